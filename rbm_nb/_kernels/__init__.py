@@ -1,0 +1,6 @@
+"""numba kernels: unchecked, contiguous float64 in, arrays out.
+
+Nothing here validates its input; the public modules do that before calling
+in. Nothing here compiles at import time either: ``@njit`` compiles on first
+call (and then from the on-disk cache).
+"""

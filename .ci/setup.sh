@@ -21,6 +21,6 @@ if [ ! -x .venv/bin/python ]; then
   "$PY" -m venv .venv
 fi
 .venv/bin/python -m pip install -q --upgrade pip
-extras="all,dev"
+if [ "$mode" = test ]; then extras="all,lab,dev"; else extras="all,lab"; fi
 echo "setup: installing rbm_nb[$extras] (pinned by .ci/constraints.txt)"
 .venv/bin/python -m pip install -q -c .ci/constraints.txt -e ".[$extras]"

@@ -16,6 +16,7 @@ _EXPORTS: dict[str, str] = {
     "Transformer": "transformer",
     "ReferenceFrameTransformBroadcaster": "publishers",
     "ReferenceFrameMarkerPublisher": "publishers",
+    "init_node": "publishers",
 }
 
 __all__ = sorted(_EXPORTS)

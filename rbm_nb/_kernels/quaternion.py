@@ -1,0 +1,777 @@
+"""Quaternion algebra on arrays: numba kernels, unchecked.
+
+Conventions shared by every function here:
+
+* quaternions are float64 arrays of shape (n, 4) in ``w, x, y, z`` order,
+  vectors are float64 arrays of shape (n, 3), both C-contiguous;
+* where two operands are given, their first dimensions are equal or one of
+  them is 1, in which case that row is reused for every output row (the
+  broadcast happens in the loop, nothing is materialised);
+* nothing is validated: the public modules check shapes and values first.
+
+The scalar helpers (names starting with ``_q``) work on unpacked components
+so that the array loops allocate nothing but their output.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .._config import NJIT_OPTIONS
+
+# Below this relative size the vector part of a quaternion counts as zero in
+# exp/log, as in numpy-quaternion (whose results squad must reproduce).
+_EPS = 1e-14
+_SQRT2 = 1.414213562373096
+
+
+# ---------------------------------------------------------------------------
+# scalar helpers
+# ---------------------------------------------------------------------------
+
+
+@njit(**NJIT_OPTIONS)
+def _qmul1(aw, ax, ay, az, bw, bx, by, bz):
+    return (
+        aw * bw - ax * bx - ay * by - az * bz,
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+    )
+
+
+@njit(**NJIT_OPTIONS)
+def _qinv1(w, x, y, z):
+    n2 = w * w + x * x + y * y + z * z
+    return w / n2, -x / n2, -y / n2, -z / n2
+
+
+@njit(**NJIT_OPTIONS)
+def _qdiv1(aw, ax, ay, az, bw, bx, by, bz):
+    """a * b⁻¹, evaluated in one step like numpy-quaternion's division."""
+    n2 = bw * bw + bx * bx + by * by + bz * bz
+    return (
+        (aw * bw + ax * bx + ay * by + az * bz) / n2,
+        (-aw * bx + ax * bw - ay * bz + az * by) / n2,
+        (-aw * by + ax * bz + ay * bw - az * bx) / n2,
+        (-aw * bz - ax * by + ay * bx + az * bw) / n2,
+    )
+
+
+@njit(**NJIT_OPTIONS)
+def _qexp1(w, x, y, z):
+    vnorm = math.sqrt(x * x + y * y + z * z)
+    e = math.exp(w)
+    if vnorm > _EPS:
+        s = math.sin(vnorm) / vnorm
+        return e * math.cos(vnorm), e * s * x, e * s * y, e * s * z
+    return e, 0.0, 0.0, 0.0
+
+
+@njit(**NJIT_OPTIONS)
+def _qlog1(w, x, y, z):
+    b = math.sqrt(x * x + y * y + z * z)
+    if b <= _EPS * abs(w):
+        if w < 0.0:
+            # a negative real number: one of infinitely many logarithms,
+            # the one numpy-quaternion picks (rotation by pi about x)
+            if abs(w + 1.0) > _EPS:
+                return math.log(-w), math.pi, 0.0, 0.0
+            return 0.0, math.pi, 0.0, 0.0
+        return math.log(w), 0.0, 0.0, 0.0
+    f = math.atan2(b, w) / b
+    return math.log(w * w + b * b) / 2.0, f * x, f * y, f * z
+
+
+@njit(**NJIT_OPTIONS)
+def _qpow1(w, x, y, z, s):
+    if w == 0.0 and x == 0.0 and y == 0.0 and z == 0.0:
+        if s == 0.0:
+            return 1.0, 0.0, 0.0, 0.0
+        return 0.0, 0.0, 0.0, 0.0
+    lw, lx, ly, lz = _qlog1(w, x, y, z)
+    return _qexp1(s * lw, s * lx, s * ly, s * lz)
+
+
+@njit(**NJIT_OPTIONS)
+def _qslerp1(aw, ax, ay, az, bw, bx, by, bz, tau):
+    """Geodesic from a (tau=0) to b (tau=1), taking the shorter way round."""
+    dw, dx, dy, dz = aw - bw, ax - bx, ay - by, az - bz
+    if math.sqrt(dw * dw + dx * dx + dy * dy + dz * dz) > _SQRT2:
+        bw, bx, by, bz = -bw, -bx, -by, -bz
+    rw, rx, ry, rz = _qdiv1(bw, bx, by, bz, aw, ax, ay, az)
+    pw, px, py, pz = _qpow1(rw, rx, ry, rz, tau)
+    return _qmul1(pw, px, py, pz, aw, ax, ay, az)
+
+
+# Taylor coefficients for the small angles that dominate interpolation of
+# densely sampled rotations: within the thresholds below, the truncated
+# series are exact to well under one rounding error, and about 3x cheaper
+# than the libm calls (atan2 costs as much as sin and cos together).
+_SMALL_ANGLE = 0.1
+_SMALL_RATIO = 0.05
+
+
+@njit(**NJIT_OPTIONS)
+def _sincos(y):
+    """(sin y, cos y)."""
+    if abs(y) < _SMALL_ANGLE:
+        y2 = y * y
+        s = y * (
+            1.0
+            + y2
+            * (
+                -1.0 / 6.0
+                + y2
+                * (
+                    1.0 / 120.0
+                    + y2 * (-1.0 / 5040.0 + y2 * (1.0 / 362880.0 - y2 / 39916800.0))
+                )
+            )
+        )
+        c = 1.0 + y2 * (
+            -0.5
+            + y2
+            * (
+                1.0 / 24.0
+                + y2
+                * (
+                    -1.0 / 720.0
+                    + y2 * (1.0 / 40320.0 + y2 * (-1.0 / 3628800.0 + y2 / 479001600.0))
+                )
+            )
+        )
+        return s, c
+    return math.sin(y), math.cos(y)
+
+
+@njit(**NJIT_OPTIONS)
+def _atan2(y, x):
+    """atan2(y, x) for y >= 0."""
+    if x > 0.0 and y < _SMALL_RATIO * x:
+        r = y / x
+        r2 = r * r
+        return r * (
+            1.0
+            + r2
+            * (
+                -1.0 / 3.0
+                + r2
+                * (
+                    1.0 / 5.0
+                    + r2
+                    * (
+                        -1.0 / 7.0
+                        + r2
+                        * (
+                            1.0 / 9.0
+                            + r2 * (-1.0 / 11.0 + r2 * (1.0 / 13.0 - r2 / 15.0))
+                        )
+                    )
+                )
+            )
+        )
+    return math.atan2(y, x)
+
+
+@njit(**NJIT_OPTIONS)
+def _geodesic1(aw, ax, ay, az, bw, bx, by, bz):
+    """Arc from unit a towards unit b: (θ, u) with b = cos θ a + sin θ u.
+
+    b is negated first if it is farther than √2 from a (the shorter way
+    round, as numpy-quaternion's slerp). u is the unit quaternion orthogonal
+    to a in the plane of a and b (zero when b == a).
+    """
+    dw, dx, dy, dz = aw - bw, ax - bx, ay - by, az - bz
+    if dw * dw + dx * dx + dy * dy + dz * dz > _SQRT2 * _SQRT2:
+        bw, bx, by, bz = -bw, -bx, -by, -bz
+    d = aw * bw + ax * bx + ay * by + az * bz
+    ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
+    so = math.sqrt(ow * ow + ox * ox + oy * oy + oz * oz)
+    if so == 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0
+    k = 1.0 / so
+    return _atan2(so, d), ow * k, ox * k, oy * k, oz * k
+
+
+@njit(**NJIT_OPTIONS)
+def _is_unit(w, x, y, z):
+    return abs(w * w + x * x + y * y + z * z - 1.0) <= 1e-12
+
+
+@njit(**NJIT_OPTIONS)
+def _qslerp_unit1(aw, ax, ay, az, bw, bx, by, bz, tau):
+    """:func:`_qslerp1` for unit quaternions, along the great circle.
+
+    For unit a and b, (b a⁻¹)^τ a is cos(τθ) a + sin(τθ) u with (θ, u) from
+    :func:`_geodesic1`: no quaternion products and no exp/log. Other
+    quaternions take the general route, so results stay numpy-quaternion's
+    to rounding.
+    """
+    if not (_is_unit(aw, ax, ay, az) and _is_unit(bw, bx, by, bz)):
+        return _qslerp1(aw, ax, ay, az, bw, bx, by, bz, tau)
+    theta, uw, ux, uy, uz = _geodesic1(aw, ax, ay, az, bw, bx, by, bz)
+    s, c = _sincos(tau * theta)
+    return c * aw + s * uw, c * ax + s * ux, c * ay + s * uy, c * az + s * uz
+
+
+@njit(**NJIT_OPTIONS)
+def _rotate1(w, x, y, z, vx, vy, vz):
+    """q v q⁻¹ for any non-zero q (dividing by |q|², so the norm of v is kept)."""
+    n2 = w * w + x * x + y * y + z * z
+    d = x * vx + y * vy + z * vz
+    cx = y * vz - z * vy
+    cy = z * vx - x * vz
+    cz = x * vy - y * vx
+    s = w * w - (x * x + y * y + z * z)
+    k = 1.0 / n2  # one division instead of three
+    d2 = 2.0 * d
+    w2 = 2.0 * w
+    return (
+        (s * vx + d2 * x + w2 * cx) * k,
+        (s * vy + d2 * y + w2 * cy) * k,
+        (s * vz + d2 * z + w2 * cz) * k,
+    )
+
+
+@njit(**NJIT_OPTIONS)
+def search_right(t_in, t_out):
+    """For each t_out[j], the index i with t_in[i] <= t_out[j] < t_in[i+1].
+
+    -1 before the first sample, n-1 at or after the last (like
+    ``np.searchsorted(t_in, t_out, "right") - 1``). Each search gallops from
+    the previous result, so sorted ``t_out`` costs O(m log(gap)) instead of
+    m full binary searches; unsorted input is still answered correctly.
+    """
+    n = t_in.shape[0]
+    m = t_out.shape[0]
+    out = np.empty(m, dtype=np.int64)
+    i = -1
+    for j in range(m):
+        t = t_out[j]
+        if i >= 0 and t < t_in[i]:
+            i = -1  # went back in time: restart from the beginning
+        # gallop: find hi with t < t_in[hi] (or hi == n)
+        lo = i
+        step = 1
+        hi = i + 1
+        while hi < n and t_in[hi] <= t:
+            lo = hi
+            hi = i + 1 + step
+            step *= 2
+        if hi > n:
+            hi = n
+        # invariant: t_in[lo] <= t (or lo == -1) and t < t_in[hi] (or hi == n)
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            if t_in[mid] <= t:
+                lo = mid
+            else:
+                hi = mid
+        i = lo
+        out[j] = i
+    return out
+
+
+# ---------------------------------------------------------------------------
+# array kernels
+# ---------------------------------------------------------------------------
+
+
+@njit(**NJIT_OPTIONS)
+def qmul(p, q):
+    """Hamilton product p * q, shapes (n, 4) x (n, 4) -> (n, 4) (n or 1)."""
+    n = max(p.shape[0], q.shape[0])
+    sp = 1 if p.shape[0] > 1 else 0
+    sq = 1 if q.shape[0] > 1 else 0
+    out = np.empty((n, 4))
+    for i in range(n):
+        a = i * sp
+        b = i * sq
+        w, x, y, z = _qmul1(
+            p[a, 0], p[a, 1], p[a, 2], p[a, 3], q[b, 0], q[b, 1], q[b, 2], q[b, 3]
+        )
+        out[i, 0] = w
+        out[i, 1] = x
+        out[i, 2] = y
+        out[i, 3] = z
+    return out
+
+
+@njit(**NJIT_OPTIONS)
+def qconj(q):
+    """Conjugate (w, -x, -y, -z), shape (n, 4) -> (n, 4)."""
+    out = np.empty_like(q)
+    for i in range(q.shape[0]):
+        out[i, 0] = q[i, 0]
+        out[i, 1] = -q[i, 1]
+        out[i, 2] = -q[i, 2]
+        out[i, 3] = -q[i, 3]
+    return out
+
+
+@njit(**NJIT_OPTIONS)
+def qinv(q):
+    """Inverse conj(q) / |q|², shape (n, 4) -> (n, 4)."""
+    out = np.empty_like(q)
+    for i in range(q.shape[0]):
+        w, x, y, z = _qinv1(q[i, 0], q[i, 1], q[i, 2], q[i, 3])
+        out[i, 0] = w
+        out[i, 1] = x
+        out[i, 2] = y
+        out[i, 3] = z
+    return out
+
+
+@njit(**NJIT_OPTIONS)
+def qnorm(q):
+    """Euclidean norm |q|, shape (n, 4) -> (n,)."""
+    out = np.empty(q.shape[0])
+    for i in range(q.shape[0]):
+        out[i] = math.sqrt(
+            q[i, 0] * q[i, 0]
+            + q[i, 1] * q[i, 1]
+            + q[i, 2] * q[i, 2]
+            + q[i, 3] * q[i, 3]
+        )
+    return out
+
+
+@njit(**NJIT_OPTIONS)
+def qnormalize(q):
+    """q / |q|, shape (n, 4) -> (n, 4)."""
+    out = np.empty_like(q)
+    for i in range(q.shape[0]):
+        n = math.sqrt(
+            q[i, 0] * q[i, 0]
+            + q[i, 1] * q[i, 1]
+            + q[i, 2] * q[i, 2]
+            + q[i, 3] * q[i, 3]
+        )
+        for k in range(4):
+            out[i, k] = q[i, k] / n
+    return out
+
+
+@njit(**NJIT_OPTIONS)
+def rotate_vectors(q, v):
+    """Rotate v by q as q v q⁻¹, shapes (n, 4) x (n, 3) -> (n, 3) (n or 1).
+
+    Correct for quaternions of any non-zero norm: the result is divided by
+    |q|², so a non-unit q rotates without scaling.
+    """
+    n = max(q.shape[0], v.shape[0])
+    sq = 1 if q.shape[0] > 1 else 0
+    sv = 1 if v.shape[0] > 1 else 0
+    out = np.empty((n, 3))
+    for i in range(n):
+        a = i * sq
+        b = i * sv
+        x, y, z = _rotate1(
+            q[a, 0], q[a, 1], q[a, 2], q[a, 3], v[b, 0], v[b, 1], v[b, 2]
+        )
+        out[i, 0] = x
+        out[i, 1] = y
+        out[i, 2] = z
+    return out
+
+
+@njit(**NJIT_OPTIONS)
+def rotate_vectors_outer(q, v):
+    """Every q applied to every v, shapes (nq, 4) x (nv, 3) -> (nq, nv, 3)."""
+    nq = q.shape[0]
+    nv = v.shape[0]
+    out = np.empty((nq, nv, 3))
+    for i in range(nq):
+        for j in range(nv):
+            x, y, z = _rotate1(
+                q[i, 0], q[i, 1], q[i, 2], q[i, 3], v[j, 0], v[j, 1], v[j, 2]
+            )
+            out[i, j, 0] = x
+            out[i, j, 1] = y
+            out[i, j, 2] = z
+    return out
+
+
+@njit(**NJIT_OPTIONS)
+def qexp(q):
+    """Quaternion exponential, shape (n, 4) -> (n, 4) (numpy-quaternion's)."""
+    out = np.empty_like(q)
+    for i in range(q.shape[0]):
+        w, x, y, z = _qexp1(q[i, 0], q[i, 1], q[i, 2], q[i, 3])
+        out[i, 0] = w
+        out[i, 1] = x
+        out[i, 2] = y
+        out[i, 3] = z
+    return out
+
+
+@njit(**NJIT_OPTIONS)
+def qlog(q):
+    """Principal quaternion logarithm, shape (n, 4) -> (n, 4).
+
+    Negative real quaternions get the vector part (pi, 0, 0), the choice
+    numpy-quaternion makes.
+    """
+    out = np.empty_like(q)
+    for i in range(q.shape[0]):
+        w, x, y, z = _qlog1(q[i, 0], q[i, 1], q[i, 2], q[i, 3])
+        out[i, 0] = w
+        out[i, 1] = x
+        out[i, 2] = y
+        out[i, 3] = z
+    return out
+
+
+@njit(**NJIT_OPTIONS)
+def slerp(q0, q1, tau):
+    """Spherical linear interpolation along the shorter arc.
+
+    Parameters
+    ----------
+    q0, q1 : ndarray, shape (n, 4) or (1, 4)
+        Values at tau = 0 and tau = 1.
+    tau : ndarray, shape (n,) or (1,)
+        Interpolation parameters (values outside [0, 1] extrapolate).
+
+    Returns
+    -------
+    ndarray, shape (n, 4)
+    """
+    n = max(q0.shape[0], q1.shape[0], tau.shape[0])
+    s0 = 1 if q0.shape[0] > 1 else 0
+    s1 = 1 if q1.shape[0] > 1 else 0
+    st = 1 if tau.shape[0] > 1 else 0
+    out = np.empty((n, 4))
+    for i in range(n):
+        a = i * s0
+        b = i * s1
+        w, x, y, z = _qslerp1(
+            q0[a, 0], q0[a, 1], q0[a, 2], q0[a, 3],
+            q1[b, 0], q1[b, 1], q1[b, 2], q1[b, 3],
+            tau[i * st],
+        )  # fmt: skip
+        out[i, 0] = w
+        out[i, 1] = x
+        out[i, 2] = y
+        out[i, 3] = z
+    return out
+
+
+@njit(**NJIT_OPTIONS)
+def squad_coefficients(r, t):
+    """Control points of the squad spline, as numpy-quaternion builds them.
+
+    Parameters
+    ----------
+    r : ndarray, shape (n, 4), n >= 2
+        Samples, assumed free of sign flips.
+    t : ndarray, shape (n,)
+        Strictly increasing sample times (only their ratios matter, so any
+        time origin gives the same coefficients).
+
+    Returns
+    -------
+    a, b : ndarray, shape (n, 4)
+        ``a[i]`` belongs to sample i, ``b[i]`` to the end of segment i; the
+        last row of ``b`` is the virtual sample r[n-1] r[n-2]⁻¹ r[n-1].
+    """
+    n = r.shape[0]
+    a_coef = np.empty((n, 4))
+    b_coef = np.empty((n, 4))
+    # logs[i] = log(r[i]⁻¹ r[i+1]): each enters two A's and two B's, so it
+    # is computed once (the same operations numpy-quaternion performs)
+    logs = np.empty((max(n - 1, 0), 4))
+    for i in range(n - 1):
+        iw, ix, iy, iz = _qinv1(r[i, 0], r[i, 1], r[i, 2], r[i, 3])
+        nw, nx, ny, nz = _qmul1(
+            iw, ix, iy, iz, r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3]
+        )
+        lw, lx, ly, lz = _qlog1(nw, nx, ny, nz)
+        logs[i, 0] = lw
+        logs[i, 1] = lx
+        logs[i, 2] = ly
+        logs[i, 3] = lz
+    for k in range(4):
+        a_coef[0, k] = r[0, k]
+        a_coef[n - 1, k] = r[n - 1, k]
+    for i in range(1, n - 1):
+        # A[i] = r[i] exp((-L[i] + L[i-1] (t[i+1]-t[i]) / (t[i]-t[i-1])) / 4)
+        ratio = (t[i + 1] - t[i]) / (t[i] - t[i - 1])
+        ew, ex, ey, ez = _qexp1(
+            (-logs[i, 0] + logs[i - 1, 0] * ratio) * 0.25,
+            (-logs[i, 1] + logs[i - 1, 1] * ratio) * 0.25,
+            (-logs[i, 2] + logs[i - 1, 2] * ratio) * 0.25,
+            (-logs[i, 3] + logs[i - 1, 3] * ratio) * 0.25,
+        )
+        w, x, y, z = _qmul1(r[i, 0], r[i, 1], r[i, 2], r[i, 3], ew, ex, ey, ez)
+        a_coef[i, 0] = w
+        a_coef[i, 1] = x
+        a_coef[i, 2] = y
+        a_coef[i, 3] = z
+    for i in range(n - 2):
+        # B[i] = r[i+1] exp((L[i+1] (t[i+1]-t[i]) / (t[i+2]-t[i+1]) - L[i]) / -4)
+        ratio = (t[i + 1] - t[i]) / (t[i + 2] - t[i + 1])
+        ew, ex, ey, ez = _qexp1(
+            (logs[i + 1, 0] * ratio - logs[i, 0]) * -0.25,
+            (logs[i + 1, 1] * ratio - logs[i, 1]) * -0.25,
+            (logs[i + 1, 2] * ratio - logs[i, 2]) * -0.25,
+            (logs[i + 1, 3] * ratio - logs[i, 3]) * -0.25,
+        )
+        w, x, y, z = _qmul1(
+            r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3], ew, ex, ey, ez
+        )
+        b_coef[i, 0] = w
+        b_coef[i, 1] = x
+        b_coef[i, 2] = y
+        b_coef[i, 3] = z
+    # past the last sample the curve continues as if r[n] = r[n-1] r[n-2]⁻¹ r[n-1]
+    iw, ix, iy, iz = _qinv1(r[n - 2, 0], r[n - 2, 1], r[n - 2, 2], r[n - 2, 3])
+    w, x, y, z = _qmul1(
+        r[n - 1, 0], r[n - 1, 1], r[n - 1, 2], r[n - 1, 3], iw, ix, iy, iz
+    )
+    ew, ex, ey, ez = _qmul1(
+        w, x, y, z, r[n - 1, 0], r[n - 1, 1], r[n - 1, 2], r[n - 1, 3]
+    )
+    for k in range(4):
+        b_coef[n - 2, k] = r[n - 1, k]
+    b_coef[n - 1, 0] = ew
+    b_coef[n - 1, 1] = ex
+    b_coef[n - 1, 2] = ey
+    b_coef[n - 1, 3] = ez
+    return a_coef, b_coef
+
+
+@njit(**NJIT_OPTIONS)
+def squad_segments(r, a_coef, b_coef):
+    """Per-segment great circles for :func:`squad_evaluate`, shape (n, 11).
+
+    Row i holds the :func:`_geodesic1` (θ, u) of r[i] -> r[i+1] and of
+    a[i] -> b[i] (the last row continues to the virtual sample
+    ``b_coef[n-1]``), and a flag: 1 if any of these is not a unit
+    quaternion, in which case evaluation takes numpy-quaternion's general
+    exp/log route for that segment.
+    """
+    n = r.shape[0]
+    seg = np.zeros((n, 11))
+    for i in range(n):
+        if i < n - 1:
+            nw, nx, ny, nz = r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3]
+        else:
+            nw, nx, ny, nz = (
+                b_coef[n - 1, 0],
+                b_coef[n - 1, 1],
+                b_coef[n - 1, 2],
+                b_coef[n - 1, 3],
+            )
+        unit = (
+            _is_unit(r[i, 0], r[i, 1], r[i, 2], r[i, 3])
+            and _is_unit(nw, nx, ny, nz)
+            and _is_unit(a_coef[i, 0], a_coef[i, 1], a_coef[i, 2], a_coef[i, 3])
+            and _is_unit(b_coef[i, 0], b_coef[i, 1], b_coef[i, 2], b_coef[i, 3])
+        )
+        if not unit:
+            seg[i, 10] = 1.0
+            continue
+        v = _geodesic1(r[i, 0], r[i, 1], r[i, 2], r[i, 3], nw, nx, ny, nz)
+        for k in range(5):
+            seg[i, k] = v[k]
+        v = _geodesic1(
+            a_coef[i, 0], a_coef[i, 1], a_coef[i, 2], a_coef[i, 3],
+            b_coef[i, 0], b_coef[i, 1], b_coef[i, 2], b_coef[i, 3],
+        )  # fmt: skip
+        for k in range(5):
+            seg[i, 5 + k] = v[k]
+    return seg
+
+
+@njit(**NJIT_OPTIONS)
+def _along1(seg, i, o, tau, qw, qx, qy, qz):
+    """cos(τθ) q + sin(τθ) u for the great circle stored at seg[i, o:o+5]."""
+    s, c = _sincos(tau * seg[i, o])
+    return (
+        c * qw + s * seg[i, o + 1],
+        c * qx + s * seg[i, o + 2],
+        c * qy + s * seg[i, o + 3],
+        c * qz + s * seg[i, o + 4],
+    )
+
+
+@njit(**NJIT_OPTIONS)
+def squad_evaluate(q_in, t_in, a_coef, b_coef, seg, t_out):
+    """Evaluate a squad spline whose coefficients are already known.
+
+    Parameters
+    ----------
+    q_in : ndarray, shape (n, 4), n >= 2
+    t_in : ndarray, shape (n,)
+    a_coef, b_coef : ndarray, shape (n, 4)
+        From :func:`squad_coefficients` (with the same ``q_in``, ``t_in``).
+    seg : ndarray, shape (n, 11)
+        From :func:`squad_segments`.
+    t_out : ndarray, shape (m,)
+        Must be on the same time origin as ``t_in``.
+
+    Returns
+    -------
+    ndarray, shape (m, 4)
+    """
+    n = q_in.shape[0]
+    m = t_out.shape[0]
+    out = np.empty((m, 4))
+    dt_last = t_in[n - 1] - t_in[n - 2]
+    idx = search_right(t_in, t_out)
+    for j in range(m):
+        i = idx[j]
+        if i < 0:
+            i = n - 1  # numpy-quaternion indexes with -1 before the start
+        if i < n - 1:
+            dt = t_in[i + 1] - t_in[i]
+        else:
+            dt = (t_in[n - 1] + dt_last) - t_in[n - 1]
+        tau = (t_out[j] - t_in[i]) / dt
+        if seg[i, 10] == 0.0:
+            s1 = _along1(seg, i, 0, tau, q_in[i, 0], q_in[i, 1], q_in[i, 2], q_in[i, 3])
+            s2 = _along1(
+                seg, i, 5, tau, a_coef[i, 0], a_coef[i, 1], a_coef[i, 2], a_coef[i, 3]
+            )
+        else:
+            if i < n - 1:
+                nw, nx, ny, nz = (
+                    q_in[i + 1, 0],
+                    q_in[i + 1, 1],
+                    q_in[i + 1, 2],
+                    q_in[i + 1, 3],
+                )
+            else:
+                nw, nx, ny, nz = (
+                    b_coef[n - 1, 0],
+                    b_coef[n - 1, 1],
+                    b_coef[n - 1, 2],
+                    b_coef[n - 1, 3],
+                )
+            s1 = _qslerp1(
+                q_in[i, 0], q_in[i, 1], q_in[i, 2], q_in[i, 3], nw, nx, ny, nz, tau
+            )
+            s2 = _qslerp1(
+                a_coef[i, 0], a_coef[i, 1], a_coef[i, 2], a_coef[i, 3],
+                b_coef[i, 0], b_coef[i, 1], b_coef[i, 2], b_coef[i, 3],
+                tau,
+            )  # fmt: skip
+        w, x, y, z = _qslerp_unit1(
+            s1[0], s1[1], s1[2], s1[3], s2[0], s2[1], s2[2], s2[3],
+            2.0 * tau * (1.0 - tau),
+        )  # fmt: skip
+        out[j, 0] = w
+        out[j, 1] = x
+        out[j, 2] = y
+        out[j, 3] = z
+    return out
+
+
+@njit(**NJIT_OPTIONS)
+def squad(q_in, t_in, t_out):
+    """Cubic spline ("squad") interpolation of a rotation time series.
+
+    Reproduces numpy-quaternion's ``quaternion.squad`` including its edge
+    behaviour: times at or after the last sample extrapolate the last
+    segment, and times before the first sample use the last segment's
+    coefficients (numpy-quaternion indexes with -1 there).
+
+    Parameters
+    ----------
+    q_in : ndarray, shape (n, 4)
+        Samples, assumed free of sign flips.
+    t_in : ndarray, shape (n,)
+        Strictly increasing sample times.
+    t_out : ndarray, shape (m,)
+        Times to interpolate to.
+
+    Returns
+    -------
+    ndarray, shape (m, 4)
+        A single sample (n == 1) is held constant.
+    """
+    n = q_in.shape[0]
+    m = t_out.shape[0]
+    if n < 2 or m == 0:
+        out = np.empty((m, 4))
+        for j in range(m):
+            for k in range(4):
+                out[j, k] = q_in[0, k]
+        return out
+    a_coef, b_coef = squad_coefficients(q_in, t_in)
+    seg = squad_segments(q_in, a_coef, b_coef)
+    return squad_evaluate(q_in, t_in, a_coef, b_coef, seg, t_out)
+
+
+@njit(**NJIT_OPTIONS)
+def matrix_from_quaternion(q):
+    """Rotation matrices, shape (n, 4) -> (n, 3, 3); non-unit q are normalised."""
+    n = q.shape[0]
+    out = np.empty((n, 3, 3))
+    for i in range(n):
+        w, x, y, z = q[i, 0], q[i, 1], q[i, 2], q[i, 3]
+        s = 2.0 / (w * w + x * x + y * y + z * z)
+        out[i, 0, 0] = 1.0 - s * (y * y + z * z)
+        out[i, 0, 1] = s * (x * y - w * z)
+        out[i, 0, 2] = s * (x * z + w * y)
+        out[i, 1, 0] = s * (x * y + w * z)
+        out[i, 1, 1] = 1.0 - s * (x * x + z * z)
+        out[i, 1, 2] = s * (y * z - w * x)
+        out[i, 2, 0] = s * (x * z - w * y)
+        out[i, 2, 1] = s * (y * z + w * x)
+        out[i, 2, 2] = 1.0 - s * (x * x + y * y)
+    return out
+
+
+@njit(**NJIT_OPTIONS)
+def quaternion_from_matrix(m):
+    """Unit quaternions (w >= 0) from rotation matrices, (n, 3, 3) -> (n, 4).
+
+    Shepperd's method: the square root is taken of the largest of the four
+    candidates (trace and diagonal), which keeps the division well away
+    from zero for every rotation.
+    """
+    n = m.shape[0]
+    out = np.empty((n, 4))
+    for i in range(n):
+        m00, m01, m02 = m[i, 0, 0], m[i, 0, 1], m[i, 0, 2]
+        m10, m11, m12 = m[i, 1, 0], m[i, 1, 1], m[i, 1, 2]
+        m20, m21, m22 = m[i, 2, 0], m[i, 2, 1], m[i, 2, 2]
+        tr = m00 + m11 + m22
+        if tr >= m00 and tr >= m11 and tr >= m22:
+            s = 2.0 * math.sqrt(1.0 + tr)
+            w = 0.25 * s
+            x = (m21 - m12) / s
+            y = (m02 - m20) / s
+            z = (m10 - m01) / s
+        elif m00 >= m11 and m00 >= m22:
+            s = 2.0 * math.sqrt(1.0 + m00 - m11 - m22)
+            w = (m21 - m12) / s
+            x = 0.25 * s
+            y = (m01 + m10) / s
+            z = (m02 + m20) / s
+        elif m11 >= m22:
+            s = 2.0 * math.sqrt(1.0 - m00 + m11 - m22)
+            w = (m02 - m20) / s
+            x = (m01 + m10) / s
+            y = 0.25 * s
+            z = (m12 + m21) / s
+        else:
+            s = 2.0 * math.sqrt(1.0 - m00 - m11 + m22)
+            w = (m10 - m01) / s
+            x = (m02 + m20) / s
+            y = (m12 + m21) / s
+            z = 0.25 * s
+        norm = math.sqrt(w * w + x * x + y * y + z * z)
+        if w < 0.0:
+            norm = -norm
+        out[i, 0] = w / norm
+        out[i, 1] = x / norm
+        out[i, 2] = y / norm
+        out[i, 3] = z / norm
+    return out

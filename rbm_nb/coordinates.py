@@ -1,0 +1,301 @@
+"""Coordinate systems: cartesian, polar (2-D) and spherical (3-D, ISO 80000-2).
+
+The four converters work on plain arrays along one axis; ``transform_coordinates``
+is the entry point that also understands DataArrays: it reads the current system
+from ``attrs["coordinate_system"]`` and swaps the coordinate dimension for one that
+names the new axes (``spherical_axis: [r, theta, phi]``, ...).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+# system name -> (dimension name, axis labels) per dimensionality
+_SYSTEM_AXES: dict[tuple[str, int], tuple[str, list[str]]] = {
+    ("cartesian", 2): ("cartesian_axis", ["x", "y"]),
+    ("polar", 2): ("polar_axis", ["r", "phi"]),
+    ("cartesian", 3): ("cartesian_axis", ["x", "y", "z"]),
+    ("spherical", 3): ("spherical_axis", ["r", "theta", "phi"]),
+    ("quaternion", 4): ("quaternion_axis", ["w", "x", "y", "z"]),
+}
+
+
+def _checked(arr: Any, axis: int, length: int, what: str) -> tuple[np.ndarray, int]:
+    """Return ``arr`` as a float array and ``axis`` normalised, checking its length."""
+    arr = np.asarray(arr, dtype=float)
+    if arr.ndim == 0:
+        raise ValueError(
+            f"arr must have an axis of length {length} ({what}), got a scalar"
+        )
+    if not -arr.ndim <= axis < arr.ndim:
+        raise ValueError(f"axis {axis} is out of range for arr with shape {arr.shape}")
+    axis %= arr.ndim
+    if arr.shape[axis] != length:
+        raise ValueError(
+            f"arr must have length {length} ({what}) along axis {axis}, "
+            f"got shape {arr.shape}"
+        )
+    return arr, axis
+
+
+def cartesian_to_polar(arr, axis: int = -1) -> np.ndarray:
+    """Convert 2-D cartesian coordinates (x, y) into polar coordinates (r, phi).
+
+    Parameters
+    ----------
+    arr : array_like, shape (..., 2, ...)
+        Cartesian coordinates along ``axis``.
+    axis : int, default -1
+        Axis of ``arr`` holding x and y.
+
+    Returns
+    -------
+    ndarray, shape (..., 2, ...)
+        Radius ``r >= 0`` and azimuth ``phi`` in (-pi, pi] along ``axis``.
+
+    Raises
+    ------
+    ValueError
+        If ``arr`` does not have length 2 along ``axis``.
+
+    Examples
+    --------
+    >>> cartesian_to_polar([0.0, 2.0])
+    array([2.        , 1.57079633])
+    """
+    arr, axis = _checked(arr, axis, 2, "x, y")
+    x, y = np.take(arr, 0, axis=axis), np.take(arr, 1, axis=axis)
+    return np.stack((np.hypot(x, y), np.arctan2(y, x)), axis=axis)
+
+
+def polar_to_cartesian(arr, axis: int = -1) -> np.ndarray:
+    """Convert polar coordinates (r, phi) into 2-D cartesian coordinates (x, y).
+
+    Parameters
+    ----------
+    arr : array_like, shape (..., 2, ...)
+        Radius and azimuth (radians) along ``axis``.
+    axis : int, default -1
+        Axis of ``arr`` holding r and phi.
+
+    Returns
+    -------
+    ndarray, shape (..., 2, ...)
+        x and y along ``axis``.
+
+    Raises
+    ------
+    ValueError
+        If ``arr`` does not have length 2 along ``axis``.
+
+    Examples
+    --------
+    >>> polar_to_cartesian([2.0, 0.0])
+    array([2., 0.])
+    """
+    arr, axis = _checked(arr, axis, 2, "r, phi")
+    r, phi = np.take(arr, 0, axis=axis), np.take(arr, 1, axis=axis)
+    return np.stack((r * np.cos(phi), r * np.sin(phi)), axis=axis)
+
+
+def cartesian_to_spherical(arr, axis: int = -1) -> np.ndarray:
+    """Convert 3-D cartesian coordinates into spherical coordinates (ISO 80000-2).
+
+    Parameters
+    ----------
+    arr : array_like, shape (..., 3, ...)
+        x, y and z along ``axis``.
+    axis : int, default -1
+        Axis of ``arr`` holding x, y and z.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, ...)
+        Radius ``r``, polar angle ``theta`` in [0, pi] measured from +z and
+        azimuth ``phi`` in (-pi, pi] along ``axis``. The origin maps to
+        ``(0, 0, 0)``.
+
+    Raises
+    ------
+    ValueError
+        If ``arr`` does not have length 3 along ``axis``.
+
+    Examples
+    --------
+    >>> cartesian_to_spherical([0.0, 0.0, 2.0])
+    array([2., 0., 0.])
+    """
+    arr, axis = _checked(arr, axis, 3, "x, y, z")
+    x, y, z = (np.take(arr, i, axis=axis) for i in range(3))
+    rho = np.hypot(x, y)
+    # arctan2 rather than arccos(z / r): defined at the origin and accurate near
+    # the poles, where arccos loses half of the digits.
+    return np.stack((np.hypot(rho, z), np.arctan2(rho, z), np.arctan2(y, x)), axis=axis)
+
+
+def spherical_to_cartesian(arr, axis: int = -1) -> np.ndarray:
+    """Convert spherical coordinates (ISO 80000-2) into 3-D cartesian coordinates.
+
+    Parameters
+    ----------
+    arr : array_like, shape (..., 3, ...)
+        Radius, polar angle from +z and azimuth (radians) along ``axis``.
+    axis : int, default -1
+        Axis of ``arr`` holding r, theta and phi.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, ...)
+        x, y and z along ``axis``.
+
+    Raises
+    ------
+    ValueError
+        If ``arr`` does not have length 3 along ``axis``.
+
+    Examples
+    --------
+    >>> spherical_to_cartesian([1.0, np.pi / 2, 0.0]).round(12)
+    array([1., 0., 0.])
+    """
+    arr, axis = _checked(arr, axis, 3, "r, theta, phi")
+    r, theta, phi = (np.take(arr, i, axis=axis) for i in range(3))
+    rho = r * np.sin(theta)
+    return np.stack(
+        (rho * np.cos(phi), rho * np.sin(phi), r * np.cos(theta)), axis=axis
+    )
+
+
+_CONVERTERS = {
+    ("cartesian", "polar"): cartesian_to_polar,
+    ("polar", "cartesian"): polar_to_cartesian,
+    ("cartesian", "spherical"): cartesian_to_spherical,
+    ("spherical", "cartesian"): spherical_to_cartesian,
+}
+
+
+def _is_dataarray(obj: Any) -> bool:
+    # Checked by duck type so that plain-array callers never import xarray.
+    return all(hasattr(obj, a) for a in ("values", "coords", "dims", "name", "attrs"))
+
+
+def _replace_dim(
+    coords: dict, dims: tuple, axis: int, system: str, length: int
+) -> tuple[dict, tuple]:
+    """Swap the dimension at ``axis`` for the one naming ``system``'s axes.
+
+    Coordinates that depend on the old dimension are dropped, since their values
+    describe axes that no longer exist.
+    """
+    try:
+        new_dim, labels = _SYSTEM_AXES[(system, length)]
+    except KeyError:
+        raise ValueError(
+            f"no {length}-axis dimension is known for {system!r}"
+        ) from None
+    old_dim = dims[axis]
+    dims = tuple(new_dim if d == old_dim else d for d in dims)
+    coords = {k: c for k, c in coords.items() if old_dim not in c.dims}
+    coords[new_dim] = labels
+    return coords, dims
+
+
+def _resolve_dim_axis(arr: Any, dim: str | None, axis: int | None) -> int:
+    """The axis of a DataArray (or array) meant by ``dim`` or ``axis``."""
+    ndim = np.ndim(arr)
+    if dim is not None:
+        if not _is_dataarray(arr):
+            raise ValueError("dim can only be given when arr is a DataArray")
+        if axis is not None:
+            raise ValueError("give either dim or axis, not both")
+        if dim not in arr.dims:
+            raise ValueError(f"dim {dim!r} is not a dimension of arr {tuple(arr.dims)}")
+        return arr.dims.index(dim)
+    axis = -1 if axis is None else int(axis)
+    if not -ndim <= axis < ndim:
+        raise ValueError(f"axis {axis} is out of range for arr with {ndim} dimensions")
+    return axis % ndim
+
+
+def transform_coordinates(
+    arr,
+    into: str,
+    outof: str | None = None,
+    dim: str | None = None,
+    axis: int | None = None,
+    replace_dim: bool = True,
+):
+    """Convert an array between coordinate systems.
+
+    Supported pairs: cartesian <-> polar (2-D) and cartesian <-> spherical (3-D).
+
+    Parameters
+    ----------
+    arr : array_like or xarray.DataArray, shape (..., 2 or 3, ...)
+        The coordinates to convert.
+    into : str
+        Target system: ``"cartesian"``, ``"polar"`` or ``"spherical"``.
+    outof : str, optional
+        Current system. May be omitted for a DataArray whose ``attrs`` contain
+        ``"coordinate_system"``.
+    dim : str, optional
+        For a DataArray, the dimension holding the coordinates.
+    axis : int, optional
+        The axis holding the coordinates; defaults to the last one.
+    replace_dim : bool, default True
+        For a DataArray, replace the coordinate dimension by one naming the
+        new axes (e.g. ``spherical_axis: [r, theta, phi]``), dropping every
+        coordinate that depended on the old dimension. If False, dimensions
+        and coordinates are kept as they are.
+
+    Returns
+    -------
+    ndarray or xarray.DataArray
+        The converted coordinates, a DataArray if ``arr`` was one. Its
+        ``attrs["coordinate_system"]`` is updated to ``into`` when present.
+
+    Raises
+    ------
+    ValueError
+        For an unknown pair of systems, a missing ``outof``, or an axis of the
+        wrong length.
+
+    Examples
+    --------
+    >>> transform_coordinates([1.0, 1.0], "polar", outof="cartesian")
+    array([1.41421356, 0.78539816])
+    """
+    is_da = _is_dataarray(arr)
+    ax = _resolve_dim_axis(arr, dim, axis)
+    attrs = dict(arr.attrs) if is_da else None
+    if outof is None:
+        if attrs is None or "coordinate_system" not in attrs:
+            raise ValueError(
+                "outof must be given unless arr is a DataArray whose attrs contain "
+                "'coordinate_system'"
+            )
+        outof = attrs["coordinate_system"]
+    try:
+        convert = _CONVERTERS[(outof, into)]
+    except KeyError:
+        known = ", ".join(f"{a} -> {b}" for a, b in _CONVERTERS)
+        raise ValueError(
+            f"cannot transform coordinates from {outof!r} into {into!r}; "
+            f"supported: {known}"
+        ) from None
+
+    data = arr.values if is_da else arr
+    out = convert(data, axis=ax)
+    if not is_da:
+        return out
+
+    import xarray as xr
+
+    if "coordinate_system" in attrs:
+        attrs["coordinate_system"] = into
+    coords, dims = dict(arr.coords), tuple(arr.dims)
+    if replace_dim:
+        coords, dims = _replace_dim(coords, dims, ax, into, out.shape[ax])
+    return xr.DataArray(out, coords, dims, arr.name, attrs)

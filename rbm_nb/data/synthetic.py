@@ -1,0 +1,237 @@
+"""A synthetic head/eye recording with the schema of the real example data.
+
+It stands in for ``head.nc``, ``left_eye.nc`` and ``right_eye.nc`` when those
+cannot be downloaded: same dimensions, variables and attributes, physically
+plausible content (see :func:`synthetic_head_eye`), generated in about a
+second and identical for identical arguments.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ..io._schema import motion_dataset
+from ._gaze import (
+    EYE_CENTERS,
+    SCENE_CAMERA_ROTATION,
+    SCENE_CAMERA_TRANSLATION,
+    detection_confidence,
+    draw_blinks,
+    eye_orientation,
+    plan_fixations,
+)
+from ._walking import WalkParams, simulate_head
+
+SOURCE = "synthetic (rbm_nb)"
+DEFAULT_START = "2020-02-02T00:27:14.300365210"
+# the eye cameras start a little after the head tracker and stop a little before
+_EYE_LEAD_IN = (0.3, 0.5)
+_EYE_LEAD_OUT = 0.2
+_EYE_NOISE = np.deg2rad(0.03)
+
+
+class HeadEyeRecording(NamedTuple):
+    """The three datasets of a head/eye recording."""
+
+    head: object  # xarray.Dataset
+    left_eye: object
+    right_eye: object
+
+
+def synthetic_head_eye(
+    duration: float = 330.0,
+    seed: int = 0,
+    *,
+    head_rate: float = 200.0,
+    eye_rate: float = 343.5,
+    speed: float = 1.45,
+    laps: int = 2,
+    start: str | np.datetime64 = DEFAULT_START,
+) -> HeadEyeRecording:
+    """Simulate a walk of ``laps`` laps around a building with head and eye tracking.
+
+    The default is a 5.5-minute recording like the real example data: a head
+    tracker (RealSense T265 conventions) at 200 Hz and two eye trackers (Pupil
+    Core conventions) at their own rate and time offsets.
+
+    Parameters
+    ----------
+    duration : float, default 330.0
+        Length of the head recording in seconds (at least 15).
+    seed : int, default 0
+        Seed of every random choice; equal arguments give equal datasets.
+    head_rate, eye_rate : float
+        Sampling rates in Hz of the head and of each eye.
+    speed : float, default 1.45
+        Walking speed in m/s; the walk starts and ends with 2 s of standing.
+    laps : int, default 2
+        Laps around the building, which is sized to fit the walk (aspect 3:2).
+    start : str or numpy.datetime64
+        Time of the first head sample.
+
+    Returns
+    -------
+    HeadEyeRecording
+        Named tuple of ``head``, ``left_eye`` and ``right_eye``
+        :class:`xarray.Dataset`, each with dims ``time`` (datetime64[ns]),
+        ``cartesian_axis`` (x, y, z) and ``quaternion_axis`` (w, x, y, z).
+
+        ``head``: ``position`` (m) and ``orientation`` of the head tracker wrt
+        a world frame at its starting pose (x right, y up, z backwards, so
+        walking forward is -z in the head frame); ``linear_velocity`` (m/s)
+        and ``angular_velocity`` (rad/s) of the head wrt world, represented in
+        world like the T265 reports them and equal to the derivatives of
+        position and orientation; ``confidence``, the T265 tracker confidence
+        (0 failed, 1/3 low, 2/3 medium, 1 high).
+
+        ``left_eye`` / ``right_eye``: ``position`` (m), the eyeball centre,
+        and ``orientation``, the eye wrt the scene camera (camera convention
+        x right, y down, z forward; gaze is the eye frame's z axis, torsion
+        by Listing's law); ``confidence``, the pupil detection confidence in
+        [0, 1], which collapses during blinks (orientation keeps following
+        the underlying eye movement there). The scene camera's pose in the
+        head frame is in the attrs ``scene_camera_translation`` and
+        ``scene_camera_rotation`` (w, x, y, z).
+
+    Raises
+    ------
+    ValueError
+        If a duration, rate, speed or lap count is not a positive finite
+        number (duration at least 15 s).
+
+    Examples
+    --------
+    >>> rec = synthetic_head_eye(duration=20.0)
+    >>> rec.head.sizes["time"], rec.head.attrs["source"]
+    (4000, 'synthetic (rbm_nb)')
+    """
+    _check_positive(
+        duration=duration, head_rate=head_rate, eye_rate=eye_rate, speed=speed
+    )
+    if duration < 15.0:
+        raise ValueError(
+            f"duration must be at least 15 s (standing, walking, standing), got {duration}"
+        )
+    if int(laps) != laps or laps < 1:
+        raise ValueError(f"laps must be a positive integer, got {laps!r}")
+    start = np.datetime64(start, "ns")
+    rng = np.random.default_rng(seed)
+
+    head_ns = _grid_ns(0.0, duration, head_rate, rng, jitter=0.0)
+    eye_ns = {
+        eye: _grid_ns(
+            rng.uniform(*_EYE_LEAD_IN),
+            duration - _EYE_LEAD_OUT,
+            eye_rate,
+            rng,
+            jitter=0.1,
+        )
+        for eye in EYE_CENTERS
+    }
+    grid_ns = np.sort(np.concatenate([head_ns, *eye_ns.values()]))
+    grid_ns = grid_ns[np.r_[True, np.diff(grid_ns) > 0]]
+    params = WalkParams(speed=float(speed), laps=int(laps))
+    head = simulate_head(grid_ns * 1e-9, float(duration), rng, params)
+
+    eye_start = min(ns[0] for ns in eye_ns.values()) * 1e-9
+    fixations = plan_fixations(rng, head, eye_start, duration)
+    blinks = draw_blinks(rng, eye_start, duration)
+
+    attrs = {
+        "source": SOURCE,
+        "seed": int(seed),
+        "duration": float(duration),
+        "walking_speed": float(speed),
+        "laps": int(laps),
+        "lap_length": float(head.lap_length),
+    }
+    i_head = np.searchsorted(grid_ns, head_ns)
+    head_ds = _head_dataset(
+        start + head_ns.astype("timedelta64[ns]"), head, i_head, rng, attrs
+    )
+    eyes = {}
+    for eye, ns in eye_ns.items():
+        index = np.searchsorted(grid_ns, ns)
+        orientation = eye_orientation(rng, head, index, eye, fixations, _EYE_NOISE)
+        confidence = detection_confidence(rng, grid_ns[index] * 1e-9, blinks)
+        eyes[eye] = _eye_dataset(
+            start + ns.astype("timedelta64[ns]"), eye, orientation, confidence, attrs
+        )
+    return HeadEyeRecording(head_ds, eyes["left_eye"], eyes["right_eye"])
+
+
+def _check_positive(**values) -> None:
+    for name, value in values.items():
+        if not (
+            isinstance(value, (int, float, np.number))
+            and np.isfinite(value)
+            and value > 0
+        ):
+            raise ValueError(f"{name} must be a positive finite number, got {value!r}")
+
+
+def _grid_ns(first: float, last: float, rate: float, rng, jitter: float) -> np.ndarray:
+    """Sample times in ns from ``first`` to before ``last`` (s); jitter in periods."""
+    n = int(np.floor((last - first) * rate))
+    k = np.arange(n, dtype=float)
+    if jitter:
+        k += rng.uniform(-jitter, jitter, n)
+    return np.round((first + k / rate) * 1e9).astype(np.int64)
+
+
+def _tracker_confidence(rng, t: np.ndarray) -> np.ndarray:
+    """T265 confidence levels: low while starting up, a few medium stretches."""
+    level = np.full(t.shape, 3.0)
+    level[t < 1.0] = 2.0
+    level[t < 0.25] = 1.0
+    for onset in rng.uniform(0.1 * t[-1], 0.9 * t[-1], 3):
+        level[(t >= onset) & (t < onset + rng.uniform(0.5, 1.5))] = 2.0
+    return level / 3.0
+
+
+def _head_dataset(time, head, index, rng, attrs):
+    variables = {
+        "position": head.position[index],
+        "linear_velocity": head.linear_velocity[index],
+        "angular_velocity": head.angular_velocity[index],
+        "confidence": _tracker_confidence(rng, head.t[index]),
+        "orientation": head.orientation[index],
+    }
+    description = (
+        "Synthetic head tracker (RealSense T265 conventions): pose of the head wrt "
+        "a world frame at its starting pose (x right, y up, z backwards); "
+        "velocities are wrt world and represented in world."
+    )
+    return motion_dataset(
+        time,
+        variables,
+        {**attrs, "description": description},
+        {"confidence": {"long_name": "Tracker confidence", "units": "1"}},
+    )
+
+
+def _eye_dataset(time, eye, orientation, confidence, attrs):
+    variables = {
+        "position": np.broadcast_to(EYE_CENTERS[eye], (orientation.shape[0], 3)).copy(),
+        "orientation": orientation,
+        "confidence": confidence,
+    }
+    description = (
+        f"Synthetic {eye.replace('_', ' ')} tracker (Pupil Core conventions): pose of "
+        "the eye wrt the scene camera (x right, y down, z forward; gaze along the "
+        "eye's z axis)."
+    )
+    attrs = {
+        **attrs,
+        "description": description,
+        "scene_camera_translation": SCENE_CAMERA_TRANSLATION.copy(),
+        "scene_camera_rotation": SCENE_CAMERA_ROTATION.copy(),
+    }
+    variable_attrs = {
+        "position": {"long_name": "Eyeball centre", "units": "m"},
+        "orientation": {"long_name": "Eye orientation"},
+        "confidence": {"long_name": "Pupil detection confidence", "units": "1"},
+    }
+    return motion_dataset(time, variables, attrs, variable_attrs)

@@ -1,0 +1,849 @@
+"""Estimators: velocities from sampled motion, rotations and transforms from data.
+
+The velocity estimators follow rigid-body-motion: finite differences on
+(possibly uneven) timestamps, optional suppression of outliers found by
+second-order differences (the rejected samples are re-interpolated), and an
+optional 7th-order Butterworth low-pass applied forwards and backwards
+(``scipy.signal.filtfilt``) with ``cutoff`` as a fraction of the Nyquist
+frequency. Linear velocity uses numpy's gradient scheme; angular velocity uses
+the derivative of the not-a-knot cubic spline through the quaternions
+("quaternion" mode) or the gradient of the rotation vectors
+("rotation_vector" mode).
+
+``_linear_velocity`` and ``_angular_velocity`` are the array-level entry
+points used by the frame lookups; the public functions add axis handling,
+timestamp conversion and DataArray support around them.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ._kernels import differences as _dk
+from ._kernels import quaternion as _qk
+from ._kernels import rotations as _rk
+from .coordinates import _is_dataarray, _replace_dim
+
+__all__ = [
+    "best_fit_rotation",
+    "best_fit_transform",
+    "estimate_angular_velocity",
+    "estimate_linear_velocity",
+    "iterative_closest_point",
+    "shortest_arc_rotation",
+]
+
+_MODES = ("quaternion", "rotation_vector")
+_BUTTER_ORDER = 7
+# filtfilt's default padding, 3 * (number of filter coefficients)
+_FILTER_PADLEN = 3 * (_BUTTER_ORDER + 1)
+
+
+# ---------------------------------------------------------------------------
+# argument checks shared by the public and the array-level functions
+# ---------------------------------------------------------------------------
+
+
+def _check_options(outlier_thresh, cutoff, n: int, mode: str | None = None) -> None:
+    if mode is not None and mode not in _MODES:
+        raise ValueError(
+            f"mode must be 'quaternion' or 'rotation_vector', got {mode!r}"
+        )
+    if outlier_thresh is not None:
+        if not np.isscalar(outlier_thresh) or not outlier_thresh >= 0:
+            raise ValueError(
+                f"outlier_thresh must be a non-negative number, got {outlier_thresh!r}"
+            )
+    if cutoff is not None:
+        if not np.isscalar(cutoff) or not 0 < cutoff < 1:
+            raise ValueError(
+                f"cutoff must be a fraction of the Nyquist frequency in (0, 1), got {cutoff!r}"
+            )
+        if n <= _FILTER_PADLEN:
+            raise ValueError(
+                f"cutoff: the low-pass filter needs more than {_FILTER_PADLEN} samples, got {n}"
+            )
+
+
+def _seconds(timestamps: Any, n: int) -> np.ndarray:
+    """Timestamps as float64 seconds, validated against ``n`` samples.
+
+    datetime64/timedelta64 are converted exactly by their unit, relative to the
+    first sample (converting epoch nanoseconds to float directly, as the
+    reference does, rounds them to 256 ns around the year 2020).
+    """
+    t = np.asarray(getattr(timestamps, "values", timestamps))
+    if t.dtype.kind in "Mm":
+        if t.ndim == 1 and t.size:
+            if np.isnat(t).any():
+                raise ValueError("timestamps must not contain NaT")
+            t = (t - t[0]) / np.timedelta64(1, "s")
+    elif t.dtype.kind in "biuf":
+        t = t.astype(np.float64)
+    else:
+        raise ValueError(
+            f"timestamps must be numbers or datetime64, got dtype {t.dtype}"
+        )
+    if t.ndim != 1 or t.shape[0] != n:
+        raise ValueError(
+            f"timestamps must be one-dimensional with one entry per sample ({n}), "
+            f"got shape {t.shape}"
+        )
+    if not np.all(np.isfinite(t)):
+        raise ValueError("timestamps must be finite")
+    if n > 1 and not np.all(np.diff(t) > 0):
+        raise ValueError("timestamps must be strictly increasing")
+    return np.ascontiguousarray(t)
+
+
+# ---------------------------------------------------------------------------
+# numerics on (n, b, k) arrays: time first, b independent series
+# ---------------------------------------------------------------------------
+
+
+def _reject_outliers(t, values, score, thresh) -> np.ndarray:
+    keep = score <= thresh  # NaN scores are rejected too
+    kept = keep.sum(axis=0)
+    if kept.min() < 2:
+        raise ValueError(
+            f"outlier_thresh={thresh} keeps only {kept.min()} sample(s) of a series; "
+            f"at least 2 are needed to interpolate the others"
+        )
+    return _dk.interpolate_rejected(t, np.ascontiguousarray(values), keep)
+
+
+def _lowpass(values: np.ndarray, cutoff: float) -> np.ndarray:
+    """Zero-phase Butterworth low-pass along axis 0 of (n, ...).
+
+    Stretches of NaN (from gaps in the data or from rejected samples at the
+    ends) are left out: every finite stretch is filtered on its own, and those
+    too short for the filter become NaN, instead of the NaN spreading over
+    the whole series.
+    """
+    from scipy.signal import butter, filtfilt
+
+    b, a = butter(_BUTTER_ORDER, cutoff)
+    finite = np.isfinite(values)
+    if finite.all():
+        return filtfilt(b, a, values, axis=0)
+    flat = values.reshape(values.shape[0], -1)
+    out = np.full(flat.shape, np.nan)
+    for col in range(flat.shape[1]):
+        ok = np.isfinite(flat[:, col])
+        edges = np.flatnonzero(np.diff(np.concatenate(([0], ok.view(np.int8), [0]))))
+        for start, stop in zip(edges[::2], edges[1::2], strict=True):
+            if stop - start > _FILTER_PADLEN:
+                out[start:stop, col] = filtfilt(b, a, flat[start:stop, col])
+    return out.reshape(values.shape)
+
+
+def _linear_series(x: np.ndarray, t: np.ndarray, outlier_thresh, cutoff) -> np.ndarray:
+    n = x.shape[0]
+    if n < 2:
+        raise ValueError(
+            f"arr needs at least 2 samples to estimate a velocity, got {n}"
+        )
+    v = _dk.gradient(np.ascontiguousarray(x.reshape(n, -1)), t).reshape(x.shape)
+    if outlier_thresh is not None:
+        score = _dk.second_difference_score(np.ascontiguousarray(x))
+        v = _reject_outliers(t, v, score, outlier_thresh)
+    if cutoff is not None:
+        v = _lowpass(v, cutoff)
+    return v
+
+
+def _angular_series(
+    q: np.ndarray, t: np.ndarray, mode, outlier_thresh, cutoff
+) -> np.ndarray:
+    n, nb, _ = q.shape
+    zero = _rk.first_zero_row(np.ascontiguousarray(q.reshape(-1, 4)))
+    if zero >= 0:
+        raise ValueError(f"arr contains a zero quaternion (row {zero} when flattened)")
+    need_rv = mode == "rotation_vector" or outlier_thresh is not None
+    w = np.empty((n, nb, 3))
+    rv = np.empty((n, nb, 3)) if need_rv else None
+    for b in range(nb):
+        # q and -q are the same rotation: differentiate a sign-continuous series
+        qb = _rk.unflip(np.ascontiguousarray(q[:, b, :]))
+        if need_rv:
+            rv[:, b, :] = _rk.rotation_vectors(qb)
+        if mode == "rotation_vector":
+            if n < 2:
+                raise ValueError(
+                    f"arr needs at least 2 samples to estimate a velocity, got {n}"
+                )
+            w[:, b, :] = _dk.gradient(np.ascontiguousarray(rv[:, b, :]), t)
+            continue
+        missing = _dk.nan_rows(qb)
+        if not missing.any():
+            w[:, b, :] = _dk.angular_velocity_from_derivative(
+                qb, _dk.spline_derivative(qb, t)
+            )
+            continue
+        valid = ~missing
+        if valid.sum() < 2:
+            raise ValueError(
+                f"arr needs at least 2 samples without NaN to estimate a velocity, "
+                f"got {valid.sum()}"
+            )
+        qv = np.ascontiguousarray(qb[valid])
+        dq = _dk.spline_derivative(qv, np.ascontiguousarray(t[valid]))
+        w[:, b, :] = np.nan
+        w[valid, b, :] = _dk.angular_velocity_from_derivative(qv, dq)
+    if outlier_thresh is not None:
+        score = _dk.second_difference_score(rv)
+        w = _reject_outliers(t, w, score, outlier_thresh)
+    if cutoff is not None:
+        w = _lowpass(w, cutoff)
+    return w
+
+
+def _linear_velocity(arr, timestamps, outlier_thresh=None, cutoff=None) -> np.ndarray:
+    """Linear velocity of positions sampled in time (array level).
+
+    Parameters
+    ----------
+    arr : ndarray, shape (n, 3)
+        Positions, time along axis 0 (float64).
+    timestamps : ndarray, shape (n,)
+        Strictly increasing times in seconds (float64).
+    outlier_thresh, cutoff : float, optional
+        As in :func:`estimate_linear_velocity`.
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+    """
+    x = np.asarray(arr, dtype=np.float64)
+    t = _seconds(timestamps, x.shape[0])
+    _check_options(outlier_thresh, cutoff, x.shape[0])
+    return _linear_series(
+        x.reshape(x.shape[0], 1, -1), t, outlier_thresh, cutoff
+    ).reshape(x.shape)
+
+
+def _angular_velocity(
+    q, timestamps, mode="quaternion", outlier_thresh=None, cutoff=None
+) -> np.ndarray:
+    """Angular velocity of orientations sampled in time (array level).
+
+    Parameters
+    ----------
+    q : ndarray, shape (n, 4)
+        Quaternions (w, x, y, z), time along axis 0 (float64).
+    timestamps : ndarray, shape (n,)
+        Strictly increasing times in seconds (float64).
+    mode, outlier_thresh, cutoff
+        As in :func:`estimate_angular_velocity`.
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        In "quaternion" mode the vector part of ``2 q⁻¹ dq/dt``, i.e. the
+        angular velocity in the rotated (body) frame.
+    """
+    qa = np.asarray(q, dtype=np.float64)
+    if qa.ndim != 2 or qa.shape[1] != 4:
+        raise ValueError(f"q must have shape (n, 4), got {qa.shape}")
+    t = _seconds(timestamps, qa.shape[0])
+    _check_options(outlier_thresh, cutoff, qa.shape[0], mode)
+    return _angular_series(qa[:, None, :], t, mode, outlier_thresh, cutoff)[:, 0, :]
+
+
+# ---------------------------------------------------------------------------
+# public velocity estimators
+# ---------------------------------------------------------------------------
+
+
+def _unpack(arr, dim, axis, timestamps, time_axis):
+    """Data, spatial axis, time axis and timestamps of a (Data)Array input."""
+    if _is_dataarray(arr):
+        data = np.asarray(arr.values)
+        if dim is not None and axis is not None:
+            raise ValueError("give either dim or axis, not both")
+        if dim is not None:
+            if dim not in arr.dims:
+                raise ValueError(
+                    f"dim {dim!r} is not a dimension of arr {tuple(arr.dims)}"
+                )
+            axis = arr.dims.index(dim)
+        if isinstance(timestamps, str):
+            if timestamps in arr.dims:
+                t_axis = arr.dims.index(timestamps)
+            elif timestamps in arr.coords and arr.coords[timestamps].ndim == 1:
+                t_axis = arr.dims.index(arr.coords[timestamps].dims[0])
+            else:
+                raise ValueError(
+                    f"timestamps {timestamps!r} is not a coordinate of arr"
+                )
+            if time_axis is not None and time_axis % data.ndim != t_axis:
+                raise ValueError(
+                    f"time_axis={time_axis} contradicts timestamps={timestamps!r}"
+                )
+            if timestamps not in arr.coords:
+                raise ValueError(f"dimension {timestamps!r} of arr has no coordinate")
+            time_axis, timestamps = t_axis, arr.coords[timestamps].values
+        elif timestamps is None:
+            time_axis = 0 if time_axis is None else time_axis
+            if data.ndim < 2:
+                raise ValueError("arr needs a time axis besides the spatial one")
+            time_dim = arr.dims[time_axis % data.ndim]
+            if time_dim not in arr.coords:
+                raise ValueError(
+                    f"arr's time dimension {time_dim!r} has no coordinate; pass timestamps"
+                )
+            timestamps = arr.coords[time_dim].values
+    else:
+        if dim is not None:
+            raise ValueError("dim can only be given when arr is a DataArray")
+        data = np.asarray(arr)
+        if timestamps is None:
+            raise ValueError(
+                "timestamps must be given unless arr is a DataArray with a time coordinate"
+            )
+        if isinstance(timestamps, str):
+            raise ValueError(
+                "timestamps can only name a coordinate when arr is a DataArray"
+            )
+    if data.dtype.kind not in "biuf":
+        raise ValueError(f"arr must be numeric, got dtype {data.dtype}")
+    if data.ndim < 2:
+        raise ValueError(
+            f"arr must have a time axis and a spatial axis, got shape {data.shape}"
+        )
+    axis = -1 if axis is None else axis
+    time_axis = 0 if time_axis is None else time_axis
+    for value, name in ((axis, "axis"), (time_axis, "time_axis")):
+        if not -data.ndim <= value < data.ndim:
+            raise ValueError(
+                f"{name}={value} is out of range for arr with shape {data.shape}"
+            )
+    axis, time_axis = axis % data.ndim, time_axis % data.ndim
+    if axis == time_axis:
+        raise ValueError(f"the spatial axis and the time axis are both axis {axis}")
+    t = _seconds(timestamps, data.shape[time_axis])
+    return data.astype(np.float64, copy=False), axis, time_axis, t
+
+
+def _to_series(data, axis, time_axis):
+    moved = np.moveaxis(data, (time_axis, axis), (0, -1))
+    return moved.reshape(moved.shape[0], -1, moved.shape[-1]), moved.shape
+
+
+def _from_series(series, moved_shape, axis, time_axis, width):
+    out = series.reshape(moved_shape[:-1] + (width,))
+    return np.moveaxis(out, (0, -1), (time_axis, axis))
+
+
+def estimate_linear_velocity(
+    arr,
+    dim=None,
+    axis=None,
+    timestamps=None,
+    time_axis=None,
+    outlier_thresh=None,
+    cutoff=None,
+):
+    """Estimate linear velocity from positions sampled in time.
+
+    Parameters
+    ----------
+    arr : array_like or DataArray, shape (..., n, ..., 3, ...)
+        Positions (any number of spatial components is accepted).
+    dim : str, optional
+        For a DataArray, the dimension holding the spatial components.
+    axis : int, optional
+        The axis holding the spatial components; default the last.
+    timestamps : array_like or str, optional
+        Times of the samples along ``time_axis`` (numbers in seconds, or
+        datetime64), or for a DataArray the name of its time coordinate.
+        Required for plain arrays; defaults to the coordinate of the DataArray
+        dimension at ``time_axis``.
+    time_axis : int, optional
+        The axis along which the samples lie; default the first.
+    outlier_thresh : float, optional
+        Reject samples where the norm of the second-order differences of the
+        positions exceeds this and interpolate the velocity there (1e-3 suits
+        the Intel RealSense T265, whose position corrections cause jumps).
+    cutoff : float, optional
+        Low-pass the velocity (7th-order Butterworth, forwards and backwards)
+        at this fraction of the Nyquist frequency.
+
+    Returns
+    -------
+    ndarray or DataArray
+        Velocities, same shape (and coordinates) as ``arr``.
+
+    Raises
+    ------
+    ValueError
+        For missing, unsorted or mismatched timestamps, bad axes, a ``cutoff``
+        outside (0, 1) or too few samples.
+
+    Examples
+    --------
+    >>> estimate_linear_velocity([[0.0, 0, 0], [1, 0, 0], [2, 0, 0]], timestamps=[0, 1, 2])
+    array([[1., 0., 0.],
+           [1., 0., 0.],
+           [1., 0., 0.]])
+    """
+    data, axis, time_axis, t = _unpack(arr, dim, axis, timestamps, time_axis)
+    _check_options(outlier_thresh, cutoff, data.shape[time_axis])
+    series, moved_shape = _to_series(data, axis, time_axis)
+    v = _linear_series(series, t, outlier_thresh, cutoff)
+    out = _from_series(v, moved_shape, axis, time_axis, data.shape[axis])
+    if _is_dataarray(arr):
+        return arr.copy(data=out)
+    return out
+
+
+def estimate_angular_velocity(
+    arr,
+    dim=None,
+    axis=None,
+    timestamps=None,
+    time_axis=None,
+    mode="quaternion",
+    outlier_thresh=None,
+    cutoff=None,
+):
+    """Estimate angular velocity from orientations (quaternions) sampled in time.
+
+    Parameters
+    ----------
+    arr : array_like or DataArray, shape (..., n, ..., 4, ...)
+        Quaternions (w, x, y, z); sign flips between samples are harmless.
+    dim : str, optional
+        For a DataArray, the dimension holding the quaternion components.
+    axis : int, optional
+        The axis holding the quaternion components; default the last.
+    timestamps : array_like or str, optional
+        As in :func:`estimate_linear_velocity`.
+    time_axis : int, optional
+        The axis along which the samples lie; default the first.
+    mode : {"quaternion", "rotation_vector"}, default "quaternion"
+        "quaternion": vector part of ``2 q⁻¹ dq/dt`` with ``dq/dt`` from the
+        cubic spline through the samples (the angular velocity in the rotated
+        frame). "rotation_vector": numerical gradient of the rotation vectors.
+    outlier_thresh : float, optional
+        Reject samples where the norm of the second-order differences of the
+        rotation vectors exceeds this, and interpolate the velocity there.
+    cutoff : float, optional
+        Low-pass the velocity at this fraction of the Nyquist frequency.
+
+    Returns
+    -------
+    ndarray or DataArray
+        Angular velocities in rad/s, ``arr``'s shape with the quaternion axis
+        of length 3; a DataArray gets a ``cartesian_axis`` dimension (x, y, z)
+        in place of the quaternion one.
+
+    Raises
+    ------
+    ValueError
+        For an unknown ``mode``, a quaternion axis not of length 4, zero
+        quaternions, and the timestamp and option errors of
+        :func:`estimate_linear_velocity`.
+
+    Examples
+    --------
+    >>> q = [[np.cos(a / 2), 0, 0, np.sin(a / 2)] for a in (0.0, 0.1, 0.2, 0.3)]
+    >>> estimate_angular_velocity(q, timestamps=[0, 1, 2, 3]).round(6)
+    array([[0. , 0. , 0.1],
+           [0. , 0. , 0.1],
+           [0. , 0. , 0.1],
+           [0. , 0. , 0.1]])
+    """
+    data, axis, time_axis, t = _unpack(arr, dim, axis, timestamps, time_axis)
+    if data.shape[axis] != 4:
+        raise ValueError(
+            f"arr must have length 4 (w, x, y, z) along axis {axis}, got shape {data.shape}"
+        )
+    _check_options(outlier_thresh, cutoff, data.shape[time_axis], mode)
+    series, moved_shape = _to_series(data, axis, time_axis)
+    w = _angular_series(series, t, mode, outlier_thresh, cutoff)
+    out = _from_series(w, moved_shape, axis, time_axis, 3)
+    if not _is_dataarray(arr):
+        return out
+    import xarray as xr
+
+    coords, dims = _replace_dim(dict(arr.coords), tuple(arr.dims), axis, "cartesian", 3)
+    return xr.DataArray(out, coords, dims, arr.name, dict(arr.attrs))
+
+
+# ---------------------------------------------------------------------------
+# rotations and transforms between vector sets
+# ---------------------------------------------------------------------------
+
+
+def _vectors(v, axis, name: str) -> tuple[np.ndarray, int]:
+    data = np.asarray(v.values if _is_dataarray(v) else v)
+    if data.dtype.kind not in "biuf":
+        raise ValueError(f"{name} must be numeric, got dtype {data.dtype}")
+    data = data.astype(np.float64, copy=False)
+    if data.ndim == 0:
+        raise ValueError(
+            f"{name} must have an axis of length 3 (x, y, z), got a scalar"
+        )
+    ax = -1 if axis is None else axis
+    if not -data.ndim <= ax < data.ndim:
+        raise ValueError(
+            f"axis={ax} is out of range for {name} with shape {data.shape}"
+        )
+    ax %= data.ndim
+    if data.shape[ax] != 3:
+        raise ValueError(
+            f"{name} must have length 3 (x, y, z) along axis {ax}, got shape {data.shape}"
+        )
+    return data, ax
+
+
+def _dim_axis(v1, dim, axis):
+    if dim is None:
+        return axis
+    if not _is_dataarray(v1):
+        raise ValueError("dim can only be given when v1 is a DataArray")
+    if axis is not None:
+        raise ValueError("give either dim or axis, not both")
+    if dim not in v1.dims:
+        raise ValueError(f"dim {dim!r} is not a dimension of v1 {tuple(v1.dims)}")
+    return v1.dims.index(dim)
+
+
+def shortest_arc_rotation(v1, v2, dim=None, axis=None):
+    """Rotation by the smallest angle that turns the direction of v1 into v2's.
+
+    Finds ``r`` with ``v2 / |v2| = rot(r, v1) / |v1|``.
+
+    Parameters
+    ----------
+    v1, v2 : array_like, shape (..., 3, ...)
+        Vectors along ``axis``; the other axes broadcast. ``v1`` may be a
+        DataArray.
+    dim : str, optional
+        For a DataArray ``v1``, the dimension holding x, y, z.
+    axis : int, optional
+        The axis holding x, y, z; default the last.
+
+    Returns
+    -------
+    ndarray or DataArray, shape (..., 4, ...)
+        Unit quaternions (w >= 0) along ``axis``; for antiparallel vectors a
+        half turn about an axis perpendicular to them. A DataArray ``v1`` gives
+        a DataArray with a ``quaternion_axis`` dimension (w, x, y, z).
+
+    Raises
+    ------
+    ValueError
+        For axes not of length 3, shapes that do not broadcast, or zero vectors.
+
+    Examples
+    --------
+    >>> shortest_arc_rotation([1.0, 0, 0], [0, 1.0, 0]).round(6)
+    array([0.707107, 0.      , 0.      , 0.707107])
+    """
+    axis = _dim_axis(v1, dim, axis)
+    a, ax1 = _vectors(v1, axis, "v1")
+    b, ax2 = _vectors(v2, axis, "v2")
+    am, bm = np.moveaxis(a, ax1, -1), np.moveaxis(b, ax2, -1)
+    try:
+        am, bm = np.broadcast_arrays(am, bm)
+    except ValueError:
+        raise ValueError(
+            f"v1 and v2: shapes {a.shape} and {b.shape} cannot be broadcast together"
+        ) from None
+    na, nb = np.linalg.norm(am, axis=-1), np.linalg.norm(bm, axis=-1)
+    for norm, name in ((na, "v1"), (nb, "v2")):
+        if np.any(norm == 0):
+            raise ValueError(f"{name} contains a zero vector, which has no direction")
+    scale = na * nb
+    q = np.concatenate(
+        ((scale + np.einsum("...i,...i->...", am, bm))[..., None], np.cross(am, bm)),
+        axis=-1,
+    )
+    qn = np.linalg.norm(q, axis=-1)
+    # Antiparallel: the cross product vanishes, so any axis perpendicular to v1
+    # will do; take the one from the coordinate axis least aligned with v1.
+    opposite = qn <= 1e-8 * scale
+    if np.any(opposite):
+        a_opp = am[opposite]
+        helper = np.eye(3)[np.argmin(np.abs(a_opp), axis=-1)]
+        perp = np.cross(a_opp, helper)
+        q[opposite] = np.concatenate(
+            (
+                np.zeros((len(perp), 1)),
+                perp / np.linalg.norm(perp, axis=-1, keepdims=True),
+            ),
+            axis=-1,
+        )
+        qn = np.where(opposite, 1.0, qn)
+    q = q / qn[..., None]
+    pos = (
+        axis
+        if axis is not None and axis >= 0
+        else q.ndim + (-1 if axis is None else axis)
+    )
+    out = np.moveaxis(q, -1, min(max(pos, 0), q.ndim - 1))
+    if _is_dataarray(v1) and out.shape == a.shape[:ax1] + (4,) + a.shape[ax1 + 1 :]:
+        import xarray as xr
+
+        coords, dims = _replace_dim(
+            dict(v1.coords), tuple(v1.dims), ax1, "quaternion", 4
+        )
+        return xr.DataArray(out, coords, dims, v1.name, dict(v1.attrs))
+    return out
+
+
+def _point_rows(v1, v2, dim, axis, same_shape: bool) -> tuple[np.ndarray, np.ndarray]:
+    axis = _dim_axis(v1, dim, axis)
+    a, ax1 = _vectors(v1, axis, "v1")
+    b, ax2 = _vectors(v2, axis, "v2")
+    if a.ndim < 2:
+        raise ValueError(
+            f"v1 must be an array of vectors with at least 2 dimensions, got shape {a.shape}"
+        )
+    rows1 = np.moveaxis(a, ax1, -1).reshape(-1, 3)
+    rows2 = np.moveaxis(b, ax2, -1).reshape(-1, 3)
+    if same_shape and a.shape != b.shape:
+        raise ValueError(
+            f"v1 and v2 must have the same shape, got {a.shape} and {b.shape}"
+        )
+    for rows, name in ((rows1, "v1"), (rows2, "v2")):
+        if not np.all(np.isfinite(rows)):
+            raise ValueError(f"{name} must be finite")
+    return rows1, rows2
+
+
+def _rotation_from_covariance(h: np.ndarray) -> np.ndarray:
+    """Kabsch: the proper rotation R minimising sum |R p1 - p2|² for h = p1^T p2."""
+    u, _, vt = np.linalg.svd(h)
+    r = vt.T @ u.T
+    if np.linalg.det(r) < 0:  # a reflection fits better: take the best rotation
+        vt[2, :] *= -1
+        r = vt.T @ u.T
+    return r
+
+
+def _check_rank(h: np.ndarray, what: str) -> None:
+    s = np.linalg.svd(h, compute_uv=False)
+    if not s[1] > 1e-10 * s[0]:
+        raise ValueError(
+            f"{what} are collinear (or all zero): the rotation about their common "
+            f"line is undetermined"
+        )
+
+
+def _quaternion(r: np.ndarray) -> np.ndarray:
+    return _qk.quaternion_from_matrix(np.ascontiguousarray(r[None]))[0]
+
+
+def _fit_transform(p1: np.ndarray, p2: np.ndarray, check: bool):
+    c1, c2 = p1.mean(axis=0), p2.mean(axis=0)
+    h = (p1 - c1).T @ (p2 - c2)
+    if check:
+        _check_rank(h, "the points of v1 or v2 (after removing their centroids)")
+    r = _rotation_from_covariance(h)
+    return c2 - r @ c1, r
+
+
+def _rotation_dataarray(rotation):
+    import xarray as xr
+
+    labels = {"quaternion_axis": ["w", "x", "y", "z"]}
+    return xr.DataArray(rotation, labels, "quaternion_axis", name="rotation")
+
+
+def _transform_dataarrays(translation, rotation):
+    import xarray as xr
+
+    labels = {"cartesian_axis": ["x", "y", "z"]}
+    translation = xr.DataArray(
+        translation, labels, "cartesian_axis", name="translation"
+    )
+    return translation, _rotation_dataarray(rotation)
+
+
+def best_fit_rotation(v1, v2, dim=None, axis=None):
+    """Least-squares rotation between corresponding vectors (Kabsch).
+
+    Finds the rotation ``r`` that minimises ``|| v2 - rot(r, v1) ||``.
+
+    Parameters
+    ----------
+    v1, v2 : array_like, shape (..., 3, ...)
+        Corresponding vectors (same shape, at least 2 dimensions, not all
+        collinear). ``v1`` may be a DataArray.
+    dim : str, optional
+        For a DataArray ``v1``, the dimension holding x, y, z.
+    axis : int, optional
+        The axis holding x, y, z; default the last.
+
+    Returns
+    -------
+    ndarray or DataArray, shape (4,)
+        Unit quaternion with w >= 0 (a DataArray named "rotation" if ``v1``
+        is one). Always a proper rotation, never a reflection.
+
+    Raises
+    ------
+    ValueError
+        For shapes that differ or have no length-3 axis, non-finite values, or
+        vectors that are all collinear.
+
+    Examples
+    --------
+    >>> best_fit_rotation([[1.0, 0, 0], [0, 1, 0]], [[0, 1.0, 0], [-1, 0, 0]]).round(6)
+    array([0.707107, 0.      , 0.      , 0.707107])
+    """
+    p1, p2 = _point_rows(v1, v2, dim, axis, same_shape=True)
+    h = p1.T @ p2
+    _check_rank(h, "the vectors of v1 or v2")
+    rotation = _quaternion(_rotation_from_covariance(h))
+    if _is_dataarray(v1):
+        return _rotation_dataarray(rotation)
+    return rotation
+
+
+def best_fit_transform(v1, v2, dim=None, axis=None):
+    """Least-squares rigid transform between corresponding points.
+
+    Finds the rotation ``r`` and translation ``t`` that minimise
+    ``|| v2 - (rot(r, v1) + t) ||``.
+
+    Parameters
+    ----------
+    v1, v2 : array_like, shape (..., 3, ...)
+        Corresponding points (same shape, at least 3 points not on one line).
+        ``v1`` may be a DataArray.
+    dim : str, optional
+        For a DataArray ``v1``, the dimension holding x, y, z.
+    axis : int, optional
+        The axis holding x, y, z; default the last.
+
+    Returns
+    -------
+    translation : ndarray or DataArray, shape (3,)
+    rotation : ndarray or DataArray, shape (4,)
+        Unit quaternion with w >= 0. DataArrays ("translation",
+        "rotation") if ``v1`` is one.
+
+    Raises
+    ------
+    ValueError
+        For shapes that differ or have no length-3 axis, non-finite values,
+        fewer than 3 points or collinear points.
+
+    Examples
+    --------
+    >>> p = np.eye(3)
+    >>> t, r = best_fit_transform(p, p + [1.0, 2.0, 3.0])
+    >>> t.round(6), r.round(6) + 0.0  # + 0.0 turns -0.0 into 0.0
+    (array([1., 2., 3.]), array([1., 0., 0., 0.]))
+    """
+    p1, p2 = _point_rows(v1, v2, dim, axis, same_shape=True)
+    if len(p1) < 3:
+        raise ValueError(
+            f"v1 and v2 need at least 3 points to fix a rigid transform, got {len(p1)}"
+        )
+    translation, r = _fit_transform(p1, p2, check=True)
+    rotation = _quaternion(r)
+    if _is_dataarray(v1):
+        return _transform_dataarrays(translation, rotation)
+    return translation, rotation
+
+
+def iterative_closest_point(
+    v1, v2, dim=None, axis=None, init_transform=None, max_iterations=20, tolerance=1e-3
+):
+    """Rigid transform aligning two point sets without known correspondences.
+
+    Repeatedly pairs every point of ``v1`` (moved by the current estimate)
+    with its nearest neighbour in ``v2`` and refits the transform, until the
+    mean pairing distance changes by less than ``tolerance``. Finds ``r`` and
+    ``t`` with ``v2 ~ rot(r, v1) + t``.
+
+    Parameters
+    ----------
+    v1, v2 : array_like, shape (..., 3, ...)
+        Point sets (sizes may differ; at least 3 points each, v1 not collinear).
+        ``v1`` may be a DataArray.
+    dim : str, optional
+        For a DataArray ``v1``, the dimension holding x, y, z.
+    axis : int, optional
+        The axis holding x, y, z; default the last.
+    init_transform : tuple of array_like, optional
+        Initial guess ``(translation (3,), rotation (4,))``.
+    max_iterations : int, default 20
+        Maximum number of iterations.
+    tolerance : float, default 1e-3
+        Stop when the mean distance improves by less than this.
+
+    Returns
+    -------
+    translation : ndarray or DataArray, shape (3,)
+    rotation : ndarray or DataArray, shape (4,)
+        Unit quaternion with w >= 0.
+
+    Raises
+    ------
+    ValueError
+        For axes not of length 3, non-finite values, fewer than 3 points,
+        collinear ``v1``, a malformed ``init_transform`` or negative
+        ``max_iterations``/``tolerance``.
+
+    Notes
+    -----
+    Points with known correspondences (e.g. two time series resampled to the
+    same timestamps) are better matched with :func:`best_fit_transform`.
+    """
+    from scipy.spatial import cKDTree
+
+    p1, p2 = _point_rows(v1, v2, dim, axis, same_shape=False)
+    for rows, name in ((p1, "v1"), (p2, "v2")):
+        if len(rows) < 3:
+            raise ValueError(f"{name} needs at least 3 points for ICP, got {len(rows)}")
+    _check_rank((p1 - p1.mean(axis=0)).T @ (p1 - p1.mean(axis=0)), "the points of v1")
+    if int(max_iterations) != max_iterations or max_iterations < 0:
+        raise ValueError(
+            f"max_iterations must be a non-negative integer, got {max_iterations!r}"
+        )
+    if not np.isscalar(tolerance) or not tolerance >= 0:
+        raise ValueError(f"tolerance must be a non-negative number, got {tolerance!r}")
+
+    moved = p1.copy()
+    if init_transform is not None:
+        try:
+            t0, r0 = init_transform
+        except (TypeError, ValueError):
+            raise ValueError(
+                "init_transform must be a (translation, rotation) tuple"
+            ) from None
+        t0 = np.asarray(getattr(t0, "values", t0), dtype=float)
+        r0 = np.asarray(getattr(r0, "values", r0), dtype=float)
+        if t0.shape != (3,) or r0.shape != (4,):
+            raise ValueError(
+                f"init_transform must hold a translation of shape (3,) and a rotation of "
+                f"shape (4,), got {t0.shape} and {r0.shape}"
+            )
+        if not np.any(r0):
+            raise ValueError("init_transform: the rotation is a zero quaternion")
+        moved = _qk.rotate_vectors(np.ascontiguousarray(r0[None]), moved) + t0
+
+    tree = cKDTree(p2)
+    prev_error = 0.0
+    for _ in range(int(max_iterations)):
+        distances, idx = tree.query(moved, 1)
+        t, r = _fit_transform(moved, p2[idx], check=False)
+        moved = moved @ r.T + t
+        error = float(np.mean(distances))
+        if abs(prev_error - error) < tolerance:
+            break
+        prev_error = error
+
+    translation, r = _fit_transform(p1, moved, check=False)
+    rotation = _quaternion(r)
+    if _is_dataarray(v1):
+        return _transform_dataarrays(translation, rotation)
+    return translation, rotation

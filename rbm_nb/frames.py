@@ -1,0 +1,784 @@
+"""Reference frames, the trees they form, and the registry of named frames.
+
+A :class:`ReferenceFrame` is a node in a tree: its translation and rotation
+map points given in the frame into its parent (``p_parent = rot(r, p) + t``),
+either once (static) or per timestamp (moving; ``discrete`` frames hold each
+value until the next event). Arrays are validated once, here, and stored
+read-only, so lookups never re-check them.
+
+The transforms and lookups themselves live in :mod:`rbm_nb.transforms` and
+:mod:`rbm_nb.lookups`; the methods here forward to them.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Callable, Iterator, Mapping
+
+import numpy as np
+
+from . import _timestamps
+from ._validation import as_float_array, check_finite, normalize_quaternions
+
+__all__ = [
+    "ReferenceFrame",
+    "registry",
+    "register_frame",
+    "deregister_frame",
+    "clear_registry",
+    "render_tree",
+    "on_registry_change",
+    "remove_registry_callback",
+]
+
+
+# ---------------------------------------------------------------------------
+# registry
+# ---------------------------------------------------------------------------
+
+
+class FrameRegistry(Mapping):
+    """Read-only mapping of names to registered frames.
+
+    Change it with :func:`register_frame`, :meth:`ReferenceFrame.register`,
+    :func:`deregister_frame` and :func:`clear_registry`; observers added with
+    :func:`on_registry_change` are told about every change.
+    """
+
+    def __init__(self):
+        self._frames: dict[str, ReferenceFrame] = {}
+        self._callbacks: list[Callable[[str, str | None], None]] = []
+
+    def __getitem__(self, name):
+        return self._frames[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._frames)
+
+    def __len__(self) -> int:
+        return len(self._frames)
+
+    def __contains__(self, name) -> bool:
+        return name in self._frames
+
+    def __repr__(self) -> str:
+        return repr(self._frames)
+
+    def _notify(self, event: str, name: str | None) -> None:
+        for callback in list(self._callbacks):
+            callback(event, name)
+
+
+registry = FrameRegistry()
+
+
+def on_registry_change(callback: Callable[[str, str | None], None]):
+    """Call ``callback(event, name)`` after every change of the registry.
+
+    ``event`` is ``"register"``, ``"deregister"`` or ``"clear"`` (with
+    ``name`` None). Returns the callback, so this works as a decorator.
+    """
+    registry._callbacks.append(callback)
+    return callback
+
+
+def remove_registry_callback(callback) -> None:
+    """Stop calling a callback added with :func:`on_registry_change`."""
+    try:
+        registry._callbacks.remove(callback)
+    except ValueError:
+        raise ValueError(f"{callback!r} is not a registry callback") from None
+
+
+def _register(frame: ReferenceFrame, update: bool = False) -> None:
+    name = frame.name
+    if name is None:
+        raise ValueError("cannot register a frame without a name; pass name=...")
+    old = registry._frames.get(name)
+    if old is not None and old is not frame:
+        if not update:
+            raise ValueError(
+                f"a frame named {name!r} is already registered; pass update=True "
+                f"to replace it"
+            )
+        # the new frame takes over the old one's children, so that frames
+        # below it see the new data instead of a detached copy
+        for child in old.children:
+            child.parent = frame
+        old.parent = None
+    registry._frames[name] = frame
+    registry._notify("register", name)
+
+
+def _deregister(name: str) -> None:
+    if name not in registry._frames:
+        raise ValueError(_not_found_message(name))
+    del registry._frames[name]
+    registry._notify("deregister", name)
+
+
+def _not_found_message(name: str) -> str:
+    names = list(registry._frames)
+    close = difflib.get_close_matches(str(name), names, n=3)
+    msg = f"frame {name!r} not found in registry"
+    if close:
+        msg += "; did you mean " + " or ".join(repr(c) for c in close) + "?"
+    elif names:
+        msg += f" (registered: {', '.join(repr(n) for n in names)})"
+    else:
+        msg += " (the registry is empty)"
+    return msg
+
+
+def _resolve(frame, argument: str = "frame") -> ReferenceFrame:
+    """A ReferenceFrame from a frame or the name of a registered one."""
+    if isinstance(frame, ReferenceFrame):
+        return frame
+    if isinstance(frame, str):
+        try:
+            return registry._frames[frame]
+        except KeyError:
+            raise ValueError(f"{argument}: {_not_found_message(frame)}") from None
+    raise TypeError(
+        f"{argument} must be a ReferenceFrame or the name of a registered frame, "
+        f"got {type(frame).__name__}"
+    )
+
+
+def register_frame(
+    name,
+    parent=None,
+    translation=None,
+    rotation=None,
+    timestamps=None,
+    inverse=False,
+    discrete=False,
+    update=False,
+) -> None:
+    """Create a reference frame and register it under ``name``.
+
+    Parameters are those of :class:`ReferenceFrame`, plus
+
+    update : bool, default False
+        Replace a frame already registered under this name (its children
+        move to the new frame). Otherwise that is an error.
+    """
+    frame = ReferenceFrame(
+        name,
+        parent=parent,
+        translation=translation,
+        rotation=rotation,
+        timestamps=timestamps,
+        inverse=inverse,
+        discrete=discrete,
+    )
+    _register(frame, update=update)
+
+
+def deregister_frame(name: str) -> None:
+    """Remove the frame registered under ``name`` from the registry."""
+    _deregister(name)
+
+
+def clear_registry() -> None:
+    """Remove every frame from the registry."""
+    registry._frames.clear()
+    registry._notify("clear", None)
+
+
+def render_tree(root) -> None:
+    """Print the tree below ``root`` (a frame or a registered name).
+
+    Examples
+    --------
+    >>> world = ReferenceFrame("world")
+    >>> _ = ReferenceFrame("observer", parent=world)
+    >>> _ = ReferenceFrame("body", parent=world)
+    >>> render_tree(world)
+    world
+    ├── observer
+    └── body
+    """
+    for line in _tree_lines(_resolve(root, "root")):
+        print(line)
+
+
+def _tree_lines(frame: ReferenceFrame, prefix: str = "", branch: str = ""):
+    yield f"{prefix}{branch}{frame.name}"
+    if branch:
+        prefix += "    " if branch.startswith("└") else "│   "
+    children = frame.children
+    for i, child in enumerate(children):
+        yield from _tree_lines(
+            child, prefix, "└── " if i == len(children) - 1 else "├── "
+        )
+
+
+# ---------------------------------------------------------------------------
+# the frame
+# ---------------------------------------------------------------------------
+
+
+class ReferenceFrame:
+    """A three-dimensional reference frame, static or moving.
+
+    Parameters
+    ----------
+    name : str, optional
+        The name of the frame (needed to register it).
+    parent : str or ReferenceFrame, optional
+        The parent frame, or the name of a registered frame. Without a
+        parent the frame is the root of a new tree.
+    translation : array_like, shape (3,) or (n, 3), optional
+        Position of this frame's origin in the parent frame (zeros if
+        omitted). Shape (n, 3) with ``timestamps``.
+    rotation : array_like, shape (4,) or (n, 4), optional
+        Orientation of this frame wrt the parent as unit quaternions w, x, y,
+        z (identity if omitted). Norms within ``UNIT_QUATERNION_TOLERANCE``
+        of 1 are normalised.
+    timestamps : array_like, shape (n,), optional
+        Strictly increasing numeric or datetime64 times of a moving frame.
+    inverse : bool, default False
+        The translation and rotation describe the parent wrt this frame.
+    discrete : bool, default False
+        The timestamps are events: each transform holds until the next one
+        instead of being interpolated.
+
+    Raises
+    ------
+    ValueError
+        If arrays have the wrong shape or values, the timestamps are not
+        strictly increasing, a root frame is given a transform, or
+        ``discrete`` is set without timestamps.
+    """
+
+    def __init__(
+        self,
+        name=None,
+        parent=None,
+        translation=None,
+        rotation=None,
+        timestamps=None,
+        inverse=False,
+        discrete=False,
+    ):
+        if name is not None and not isinstance(name, str):
+            raise ValueError(f"name must be a string, got {type(name).__name__}")
+        self.name = name
+        self._parent: ReferenceFrame | None = None
+        self._children: list[ReferenceFrame] = []
+        self._coefficients = None
+        # frames created as roots have no transform of their own (None)
+        self._has_transform = parent is not None
+        if parent is None:
+            for arg, value in (
+                ("translation", translation),
+                ("rotation", rotation),
+                ("timestamps", timestamps),
+            ):
+                if value is not None:
+                    raise ValueError(
+                        f"frame {name!r}: {arg} given without a parent frame; a "
+                        f"root frame has no transform"
+                    )
+            self._track = None
+            self._t = np.zeros((1, 3))
+            self._r = np.array([[1.0, 0.0, 0.0, 0.0]])
+            self._rotation_public = self._r
+        else:
+            parent = _resolve(parent, "parent")
+            self._init_arrays(translation, rotation, timestamps, inverse)
+        if discrete and self._track is None:
+            raise ValueError(
+                f"frame {name!r}: discrete=True needs timestamps (the times of the events)"
+            )
+        self.discrete = bool(discrete)
+        if parent is not None:
+            self.parent = parent
+
+    def _init_arrays(self, translation, rotation, timestamps, inverse) -> None:
+        from ._kernels import quaternion as kq
+        from ._kernels import resample as kr
+
+        label = f"frame {self.name!r}: " if self.name is not None else ""
+        if timestamps is not None:
+            self._track = _timestamps.as_track(timestamps, f"{label}timestamps")
+            n = len(self._track)
+            t_shape, r_shape = (n, 3), (n, 4)
+        else:
+            self._track = None
+            t_shape, r_shape = (3,), (4,)
+
+        if translation is None:
+            t = np.zeros(t_shape)
+        else:
+            t = as_float_array(translation, f"{label}translation")
+            if t.shape != t_shape:
+                raise ValueError(_shape_message(label, "translation", t.shape, t_shape))
+            check_finite(t, f"{label}translation")
+        if rotation is None:
+            r = np.zeros(r_shape)
+            r[..., 0] = 1.0
+        else:
+            r = as_float_array(rotation, f"{label}rotation")
+            if r.shape != r_shape:
+                raise ValueError(_shape_message(label, "rotation", r.shape, r_shape))
+            r = normalize_quaternions(r, f"{label}rotation")
+        # private copies: the caller's arrays may change later
+        t = np.array(t.reshape(-1, 3), dtype=np.float64, order="C")
+        r = np.array(r.reshape(-1, 4), dtype=np.float64, order="C")
+        if inverse:
+            r = kq.qconj(r)  # unit quaternions: the conjugate is the inverse
+            t = -kq.rotate_vectors(r, t)
+        self._t = t
+        self._rotation_public = r
+        # interpolation needs consecutive samples on the same hemisphere
+        self._r = kr.unflip(r) if self._track is not None and len(r) > 1 else r
+
+    # -- data -------------------------------------------------------------
+
+    @property
+    def translation(self):
+        """Translation wrt the parent, shape (3,) or (n, 3); None for a root."""
+        if not self._has_transform:
+            return None
+        return _read_only(self._t if self._track is not None else self._t[0])
+
+    @property
+    def rotation(self):
+        """Rotation wrt the parent, shape (4,) or (n, 4); None for a root."""
+        if not self._has_transform:
+            return None
+        r = self._rotation_public
+        return _read_only(r if self._track is not None else r[0])
+
+    @property
+    def timestamps(self):
+        """Timestamps of a moving frame as given, shape (n,); None if static."""
+        return None if self._track is None else _read_only(self._track.values)
+
+    def _squad_coefficients(self):
+        # frames are immutable, so the spline coefficients can be kept
+        if self._coefficients is None:
+            from ._kernels import quaternion as kq
+
+            a_coef, b_coef = kq.squad_coefficients(self._r, self._track.base)
+            seg = kq.squad_segments(self._r, a_coef, b_coef)
+            self._coefficients = (a_coef, b_coef, seg)
+        return self._coefficients
+
+    def __repr__(self) -> str:
+        return f"<ReferenceFrame {self.name!r}>"
+
+    __str__ = __repr__
+
+    # -- tree -------------------------------------------------------------
+
+    @property
+    def parent(self) -> ReferenceFrame | None:
+        """The parent frame (None for a root). Settable; cycles are refused."""
+        return self._parent
+
+    @parent.setter
+    def parent(self, parent) -> None:
+        if parent is not None:
+            parent = _resolve(parent, "parent")
+            node = parent
+            while node is not None:
+                if node is self:
+                    raise ValueError(
+                        f"cannot make {parent.name!r} the parent of {self.name!r}: "
+                        f"{parent.name!r} is {self.name!r} or below it, which would "
+                        f"make a cycle"
+                    )
+                node = node._parent
+        if self._parent is not None:
+            self._parent._children.remove(self)
+        self._parent = parent
+        if parent is not None:
+            parent._children.append(self)
+
+    @property
+    def children(self) -> tuple:
+        """The frames whose parent this is, in order of attachment."""
+        return tuple(self._children)
+
+    def _path_to_root(self) -> list:
+        path = []
+        node = self
+        while node is not None:
+            path.append(node)
+            node = node._parent
+        return path
+
+    def iter_path_reverse(self):
+        """Iterate from this frame up to the root (inclusive)."""
+        node = self
+        while node is not None:
+            yield node
+            node = node._parent
+
+    @property
+    def path(self) -> tuple:
+        """The frames from the root down to this one."""
+        return tuple(reversed(self._path_to_root()))
+
+    @property
+    def ancestors(self) -> tuple:
+        """The frames from the root down to the parent."""
+        return self.path[:-1]
+
+    @property
+    def root(self) -> ReferenceFrame:
+        """The root of this frame's tree."""
+        return self._path_to_root()[-1]
+
+    @property
+    def depth(self) -> int:
+        """Number of edges between this frame and the root."""
+        return len(self._path_to_root()) - 1
+
+    @property
+    def descendants(self) -> tuple:
+        """Every frame below this one, depth first."""
+        out = []
+        stack = list(reversed(self._children))
+        while stack:
+            node = stack.pop()
+            out.append(node)
+            stack.extend(reversed(node._children))
+        return tuple(out)
+
+    @property
+    def height(self) -> int:
+        """Number of edges on the longest path down to a leaf."""
+        if not self._children:
+            return 0
+        return 1 + max(child.height for child in self._children)
+
+    @property
+    def is_root(self) -> bool:
+        return self._parent is None
+
+    @property
+    def is_leaf(self) -> bool:
+        return not self._children
+
+    @property
+    def leaves(self) -> tuple:
+        """The frames without children at or below this one."""
+        if not self._children:
+            return (self,)
+        return tuple(node for node in self.descendants if not node._children)
+
+    @property
+    def siblings(self) -> tuple:
+        """The other children of this frame's parent."""
+        if self._parent is None:
+            return ()
+        return tuple(c for c in self._parent._children if c is not self)
+
+    # -- construction from xarray ------------------------------------------
+
+    @classmethod
+    def from_dataset(
+        cls,
+        ds,
+        translation,
+        rotation,
+        timestamps,
+        parent,
+        name=None,
+        inverse=False,
+        discrete=False,
+    ) -> ReferenceFrame:
+        """A moving frame from variables of an xarray Dataset.
+
+        Parameters
+        ----------
+        ds : xarray.Dataset
+        translation, rotation : str
+            Names of the variables with shape (n, 3) and (n, 4).
+        timestamps : str
+            Name of the variable or coordinate with the n timestamps.
+        parent : str or ReferenceFrame
+        name : str, optional
+        inverse, discrete : bool, default False
+            As for :class:`ReferenceFrame`.
+        """
+        from ._xarray import dataset_variable
+
+        return cls(
+            name,
+            parent,
+            translation=dataset_variable(ds, translation, "translation"),
+            rotation=dataset_variable(ds, rotation, "rotation"),
+            timestamps=dataset_variable(ds, timestamps, "timestamps"),
+            inverse=inverse,
+            discrete=discrete,
+        )
+
+    @classmethod
+    def from_translation_dataarray(
+        cls, da, timestamps, parent, name=None, inverse=False, discrete=False
+    ) -> ReferenceFrame:
+        """A moving frame (no rotation) from a translation DataArray, shape (n, 3).
+
+        ``timestamps`` names the coordinate holding the n timestamps.
+        """
+        from ._xarray import dataarray_coordinate
+
+        return cls(
+            name,
+            parent,
+            translation=da.data,
+            timestamps=dataarray_coordinate(da, timestamps),
+            inverse=inverse,
+            discrete=discrete,
+        )
+
+    @classmethod
+    def from_rotation_dataarray(
+        cls, da, timestamps, parent, name=None, inverse=False, discrete=False
+    ) -> ReferenceFrame:
+        """A moving frame (no translation) from a rotation DataArray, shape (n, 4).
+
+        ``timestamps`` names the coordinate holding the n timestamps.
+        """
+        from ._xarray import dataarray_coordinate
+
+        return cls(
+            name,
+            parent,
+            rotation=da.data,
+            timestamps=dataarray_coordinate(da, timestamps),
+            inverse=inverse,
+            discrete=discrete,
+        )
+
+    @classmethod
+    def from_rotation_matrix(
+        cls, mat, parent, name=None, inverse=False
+    ) -> ReferenceFrame:
+        """A static frame rotated by a (3, 3) rotation matrix wrt its parent."""
+        from ._kernels import quaternion as kq
+
+        mat = as_float_array(mat, "mat")
+        if mat.shape != (3, 3):
+            raise ValueError(f"mat must have shape (3, 3), got {mat.shape}")
+        check_finite(mat, "mat")
+        if not np.allclose(mat @ mat.T, np.eye(3), atol=1e-6) or np.linalg.det(mat) < 0:
+            raise ValueError("mat must be a rotation matrix (orthonormal, det +1)")
+        q = kq.quaternion_from_matrix(np.ascontiguousarray(mat[None]))[0]
+        return cls(name, parent, rotation=q, inverse=inverse)
+
+    # -- registry ----------------------------------------------------------
+
+    def register(self, update: bool = False) -> None:
+        """Register this frame under its name (``update`` replaces another)."""
+        _register(self, update=update)
+
+    def deregister(self) -> None:
+        """Remove this frame's name from the registry."""
+        _deregister(self.name)
+
+    # -- lookups and transforms (see rbm_nb.lookups / rbm_nb.transforms) ----
+
+    def lookup_transform(self, to_frame):
+        """Transform from this frame to ``to_frame``.
+
+        Returns
+        -------
+        t : ndarray, shape (3,) or (n, 3)
+        r : ndarray, shape (4,) or (n, 4)
+        ts : ndarray, shape (n,), or None if static
+        """
+        from .lookups import _frame_lookup_transform
+
+        return _frame_lookup_transform(self, to_frame)
+
+    def get_transformation(self, to_frame):
+        """Deprecated alias of :meth:`lookup_transform`."""
+        import warnings
+
+        warnings.warn(
+            "get_transformation is deprecated, use lookup_transform instead",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.lookup_transform(to_frame)
+
+    def lookup_twist(
+        self,
+        reference=None,
+        represent_in=None,
+        outlier_thresh=None,
+        cutoff=None,
+        mode="quaternion",
+        allow_static=False,
+        return_timestamps=False,
+    ):
+        """Linear and angular velocity of this frame wrt ``reference``.
+
+        Both default to the parent frame. Returns ``(linear, angular)``
+        with shape (n, 3) each, plus the timestamps if ``return_timestamps``.
+        """
+        from .lookups import _frame_lookup_twist
+
+        linear, angular, ts = _frame_lookup_twist(
+            self, reference, represent_in, outlier_thresh, cutoff, mode, allow_static
+        )
+        return (linear, angular, ts) if return_timestamps else (linear, angular)
+
+    def lookup_linear_velocity(
+        self,
+        reference=None,
+        represent_in=None,
+        outlier_thresh=None,
+        cutoff=None,
+        allow_static=False,
+        return_timestamps=False,
+    ):
+        """Linear velocity of this frame wrt ``reference``, shape (n, 3)."""
+        from .lookups import _frame_lookup_linear_velocity
+
+        linear, ts = _frame_lookup_linear_velocity(
+            self, reference, represent_in, outlier_thresh, cutoff, allow_static
+        )
+        return (linear, ts) if return_timestamps else linear
+
+    def lookup_angular_velocity(
+        self,
+        reference=None,
+        represent_in=None,
+        outlier_thresh=None,
+        cutoff=None,
+        mode="quaternion",
+        allow_static=False,
+        return_timestamps=False,
+    ):
+        """Angular velocity of this frame wrt ``reference``, shape (n, 3)."""
+        from .lookups import _frame_lookup_angular_velocity
+
+        angular, ts = _frame_lookup_angular_velocity(
+            self, reference, represent_in, outlier_thresh, cutoff, mode, allow_static
+        )
+        return (angular, ts) if return_timestamps else angular
+
+    def transform_points(
+        self,
+        arr,
+        to_frame,
+        axis=-1,
+        time_axis=0,
+        timestamps=None,
+        return_timestamps=False,
+    ):
+        """Points given in this frame, expressed in ``to_frame``."""
+        from .transforms import _frame_transform
+
+        out, ts = _frame_transform(
+            self, "points", arr, to_frame, axis, time_axis, timestamps
+        )
+        return (out, ts) if return_timestamps else out
+
+    def transform_vectors(
+        self,
+        arr,
+        to_frame,
+        axis=-1,
+        time_axis=0,
+        timestamps=None,
+        return_timestamps=False,
+    ):
+        """Vectors represented in this frame, represented in ``to_frame``."""
+        from .transforms import _frame_transform
+
+        out, ts = _frame_transform(
+            self, "vectors", arr, to_frame, axis, time_axis, timestamps
+        )
+        return (out, ts) if return_timestamps else out
+
+    def transform_quaternions(
+        self,
+        arr,
+        to_frame,
+        axis=-1,
+        time_axis=0,
+        timestamps=None,
+        return_timestamps=False,
+    ):
+        """Orientations wrt this frame, expressed wrt ``to_frame``."""
+        from .transforms import _frame_transform
+
+        out, ts = _frame_transform(
+            self, "quaternions", arr, to_frame, axis, time_axis, timestamps
+        )
+        return (out, ts) if return_timestamps else out
+
+    def transform_angular_velocity(
+        self,
+        arr,
+        to_frame,
+        what="reference_frame",
+        axis=-1,
+        time_axis=0,
+        timestamps=None,
+        return_timestamps=False,
+        cutoff=None,
+    ):
+        """Change the reference, moving or representation frame of angular velocities."""
+        from .transforms import _frame_transform_angular_velocity
+
+        out, ts = _frame_transform_angular_velocity(
+            self, arr, to_frame, what, axis, time_axis, timestamps, cutoff
+        )
+        return (out, ts) if return_timestamps else out
+
+    def transform_linear_velocity(
+        self,
+        arr,
+        to_frame,
+        what="reference_frame",
+        moving_frame=None,
+        reference_frame=None,
+        axis=-1,
+        time_axis=0,
+        timestamps=None,
+        return_timestamps=False,
+        outlier_thresh=None,
+        cutoff=None,
+    ):
+        """Change the reference, moving or representation frame of linear velocities."""
+        from .transforms import _frame_transform_linear_velocity
+
+        out, ts = _frame_transform_linear_velocity(
+            self,
+            arr,
+            to_frame,
+            what,
+            moving_frame,
+            reference_frame,
+            axis,
+            time_axis,
+            timestamps,
+            outlier_thresh,
+            cutoff,
+        )
+        return (out, ts) if return_timestamps else out
+
+
+def _read_only(arr: np.ndarray) -> np.ndarray:
+    """A view that cannot change the frame's data (kernels get the original)."""
+    view = arr.view()
+    view.setflags(write=False)
+    return view
+
+
+def _shape_message(label, name, got, expected) -> str:
+    hint = ""
+    if len(expected) == 2 and len(got) >= 1 and got[-1] == expected[1]:
+        hint = f" (one row per timestamp: {expected[0]} timestamps given)"
+    elif len(expected) == 1 and len(got) == 2:
+        hint = " (a moving frame needs timestamps)"
+    return f"{label}{name} must have shape {expected}, got {got}{hint}"

@@ -1,0 +1,736 @@
+"""Quaternion utilities: inverse, product, mean, interpolation, rotation, Euler angles.
+
+Every function accepts float arrays with the quaternion components ``w, x, y,
+z`` along ``qaxis`` (any position), arrays of numpy-quaternion's ``quaternion``
+dtype (returned in that dtype, as the reference package does) and DataArrays
+(returned as DataArrays with the same coordinates wherever the output keeps the
+input's shape). Inputs are validated here; the arithmetic runs in the numba
+kernels of :mod:`rbm_nb._kernels.quaternion` and :mod:`rbm_nb._kernels.rotations`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ._kernels import quaternion as _qk
+from ._kernels import rotations as _rk
+
+__all__ = ["from_euler_angles", "qinterp", "qinv", "qmean", "qmul", "rotate_vectors"]
+
+
+# ---------------------------------------------------------------------------
+# input handling shared by the public functions
+# ---------------------------------------------------------------------------
+
+
+def _is_dataarray(obj: Any) -> bool:
+    # duck-typed so that plain-array callers never import xarray
+    return all(hasattr(obj, a) for a in ("values", "coords", "dims", "name", "attrs"))
+
+
+def _is_quaternion_dtype(arr: np.ndarray) -> bool:
+    return arr.dtype.name == "quaternion"
+
+
+def _normalize_axis(axis: Any, ndim: int, name: str) -> int:
+    try:
+        axis = int(axis)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be an integer, got {axis!r}") from None
+    if not -ndim <= axis < ndim:
+        raise ValueError(
+            f"{name}={axis} is out of range for an array with {ndim} dimensions"
+        )
+    return axis % ndim
+
+
+def _float_array(obj: Any, name: str) -> np.ndarray:
+    arr = np.asarray(obj)
+    if arr.dtype != np.float64:
+        try:
+            arr = arr.astype(np.float64)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name} must be numeric, got dtype {arr.dtype}") from None
+    return arr
+
+
+def _split(q: Any, qaxis: int, name: str) -> tuple[np.ndarray, bool]:
+    """Quaternions as a float array with the components last, and whether
+    the input was of quaternion dtype (whose ``qaxis`` is then ignored)."""
+    arr = np.asarray(q)
+    if _is_quaternion_dtype(arr):
+        import quaternion
+
+        return quaternion.as_float_array(arr), True
+    arr = _float_array(arr, name)
+    if arr.ndim == 0:
+        raise ValueError(
+            f"{name} must have an axis of length 4 (w, x, y, z), got a scalar"
+        )
+    ax = _normalize_axis(qaxis, arr.ndim, "qaxis")
+    if arr.shape[ax] != 4:
+        raise ValueError(
+            f"{name} must have length 4 (w, x, y, z) along qaxis={qaxis}, got shape {arr.shape}"
+        )
+    return np.moveaxis(arr, ax, -1), False
+
+
+def _join(out: np.ndarray, was_quaternion: bool, qpos: int) -> np.ndarray:
+    """Inverse of :func:`_split` for a result with the components last:
+    they move to position ``qpos`` of the result (negative counts from the end)."""
+    if was_quaternion:
+        import quaternion
+
+        return quaternion.as_quat_array(np.ascontiguousarray(out))
+    if out.ndim == 1:
+        return out
+    pos = qpos + out.ndim if qpos < 0 else qpos
+    return np.moveaxis(out, -1, min(max(pos, 0), out.ndim - 1))
+
+
+def _rows(arr: np.ndarray, shape: tuple[int, ...], width: int) -> np.ndarray:
+    """``arr`` (shape + (width,) after broadcasting) as contiguous kernel rows:
+    (prod(shape), width), or (1, width) if it holds a single row (the kernels
+    reuse such a row without it being copied n times)."""
+    if arr.shape[:-1] != shape:
+        if arr[..., 0].size == 1:
+            return np.ascontiguousarray(arr.reshape(1, width))
+        arr = np.broadcast_to(arr, shape + (width,))
+    return np.ascontiguousarray(arr.reshape(-1, width))
+
+
+def _broadcast(a: tuple[int, ...], b: tuple[int, ...], what: str) -> tuple[int, ...]:
+    try:
+        return tuple(np.broadcast_shapes(a, b))
+    except ValueError:
+        raise ValueError(
+            f"{what}: shapes {a} and {b} cannot be broadcast together"
+        ) from None
+
+
+def _like(template: Any, data: np.ndarray) -> Any:
+    """``data`` wrapped like the DataArray ``template`` when shapes agree."""
+    if template is not None and data.shape == template.shape:
+        return template.copy(data=data)
+    return data
+
+
+def _raise_zero(name: str, idx: int, what: str) -> None:
+    raise ValueError(
+        f"{name} contains a zero quaternion (row {idx} when flattened): {what}"
+    )
+
+
+# ---------------------------------------------------------------------------
+# algebra
+# ---------------------------------------------------------------------------
+
+
+def qinv(q, qaxis: int = -1):
+    """Inverse of quaternions, ``conj(q) / |q|**2``.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4, ...)
+        Quaternions along ``qaxis``, or an array of quaternion dtype, or a
+        DataArray.
+    qaxis : int, default -1
+        Axis of ``q`` holding w, x, y, z (ignored for quaternion dtype).
+
+    Returns
+    -------
+    ndarray or DataArray
+        Same shape and type as ``q``.
+
+    Raises
+    ------
+    ValueError
+        If ``q`` has no length-4 ``qaxis`` or contains a zero quaternion.
+
+    Examples
+    --------
+    >>> qinv([0.0, 0.0, 0.0, 2.0])
+    array([ 0. , -0. , -0. , -0.5])
+    """
+    template = q if _is_dataarray(q) else None
+    qf, was_quaternion = _split(q, qaxis, "q")
+    out, zero = _rk.qinv_checked(np.ascontiguousarray(qf.reshape(-1, 4)))
+    if zero >= 0:
+        _raise_zero("q", zero, "it has no inverse")
+    return _like(template, _join(out.reshape(qf.shape), was_quaternion, qaxis))
+
+
+def qmul(*q, qaxis: int = -1):
+    """Hamilton product of two or more quaternion arrays, left to right.
+
+    Parameters
+    ----------
+    *q : array_like, shape (..., 4, ...)
+        Two or more arrays of quaternions along ``qaxis`` (all float) or of
+        quaternion dtype (all of them). The other axes broadcast like numpy's.
+    qaxis : int, default -1
+        Axis holding w, x, y, z in every float array.
+
+    Returns
+    -------
+    ndarray or DataArray
+        ``q[0] * q[1] * ...``, of the broadcast shape; quaternion dtype if
+        the inputs were; a DataArray like the first DataArray input that has
+        the output's shape.
+
+    Raises
+    ------
+    ValueError
+        With fewer than two arrays, a mix of float and quaternion dtypes, an
+        axis that is not of length 4, or shapes that do not broadcast.
+
+    Examples
+    --------
+    >>> qmul([0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0])
+    array([0., 0., 0., 1.])
+    """
+    if len(q) < 2:
+        raise ValueError(f"qmul needs at least 2 quaternion arrays, got {len(q)}")
+    kinds = {_is_quaternion_dtype(np.asarray(x)) for x in q}
+    if len(kinds) > 1:
+        raise ValueError(
+            "q: either all or none of the arrays must be of quaternion dtype"
+        )
+    parts = [_split(x, qaxis, f"q[{i}]")[0] for i, x in enumerate(q)]
+    result = parts[0]
+    for i, nxt in enumerate(parts[1:], start=1):
+        shape = _broadcast(result.shape[:-1], nxt.shape[:-1], f"q[{i}]")
+        if 0 in shape:  # the kernel reuses a single row for any length, even 0
+            result = np.empty(shape + (4,))
+            continue
+        out = _qk.qmul(_rows(result, shape, 4), _rows(nxt, shape, 4))
+        result = out.reshape(shape + (4,))
+    out = _join(result, kinds.pop(), qaxis)
+    for x in q:
+        if _is_dataarray(x) and x.shape == out.shape:
+            return x.copy(data=out)
+    return out
+
+
+def _resolve_reduce_axes(axis: Any, ndim: int) -> tuple[int, ...]:
+    if axis is None:
+        return tuple(range(ndim))
+    axes = (axis,) if np.ndim(axis) == 0 else tuple(axis)
+    out = tuple(sorted({_normalize_axis(a, ndim, "axis") for a in axes}))
+    if len(out) != len(axes):
+        raise ValueError(f"axis contains repeated axes: {axis!r}")
+    return out
+
+
+def qmean(q, axis=None, qaxis: int = -1):
+    """Mean rotation of quaternions (Markley's eigenvector method).
+
+    The mean is the unit eigenvector of the largest eigenvalue of the mean
+    outer product ``mean(q q^T)``: it does not depend on the signs of the
+    inputs (q and -q are the same rotation) and weights each quaternion by
+    ``|q|**2``. Its sign is chosen so that ``w >= 0``.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4, ...)
+        Quaternions along ``qaxis``, or an array of quaternion dtype.
+    axis : None or int or tuple of int, optional
+        Axes to average over, counted on the array of quaternions (``q``
+        without its ``qaxis``, as for quaternion dtype). Default: all.
+    qaxis : int, default -1
+        Axis of ``q`` holding w, x, y, z (ignored for quaternion dtype).
+
+    Returns
+    -------
+    ndarray or DataArray
+        The means, with the averaged axes removed; shape (4,) when averaging
+        everything. Groups containing NaN give NaN.
+
+    Raises
+    ------
+    ValueError
+        For a bad ``qaxis``/``axis``, nothing to average, or a group made only
+        of zero quaternions.
+
+    Examples
+    --------
+    >>> qmean([[1.0, 0.0, 0.0, 0.0], [-1.0, 0.0, 0.0, 0.0]])
+    array([1., 0., 0., 0.])
+
+    Notes
+    -----
+    rigid-body-motion 0.9.3 picks the wrong eigenvector components (they come
+    out permuted) and mixes up groups when ``axis`` leaves several; this
+    implementation returns the actual eigenvector.
+    """
+    template = q if _is_dataarray(q) else None
+    qf, was_quaternion = _split(q, qaxis, "q")
+    nd = qf.ndim - 1
+    reduce_axes = _resolve_reduce_axes(axis, nd)
+    keep_axes = tuple(a for a in range(nd) if a not in reduce_axes)
+    moved = np.transpose(qf, keep_axes + reduce_axes + (nd,))
+    keep_shape = moved.shape[: len(keep_axes)]
+    groups = moved.reshape(int(np.prod(keep_shape)), -1, 4)
+    if groups.shape[1] == 0:
+        raise ValueError(f"q has no quaternions to average along axis={axis!r}")
+    outer = np.einsum("gni,gnj->gij", groups, groups) / groups.shape[1]
+    finite = np.isfinite(outer).all(axis=(1, 2))
+    outer[~finite] = np.eye(4)
+    empty = np.trace(outer, axis1=1, axis2=2) == 0.0
+    if empty.any():
+        raise ValueError("q: every quaternion of a group to average is zero")
+    _, vectors = np.linalg.eigh(outer)
+    mean = vectors[:, :, -1]
+    first_nonzero = np.argmax(mean != 0.0, axis=1)
+    mean *= np.sign(mean[np.arange(len(mean)), first_nonzero])[:, None]
+    mean[~finite] = np.nan
+    qpos = -1
+    if not was_quaternion:
+        qin = _normalize_axis(qaxis, qf.ndim, "qaxis")
+        qpos = qin - sum(1 for a in reduce_axes if a < qin)
+    out = _join(mean.reshape(keep_shape + (4,)), was_quaternion, qpos)
+    if (
+        template is not None
+        and not was_quaternion
+        and out.ndim == qf.ndim - len(reduce_axes)
+    ):
+        return _reduced_like(template, out, qaxis, reduce_axes)
+    return out
+
+
+def _reduced_like(
+    template: Any, out: np.ndarray, qaxis: int, reduce_axes: tuple[int, ...]
+):
+    """A DataArray for a reduction of ``template`` (its qdim kept, others dropped)."""
+    qdim = template.dims[_normalize_axis(qaxis, template.ndim, "qaxis")]
+    other = [d for d in template.dims if d != qdim]
+    dropped = {other[a]: 0 for a in reduce_axes}
+    reduced = template.isel(dropped, drop=True)
+    if reduced.shape != out.shape:
+        return out
+    return reduced.copy(data=out)
+
+
+# ---------------------------------------------------------------------------
+# interpolation
+# ---------------------------------------------------------------------------
+
+
+def _time_values(t_in: Any, t_out: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Both time arrays as float64 on a common origin, in seconds for
+    datetime64/timedelta64 (converted exactly, relative to ``t_in[0]``)."""
+    t_in = np.asarray(t_in)
+    t_out = np.asarray(t_out)
+    kinds = {t_in.dtype.kind, t_out.dtype.kind}
+    if kinds & {"M", "m"}:
+        if len(kinds) != 1:
+            raise ValueError(
+                f"t_in and t_out must both be datetimes or both be numbers, got "
+                f"dtypes {t_in.dtype} and {t_out.dtype}"
+            )
+        base = t_in.reshape(-1)[0] if t_in.size else t_in.dtype.type(0, "s")
+        one = np.timedelta64(1, "s")
+        return (t_in - base) / one, (t_out - base) / one
+    return _float_array(t_in, "t_in"), _float_array(t_out, "t_out")
+
+
+def _check_times(t_in: np.ndarray, t_out: np.ndarray, n: int) -> None:
+    if t_in.ndim != 1 or t_in.shape[0] != n:
+        raise ValueError(
+            f"t_in must be one-dimensional with one time per sample ({n}), got shape {t_in.shape}"
+        )
+    if n == 0:
+        raise ValueError("q has no samples to interpolate along axis")
+    if not np.all(np.isfinite(t_in)):
+        raise ValueError("t_in must be finite")
+    if np.any(np.diff(t_in) <= 0):
+        raise ValueError("t_in must be strictly increasing")
+    if t_out.ndim > 1:
+        raise ValueError(
+            f"t_out must be a scalar or one-dimensional, got shape {t_out.shape}"
+        )
+    if not np.all(np.isfinite(t_out)):
+        raise ValueError("t_out must be finite")
+    if t_out.size and (t_out.min() < t_in[0] or t_out.max() > t_in[-1]):
+        raise ValueError(
+            f"t_out must lie within the range of t_in [{t_in[0]}, {t_in[-1]}], got "
+            f"[{t_out.min()}, {t_out.max()}] (squad cannot extrapolate)"
+        )
+
+
+def _squad_series(
+    series: np.ndarray, t_in: np.ndarray, t_out: np.ndarray
+) -> np.ndarray:
+    """Squad of (n, b, 4) independent series sampled at ``t_in`` -> (m, b, 4)."""
+    m = t_out.shape[0]
+    out = np.empty((m, series.shape[1], 4))
+    for b in range(series.shape[1]):
+        q_b = _rk.unflip(np.ascontiguousarray(series[:, b, :]))
+        out[:, b, :] = _qk.squad(q_b, t_in, t_out)
+    return out
+
+
+def _squad_along(
+    qf: np.ndarray, axis: int, t_in: np.ndarray, t_out: np.ndarray
+) -> np.ndarray:
+    """Interpolate ``qf`` (components last) along ``axis``; returns same layout."""
+    moved = np.moveaxis(qf, axis, 0)
+    rest = moved.shape[1:-1]
+    series = moved.reshape(moved.shape[0], -1, 4)
+    zero = _rk.first_zero_row(np.ascontiguousarray(series.reshape(-1, 4)))
+    if zero >= 0:
+        _raise_zero("q", zero, "it cannot be interpolated")
+    t_flat = np.ascontiguousarray(t_out.reshape(-1))
+    out = _squad_series(series, np.ascontiguousarray(t_in), t_flat)
+    out = out.reshape((t_flat.shape[0],) + rest + (4,))
+    out = np.moveaxis(out, 0, axis)
+    if t_out.ndim == 0:
+        out = out.take(0, axis=axis)
+    return out
+
+
+def qinterp(q, t_in, t_out, axis: int = 0, qaxis: int = -1):
+    """Interpolate quaternions in time with squad (a cubic spline on rotations).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., n, ..., 4, ...)
+        Quaternions along ``qaxis`` and samples along ``axis``, or an array of
+        quaternion dtype, or a DataArray.
+    t_in : array_like, shape (n,)
+        Strictly increasing sample times of ``q`` (numbers or datetime64).
+    t_out : array_like, shape (m,) or scalar
+        Times to interpolate to, within ``[t_in[0], t_in[-1]]``.
+    axis : int, default 0
+        Axis of ``q`` along which the samples lie (counted on ``q`` as given).
+    qaxis : int, default -1
+        Axis of ``q`` holding w, x, y, z (ignored for quaternion dtype).
+
+    Returns
+    -------
+    ndarray or DataArray
+        ``q`` with ``axis`` resampled to ``t_out`` (removed for a scalar
+        ``t_out``). Sign flips between successive input samples are undone
+        before interpolating, so the path is the short one.
+
+    Raises
+    ------
+    ValueError
+        For bad axes, times that are not strictly increasing or of the wrong
+        length, ``t_out`` outside the sampled range, or zero quaternions.
+
+    Examples
+    --------
+    >>> q = [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
+    >>> qinterp(q, [0.0, 1.0], [0.5]).round(6)
+    array([[0.707107, 0.      , 0.      , 0.707107]])
+    """
+    if _is_dataarray(q):
+        dim = q.dims[_normalize_axis(axis, q.ndim, "axis")]
+        qdim = q.dims[_normalize_axis(qaxis, q.ndim, "qaxis")]
+        return _qinterp_dataarray(q, dim, qdim, t_out, t_in=t_in, out_of_range="raise")
+    arr = np.asarray(q)
+    qf, was_quaternion = _split(arr, qaxis, "q")
+    ax = _normalize_axis(axis, arr.ndim, "axis")
+    qpos = -1
+    if not was_quaternion:
+        qpos = _normalize_axis(qaxis, arr.ndim, "qaxis")
+        if ax == qpos:
+            raise ValueError(
+                f"axis={axis} and qaxis={qaxis} refer to the same axis of q"
+            )
+        ax_without_q = ax - 1 if ax > qpos else ax
+    else:
+        ax_without_q = ax
+    t_in_f, t_out_f = _time_values(t_in, t_out)
+    _check_times(t_in_f, t_out_f.reshape(-1), qf.shape[ax_without_q])
+    out = _squad_along(qf, ax_without_q, t_in_f, t_out_f)
+    if t_out_f.ndim == 0 and ax < qpos:
+        qpos -= 1  # the sampled axis is gone
+    return _join(out, was_quaternion, qpos)
+
+
+def _qinterp_dataarray(
+    da, dim: str, qdim: str, t_out, t_in=None, out_of_range: str = "raise"
+):
+    """Squad of a DataArray along ``dim``; other coordinates along ``dim`` are
+    interpolated linearly (numbers) or take the nearest value (anything else).
+
+    ``out_of_range="nan"`` gives NaN outside the sampled range (as
+    ``DataArray.interp`` does) instead of raising.
+    """
+    import xarray as xr
+
+    if dim not in da.dims:
+        raise ValueError(
+            f"{dim!r} is not a dimension of this DataArray {tuple(da.dims)}"
+        )
+    if qdim not in da.dims:
+        raise ValueError(
+            f"qdim {qdim!r} is not a dimension of this DataArray {tuple(da.dims)}"
+        )
+    if dim == qdim:
+        raise ValueError(f"cannot interpolate along the quaternion dimension {qdim!r}")
+    if da.sizes[qdim] != 4:
+        raise ValueError(
+            f"dimension {qdim!r} must have length 4 (w, x, y, z), got {da.sizes[qdim]}"
+        )
+    if t_in is None:
+        if dim not in da.coords:
+            raise ValueError(f"dimension {dim!r} has no coordinate to interpolate from")
+        t_in = da.coords[dim].values
+    t_out_values = np.asarray(getattr(t_out, "values", t_out))
+    if t_out_values.ndim > 1:
+        raise ValueError(
+            f"the new coordinate for {dim!r} must be a scalar or one-dimensional, "
+            f"got shape {t_out_values.shape}"
+        )
+    t_in_f, t_out_f = _time_values(t_in, t_out_values)
+    flat_out = t_out_f.reshape(-1)
+    inside = np.ones(flat_out.shape, dtype=bool)
+    if out_of_range == "nan" and t_in_f.ndim == 1 and t_in_f.size:
+        inside = (flat_out >= t_in_f[0]) & (flat_out <= t_in_f[-1])
+    _check_times(t_in_f, flat_out[inside], da.sizes[dim])
+
+    data = np.moveaxis(_float_array(da.values, "q"), da.dims.index(qdim), -1)
+    ax = [d for d in da.dims if d != qdim].index(dim)
+    values = np.full(data.shape[:ax] + (flat_out.size,) + data.shape[ax + 1 :], np.nan)
+    if inside.any():
+        index = [slice(None)] * values.ndim
+        index[ax] = inside
+        values[tuple(index)] = _squad_along(data, ax, t_in_f, flat_out[inside])
+    values = np.moveaxis(values, -1, da.dims.index(qdim))
+
+    coords = {}
+    for name, coord in da.coords.items():
+        if name == dim or dim not in coord.dims:
+            if name != dim:
+                coords[name] = coord
+            continue
+        if np.issubdtype(coord.dtype, np.number):
+            coords[name] = coord.interp({dim: t_out_values.reshape(-1)})
+        else:
+            coords[name] = coord.sel({dim: t_out_values.reshape(-1)}, method="nearest")
+        coords[name] = coords[name].drop_vars(dim, errors="ignore")
+    if isinstance(t_out, xr.DataArray) and t_out.ndim == 1 and t_out.dims == (dim,):
+        coords[dim] = t_out.variable
+    else:
+        coords[dim] = (dim, t_out_values.reshape(-1))
+    result = xr.DataArray(values, coords, da.dims, da.name, dict(da.attrs))
+    if t_out_values.ndim == 0:
+        result = result.isel({dim: 0})
+    return result
+
+
+# ---------------------------------------------------------------------------
+# rotation of vectors
+# ---------------------------------------------------------------------------
+
+
+def rotate_vectors(q, v, axis: int = -1, qaxis: int = -1, one_to_one: bool = True):
+    """Rotate vectors by quaternions, ``q v q⁻¹``.
+
+    Correct for quaternions of any non-zero norm (the rotation does not scale
+    the vectors).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 4, ...)
+        Quaternions along ``qaxis``, or an array of quaternion dtype.
+    v : array_like, shape (..., 3, ...)
+        Vectors along ``axis``; a DataArray gives a DataArray back when the
+        output has its shape.
+    axis : int, default -1
+        Axis of ``v`` holding x, y, z.
+    qaxis : int, default -1
+        Axis of ``q`` holding w, x, y, z (ignored for quaternion dtype).
+    one_to_one : bool, default True
+        If True, pair quaternions and vectors element by element: the other
+        axes of ``q`` and ``v`` correspond in order and must match or be 1
+        (a single quaternion rotates every vector). If False, rotate every
+        vector by every quaternion.
+
+    Returns
+    -------
+    ndarray or DataArray
+        With ``one_to_one``: the broadcast shape of the non-vector axes, with
+        the vector axis at ``axis``. Otherwise shape ``q_shape + v.shape``
+        where ``q_shape`` is ``q``'s shape without ``qaxis``.
+
+    Raises
+    ------
+    ValueError
+        For axes of the wrong length, incompatible shapes, or zero quaternions.
+
+    Examples
+    --------
+    >>> rotate_vectors([0.0, 0.0, 0.0, 2.0], [1.0, 0.0, 0.0]).round(12)
+    array([-1.,  0.,  0.])
+    """
+    qa = np.asarray(q)
+    va = v.values if _is_dataarray(v) else v
+    va = _float_array(va, "v")
+    if va.ndim == 0:
+        raise ValueError("v must have an axis of length 3 (x, y, z), got a scalar")
+    vax = _normalize_axis(axis, va.ndim, "axis")
+    if va.shape[vax] != 3:
+        raise ValueError(
+            f"v must have length 3 (x, y, z) along axis={axis}, got shape {va.shape}"
+        )
+
+    # Common case first: (n, 4) x (n, 3) contiguous float64, no copies at all.
+    if (
+        one_to_one
+        and qa.ndim == 2
+        and va.ndim == 2
+        and vax == 1
+        and qa.dtype == np.float64
+        and qa.shape[1] == 4
+        and _normalize_axis(qaxis, 2, "qaxis") == 1
+        and qa.flags.c_contiguous
+        and va.flags.c_contiguous
+        and (qa.shape[0] == va.shape[0] or qa.shape[0] == 1 or va.shape[0] == 1)
+    ):
+        out, zero = _rk.rotate_vectors_checked(qa, va)
+        if zero >= 0:
+            _raise_zero("q", zero, "it does not describe a rotation")
+        return _like(v if _is_dataarray(v) else None, out)
+
+    qf, _ = _split(qa, qaxis, "q")
+    q_shape = qf.shape[:-1]
+    vm = np.moveaxis(va, vax, -1)
+    v_shape = vm.shape[:-1]
+    if one_to_one and q_shape:
+        if len(q_shape) != len(v_shape):
+            raise ValueError(
+                f"one_to_one rotation needs one quaternion per vector: q has shape "
+                f"{q_shape} (without qaxis) and v has shape {v_shape} (without axis); "
+                f"use one_to_one=False to rotate every vector by every quaternion"
+            )
+        shape = _broadcast(q_shape, v_shape, "q and v")
+        out, zero = _rk.rotate_vectors_checked(_rows(qf, shape, 4), _rows(vm, shape, 3))
+        if zero >= 0:
+            _raise_zero("q", zero, "it does not describe a rotation")
+        out = np.moveaxis(out.reshape(shape + (3,)), -1, vax)
+        return _like(v if _is_dataarray(v) else None, out)
+
+    q_rows = np.ascontiguousarray(qf.reshape(-1, 4))
+    v_rows = np.ascontiguousarray(vm.reshape(-1, 3))
+    if not q_shape:
+        out, zero = _rk.rotate_vectors_checked(q_rows, v_rows)
+        if zero >= 0:
+            _raise_zero("q", zero, "it does not describe a rotation")
+        out = np.moveaxis(out.reshape(v_shape + (3,)), -1, vax)
+        return _like(v if _is_dataarray(v) else None, out)
+    zero = _rk.first_zero_row(q_rows)
+    if zero >= 0:
+        _raise_zero("q", zero, "it does not describe a rotation")
+    out = _qk.rotate_vectors_outer(q_rows, v_rows).reshape(q_shape + v_shape + (3,))
+    return np.moveaxis(out, -1, len(q_shape) + vax)
+
+
+# ---------------------------------------------------------------------------
+# construction
+# ---------------------------------------------------------------------------
+
+_ELEMENTARY_AXIS = {"r": 1, "p": 2, "y": 3}
+
+
+def from_euler_angles(
+    rpy=None,
+    roll=None,
+    pitch=None,
+    yaw=None,
+    axis: int = -1,
+    order: str = "rpy",
+    return_quaternion: bool = False,
+):
+    """Quaternions from roll, pitch and yaw angles (radians).
+
+    Roll, pitch and yaw are rotations about the x, y and z axes. The result is
+    the product of the three elementary rotations in the sequence ``order``,
+    ``q = q[order[0]] * q[order[1]] * q[order[2]]``: with the default "rpy",
+    ``roll * pitch * yaw``. Angles that are not given are left out.
+
+    Parameters
+    ----------
+    rpy : array_like, shape (..., 3, ...), optional
+        Roll, pitch and yaw along ``axis``. Excludes ``roll``, ``pitch`` and
+        ``yaw``.
+    roll, pitch, yaw : array_like, optional
+        Separate angle arrays; their shapes broadcast together.
+    axis : int, default -1
+        Axis of ``rpy`` holding the angles, and the axis of the result that
+        holds w, x, y, z.
+    order : str, default "rpy"
+        A permutation of "r", "p" and "y".
+    return_quaternion : bool, default False
+        Return an array of numpy-quaternion's quaternion dtype.
+
+    Returns
+    -------
+    ndarray, shape (..., 4, ...)
+        Unit quaternions (or quaternion dtype, without the component axis).
+
+    Raises
+    ------
+    ValueError
+        If no angle is given, ``rpy`` is combined with separate angles, the
+        shapes disagree or ``order`` is not a permutation of "rpy".
+
+    Examples
+    --------
+    >>> from_euler_angles(yaw=np.pi / 2).round(6)
+    array([0.707107, 0.      , 0.      , 0.707107])
+    """
+    if not isinstance(order, str) or sorted(order) != ["p", "r", "y"]:
+        raise ValueError(
+            f"order must be a permutation of 'r', 'p' and 'y', got {order!r}"
+        )
+    angles: dict[str, np.ndarray] = {}
+    if rpy is not None:
+        if roll is not None or pitch is not None or yaw is not None:
+            raise ValueError("give either rpy or roll/pitch/yaw, not both")
+        arr = _float_array(rpy, "rpy")
+        if arr.ndim == 0:
+            raise ValueError(
+                "rpy must have an axis of length 3 (roll, pitch, yaw), got a scalar"
+            )
+        ax = _normalize_axis(axis, arr.ndim, "axis")
+        if arr.shape[ax] != 3:
+            raise ValueError(
+                f"rpy must have length 3 (roll, pitch, yaw) along axis={axis}, got shape {arr.shape}"
+            )
+        arr = np.moveaxis(arr, ax, -1)
+        angles = {"r": arr[..., 0], "p": arr[..., 1], "y": arr[..., 2]}
+    else:
+        for key, value, name in (
+            ("r", roll, "roll"),
+            ("p", pitch, "pitch"),
+            ("y", yaw, "yaw"),
+        ):
+            if value is not None:
+                angles[key] = _float_array(value, name)
+        if not angles:
+            raise ValueError("give at least one of rpy, roll, pitch or yaw")
+    shape: tuple[int, ...] = ()
+    for key, value in angles.items():
+        shape = _broadcast(
+            shape, value.shape, {"r": "roll", "p": "pitch", "y": "yaw"}[key]
+        )
+
+    result = None
+    for key in order:
+        if key not in angles:
+            continue
+        half = np.broadcast_to(angles[key], shape).reshape(-1) / 2.0
+        rotor = np.zeros((half.shape[0], 4))
+        rotor[:, 0] = np.cos(half)
+        rotor[:, _ELEMENTARY_AXIS[key]] = np.sin(half)
+        result = rotor if result is None else _qk.qmul(result, rotor)
+    result = result.reshape(shape + (4,))
+    if return_quaternion:
+        return _join(result, True, -1)
+    return np.moveaxis(result, -1, _normalize_axis(axis, result.ndim, "axis"))

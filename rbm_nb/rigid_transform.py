@@ -1,0 +1,477 @@
+"""``Transform``: an immutable rigid transformation value, scalar or batched.
+
+A transformation maps a point ``p`` given in frame B to frame T by rotating
+first and translating second, the convention of rbm_nb and of
+``lookup_transform``::
+
+    p_T = rot(r, p_B) + t
+
+``translation`` has shape ``(..., 3)`` and ``rotation`` (unit quaternions,
+``w, x, y, z``) shape ``(..., 4)``; the leading shape is the batch shape, ``()``
+for a single transformation. Composition reads like matrix products:
+``(a @ b).apply(p) == a.apply(b.apply(p))``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._validation import (
+    as_float_array,
+    check_finite,
+    check_last_axis,
+    normalize_quaternions,
+)
+from .conversions import (
+    MATRIX_TOLERANCE,
+    homogeneous_from_transform,
+    rotation_vector_from_quaternion,
+    transform_from_homogeneous,
+)
+
+__all__ = ["Transform"]
+
+_AXES = "xyz"
+
+
+def _as_float(value, name: str, tail: int) -> np.ndarray:
+    arr = as_float_array(value, name)
+    check_last_axis(arr, tail, name)
+    return arr
+
+
+def _unit_rotation(rotation) -> np.ndarray:
+    return normalize_quaternions(_as_float(rotation, "rotation", 4), "rotation")
+
+
+def _finite_translation(translation) -> np.ndarray:
+    t = _as_float(translation, "translation", 3)
+    check_finite(t, "translation")
+    return t
+
+
+def _ratio(ratio, name: str = "ratio") -> np.ndarray:
+    try:
+        r = np.asarray(ratio, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise ValueError(f"{name} must be a number or an array of numbers") from err
+    if not np.isfinite(r).all():
+        raise ValueError(f"{name} must be finite, got {ratio!r}")
+    return r
+
+
+def _read_only(arr: np.ndarray) -> np.ndarray:
+    arr = np.ascontiguousarray(arr)
+    arr.flags.writeable = False
+    return arr
+
+
+def _mask(mask, name: str) -> np.ndarray:
+    """A 0/1 weight per axis from True/False/None, 'xz'-style strings or 3 flags."""
+    if mask is True:
+        return np.ones(3)
+    if mask is False or mask is None:
+        return np.zeros(3)
+    if isinstance(mask, str):
+        letters = mask.lower()
+        if not letters or any(c not in _AXES for c in letters):
+            raise ValueError(f"{name} must use the letters x, y, z, got {mask!r}")
+        return np.array([float(c in letters) for c in _AXES])
+    arr = np.asarray(mask)
+    if arr.shape != (3,) or not np.isin(arr, (0, 1)).all():
+        raise ValueError(
+            f"{name} must be True, False, None, a string of axes such as 'xy' or "
+            f"three 0/1 flags, got {mask!r}"
+        )
+    return arr.astype(np.float64)
+
+
+def _kernels():
+    from ._kernels import quaternion
+
+    return quaternion
+
+
+def _rows(arr: np.ndarray, shape: tuple, width: int) -> np.ndarray:
+    return np.ascontiguousarray(np.broadcast_to(arr, shape + (width,))).reshape(
+        -1, width
+    )
+
+
+class Transform:
+    """A rigid transformation (or a batch of them): rotate, then translate.
+
+    Parameters
+    ----------
+    translation : array_like, shape (..., 3), default (0, 0, 0)
+    rotation : array_like, shape (..., 4), default (1, 0, 0, 0)
+        Unit quaternions ``w, x, y, z`` (within ``UNIT_QUATERNION_TOLERANCE``,
+        normalised on construction). The leading shapes of ``translation``
+        and ``rotation`` broadcast to the batch shape.
+
+    Raises
+    ------
+    ValueError
+        If a shape is wrong, a translation is not finite or a quaternion is
+        not (close to) unit norm.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from rbm_nb import Transform
+    >>> quarter_z = [np.cos(np.pi / 4), 0.0, 0.0, np.sin(np.pi / 4)]
+    >>> a = Transform([1.0, 0.0, 0.0], quarter_z)
+    >>> a.apply([1.0, 0.0, 0.0]).round(12) + 0.0
+    array([1., 1., 0.])
+    >>> (a @ a.inv()).allclose(Transform.identity())
+    True
+    """
+
+    __slots__ = ("_translation", "_rotation")
+    # numpy must not treat a Transform as an array operand: ``tf @ ndarray``
+    # and ``ndarray @ tf`` then raise TypeError instead of guessing
+    __array_ufunc__ = None
+
+    def __init__(self, translation=(0.0, 0.0, 0.0), rotation=(1.0, 0.0, 0.0, 0.0)):
+        t = _finite_translation(translation)
+        q = _unit_rotation(rotation)
+        try:
+            shape = np.broadcast_shapes(t.shape[:-1], q.shape[:-1])
+        except ValueError:
+            raise ValueError(
+                f"translation of shape {t.shape} and rotation of shape {q.shape} "
+                "have batch shapes that do not broadcast"
+            ) from None
+        # np.array copies: the caller's arrays must not alias ours
+        object.__setattr__(
+            self, "_translation", _read_only(np.array(np.broadcast_to(t, shape + (3,))))
+        )
+        object.__setattr__(
+            self, "_rotation", _read_only(np.array(np.broadcast_to(q, shape + (4,))))
+        )
+
+    @classmethod
+    def _trusted(cls, translation: np.ndarray, rotation: np.ndarray) -> Transform:
+        """Wrap arrays that are already valid (results of our own arithmetic)."""
+        new = object.__new__(cls)
+        object.__setattr__(new, "_translation", _read_only(translation))
+        object.__setattr__(new, "_rotation", _read_only(rotation))
+        return new
+
+    def __setattr__(self, name, value):
+        raise AttributeError("Transform is immutable; build a new one instead")
+
+    def __delattr__(self, name):
+        raise AttributeError("Transform is immutable")
+
+    def __reduce__(self):
+        return (Transform, (np.array(self._translation), np.array(self._rotation)))
+
+    # -- construction -------------------------------------------------------
+
+    @classmethod
+    def identity(cls, shape=()) -> Transform:
+        """The identity, or a batch of identities of the given shape.
+
+        Parameters
+        ----------
+        shape : int or tuple of int, default ()
+        """
+        shape = (shape,) if np.ndim(shape) == 0 and shape != () else tuple(shape)
+        t = np.zeros(shape + (3,))
+        q = np.zeros(shape + (4,))
+        q[..., 0] = 1.0
+        return cls._trusted(t, q)
+
+    @classmethod
+    def from_matrix(cls, matrix, *, tol: float = MATRIX_TOLERANCE) -> Transform:
+        """From homogeneous matrices ``[[R, t], [0, 0, 0, 1]]``.
+
+        Parameters
+        ----------
+        matrix : array_like, shape (..., 4, 4)
+        tol : float, default 1e-6
+            Accepted deviation of ``R`` from orthonormality (see
+            ``rbm_nb.conversions.transform_from_homogeneous``).
+        """
+        t, q = transform_from_homogeneous(matrix, tol=tol)
+        return cls._trusted(t, q)
+
+    # -- array-like behaviour -----------------------------------------------
+
+    @property
+    def translation(self) -> np.ndarray:
+        """Translations, shape (..., 3), read-only."""
+        return self._translation
+
+    @property
+    def rotation(self) -> np.ndarray:
+        """Unit quaternions ``w, x, y, z``, shape (..., 4), read-only."""
+        return self._rotation
+
+    @property
+    def shape(self) -> tuple:
+        """Batch shape; ``()`` for a single transformation."""
+        return self._translation.shape[:-1]
+
+    @property
+    def ndim(self) -> int:
+        return len(self.shape)
+
+    def __len__(self) -> int:
+        if not self.shape:
+            raise TypeError("len() of a single Transform (batch shape ())")
+        return self.shape[0]
+
+    def __getitem__(self, index) -> Transform:
+        if not self.shape:
+            raise IndexError("a single Transform (batch shape ()) cannot be indexed")
+        rows = np.arange(int(np.prod(self.shape))).reshape(self.shape)[index]
+        return Transform._trusted(
+            self._translation.reshape(-1, 3)[rows], self._rotation.reshape(-1, 4)[rows]
+        )
+
+    def __iter__(self):
+        for i in range(len(self)):
+            yield self[i]
+
+    def __repr__(self) -> str:
+        opts = dict(
+            precision=6, suppress_small=True, separator=", ", threshold=12, edgeitems=2
+        )
+        t = np.array2string(self._translation, prefix="    translation=", **opts)
+        r = np.array2string(self._rotation, prefix="    rotation=", **opts)
+        if not self.shape:
+            return f"Transform(translation={t}, rotation={r})"
+        return f"Transform(shape={self.shape},\n    translation={t},\n    rotation={r})"
+
+    def __eq__(self, other):
+        """Exactly the same transformation(s): equal translations and q or -q."""
+        if not isinstance(other, Transform):
+            return NotImplemented
+        if self.shape != other.shape:
+            return False
+        same_q = np.all(self._rotation == other._rotation, axis=-1) | np.all(
+            self._rotation == -other._rotation, axis=-1
+        )
+        return bool(np.all(self._translation == other._translation) and np.all(same_q))
+
+    __hash__ = None  # mutable-free but array-valued: no meaningful hash
+
+    def allclose(self, other: Transform, *, atol: float = 1e-12) -> bool:
+        """Whether both describe the same transformation(s) to within ``atol``.
+
+        Translations are compared entry by entry, rotations as quaternions
+        up to sign (q and -q are the same rotation). Batch shapes broadcast.
+        """
+        if not isinstance(other, Transform):
+            raise TypeError(f"allclose needs a Transform, got {type(other).__name__}")
+        dt = np.abs(self._translation - other._translation).max(axis=-1)
+        dq = np.minimum(
+            np.abs(self._rotation - other._rotation).max(axis=-1),
+            np.abs(self._rotation + other._rotation).max(axis=-1),
+        )
+        return bool(np.all(dt <= atol) and np.all(dq <= atol))
+
+    # -- algebra --------------------------------------------------------------
+
+    def _paired(self, other: Transform, what: str):
+        if not isinstance(other, Transform):
+            raise TypeError(f"{what} needs a Transform, got {type(other).__name__}")
+        try:
+            return np.broadcast_shapes(self.shape, other.shape)
+        except ValueError:
+            raise ValueError(
+                f"cannot {what} Transforms of batch shapes {self.shape} and {other.shape}"
+            ) from None
+
+    def __matmul__(self, other: Transform) -> Transform:
+        """Composition: ``(self @ other).apply(p) == self.apply(other.apply(p))``."""
+        if not isinstance(other, Transform):
+            return NotImplemented
+        shape = self._paired(other, "compose")
+        k = _kernels()
+        qa = _rows(self._rotation, shape, 4)
+        q = k.qmul(qa, _rows(other._rotation, shape, 4))
+        t = k.rotate_vectors(qa, _rows(other._translation, shape, 3))
+        t += _rows(self._translation, shape, 3)
+        return Transform._trusted(t.reshape(shape + (3,)), q.reshape(shape + (4,)))
+
+    def inv(self) -> Transform:
+        """The inverse: ``self.inv() @ self`` is the identity."""
+        k = _kernels()
+        q = k.qconj(self._rotation.reshape(-1, 4))
+        t = -k.rotate_vectors(q, self._translation.reshape(-1, 3))
+        return Transform._trusted(
+            t.reshape(self.shape + (3,)), q.reshape(self.shape + (4,))
+        )
+
+    def _rotate(self, vectors, name: str, shift: bool) -> np.ndarray:
+        v = _as_float(vectors, name, 3)
+        try:
+            shape = np.broadcast_shapes(self.shape, v.shape[:-1])
+        except ValueError:
+            raise ValueError(
+                f"{name} of shape {v.shape} do not broadcast against the Transform's "
+                f"batch shape {self.shape}"
+            ) from None
+        out = _kernels().rotate_vectors(
+            _rows(self._rotation, shape, 4), _rows(v, shape, 3)
+        )
+        if shift:
+            out += _rows(self._translation, shape, 3)
+        return out.reshape(shape + (3,))
+
+    def apply(self, points) -> np.ndarray:
+        """Transform points: ``rot(r, p) + t``.
+
+        Parameters
+        ----------
+        points : array_like, shape (..., 3)
+            Leading shape broadcasts against the batch shape.
+
+        Returns
+        -------
+        ndarray, shape (broadcast, 3)
+        """
+        return self._rotate(points, "points", shift=True)
+
+    def apply_vectors(self, vectors) -> np.ndarray:
+        """Transform free vectors (directions, velocities): rotation only.
+
+        Parameters
+        ----------
+        vectors : array_like, shape (..., 3)
+
+        Returns
+        -------
+        ndarray, shape (broadcast, 3)
+        """
+        return self._rotate(vectors, "vectors", shift=False)
+
+    def as_matrix(self) -> np.ndarray:
+        """Homogeneous matrices ``[[R, t], [0, 0, 0, 1]]``, shape (..., 4, 4)."""
+        return homogeneous_from_transform(self._translation, self._rotation)
+
+    # -- interpolation and differences -------------------------------------
+
+    def _blend(self, other: Transform, ratio, what: str):
+        shape = self._paired(other, what)
+        r = _ratio(ratio)
+        try:
+            shape = np.broadcast_shapes(shape, r.shape)
+        except ValueError:
+            raise ValueError(
+                f"ratio of shape {r.shape} does not broadcast against batch shape {shape}"
+            ) from None
+        r_rows = np.ascontiguousarray(np.broadcast_to(r, shape)).reshape(-1)
+        t0 = _rows(self._translation, shape, 3)
+        t1 = _rows(other._translation, shape, 3)
+        t = t0 + r_rows[:, None] * (t1 - t0)
+        return shape, r_rows, t
+
+    def slerp(self, other: Transform, ratio) -> Transform:
+        """Interpolate towards ``other``: linear in translation, slerp in rotation.
+
+        Parameters
+        ----------
+        other : Transform
+        ratio : float or array_like
+            0 gives ``self``, 1 gives ``other``; values outside [0, 1]
+            extrapolate. Broadcasts against the batch shapes.
+
+        Returns
+        -------
+        Transform
+            The rotation follows the shorter arc at constant angular speed.
+        """
+        shape, r, t = self._blend(other, ratio, "slerp")
+        q = _kernels().slerp(
+            _rows(self._rotation, shape, 4), _rows(other._rotation, shape, 4), r
+        )
+        return Transform._trusted(t.reshape(shape + (3,)), q.reshape(shape + (4,)))
+
+    def lerp(self, other: Transform, ratio) -> Transform:
+        """Interpolate towards ``other`` linearly (normalised lerp for rotations).
+
+        Cheaper than ``slerp`` and on the same shorter arc, but the angular
+        speed is not constant.
+
+        Parameters
+        ----------
+        other : Transform
+        ratio : float or array_like
+            As in ``slerp``.
+        """
+        shape, r, t = self._blend(other, ratio, "lerp")
+        q0 = _rows(self._rotation, shape, 4)
+        q1 = _rows(other._rotation, shape, 4)
+        q1 = np.where(np.einsum("ij,ij->i", q0, q1)[:, None] < 0.0, -q1, q1)
+        q = q0 + r[:, None] * (q1 - q0)
+        norm = np.linalg.norm(q, axis=1, keepdims=True)
+        if not np.all(norm > 0.0):
+            raise ValueError(
+                "lerp passes through a zero quaternion for this ratio; use slerp"
+            )
+        return Transform._trusted(
+            t.reshape(shape + (3,)), (q / norm).reshape(shape + (4,))
+        )
+
+    def difference(
+        self,
+        other: Transform,
+        *,
+        position_mask=True,
+        rotation_mask=True,
+        rotation_mirror: str | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Position and rotation of ``other`` relative to ``self``, in ``self``'s axes.
+
+        The position difference is ``rot(r_self⁻¹, t_other - t_self)`` and the
+        rotation difference the rotation vector of ``r_self⁻¹ r_other``: both
+        are zero when the two coincide and are what a controller moving
+        ``self`` onto ``other`` would act on.
+
+        Parameters
+        ----------
+        other : Transform
+        position_mask, rotation_mask : bool, None, str or array_like of 3
+            Which components to keep: True (all, the default), False or None
+            (none), a string of axes such as ``"xy"``, or three 0/1 flags.
+            Dropped components are returned as 0.
+        rotation_mirror : {"x", "y", "z"}, optional
+            Treat ``other`` rotated by 180° about its own axis of that name as
+            equally good, and report whichever of the two is closer (for
+            symmetric objects).
+
+        Returns
+        -------
+        position : ndarray, shape (..., 3)
+        rotation : ndarray, shape (..., 3)
+            Rotation vector, angle in [0, pi].
+        """
+        shape = self._paired(other, "difference")
+        pmask = _mask(position_mask, "position_mask")
+        rmask = _mask(rotation_mask, "rotation_mask")
+        k = _kernels()
+        q_inv = k.qconj(_rows(self._rotation, shape, 4))
+        offset = _rows(other._translation, shape, 3) - _rows(
+            self._translation, shape, 3
+        )
+        position = k.rotate_vectors(q_inv, offset)
+        q_rel = k.qmul(q_inv, _rows(other._rotation, shape, 4))
+        rotation = rotation_vector_from_quaternion(q_rel)
+        if rotation_mirror is not None:
+            if rotation_mirror not in ("x", "y", "z"):
+                raise ValueError(
+                    f"rotation_mirror must be 'x', 'y', 'z' or None, got {rotation_mirror!r}"
+                )
+            half_turn = np.zeros((1, 4))
+            half_turn[0, 1 + _AXES.index(rotation_mirror)] = 1.0
+            mirrored = rotation_vector_from_quaternion(k.qmul(q_rel, half_turn))
+            closer = np.linalg.norm(mirrored, axis=1) < np.linalg.norm(rotation, axis=1)
+            rotation = np.where(closer[:, None], mirrored, rotation)
+        # "+ 0.0" turns the -0.0 of masked-out negative components into 0.0
+        position = position * pmask + 0.0
+        rotation = rotation * rmask + 0.0
+        return position.reshape(shape + (3,)), rotation.reshape(shape + (3,))

@@ -1,0 +1,507 @@
+"""A tf2-style transform buffer that needs no ROS: ``rbm.ros.Transformer``.
+
+The buffer keeps, for every child frame, its parent and either one static
+transform or a time series of transforms (at most ``cache_time`` seconds of
+it). Lookups build rbm_nb reference frames from that data (a private tree,
+never the global registry) and evaluate the chain at the requested time with
+rbm_nb's core: translations are interpolated linearly and rotations by squad,
+frames that came from discrete reference frames hold their last value.
+
+Conventions follow tf2:
+
+* ``lookup_transform(target_frame, source_frame)`` is the transform that maps
+  data given in ``source_frame`` into ``target_frame``;
+* times are float seconds (datetime64 timestamps are converted to seconds
+  since the Unix epoch), and ``time=0`` means the latest time at which every
+  frame on the chain has data;
+* nothing is extrapolated: asking for a time outside a moving frame's data
+  raises :class:`~rbm_nb._at_time.ExtrapolationError`.
+
+Results are tuples of floats, quaternions in ``w, x, y, z`` order, as in the
+reference API.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+
+import numpy as np
+
+from .._at_time import ExtrapolationError, latest_common_time, transform_at_times
+from .._validation import as_float_array, check_finite, normalize_quaternions
+from ..frames import ReferenceFrame, _resolve
+
+__all__ = [
+    "ConnectivityError",
+    "FrameNotFoundError",
+    "ExtrapolationError",
+    "Transformer",
+]
+
+#: tf2's default buffer length in seconds.
+DEFAULT_CACHE_TIME = 10.0
+
+
+class FrameNotFoundError(ValueError):
+    """A frame name the buffer has never heard of (tf2's LookupException)."""
+
+
+class ConnectivityError(ValueError):
+    """Two frames that no chain of transforms connects (tf2's ConnectivityException)."""
+
+
+class _Edge:
+    """What the buffer knows about one child frame."""
+
+    __slots__ = ("parent", "translation", "rotation", "times", "discrete")
+
+    def __init__(self, parent, translation, rotation, times, discrete):
+        self.parent = parent
+        self.translation = translation  # (3,) static, (n, 3) moving
+        self.rotation = rotation  # (4,) static, (n, 4) moving
+        self.times = times  # None static, (n,) float seconds moving
+        self.discrete = discrete
+
+
+def _seconds(timestamps) -> np.ndarray:
+    """Timestamps as float seconds (datetime64: since the Unix epoch)."""
+    ts = np.asarray(timestamps)
+    if ts.dtype.kind == "M":
+        return ts.astype("datetime64[ns]").view(np.int64) / 1e9
+    return ts.astype(np.float64)
+
+
+def _time_value(time, name: str = "time") -> float:
+    if isinstance(time, (np.datetime64,)) or np.asarray(time).dtype.kind == "M":
+        return float(_seconds(np.asarray(time).reshape(1))[0])
+    try:
+        value = float(time)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number of seconds, got {time!r}") from None
+    if not math.isfinite(value):
+        raise ValueError(f"{name} must be finite, got {time!r}")
+    return value
+
+
+def _vector(value, size: int, name: str) -> np.ndarray:
+    arr = as_float_array(value, name)
+    if arr.shape != (size,):
+        raise ValueError(f"{name} must have length {size}, got shape {arr.shape}")
+    check_finite(arr, name)
+    return arr
+
+
+def _name(value, what: str) -> str:
+    if not isinstance(value, str) or not value:
+        raise ValueError(f"{what} must be a non-empty frame name, got {value!r}")
+    return value
+
+
+class Transformer:
+    """A buffer of transforms between named frames, queried like tf2.
+
+    Parameters
+    ----------
+    cache_time : float, optional
+        How many seconds of each moving frame's history to keep, counted back
+        from its newest sample (tf2's default of 10 s if not given).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from rbm_nb.frames import ReferenceFrame
+    >>> from rbm_nb.ros import Transformer
+    >>> world = ReferenceFrame("world")
+    >>> head = ReferenceFrame("head", parent=world, translation=[[0, 0, 0], [1, 0, 0]],
+    ...                       timestamps=[0.0, 1.0])
+    >>> tf = Transformer.from_reference_frame(world)
+    >>> tf.lookup_transform("world", "head", time=0.25)
+    ((0.25, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
+    >>> tf.transform_point((1.0, 2.0, 3.0), "world", "head")  # time 0: the latest
+    (2.0, 2.0, 3.0)
+    """
+
+    def __init__(self, cache_time=None):
+        if cache_time is None:
+            cache_time = DEFAULT_CACHE_TIME
+        cache_time = _time_value(cache_time, "cache_time")
+        if cache_time < 0:
+            raise ValueError(f"cache_time must be >= 0 seconds, got {cache_time}")
+        self.cache_time = cache_time
+        self._edges: dict[str, _Edge] = {}
+        self._built: dict[str, ReferenceFrame] = {}
+
+    def __repr__(self) -> str:
+        moving = sum(e.times is not None for e in self._edges.values())
+        return (
+            f"<Transformer: {len(self.frames)} frames, {len(self._edges) - moving} static "
+            f"and {moving} moving transforms, cache_time={self.cache_time:g} s>"
+        )
+
+    @property
+    def frames(self) -> tuple:
+        """Names of all frames the buffer knows, sorted."""
+        names = set(self._edges)
+        names.update(e.parent for e in self._edges.values())
+        return tuple(sorted(names))
+
+    # -- filling the buffer ------------------------------------------------
+
+    @staticmethod
+    def from_reference_frame(reference_frame) -> Transformer:
+        """A Transformer holding every transform of a reference frame's tree.
+
+        Parameters
+        ----------
+        reference_frame : ReferenceFrame or str
+            Any frame of the tree (or the name of a registered one); the whole
+            tree from its root down is added.
+
+        Returns
+        -------
+        Transformer
+            Its cache time covers all timestamps of the tree (at least tf2's
+            default of 10 s), so nothing is dropped.
+        """
+        root = _resolve(reference_frame, "reference_frame").root
+        nodes = root.descendants
+        names = [root.name] + [n.name for n in nodes]
+        if any(not isinstance(n, str) or not n for n in names):
+            raise ValueError(
+                "every frame of the tree needs a name to go into a Transformer"
+            )
+        duplicates = sorted({n for n in names if names.count(n) > 1})
+        if duplicates:
+            raise ValueError(
+                f"frame names must be unique in the tree, repeated: {duplicates}"
+            )
+        spans = [
+            _seconds(n.timestamps)[[0, -1]] for n in nodes if n.timestamps is not None
+        ]
+        cache_time = DEFAULT_CACHE_TIME
+        if spans:
+            spans = np.array(spans)
+            cache_time = max(cache_time, float(spans[:, 1].max() - spans[:, 0].min()))
+        transformer = Transformer(cache_time=cache_time)
+        for node in nodes:
+            if node.timestamps is None:
+                transformer.set_transform_static(node)
+            else:
+                transformer.set_transforms(node)
+        return transformer
+
+    def set_transform_static(self, reference_frame) -> None:
+        """Add the static transform of a reference frame wrt its parent.
+
+        Parameters
+        ----------
+        reference_frame : ReferenceFrame or str
+            A static frame with a parent (or the name of a registered one).
+        """
+        frame = self._checked_frame(reference_frame)
+        if frame.timestamps is not None:
+            raise ValueError(
+                f"frame {frame.name!r} is moving (it has timestamps); use set_transforms"
+            )
+        self._set_edge(
+            frame.name, frame.parent.name, np.array(frame.translation),
+            np.array(frame.rotation), None, False,
+        )  # fmt: skip
+
+    def set_transforms(self, reference_frame) -> None:
+        """Add the transforms of a moving reference frame wrt its parent.
+
+        Samples are merged with those already buffered for the frame (a new
+        sample replaces an old one at the same time); samples older than
+        ``cache_time`` before the newest are dropped.
+
+        Parameters
+        ----------
+        reference_frame : ReferenceFrame or str
+            A moving frame with a parent (or the name of a registered one).
+        """
+        frame = self._checked_frame(reference_frame)
+        if frame.timestamps is None:
+            raise ValueError(
+                f"frame {frame.name!r} is static (no timestamps); use set_transform_static"
+            )
+        self._set_edge(
+            frame.name, frame.parent.name, np.array(frame.translation),
+            np.array(frame.rotation), _seconds(frame.timestamps), frame.discrete,
+        )  # fmt: skip
+
+    def set_transform(self, translation, rotation, frame_id, child_frame_id, time=None):
+        """Add raw transforms of ``child_frame_id`` wrt ``frame_id``.
+
+        The counterpart of tf2's ``set_transform`` for data that does not come
+        as a reference frame (e.g. ``/tf`` messages read from a rosbag).
+
+        Parameters
+        ----------
+        translation : array_like, shape (3,) or (n, 3)
+            Origin of the child frame in the parent frame.
+        rotation : array_like, shape (4,) or (n, 4)
+            Orientation of the child wrt the parent, ``w, x, y, z``.
+        frame_id, child_frame_id : str
+            Parent and child frame names.
+        time : float or array_like, shape (n,), optional
+            Seconds (or datetime64). None adds a static transform.
+        """
+        parent = _name(frame_id, "frame_id")
+        child = _name(child_frame_id, "child_frame_id")
+        if time is None:
+            t = _vector(translation, 3, "translation")
+            r = normalize_quaternions(_vector(rotation, 4, "rotation"), "rotation")
+            self._set_edge(child, parent, t, r, None, False)
+            return
+        times = _seconds(np.atleast_1d(time))
+        if times.ndim != 1 or not np.isfinite(times).all():
+            raise ValueError(f"time must be finite seconds, shape (n,), got {time!r}")
+        n = len(times)
+        t = np.asarray(translation, dtype=np.float64).reshape(-1, 3) if n else None
+        r = np.asarray(rotation, dtype=np.float64).reshape(-1, 4) if n else None
+        if t is None or t.shape != (n, 3) or r.shape != (n, 4):
+            raise ValueError(
+                f"translation and rotation must have shapes ({n}, 3) and ({n}, 4) for "
+                f"{n} times, got {np.shape(translation)} and {np.shape(rotation)}"
+            )
+        check_finite(t, "translation")
+        order = np.argsort(times, kind="stable")
+        self._set_edge(
+            child,
+            parent,
+            t[order],
+            normalize_quaternions(r[order], "rotation"),
+            times[order],
+            False,
+        )
+
+    def _checked_frame(self, reference_frame) -> ReferenceFrame:
+        frame = _resolve(reference_frame, "reference_frame")
+        if frame.parent is None:
+            raise ValueError(
+                f"frame {frame.name!r} has no parent: there is no transform to add"
+            )
+        _name(frame.name, "the frame's name")
+        _name(frame.parent.name, "the parent frame's name")
+        return frame
+
+    def _set_edge(self, child, parent, t, r, times, discrete) -> None:
+        if child == parent:
+            raise ValueError(f"frame {child!r} cannot be its own parent")
+        node = parent
+        while node is not None:  # refuse cycles, as a tree must
+            if node == child:
+                raise ValueError(
+                    f"making {parent!r} the parent of {child!r} would close a loop: "
+                    f"{parent!r} is already below {child!r}"
+                )
+            edge = self._edges.get(node)
+            node = None if edge is None else edge.parent
+        old = self._edges.get(child)
+        if (
+            times is not None
+            and old is not None
+            and old.times is not None
+            and old.parent == parent
+        ):
+            # newer samples win at equal times: keep the last occurrence
+            all_times = np.concatenate([old.times, times])
+            t = np.concatenate([old.translation, t])
+            r = np.concatenate([old.rotation, r])
+            _, last = np.unique(all_times[::-1], return_index=True)
+            keep = len(all_times) - 1 - last
+            all_times, t, r = all_times[keep], t[keep], r[keep]
+            times = all_times
+        elif times is not None:
+            _, keep = np.unique(times[::-1], return_index=True)
+            keep = len(times) - 1 - keep
+            times, t, r = times[keep], t[keep], r[keep]
+        if times is not None:
+            recent = times >= times[-1] - self.cache_time
+            times, t, r = times[recent], t[recent], r[recent]
+        self._edges[child] = _Edge(parent, t, r, times, discrete)
+        self._invalidate(child)
+
+    def _invalidate(self, name: str) -> None:
+        """Forget the built frame of ``name`` and everything below it."""
+        frame = self._built.pop(name, None)
+        if frame is not None:
+            frame.parent = None  # detach, so the old object leaves the tree
+        for child, edge in self._edges.items():
+            if edge.parent == name:
+                self._invalidate(child)
+
+    # -- the private frame tree -------------------------------------------
+
+    def _frame(self, name: str) -> ReferenceFrame:
+        frame = self._built.get(name)
+        if frame is not None:
+            return frame
+        edge = self._edges.get(name)
+        if edge is None:
+            frame = ReferenceFrame(name)
+        else:
+            frame = ReferenceFrame(
+                name,
+                parent=self._frame(edge.parent),
+                translation=edge.translation,
+                rotation=edge.rotation,
+                timestamps=edge.times,
+                discrete=edge.discrete,
+            )
+        self._built[name] = frame
+        return frame
+
+    def _known(self, name, what: str) -> ReferenceFrame:
+        name = _name(name, what)
+        known = self.frames
+        if name not in known:
+            close = difflib.get_close_matches(name, known, n=3)
+            hint = f"; did you mean {' or '.join(map(repr, close))}?" if close else ""
+            listing = (
+                f" (frames: {', '.join(known)})" if known else " (the buffer is empty)"
+            )
+            raise FrameNotFoundError(
+                f"{what} {name!r} does not exist in this Transformer{hint}{listing}"
+            )
+        return self._frame(name)
+
+    def _lookup(self, target_frame, source_frame, time):
+        target = self._known(target_frame, "target_frame")
+        source = self._known(source_frame, "source_frame")
+        if target.root is not source.root:
+            raise ConnectivityError(
+                f"no chain of transforms connects {source.name!r} and {target.name!r} "
+                f"(their trees have the roots {source.root.name!r} and {target.root.name!r})"
+            )
+        when = _time_value(time)
+        if when == 0.0:
+            latest = latest_common_time(source, target)
+            if latest is None:  # all static: any time will do
+                latest = 0.0
+            when = float(latest)
+        return transform_at_times(source, target, when)
+
+    # -- queries ------------------------------------------------------------
+
+    def can_transform(self, target_frame, source_frame, time=0.0) -> bool:
+        """Whether ``lookup_transform`` would succeed.
+
+        Parameters
+        ----------
+        target_frame, source_frame : str
+        time : float, default 0.0
+            Seconds; 0 means the latest common time.
+
+        Returns
+        -------
+        bool
+        """
+        _name(target_frame, "target_frame")
+        _name(source_frame, "source_frame")
+        _time_value(time)
+        try:
+            self._lookup(target_frame, source_frame, time)
+        except (FrameNotFoundError, ConnectivityError, ExtrapolationError):
+            return False
+        return True
+
+    def lookup_transform(self, target_frame, source_frame, time=0.0):
+        """The transform that maps data in ``source_frame`` into ``target_frame``.
+
+        Parameters
+        ----------
+        target_frame : str
+            Name of the frame to transform into.
+        source_frame : str
+            Name of the frame the data is given in.
+        time : float, default 0.0
+            Seconds; 0 means the latest time at which the whole chain has
+            data.
+
+        Returns
+        -------
+        t : tuple, len 3
+            Origin of ``source_frame`` in ``target_frame``.
+        r : tuple, len 4
+            Orientation of ``source_frame`` wrt ``target_frame``, ``w, x, y, z``.
+
+        Raises
+        ------
+        FrameNotFoundError, ConnectivityError, ExtrapolationError
+            (all ValueErrors) for unknown frames, unconnected frames and
+            times without data.
+        """
+        t, r = self._lookup(target_frame, source_frame, time)
+        return tuple(map(float, t)), tuple(map(float, r))
+
+    def _rotate(self, r, v):
+        from .._kernels import quaternion as kq
+
+        return kq.rotate_vectors(
+            np.ascontiguousarray(r[None]), np.ascontiguousarray(v[None])
+        )[0]
+
+    def transform_point(self, p, target_frame, source_frame, time=0.0):
+        """A point given in ``source_frame``, expressed in ``target_frame``.
+
+        Returns
+        -------
+        tuple, len 3
+        """
+        p = _vector(p, 3, "p")
+        t, r = self._lookup(target_frame, source_frame, time)
+        return tuple(map(float, self._rotate(r, p) + t))
+
+    def transform_vector(self, v, target_frame, source_frame, time=0.0):
+        """A vector represented in ``source_frame``, represented in ``target_frame``.
+
+        Only the rotation applies (a vector has no position).
+
+        Returns
+        -------
+        tuple, len 3
+        """
+        v = _vector(v, 3, "v")
+        _, r = self._lookup(target_frame, source_frame, time)
+        return tuple(map(float, self._rotate(r, v)))
+
+    def transform_quaternion(self, q, target_frame, source_frame, time=0.0):
+        """An orientation wrt ``source_frame``, expressed wrt ``target_frame``.
+
+        Returns
+        -------
+        tuple, len 4
+            ``w, x, y, z``.
+        """
+        q = normalize_quaternions(_vector(q, 4, "q"), "q")
+        _, r = self._lookup(target_frame, source_frame, time)
+        return tuple(map(float, _qmul(r, q)))
+
+    def transform_pose(self, p, o, target_frame, source_frame, time=0.0):
+        """A pose (position and orientation) from ``source_frame`` to ``target_frame``.
+
+        Parameters
+        ----------
+        p : iterable, len 3
+            Position in the source frame.
+        o : iterable, len 4
+            Orientation wrt the source frame, ``w, x, y, z``.
+
+        Returns
+        -------
+        pt : tuple, len 3
+        ot : tuple, len 4
+        """
+        p = _vector(p, 3, "p")
+        o = normalize_quaternions(_vector(o, 4, "o"), "o")
+        t, r = self._lookup(target_frame, source_frame, time)
+        return tuple(map(float, self._rotate(r, p) + t)), tuple(map(float, _qmul(r, o)))
+
+
+def _qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    from .._kernels import quaternion as kq
+
+    return kq.qmul(np.ascontiguousarray(a[None]), np.ascontiguousarray(b[None]))[0]

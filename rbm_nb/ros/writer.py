@@ -1,0 +1,278 @@
+"""Writing motion topics to rosbags (ROS1 ``.bag`` or a ROS2 bag folder), no ROS needed."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .._atomic import atomic_path
+from .._config import UNIT_QUATERNION_TOLERANCE
+from .._xarray import dataset_variable
+from ._messages import TRANSFORM_STAMPED, encode_transform_stamped, rosbags_type_name
+
+STORAGES = ("sqlite3", "mcap")
+_MAX_SEC = {False: 2**32, True: 2**31}  # ROS1 stamps are uint32 s, ROS2 int32 s
+
+
+class RosbagWriter:
+    """Writer for motion topics to a rosbag.
+
+    Use it as a context manager. Everything goes to a temporary file beside
+    the target, which replaces the target only when the ``with`` block ends
+    without an error: a failure never leaves a half-written bag, and an
+    existing bag at the target is untouched until then.
+
+    Parameters
+    ----------
+    bag_file : str or path-like
+        A path ending in ``.bag`` makes a ROS1 bag; anything else a ROS2 bag
+        folder.
+    storage : {"sqlite3", "mcap"}, optional
+        Storage of a ROS2 bag (default "sqlite3"); not for ROS1 bags.
+
+    Examples
+    --------
+    >>> import numpy as np, tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "walk.bag"
+    >>> with RosbagWriter(path) as writer:
+    ...     writer.write_transform_stamped(
+    ...         [1.0, 2.0], np.zeros((2, 3)), [[1, 0, 0, 0]] * 2, "/tf_walk", "world", "head"
+    ...     )
+    >>> path.exists()
+    True
+    """
+
+    def __init__(self, bag_file: str | os.PathLike, *, storage: str | None = None):
+        self.bag_file = Path(bag_file)
+        self.ros2 = self.bag_file.suffix != ".bag"
+        if storage is not None and not self.ros2:
+            raise ValueError(
+                f"storage is for ROS2 bags; {self.bag_file} (.bag) is a ROS1 bag"
+            )
+        if storage is not None and storage not in STORAGES:
+            raise ValueError(f"storage must be one of {STORAGES}, got {storage!r}")
+        self.storage = (storage or "sqlite3") if self.ros2 else None
+        self._atomic = None
+        self._writer = None
+        self._typestore = None
+        self._connections: dict = {}
+
+    def __repr__(self) -> str:
+        state = "open" if self._writer is not None else "closed"
+        return f"RosbagWriter({str(self.bag_file)!r}, {state})"
+
+    def __enter__(self) -> RosbagWriter:
+        from rosbags.typesys import Stores, get_typestore
+
+        if self._writer is not None:
+            raise RuntimeError(f"{self!r} is already open")
+        self._typestore = get_typestore(
+            Stores.ROS2_HUMBLE if self.ros2 else Stores.ROS1_NOETIC
+        )
+        self._atomic = atomic_path(self.bag_file)
+        tmp = self._atomic.__enter__()
+        try:
+            self._writer = self._make_writer(tmp)
+            self._writer.open()
+        except BaseException as err:
+            self._writer = None
+            self._atomic.__exit__(type(err), err, err.__traceback__)
+            raise
+        return self
+
+    def _make_writer(self, path: Path):
+        if not self.ros2:
+            from rosbags.rosbag1 import Writer
+
+            return Writer(path)
+        from rosbags.rosbag2 import StoragePlugin, Writer
+
+        plugin = StoragePlugin.MCAP if self.storage == "mcap" else StoragePlugin.SQLITE3
+        return Writer(path, version=Writer.VERSION_LATEST, storage_plugin=plugin)
+
+    def __exit__(self, exc_type, exc_val, exc_tb) -> None:
+        writer, atomic = self._writer, self._atomic
+        self._writer = self._atomic = None
+        self._connections = {}
+        try:
+            if exc_type is None:
+                writer.close()
+            else:
+                writer.abort()
+        except BaseException as err:
+            atomic.__exit__(type(err), err, err.__traceback__)
+            raise
+        # commits the temporary bag on success, discards it otherwise
+        atomic.__exit__(exc_type, exc_val, exc_tb)
+
+    def _connection(self, topic: str, msgtype: str):
+        key = (topic, msgtype)
+        if key not in self._connections:
+            self._connections[key] = self._writer.add_connection(
+                topic, rosbags_type_name(msgtype), typestore=self._typestore
+            )
+        return self._connections[key]
+
+    def write_transform_stamped(
+        self,
+        timestamps,
+        translation,
+        rotation,
+        topic: str,
+        frame: str,
+        child_frame: str,
+    ) -> None:
+        """Write ``geometry_msgs/TransformStamped`` messages.
+
+        Parameters
+        ----------
+        timestamps : array_like, shape (n,)
+            Header stamps: float seconds since the epoch, or datetime64.
+            Also used as the bag's record times.
+        translation : array_like, shape (n, 3)
+            Translations (x, y, z).
+        rotation : array_like, shape (n, 4)
+            Rotations as unit quaternions (w, x, y, z); written as they are.
+        topic : str
+            Topic of the messages.
+        frame : str
+            Parent frame (``header.frame_id``).
+        child_frame : str
+            Child frame (``child_frame_id``).
+
+        Raises
+        ------
+        ValueError
+            If shapes do not match, values are not finite, a stamp is before
+            1970 or beyond what the bag format can hold, or a rotation is
+            not a unit quaternion (within ``UNIT_QUATERNION_TOLERANCE``).
+        RuntimeError
+            If called outside the ``with`` block.
+        """
+        if self._writer is None:
+            raise RuntimeError(
+                "RosbagWriter writes inside a with block: "
+                f"with RosbagWriter({str(self.bag_file)!r}) as writer: ..."
+            )
+        stamps = self._stamps_ns(timestamps)
+        n = stamps.shape[0]
+        translation = _rows(translation, "translation", n, 3)
+        rotation = _rows(rotation, "rotation", n, 4)
+        norm_error = np.abs(np.linalg.norm(rotation, axis=1) - 1.0)
+        if n and norm_error.max() > UNIT_QUATERNION_TOLERANCE:
+            i = int(np.argmax(norm_error > UNIT_QUATERNION_TOLERANCE))
+            raise ValueError(
+                f"rotation must be unit quaternions (w, x, y, z); row {i} has norm "
+                f"{np.linalg.norm(rotation[i]):.6g}"
+            )
+        for name, value in (
+            ("topic", topic),
+            ("frame", frame),
+            ("child_frame", child_frame),
+        ):
+            if not isinstance(value, str):
+                raise ValueError(f"{name} must be a str, got {value!r}")
+        if not topic:
+            raise ValueError("topic must not be empty")
+        rows = encode_transform_stamped(
+            stamps, translation, rotation, frame, child_frame, self.ros2
+        )
+        connection = self._connection(topic, TRANSFORM_STAMPED)
+        write = self._writer.write
+        for stamp, row in zip(stamps.tolist(), rows, strict=True):
+            write(connection, stamp, row.tobytes())
+
+    def write_transform_stamped_dataset(
+        self,
+        ds,
+        topic: str,
+        frame: str,
+        child_frame: str,
+        timestamps: str = "time",
+        translation: str = "position",
+        rotation: str = "orientation",
+    ) -> None:
+        """Write a dataset as ``geometry_msgs/TransformStamped`` messages.
+
+        Parameters
+        ----------
+        ds : xarray.Dataset
+            Dataset with timestamps, translation and rotation.
+        topic, frame, child_frame : str
+            As in :meth:`write_transform_stamped`.
+        timestamps : str, default "time"
+            Name of the coordinate with the timestamps (datetime64 or float s).
+        translation : str, default "position"
+            Name of the (time, 3) translation variable.
+        rotation : str, default "orientation"
+            Name of the (time, 4) rotation variable (w, x, y, z).
+        """
+        for argument, name in (
+            ("timestamps", timestamps),
+            ("translation", translation),
+            ("rotation", rotation),
+        ):
+            dataset_variable(ds, name, argument)  # raises, naming what is missing
+        time_dim = ds[timestamps].dims[0]
+        translation, rotation = (
+            ds[name].transpose(time_dim, ...).values for name in (translation, rotation)
+        )
+        self.write_transform_stamped(
+            ds[timestamps].values, translation, rotation, topic, frame, child_frame
+        )
+
+    def _stamps_ns(self, timestamps) -> np.ndarray:
+        stamps = np.asarray(timestamps)
+        if stamps.ndim != 1:
+            raise ValueError(
+                f"timestamps must be one-dimensional, got shape {stamps.shape}"
+            )
+        if np.issubdtype(stamps.dtype, np.datetime64):
+            if np.isnat(stamps).any():
+                raise ValueError(
+                    f"timestamps contain NaT at index {int(np.flatnonzero(np.isnat(stamps))[0])}"
+                )
+            ns = stamps.astype("datetime64[ns]").astype(np.int64)
+        else:
+            try:
+                seconds = stamps.astype(np.float64)
+            except (TypeError, ValueError):
+                raise ValueError(
+                    f"timestamps must be float seconds or datetime64, got dtype {stamps.dtype}"
+                ) from None
+            if not np.isfinite(seconds).all():
+                raise ValueError(
+                    f"timestamps must be finite; index {int(np.flatnonzero(~np.isfinite(seconds))[0])} is not"
+                )
+            if seconds.size and seconds.max() >= _MAX_SEC[self.ros2]:
+                raise ValueError(
+                    "timestamps must be seconds since 1970 that the bag format can hold"
+                )
+            # nearest ns: reading back sec + nsec / 1e9 gives the same float
+            sec = np.floor(seconds)
+            ns = sec.astype(np.int64) * 1_000_000_000 + np.round(
+                (seconds - sec) * 1e9
+            ).astype(np.int64)
+        if ns.size and (
+            ns.min() < 0 or ns.max() // 1_000_000_000 >= _MAX_SEC[self.ros2]
+        ):
+            raise ValueError(
+                "timestamps must lie between 1970 and the largest time the bag format can hold "
+                f"({_MAX_SEC[self.ros2]} s)"
+            )
+        return ns
+
+
+def _rows(values, name: str, n: int, width: int) -> np.ndarray:
+    arr = np.asarray(values, dtype=np.float64)
+    if arr.shape != (n, width):
+        raise ValueError(
+            f"{name} must have shape ({n}, {width}) to match timestamps, got {arr.shape}"
+        )
+    if not np.isfinite(arr).all():
+        raise ValueError(
+            f"{name} must be finite; row {int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])} is not"
+        )
+    return arr

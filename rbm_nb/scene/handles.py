@@ -1,0 +1,366 @@
+"""Handles to objects in a :class:`~rbm_nb.scene.Scene`.
+
+Every ``Scene.add_*`` call returns a handle. A handle can be restyled with
+``update(**style)``, hidden with ``visible = False`` and deleted with
+``remove()``. The geometry itself is built here from meshcat's geometry
+classes; the scene owns placement and timing.
+
+Each object lives at ``/rbm/<anchor>/<name>`` in the meshcat tree::
+
+    <name>            user visibility
+      pose            follows the frame in the handle's base (static or a track)
+        [data]        follows the object's own samples (moving points/vectors)
+          geom        the geometry, with its fixed offset
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .commands import color_int
+from .commands import meshcat_geometry as _geometry
+
+
+class SceneHandle:
+    """Base class of scene handles."""
+
+    kind = "object"
+
+    def __init__(self, scene, name: str, frame, base, style: dict):
+        self._scene = scene
+        self.name = name
+        self.frame = frame
+        self.base = base
+        self._style = dict(style)
+        self._visible = True
+        self.root_path = ""
+        self.pose_path = ""
+        self.geom_path = ""
+        self.removed = False
+
+    # -- facade -----------------------------------------------------------------
+    @property
+    def scene(self):
+        return self._scene
+
+    @property
+    def style(self) -> dict:
+        """Current styling keywords."""
+        return dict(self._style)
+
+    @property
+    def visible(self) -> bool:
+        """Whether the object is shown (when its data covers the current time)."""
+        return self._visible
+
+    @visible.setter
+    def visible(self, value: bool) -> None:
+        self._check()
+        self._visible = bool(value)
+        self._scene._set_visible(self, self._visible)
+
+    def update(self, **style) -> SceneHandle:
+        """Change styling keywords (the same as those of ``add_*``) and redraw."""
+        self._check()
+        unknown = set(style) - set(self._style)
+        if unknown:
+            raise ValueError(
+                f"{type(self).__name__}.update: unknown style {sorted(unknown)}; "
+                f"known: {sorted(self._style)}"
+            )
+        new = dict(self._style)
+        new.update(style)
+        self._validate_style(new)
+        self._style = new
+        self._scene._redraw(self)
+        return self
+
+    def remove(self) -> None:
+        """Delete the object from the scene (idempotent)."""
+        if self.removed:
+            return
+        self._scene._remove_handle(self)
+
+    def _check(self) -> None:
+        if self.removed:
+            raise RuntimeError(f"{self.kind} {self.name!r} was removed from its scene")
+        self._scene._check_open()
+
+    def __repr__(self) -> str:
+        state = " (removed)" if self.removed else ""
+        return f"<{type(self).__name__} {self.name!r}{state}>"
+
+    # -- for the scene ----------------------------------------------------------
+    def _validate_style(self, style: dict) -> None:
+        pass
+
+    def _objects(self) -> list:
+        """``(relative path, meshcat Object)`` pairs below ``geom``."""
+        raise NotImplementedError
+
+    def _extent(self) -> np.ndarray:
+        """Points (in the handle's frame) that the camera should see."""
+        return np.zeros((1, 3))
+
+
+def _positive(value, name: str, owner: str) -> float:
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"{owner}: {name} must be a positive number, got {value!r}"
+        ) from None
+    if not (np.isfinite(value) and value > 0):
+        raise ValueError(f"{owner}: {name} must be a positive number, got {value!r}")
+    return value
+
+
+def _points_array(arr, name: str, owner: str) -> np.ndarray:
+    arr = np.asarray(arr, dtype=np.float64)
+    if arr.ndim == 1:
+        arr = arr[np.newaxis]
+    if arr.ndim != 2 or arr.shape[1] != 3 or arr.shape[0] == 0:
+        raise ValueError(
+            f"{owner}: {name} must have shape (3,) or (n, 3), got {np.shape(arr)}"
+        )
+    if not np.isfinite(arr).all():
+        raise ValueError(f"{owner}: {name} must be finite")
+    return arr
+
+
+class FrameHandle(SceneHandle):
+    """A frame drawn as a red/green/blue triad (x, y, z)."""
+
+    kind = "frame"
+
+    def _validate_style(self, style):
+        style["scale"] = _positive(style["scale"], "scale", "add_frame")
+
+    def _objects(self):
+        g = _geometry()
+        return [("", g.triad(self._style["scale"]))]
+
+    def _extent(self):
+        return np.eye(3) * self._style["scale"]
+
+
+class PathHandle(SceneHandle):
+    """The trajectory of a frame in its base, as a line."""
+
+    kind = "path"
+
+    def __init__(self, scene, name, frame, base, style, positions: np.ndarray):
+        super().__init__(scene, name, frame, base, style)
+        self.positions = positions
+
+    def _validate_style(self, style):
+        color_int(style["color"], "add_path: color")
+        if int(style["max_points"]) < 2:
+            raise ValueError(
+                f"add_path: max_points must be at least 2, got {style['max_points']}"
+            )
+        style["max_points"] = int(style["max_points"])
+
+    def shown_positions(self) -> np.ndarray:
+        """The positions drawn: subsampled to at most ``max_points``."""
+        n = len(self.positions)
+        stride = max(int(np.ceil(n / self._style["max_points"])), 1)
+        shown = self.positions[::stride]
+        if n > 1 and (n - 1) % stride:
+            shown = np.vstack([shown, self.positions[-1:]])
+        return shown
+
+    def _objects(self):
+        g = _geometry()
+        pts = self.shown_positions().astype(np.float32)
+        if len(pts) == 1:
+            pts = np.vstack([pts, pts])
+        line = g.Line(
+            g.PointsGeometry(np.ascontiguousarray(pts.T)),
+            g.LineBasicMaterial(color=color_int(self._style["color"])),
+        )
+        return [("", line)]
+
+    def _extent(self):
+        return self.positions
+
+
+class PointsHandle(SceneHandle):
+    """A static point cloud, or one point moving over time (a sphere)."""
+
+    kind = "points"
+
+    def __init__(
+        self, scene, name, frame, base, style, points: np.ndarray, moving: bool
+    ):
+        super().__init__(scene, name, frame, base, style)
+        self.points = points
+        self.moving = moving
+
+    def _validate_style(self, style):
+        color_int(style["color"], "add_points: color")
+        style["size"] = _positive(style["size"], "size", "add_points")
+
+    def _objects(self):
+        g = _geometry()
+        color = color_int(self._style["color"])
+        if self.moving:
+            return [
+                (
+                    "",
+                    g.Mesh(
+                        g.Sphere(self._style["size"]),
+                        g.MeshLambertMaterial(color=color),
+                    ),
+                )
+            ]
+        rgb = (
+            np.array(
+                [(color >> 16) & 255, (color >> 8) & 255, color & 255], dtype=np.float32
+            )
+            / 255
+        )
+        colors = np.repeat(rgb[:, np.newaxis], len(self.points), axis=1)
+        cloud = g.Points(
+            g.PointsGeometry(
+                np.ascontiguousarray(self.points.T.astype(np.float32)), color=colors
+            ),
+            g.PointsMaterial(size=self._style["size"], color=color),
+        )
+        return [("", cloud)]
+
+    def _extent(self):
+        return self.points
+
+
+class VectorsHandle(SceneHandle):
+    """Vectors fixed in a frame (e.g. gaze rays), or one vector over time."""
+
+    kind = "vectors"
+
+    def __init__(self, scene, name, frame, base, style, vectors, origins, moving: bool):
+        super().__init__(scene, name, frame, base, style)
+        self.vectors = vectors
+        self.origins = origins
+        self.moving = moving
+
+    def _validate_style(self, style):
+        color_int(style["color"], "add_vectors: color")
+        style["length"] = _positive(style["length"], "length", "add_vectors")
+
+    def _objects(self):
+        g = _geometry()
+        if self.moving:
+            # a segment along x; the data track turns it onto the vector and
+            # scales it by the vector's norm
+            segments = np.array([[0.0, 0.0, 0.0], [self._style["length"], 0.0, 0.0]])
+        else:
+            tips = self.origins + self.vectors * self._style["length"]
+            segments = np.empty((2 * len(tips), 3))
+            segments[0::2] = self.origins
+            segments[1::2] = tips
+        lines = g.LineSegments(
+            g.PointsGeometry(np.ascontiguousarray(segments.T.astype(np.float32))),
+            g.LineBasicMaterial(color=color_int(self._style["color"])),
+        )
+        return [("", lines)]
+
+    def _extent(self):
+        if self.moving:
+            return np.zeros((1, 3))
+        return np.vstack(
+            [self.origins, self.origins + self.vectors * self._style["length"]]
+        )
+
+
+PRIMITIVES = ("box", "sphere", "cylinder", "ellipsoid")
+MESH_FORMATS = {".obj": "obj", ".stl": "stl", ".dae": "dae"}
+
+
+class MeshHandle(SceneHandle):
+    """A mesh file or a primitive attached to a frame."""
+
+    kind = "mesh"
+
+    def __init__(self, scene, name, frame, base, style, mesh, size):
+        super().__init__(scene, name, frame, base, style)
+        self.mesh = mesh
+        self.size = size
+        self._geometry_object = _mesh_geometry(mesh, size)
+
+    def _validate_style(self, style):
+        color_int(style["color"], "add_mesh: color")
+        opacity = float(style["opacity"])
+        if not 0 <= opacity <= 1:
+            raise ValueError(
+                f"add_mesh: opacity must be in [0, 1], got {style['opacity']}"
+            )
+        style["opacity"] = opacity
+        style["scale"] = _positive(style["scale"], "scale", "add_mesh")
+
+    def _objects(self):
+        g = _geometry()
+        material = g.MeshLambertMaterial(
+            color=color_int(self._style["color"]), opacity=self._style["opacity"]
+        )
+        return [("", g.Mesh(self._geometry_object, material))]
+
+    def _extent(self):
+        # a cube around the mesh: primitives' sizes are at most this big
+        half = float(np.max(self.size)) * self._style["scale"]
+        return np.array([[-half, -half, -half], [half, half, half]])
+
+
+def _mesh_geometry(mesh, size):
+    g = _geometry()
+    if isinstance(mesh, g.Geometry):
+        return mesh
+    if isinstance(mesh, (str, os.PathLike)) and str(mesh) in PRIMITIVES:
+        kind = str(mesh)
+        s = np.atleast_1d(np.asarray(size, dtype=float))
+        if not (np.isfinite(s).all() and (s > 0).all()):
+            raise ValueError(f"add_mesh: size must be positive, got {size!r}")
+        if kind == "box":
+            s = np.broadcast_to(s, (3,)) if s.size in (1, 3) else None
+            if s is None:
+                raise ValueError(
+                    f"add_mesh: a box needs size=(x, y, z) or one number, got {size!r}"
+                )
+            return g.Box([float(v) for v in s])
+        if kind == "sphere":
+            if s.size != 1:
+                raise ValueError(f"add_mesh: a sphere needs size=radius, got {size!r}")
+            return g.Sphere(float(s[0]))
+        if kind == "cylinder":
+            if s.size != 2:
+                raise ValueError(
+                    f"add_mesh: a cylinder needs size=(height, radius), got {size!r}"
+                )
+            return g.Cylinder(float(s[0]), float(s[1]))
+        if s.size != 3:
+            raise ValueError(
+                f"add_mesh: an ellipsoid needs size=(rx, ry, rz), got {size!r}"
+            )
+        return g.Ellipsoid([float(v) for v in s])
+    if isinstance(mesh, (str, os.PathLike)):
+        path = Path(mesh)
+        fmt = MESH_FORMATS.get(path.suffix.lower())
+        if fmt is None:
+            raise ValueError(
+                f"add_mesh: mesh must be one of {PRIMITIVES}, a meshcat Geometry or a "
+                f".obj/.stl/.dae file, got {str(mesh)!r}"
+            )
+        if not path.is_file():
+            raise ValueError(f"add_mesh: mesh file {str(path)!r} does not exist")
+        if fmt == "stl":
+            return g.StlMeshGeometry.from_file(str(path))
+        if fmt == "obj":
+            return g.ObjMeshGeometry.from_file(str(path))
+        return g.DaeMeshGeometry.from_file(str(path))
+    raise ValueError(
+        f"add_mesh: mesh must be one of {PRIMITIVES}, a meshcat Geometry or a mesh file path, "
+        f"got {type(mesh).__name__}"
+    )

@@ -1,0 +1,128 @@
+"""Poses over time, looked up once and sampled per player step.
+
+A scene object is placed by the transform of its frame into the scene's base.
+That transform is looked up once for the whole recording when the object is
+added and kept as a :class:`Track`; each step then picks the latest sample at
+or before the player's time with a binary search.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..widgets._time import check_kinds, timestamps_as_seconds
+from .commands import pose_matrix
+
+TIME_TOLERANCE = 1e-9  # seconds
+
+
+class Track:
+    """Translation and rotation of something, static or sampled over time.
+
+    Parameters
+    ----------
+    translation : array_like, shape (3,) or (n, 3)
+    rotation : array_like, shape (4,) or (n, 4)
+        Quaternions ``(w, x, y, z)``.
+    timestamps : array_like, shape (n,), optional
+        None for a static pose.
+    scale : array_like, shape (n,), optional
+        Uniform scale per sample (vector lengths).
+    name : str
+        Used in error messages.
+    """
+
+    def __init__(
+        self, translation, rotation, timestamps=None, scale=None, name: str = "track"
+    ):
+        self.name = name
+        t = np.asarray(translation, dtype=np.float64)
+        r = np.asarray(rotation, dtype=np.float64)
+        if timestamps is None:
+            if t.shape != (3,) or r.shape != (4,):
+                raise ValueError(
+                    f"{name}: a static pose needs translation (3,) and rotation (4,), "
+                    f"got {t.shape} and {r.shape}"
+                )
+            self.seconds = None
+            self.kind = None
+            self.original_timestamps = None
+        else:
+            self.seconds, self.kind = timestamps_as_seconds(
+                timestamps, f"{name} timestamps"
+            )
+            self.original_timestamps = np.asarray(
+                getattr(timestamps, "values", timestamps)
+            )
+            n = len(self.seconds)
+            if t.shape != (n, 3) or r.shape != (n, 4):
+                raise ValueError(
+                    f"{name}: {n} timestamps need translation ({n}, 3) and rotation ({n}, 4), "
+                    f"got {t.shape} and {r.shape}"
+                )
+        if not (np.isfinite(t).all() and np.isfinite(r).all()):
+            raise ValueError(f"{name}: translation and rotation must be finite")
+        self.translation = np.ascontiguousarray(t)
+        self.rotation = np.ascontiguousarray(r)
+        if scale is not None:
+            scale = np.ascontiguousarray(scale, dtype=np.float64)
+            if self.seconds is None or scale.shape != (len(self.seconds),):
+                raise ValueError(f"{name}: scale must have one value per timestamp")
+        self.scale = scale
+
+    @classmethod
+    def lookup(cls, frame, base, name: str | None = None) -> Track:
+        """The transform of ``frame`` into ``base`` (points in frame -> base)."""
+        from .. import lookups
+
+        label = name or f"pose of {frame.name!r} in {base.name!r}"
+        if frame is base:
+            return cls(np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0]), name=label)
+        t, r, ts = lookups.lookup_transform(
+            outof=frame, into=base, return_timestamps=True
+        )
+        t, r = np.asarray(t), np.asarray(r)
+        if ts is None:
+            return cls(t.reshape(3), r.reshape(4), name=label)
+        return cls(t, r, ts, name=label)
+
+    @property
+    def static(self) -> bool:
+        return self.seconds is None
+
+    def __len__(self) -> int:
+        return 1 if self.seconds is None else len(self.seconds)
+
+    @property
+    def start(self) -> float | None:
+        return None if self.seconds is None else float(self.seconds[0])
+
+    @property
+    def end(self) -> float | None:
+        return None if self.seconds is None else float(self.seconds[-1])
+
+    def index_at(self, t: float) -> int:
+        """Index of the latest sample at or before ``t``; -1 before the start.
+
+        Times within a nanosecond of a sample count as equal to it, so that
+        ``0.3`` finds the sample stored as ``0.30000000000000004``.
+        """
+        if self.seconds is None:
+            return 0
+        return int(np.searchsorted(self.seconds, t + TIME_TOLERANCE, side="right")) - 1
+
+    def matrix(self, index: int = 0) -> np.ndarray:
+        """Homogeneous (4, 4) matrix of sample ``index``."""
+        if self.seconds is None:
+            return pose_matrix(self.translation, self.rotation)
+        m = pose_matrix(self.translation[index], self.rotation[index])
+        if self.scale is not None:
+            m[:3, :3] *= self.scale[index]
+        return m
+
+    def positions(self) -> np.ndarray:
+        """All translations as (n, 3)."""
+        return self.translation.reshape(-1, 3)
+
+    def check_kind(self, kind: str | None, what: str) -> None:
+        check_kinds(kind, self.kind, what)

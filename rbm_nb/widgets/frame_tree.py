@@ -1,0 +1,581 @@
+"""The registered reference frames as a collapsible ipywidgets tree.
+
+Each row shows a frame's name, whether it is static, moving or discrete, its
+sample count, time span and mean rate. Selecting one frame shows its parent,
+children, path to the root and its pose wrt the parent at the current time;
+selecting two shows the chain between them and the transform from the first
+into the second. The panel follows the registry (through
+``rbm_nb.frames.on_registry_change``) and, linked to a
+:class:`~rbm_nb.widgets.Player`, the player's time. ``rbm.render_tree`` remains
+the plain-text view.
+"""
+
+from __future__ import annotations
+
+import html
+import math
+import sys
+import threading
+import weakref
+
+import ipywidgets as widgets
+import numpy as np
+import traitlets
+
+from ._time import format_time, time_as_seconds, timestamps_as_seconds
+
+
+def roll_pitch_yaw(q) -> tuple[float, float, float]:
+    """Roll, pitch and yaw in degrees of a quaternion (w, x, y, z).
+
+    Angles of the z-y'-x'' (yaw, pitch, roll) sequence: the rotation is
+    ``Rz(yaw) @ Ry(pitch) @ Rx(roll)``.
+    """
+    w, x, y, z = (float(v) for v in q)
+    n = math.sqrt(w * w + x * x + y * y + z * z)
+    w, x, y, z = w / n, x / n, y / n, z / n
+    roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+    pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
+    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    return math.degrees(roll), math.degrees(pitch), math.degrees(yaw)
+
+
+def frame_kind(frame) -> str:
+    """``root``, ``static``, ``moving`` or ``discrete``."""
+    if frame.parent is None:
+        return "root"
+    if frame.timestamps is None:
+        return "static"
+    return "discrete" if getattr(frame, "discrete", False) else "moving"
+
+
+def frame_info(frame) -> dict:
+    """Kind, sample count, time span and mean rate of a frame.
+
+    Returns
+    -------
+    dict
+        ``kind``, ``samples`` (1 for static frames), ``start`` / ``end`` (float
+        seconds, None if static), ``span`` (seconds), ``rate`` (Hz, None
+        unless moving with at least two samples) and ``time_kind``.
+    """
+    kind = frame_kind(frame)
+    info = {
+        "kind": kind,
+        "samples": 1,
+        "start": None,
+        "end": None,
+        "span": 0.0,
+        "rate": None,
+        "time_kind": None,
+    }
+    if frame.timestamps is not None:
+        seconds, time_kind = timestamps_as_seconds(
+            frame.timestamps, f"timestamps of {frame.name!r}"
+        )
+        info.update(
+            samples=len(seconds),
+            start=float(seconds[0]),
+            end=float(seconds[-1]),
+            time_kind=time_kind,
+        )
+        info["span"] = float(seconds[-1] - seconds[0])
+        if len(seconds) > 1 and info["span"] > 0:
+            info["rate"] = (len(seconds) - 1) / info["span"]
+    return info
+
+
+def _describe(info: dict) -> str:
+    if info["kind"] in ("root", "static"):
+        return info["kind"]
+    unit = "events" if info["kind"] == "discrete" else "samples"
+    text = f"{info['kind']} \u00b7 {info['samples']} {unit} \u00b7 {info['span']:.3g} s"
+    if info["rate"] is not None:
+        text += f" \u00b7 {info['rate']:.4g} Hz"
+    return text
+
+
+def _fmt_vector(v) -> str:
+    return "[" + ", ".join(f"{float(x):.4g}" for x in v) + "]"
+
+
+def _registry_listener(tree_ref):
+    """A registry callback that keeps only a weak reference to the tree."""
+
+    def callback(event, name):
+        tree = tree_ref()
+        if tree is None:
+            from .. import frames
+
+            try:
+                frames.remove_registry_callback(callback)
+            except ValueError:
+                pass
+            return
+        tree._registry_changed()
+
+    return callback
+
+
+class FrameTree(widgets.VBox):
+    """Collapsible tree of the registered frames below ``root``.
+
+    Parameters
+    ----------
+    root : str, default "world"
+        Name of the registered frame at the top of the tree.
+    scene : rbm_nb.scene.Scene, optional
+        A scene in which the selected frame is highlighted.
+    player : rbm_nb.widgets.Player, optional
+        Link to this player: poses are shown at its current time.
+
+    Examples
+    --------
+    >>> import rbm_nb as rbm
+    >>> rbm.clear_registry()
+    >>> rbm.register_frame("world")
+    >>> rbm.register_frame("observer", parent="world", translation=(5, 0, 0))
+    >>> tree = FrameTree("world")
+    >>> tree.nodes
+    ['world', 'observer']
+    >>> tree.select("observer")
+    >>> "parent: world" in tree.details_text()
+    True
+    """
+
+    root = traitlets.Unicode("world", help="Name of the frame at the top of the tree.")
+    selected = traitlets.Tuple(help="Names of the selected frames (at most two).")
+    time = traitlets.Float(
+        None, allow_none=True, help="Time shown (float seconds); None: first sample."
+    )
+
+    def __init__(self, root: str = "world", *, scene=None, player=None):
+        if not isinstance(root, str):
+            root = getattr(root, "name", None)
+            if root is None:
+                raise ValueError(
+                    "FrameTree: root must be the name of a registered frame"
+                )
+        self._rows: dict[str, dict] = {}
+        self._order: list[str] = []
+        self._collapsed: set[str] = set()
+        self._updating = False
+        self._lock = threading.RLock()
+        self._lookup_cache: dict = {}
+        self._message = widgets.HTML(value="")
+        self._rows_box = widgets.VBox(
+            [], layout=widgets.Layout(overflow="auto", max_height="360px")
+        )
+        self._details = widgets.HTML(value="", layout=widgets.Layout(padding="4px 8px"))
+        self._details.add_class("rbm-frame-details")
+        self._refresh_button = widgets.Button(
+            icon="refresh", tooltip="Refresh", layout=widgets.Layout(width="40px")
+        )
+        self._refresh_button.on_click(lambda _: self.refresh())
+        self._title = widgets.HTML(value="")
+        header = widgets.HBox([self._refresh_button, self._title])
+        super().__init__(
+            children=[header, self._message, self._rows_box, self._details]
+        )
+        self.add_class("rbm-frame-tree")
+        self.scene = scene
+        self.root = root
+        from .. import frames
+
+        self._listener = None
+        if hasattr(frames, "on_registry_change"):
+            self._listener = frames.on_registry_change(
+                _registry_listener(weakref.ref(self))
+            )
+        self.refresh()
+        if player is not None:
+            player.link(self)
+
+    # -- public API -------------------------------------------------------------
+    @property
+    def nodes(self) -> list[str]:
+        """Frame names in display order (depth first)."""
+        return list(self._order)
+
+    @property
+    def visible_nodes(self) -> list[str]:
+        """Names of the rows not hidden by a collapsed ancestor."""
+        return [n for n in self._order if self._rows[n]["box"].layout.display != "none"]
+
+    def row_text(self, name: str) -> str:
+        """The description shown in the row of ``name``."""
+        return self._rows[name]["label"].value
+
+    def details_text(self) -> str:
+        """The details panel as plain text."""
+        import re
+
+        text = re.sub(r"<br\s*/?>|</(div|p|li|tr)>", "\n", self._details.value)
+        return html.unescape(re.sub(r"<[^>]+>", "", text))
+
+    def refresh(self) -> None:
+        """Rebuild the tree from the registry."""
+        with self._lock:
+            self._lookup_cache.clear()
+            self._build()
+            keep = tuple(n for n in self.selected if n in self._rows)
+            if keep != tuple(self.selected):
+                self.selected = keep
+            else:
+                self._update_details()
+
+    def select(self, *names: str) -> None:
+        """Select one or two frames by name (no names clears the selection)."""
+        self.selected = tuple(names)
+
+    def collapse(self, name: str) -> None:
+        """Hide the frames below ``name``."""
+        self._check_node(name)
+        self._collapsed.add(name)
+        self._apply_collapse()
+
+    def expand(self, name: str) -> None:
+        """Show the frames below ``name``."""
+        self._check_node(name)
+        self._collapsed.discard(name)
+        self._apply_collapse()
+
+    def set_time(self, t) -> None:
+        """Show poses at time ``t`` (float seconds or datetime64); for Player links."""
+        self.time = time_as_seconds(t)
+        if self._listener is None:  # no registry hook: notice changes on steps
+            self._poll_registry()
+
+    def close(self) -> None:
+        frames = sys.modules.get("rbm_nb.frames")
+        if self._listener is not None and frames is not None:
+            try:
+                frames.remove_registry_callback(self._listener)
+            except ValueError:
+                pass
+            self._listener = None
+        for row in self._rows.values():
+            for w in row["widgets"]:
+                w.close()
+        super().close()
+
+    # -- validation and observers -----------------------------------------------
+    @traitlets.validate("selected")
+    def _valid_selected(self, proposal):
+        names = tuple(proposal["value"])
+        if len(names) > 2:
+            raise traitlets.TraitError(f"select at most two frames, got {len(names)}")
+        for name in names:
+            if name not in self._rows:
+                raise traitlets.TraitError(
+                    f"frame {name!r} is not in the tree below {self.root!r}; frames: {self._order}"
+                )
+        if len(names) == 2 and names[0] == names[1]:
+            names = names[:1]
+        return names
+
+    @traitlets.observe("selected")
+    def _on_selected(self, change):
+        self._updating = True
+        try:
+            for name, row in self._rows.items():
+                row["button"].value = name in self.selected
+                row["button"].button_style = "info" if name in self.selected else ""
+        finally:
+            self._updating = False
+        self._update_details()
+        if self.scene is not None and not getattr(self.scene, "closed", False):
+            try:
+                self.scene.highlight(self.selected[-1] if self.selected else None)
+            except (ValueError, RuntimeError) as err:
+                self._message.value = (
+                    f"<i>highlight failed: {html.escape(str(err))}</i>"
+                )
+
+    @traitlets.observe("time")
+    def _on_time(self, change):
+        self._update_details()
+
+    @traitlets.observe("root")
+    def _on_root(self, change):
+        if self._rows is not None and change["old"] != change["new"]:
+            self.refresh()
+
+    # -- building -----------------------------------------------------------------
+    def _registry_changed(self) -> None:
+        # called from inside register_frame & co: never let a display
+        # problem of the panel break a registration
+        try:
+            self.refresh()
+        except Exception as err:
+            self._message.value = f"<span style='color:#b00'>refresh failed: {html.escape(str(err))}</span>"
+
+    def _poll_registry(self) -> None:
+        from .. import frames
+
+        signature = tuple((n, id(f)) for n, f in frames.registry.items())
+        if signature != getattr(self, "_signature", None):
+            self._signature = signature
+            self.refresh()
+
+    def _check_node(self, name: str) -> None:
+        if name not in self._rows:
+            raise ValueError(
+                f"frame {name!r} is not in the tree below {self.root!r}; frames: {self._order}"
+            )
+
+    def _walk(self, frame, depth: int, out: list) -> None:
+        out.append((frame, depth))
+        registered = self._registered()
+        for child in frame.children:
+            if child.name in registered and registered[child.name] is child:
+                self._walk(child, depth + 1, out)
+
+    def _registered(self) -> dict:
+        from .. import frames
+
+        return dict(frames.registry.items())
+
+    def _build(self) -> None:
+        for row in self._rows.values():
+            for w in row["widgets"]:
+                w.close()
+        self._rows = {}
+        self._order = []
+        registered = self._registered()
+        root = registered.get(self.root)
+        if root is None:
+            names = ", ".join(repr(n) for n in registered) or "none"
+            self._message.value = (
+                f"<i>no frame named {html.escape(repr(self.root), quote=False)} is registered "
+                f"(registered: {html.escape(names, quote=False)})</i>"
+            )
+            self._title.value = ""
+            self._rows_box.children = []
+            return
+        self._message.value = ""
+        walked: list = []
+        self._walk(root, 0, walked)
+        self._title.value = (
+            f"<b>{len(walked)}</b> frames below <b>{html.escape(self.root)}</b>"
+        )
+        boxes = []
+        for frame, depth in walked:
+            row = self._make_row(frame, depth)
+            self._rows[frame.name] = row
+            self._order.append(frame.name)
+            boxes.append(row["box"])
+        self._rows_box.children = boxes
+        self._collapsed &= set(self._rows)
+        self._apply_collapse()
+
+    def _make_row(self, frame, depth: int) -> dict:
+        info = frame_info(frame)
+        has_children = any(c.name in self._registered() for c in frame.children)
+        toggle = widgets.Button(
+            icon="caret-down" if has_children else "",
+            tooltip="Collapse / expand" if has_children else "",
+            disabled=not has_children,
+            layout=widgets.Layout(
+                width="34px",
+                padding="0",
+                visibility="visible" if has_children else "hidden",
+            ),
+        )
+        button = widgets.ToggleButton(
+            value=frame.name in self.selected,
+            description=frame.name,
+            tooltip=f"Select {frame.name}",
+            layout=widgets.Layout(width="auto", min_width="90px"),
+        )
+        button.add_class("rbm-frame-node")
+        label = widgets.Label(value=_describe(info))
+        box = widgets.HBox(
+            [toggle, button, label],
+            layout=widgets.Layout(margin=f"0 0 0 {18 * depth}px"),
+        )
+        name = frame.name
+        toggle.on_click(lambda _: self._toggle_collapse(name))
+        button.observe(lambda change: self._on_click(name, change), "value")
+        return {
+            "frame": frame,
+            "depth": depth,
+            "info": info,
+            "box": box,
+            "button": button,
+            "toggle": toggle,
+            "label": label,
+            "widgets": (toggle, button, label, box),
+        }
+
+    def _toggle_collapse(self, name: str) -> None:
+        if name in self._collapsed:
+            self.expand(name)
+        else:
+            self.collapse(name)
+
+    def _apply_collapse(self) -> None:
+        hidden_below: list[int] = []
+        for name in self._order:
+            row = self._rows[name]
+            depth = row["depth"]
+            while hidden_below and depth <= hidden_below[-1]:
+                hidden_below.pop()
+            row["box"].layout.display = "none" if hidden_below else None
+            if name in self._collapsed:
+                hidden_below.append(depth)
+            if row["toggle"].icon:
+                row["toggle"].icon = (
+                    "caret-right" if name in self._collapsed else "caret-down"
+                )
+
+    def _on_click(self, name: str, change) -> None:
+        if self._updating:
+            return
+        current = list(self.selected)
+        if change["new"] and name not in current:
+            current = (current + [name])[-2:]
+        elif not change["new"] and name in current:
+            current.remove(name)
+        self.selected = tuple(current)
+
+    # -- details ------------------------------------------------------------------
+    def _frame(self, name: str):
+        return self._rows[name]["frame"]
+
+    def _update_details(self) -> None:
+        names = [n for n in self.selected if n in self._rows]
+        try:
+            if not names:
+                text = "<i>select a frame for details, two for the transform between them</i>"
+            elif len(names) == 1:
+                text = self._single_details(self._frame(names[0]))
+            else:
+                text = self._pair_details(self._frame(names[0]), self._frame(names[1]))
+        except Exception as err:  # shown, not raised: the panel must stay usable
+            text = f"<span style='color:#b00'>{html.escape(type(err).__name__)}: {html.escape(str(err))}</span>"
+        self._details.value = text
+
+    def _time_text(self, seconds: float | None, time_kind: str | None) -> str:
+        if seconds is None:
+            return "the first sample"
+        return format_time(seconds, time_kind or "float")
+
+    def _single_details(self, frame) -> str:
+        info = self._rows[frame.name]["info"]
+        parent = frame.parent.name if frame.parent is not None else "none (root)"
+        children = (
+            ", ".join(c.name for c in frame.children if c.name in self._rows) or "none"
+        )
+        path = " \u2192 ".join(f.name for f in _path_to_root(frame))
+        lines = [
+            f"<b>{html.escape(frame.name)}</b> \u2014 {html.escape(_describe(info))}",
+            f"parent: {html.escape(parent)}",
+            f"children: {html.escape(children)}",
+            f"path to root: {html.escape(path)}",
+        ]
+        if frame.parent is not None:
+            t, r, when = self._pose_wrt_parent(frame, info)
+            lines.append(self._pose_text(f"wrt {frame.parent.name}", t, r, when))
+        return "<br>".join(lines)
+
+    def _pose_wrt_parent(self, frame, info):
+        translation = np.asarray(frame.translation, dtype=float)
+        rotation = np.asarray(frame.rotation, dtype=float)
+        if frame.timestamps is None:
+            return translation, rotation, "static"
+        seconds, time_kind = timestamps_as_seconds(
+            frame.timestamps, f"timestamps of {frame.name!r}"
+        )
+        index = self._index_at(seconds)
+        if index < 0:
+            return (
+                None,
+                None,
+                f"not defined before {format_time(seconds[0], time_kind)}",
+            )
+        return (
+            translation[index],
+            rotation[index],
+            f"at {format_time(seconds[index], time_kind)}",
+        )
+
+    def _index_at(self, seconds: np.ndarray) -> int:
+        if self.time is None:
+            return 0
+        return int(np.searchsorted(seconds, self.time, side="right")) - 1
+
+    def _pose_text(self, what: str, t, r, when: str) -> str:
+        if t is None:
+            return f"pose {html.escape(what)}: {html.escape(when)}"
+        roll, pitch, yaw = roll_pitch_yaw(r)
+        return (
+            f"pose {html.escape(what)} ({html.escape(when)}):<br>"
+            f"&nbsp;&nbsp;translation {_fmt_vector(t)} m<br>"
+            f"&nbsp;&nbsp;roll {roll:.2f}\u00b0, pitch {pitch:.2f}\u00b0, yaw {yaw:.2f}\u00b0"
+        )
+
+    def _pair_details(self, a, b) -> str:
+        chain = _chain(a, b)
+        lines = [
+            f"<b>{html.escape(a.name)}</b> \u2192 <b>{html.escape(b.name)}</b>",
+            "chain: " + html.escape(" \u2192 ".join(f.name for f in chain)),
+        ]
+        key = (a.name, b.name, id(a), id(b))
+        if key not in self._lookup_cache:
+            from .. import lookups
+
+            t, r, ts = lookups.lookup_transform(outof=a, into=b, return_timestamps=True)
+            seconds, kind = (
+                (None, None)
+                if ts is None
+                else timestamps_as_seconds(ts, "transform timestamps")
+            )
+            self._lookup_cache[key] = (np.asarray(t), np.asarray(r), seconds, kind)
+        t, r, seconds, kind = self._lookup_cache[key]
+        if seconds is None:
+            lines.append(self._pose_text(f"of {a.name} in {b.name}", t, r, "static"))
+        else:
+            index = self._index_at(seconds)
+            if index < 0:
+                lines.append(
+                    self._pose_text(
+                        f"of {a.name} in {b.name}",
+                        None,
+                        None,
+                        f"not defined before {format_time(seconds[0], kind)}",
+                    )
+                )
+            else:
+                lines.append(
+                    self._pose_text(
+                        f"of {a.name} in {b.name}",
+                        t[index],
+                        r[index],
+                        f"at {format_time(seconds[index], kind)}",
+                    )
+                )
+        return "<br>".join(lines)
+
+    def __repr__(self) -> str:
+        return f"<FrameTree root={self.root!r} frames={len(self._order)} selected={self.selected}>"
+
+
+def _path_to_root(frame) -> list:
+    out = [frame]
+    while out[-1].parent is not None:
+        out.append(out[-1].parent)
+    return out
+
+
+def _chain(a, b) -> list:
+    """Frames from ``a`` up to the common ancestor and down to ``b``."""
+    up = _path_to_root(a)
+    down = _path_to_root(b)
+    ids = {id(f) for f in down}
+    common = next((f for f in up if id(f) in ids), None)
+    if common is None:
+        raise ValueError(f"frames {a.name!r} and {b.name!r} are not in the same tree")
+    first = up[: [id(f) for f in up].index(id(common)) + 1]
+    second = down[: [id(f) for f in down].index(id(common))]
+    return first + second[::-1]

@@ -1,0 +1,283 @@
+"""FrameTree: rows, details, selection, registry hook, player time, scene highlight."""
+
+from __future__ import annotations
+
+import uuid
+
+import comm
+import ipywidgets
+import numpy as np
+import pytest
+import traitlets
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.spatial.transform import Rotation
+
+import rbm_nb as rbm
+from rbm_nb import frames
+from rbm_nb.widgets import FrameTree, Player
+from rbm_nb.widgets.frame_tree import frame_info, roll_pitch_yaw
+
+
+class RecordingComm:
+    kernel = "Truthy"
+
+    def __init__(self, *args, **kwargs):
+        self.comm_id = uuid.uuid4().hex  # unique, like a kernel's comms
+        self.messages = []
+
+    def open(self, *args, **kwargs):
+        pass
+
+    def on_msg(self, *args, **kwargs):
+        pass
+
+    def send(self, data=None, *args, **kwargs):
+        self.messages.append(data)
+
+    def close(self, *args, **kwargs):
+        pass
+
+
+@pytest.fixture(autouse=True)
+def recording_comm(monkeypatch):
+    monkeypatch.setattr(comm, "create_comm", lambda **kwargs: RecordingComm())
+    yield
+    # closing the trees also removes their registry listeners
+    ipywidgets.Widget.close_all()
+
+
+@pytest.fixture
+def tree_frames():
+    """world -> observer (static), body (moving) -> body2 (static), events (discrete)."""
+    rbm.register_frame("world")
+    rbm.register_frame(
+        "observer",
+        parent="world",
+        translation=(5, 0, 0),
+        rotation=(np.sqrt(2) / 2, 0, 0, np.sqrt(2) / 2),
+    )
+    ts = np.arange(5) * 0.5
+    angle = np.linspace(0, np.pi / 2, 5)
+    rbm.register_frame(
+        "body",
+        parent="world",
+        translation=np.c_[np.arange(5.0), np.zeros(5), np.zeros(5)],
+        rotation=np.c_[np.cos(angle / 2), np.zeros(5), np.zeros(5), np.sin(angle / 2)],
+        timestamps=ts,
+    )
+    rbm.register_frame("body2", parent="body", translation=(0, 1, 0))
+    rbm.register_frame(
+        "events",
+        parent="world",
+        translation=np.eye(3),
+        timestamps=np.array([1.0, 2.0, 4.0]),
+        discrete=True,
+    )
+    return ts
+
+
+def test_rows_list_frames_depth_first_with_their_kind(tree_frames):
+    tree = FrameTree("world")
+    assert tree.nodes == ["world", "observer", "body", "body2", "events"]
+    assert tree.row_text("world") == "root"
+    assert tree.row_text("observer") == "static"
+    assert tree.row_text("body") == "moving \u00b7 5 samples \u00b7 2 s \u00b7 2 Hz"
+    assert (
+        tree.row_text("events")
+        == "discrete \u00b7 3 events \u00b7 3 s \u00b7 0.6667 Hz"
+    )
+    depths = [tree._rows[n]["depth"] for n in tree.nodes]
+    assert depths == [0, 1, 1, 2, 1]
+
+
+def test_frame_info_of_datetime_frame():
+    rbm.register_frame("world")
+    ts = np.datetime64("2020-02-02T00:00:00") + np.arange(201) * np.timedelta64(5, "ms")
+    rbm.register_frame(
+        "head", parent="world", translation=np.zeros((201, 3)), timestamps=ts
+    )
+    info = frame_info(rbm.registry["head"])
+    assert info["kind"] == "moving"
+    assert info["samples"] == 201
+    assert info["span"] == pytest.approx(1.0)
+    assert info["rate"] == pytest.approx(200.0)
+    assert info["time_kind"] == "datetime"
+
+
+def test_single_selection_shows_pose_wrt_parent_at_the_current_time(tree_frames):
+    tree = FrameTree("world")
+    tree.select("body")
+    text = tree.details_text()
+    assert "parent: world" in text
+    assert "children: body2" in text
+    assert "path to root: body \u2192 world" in text
+    assert "(at 0.000 s)" in text and "translation [0, 0, 0] m" in text
+    tree.set_time(1.2)  # latest sample at or before: index 2 (t=1.0)
+    text = tree.details_text()
+    assert "(at 1.000 s)" in text
+    assert "translation [2, 0, 0] m" in text
+    assert "yaw 45.00\u00b0" in text
+
+
+def test_static_frame_details(tree_frames):
+    tree = FrameTree("world")
+    tree.select("observer")
+    text = tree.details_text()
+    assert "pose wrt world (static)" in text
+    assert "translation [5, 0, 0] m" in text
+    assert "roll 0.00\u00b0, pitch 0.00\u00b0, yaw 90.00\u00b0" in text
+    tree.select("world")
+    assert "parent: none (root)" in tree.details_text()
+
+
+def test_two_frames_show_the_chain_and_the_transform(tree_frames):
+    tree = FrameTree("world")
+    tree.select("body2", "observer")
+    tree.set_time(2.0)
+    text = tree.details_text()
+    assert "chain: body2 \u2192 body \u2192 world \u2192 observer" in text
+    t, r, ts = rbm.lookup_transform(
+        outof="body2", into="observer", return_timestamps=True
+    )
+    i = int(np.searchsorted(ts, 2.0, side="right")) - 1
+    expected_t = "[" + ", ".join(f"{v:.4g}" for v in t[i]) + "]"
+    roll, pitch, yaw = roll_pitch_yaw(r[i])
+    assert f"translation {expected_t} m" in text
+    assert f"yaw {yaw:.2f}\u00b0" in text
+
+
+def test_time_before_the_start_says_so(tree_frames):
+    tree = FrameTree("world")
+    tree.select("events")
+    tree.set_time(0.5)
+    assert "not defined before 1.000 s" in tree.details_text()
+
+
+def test_clicking_rows_selects_at_most_two(tree_frames):
+    tree = FrameTree("world")
+    buttons = {name: tree._rows[name]["button"] for name in tree.nodes}
+    buttons["body"].value = True
+    buttons["observer"].value = True
+    assert tree.selected == ("body", "observer")
+    buttons["events"].value = True  # the oldest selection goes
+    assert tree.selected == ("observer", "events")
+    assert not buttons["body"].value
+    buttons["observer"].value = False
+    assert tree.selected == ("events",)
+
+
+def test_registry_changes_refresh_the_tree(tree_frames):
+    tree = FrameTree("world")
+    tree.select("body2")
+    rbm.register_frame("new", parent="body2", translation=(1, 2, 3))
+    assert tree.nodes == ["world", "observer", "body", "body2", "new", "events"]
+    assert tree._rows["new"]["depth"] == 3
+    rbm.deregister_frame("body2")
+    assert "body2" not in tree.nodes and "new" not in tree.nodes
+    assert tree.selected == ()
+    rbm.clear_registry()
+    assert tree.nodes == []
+    assert "no frame named 'world'" in tree._message.value
+
+
+def test_close_removes_the_registry_listener(tree_frames):
+    before = len(frames.registry._callbacks)
+    tree = FrameTree("world")
+    assert len(frames.registry._callbacks) == before + 1
+    tree.close()
+    tree.close()
+    assert len(frames.registry._callbacks) == before
+    rbm.register_frame("late", parent="world")
+    assert "late" not in tree.nodes  # a closed tree no longer follows the registry
+
+
+def test_collapse_and_expand(tree_frames):
+    tree = FrameTree("world")
+    tree.collapse("body")
+    assert tree.visible_nodes == ["world", "observer", "body", "events"]
+    tree._rows["world"]["toggle"].click()
+    assert tree.visible_nodes == ["world"]
+    tree.expand("world")
+    assert tree.visible_nodes == ["world", "observer", "body", "events"]
+    tree.expand("body")
+    assert tree.visible_nodes == tree.nodes
+
+
+def test_player_time_drives_the_details(tree_frames):
+    player = Player(tree_frames, threaded=False)
+    tree = FrameTree("world", player=player)
+    tree.select("body")
+    player.seek(3)
+    assert tree.time == pytest.approx(1.5)
+    assert "translation [3, 0, 0] m" in tree.details_text()
+
+
+def test_selection_highlights_in_a_linked_scene(tree_frames):
+    from rbm_nb.scene import Scene
+
+    scene = Scene("world")
+    body = scene.add_frame("body")
+    tree = FrameTree("world", scene=scene)
+    tree.select("body")
+    assert scene._highlight == ("scaled", body)
+    tree.select("observer")  # not in the scene: a highlight triad is added
+    kind, handle = scene._highlight
+    assert kind == "added" and handle.frame is rbm.registry["observer"]
+    tree.select()
+    assert scene._highlight is None and handle.removed
+    scene.close()
+
+
+def test_bad_selection_and_root(tree_frames):
+    tree = FrameTree("world")
+    with pytest.raises(traitlets.TraitError, match="'nope' is not in the tree"):
+        tree.select("nope")
+    with pytest.raises(traitlets.TraitError, match="at most two"):
+        tree.select("world", "body", "observer")
+    with pytest.raises(ValueError, match="not in the tree"):
+        tree.collapse("nope")
+    other = FrameTree("nope")
+    assert other.nodes == [] and "no frame named 'nope'" in other._message.value
+
+
+def _naive_rpy(q):
+    """scipy's intrinsic z-y'-x'' angles, as (roll, pitch, yaw) in degrees."""
+    yaw, pitch, roll = Rotation.from_quat([q[1], q[2], q[3], q[0]]).as_euler(
+        "ZYX", degrees=True
+    )
+    return roll, pitch, yaw
+
+
+@pytest.mark.parametrize(
+    "q",
+    [
+        (1.0, 0.0, 0.0, 0.0),
+        (np.sqrt(2) / 2, 0.0, 0.0, np.sqrt(2) / 2),
+        (np.sqrt(2) / 2, np.sqrt(2) / 2, 0.0, 0.0),
+        (0.9, 0.1, -0.3, 0.2),
+    ],
+)
+def test_roll_pitch_yaw_matches_scipy(q):
+    np.testing.assert_allclose(
+        roll_pitch_yaw(q), _naive_rpy(np.asarray(q) / np.linalg.norm(q)), atol=1e-9
+    )
+
+
+unit = st.floats(-1, 1, allow_nan=False)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.tuples(unit, unit, unit, unit))
+def test_roll_pitch_yaw_round_trip(q):
+    q = np.asarray(q)
+    if np.linalg.norm(q) < 1e-3:
+        return
+    q = q / np.linalg.norm(q)
+    roll, pitch, yaw = roll_pitch_yaw(q)
+    if abs(pitch) > 89.0:  # gimbal lock: roll and yaw are not unique
+        return
+    back = Rotation.from_euler("ZYX", [yaw, pitch, roll], degrees=True).as_quat()
+    np.testing.assert_allclose(
+        abs(np.dot(back, [q[1], q[2], q[3], q[0]])), 1.0, atol=1e-9
+    )

@@ -1,0 +1,229 @@
+"""The quaternion kernels against their plain-numpy twins and numpy-quaternion."""
+
+from __future__ import annotations
+
+import naive
+import numpy as np
+import pytest
+import quaternion as npq
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from rbm_nb._kernels import quaternion as kq
+
+RNG = np.random.default_rng(20240601)
+
+
+def unit(n, rng=RNG):
+    q = rng.normal(size=(n, 4))
+    return q / np.linalg.norm(q, axis=1, keepdims=True)
+
+
+def walk(n, step=0.2, rng=RNG):
+    """A continuous rotation time series (no sign flips)."""
+    q = np.cumsum(rng.normal(scale=step, size=(n, 4)), axis=0) + [1.0, 0, 0, 0]
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    for i in range(1, n):
+        if q[i] @ q[i - 1] < 0:
+            q[i] = -q[i]
+    return q
+
+
+def general(n, rng=RNG):
+    return rng.normal(size=(n, 4)) * rng.uniform(0.2, 3.0, size=(n, 1))
+
+
+# (test id, kernel name, argument factory)
+CASES = [
+    ("qmul", "qmul", lambda: (general(7), general(7))),
+    ("qmul-broadcast-left", "qmul", lambda: (general(1), general(6))),
+    ("qmul-broadcast-right", "qmul", lambda: (general(5), general(1))),
+    ("qconj", "qconj", lambda: (general(6),)),
+    ("qinv", "qinv", lambda: (general(6),)),
+    ("qnorm", "qnorm", lambda: (general(6),)),
+    ("qnormalize", "qnormalize", lambda: (general(6),)),
+    ("rotate_vectors", "rotate_vectors", lambda: (general(8), RNG.normal(size=(8, 3)))),
+    (
+        "rotate_vectors-broadcast-q",
+        "rotate_vectors",
+        lambda: (general(1), RNG.normal(size=(8, 3))),
+    ),
+    (
+        "rotate_vectors-broadcast-v",
+        "rotate_vectors",
+        lambda: (general(8), RNG.normal(size=(1, 3))),
+    ),
+    (
+        "rotate_vectors_outer",
+        "rotate_vectors_outer",
+        lambda: (general(4), RNG.normal(size=(5, 3))),
+    ),
+    (
+        "qexp",
+        "qexp",
+        lambda: (np.vstack([general(6), [[0.3, 0, 0, 0], [-1.0, 1e-16, 0, 0]]]),),
+    ),
+    (
+        "qlog",
+        "qlog",
+        lambda: (
+            np.vstack([general(6), [[2.0, 0, 0, 0], [-3.0, 0, 0, 0], [-1.0, 0, 0, 0]]]),
+        ),
+    ),
+    ("slerp", "slerp", lambda: (unit(6), unit(6), RNG.uniform(-0.5, 1.5, 6))),
+    ("slerp-broadcast", "slerp", lambda: (unit(1), unit(6), RNG.uniform(0, 1, 1))),
+    ("matrix_from_quaternion", "matrix_from_quaternion", lambda: (general(6),)),
+    (
+        "quaternion_from_matrix",
+        "quaternion_from_matrix",
+        lambda: (naive.matrix_from_quaternion(unit(50)),),
+    ),
+]
+
+
+@pytest.mark.parametrize(
+    "name, make_args", [c[1:] for c in CASES], ids=[c[0] for c in CASES]
+)
+def test_kernel_matches_naive_twin(name, make_args):
+    args = [np.ascontiguousarray(a, dtype=float) for a in make_args()]
+    got = getattr(kq, name)(*args)
+    expected = getattr(naive, name)(*args)
+    np.testing.assert_allclose(got, expected, rtol=1e-10, atol=1e-12)
+
+
+@pytest.mark.parametrize("step", [0.02, 0.2])
+@pytest.mark.parametrize("n", [2, 3, 4, 7, 60])
+def test_squad_equals_numpy_quaternion(n, step):
+    rng = np.random.default_rng(n)
+    q = walk(n, step=step, rng=rng)
+    t = np.cumsum(rng.uniform(0.05, 1.0, n))
+    # inside, at every sample, and past the end (within one more segment)
+    t_out = np.sort(
+        np.concatenate([rng.uniform(t[0], t[-1] + 0.5 * (t[-1] - t[-2]), 80), t])
+    )
+    np.testing.assert_allclose(
+        kq.squad(q, t, t_out), naive.squad(q, t, t_out), rtol=0, atol=1e-12
+    )
+    # before the start numpy-quaternion extrapolates the *last* segment back
+    # over the whole series (tau of order -n): ill-conditioned on both sides
+    early = rng.uniform(t[0] - 1, t[0], 10)
+    np.testing.assert_allclose(
+        kq.squad(q, t, early), naive.squad(q, t, early), rtol=0, atol=1e-7
+    )
+
+
+def test_squad_hits_samples_exactly():
+    q = walk(20)
+    t = np.arange(20.0) * 0.005
+    np.testing.assert_array_equal(kq.squad(q, t, t), q)
+
+
+def test_squad_single_sample_is_constant():
+    q = unit(1)
+    out = kq.squad(q, np.array([1.0]), np.array([0.0, 1.0, 2.0]))
+    np.testing.assert_array_equal(out, np.repeat(q, 3, axis=0))
+
+
+def test_squad_coefficients_are_origin_invariant():
+    q = walk(30)
+    t = np.cumsum(RNG.uniform(0.1, 1, 30))
+    a1, b1 = kq.squad_coefficients(q, t)
+    a2, b2 = kq.squad_coefficients(q, t + 1e5)
+    np.testing.assert_allclose(a1, a2, atol=1e-9)
+    np.testing.assert_allclose(b1, b2, atol=1e-9)
+
+
+def test_rotate_vectors_non_unit_keeps_norm():
+    """The reference scales vectors by non-unit quaternions; q v q⁻¹ must not."""
+    q = unit(10) * 3.0
+    v = RNG.normal(size=(10, 3))
+    out = kq.rotate_vectors(q, v)
+    np.testing.assert_allclose(np.linalg.norm(out, axis=1), np.linalg.norm(v, axis=1))
+    qq = npq.as_quat_array(q)
+    vv = npq.as_quat_array(np.column_stack([np.zeros(10), v]))
+    np.testing.assert_allclose(out, npq.as_float_array(qq * vv / qq)[:, 1:], atol=1e-12)
+
+
+def test_exp_log_slerp_equal_numpy_quaternion():
+    q = general(20)
+    qq = npq.as_quat_array(q)
+    np.testing.assert_allclose(kq.qexp(q), npq.as_float_array(np.exp(qq)), atol=1e-12)
+    np.testing.assert_allclose(kq.qlog(q), npq.as_float_array(np.log(qq)), atol=1e-12)
+    a, b, tau = unit(20), unit(20), RNG.uniform(0, 1, 20)
+    expected = npq.as_float_array(
+        np.slerp_vectorized(npq.as_quat_array(a), npq.as_quat_array(b), tau)
+    )
+    np.testing.assert_allclose(kq.slerp(a, b, tau), expected, atol=1e-12)
+
+
+def test_small_angle_series_are_exact_to_rounding():
+    """The Taylor shortcuts squad uses agree with libm to an ulp or two."""
+    import math
+
+    ys = np.concatenate([np.linspace(-0.2, 0.2, 4001), np.geomspace(1e-300, 0.2, 300)])
+    for y in ys:
+        s, c = kq._sincos(y)
+        assert abs(s - math.sin(y)) <= 4.5e-16 * abs(math.sin(y))
+        assert abs(c - math.cos(y)) <= 2.3e-16
+    for y in np.concatenate(
+        [np.linspace(0.0, 0.1, 2001), np.geomspace(1e-300, 0.1, 300)]
+    ):
+        for x in (0.3, 1.0, 2.0):
+            expected = math.atan2(y * x, x)
+            assert abs(kq._atan2(y * x, x) - expected) <= 4.5e-16 * expected
+
+
+def test_quaternion_from_matrix_near_half_turns():
+    """Shepperd's branch choice stays accurate where the trace is about -1."""
+    axes = np.eye(3)
+    q = np.column_stack([np.full(3, 1e-9), axes])
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    back = kq.quaternion_from_matrix(kq.matrix_from_quaternion(q))
+    np.testing.assert_allclose(np.abs(np.sum(back * q, axis=1)), 1.0, atol=1e-12)
+    assert (back[:, 0] >= 0).all()
+
+
+finite = st.floats(-10, 10, allow_nan=False)
+quats = arrays(np.float64, (5, 4), elements=finite).filter(
+    lambda q: (np.linalg.norm(q, axis=1) > 1e-3).all()
+)
+vecs = arrays(np.float64, (5, 3), elements=finite)
+
+
+@settings(max_examples=60, deadline=None)
+@given(quats, quats, quats)
+def test_qmul_is_associative(a, b, c):
+    left = kq.qmul(kq.qmul(a, b), c)
+    right = kq.qmul(a, kq.qmul(b, c))
+    scale = (
+        np.linalg.norm(a, axis=1)
+        * np.linalg.norm(b, axis=1)
+        * np.linalg.norm(c, axis=1)
+    )
+    np.testing.assert_allclose(left, right, atol=1e-12 * scale.max() + 1e-12)
+
+
+@settings(max_examples=60, deadline=None)
+@given(quats)
+def test_qinv_times_q_is_identity(q):
+    np.testing.assert_allclose(
+        kq.qmul(kq.qinv(q), q), np.tile([1.0, 0, 0, 0], (5, 1)), atol=1e-12
+    )
+
+
+@settings(max_examples=60, deadline=None)
+@given(quats, vecs)
+def test_rotation_keeps_norms(q, v):
+    out = kq.rotate_vectors(q, v)
+    np.testing.assert_allclose(
+        np.linalg.norm(out, axis=1), np.linalg.norm(v, axis=1), rtol=1e-10, atol=1e-10
+    )
+
+
+@settings(max_examples=60, deadline=None)
+@given(quats)
+def test_matrix_round_trip(q):
+    unit_q = q / np.linalg.norm(q, axis=1, keepdims=True)
+    back = kq.quaternion_from_matrix(kq.matrix_from_quaternion(q))
+    np.testing.assert_allclose(np.abs(np.sum(back * unit_q, axis=1)), 1.0, atol=1e-10)

@@ -80,6 +80,7 @@ _SUBMODULES = {
     "coordinates",
     "data",
     "estimators",
+    "explorer",
     "frames",
     "io",
     "lookups",

@@ -137,6 +137,10 @@ def _tree(kind: str):
         rotation=r2[::4], timestamps=_times(kind, N_SAMPLES // 4, step=0.04, offset=0.01),
         discrete=True,
     )  # fmt: skip
+    frames["from_matrix"] = ReferenceFrame.from_rotation_matrix(
+        np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]),
+        frames["moving"], "warmup-from-matrix", inverse=True,
+    )  # fmt: skip
     frames["single"] = ReferenceFrame(
         "warmup-single", world, translation=t[:1], rotation=r[:1],
         timestamps=_times(kind, 1),
@@ -185,6 +189,7 @@ def _lookups(kind: str) -> None:
         ("discrete_child", "world"),  # discrete only: union of events
         ("discrete", "moving"),  # discrete held at the moving timestamps
         ("single", "moving"),  # a one-sample moving frame
+        ("from_matrix", "static"),
     ]
     for outof, into in pairs:
         lookups.lookup_transform(f[outof], f[into], return_timestamps=True)

@@ -1,13 +1,22 @@
 """The ``rbm-nb`` command.
 
-``rbm-nb demo --text`` prints a lookup across a small moving frame tree: a
-quick check that the frame core works, with no Jupyter involved.
+``rbm-nb demo`` opens JupyterLab on the head/eye explorer notebook (offline it
+uses the synthetic recording); ``rbm-nb demo --html out.html`` writes the
+explorer's scene as a self-contained animation with no Jupyter involved;
+``rbm-nb demo --text`` prints a lookup across a small moving frame tree.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import secrets
+import shutil
+import socket
 import sys
+from pathlib import Path
+
+EXPLORER = "06_head_eye_explorer.ipynb"
 
 
 def _text_demo() -> int:
@@ -37,12 +46,77 @@ def _text_demo() -> int:
     )
     print("\nPose of 'camera' in 'world':")
     print(" time [s]   position [m]              orientation (w, x, y, z)")
-    for t, p, q in zip(stamps, position, orientation):
-        print(f" {t:6.2f}   {np.array2string(p, precision=3):24s}  "
-              f"{np.array2string(q, precision=3)}")
+    for t, p, q in zip(stamps, position, orientation, strict=True):
+        print(
+            f" {t:6.2f}   {np.array2string(p, precision=3):24s}  "
+            f"{np.array2string(q, precision=3)}"
+        )
     point = rbm.transform_points((1.0, 0.0, 0.0), outof="world", into="camera")
     print("\nThe world point (1, 0, 0) seen from 'camera' over time:")
     print(np.array2string(point, precision=3))
+    return 0
+
+
+def _notebook_dir(given: str | None) -> Path:
+    """The notebooks folder: given, or the one of the clone rbm_nb runs from."""
+    folder = Path(given) if given else Path(__file__).resolve().parents[1] / "notebooks"
+    if not (folder / EXPLORER).is_file():
+        raise SystemExit(
+            f"rbm-nb demo: {EXPLORER} not found in {folder}. Run the demo from a clone "
+            "of the rbm_nb repository (it ships the notebooks), or pass "
+            "--notebook-dir pointing to its notebooks/ folder."
+        )
+    return folder
+
+
+def _free_port(preferred: int) -> int:
+    """``preferred`` if it is free on loopback, else any free port (0: any)."""
+    with socket.socket() as sock:
+        try:
+            sock.bind(("127.0.0.1", preferred))
+        except OSError:
+            sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def _lab_demo(args) -> int:
+    folder = _notebook_dir(args.notebook_dir)
+    if shutil.which("jupyter-lab", path=os.path.dirname(sys.executable)) is None:
+        raise SystemExit(
+            "rbm-nb demo: JupyterLab is not installed in this environment; "
+            "pip install 'rbm_nb[lab]' (or use --html / --text)"
+        )
+    port = _free_port(args.port)
+    token = secrets.token_hex(16)
+    url = f"http://127.0.0.1:{port}/lab/tree/{EXPLORER}?token={token}"
+    print(f"rbm-nb demo: JupyterLab on the head/eye explorer at\n\n    {url}\n")
+    print("Open that address in a browser; stop the server with Ctrl-C.", flush=True)
+    command = [
+        os.path.join(os.path.dirname(sys.executable), "jupyter-lab"),
+        f"--ServerApp.root_dir={folder}",
+        "--ServerApp.ip=127.0.0.1",
+        f"--ServerApp.port={port}",
+        "--ServerApp.port_retries=0",
+        f"--IdentityProvider.token={token}",
+        f"--ServerApp.open_browser={not args.no_browser}",
+        f"--LabApp.default_url=/lab/tree/{EXPLORER}",
+    ]
+    if hasattr(os, "geteuid") and os.geteuid() == 0:
+        command.append("--allow-root")  # containers and CI machines run as root
+    os.execv(command[0], command)  # the server takes over this process (and Ctrl-C)
+    return 0  # pragma: no cover
+
+
+def _html_demo(args) -> int:
+    from .explorer import write_explorer_html
+
+    path = write_explorer_html(
+        args.html, source=args.source, max_frames=args.max_frames, progress=True
+    )
+    print(
+        f"rbm-nb demo: wrote {path} ({path.stat().st_size / 1e6:.1f} MB); "
+        "open it in a browser, it plays offline."
+    )
     return 0
 
 
@@ -51,15 +125,43 @@ def main(argv: list[str] | None = None) -> int:
         prog="rbm-nb", description="rbm_nb: rigid body motion in Jupyter."
     )
     sub = parser.add_subparsers(dest="command", required=True)
-    demo = sub.add_parser("demo", help="run the demo")
-    demo.add_argument(
+    demo = sub.add_parser(
+        "demo", help="open JupyterLab on the head/eye explorer (or export it)"
+    )
+    mode = demo.add_mutually_exclusive_group()
+    mode.add_argument(
+        "--html",
+        metavar="OUT.html",
+        help="write the explorer's 3D scene as one self-contained HTML file and exit",
+    )
+    mode.add_argument(
         "--text",
         action="store_true",
         help="print a lookup across a small moving frame tree and exit",
     )
+    demo.add_argument(
+        "--source",
+        choices=("auto", "remote", "synthetic"),
+        default="auto",
+        help="example data for --html: the real recording, else synthetic (auto)",
+    )
+    demo.add_argument(
+        "--max-frames", type=int, default=3000, help="samples per object in --html"
+    )
+    demo.add_argument("--port", type=int, default=8888, help="JupyterLab port")
+    demo.add_argument(
+        "--no-browser", action="store_true", help="do not open a browser window"
+    )
+    demo.add_argument(
+        "--notebook-dir", help="folder with the notebooks (default: the clone's)"
+    )
     args = parser.parse_args(argv)
     if args.command == "demo":
-        return _text_demo()
+        if args.text:
+            return _text_demo()
+        if args.html:
+            return _html_demo(args)
+        return _lab_demo(args)
     parser.error(f"unknown command {args.command!r}")
     return 2
 

@@ -27,6 +27,7 @@ __all__ = [
     "deregister_frame",
     "clear_registry",
     "render_tree",
+    "find_frame",
     "on_registry_change",
     "remove_registry_callback",
 ]
@@ -201,6 +202,16 @@ def render_tree(root) -> None:
     """
     for line in _tree_lines(_resolve(root, "root")):
         print(line)
+
+
+def find_frame(path: str) -> ReferenceFrame:
+    """The one frame of the registry's trees matching ``path``, e.g. ``"world/.../eye"``.
+
+    See :func:`rbm_nb._frame_paths.find_frame` for the path syntax.
+    """
+    from ._frame_paths import find_frame as _find_frame
+
+    return _find_frame(path)
 
 
 def _tree_lines(frame: ReferenceFrame, prefix: str = "", branch: str = ""):
@@ -417,6 +428,17 @@ class ReferenceFrame:
         while node is not None:
             yield node
             node = node._parent
+
+    def frames_between(self, to_frame, *, include_self=True, include_to_frame=True):
+        """The frames from this one up to the common ancestor and down to ``to_frame``.
+
+        See :func:`rbm_nb._frame_paths.frames_between`.
+        """
+        from ._frame_paths import frames_between
+
+        return frames_between(
+            self, to_frame, include_self=include_self, include_to_frame=include_to_frame
+        )
 
     @property
     def path(self) -> tuple:

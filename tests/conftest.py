@@ -54,5 +54,39 @@ def _empty_registry():
 def shared_data() -> Path:
     """The real recordings beside the repo (``../shared/data``)."""
     if not SHARED_DATA.is_dir():
-        pytest.fail(f"{SHARED_DATA} is missing: CI must have ../shared beside the clone")
+        pytest.fail(
+            f"{SHARED_DATA} is missing: CI must have ../shared beside the clone"
+        )
     return SHARED_DATA
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """Debian's chromium driven by playwright (never a downloaded browser)."""
+    from browser_support import CHROMIUM, CHROMIUM_ARGS
+
+    if not Path(CHROMIUM).exists():
+        pytest.fail(
+            f"{CHROMIUM} is missing: install Debian's chromium (bash .ci/setup.sh test)"
+        )
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as pw:
+        chromium = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        try:
+            yield chromium
+        finally:
+            chromium.close()
+
+
+@pytest.fixture
+def page(browser):
+    """A fresh page; its JavaScript errors are collected in ``page.errors``."""
+    context = browser.new_context(viewport={"width": 1100, "height": 900})
+    page = context.new_page()
+    page.errors = []
+    page.on("pageerror", lambda err: page.errors.append(str(err)))
+    try:
+        yield page
+    finally:
+        context.close()

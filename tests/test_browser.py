@@ -12,17 +12,6 @@ that started it, also when a test fails.
 
 from __future__ import annotations
 
-import io
-import json
-import os
-import secrets
-import shutil
-import signal
-import socket
-import subprocess
-import sys
-import time
-import urllib.request
 from pathlib import Path
 
 import numpy as np
@@ -32,78 +21,16 @@ import rbm_nb as rbm
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
-REPO = Path(__file__).resolve().parents[1]
-ARTIFACTS = REPO / "test-artifacts"
+from browser_support import (  # noqa: E402
+    JupyterLab,
+    changed_pixels,
+    magenta_pixels,
+    png_pixels,
+    save,
+)
+
 NOTEBOOK = Path(__file__).resolve().parent / "notebooks" / "live_scene.ipynb"
-CHROMIUM = "/usr/bin/chromium"
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--enable-unsafe-swiftshader",
-    "--use-angle=swiftshader",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--no-first-run",
-    "--disable-gpu",
-]
 BASE_URL = "/rbm-test/"  # a path prefix like JupyterHub's /user/<name>/
-
-
-def png_pixels(png: bytes) -> np.ndarray:
-    from PIL import Image
-
-    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
-
-
-def magenta_pixels(img: np.ndarray) -> int:
-    """Pixels of the test scenes' path colour (#ff00ff, blended by antialiasing)."""
-    r, g, b = img[..., 0], img[..., 1], img[..., 2]
-    return int(((r > 150) & (b > 150) & (g < 110)).sum())
-
-
-def changed_pixels(a: np.ndarray, b: np.ndarray) -> int:
-    return int((np.abs(a - b).sum(axis=-1) > 60).sum())
-
-
-def save(name: str, png: bytes) -> Path:
-    ARTIFACTS.mkdir(exist_ok=True)
-    path = ARTIFACTS / name
-    path.write_bytes(png)
-    return path
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-@pytest.fixture(scope="module")
-def browser():
-    if not Path(CHROMIUM).exists():
-        pytest.fail(
-            f"{CHROMIUM} is missing: install Debian's chromium (bash .ci/setup.sh test)"
-        )
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as pw:
-        chromium = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        try:
-            yield chromium
-        finally:
-            chromium.close()
-
-
-@pytest.fixture
-def page(browser):
-    context = browser.new_context(viewport={"width": 1100, "height": 900})
-    page = context.new_page()
-    page.errors = []
-    page.on("pageerror", lambda err: page.errors.append(str(err)))
-    try:
-        yield page
-    finally:
-        context.close()
 
 
 @pytest.fixture(autouse=True)
@@ -230,128 +157,9 @@ def test_live_viewer_page_follows_the_kernel(page):
 
 
 # -- (b), (c) JupyterLab and jupyter-server-proxy ----------------------------------------
-class JupyterLab:
-    """A JupyterLab server on loopback in a temporary home, and its cleanup."""
-
-    def __init__(self, tmp: Path):
-        self.tmp = tmp
-        self.root = tmp / "root"
-        self.root.mkdir()
-        shutil.copy(NOTEBOOK, self.root / NOTEBOOK.name)
-        self.port = free_port()
-        self.token = secrets.token_hex(16)
-        self.base = f"http://127.0.0.1:{self.port}{BASE_URL}"
-        env = dict(os.environ)
-        for var, sub in (
-            ("JUPYTER_CONFIG_DIR", "config"),
-            ("JUPYTER_RUNTIME_DIR", "runtime"),
-            ("JUPYTER_DATA_DIR", "data"),
-            ("IPYTHONDIR", "ipython"),
-            ("MPLCONFIGDIR", "mpl"),
-        ):
-            (tmp / sub).mkdir()
-            env[var] = str(tmp / sub)
-        env["JUPYTER_PLATFORM_DIRS"] = "1"
-        # no "official Jupyter news?" toast over the screenshots, no requests out
-        settings = tmp / "config" / "lab" / "user-settings" / "@jupyterlab"
-        (settings / "apputils-extension").mkdir(parents=True)
-        (
-            settings / "apputils-extension" / "notification.jupyterlab-settings"
-        ).write_text(json.dumps({"fetchNews": "false", "checkForUpdates": False}))
-        env.pop("RBM_NB_VIEWER_PROXY", None)
-        self.log = open(tmp / "jupyter.log", "wb")
-        self.process = subprocess.Popen(
-            [
-                sys.executable,
-                "-m",
-                "jupyter",
-                "lab",
-                "--no-browser",
-                "--ServerApp.open_browser=False",
-                "--ServerApp.ip=127.0.0.1",
-                f"--ServerApp.port={self.port}",
-                "--ServerApp.port_retries=0",
-                f"--ServerApp.base_url={BASE_URL}",
-                f"--IdentityProvider.token={self.token}",
-                f"--ServerApp.root_dir={self.root}",
-                "--LabApp.news_url=",
-                "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate",
-            ]
-            + (
-                ["--allow-root"] if os.geteuid() == 0 else []
-            ),  # CI containers run as root
-            env=env,
-            stdout=self.log,
-            stderr=subprocess.STDOUT,
-            start_new_session=True,  # its own process group, stopped as a whole
-        )
-        self.wait_ready()
-
-    def api(self, path: str, method: str = "GET"):
-        request = urllib.request.Request(
-            f"{self.base}api/{path}",
-            method=method,
-            headers={"Authorization": f"token {self.token}"},
-        )
-        with urllib.request.urlopen(request, timeout=10) as response:
-            body = response.read()
-        return json.loads(body) if body else None
-
-    def wait_ready(self, timeout: float = 120.0) -> None:
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            if self.process.poll() is not None:
-                raise RuntimeError(f"JupyterLab exited early:\n{self.log_text()}")
-            try:
-                self.api("status")
-                return
-            except OSError:
-                time.sleep(0.5)
-        raise RuntimeError(
-            f"JupyterLab did not start in {timeout} s:\n{self.log_text()}"
-        )
-
-    def log_text(self) -> str:
-        self.log.flush()
-        return (self.tmp / "jupyter.log").read_text(errors="replace")[-4000:]
-
-    def url(self, path: str) -> str:
-        return f"{self.base}{path}?token={self.token}"
-
-    def stop(self) -> None:
-        import psutil
-
-        try:
-            children = psutil.Process(self.process.pid).children(recursive=True)
-        except psutil.NoSuchProcess:
-            children = []
-        if self.process.poll() is None:
-            try:
-                for kernel in self.api("kernels"):
-                    self.api(f"kernels/{kernel['id']}", method="DELETE")
-            except OSError:
-                pass
-            os.killpg(self.process.pid, signal.SIGTERM)
-            try:
-                self.process.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                os.killpg(self.process.pid, signal.SIGKILL)
-                self.process.wait(timeout=10)
-        # kernels run in their own sessions: stop any that survived, by pid
-        for child in children:
-            try:
-                child.terminate()
-                child.wait(timeout=10)
-            except psutil.NoSuchProcess:
-                pass
-            except psutil.TimeoutExpired:
-                child.kill()
-        self.log.close()
-
-
 @pytest.fixture(scope="module")
 def lab(tmp_path_factory):
-    server = JupyterLab(tmp_path_factory.mktemp("jupyterlab"))
+    server = JupyterLab(tmp_path_factory.mktemp("jupyterlab"), [NOTEBOOK], BASE_URL)
     try:
         yield server
     finally:

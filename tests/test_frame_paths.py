@@ -175,3 +175,11 @@ def test_docstring_examples_run():
     module = importlib.import_module("rbm_nb._frame_paths")
     result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
     assert result.attempted > 0 and result.failed == 0
+
+
+def test_public_wiring(tree):
+    eye = rbm.find_frame("head/left_eye")
+    assert eye is find_frame("head/left_eye")
+    hand = rbm.find_frame("left_hand")
+    assert eye.frames_between(hand) == frames_between(eye, hand)
+    assert names(eye.frames_between("world", include_self=False)) == ["head", "world"]

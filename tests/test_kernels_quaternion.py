@@ -174,6 +174,20 @@ def test_small_angle_series_are_exact_to_rounding():
             assert abs(kq._atan2(y * x, x) - expected) <= 4.5e-16 * expected
 
 
+@pytest.mark.parametrize("angle", [0.0, 1e-9, 1e-4, 0.02, 0.09, 0.5, 3.0])
+def test_unit_slerp_shortcuts_equal_the_general_slerp(angle):
+    """Small arcs use series, larger ones the great circle: both equal exp/log."""
+    a = unit(30)
+    axis = RNG.normal(size=(30, 3))
+    axis /= np.linalg.norm(axis, axis=1, keepdims=True)
+    rot = np.column_stack([np.full(30, np.cos(angle / 2)), np.sin(angle / 2) * axis])
+    b = naive.qmul(rot, a)
+    for tau in (-0.7, 0.0, 0.3, 0.5, 1.0, 2.5):
+        fast = np.array([kq._qslerp_unit1(*a[i], *b[i], tau) for i in range(30)])
+        slow = np.array([kq._qslerp1(*a[i], *b[i], tau) for i in range(30)])
+        np.testing.assert_allclose(fast, slow, rtol=0, atol=2e-15)
+
+
 def test_quaternion_from_matrix_near_half_turns():
     """Shepperd's branch choice stays accurate where the trace is about -1."""
     axes = np.eye(3)

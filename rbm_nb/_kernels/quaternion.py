@@ -116,35 +116,55 @@ _SMALL_RATIO = 0.05
 
 
 @njit(**NJIT_OPTIONS)
+def _sinc_series(y2):
+    """sin(y) / y from y², for |y| < _SMALL_ANGLE."""
+    return 1.0 + y2 * (
+        -1.0 / 6.0
+        + y2
+        * (1.0 / 120.0 + y2 * (-1.0 / 5040.0 + y2 * (1.0 / 362880.0 - y2 / 39916800.0)))
+    )
+
+
+@njit(**NJIT_OPTIONS)
+def _cos_series(y2):
+    """cos(y) from y², for |y| < _SMALL_ANGLE."""
+    return 1.0 + y2 * (
+        -0.5
+        + y2
+        * (
+            1.0 / 24.0
+            + y2
+            * (
+                -1.0 / 720.0
+                + y2 * (1.0 / 40320.0 + y2 * (-1.0 / 3628800.0 + y2 / 479001600.0))
+            )
+        )
+    )
+
+
+@njit(**NJIT_OPTIONS)
+def _atan_over_x(x2):
+    """atan(x) / x from x², for 0 <= x < _SMALL_RATIO."""
+    return 1.0 + x2 * (
+        -1.0 / 3.0
+        + x2
+        * (
+            1.0 / 5.0
+            + x2
+            * (
+                -1.0 / 7.0
+                + x2 * (1.0 / 9.0 + x2 * (-1.0 / 11.0 + x2 * (1.0 / 13.0 - x2 / 15.0)))
+            )
+        )
+    )
+
+
+@njit(**NJIT_OPTIONS)
 def _sincos(y):
     """(sin y, cos y)."""
     if abs(y) < _SMALL_ANGLE:
         y2 = y * y
-        s = y * (
-            1.0
-            + y2
-            * (
-                -1.0 / 6.0
-                + y2
-                * (
-                    1.0 / 120.0
-                    + y2 * (-1.0 / 5040.0 + y2 * (1.0 / 362880.0 - y2 / 39916800.0))
-                )
-            )
-        )
-        c = 1.0 + y2 * (
-            -0.5
-            + y2
-            * (
-                1.0 / 24.0
-                + y2
-                * (
-                    -1.0 / 720.0
-                    + y2 * (1.0 / 40320.0 + y2 * (-1.0 / 3628800.0 + y2 / 479001600.0))
-                )
-            )
-        )
-        return s, c
+        return y * _sinc_series(y2), _cos_series(y2)
     return math.sin(y), math.cos(y)
 
 
@@ -153,27 +173,7 @@ def _atan2(y, x):
     """atan2(y, x) for y >= 0."""
     if x > 0.0 and y < _SMALL_RATIO * x:
         r = y / x
-        r2 = r * r
-        return r * (
-            1.0
-            + r2
-            * (
-                -1.0 / 3.0
-                + r2
-                * (
-                    1.0 / 5.0
-                    + r2
-                    * (
-                        -1.0 / 7.0
-                        + r2
-                        * (
-                            1.0 / 9.0
-                            + r2 * (-1.0 / 11.0 + r2 * (1.0 / 13.0 - r2 / 15.0))
-                        )
-                    )
-                )
-            )
-        )
+        return r * _atan_over_x(r * r)
     return math.atan2(y, x)
 
 
@@ -213,6 +213,25 @@ def _qslerp_unit1(aw, ax, ay, az, bw, bx, by, bz, tau):
     """
     if not (_is_unit(aw, ax, ay, az) and _is_unit(bw, bx, by, bz)):
         return _qslerp1(aw, ax, ay, az, bw, bx, by, bz, tau)
+    dw, dx, dy, dz = aw - bw, ax - bx, ay - by, az - bz
+    if dw * dw + dx * dx + dy * dy + dz * dz > _SQRT2 * _SQRT2:
+        bw, bx, by, bz = -bw, -bx, -by, -bz
+    d = aw * bw + ax * bx + ay * by + az * bz
+    ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
+    o2 = ow * ow + ox * ox + oy * oy + oz * oz
+    if d > 0.0 and o2 < (_SMALL_RATIO * d) ** 2:
+        # small arcs (the rule in squad's outer slerp): with x = tan θ and
+        # y = τθ, the result is cos(y) a + τ (θ/x) (sin y / y) / d o, and
+        # every factor is a short series in x² or y², so neither sqrt nor
+        # atan2 is needed
+        inv_d = 1.0 / d
+        x2 = o2 * inv_d * inv_d
+        p = _atan_over_x(x2)
+        y2 = tau * tau * x2 * p * p
+        if y2 < _SMALL_ANGLE * _SMALL_ANGLE:
+            c = _cos_series(y2)
+            k = _sinc_series(y2) * tau * p * inv_d
+            return c * aw + k * ow, c * ax + k * ox, c * ay + k * oy, c * az + k * oz
     theta, uw, ux, uy, uz = _geodesic1(aw, ax, ay, az, bw, bx, by, bz)
     s, c = _sincos(tau * theta)
     return c * aw + s * uw, c * ax + s * ux, c * ay + s * uy, c * az + s * uz

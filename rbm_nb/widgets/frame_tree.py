@@ -386,7 +386,9 @@ class FrameTree(widgets.VBox):
             value=frame.name in self.selected,
             description=frame.name,
             tooltip=f"Select {frame.name}",
-            layout=widgets.Layout(width="auto", min_width="90px"),
+            # never shrink the name (long frame names like "pupil/left_eye"),
+            # let the description beside it take what room is left
+            layout=widgets.Layout(width="auto", min_width="90px", flex="0 0 auto"),
         )
         button.add_class("rbm-frame-node")
         label = widgets.Label(value=_describe(info))

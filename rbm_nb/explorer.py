@@ -1,0 +1,226 @@
+"""The head/eye explorer: one definition shared by notebook 06 and ``rbm-nb demo``.
+
+The recording is the example head/eye dataset (real when it can be had, else
+the synthetic one). Its frame tree follows guide 1.6 of rigid-body-motion:
+
+    world
+    └── t265/world        VR axes (x right, y up, z back) of the head tracker
+        └── t265/tracker  the tracked head pose
+            ├── head      the same pose in robotics axes (x forward, y left, z up)
+            └── pupil/scene_cam     eye tracker's scene camera (calibrated offset)
+                ├── pupil/left_eye  eye orientation in camera axes (z = line of sight)
+                └── pupil/right_eye
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+# rotation between the T265's VR axes and ROS axes (guide 1.6)
+R_T265_ROS = np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+# pose of the Pupil Core scene camera on the T265, from the study's calibration
+SCENE_CAM_TRANSLATION = (24.5e-3, -29e-3, 0.0)
+SCENE_CAM_ROTATION = (-0.00125, -1.0, 6.3463e-05, 3.977e-06)
+EYES = ("left_eye", "right_eye")
+GAZE_COLORS = {"left_eye": "#ffd700", "right_eye": "#00bfff"}
+
+
+def load_head_eye(source: str = "auto"):
+    """Load the head, left-eye and right-eye recordings.
+
+    Parameters
+    ----------
+    source : {"auto", "remote", "synthetic"}
+        As for :func:`rbm_nb.data.load_example`. With "auto" the fallback to
+        synthetic data is reported in ``note`` instead of as a warning.
+
+    Returns
+    -------
+    head, left_eye, right_eye : xarray.Dataset
+    note : str
+        Which data this is, in a sentence.
+    """
+    from .data import load_example
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        head, left_eye, right_eye = (
+            load_example(name, source=source) for name in ("head", *EYES)
+        )
+    if is_synthetic(head):
+        note = "synthetic head/eye recording (the real one could not be had here)"
+    else:
+        note = "real head/eye recording (rbm-data)"
+    return head, left_eye, right_eye, note
+
+
+def is_synthetic(ds) -> bool:
+    """Whether a dataset comes from rbm_nb's synthetic generator."""
+    return "synthetic" in str(ds.attrs.get("source", ""))
+
+
+def register_head_eye_frames(head, left_eye, right_eye, *, world: str = "world"):
+    """Register the explorer's frame tree (see the module docstring).
+
+    ``world`` is registered as a root if it is not already. Existing frames of
+    the same names are replaced, so the cell can be run again.
+    """
+    from . import frames
+    from .frames import ReferenceFrame
+
+    if world not in frames.registry:
+        frames.register_frame(world)
+    ReferenceFrame.from_rotation_matrix(
+        R_T265_ROS, parent=world, name="t265/world"
+    ).register(update=True)
+    ReferenceFrame.from_dataset(
+        head,
+        "position",
+        "orientation",
+        "time",
+        parent="t265/world",
+        name="t265/tracker",
+    ).register(update=True)
+    ReferenceFrame.from_rotation_matrix(
+        R_T265_ROS, parent="t265/tracker", name="head", inverse=True
+    ).register(update=True)
+    frames.register_frame(
+        "pupil/scene_cam",
+        parent="t265/tracker",
+        translation=SCENE_CAM_TRANSLATION,
+        rotation=SCENE_CAM_ROTATION,
+        update=True,
+    )
+    for name, eye in zip(EYES, (left_eye, right_eye), strict=True):
+        ReferenceFrame.from_dataset(
+            eye.dropna("time"),
+            "position",
+            "orientation",
+            "time",
+            parent="pupil/scene_cam",
+            name=f"pupil/{name}",
+        ).register(update=True)
+
+
+def gaze_angles(eye):
+    """Azimuth (right) and elevation (up) of an eye's line of sight, in degrees.
+
+    The line of sight is the eye frame's z axis expressed in the scene camera
+    (x right, y down, z forward).
+
+    Returns
+    -------
+    xarray.DataArray, dims (time, angle)
+    """
+    import xarray as xr
+
+    from .quaternions import rotate_vectors
+
+    eye = eye.dropna("time")
+    sight = rotate_vectors(
+        eye.orientation.values, np.array([0.0, 0.0, 1.0]), one_to_one=False
+    )
+    azimuth = np.degrees(np.arctan2(sight[:, 0], sight[:, 2]))
+    elevation = np.degrees(np.arctan2(-sight[:, 1], np.hypot(sight[:, 0], sight[:, 2])))
+    return xr.DataArray(
+        np.column_stack([azimuth, elevation]),
+        dims=("time", "angle"),
+        coords={"time": eye.time, "angle": ["azimuth", "elevation"]},
+        attrs={"long_name": "Gaze angles", "units": "deg"},
+    )
+
+
+def head_speed(head):
+    """Norm of the head tracker's linear velocity, in m/s."""
+    speed = np.sqrt((head.linear_velocity**2).sum("cartesian_axis"))
+    speed.attrs = {"long_name": "Head speed", "units": "m/s"}
+    return speed
+
+
+def explorer_series(head, left_eye, right_eye) -> dict:
+    """The explorer's time series: head speed and both eyes' gaze angles."""
+    return {
+        "head speed": head_speed(head),
+        "left gaze": gaze_angles(left_eye),
+        "right gaze": gaze_angles(right_eye),
+    }
+
+
+def explorer_scene(
+    *, world: str = "world", name: str | None = None, head_scale=3.0, gaze_length=12.0
+):
+    """A Scene with the world axes, the head's triad and path, and both gaze rays.
+
+    The frames must be registered first (:func:`register_head_eye_frames`).
+    The default sizes are for the walk around a building (tens of metres):
+    a 3 m head triad and 12 m gaze rays stay visible when the whole path is in
+    view.
+    """
+    from .scene import Scene
+
+    scene = Scene(world, name=name)
+    scene.add_frame(world, scale=2.0)
+    scene.add_frame("head", scale=head_scale, label="head")
+    scene.add_path("head", color="#ffffff", max_points=2000)
+    for eye in EYES:
+        scene.add_vectors(
+            f"pupil/{eye}",
+            (0.0, 0.0, 1.0),
+            length=gaze_length,
+            color=GAZE_COLORS[eye],
+            label=f"{eye.replace('_', ' ')} gaze",
+        )
+    return scene
+
+
+def write_explorer_html(
+    path, *, source: str = "auto", max_frames: int = 3000, progress: bool = True
+) -> Path:
+    """Build the explorer's scene from the example data and write it as HTML.
+
+    The file plays offline in any browser (see :meth:`Scene.to_html`).
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
+    from . import frames
+    from ._progress import make_bar
+
+    steps = [
+        "loading the recording",
+        "building the frame tree",
+        "building the scene",
+        "writing the HTML",
+    ]
+    bar = make_bar(len(steps), "rbm-nb demo --html", progress=progress)
+    previous = dict(frames.registry)
+    scene = None
+    try:
+        bar.set_postfix_str(steps[0])
+        head, left_eye, right_eye, note = load_head_eye(source)
+        bar.update()
+        bar.set_postfix_str(steps[1])
+        register_head_eye_frames(head, left_eye, right_eye)
+        bar.update()
+        bar.set_postfix_str(steps[2])
+        scene = explorer_scene()
+        bar.update()
+        bar.set_postfix_str(steps[3])
+        out = scene.to_html(
+            Path(path), max_frames=max_frames, title=f"rbm_nb head/eye explorer: {note}"
+        )
+        bar.update()
+    finally:
+        bar.close()
+        if scene is not None:
+            scene.close()
+        # leave the registry as the caller had it
+        frames.clear_registry()
+        for frame in previous.values():
+            frame.register(update=True)
+    return out

@@ -1,0 +1,77 @@
+"""The teaching notebooks run top to bottom offline, each in a fresh kernel."""
+
+from __future__ import annotations
+
+import json
+import time
+
+import pytest
+from conftest import REPO
+
+NOTEBOOKS = sorted((REPO / "notebooks").glob("*.ipynb"))
+# what each notebook must say about where its data came from
+SAYS_ITS_DATA = {
+    "04_xarray.ipynb": "data source:",
+    "05_rosbag_and_3d.ipynb": "bag:",
+    "06_head_eye_explorer.ipynb": "data:",
+}
+
+
+def test_the_six_notebooks_are_there():
+    assert [nb.name for nb in NOTEBOOKS] == [
+        "01_reference_frames.ipynb",
+        "02_velocities.ipynb",
+        "03_estimators.ipynb",
+        "04_xarray.ipynb",
+        "05_rosbag_and_3d.ipynb",
+        "06_head_eye_explorer.ipynb",
+    ]
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.stem)
+def test_outputs_are_stripped_in_the_repo(path):
+    notebook = json.loads(path.read_text())
+    for cell in notebook["cells"]:
+        assert not cell.get("outputs"), f"{path.name} has stored outputs"
+        assert cell.get("execution_count") is None, f"{path.name} has execution counts"
+
+
+def _stream_text(notebook) -> str:
+    texts = []
+    for cell in notebook.cells:
+        for output in cell.get("outputs", []):
+            if output.get("output_type") == "stream":
+                texts.append(output["text"])
+            elif "text/plain" in output.get("data", {}):
+                texts.append(output["data"]["text/plain"])
+    return "\n".join(texts)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.stem)
+def test_notebook_runs_offline_in_a_fresh_kernel(path, tmp_path, monkeypatch):
+    import nbclient
+    import nbformat
+
+    # the kernel inherits this environment: no display, matplotlib config in tmp
+    monkeypatch.setenv("MPLCONFIGDIR", str(tmp_path / "mpl"))
+    monkeypatch.delenv("RBM_NB_VIEWER_PROXY", raising=False)
+    notebook = nbformat.read(path, as_version=4)
+    client = nbclient.NotebookClient(
+        notebook,
+        timeout=600,
+        kernel_name="python3",
+        resources={"metadata": {"path": str(tmp_path)}},  # exports land in tmp
+    )
+    start = time.perf_counter()
+    client.execute()
+    elapsed = time.perf_counter() - start
+    print(f"{path.name}: executed in {elapsed:.1f} s")
+    text = _stream_text(notebook)
+    if path.name in SAYS_ITS_DATA:
+        assert SAYS_ITS_DATA[path.name] in text, f"{path.name} does not say its data"
+    widget_state = notebook.metadata.get("widgets", {})
+    if path.name in ("05_rosbag_and_3d.ipynb", "06_head_eye_explorer.ipynb"):
+        # the widget cells really created widgets in the kernel
+        models = widget_state.get("application/vnd.jupyter.widget-state+json", {})
+        assert models.get("state"), f"{path.name} created no widgets"

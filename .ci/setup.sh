@@ -24,3 +24,8 @@ fi
 if [ "$mode" = test ]; then extras="all,lab,dev"; else extras="all,lab"; fi
 echo "setup: installing rbm_nb[$extras] (pinned by .ci/constraints.txt)"
 .venv/bin/python -m pip install -q -c .ci/constraints.txt -e ".[$extras]"
+
+# Compile every numba kernel into the on-disk cache now, so that neither the
+# demo's first cell nor the first tests wait for compilation.
+echo "setup: warming numba's cache"
+.venv/bin/python -m rbm_nb._warmup

@@ -12,6 +12,8 @@ import importlib
 import sys
 from typing import TYPE_CHECKING
 
+from ._lazy import lazy_attributes
+
 __version__ = "0.1.0"
 
 # public name -> submodule that defines it. Submodules themselves are listed in
@@ -96,19 +98,7 @@ _SUBMODULES = {
 __all__ = sorted(_EXPORTS) + sorted(_SUBMODULES) + ["__version__"]
 
 
-def __getattr__(name: str):
-    if name in _EXPORTS:
-        module = importlib.import_module(f"{__name__}.{_EXPORTS[name]}")
-        value = getattr(module, name)
-        globals()[name] = value  # later lookups skip this function
-        return value
-    if name in _SUBMODULES:
-        return importlib.import_module(f"{__name__}.{name}")
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return __all__
+__getattr__, __dir__ = lazy_attributes(__name__, _EXPORTS, _SUBMODULES)
 
 
 if TYPE_CHECKING:  # pragma: no cover - static analysers see the real names

@@ -8,6 +8,9 @@ keys); read-only frame arrays; both angular velocity modes with outlier
 rejection and low-pass filtering; estimators, conversions, the tf2-style
 ``Transformer``, the ``DataArray.rbm`` accessor and the synthetic recording.
 A later process then loads the compiled kernels instead of compiling them.
+The meshcat scene has no kernels of its own: a player step is a binary search
+and a 4 x 4 matrix in numpy, and the lookups it makes when objects are added
+are the ones warmed here.
 
 Why the cache is found again: numba stores it next to the kernel sources
 (``rbm_nb/_kernels/__pycache__``, inside site-packages for a normal install)
@@ -113,38 +116,60 @@ def _tree(kind: str):
             "warmup-static", world, translation=(1.0, 0.0, 0.5), rotation=r[3]
         ),
         "static_inverse": ReferenceFrame(
-            "warmup-static-inverse", world, translation=(0.0, 2.0, 0.0),
-            rotation=r[7], inverse=True,
-        ),  # fmt: skip
+            "warmup-static-inverse",
+            world,
+            translation=(0.0, 2.0, 0.0),
+            rotation=r[7],
+            inverse=True,
+        ),
         "moving": ReferenceFrame(
             "warmup-moving", world, translation=t, rotation=r, timestamps=_times(kind)
         ),
     }
     frames["child"] = ReferenceFrame(
-        "warmup-child", frames["moving"], translation=t2, rotation=r2,
+        "warmup-child",
+        frames["moving"],
+        translation=t2,
+        rotation=r2,
         timestamps=_times(kind, step=0.013, offset=0.002),
-    )  # fmt: skip
+    )
     frames["moving_inverse"] = ReferenceFrame(
-        "warmup-moving-inverse", frames["static"], translation=t2, rotation=r2,
-        timestamps=_times(kind, step=0.009), inverse=True,
-    )  # fmt: skip
+        "warmup-moving-inverse",
+        frames["static"],
+        translation=t2,
+        rotation=r2,
+        timestamps=_times(kind, step=0.009),
+        inverse=True,
+    )
     frames["discrete"] = ReferenceFrame(
-        "warmup-discrete", world, translation=t[::5], rotation=r[::5],
-        timestamps=_times(kind, N_SAMPLES // 5, step=0.05), discrete=True,
-    )  # fmt: skip
-    frames["discrete_child"] = ReferenceFrame(
-        "warmup-discrete-child", frames["discrete"], translation=t2[::4],
-        rotation=r2[::4], timestamps=_times(kind, N_SAMPLES // 4, step=0.04, offset=0.01),
+        "warmup-discrete",
+        world,
+        translation=t[::5],
+        rotation=r[::5],
+        timestamps=_times(kind, N_SAMPLES // 5, step=0.05),
         discrete=True,
-    )  # fmt: skip
+    )
+    frames["discrete_child"] = ReferenceFrame(
+        "warmup-discrete-child",
+        frames["discrete"],
+        translation=t2[::4],
+        rotation=r2[::4],
+        timestamps=_times(kind, N_SAMPLES // 4, step=0.04, offset=0.01),
+        discrete=True,
+    )
     frames["from_matrix"] = ReferenceFrame.from_rotation_matrix(
         np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]),
-        frames["moving"], "warmup-from-matrix", inverse=True,
-    )  # fmt: skip
+        frames["moving"],
+        "warmup-from-matrix",
+        inverse=True,
+    )
     frames["single"] = ReferenceFrame(
-        "warmup-single", world, translation=t[:1], rotation=r[:1],
+        "warmup-single",
+        world,
+        translation=t[:1],
+        rotation=r[:1],
         timestamps=_times(kind, 1),
-    )  # fmt: skip
+    )
     return frames
 
 
@@ -198,7 +223,11 @@ def _lookups(kind: str) -> None:
     lookups.lookup_pose(f["child"], f["world"], as_dataset=True)
     times = f["child"].timestamps
     inside = times[3:9][::-1]  # any order, inside the range
-    for outof, into in (("child", "world"), ("discrete_child", "moving"), ("static", "world")):
+    for outof, into in (
+        ("child", "world"),
+        ("discrete_child", "moving"),
+        ("static", "world"),
+    ):
         lookups.lookup_transform(f[outof], f[into], time=inside)
         lookups.lookup_transform(f[outof], f[into], time=inside[0])
         lookups.lookup_transform(f[outof], f[into], time=inside, as_matrix=True)
@@ -214,8 +243,13 @@ def _transforms(kind: str) -> None:
     f = _tree(kind)
     t, r = _motion(12, phase=0.1)
     ts = f["moving"].timestamps[2:14]
-    for into, outof in (("static", "world"), ("child", "world"), ("world", "moving_inverse"),
-                        ("discrete_child", "world"), ("discrete", "static")):  # fmt: skip
+    for into, outof in (
+        ("static", "world"),
+        ("child", "world"),
+        ("world", "moving_inverse"),
+        ("discrete_child", "world"),
+        ("discrete", "static"),
+    ):
         a, b = f[into], f[outof]
         tr.transform_points(t[0], a, b)
         tr.transform_vectors(t[0], a, b)
@@ -237,37 +271,46 @@ def _velocities(kind: str) -> None:
 
     f = _tree(kind)
     moving, child, world = f["moving"], f["child"], f["world"]
-    for options in ({}, {"outlier_thresh": OUTLIER_THRESH}, {"cutoff": 0.3},
-                    {"outlier_thresh": OUTLIER_THRESH, "cutoff": 0.3}):  # fmt: skip
+    for options in (
+        {},
+        {"outlier_thresh": OUTLIER_THRESH},
+        {"cutoff": 0.3},
+        {"outlier_thresh": OUTLIER_THRESH, "cutoff": 0.3},
+    ):
         for mode in ("quaternion", "rotation_vector"):
             lookups.lookup_twist(child, world, mode=mode, **options)
-            lookups.lookup_angular_velocity(child, world, represent_in=child, mode=mode, **options)
+            lookups.lookup_angular_velocity(
+                child, world, represent_in=child, mode=mode, **options
+            )
         lookups.lookup_linear_velocity(child, world, represent_in=moving, **options)
     lookups.lookup_twist(moving, as_dataset=True)
     lookups.lookup_linear_velocity(moving, as_dataarray=True)
     lookups.lookup_angular_velocity(moving, as_dataarray=True)
     lookups.lookup_twist(f["moving_inverse"], child)
     ts = child.timestamps
-    v, _ = lookups.lookup_twist(child, moving)
-    for what, into in (("reference_frame", world), ("moving_frame", f["static"]),
-                       ("representation_frame", world)):  # fmt: skip
-        outof = moving if what == "reference_frame" else child
-        if what == "representation_frame":
-            outof = moving
+    v, _ = lookups.lookup_twist(child, moving)  # child wrt moving, at ts
+    changes = (
+        # (what changes, from, to, the other frame the linear velocity needs)
+        ("reference_frame", moving, world, {"moving_frame": child}),
+        ("moving_frame", child, f["static"], {"reference_frame": world}),
+        ("representation_frame", moving, world, {}),
+    )
+    for what, outof, into, other in changes:
         tr.transform_angular_velocity(v, into, outof, what=what, timestamps=ts)
-        tr.transform_angular_velocity(v, into, outof, what=what, timestamps=ts, cutoff=0.3)
-        extra = (
-            {"moving_frame": child}
-            if what == "reference_frame"
-            else {"reference_frame": world}
-            if what == "moving_frame"
-            else {}
+        tr.transform_angular_velocity(
+            v, into, outof, what=what, timestamps=ts, cutoff=0.3
         )
-        tr.transform_linear_velocity(v, into, outof, what=what, timestamps=ts, **extra)
+        tr.transform_linear_velocity(v, into, outof, what=what, timestamps=ts, **other)
         tr.transform_linear_velocity(
-            v, into, outof, what=what, timestamps=ts, cutoff=0.3, outlier_thresh=OUTLIER_THRESH,
-            **extra,
-        )  # fmt: skip
+            v,
+            into,
+            outof,
+            what=what,
+            timestamps=ts,
+            cutoff=0.3,
+            outlier_thresh=OUTLIER_THRESH,
+            **other,
+        )
 
 
 def _estimators() -> None:
@@ -281,7 +324,9 @@ def _estimators() -> None:
         for options in ({}, {"outlier_thresh": OUTLIER_THRESH}, {"cutoff": 0.3}):
             est.estimate_linear_velocity(t, timestamps=ts, **options)
             for mode in ("quaternion", "rotation_vector"):
-                est.estimate_angular_velocity(flipped, timestamps=ts, mode=mode, **options)
+                est.estimate_angular_velocity(
+                    flipped, timestamps=ts, mode=mode, **options
+                )
     gappy = r.copy()
     gappy[5] = np.nan  # dropped samples take another path
     est.estimate_angular_velocity(gappy, timestamps=_times("float"))
@@ -291,7 +336,9 @@ def _estimators() -> None:
     est.shortest_arc_rotation(t, t[::-1])
     rotated = est.best_fit_rotation(t, t[::-1])
     est.best_fit_transform(t, t[::-1] + 1.0)
-    est.iterative_closest_point(t, t[::-1] + 0.01, init_transform=((0.0, 0, 0), rotated))
+    est.iterative_closest_point(
+        t, t[::-1] + 0.01, init_transform=((0.0, 0, 0), rotated)
+    )
     est.iterative_closest_point(t[:20], t + 0.01)
 
 
@@ -335,9 +382,15 @@ def _ros_transformer() -> None:
     tf.lookup_transform("warmup-world", "warmup-child", time=t)
     tf.transform_point((1.0, 2.0, 3.0), "warmup-world", "warmup-child", time=t)
     tf.transform_vector((1.0, 2.0, 3.0), "warmup-static", "warmup-child", time=t)
-    tf.transform_quaternion((1.0, 0.0, 0.0, 0.0), "warmup-world", "warmup-child", time=t)
-    tf.transform_pose((1.0, 2.0, 3.0), (1.0, 0.0, 0.0, 0.0), "warmup-world", "warmup-discrete")
-    tf.set_transform((0.0, 0.0, 1.0), (1.0, 0.0, 0.0, 0.0), "warmup-world", "warmup-extra")
+    tf.transform_quaternion(
+        (1.0, 0.0, 0.0, 0.0), "warmup-world", "warmup-child", time=t
+    )
+    tf.transform_pose(
+        (1.0, 2.0, 3.0), (1.0, 0.0, 0.0, 0.0), "warmup-world", "warmup-discrete"
+    )
+    tf.set_transform(
+        (0.0, 0.0, 1.0), (1.0, 0.0, 0.0, 0.0), "warmup-world", "warmup-extra"
+    )
     tf.lookup_transform("warmup-extra", "warmup-moving", time=t)
 
 
@@ -361,7 +414,9 @@ def _xarray() -> None:
         },
     )
     world = ReferenceFrame("warmup-world")
-    head = ReferenceFrame.from_dataset(ds, "position", "orientation", "time", world, "warmup-head")
+    head = ReferenceFrame.from_dataset(
+        ds, "position", "orientation", "time", world, "warmup-head"
+    )
     ReferenceFrame.from_translation_dataarray(ds.position, "time", world, "warmup-t")
     ReferenceFrame.from_rotation_dataarray(ds.orientation, "time", world, "warmup-r")
     ds.orientation.rbm.qinterp(time=ds.time[1:-1] + np.timedelta64(5, "ms"))

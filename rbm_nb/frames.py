@@ -583,15 +583,15 @@ class ReferenceFrame:
         cls, mat, parent, name=None, inverse=False
     ) -> ReferenceFrame:
         """A static frame rotated by a (3, 3) rotation matrix wrt its parent."""
-        from ._kernels import quaternion as kq
+        from .conversions import quaternion_from_matrix
 
         mat = as_float_array(mat, "mat")
         if mat.shape != (3, 3):
             raise ValueError(f"mat must have shape (3, 3), got {mat.shape}")
-        check_finite(mat, "mat")
-        if not np.allclose(mat @ mat.T, np.eye(3), atol=1e-6) or np.linalg.det(mat) < 0:
-            raise ValueError("mat must be a rotation matrix (orthonormal, det +1)")
-        q = kq.quaternion_from_matrix(np.ascontiguousarray(mat[None]))[0]
+        try:  # orthonormal and det +1, to a tolerance the message names
+            q = quaternion_from_matrix(mat)
+        except ValueError as err:
+            raise ValueError(f"mat: {err}") from None
         return cls(name, parent, rotation=q, inverse=inverse)
 
     # -- registry ----------------------------------------------------------

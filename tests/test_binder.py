@@ -29,7 +29,6 @@ import struct
 import subprocess
 import sys
 import time
-import tomllib
 import urllib.error
 import urllib.request
 import uuid
@@ -39,6 +38,7 @@ from pathlib import Path
 import nbformat
 import psutil
 import pytest
+import tomllib
 import websocket
 from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
@@ -48,16 +48,40 @@ BINDER = REPO / "binder"
 NOTEBOOK = "notebooks/06_head_eye_explorer.ipynb"
 ARTIFACT = REPO / "test-artifacts" / "binder_timing.json"
 EXTRAS = ("notebook", "data", "ros", "lab")
-TEST_ONLY = {"rigid-body-motion", "pytest", "pytest-timeout", "hypothesis",
-             "playwright", "anytree", "ruff"}  # fmt: skip
+TEST_ONLY = {
+    "rigid-body-motion",
+    "pytest",
+    "pytest-timeout",
+    "hypothesis",
+    "playwright",
+    "anytree",
+    "ruff",
+}
 # packages a fresh venv has before anything is installed
 VENV_SEED = {"pip", "setuptools", "wheel"}
 # environment that would make the simulated Binder see this machine's setup
-LEAKY_ENV = ("VIRTUAL_ENV", "PYTHONPATH", "PYTHONHOME", "PYTHONSTARTUP", "NUMBA_CACHE_DIR",
-             "NUMBA_DISABLE_JIT", "RBM_NB_DATA_DIR", "RBM_NB_VIEWER_PORT", "XDG_CACHE_HOME",
-             "XDG_CONFIG_HOME", "XDG_DATA_HOME", "XDG_RUNTIME_DIR", "MPLCONFIGDIR",
-             "IPYTHONDIR", "JUPYTER_CONFIG_DIR", "JUPYTER_DATA_DIR", "JUPYTER_PATH",
-             "JUPYTER_RUNTIME_DIR", "JUPYTER_CONFIG_PATH")  # fmt: skip
+LEAKY_ENV = (
+    "VIRTUAL_ENV",
+    "PYTHONPATH",
+    "PYTHONHOME",
+    "PYTHONSTARTUP",
+    "NUMBA_CACHE_DIR",
+    "NUMBA_DISABLE_JIT",
+    "RBM_NB_DATA_DIR",
+    "RBM_NB_VIEWER_PORT",
+    "XDG_CACHE_HOME",
+    "XDG_CONFIG_HOME",
+    "XDG_DATA_HOME",
+    "XDG_RUNTIME_DIR",
+    "MPLCONFIGDIR",
+    "IPYTHONDIR",
+    "PYTHONDONTWRITEBYTECODE",
+    "JUPYTER_CONFIG_DIR",
+    "JUPYTER_DATA_DIR",
+    "JUPYTER_PATH",
+    "JUPYTER_RUNTIME_DIR",
+    "JUPYTER_CONFIG_PATH",
+)
 
 TIMINGS: dict = {}
 
@@ -195,12 +219,15 @@ class BinderBuild:
     def python(self) -> str:
         return str(self.venv / "bin" / "python")
 
-    def run_python(self, code: str, timeout: float = 300.0, **env) -> tuple[int, str, float]:
+    def run_python(self, code: str, cwd=None, **env) -> tuple[int, str, float]:
+        """Run ``code`` in a fresh process (in ``cwd``, default outside the repo)."""
         start = time.perf_counter()
         rc, out = self.procs.run(
-            [self.python, "-c", code], timeout=timeout, cwd=self.root,
+            [self.python, "-c", code],
+            timeout=300,
+            cwd=cwd or self.root,
             env={**self.env, **env},
-        )  # fmt: skip
+        )
         return rc, out, time.perf_counter() - start
 
 
@@ -211,7 +238,9 @@ def _pins() -> dict[str, str]:
         if line:
             req = Requirement(line)
             (spec,) = req.specifier  # exactly one specifier per line
-            assert spec.operator == "==", f"binder/requirements.txt: {line!r} is not an exact pin"
+            assert spec.operator == "==", (
+                f"binder/requirements.txt: {line!r} is not an exact pin"
+            )
             pins[canonicalize_name(req.name)] = spec.version
     return pins
 
@@ -226,16 +255,21 @@ def _binder_python() -> str:
     if found is None and f"{sys.version_info[0]}.{sys.version_info[1]}" == version:
         found = getattr(sys, "_base_executable", None) or sys.executable
     if found is None:
-        pytest.fail(f"binder/runtime.txt asks for Python {version}, which is not installed")
-    return found
+        pytest.fail(f"binder/runtime.txt asks for Python {version}: not installed")
+    # the interpreter itself, not a shim (pyenv's depend on HOME, which moves)
+    code = "import sys; print(sys.executable)"
+    real = subprocess.run([found, "-c", code], capture_output=True, text=True)
+    return real.stdout.strip() or found
 
 
 def _copy_working_tree(dst: Path) -> None:
     """Tracked and untracked files that are not ignored, as Binder would get them."""
     listed = subprocess.run(
         ["git", "ls-files", "-co", "--exclude-standard", "-z"],
-        cwd=REPO, capture_output=True, check=True,
-    ).stdout.decode()  # fmt: skip
+        cwd=REPO,
+        capture_output=True,
+        check=True,
+    ).stdout.decode()
     for rel in filter(None, listed.split("\0")):
         src = REPO / rel
         if src.is_file():  # deleted but still tracked files are left out
@@ -286,22 +320,22 @@ def binder(tmp_path_factory, timings):
         env = _environment(root, venv)
         build = BinderBuild(root, repo, venv, env, procs)
         start = time.perf_counter()
-        rc, out = procs.run([_binder_python(), "-m", "venv", str(venv)], timeout=120, env=env)
-        assert rc == 0, out
-        # --no-compile: byte-compiling every module is not what is tested here
-        # (postBuild's imports write the .pyc files that matter) and halves the time
         rc, out = procs.run(
-            [build.python, "-m", "pip", "install", "--no-compile", "-q",
-             "-r", str(BINDER / "requirements.txt")],
-            timeout=900, env=env,
-        )  # fmt: skip
+            [_binder_python(), "-m", "venv", str(venv)], timeout=120, env=env
+        )
+        assert rc == 0, out
+        # --no-compile halves the install time. pip byte-compiles on Binder; here
+        # each module gets its .pyc when first imported (PYTHONDONTWRITEBYTECODE
+        # is dropped above), and postBuild imports all that a first call needs
+        pip = [build.python, "-m", "pip"]
+        requirements = str(BINDER / "requirements.txt")
+        cmd = [*pip, "install", "--no-compile", "-q", "-r", requirements]
+        rc, out = procs.run(cmd, timeout=900, env=env)
         assert rc == 0, f"pip install -r binder/requirements.txt failed:\n{out[-5000:]}"
         timings["venv + pip install -r requirements.txt"] = time.perf_counter() - start
-        rc, out = procs.run([build.python, "-m", "pip", "check"], timeout=120, env=env)
+        rc, out = procs.run([*pip, "check"], timeout=120, env=env)
         assert rc == 0, f"pip check after installing binder/requirements.txt:\n{out}"
-        rc, out = procs.run(
-            [build.python, "-m", "pip", "list", "--format=json"], timeout=120, env=env
-        )
+        rc, out = procs.run([*pip, "list", "--format=json"], timeout=120, env=env)
         assert rc == 0, out
         build.installed = {
             canonicalize_name(d["name"]): d["version"] for d in json.loads(out)
@@ -309,14 +343,15 @@ def binder(tmp_path_factory, timings):
 
         _copy_working_tree(repo)
         start = time.perf_counter()
-        rc, out = procs.run([str(repo / "binder" / "postBuild")], timeout=900, cwd=repo, env=env)
+        rc, out = procs.run(
+            [str(repo / "binder" / "postBuild")], timeout=900, cwd=repo, env=env
+        )
         timings["postBuild"] = time.perf_counter() - start
         build.postbuild_output = out
         assert rc == 0, f"binder/postBuild failed:\n{out[-5000:]}"
-        rc, out = procs.run(
-            [build.python, "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
-            timeout=60, cwd=root, env=env,
-        )  # fmt: skip
+        code = "import sysconfig; print(sysconfig.get_paths()['purelib'])"
+        rc, out = procs.run([build.python, "-c", code], timeout=60, env=env)
+        assert rc == 0, out
         build.site_packages = Path(out.strip())
         yield build
     finally:
@@ -345,12 +380,24 @@ def test_requirements_pin_everything_rbm_nb_needs_and_nothing_for_tests():
         assert req.specifier.contains(pins[name], prereleases=True), (
             f"binder/requirements.txt pins {req.name}=={pins[name]}, pyproject wants {line}"
         )
-    assert not TEST_ONLY & set(pins), f"test-only packages pinned: {TEST_ONLY & set(pins)}"
+    assert not TEST_ONLY & set(pins), (
+        f"test-only packages pinned: {TEST_ONLY & set(pins)}"
+    )
     assert "rbm-nb" not in pins, "rbm_nb itself is installed by postBuild"
+    # the same versions as the environment CI tests (a subset of its freeze)
+    ci = {}
+    for line in (REPO / ".ci" / "constraints.txt").read_text().splitlines():
+        if "==" in line and not line.lstrip().startswith("#"):
+            name, version = line.split("==")
+            ci[canonicalize_name(name.strip())] = version.strip()
+    drift = {n: (v, ci.get(n)) for n, v in pins.items() if ci.get(n) != v}
+    assert not drift, f"binder pins differ from .ci/constraints.txt: {drift}"
 
 
 def test_binder_files_are_what_repo2docker_runs():
-    assert os.access(BINDER / "postBuild", os.X_OK), "binder/postBuild must be executable"
+    assert os.access(BINDER / "postBuild", os.X_OK), (
+        "binder/postBuild must be executable"
+    )
     script = (BINDER / "postBuild").read_text()
     assert script.startswith("#!/usr/bin/env bash\n") and "set -euo pipefail" in script
     assert (BINDER / "runtime.txt").read_text().strip() == "python-3.11"
@@ -363,13 +410,12 @@ def test_binder_files_are_what_repo2docker_runs():
 
 @pytest.mark.slow
 def test_requirements_install_alone_and_pin_every_package(binder):
-    pins = _pins()
-    rbm_nb_installed = binder.installed.pop("rbm-nb", None)  # pip list ran before postBuild
-    assert rbm_nb_installed is None
-    unpinned = {n: v for n, v in binder.installed.items() if n not in pins and n not in VENV_SEED}
-    assert not unpinned, f"installed but not pinned in binder/requirements.txt: {unpinned}"
-    differing = {n: (v, pins[n]) for n, v in binder.installed.items() if n in pins and pins[n] != v}
-    assert not differing, f"installed versions differ from the pins: {differing}"
+    pins, installed = _pins(), binder.installed  # installed: before postBuild
+    unpinned = {n: v for n, v in installed.items() if n not in {*pins, *VENV_SEED}}
+    assert not unpinned, f"installed, not pinned in binder/requirements.txt: {unpinned}"
+    other = {n: (v, pins[n]) for n, v in installed.items() if pins.get(n, v) != v}
+    assert not other, f"installed versions differ from the pins: {other}"
+    assert not set(pins) - set(installed), "pinned but not installed"
 
 
 @pytest.mark.slow
@@ -377,34 +423,43 @@ def test_postbuild_installs_fetches_and_warms_the_cache(binder, timings):
     out = binder.postbuild_output
     assert "Successfully installed rbm_nb-" in out
     installed = binder.site_packages / "rbm_nb"
-    assert (installed / "__init__.py").is_file() and not (installed / "__init__.py").is_symlink()
+    init = installed / "__init__.py"
+    assert init.is_file() and not init.is_symlink(), "rbm_nb is not a regular install"
     # example data: fetched, or one clear line that the synthetic recording is used
+    offline = re.search(
+        r"^postBuild: example data unavailable \(([a-z_, ]+): .+\); the notebooks "
+        r"will use the synthetic recording instead$",
+        out,
+        re.M,
+    )
+    unavailable = set(offline.group(1).split(", ")) if offline else set()
     for name in ("head", "left_eye", "right_eye", "rosbag"):
         ready = f"postBuild: example data {name!r} ready at" in out
-        fallback = re.search(
-            rf"postBuild: example data unavailable \([^)]*\b{name}\b.*the notebooks will use "
-            r"the synthetic recording instead",
-            out,
-        )  # fmt: skip
-        assert ready or fallback, f"postBuild said nothing clear about {name!r}:\n{out}"
-    summary = re.search(
-        r"rbm_nb warm-up: (\d+) kernel signatures compiled, (\d+) loaded from the cache "
-        r"\((\d+) kernels\), ([\d.]+) s; cache: (.+)", out,
-    )  # fmt: skip
-    assert summary, f"no warm-up summary in the postBuild output:\n{out[-3000:]}"
-    compiled, seconds, cache = int(summary.group(1)), float(summary.group(4)), summary.group(5)
-    assert compiled > 0
-    timings["postBuild: warm-up"] = seconds
-    TIMINGS["warm-up signatures compiled"] = compiled
-    # the cache sits next to the installed kernels, not in the source tree
-    kernels = installed / "_kernels"
-    assert Path(cache) == kernels / "__pycache__"
-    for module in sorted(kernels.glob("[a-z]*.py")):
-        if "@njit" in module.read_text():
-            assert list((kernels / "__pycache__").glob(f"{module.stem}.*.nbi")), (
-                f"no numba cache index for {module.name}"
-            )
-    assert not list(binder.repo.rglob("*.nbi")), "the warm-up compiled the source tree"
+        assert ready != (name in unavailable), f"postBuild on {name!r}:\n{out}"
+    timings["postBuild: example data"] = float(
+        re.search(r"example data step took (\d+) s", out).group(1)
+    )
+    # two warm-ups: the installed package's kernels, then the source tree's
+    summaries = re.findall(
+        r"^rbm_nb warm-up: (\d+) kernel signatures compiled, \d+ loaded from the "
+        r"cache \(\d+ kernels\), ([\d.]+) s; cache: (.+)$",
+        out,
+        re.M,
+    )
+    assert len(summaries) == 2, f"expected two warm-up summaries:\n{out[-3000:]}"
+    trees = {"installed": installed, "source tree": binder.repo / "rbm_nb"}
+    for (compiled, seconds, cache), (label, tree) in zip(
+        summaries, trees.items(), strict=True
+    ):
+        assert int(compiled) > 0
+        timings[f"postBuild: warm-up, {label}"] = float(seconds)
+        kernels = tree / "_kernels"
+        assert Path(cache) == kernels / "__pycache__"
+        for module in sorted(kernels.glob("[a-z]*.py")):
+            if "@njit" in module.read_text():
+                indexes = list((kernels / "__pycache__").glob(f"{module.stem}.*.nbi"))
+                assert indexes, f"no numba cache index for {module}"
+    TIMINGS["warm-up signatures compiled"] = int(summaries[0][0])
 
 
 @pytest.mark.slow
@@ -419,16 +474,27 @@ def test_first_frame_core_call_loads_its_kernels_from_the_cache(binder, timings)
     timings["first call after postBuild: process wall"] = wall
 
     # the same call without the warmed cache compiles: the check above can fail
-    rc, out, wall = binder.run_python(FIRST_CALL, NUMBA_CACHE_DIR=str(binder.root / "cold"))
+    rc, out, wall = binder.run_python(
+        FIRST_CALL, NUMBA_CACHE_DIR=str(binder.root / "cold")
+    )
     assert rc == 0, out
     cold = json.loads(out.strip().splitlines()[-1])
     assert cold["compiled"] > 0, cold
     timings["same call, empty cache: calls only"] = cold["call_s"]
 
+    # a kernel at the repository root imports ./rbm_nb: warmed as well
+    rc, out, _ = binder.run_python(FIRST_CALL, cwd=binder.repo)
+    assert rc == 0, out
+    at_root = json.loads(out.strip().splitlines()[-1])
+    assert Path(at_root["rbm_nb"]).is_relative_to(binder.repo)
+    assert at_root["compiled"] == 0 and at_root["loaded"] > 0, at_root
+
     # and a second warm-up has nothing left to compile
     rc, out, _ = binder.run_python("from rbm_nb._warmup import main; main([])")
     assert rc == 0, out
-    assert re.search(r"warm-up: 0 kernel signatures compiled, [1-9]\d* loaded", out), out
+    assert re.search(r"warm-up: 0 kernel signatures compiled, [1-9]\d* loaded", out), (
+        out
+    )
 
 
 # ---------------------------------------------------------------------------
@@ -452,10 +518,14 @@ class Server:
         """(status, body bytes) of a request with the token."""
         data = None if body is None else json.dumps(body).encode()
         req = urllib.request.Request(
-            self.url + path, data=data, method=method,
-            headers={"Authorization": f"token {self.token}",
-                     "Content-Type": "application/json"},
-        )  # fmt: skip
+            self.url + path,
+            data=data,
+            method=method,
+            headers={
+                "Authorization": f"token {self.token}",
+                "Content-Type": "application/json",
+            },
+        )
         try:
             with urllib.request.urlopen(req, timeout=timeout) as resp:
                 return resp.status, resp.read()
@@ -470,13 +540,25 @@ class Server:
 def jupyter(binder, timings):
     port, token = _free_port(), uuid.uuid4().hex
     log = binder.root / "jupyter.log"
+    cmd = [
+        str(binder.venv / "bin" / "jupyter-lab"),
+        "--no-browser",
+        "--ip=127.0.0.1",
+        f"--port={port}",
+        "--ServerApp.port_retries=0",
+        f"--IdentityProvider.token={token}",
+        f"--ServerApp.root_dir={binder.repo}",
+    ]
+    if os.geteuid() == 0:  # CI containers run as root; Binder's user is not
+        cmd.append("--allow-root")
     with open(log, "w") as log_file:
         proc = binder.procs.start(
-            [str(binder.venv / "bin" / "jupyter-lab"), "--no-browser", "--ip=127.0.0.1",
-             f"--port={port}", "--ServerApp.port_retries=0",
-             f"--IdentityProvider.token={token}", f"--ServerApp.root_dir={binder.repo}"],
-            cwd=binder.repo, env=binder.env, stdout=log_file, stderr=subprocess.STDOUT,
-        )  # fmt: skip
+            cmd,
+            cwd=binder.repo,
+            env=binder.env,
+            stdout=log_file,
+            stderr=subprocess.STDOUT,
+        )
     server = Server(f"http://127.0.0.1:{port}", token, log)
     try:
         start = time.perf_counter()
@@ -503,8 +585,9 @@ class KernelChannel:
         self.session = session
         self.ws = websocket.create_connection(
             f"ws{server.url[4:]}/api/kernels/{kernel_id}/channels?session_id={session}",
-            header=[f"Authorization: token {server.token}"], timeout=30,
-        )  # fmt: skip
+            header=[f"Authorization: token {server.token}"],
+            timeout=30,
+        )
 
     def close(self) -> None:
         self.ws.close()
@@ -523,20 +606,39 @@ class KernelChannel:
     def execute(self, code: str, timeout: float = 600.0) -> tuple[str, list]:
         """Run ``code``; returns (stdout text, errors as 'ename: evalue' + traceback)."""
         msg_id = uuid.uuid4().hex
-        self.ws.send(json.dumps({
-            "header": {"msg_id": msg_id, "msg_type": "execute_request",
-                       "username": "binder-test", "session": self.session,
-                       "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-                       "version": "5.3"},
-            "parent_header": {}, "metadata": {}, "channel": "shell", "buffers": [],
-            "content": {"code": code, "silent": False, "store_history": True,
-                        "user_expressions": {}, "allow_stdin": False, "stop_on_error": True},
-        }))  # fmt: skip
+        self.ws.send(
+            json.dumps(
+                {
+                    "header": {
+                        "msg_id": msg_id,
+                        "msg_type": "execute_request",
+                        "username": "binder-test",
+                        "session": self.session,
+                        "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+                        "version": "5.3",
+                    },
+                    "parent_header": {},
+                    "metadata": {},
+                    "channel": "shell",
+                    "buffers": [],
+                    "content": {
+                        "code": code,
+                        "silent": False,
+                        "store_history": True,
+                        "user_expressions": {},
+                        "allow_stdin": False,
+                        "stop_on_error": True,
+                    },
+                }
+            )
+        )
         deadline = time.monotonic() + timeout
         text, errors, replied, idle = [], [], False, False
         while not (replied and idle):
             left = deadline - time.monotonic()
-            assert left > 0, f"no reply within {timeout} s; output so far:\n{''.join(text)}"
+            assert left > 0, (
+                f"no reply within {timeout} s; output so far:\n{''.join(text)}"
+            )
             msg = self._receive(left)
             if msg.get("parent_header", {}).get("msg_id") != msg_id:
                 continue
@@ -544,8 +646,10 @@ class KernelChannel:
             if kind == "stream" and content.get("name") == "stdout":
                 text.append(content["text"])
             elif kind == "error":
-                errors.append(f"{content['ename']}: {content['evalue']}\n"
-                              + "\n".join(content.get("traceback", [])))  # fmt: skip
+                errors.append(
+                    f"{content['ename']}: {content['evalue']}\n"
+                    + "\n".join(content.get("traceback", []))
+                )
             elif kind == "execute_reply":
                 replied = True
                 if content["status"] != "ok" and not errors:
@@ -567,15 +671,20 @@ def test_explorer_notebook_runs_in_the_binder_jupyter_server(binder, jupyter, ti
     # a notebook session, as JupyterLab opens one: the kernel's cwd is notebooks/
     start = time.perf_counter()
     status, body = jupyter.request(
-        "POST", "/api/sessions",
-        {"path": NOTEBOOK, "type": "notebook", "name": Path(NOTEBOOK).name,
-         "kernel": {"name": "python3"}},
-    )  # fmt: skip
+        "POST",
+        "/api/sessions",
+        {
+            "path": NOTEBOOK,
+            "type": "notebook",
+            "name": Path(NOTEBOOK).name,
+            "kernel": {"name": "python3"},
+        },
+    )
     assert status == 201, f"{status} {body!r}\n{jupyter.log_tail()}"
     session = json.loads(body)
-    channel = KernelChannel(jupyter, session["kernel"]["id"])
-    kernel_pid = None
+    channel = kernel_pid = None
     try:
+        channel = KernelChannel(jupyter, session["kernel"]["id"])
         channel.execute("1 + 1", timeout=120)  # the kernel is up
         timings["kernel start"] = time.perf_counter() - start
 
@@ -586,7 +695,9 @@ def test_explorer_notebook_runs_in_the_binder_jupyter_server(binder, jupyter, ti
         for i, cell in enumerate(cells):
             cell_start = time.perf_counter()
             _, errors = channel.execute(cell.source)
-            assert not errors, f"{NOTEBOOK} cell {i} failed:\n{cell.source}\n\n{errors[0]}"
+            assert not errors, (
+                f"{NOTEBOOK} cell {i} failed:\n{cell.source}\n\n{errors[0]}"
+            )
             timings[f"notebook cell {i}"] = time.perf_counter() - cell_start
         timings["notebook execution (all cells)"] = time.perf_counter() - start
 
@@ -613,22 +724,22 @@ def test_explorer_notebook_runs_in_the_binder_jupyter_server(binder, jupyter, ti
         assert status == 200 and b"<html" in body.lower()
         viewer = websocket.create_connection(
             f"ws{jupyter.url[4:]}{proxy}{scenes[0]}/ws",
-            header=[f"Authorization: token {jupyter.token}"], timeout=30,
-        )  # fmt: skip
+            header=[f"Authorization: token {jupyter.token}"],
+            timeout=30,
+        )
         try:
             assert viewer.recv(), "the viewer websocket sent no scene"
         finally:
             viewer.close()
     finally:
-        channel.close()
+        if channel is not None:
+            channel.close()
         status, _ = jupyter.request("DELETE", f"/api/sessions/{session['id']}")
     assert status == 204
-    if kernel_pid is not None:
-        # the session's kernel is gone with it
-        try:
-            psutil.Process(kernel_pid).wait(timeout=30)
-        except psutil.NoSuchProcess:
-            pass
+    try:  # the session's kernel ends with it (TimeoutExpired if it does not)
+        psutil.Process(kernel_pid).wait(timeout=30)
+    except psutil.NoSuchProcess:
+        pass
 
 
 # ---------------------------------------------------------------------------

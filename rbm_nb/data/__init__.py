@@ -9,8 +9,7 @@ offline. The generator and loaders are imported on first use, so that
 
 from __future__ import annotations
 
-import importlib
-
+from .._lazy import lazy_attributes
 from .fetch import ExampleDataStore, ExampleDataUnavailable, example_data
 
 _LAZY = {
@@ -23,13 +22,4 @@ _LAZY = {
 __all__ = ["ExampleDataStore", "ExampleDataUnavailable", "example_data", *_LAZY]
 
 
-def __getattr__(name: str):
-    if name in _LAZY:
-        value = getattr(importlib.import_module(f"{__name__}.{_LAZY[name]}"), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_attributes(__name__, _LAZY)

@@ -425,6 +425,71 @@ def _xarray() -> None:
     tr.transform_quaternions(ds.orientation, head, world, dim="quaternion_axis")
 
 
+def _read_only_inputs() -> None:
+    # A frame's translation, rotation and timestamps are read-only arrays, and
+    # numba compiles read-only arguments separately: users pass them straight
+    # on (``rbm.qinterp(rf.rotation, rf.timestamps, t)``), so warm those too.
+    from . import conversions as cv
+    from . import estimators as est
+    from . import lookups
+    from . import quaternions as q
+    from . import transforms as tr
+    from .frames import ReferenceFrame
+    from .rigid_transform import Transform
+
+    for kind in ("float", "datetime"):
+        f = _tree(kind)
+        t, r, ts = (
+            f["moving"].translation,
+            f["moving"].rotation,
+            f["moving"].timestamps,
+        )
+        ReferenceFrame(
+            "warmup-copy", f["world"], translation=t, rotation=r, timestamps=ts
+        )
+        q.qinterp(r, ts, ts)
+        q.qinterp(r, ts, ts[1:-1] + (ts[1] - ts[0]) / 2)
+        lookups.lookup_transform(
+            f["child"], f["world"], time=f["child"].timestamps[2:5]
+        )
+        for into, outof in (
+            ("static", "world"),
+            ("child", "world"),
+            ("discrete", "static"),
+        ):
+            tr.transform_points(t, f[into], f[outof], timestamps=ts)
+            tr.transform_vectors(t, f[into], f[outof], timestamps=ts)
+            tr.transform_quaternions(r, f[into], f[outof], timestamps=ts)
+        for options in ({}, {"outlier_thresh": OUTLIER_THRESH}, {"cutoff": 0.3}):
+            est.estimate_linear_velocity(t, timestamps=ts, **options)
+            for mode in ("quaternion", "rotation_vector"):
+                est.estimate_angular_velocity(r, timestamps=ts, mode=mode, **options)
+    q.from_euler_angles(rpy=t)
+    q.qinv(r)
+    q.qmul(r, r)
+    q.qmean(r)
+    q.rotate_vectors(r, t)
+    q.rotate_vectors(r, t[:5], one_to_one=False)
+    tr.transform_points(t[0], f["static"], f["world"])
+    est.shortest_arc_rotation(t, t[::-1])
+    est.best_fit_rotation(t, t[::-1])
+    est.best_fit_transform(t, t[::-1])
+    est.iterative_closest_point(t, t[::-1])
+    cv.matrix_from_quaternion(r)
+    cv.quaternion_from_matrix(cv.matrix_from_quaternion(r)[:1].copy())
+    cv.rotation_vector_from_quaternion(r)
+    cv.axis_angle_from_quaternion(r)
+    cv.euler_from_quaternion(r)
+    cv.quaternion_from_euler(t)
+    cv.quaternion_from_rotation_vector(t)
+    cv.homogeneous_from_transform(t, r)
+    a = Transform(t, r)
+    a.apply(t)
+    a.apply_vectors(t)
+    a.slerp(a, 0.5)
+    a.difference(a)
+
+
 def _synthetic_data() -> None:
     from .data.synthetic import synthetic_head_eye
 
@@ -443,6 +508,7 @@ STEPS: tuple[tuple[str, Callable[[], None]], ...] = (
     ("conversions and Transform", _conversions),
     ("ros Transformer", _ros_transformer),
     ("xarray frames and accessor", _xarray),
+    ("read-only inputs (frame properties)", _read_only_inputs),
     ("synthetic recording", _synthetic_data),
 )
 

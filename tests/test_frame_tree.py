@@ -281,3 +281,18 @@ def test_roll_pitch_yaw_round_trip(q):
     np.testing.assert_allclose(
         abs(np.dot(back, [q[1], q[2], q[3], q[0]])), 1.0, atol=1e-9
     )
+
+
+def test_show_lookup_highlights_the_chain(tree_frames):
+    tree = FrameTree("world")
+    chain = tree.show_lookup("body2", "observer")
+    assert chain == ("body2", "body", "world", "observer")
+    assert tree.selected == ("body2", "observer")
+    styles = {name: row["button"].button_style for name, row in tree._rows.items()}
+    assert styles["body2"] == styles["observer"] == "info"  # the two ends
+    assert styles["body"] == styles["world"] == "warning"  # passed through
+    assert all(s == "" for n, s in styles.items() if n not in chain)
+    assert "chain: body2 \u2192 body \u2192 world \u2192 observer" in tree.details_text()
+    tree.select("body")  # one frame: no chain
+    assert tree.chain == ()
+    assert tree._rows["world"]["button"].button_style == ""

@@ -145,6 +145,9 @@ class FrameTree(widgets.VBox):
 
     root = traitlets.Unicode("world", help="Name of the frame at the top of the tree.")
     selected = traitlets.Tuple(help="Names of the selected frames (at most two).")
+    chain = traitlets.Tuple(
+        help="Frames a lookup between the two selected frames goes through, in order."
+    )
     time = traitlets.Float(
         None, allow_none=True, help="Time shown (float seconds); None: first sample."
     )
@@ -228,6 +231,15 @@ class FrameTree(widgets.VBox):
         """Select one or two frames by name (no names clears the selection)."""
         self.selected = tuple(names)
 
+    def show_lookup(self, outof: str, into: str) -> tuple:
+        """Highlight the chain of frames that ``lookup_transform(outof, into)`` uses.
+
+        Selects both frames; the frames in between are highlighted too and the
+        details show the transform. Returns the chain's frame names.
+        """
+        self.select(outof, into)
+        return self.chain
+
     def collapse(self, name: str) -> None:
         """Hide the frames below ``name``."""
         self._check_node(name)
@@ -276,11 +288,18 @@ class FrameTree(widgets.VBox):
 
     @traitlets.observe("selected")
     def _on_selected(self, change):
+        self.chain = self._chain_names()
         self._updating = True
         try:
             for name, row in self._rows.items():
                 row["button"].value = name in self.selected
-                row["button"].button_style = "info" if name in self.selected else ""
+                if name in self.selected:
+                    style = "info"
+                elif name in self.chain:
+                    style = "warning"  # a frame the lookup passes through
+                else:
+                    style = ""
+                row["button"].button_style = style
         finally:
             self._updating = False
         self._update_details()
@@ -291,6 +310,12 @@ class FrameTree(widgets.VBox):
                 self._message.value = (
                     f"<i>highlight failed: {html.escape(str(err))}</i>"
                 )
+
+    def _chain_names(self) -> tuple:
+        if len(self.selected) != 2:
+            return ()
+        a, b = (self._rows[name]["frame"] for name in self.selected)
+        return tuple(f.name for f in a.frames_between(b))
 
     @traitlets.observe("time")
     def _on_time(self, change):
@@ -518,7 +543,7 @@ class FrameTree(widgets.VBox):
         )
 
     def _pair_details(self, a, b) -> str:
-        chain = _chain(a, b)
+        chain = a.frames_between(b)
         lines = [
             f"<b>{html.escape(a.name)}</b> \u2192 <b>{html.escape(b.name)}</b>",
             "chain: " + html.escape(" \u2192 ".join(f.name for f in chain)),
@@ -568,16 +593,3 @@ def _path_to_root(frame) -> list:
     while out[-1].parent is not None:
         out.append(out[-1].parent)
     return out
-
-
-def _chain(a, b) -> list:
-    """Frames from ``a`` up to the common ancestor and down to ``b``."""
-    up = _path_to_root(a)
-    down = _path_to_root(b)
-    ids = {id(f) for f in down}
-    common = next((f for f in up if id(f) in ids), None)
-    if common is None:
-        raise ValueError(f"frames {a.name!r} and {b.name!r} are not in the same tree")
-    first = up[: [id(f) for f in up].index(id(common)) + 1]
-    second = down[: [id(f) for f in down].index(id(common))]
-    return first + second[::-1]

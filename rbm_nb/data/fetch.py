@@ -152,6 +152,11 @@ class ExampleDataStore(Mapping):
         url = self.base_url + filename
         bar = download_bar(filename)
         downloader = pooch.HTTPDownloader(progressbar=bar, timeout=self.timeout)
+        # pooch logs "Downloading data from ..." even when the connection then
+        # fails (offline); the bar shows a real download, our errors a failed one
+        logger = pooch.get_logger()
+        level = logger.level
+        logger.setLevel("WARNING")
         try:
             fetched = pooch.retrieve(
                 url,
@@ -176,6 +181,7 @@ class ExampleDataStore(Mapping):
                 "writable folder."
             ) from err
         finally:
+            logger.setLevel(level)
             if bar is not False:
                 bar.close()
         return Path(fetched)

@@ -23,11 +23,10 @@ import numpy as np
 
 import rbm_nb as rbm
 from rbm_nb.data import synthetic_head_eye
+from rbm_nb.explorer import register_head_eye_frames
 from rbm_nb.scene import Scene, shutdown_server
 from rbm_nb.widgets import Player
 
-R_T265_ROS = np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
-R_PUPIL_ROS = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]])
 FRAMES = (
     "world",
     "t265/world",
@@ -44,40 +43,10 @@ FRAMES = (
 
 def register_head_eye(recording) -> None:
     """The frame tree of the ROS guide (1.6) plus a static 'nose' on the head."""
-    rbm.register_frame("world")
-    rbm.ReferenceFrame.from_rotation_matrix(
-        R_T265_ROS, parent="world", name="t265/world"
-    ).register()
-    rbm.ReferenceFrame.from_dataset(
-        recording.head,
-        "position",
-        "orientation",
-        "time",
-        parent="t265/world",
-        name="t265/tracker",
-    ).register()
-    rbm.ReferenceFrame.from_rotation_matrix(
-        R_T265_ROS, parent="t265/tracker", name="head", inverse=True
-    ).register()
-    rbm.register_frame("nose", parent="head", translation=(0.1, 0.0, -0.05))
-    rbm.register_frame(
-        "pupil/scene_cam",
-        parent="t265/tracker",
-        translation=(24.5e-3, -29e-3, 0.0),
-        rotation=(-0.00125, -1.0, 6.3463e-05, 3.977e-06),
+    register_head_eye_frames(
+        recording.head, recording.left_eye, recording.right_eye, ros_eyes=True
     )
-    for side in ("left", "right"):
-        rbm.ReferenceFrame.from_dataset(
-            getattr(recording, f"{side}_eye"),
-            "position",
-            "orientation",
-            "time",
-            parent="pupil/scene_cam",
-            name=f"pupil/{side}_eye",
-        ).register()
-        rbm.ReferenceFrame.from_rotation_matrix(
-            R_PUPIL_ROS, parent=f"pupil/{side}_eye", name=f"{side}_eye"
-        ).register()
+    rbm.register_frame("nose", parent="head", translation=(0.1, 0.0, -0.05))
 
 
 def build_scene() -> Scene:

@@ -21,6 +21,9 @@ import numpy as np
 
 # rotation between the T265's VR axes and ROS axes (guide 1.6)
 R_T265_ROS = np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+# rotation between the Pupil Core's camera axes (x right, y down, z forward)
+# and ROS axes (guide 1.6)
+R_PUPIL_ROS = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]])
 # pose of the Pupil Core scene camera on the T265, from the study's calibration
 SCENE_CAM_TRANSLATION = (24.5e-3, -29e-3, 0.0)
 SCENE_CAM_ROTATION = (-0.00125, -1.0, 6.3463e-05, 3.977e-06)
@@ -62,11 +65,15 @@ def is_synthetic(ds) -> bool:
     return "synthetic" in str(ds.attrs.get("source", ""))
 
 
-def register_head_eye_frames(head, left_eye, right_eye, *, world: str = "world"):
+def register_head_eye_frames(
+    head, left_eye, right_eye, *, world: str = "world", ros_eyes: bool = False
+):
     """Register the explorer's frame tree (see the module docstring).
 
     ``world`` is registered as a root if it is not already. Existing frames of
-    the same names are replaced, so the cell can be run again.
+    the same names are replaced, so the cell can be run again. With
+    ``ros_eyes`` each eye also gets a frame in ROS axes below it
+    (``left_eye``, ``right_eye``: x along the line of sight), as in guide 1.6.
     """
     from . import frames
     from .frames import ReferenceFrame
@@ -103,6 +110,10 @@ def register_head_eye_frames(head, left_eye, right_eye, *, world: str = "world")
             parent="pupil/scene_cam",
             name=f"pupil/{name}",
         ).register(update=True)
+        if ros_eyes:
+            ReferenceFrame.from_rotation_matrix(
+                R_PUPIL_ROS, parent=f"pupil/{name}", name=name
+            ).register(update=True)
 
 
 def gaze_angles(eye):

@@ -114,6 +114,29 @@ def _result(values, track, as_track):
     return values, (track if as_track else (None if track is None else track.values))
 
 
+def _linear_part(frame, reference, represent_in, looked_up, outlier_thresh, cutoff):
+    """Linear velocity of ``frame`` wrt ``reference``, represented in ``represent_in``."""
+    from .estimators import _linear_velocity
+
+    t, r, target = looked_up
+    linear = _linear_velocity(t, target.track.seconds(), outlier_thresh, cutoff)
+    return _represent(
+        linear, target.track, reference, represent_in, (frame, reference, r)
+    )
+
+
+def _angular_part(
+    frame, reference, represent_in, looked_up, mode, outlier_thresh, cutoff
+):
+    """Angular velocity of ``frame`` wrt ``reference``, represented in ``represent_in``."""
+    from .estimators import _angular_velocity
+
+    _, r, target = looked_up
+    angular = _angular_velocity(r, target.track.seconds(), mode, outlier_thresh, cutoff)
+    # the estimate is in the moving frame's axes (2 q^-1 dq/dt)
+    return _represent(angular, target.track, frame, represent_in, (frame, reference, r))
+
+
 def _frame_lookup_linear_velocity(
     frame,
     reference=None,
@@ -123,16 +146,12 @@ def _frame_lookup_linear_velocity(
     allow_static=False,
     as_track=False,
 ):
-    from .estimators import _linear_velocity
-
     reference, represent_in = _defaults(frame, reference, represent_in)
     looked_up = _moving_lookup(frame, reference, allow_static)
     if looked_up is None:
         return np.zeros(3), None
-    t, r, target = looked_up
-    linear = _linear_velocity(t, target.track.seconds(), outlier_thresh, cutoff)
-    linear, track = _represent(
-        linear, target.track, reference, represent_in, (frame, reference, r)
+    linear, track = _linear_part(
+        frame, reference, represent_in, looked_up, outlier_thresh, cutoff
     )
     return _result(linear, track, as_track)
 
@@ -147,17 +166,13 @@ def _frame_lookup_angular_velocity(
     allow_static=False,
     as_track=False,
 ):
-    from .estimators import _angular_velocity
-
     check_mode(mode)
     reference, represent_in = _defaults(frame, reference, represent_in)
     looked_up = _moving_lookup(frame, reference, allow_static)
     if looked_up is None:
         return np.zeros(3), None
-    _, r, target = looked_up
-    angular = _angular_velocity(r, target.track.seconds(), mode, outlier_thresh, cutoff)
-    angular, track = _represent(
-        angular, target.track, frame, represent_in, (frame, reference, r)
+    angular, track = _angular_part(
+        frame, reference, represent_in, looked_up, mode, outlier_thresh, cutoff
     )
     return _result(angular, track, as_track)
 
@@ -172,21 +187,18 @@ def _frame_lookup_twist(
     allow_static=False,
     as_track=False,
 ):
-    from .estimators import _angular_velocity, _linear_velocity
-
     check_mode(mode)
     reference, represent_in = _defaults(frame, reference, represent_in)
     looked_up = _moving_lookup(frame, reference, allow_static)
     if looked_up is None:
         return np.zeros(3), np.zeros(3), None
-    t, r, target = looked_up
-    seconds = target.track.seconds()
-    linear = _linear_velocity(t, seconds, outlier_thresh, cutoff)
+    linear, lin_track = _linear_part(
+        frame, reference, represent_in, looked_up, outlier_thresh, cutoff
+    )
     # outlier_thresh refers to the position, so the rotation is not filtered
-    angular = _angular_velocity(r, seconds, mode, None, cutoff)
-    known = (frame, reference, r)
-    linear, lin_track = _represent(linear, target.track, reference, represent_in, known)
-    angular, ang_track = _represent(angular, target.track, frame, represent_in, known)
+    angular, ang_track = _angular_part(
+        frame, reference, represent_in, looked_up, mode, None, cutoff
+    )
     final = _matching.match([], [ang_track, lin_track])
     angular = _matching.resample_array(angular[:, None, :], ang_track, final, False)[
         :, 0

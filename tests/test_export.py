@@ -177,41 +177,11 @@ def test_bad_max_frames(scene, tmp_path, max_frames):
 
 def register_head_eye(recording):
     """The guide's head/eye frame tree (section 1.6) on a recording."""
-    r_t265_ros = np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
-    r_pupil_ros = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]])
-    rbm.register_frame("world")
-    rbm.ReferenceFrame.from_rotation_matrix(
-        r_t265_ros, parent="world", name="t265/world"
-    ).register()
-    rbm.ReferenceFrame.from_dataset(
-        recording.head,
-        "position",
-        "orientation",
-        "time",
-        parent="t265/world",
-        name="t265/tracker",
-    ).register()
-    rbm.ReferenceFrame.from_rotation_matrix(
-        r_t265_ros, parent="t265/tracker", name="head", inverse=True
-    ).register()
-    rbm.register_frame(
-        "pupil/scene_cam",
-        parent="t265/tracker",
-        translation=(24.5e-3, -29e-3, 0.0),
-        rotation=(-0.00125, -1.0, 6.3463e-05, 3.977e-06),
+    from rbm_nb.explorer import register_head_eye_frames
+
+    register_head_eye_frames(
+        recording.head, recording.left_eye, recording.right_eye, ros_eyes=True
     )
-    for side in ("left", "right"):
-        rbm.ReferenceFrame.from_dataset(
-            getattr(recording, f"{side}_eye"),
-            "position",
-            "orientation",
-            "time",
-            parent="pupil/scene_cam",
-            name=f"pupil/{side}_eye",
-        ).register()
-        rbm.ReferenceFrame.from_rotation_matrix(
-            r_pupil_ros, parent=f"pupil/{side}_eye", name=f"{side}_eye"
-        ).register()
 
 
 @pytest.mark.slow

@@ -21,6 +21,8 @@ from typing import Any
 
 import numpy as np
 
+from . import _dask
+from ._dask import GRADIENT_HALO, SPLINE_HALO, filter_halo
 from ._kernels import differences as _dk
 from ._kernels import quaternion as _qk
 from ._kernels import rotations as _rk
@@ -337,6 +339,22 @@ def _from_series(series, moved_shape, axis, time_axis, width):
     return np.moveaxis(out, (0, -1), (time_axis, axis))
 
 
+def _lazy_estimate(eager, arr, dim, axis, timestamps, time_axis, halo, **options):
+    if options.get("outlier_thresh") is not None:
+        raise NotImplementedError(
+            "outlier_thresh on dask-backed data is not lazy: a rejected sample "
+            "is re-interpolated from kept samples that may lie any distance "
+            "away, beyond what a chunk can see; call .compute() first"
+        )
+    if options.get("cutoff") is not None:
+        _check_options(None, options["cutoff"], _FILTER_PADLEN + 1)
+        halo = max(halo, filter_halo(_BUTTER_ORDER, options["cutoff"], _FILTER_PADLEN))
+    quaternions = options.pop("quaternions", False)
+    return _dask.estimate(
+        eager, arr, dim, axis, timestamps, time_axis, halo, quaternions, **options
+    )
+
+
 def estimate_linear_velocity(
     arr,
     dim=None,
@@ -389,6 +407,11 @@ def estimate_linear_velocity(
            [1., 0., 0.],
            [1., 0., 0.]])
     """
+    if _dask.is_dask(arr):
+        return _lazy_estimate(
+            estimate_linear_velocity, arr, dim, axis, timestamps, time_axis,
+            GRADIENT_HALO, outlier_thresh=outlier_thresh, cutoff=cutoff,
+        )  # fmt: skip
     data, axis, time_axis, t = _unpack(arr, dim, axis, timestamps, time_axis)
     _check_options(outlier_thresh, cutoff, data.shape[time_axis])
     series, moved_shape = _to_series(data, axis, time_axis)
@@ -456,6 +479,13 @@ def estimate_angular_velocity(
            [0. , 0. , 0.1],
            [0. , 0. , 0.1]])
     """
+    if _dask.is_dask(arr):
+        halo = SPLINE_HALO if mode == "quaternion" else GRADIENT_HALO
+        return _lazy_estimate(
+            estimate_angular_velocity, arr, dim, axis, timestamps, time_axis,
+            halo, quaternions=True, mode=mode, outlier_thresh=outlier_thresh,
+            cutoff=cutoff,
+        )  # fmt: skip
     data, axis, time_axis, t = _unpack(arr, dim, axis, timestamps, time_axis)
     if data.shape[axis] != 4:
         raise ValueError(

@@ -12,8 +12,11 @@ from __future__ import annotations
 
 from typing import Any
 
+import sys
+
 import numpy as np
 
+from . import _dask
 from ._kernels import quaternion as _qk
 from ._kernels import rotations as _rk
 
@@ -27,7 +30,8 @@ __all__ = ["from_euler_angles", "qinterp", "qinv", "qmean", "qmul", "rotate_vect
 
 def _is_dataarray(obj: Any) -> bool:
     # duck-typed so that plain-array callers never import xarray
-    return all(hasattr(obj, a) for a in ("values", "coords", "dims", "name", "attrs"))
+    xarray = sys.modules.get("xarray")
+    return xarray is not None and isinstance(obj, xarray.DataArray)
 
 
 def _is_quaternion_dtype(arr: np.ndarray) -> bool:
@@ -154,12 +158,37 @@ def qinv(q, qaxis: int = -1):
     >>> qinv([0.0, 0.0, 0.0, 2.0])
     array([ 0. , -0. , -0. , -0.5])
     """
+    if _dask.is_dask(q):
+        core = q.dims[qaxis] if _is_dataarray(q) else qaxis
+        return _dask.elementwise(
+            qinv, q, core, fill=(1.0, 0.0, 0.0, 0.0), qaxis=qaxis
+        )
     template = q if _is_dataarray(q) else None
     qf, was_quaternion = _split(q, qaxis, "q")
     out, zero = _rk.qinv_checked(np.ascontiguousarray(qf.reshape(-1, 4)))
     if zero >= 0:
         _raise_zero("q", zero, "it has no inverse")
     return _like(template, _join(out.reshape(qf.shape), was_quaternion, qaxis))
+
+
+def _lazy_qmul(q, qaxis: int):
+    if all(_is_dataarray(x) for x in q):
+        core = [x.dims[qaxis] for x in q]
+        out = _dask.blockwise(qmul, q, core, core[0], qaxis=-1)
+        first = q[0]
+        if set(out.dims) == set(first.dims):
+            out = out.transpose(*first.dims)
+        return out
+    if any(_is_dataarray(x) for x in q):
+        raise ValueError(
+            "q: mix DataArrays and plain arrays in qmul only in memory; with "
+            "dask-backed data pass all DataArrays or all arrays"
+        )
+    import dask.array as dsa
+
+    parts = [dsa.asarray(x) for x in q]
+    parts = [p.rechunk({qaxis % p.ndim: -1}) for p in parts]
+    return dsa.map_blocks(lambda *b: qmul(*b, qaxis=qaxis), *parts, dtype=np.float64)
 
 
 def qmul(*q, qaxis: int = -1):
@@ -193,6 +222,8 @@ def qmul(*q, qaxis: int = -1):
     """
     if len(q) < 2:
         raise ValueError(f"qmul needs at least 2 quaternion arrays, got {len(q)}")
+    if any(_dask.is_dask(x) for x in q):
+        return _lazy_qmul(q, qaxis)
     kinds = {_is_quaternion_dtype(np.asarray(x)) for x in q}
     if len(kinds) > 1:
         raise ValueError(
@@ -427,6 +458,16 @@ def qinterp(q, t_in, t_out, axis: int = 0, qaxis: int = -1):
     >>> qinterp(q, [0.0, 1.0], [0.5]).round(6)
     array([[0.707107, 0.      , 0.      , 0.707107]])
     """
+    if _dask.is_dask(q) and not _is_dataarray(q):
+        import xarray as xr
+
+        ax = _normalize_axis(axis, q.ndim, "axis")
+        qa = _normalize_axis(qaxis, q.ndim, "qaxis")
+        dims = [f"dim_{k}" for k in range(q.ndim)]
+        dims[ax] = "time"
+        wrapped = xr.DataArray(q, {"time": np.asarray(t_in)}, dims)
+        out = _qinterp_dataarray(wrapped, "time", dims[qa], t_out, out_of_range="raise")
+        return out.data
     if _is_dataarray(q):
         dim = q.dims[_normalize_axis(axis, q.ndim, "axis")]
         qdim = q.dims[_normalize_axis(qaxis, q.ndim, "qaxis")]
@@ -467,6 +508,10 @@ def _qinterp_dataarray(
         raise ValueError(
             f"{dim!r} is not a dimension of this DataArray {tuple(da.dims)}"
         )
+    if _dask.is_dask(da) and qdim in da.dims and dim != qdim:
+        if t_in is not None:
+            da = da.assign_coords({dim: np.asarray(getattr(t_in, "values", t_in))})
+        return _dask.qinterp(_qinterp_dataarray, da, dim, qdim, t_out, out_of_range)
     if qdim not in da.dims:
         raise ValueError(
             f"qdim {qdim!r} is not a dimension of this DataArray {tuple(da.dims)}"
@@ -529,6 +574,36 @@ def _qinterp_dataarray(
 # ---------------------------------------------------------------------------
 
 
+def _lazy_rotate_vectors(q, v, axis: int, qaxis: int, one_to_one: bool):
+    if not one_to_one:
+        raise NotImplementedError(
+            "one_to_one=False with dask-backed data is not lazy (its result "
+            "has the shape of q times v); call .compute() first"
+        )
+    if not _dask.is_dask(q) and np.ndim(q) == 1:
+        single = np.asarray(getattr(q, "values", q), dtype=np.float64)
+        core = v.dims[axis] if _is_dataarray(v) else axis
+        return _dask.elementwise(
+            lambda block: rotate_vectors(single, block, axis=axis), v, core
+        )
+    if _is_dataarray(q) and _is_dataarray(v):
+        out = _dask.blockwise(
+            rotate_vectors, [q, v], [q.dims[qaxis], v.dims[axis]], v.dims[axis]
+        )
+        out.attrs = dict(v.attrs)
+        return out.transpose(*v.dims) if set(out.dims) == set(v.dims) else out
+    import dask.array as dsa
+
+    qd = dsa.asarray(getattr(q, "data", q))
+    vd = dsa.asarray(getattr(v, "data", v))
+    qd = qd.rechunk({qaxis % qd.ndim: -1})
+    vd = vd.rechunk({axis % vd.ndim: -1})
+    return dsa.map_blocks(
+        lambda a, b: rotate_vectors(a, b, axis=axis, qaxis=qaxis),
+        qd, vd, dtype=np.float64, chunks=vd.chunks,
+    )
+
+
 def rotate_vectors(q, v, axis: int = -1, qaxis: int = -1, one_to_one: bool = True):
     """Rotate vectors by quaternions, ``q v q⁻¹``.
 
@@ -569,6 +644,8 @@ def rotate_vectors(q, v, axis: int = -1, qaxis: int = -1, one_to_one: bool = Tru
     >>> rotate_vectors([0.0, 0.0, 0.0, 2.0], [1.0, 0.0, 0.0]).round(12)
     array([-1.,  0.,  0.])
     """
+    if _dask.is_dask(q) or _dask.is_dask(v):
+        return _lazy_rotate_vectors(q, v, axis, qaxis, one_to_one)
     qa = np.asarray(q)
     va = v.values if _is_dataarray(v) else v
     va = _float_array(va, "v")

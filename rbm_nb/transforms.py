@@ -13,7 +13,7 @@ import warnings
 
 import numpy as np
 
-from . import _matching, _timestamps
+from . import _dask, _matching, _timestamps
 from ._kernels import resample as kr
 from ._validation import (
     as_float_array,
@@ -313,6 +313,11 @@ def _transform(
     **kwargs,
 ):
     """Unpack, resolve frames (``outof`` may come from ``attrs[attr]``), wrap."""
+    if _dask.is_dask(arr):
+        return _lazy_transform(
+            method, arr, into, outof, dim, axis, timestamps, time_axis, attr,
+            return_timestamps,
+        )  # fmt: skip
     unpacked = unpack(
         arr, dim=dim, axis=axis, time_axis=time_axis, timestamps=timestamps
     )
@@ -350,6 +355,27 @@ def _transform(
     if return_timestamps:
         return out, ts_out
     return out
+
+
+def _lazy_transform(
+    method, arr, into, outof, dim, axis, timestamps, time_axis, attr, return_timestamps
+):
+    if method not in (_points, _vectors, _quaternions):
+        raise NotImplementedError(
+            "velocity transforms of dask-backed arrays are not lazy yet (each "
+            "chunk would re-estimate the frames' velocities); call .compute() "
+            "on the array first"
+        )
+
+    def eager(block, into, outof, dim, axis, timestamps):
+        return _transform(
+            method, block, into, outof, dim, axis, timestamps, None, attr, False
+        )
+
+    return _dask.transform(
+        eager, arr, into, outof, dim, axis, timestamps, time_axis,
+        return_timestamps, _resolve, attr, method is _quaternions,
+    )  # fmt: skip
 
 
 def _points(frame, arr, into, **kw):

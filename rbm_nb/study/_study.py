@@ -250,10 +250,16 @@ def _join_windows(name: str, pieces: list):
 
 
 def _concat_recordings(results: Mapping[str, Any]):
-    import pandas as pd
+    import numpy as np
 
-    index = pd.Index(list(results), name="recording")
-    return xr.concat(list(results.values()), dim=index, join="outer", combine_attrs="drop_conflicts")
+    combined = xr.concat(
+        list(results.values()),
+        dim="recording",
+        join="outer",
+        combine_attrs="drop_conflicts",
+    )
+    # a plain unicode coordinate, whatever string dtype pandas would pick
+    return combined.assign_coords(recording=np.array(list(results), dtype=str))
 
 
 def _write_netcdf(result, path: Path) -> Path:

@@ -10,6 +10,7 @@ there, so files are read where the work is done.
 from __future__ import annotations
 
 import os
+import threading
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -79,6 +80,12 @@ class Recording:
         )
 
 
+# netCDF4's HDF5 library is not thread-safe, and xarray locks only its reads,
+# not the opening of files: every file access of a study goes through this
+# lock (tasks on the threaded scheduler share one process).
+_NETCDF_LOCK = threading.RLock()
+
+
 @dataclass(frozen=True)
 class RecordingSource:
     """What is needed to open one recording: paths of its streams, or datasets."""
@@ -87,31 +94,62 @@ class RecordingSource:
     paths: Mapping[str, Path] = field(default_factory=dict)
     datasets: Mapping[str, xr.Dataset] = field(default_factory=dict)
 
-    def open(self, chunks: Any = None) -> Recording:
-        """Open every stream; ``.nc`` files lazily (only what is used is read)."""
+    def open(self, chunks: Any = None, start: Any = None, stop: Any = None) -> Recording:
+        """Load the streams, restricted to ``start <= time <= stop`` if given.
+
+        Files are read into memory (only the selected span) and closed; with
+        ``chunks`` the loaded streams are then made dask-backed, so that an
+        analysis written with rbm_nb's lazy functions computes chunk by chunk.
+        """
+        span = slice(start, stop)
         streams: dict[str, xr.Dataset] = {}
         for stream, path in self.paths.items():
-            streams.update(_open_path(stream, path, chunks))
+            streams.update(_load_path(stream, path, span))
         for stream, ds in self.datasets.items():
-            streams[stream] = ds.chunk(chunks) if chunks is not None else ds
+            streams[stream] = ds.sel(time=span) if span != slice(None) else ds
+        if chunks is not None:
+            streams = {k: ds.chunk(chunks) for k, ds in streams.items()}
         return Recording(self.name, streams)
 
+    def time_range(self) -> tuple[Any, Any]:
+        """First and last timestamp over all streams, reading only time coordinates."""
+        if not self.paths:
+            return Recording(self.name, dict(self.datasets)).time_range()
+        firsts, lasts = [], []
+        for stream, path in self.paths.items():
+            if path.suffix == ".bag" or path.is_dir():
+                first, last = Recording(self.name, _load_path(stream, path, slice(None))).time_range()
+            else:
+                with _NETCDF_LOCK, xr.open_dataset(path) as ds:
+                    if "time" not in ds.coords or ds.sizes.get("time", 0) == 0:
+                        raise ValueError(
+                            f"stream {stream!r} of recording {self.name!r} ({path}) "
+                            f"has no 'time' coordinate with samples"
+                        )
+                    first, last = ds.indexes["time"][0], ds.indexes["time"][-1]
+            firsts.append(first)
+            lasts.append(last)
+        if self.datasets:
+            first, last = Recording(self.name, dict(self.datasets)).time_range()
+            firsts.append(first)
+            lasts.append(last)
+        return min(firsts), max(lasts)
 
-def _open_path(stream: str, path: Path, chunks: Any) -> dict[str, xr.Dataset]:
+
+def _load_path(stream: str, path: Path, span: slice) -> dict[str, xr.Dataset]:
     if path.suffix == ".bag" or path.is_dir():
         from ..ros import RosbagReader
 
         reader = RosbagReader(path)
-        datasets = {
-            topic.strip("/").replace("/", "_"): reader.load_dataset(topic)
-            for topic, msgtype in reader.get_topics_and_types().items()
-            if msgtype in POSE_MESSAGE_TYPES
-        }
-        if chunks is not None:
-            datasets = {k: ds.chunk(chunks) for k, ds in datasets.items()}
-        return datasets
-    # cache=False keeps xarray from holding whole variables once they are read
-    return {stream: xr.open_dataset(path, chunks=chunks, cache=False)}
+        with _NETCDF_LOCK:
+            datasets = {
+                topic.strip("/").replace("/", "_"): reader.load_dataset(topic)
+                for topic, msgtype in reader.get_topics_and_types().items()
+                if msgtype in POSE_MESSAGE_TYPES
+            }
+        return {k: ds.sel(time=span) for k, ds in datasets.items()}
+    with _NETCDF_LOCK, xr.open_dataset(path) as ds:
+        return {stream: ds.sel(time=span).load()}
 
 
 def find_sources(source: Any, streams: Iterable[str] | None = None) -> list[RecordingSource]:

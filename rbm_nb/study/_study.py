@@ -34,10 +34,10 @@ def open_study(
     streams : iterable of str, optional
         Keep only these streams; every recording must have them.
     chunks : int, dict or "auto", optional
-        Open the streams as dask arrays with these chunks (as for
-        :func:`xarray.open_dataset`), so that an analysis written with
-        rbm_nb's lazy functions reads and computes one chunk at a time.
-        Default: NumPy-backed, read when first used.
+        Make the streams dask-backed with these chunks once a task has read
+        them, so that an analysis written with rbm_nb's lazy functions
+        computes one chunk at a time. To bound what a task reads, use
+        ``window=`` in :meth:`Study.map`. Default: NumPy arrays.
 
     Returns
     -------
@@ -122,7 +122,7 @@ class Study:
             if window is None:
                 results[name] = run(source_key, self.chunks, analysis_key, frames_key, None)
                 continue
-            span = source.open(self.chunks).time_range()
+            span = source.time_range()
             pieces = [
                 run(source_key, self.chunks, analysis_key, frames_key, w)
                 for w in _windows.split(*span, window, margin)
@@ -215,9 +215,10 @@ def _check_callable(value: Any, name: str) -> None:
 
 def _run_piece(source: RecordingSource, chunks, analysis, frames, window):
     """Open, build frames, analyse and (for a window) trim: one task's work."""
-    recording = source.open(chunks)
-    if window is not None:
-        recording = recording.select(window.read_start, window.read_stop)
+    if window is None:
+        recording = source.open(chunks)
+    else:
+        recording = source.open(chunks, window.read_start, window.read_stop)
     if frames is None:
         result = analysis(recording)
     else:

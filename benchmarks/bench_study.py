@@ -32,6 +32,7 @@ import xarray as xr
 
 import rbm_nb as rbm
 from rbm_nb.data import synthetic_head_eye
+from rbm_nb.explorer import SCENE_CAM_ROTATION, SCENE_CAM_TRANSLATION
 from rbm_nb.study import Recording, open_study
 
 
@@ -40,9 +41,12 @@ def build_frames(rec):
     head = rbm.ReferenceFrame.from_dataset(
         rec["head"], "position", "orientation", "time", parent=world, name="head"
     )
+    camera = rbm.ReferenceFrame(
+        "scene_cam", head, translation=SCENE_CAM_TRANSLATION, rotation=SCENE_CAM_ROTATION
+    )
     eye = rbm.ReferenceFrame.from_dataset(
         rec["left_eye"].dropna("time"), "position", "orientation", "time",
-        parent=head, name="left_eye",
+        parent=camera, name="left_eye",
     )  # fmt: skip
     return {"world": world, "head": head, "left_eye": eye}
 

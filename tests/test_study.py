@@ -14,6 +14,7 @@ import xarray as xr
 pytest.importorskip("dask")
 
 import rbm_nb as rbm  # noqa: E402
+from rbm_nb.explorer import SCENE_CAM_ROTATION, SCENE_CAM_TRANSLATION  # noqa: E402
 from rbm_nb.data import synthetic_head_eye  # noqa: E402
 from rbm_nb.study import open_study  # noqa: E402
 
@@ -26,12 +27,15 @@ def build_frames(rec):
     head = rbm.ReferenceFrame.from_dataset(
         rec["head"], "position", "orientation", "time", parent=world, name="head"
     )
+    camera = rbm.ReferenceFrame(
+        "scene_cam", head, translation=SCENE_CAM_TRANSLATION, rotation=SCENE_CAM_ROTATION
+    )
     eye = rbm.ReferenceFrame.from_dataset(
         rec["left_eye"].dropna("time"),
         "position",
         "orientation",
         "time",
-        parent=head,
+        parent=camera,
         name="left_eye",
     )
     return {"world": world, "head": head, "left_eye": eye}

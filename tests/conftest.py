@@ -1,4 +1,8 @@
-"""Shared fixtures: every test starts and ends with an empty frame registry."""
+"""Shared fixtures of the tests (the registry is cleared by ../conftest.py).
+
+Fast local selection (no browser, nothing over a few seconds):
+``python -m pytest -m "not slow and not browser"``.
+"""
 
 from __future__ import annotations
 
@@ -61,18 +65,6 @@ if ORACLE in sys.modules:
     _register_our_accessor()
 else:
     sys.meta_path.insert(0, _ReclaimAccessorAfterOracle())
-
-
-@pytest.fixture(autouse=True)
-def _empty_registry():
-    """Clear the frame registry around each test (only if frames are loaded)."""
-    frames = sys.modules.get("rbm_nb.frames")
-    if frames is not None:
-        frames.clear_registry()
-    yield
-    frames = sys.modules.get("rbm_nb.frames")
-    if frames is not None:
-        frames.clear_registry()
 
 
 @pytest.fixture(scope="session")

@@ -19,7 +19,8 @@ import pytest
 
 import rbm_nb as rbm
 
-pytestmark = [pytest.mark.browser, pytest.mark.slow]
+# JupyterLab and chromium start in the fixtures (about 30 s here)
+pytestmark = [pytest.mark.browser, pytest.mark.slow, pytest.mark.timeout(300)]
 
 from browser_support import (  # noqa: E402
     JupyterLab,

@@ -172,6 +172,7 @@ def test_demo_html_export_plays_offline_in_chromium(page, tmp_path):
 
 @pytest.mark.slow
 @pytest.mark.browser
+@pytest.mark.timeout(300)  # JupyterLab + the explorer in chromium (about 45 s here)
 def test_explorer_in_jupyterlab(browser, tmp_path):
     """Run the explorer in JupyterLab: the tree, the player, the view and the plot."""
     from playwright.sync_api import TimeoutError as PlaywrightTimeout

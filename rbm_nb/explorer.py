@@ -1,7 +1,7 @@
 """The head/eye explorer: one definition shared by notebook 06 and ``rbm-nb demo``.
 
 The recording is the example head/eye dataset (real when it can be had, else
-the synthetic one). Its frame tree follows guide 1.6 of rigid-body-motion:
+the synthetic one). Its frame tree follows guide 1.6 of rigid-body-motion::
 
     world
     └── t265/world        VR axes (x right, y up, z back) of the head tracker

@@ -22,9 +22,17 @@ as_root() { if [ "$(id -u)" = 0 ]; then "$@"; else sudo "$@"; fi; }
 
 PY=${PYTHON:-python3}
 UV_VERSION=$(sed -n 's/^uv==//p' .ci/constraints.txt)
+# The interpreter's own pip installs uv into the venv (pip >= 22.3 can target
+# another environment), which spares ensurepip's copy of pip in .venv; without a
+# pip beside the interpreter, the venv gets one.
+if "$PY" -m pip --version >/dev/null 2>&1; then
+  pip=("$PY" -m pip --python .venv/bin/python); venv_opts=(--without-pip)
+else
+  pip=(.venv/bin/python -m pip); venv_opts=()
+fi
 if [ ! -x .venv/bin/python ]; then
   say "creating .venv with $("$PY" --version)"
-  "$PY" -m venv .venv
+  "$PY" -m venv "${venv_opts[@]}" .venv
 fi
 
 # Debian's chromium for the browser tests: apt works while uv installs.
@@ -38,7 +46,7 @@ if [ "$mode" = test ] && [ ! -x /usr/bin/chromium ]; then
 fi
 if [ "$(.venv/bin/uv --version 2>/dev/null | cut -d' ' -f2)" != "$UV_VERSION" ]; then
   say "bootstrapping uv $UV_VERSION from PyPI into .venv"
-  .venv/bin/python -m pip install -q --disable-pip-version-check "uv==$UV_VERSION"
+  "${pip[@]}" install -q --disable-pip-version-check "uv==$UV_VERSION"
 fi
 
 # what the install depends on; unchanged -> nothing to do

@@ -49,33 +49,55 @@ if [ "$(.venv/bin/uv --version 2>/dev/null | cut -d' ' -f2)" != "$UV_VERSION" ];
   "${pip[@]}" install -q --disable-pip-version-check "uv==$UV_VERSION"
 fi
 
+install() {  # install rbm_nb[$1] (editable) at the exact pins
+  # --compile-bytecode: later imports (the warm-up, JupyterLab) skip writing .pyc
+  .venv/bin/uv pip install --quiet --python .venv/bin/python --compile-bytecode \
+    -c .ci/constraints.txt -e ".[$1]"
+}
+
+# The numba warm-up needs only the frame core (numpy, numba, xarray, scipy; the
+# data and ros extras are small): it compiles while uv installs the notebook
+# layer and JupyterLab, so the two overlap on a 2-core machine.
+# Compiling every kernel into the on-disk cache means neither the demo's first
+# cell nor the first tests wait for compilation. numba writes one .nbc file per
+# compiled signature: their count is the progress shown.
+cache_dir=${NUMBA_CACHE_DIR:-rbm_nb/_kernels/__pycache__}
+warm_stamp=".venv/.rbm_nb-warm"
+warm_pid=""
+# a failed install must not leave the warm-up running behind the script
+trap 'if [ -n "$warm_pid" ]; then kill "$warm_pid" 2>/dev/null || true; fi' EXIT
+warm_up() {
+  local sources
+  sources=$( (echo "$cache_dir"; find rbm_nb -name '*.py' -printf '%p %T@ %s\n' | sort) | sha256sum)
+  if [ "$(cat "$warm_stamp" 2>/dev/null)" = "$sources" ] &&
+     [ -n "$(find "$cache_dir" -name '*.nbc' -print -quit 2>/dev/null)" ]; then
+    say "numba's cache is warm (no file of rbm_nb/ changed since the last warm-up)"
+    return
+  fi
+  say "compiling the numba kernels into their cache (a minute or two the first time)"
+  rm -f "$warm_stamp"
+  ( .venv/bin/python -m rbm_nb._warmup && echo "$sources" > "$warm_stamp" ) &
+  warm_pid=$!
+}
+
 # what the install depends on; unchanged -> nothing to do
 stamp=".venv/.rbm_nb-install-$mode"
 want=$(cat pyproject.toml setup.py .ci/constraints.txt <(echo "$extras") | sha256sum)
 if [ "$(cat "$stamp" 2>/dev/null)" = "$want" ] && .venv/bin/python -c "import rbm_nb" 2>/dev/null; then
   say "rbm_nb[$extras] already installed with the pins of .ci/constraints.txt"
+  warm_up
 else
-  say "installing rbm_nb[$extras] (editable) with the pins of .ci/constraints.txt"
-  # --compile-bytecode: later imports (and the warm-up) skip writing .pyc files
-  .venv/bin/uv pip install --quiet --python .venv/bin/python --compile-bytecode \
-    -c .ci/constraints.txt -e ".[$extras]"
+  rm -f "$stamp"
+  say "installing rbm_nb[data,ros] (editable; the frame core) with the pins of .ci/constraints.txt"
+  install "data,ros"
+  warm_up
+  say "installing the rest of rbm_nb[$extras] meanwhile"
+  install "$extras"
   echo "$want" > "$stamp"
   say "installed"
 fi
 
-# Compile every numba kernel into the on-disk cache now, so that neither the
-# demo's first cell nor the first tests wait for compilation. numba writes one
-# .nbc file per compiled signature: their count is the progress shown.
-cache_dir=${NUMBA_CACHE_DIR:-rbm_nb/_kernels/__pycache__}
-warm_stamp=".venv/.rbm_nb-warm"
-sources=$( (echo "$cache_dir"; find rbm_nb -name '*.py' -printf '%p %T@ %s\n' | sort) | sha256sum)
-if [ "$(cat "$warm_stamp" 2>/dev/null)" = "$sources" ] &&
-   [ -n "$(find "$cache_dir" -name '*.nbc' -print -quit 2>/dev/null)" ]; then
-  say "numba's cache is warm (no file of rbm_nb/ changed since the last warm-up)"
-else
-  say "compiling the numba kernels into their cache (a minute or two the first time)"
-  .venv/bin/python -m rbm_nb._warmup &
-  warm_pid=$!
+if [ -n "$warm_pid" ]; then
   ticks=0
   while kill -0 "$warm_pid" 2>/dev/null; do
     sleep 1
@@ -86,7 +108,6 @@ else
     fi
   done
   wait "$warm_pid"
-  echo "$sources" > "$warm_stamp"
 fi
 
 if [ -n "$apt_pid" ]; then

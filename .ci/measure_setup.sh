@@ -32,9 +32,12 @@ ready() {  # start the demo, wait until the explorer is served, stop it
 }
 
 cd "$work/clone"
+# CPU time next to wall time: on a machine shared with other work the wall
+# time mostly measures the others (and the network).
+TIMEFORMAT="    setup.sh: %R s wall, %U s user + %S s system CPU"
 for run in fresh second; do
   start=$(date +%s.%N)
-  bash .ci/setup.sh demo 2>&1 | grep -v '^WARNING: Location' | sed 's/^/    /'
+  time (bash .ci/setup.sh demo 2>&1 | grep -v '^WARNING: Location' | sed 's/^/    /')
   ready
-  echo "$run: demo ready after $(echo "$(date +%s.%N) - $start" | bc) s"
+  echo "$run: demo ready after $(echo "$(date +%s.%N) - $start" | bc) s (load: $(cut -d' ' -f1-3 /proc/loadavg))"
 done

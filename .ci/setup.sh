@@ -55,17 +55,17 @@ install() {  # install rbm_nb[$1] (editable) at the exact pins
     -c .ci/constraints.txt -e ".[$1]"
 }
 
-# The numba warm-up needs only the frame core (numpy, numba, xarray, scipy; the
-# data and ros extras are small): it compiles while uv installs the notebook
-# layer and JupyterLab, so the two overlap on a 2-core machine.
-# Compiling every kernel into the on-disk cache means neither the demo's first
-# cell nor the first tests wait for compilation. numba writes one .nbc file per
-# compiled signature: their count is the progress shown.
+# Compile every numba kernel into the on-disk cache, so that neither the
+# demo's first cell nor the first tests wait for compilation. numba writes one
+# .nbc file per compiled signature: their count is the progress shown. (Starting
+# it before JupyterLab & co. are installed, to overlap the two, was measured:
+# two uv runs cost more than the overlap saved.)
 cache_dir=${NUMBA_CACHE_DIR:-rbm_nb/_kernels/__pycache__}
 warm_stamp=".venv/.rbm_nb-warm"
 warm_pid=""
 # a failed install must not leave the warm-up running behind the script
 trap 'if [ -n "$warm_pid" ]; then kill "$warm_pid" 2>/dev/null || true; fi' EXIT
+warm_sources=""
 warm_up() {
   local sources
   sources=$( (echo "$cache_dir"; find rbm_nb -name '*.py' -printf '%p %T@ %s\n' | sort) | sha256sum)
@@ -76,8 +76,9 @@ warm_up() {
   fi
   say "compiling the numba kernels into their cache (a minute or two the first time)"
   rm -f "$warm_stamp"
-  ( .venv/bin/python -m rbm_nb._warmup && echo "$sources" > "$warm_stamp" ) &
+  .venv/bin/python -m rbm_nb._warmup &
   warm_pid=$!
+  warm_sources=$sources
 }
 
 # what the install depends on; unchanged -> nothing to do
@@ -88,13 +89,11 @@ if [ "$(cat "$stamp" 2>/dev/null)" = "$want" ] && .venv/bin/python -c "import rb
   warm_up
 else
   rm -f "$stamp"
-  say "installing rbm_nb[data,ros] (editable; the frame core) with the pins of .ci/constraints.txt"
-  install "data,ros"
-  warm_up
-  say "installing the rest of rbm_nb[$extras] meanwhile"
+  say "installing rbm_nb[$extras] (editable) with the pins of .ci/constraints.txt"
   install "$extras"
   echo "$want" > "$stamp"
   say "installed"
+  warm_up
 fi
 
 if [ -n "$warm_pid" ]; then
@@ -107,7 +106,10 @@ if [ -n "$warm_pid" ]; then
       say "  still compiling: $n kernel signatures in the cache so far"
     fi
   done
-  wait "$warm_pid"
+  pid=$warm_pid
+  warm_pid=""  # reaped below: nothing for the trap to kill
+  wait "$pid"
+  echo "$warm_sources" > "$warm_stamp"
 fi
 
 if [ -n "$apt_pid" ]; then

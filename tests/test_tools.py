@@ -59,7 +59,6 @@ PENDING = {
         "rbm_nb/estimators.py",
         "rbm_nb/explorer.py",
         "rbm_nb/frames.py",
-        "rbm_nb/io/optitrack.py",
         "rbm_nb/plot.py",
         "rbm_nb/quaternions.py",
         "rbm_nb/rigid_transform.py",

@@ -140,9 +140,7 @@ def dataarray_points(**kwargs):
     import xarray as xr
 
     coords = kwargs.pop("coords", {"time": np.linspace(0, 9, 19)})
-    da = xr.DataArray(
-        np.zeros((19, 3)), dims=("time", "cartesian_axis"), coords=coords
-    )
+    da = xr.DataArray(np.zeros((19, 3)), dims=("time", "cartesian_axis"), coords=coords)
     return rbm.transform_points(da, "world", "moving", **kwargs)
 
 
@@ -191,17 +189,29 @@ _NORM3[2] *= 3.0  # one far-from-unit row
 _INFQ = _turning(5)
 _INFQ[3, 0] = np.inf
 
-I12_1 = "issue 12 item 1: one sample is refused at the door (no kernel read out of bounds)"
+I12_1 = (
+    "issue 12 item 1: one sample is refused at the door (no kernel read out of bounds)"
+)
 I12_3 = "issue 12 item 3: a time dimension without coordinate is refused"
 I12_4 = "issue 12 item 4: one rule for quaternions everywhere (far-from-unit refused)"
 I12_5 = "issue 12 item 5: non-finite input gets a clear error naming the argument"
-I12_12 = "issue 12 item 12: say that no sample falls in the window, not 'do not overlap'"
+I12_12 = (
+    "issue 12 item 12: say that no sample falls in the window, not 'do not overlap'"
+)
 I12_13 = "issue 12 item 13: ICP validates its arguments at the door"
-I11_1Q = "issue 11 item 1: accessor qinterp raises NotImplementedError like the reference"
-I11_1R = "issue 11 item 1: the registry supports del / item assignment like the reference"
-I11_1D = "issue 11 item 1: registering the same frame object twice raises like the reference"
+I11_1Q = (
+    "issue 11 item 1: accessor qinterp raises NotImplementedError like the reference"
+)
+I11_1R = (
+    "issue 11 item 1: the registry supports del / item assignment like the reference"
+)
+I11_1D = (
+    "issue 11 item 1: registering the same frame object twice raises like the reference"
+)
 PROBE = "hardening probe (not in an issue yet): "
 
+# one row per line group reads as a table; keep the formatter out
+# fmt: off
 CASES: list[Case] = [
     # -- ReferenceFrame construction ----------------------------------------
     Case("rf-translation-rows", RF, ("f", "world"),
@@ -609,3 +619,4 @@ CASES: list[Case] = [
          ("/nonexistent/nope.bag", "get_topics_and_types"), {}, FileNotFoundError,
          "nope.bag"),
 ]
+# fmt: on

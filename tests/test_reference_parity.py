@@ -287,7 +287,9 @@ def test_transformer_transform_quaternion_and_pose_sign(seed):
             and np.allclose(got_pose, expected, atol=1e-9)
         ):
             wrong.append((target, source, got.round(4), expected.round(4)))
-    assert not wrong, f"{len(wrong)} of {len(PAIRS)} pairs have the other sign: {wrong[:3]}"
+    assert not wrong, (
+        f"{len(wrong)} of {len(PAIRS)} pairs have the other sign: {wrong[:3]}"
+    )
 
 
 # ---------------------------------------------------------------------------
@@ -314,7 +316,9 @@ def test_real_head_values_round_trip(head):
         pkg.ReferenceFrame.from_dataset(
             head, "position", "orientation", "time", parent="world", name="head"
         ).register()
-    np.testing.assert_array_equal(rbm.registry["head"].rotation, head.orientation.values)
+    np.testing.assert_array_equal(
+        rbm.registry["head"].rotation, head.orientation.values
+    )
     got = rbm.lookup_transform("head", "world", as_dataset=True)
     expected = ref.lookup_transform("head", "world", as_dataset=True)
     np.testing.assert_array_equal(got.rotation.values, expected.rotation.values)
@@ -331,7 +335,9 @@ def test_real_head_values_round_trip(head):
 
 def _smooth_quaternions(n=8):
     a = np.linspace(0, 1.5, n)
-    q = np.column_stack([np.cos(a), np.sin(a) * 0.6, np.sin(a) * 0.8 * np.cos(a), 0 * a])
+    q = np.column_stack(
+        [np.cos(a), np.sin(a) * 0.6, np.sin(a) * 0.8 * np.cos(a), 0 * a]
+    )
     q[:, 3] = 0.3 * np.sin(2 * a)
     return q / np.linalg.norm(q, axis=1, keepdims=True)
 

@@ -17,10 +17,11 @@ What this guarantees, even if the process is killed at any instant:
   kept (a 0600 file stays 0600).
 * The new data is flushed to disk (``fsync`` of every file and folder written)
   before the rename, and the folder holding the target after it.
-* Scratch folders left by killed processes (``.<name>.<pid>-<random>.tmp``) are
-  removed by the next write to the same folder: at once if their process is
-  gone, after :data:`STALE_AFTER` seconds otherwise (the pid may have been
-  reused).
+* Scratch folders left by killed processes (``.<name>.<pid>-<host>_<random>.tmp``)
+  are removed by the next write to the same folder: at once if their process
+  is gone, after :data:`STALE_AFTER` seconds without change otherwise (the pid
+  may have been reused, or belong to another machine or container sharing the
+  folder).
 * Errors name the target the user asked for, never the hidden scratch path.
 """
 
@@ -60,9 +61,13 @@ _WRITE_ERRNOS = {
     errno.EPERM,
 }
 
-# scratch names: .<name>.<pid>-<random>.tmp, and the older .<name>.<random>.tmp
-# of tempfile.mkdtemp (8 characters of [a-z0-9_])
-_SCRATCH = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)-[a-z0-9_]+\.tmp$")
+# scratch names: .<name>.<pid>-<host>_<random>.tmp, where <host> (8 hex) tells
+# this machine and pid namespace from others sharing the folder (a pid is only
+# meaningful there), and the older .<name>.<random>.tmp; <random> is
+# tempfile.mkdtemp's 8 characters of [a-z0-9_]
+_SCRATCH = re.compile(
+    r"^\.(?P<name>.+)\.(?P<pid>\d+)-(?P<host>[0-9a-f]{8})_[a-z0-9_]{8}\.tmp$"
+)
 _LEGACY_SCRATCH = re.compile(r"^\.(?P<name>.+)\.[a-z0-9_]{8}\.tmp$")
 
 
@@ -100,17 +105,18 @@ def atomic_path(target: str | os.PathLike) -> Iterator[Path]:
         clean_stale_scratch(real.parent)
         scratch = Path(
             tempfile.mkdtemp(
-                dir=real.parent, prefix=f".{real.name}.{os.getpid()}-", suffix=".tmp"
+                dir=real.parent, prefix=scratch_prefix(real.name), suffix=".tmp"
             )
         )
     except OSError as err:
         _reraise(err, _naming_target(err, target, None))
-    new = scratch / target.name
+    # named like the file finally written, so leftovers can be recognised
+    new = scratch / real.name
     try:
         try:
             yield new
         except BaseException as err:
-            _reraise(err, _renamed(err, target, scratch))
+            _reraise(err, _renamed(err, target, scratch, new))
         try:
             _commit(new, real, scratch, target)
         except OSError as err:
@@ -268,8 +274,9 @@ def _fsync_dir(path: Path) -> None:
 def clean_stale_scratch(folder: str | os.PathLike) -> list[Path]:
     """Remove abandoned scratch folders of :func:`atomic_path` in ``folder``.
 
-    A scratch folder is abandoned if the process named in it no longer runs,
-    or if it is older than :data:`STALE_AFTER` seconds. Only folders with our
+    A scratch folder is abandoned if the process named in it (on this machine
+    and in this pid namespace) no longer runs, or if nothing in it changed for
+    :data:`STALE_AFTER` seconds. Only folders with our
     naming whose content is what :func:`atomic_path` puts there (the target's
     name and/or a parked old version) are touched. If a folder was killed
     between parking the old version and renaming the new one in, the old
@@ -309,15 +316,48 @@ def _looks_like_ours(path: Path, name: str) -> bool:
         return False
 
 
+def scratch_prefix(name: str) -> str:
+    """Start of the name of a scratch folder this process makes for ``name``."""
+    return f".{name}.{os.getpid()}-{host_tag()}_"
+
+
+_HOST_TAG = []  # cache: [tag]
+
+
+def host_tag() -> str:
+    """8 hex digits naming this machine and pid namespace."""
+    if not _HOST_TAG:
+        import hashlib
+        import socket
+
+        try:
+            namespace = os.stat("/proc/self/ns/pid").st_ino
+        except OSError:
+            namespace = 0
+        key = f"{socket.gethostname()}:{namespace}".encode()
+        _HOST_TAG.append(hashlib.sha1(key).hexdigest()[:8])
+    return _HOST_TAG[0]
+
+
 def _abandoned(entry: os.DirEntry, match: re.Match, now: float) -> bool:
-    pid = match.groupdict().get("pid")
-    if pid is not None and not _alive(int(pid)):
-        return True
-    try:
-        age = now - entry.stat(follow_symlinks=False).st_mtime
-    except OSError:
-        return False
-    return age > STALE_AFTER
+    fields = match.groupdict()
+    if fields.get("host") == host_tag() and not _alive(int(fields["pid"])):
+        return True  # its writer is gone
+    # someone else's pid, or no pid: only the age tells
+    return now - _newest_mtime(Path(entry.path)) > STALE_AFTER
+
+
+def _newest_mtime(path: Path) -> float:
+    """Latest modification anywhere in a scratch folder (a writer still at work
+    touches the files it writes, not the folder itself)."""
+    newest = 0.0
+    for root, dirs, files in os.walk(path):
+        for name in [root, *(os.path.join(root, f) for f in files + dirs)]:
+            try:
+                newest = max(newest, os.lstat(name).st_mtime)
+            except OSError:
+                pass
+    return newest
 
 
 def _alive(pid: int) -> bool:
@@ -379,7 +419,9 @@ def _naming_target(err: OSError, target: Path, scratch: Path | None) -> OSError:
 _NO_PATH_ERRORS = {"database or disk is full": errno.ENOSPC}
 
 
-def _renamed(err: BaseException, target: Path, scratch: Path) -> BaseException:
+def _renamed(
+    err: BaseException, target: Path, scratch: Path, new: Path
+) -> BaseException:
     """An error from inside the block, with the scratch path replaced by ``target``."""
     if isinstance(err, OSError):
         return _naming_target(err, target, scratch)
@@ -391,7 +433,7 @@ def _renamed(err: BaseException, target: Path, scratch: Path) -> BaseException:
             return OSError(code, f"{os.strerror(code)} ({message})", str(target))
     if str(scratch) not in message:
         return err
-    text = str(err).replace(str(scratch / target.name), str(target))
+    text = message.replace(str(new), str(target))
     text = text.replace(str(scratch), str(target.parent))
     try:
         new = type(err)(text)

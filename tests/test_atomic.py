@@ -237,10 +237,15 @@ def _dead_pid() -> int:
     return proc.pid
 
 
+def _ours(name, pid, rand="ab12cd34", host=None):
+    """A scratch folder name as a writer with ``pid`` on ``host`` makes it."""
+    return f".{name}.{pid}-{host or _atomic.host_tag()}_{rand}.tmp"
+
+
 def test_stale_scratch_is_cleaned_on_the_next_write(tmp_path):
     dead = _dead_pid()
     old = time.time() - _atomic.STALE_AFTER - 60
-    made = {}
+    elsewhere = "0123abcd" if _atomic.host_tag() != "0123abcd" else "fedc9876"
 
     def scratch(name, content=("x.bag",), mtime=None):
         path = tmp_path / name
@@ -249,32 +254,57 @@ def test_stale_scratch_is_cleaned_on_the_next_write(tmp_path):
             (path / entry).mkdir()
             (path / entry / "data").write_bytes(b"\0" * 1000)
         if mtime is not None:
-            os.utime(path, (mtime, mtime))
-        made[name] = path
+            for p in [path, *path.rglob("*")]:
+                os.utime(p, (mtime, mtime))
 
-    scratch(f".x.bag.{dead}-abc123_z.tmp")  # killed writer: removed
-    scratch(f".other.nc.{dead}-q9.tmp", content=("other.nc",))  # same folder: removed
-    scratch(".x.bag.k2j4_x9a.tmp", mtime=old)  # older naming, old: removed
-    scratch(f".x.bag.{os.getpid()}-live1.tmp")  # a live writer: kept
-    scratch(".x.bag.recent01.tmp")  # older naming, recent: kept
-    scratch(f".x.bag.{dead}-foreign.tmp", content=("notes",))  # not ours: kept
-    (tmp_path / f".x.bag.{dead}-file.tmp").write_text("a file, not ours")
+    removed = [
+        _ours("x.bag", dead),  # its writer was killed
+        _ours("other.nc", dead, "zz_9q0aa"),  # another target in the folder
+        _ours("x.bag", dead, "a1b2c3d4", host=elsewhere),  # other host, old
+        ".x.bag.k2j4_x9a.tmp",  # older naming, old
+    ]
+    kept = [
+        _ours("x.bag", os.getpid(), "live1111"),  # a live writer
+        _ours("x.bag", dead, "b1b2c3d4", host=elsewhere),  # other host, recent
+        ".x.bag.recent01.tmp",  # older naming, recent
+        _ours("x.bag", dead, "foreign1"),  # content is not ours
+        _ours("x.bag", dead, "plainfil"),  # a file, not a folder
+    ]
+    scratch(removed[0])
+    scratch(removed[1], content=("other.nc",))
+    scratch(removed[2], mtime=old)
+    scratch(removed[3], mtime=old)
+    scratch(kept[0])
+    scratch(kept[1])
+    scratch(kept[2])
+    scratch(kept[3], content=("notes",))
+    (tmp_path / kept[4]).write_text("a file")
     with atomic_path(tmp_path / "x.bag") as tmp:
         tmp.write_text("bag")
-    left = set(_scratch_entries(tmp_path))
-    assert left == {
-        f".x.bag.{os.getpid()}-live1.tmp",
-        ".x.bag.recent01.tmp",
-        f".x.bag.{dead}-foreign.tmp",
-        f".x.bag.{dead}-file.tmp",
-    }
+    assert set(_scratch_entries(tmp_path)) == set(kept)
     assert (tmp_path / "x.bag").read_text() == "bag"
+
+
+def test_a_writer_still_writing_is_not_old(tmp_path):
+    """Age counts from the newest change inside, not the folder's own mtime."""
+    old = time.time() - _atomic.STALE_AFTER - 60
+    name = _ours(
+        "x.bag", 1, host="0123abcd" if _atomic.host_tag() != "0123abcd" else "fedc9876"
+    )
+    path = tmp_path / name
+    (path / "x.bag").mkdir(parents=True)
+    (path / "x.bag" / "chunk").write_bytes(b"new data")  # just written
+    os.utime(path, (old, old))
+    os.utime(path / "x.bag", (old, old))
+    assert clean_stale_scratch(tmp_path) == []
+    os.utime(path / "x.bag" / "chunk", (old, old))
+    assert clean_stale_scratch(tmp_path) == [path]
 
 
 def test_live_scratch_of_another_process_is_kept(tmp_path):
     proc = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
     try:
-        name = f".x.nc.{proc.pid}-zz.tmp"
+        name = _ours("x.nc", proc.pid)
         (tmp_path / name).mkdir()
         assert clean_stale_scratch(tmp_path) == []
         proc.kill()
@@ -286,10 +316,32 @@ def test_live_scratch_of_another_process_is_kept(tmp_path):
             proc.wait()
 
 
+def test_scratch_of_a_killed_writer_through_a_link_is_cleaned(tmp_path):
+    real = tmp_path / "runs" / "run-3.html"
+    real.parent.mkdir()
+    real.write_text("old")
+    link = tmp_path / "latest.html"
+    link.symlink_to(real)
+    script = (
+        "import os, signal, sys\n"
+        "from rbm_nb._atomic import atomic_path\n"
+        "with atomic_path(sys.argv[1]) as tmp:\n"
+        "    tmp.write_text('half')\n"
+        "    os.kill(os.getpid(), signal.SIGKILL)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script, str(link)], env=_env())
+    assert done.returncode == -signal.SIGKILL
+    assert len(_scratch_entries(real.parent)) == 1  # left by the killed writer
+    with atomic_path(link) as tmp:
+        tmp.write_text("new")
+    assert _scratch_entries(real.parent) == []
+    assert real.read_text() == "new" and link.is_symlink()
+
+
 def test_parked_folder_is_put_back(tmp_path, no_exchange):
     """A kill between parking the old folder and renaming the new one in."""
     dead = _dead_pid()
-    scratch = tmp_path / f".bag.{dead}-k1.tmp"
+    scratch = tmp_path / _ours("bag", dead)
     scratch.mkdir()
     _write_folder(scratch / _atomic.PARKED, 7)  # the user's folder, parked
     _write_folder(scratch / "bag", 8)  # the new one, never renamed in

@@ -75,9 +75,9 @@ _LEGACY_SCRATCH = re.compile(r"^\.(?P<name>.+)\.[a-z0-9_]{8}\.tmp$")
 def atomic_path(target: str | os.PathLike) -> Iterator[Path]:
     """Yield a temporary path that replaces ``target`` only if the block succeeds.
 
-    The temporary path has the same name as ``target`` (so writers that look
-    at the suffix behave as for ``target``) inside a hidden folder beside the
-    file finally written, on the same file system. It may become a file or a
+    The temporary path has the name of the file finally written (``target``,
+    or what it links to) inside a hidden folder beside it, on the same file
+    system, so the final rename is atomic and leftovers can be recognised. It may become a file or a
     folder. If the block raises, ``target`` is left exactly as it was and the
     scratch folder is removed.
 
@@ -302,7 +302,10 @@ def clean_stale_scratch(folder: str | os.PathLike) -> list[Path]:
         path = Path(entry.path)
         if not _looks_like_ours(path, name) or not _abandoned(entry, match, now):
             continue
-        _restore_parked(path, folder / name)
+        try:
+            _restore_parked(path, folder / name)
+        except OSError:
+            continue  # keep it: the parked folder is the user's data
         shutil.rmtree(path, ignore_errors=True)
         if not path.exists():
             removed.append(path)

@@ -168,6 +168,41 @@ def rosbag_reader(path, method, *args):
     return getattr(RosbagReader(path), method)(*args)
 
 
+def in_temp_folder(func, *args, files=None, **kwargs):
+    """Call ``func(folder, *args)`` in a fresh folder holding ``files`` (name: text)."""
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory() as folder:
+        folder = Path(folder)
+        for name, text in (files or {}).items():
+            (folder / name).write_text(text)
+        return func(folder, *args, **kwargs)
+
+
+def optitrack_in(folder, name, **kwargs):
+    return rbm.io.load_optitrack(folder / name, **kwargs)
+
+
+def netcdf_in(folder, name):
+    return rbm.io.load_netcdf(folder / name)
+
+
+def write_bag_in(folder, name, timestamps, **options):
+    from rbm_nb.ros import RosbagWriter
+
+    n = len(timestamps)
+    with RosbagWriter(folder / name, **options) as writer:
+        writer.write_transform_stamped(
+            timestamps,
+            np.zeros((n, 3)),
+            np.tile([1.0, 0, 0, 0], (n, 1)),
+            "/x",
+            "a",
+            "b",
+        )
+
+
 RF = "ReferenceFrame"
 Q1 = np.array([1.0, 0, 0, 0])
 PTS = np.random.default_rng(7).normal(size=(12, 3))
@@ -208,6 +243,7 @@ I11_1R = (
 I11_1D = (
     "issue 11 item 1: registering the same frame object twice raises like the reference"
 )
+I12_6 = "issue 12 item 6: RosbagWriter refuses non-increasing stamps"
 PROBE = "hardening probe (not in an issue yet): "
 
 # one row per line group reads as a table; keep the formatter out
@@ -617,6 +653,27 @@ CASES: list[Case] = [
     Case("transformer-set-transform-time-nan", transformer,
          ("set_transform", np.zeros(3), Q1, "world", "x"), {"time": np.nan},
          ValueError, "time must be finite"),
+    # -- files: OptiTrack, netCDF, rosbag writer ----------------------------------
+    Case("optitrack-missing-file", in_temp_folder, (optitrack_in, "nope.csv"), {},
+         FileNotFoundError, "nope.csv"),
+    Case("optitrack-not-an-export", in_temp_folder, (optitrack_in, "x.csv"),
+         {"files": {"x.csv": "hello,world\n1,2\n"}}, rbm.io.FileFormatError,
+         "x.csv is not an OptiTrack CSV export"),
+    Case("optitrack-import-format", in_temp_folder, (optitrack_in, "x.csv"),
+         {"files": {"x.csv": "a"}, "import_format": "excel"}, ValueError,
+         "import_format must be one of"),
+    Case("netcdf-missing-file", in_temp_folder, (netcdf_in, "nope.nc"), {},
+         FileNotFoundError, "nope.nc"),
+    Case("netcdf-not-netcdf", in_temp_folder, (netcdf_in, "y.nc"),
+         {"files": {"y.nc": "not netcdf"}}, rbm.io.FileFormatError,
+         "y.nc is not a readable netCDF file"),
+    Case("rosbag-writer-storage", in_temp_folder, (write_bag_in, "b", [1.0]),
+         {"storage": "zip"}, ValueError, "storage must be one of"),
+    Case("rosbag-writer-storage-for-ros1", in_temp_folder,
+         (write_bag_in, "b.bag", [1.0]), {"storage": "mcap"}, ValueError,
+         "storage is for ROS2 bags"),
+    Case("rosbag-writer-decreasing-stamps", in_temp_folder,
+         (write_bag_in, "w.bag", [2.0, 1.0]), {}, ValueError, "timestamps", I12_6),
     # -- rosbags ---------------------------------------------------------------
     Case("rosbag-missing-file", rosbag_reader,
          ("/nonexistent/nope.bag", "get_topics_and_types"), {}, FileNotFoundError,

@@ -399,7 +399,7 @@ def _kill_rounds(tmp_path, kind, exchange, rounds):
             stdout=subprocess.PIPE, env=_env(),
         )  # fmt: skip
         assert proc.stdout.readline().strip() == b"ready"
-        time.sleep(rng.uniform(0.0, 0.15))
+        time.sleep(rng.uniform(0.02, 0.5))
         os.kill(proc.pid, signal.SIGKILL)
         proc.wait()
         proc.stdout.close()

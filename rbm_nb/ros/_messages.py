@@ -213,6 +213,53 @@ def _twist(twist) -> tuple:
     return (lin.x, lin.y, lin.z, ang.x, ang.y, ang.z)
 
 
+def check_messages(messages: Messages, where: str) -> None:
+    """Raise FileFormatError unless the decoded values are what a bag can hold.
+
+    Each pose field (position, orientation, each twist part) of a message is
+    all finite, or all NaN (a sample without data, written so on purpose);
+    finite orientations are unit quaternions within
+    ``UNIT_QUATERNION_TOLERANCE``; nanoseconds are below 1e9. ``where``
+    names the bag and topic in the message, which also gives the index of
+    the first bad message.
+    """
+    from .._config import UNIT_QUATERNION_TOLERANCE
+    from ..io._files import FileFormatError
+
+    bad_nsec = np.flatnonzero((messages.nsec < 0) | (messages.nsec >= 1_000_000_000))
+    if bad_nsec.size:
+        i = int(bad_nsec[0])
+        raise FileFormatError(
+            f"{where}: message {i} has a header stamp with {messages.nsec[i]} "
+            "nanoseconds (must be below 1e9): the bag is damaged"
+        )
+    fields = [("position", messages.position), ("orientation", messages.orientation)]
+    if messages.linear_velocity is not None:
+        fields += [
+            ("linear velocity", messages.linear_velocity),
+            ("angular velocity", messages.angular_velocity),
+        ]
+    for name, values in fields:
+        finite = np.isfinite(values).all(axis=1)
+        bad = np.flatnonzero(~(finite | np.isnan(values).all(axis=1)))
+        if bad.size:
+            i = int(bad[0])
+            raise FileFormatError(
+                f"{where}: message {i} has {name} {values[i].tolist()}; a field must be "
+                "all finite, or all NaN for a sample without data: the bag is damaged"
+            )
+    q = messages.orientation
+    finite = np.isfinite(q).all(axis=1)
+    error = np.abs(np.linalg.norm(q[finite], axis=1) - 1.0)
+    if error.size and error.max() > UNIT_QUATERNION_TOLERANCE:
+        i = int(np.flatnonzero(finite)[np.argmax(error > UNIT_QUATERNION_TOLERANCE)])
+        raise FileFormatError(
+            f"{where}: message {i} has orientation {q[i].tolist()} (w, x, y, z) of norm "
+            f"{np.linalg.norm(q[i]):.6g}, not a unit quaternion (tolerance "
+            f"{UNIT_QUATERNION_TOLERANCE}): the bag is damaged"
+        )
+
+
 # ---------------------------------------------------------------------------
 # encoding
 # ---------------------------------------------------------------------------

@@ -16,6 +16,7 @@ from ._messages import (
     KINDS,
     SUPPORTED_TYPES,
     Messages,
+    check_messages,
     decode_objects,
     decode_raw,
     ros1_type_name,
@@ -138,7 +139,10 @@ class RosbagReader:
             If the topic is not in the bag (the message lists the topics) or
             its message type is not supported (the message lists those).
         rbm_nb.io.FileFormatError
-            If the bag is damaged.
+            If the bag is damaged, including decoded values no bag should
+            hold: a pose field partly NaN or infinite (all NaN is a sample
+            without data), a non-unit quaternion, a stamp with 1e9 ns or
+            more. The message names the topic and the message index.
         """
         messages, _ = self._read(topic, progress)
         out = {
@@ -178,6 +182,7 @@ class RosbagReader:
                     f"{self.bag_file} is damaged: reading {topic!r} failed after "
                     f"{len(raws)} of {count} messages ({type(err).__name__}: {err})"
                 ) from err
+        check_messages(messages, f"{self.bag_file}, topic {topic!r}")
         return messages, name
 
     def _message_type(self, reader, topic: str) -> str:
@@ -220,9 +225,11 @@ class RosbagReader:
             Name of the topic.
         cache : bool, default False
             Keep the dataset in ``cache/<topic>.nc`` beside the bag (slashes in
-            the topic become underscores) and read it from there next time.
-            A cache made from another bag or from an older version of this
-            bag is rebuilt.
+            the topic become underscores) and read it from there next time;
+            for a bag in the example-data folder (``RBM_NB_DATA_DIR``), in
+            rbm_nb's cache folder instead (see :meth:`cache_file`). A cache
+            made from another bag or from an older version of this bag is
+            rebuilt.
         progress : bool, optional
             See :meth:`load_messages`.
 
@@ -250,8 +257,23 @@ class RosbagReader:
         return self._export(topic, path, progress)
 
     def cache_file(self, topic: str) -> Path:
-        """Where :meth:`load_dataset` caches ``topic``."""
-        return self.bag_file.parent / "cache" / f"{topic.replace('/', '_')}.nc"
+        """Where :meth:`load_dataset` caches ``topic``.
+
+        ``cache/<topic>.nc`` beside the bag, as rigid-body-motion does; but
+        never in the example-data folder, which holds only the registry's
+        files: a bag there is cached under ``rosbag/<bag name>-<path hash>/``
+        in :func:`rbm_nb.data.fetch.cache_dir` (``RBM_NB_CACHE_DIR``).
+        """
+        name = f"{topic.replace('/', '_')}.nc"
+        folder = self.bag_file.parent.resolve()
+        from ..data.fetch import cache_dir, example_data_dirs
+
+        if any(folder == d or d in folder.parents for d in example_data_dirs()):
+            import hashlib
+
+            key = hashlib.sha1(str(self.bag_file.resolve()).encode()).hexdigest()[:12]
+            return cache_dir() / "rosbag" / f"{self.bag_file.name}-{key}" / name
+        return self.bag_file.parent / "cache" / name
 
     def export(self, topic: str, output_file: str | os.PathLike | None = None) -> Path:
         """Write the messages of a topic to a netCDF4 file.

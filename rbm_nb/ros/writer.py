@@ -135,6 +135,10 @@ class RosbagWriter:
             Translations (x, y, z).
         rotation : array_like, shape (n, 4)
             Rotations as unit quaternions (w, x, y, z); written as they are.
+
+            A row of ``translation`` or ``rotation`` that is all NaN is a
+            sample without data (as in real eye-tracking recordings): it is
+            written as NaN and read back bit for bit.
         topic : str
             Topic of the messages.
         frame : str
@@ -145,9 +149,11 @@ class RosbagWriter:
         Raises
         ------
         ValueError
-            If shapes do not match, values are not finite, a stamp is before
-            1970 or beyond what the bag format can hold, or a rotation is
-            not a unit quaternion (within ``UNIT_QUATERNION_TOLERANCE``).
+            If shapes do not match, a row is partly NaN or has an infinity,
+            the stamps are not strictly increasing, a stamp is before 1970 or
+            beyond what the bag format can hold, or a rotation is not a unit
+            quaternion (within ``UNIT_QUATERNION_TOLERANCE``). The message
+            names the topic and the row.
         RuntimeError
             If called outside the ``with`` block.
         """
@@ -155,17 +161,6 @@ class RosbagWriter:
             raise RuntimeError(
                 "RosbagWriter writes inside a with block: "
                 f"with RosbagWriter({str(self.bag_file)!r}) as writer: ..."
-            )
-        stamps = self._stamps_ns(timestamps)
-        n = stamps.shape[0]
-        translation = _rows(translation, "translation", n, 3)
-        rotation = _rows(rotation, "rotation", n, 4)
-        norm_error = np.abs(np.linalg.norm(rotation, axis=1) - 1.0)
-        if n and norm_error.max() > UNIT_QUATERNION_TOLERANCE:
-            i = int(np.argmax(norm_error > UNIT_QUATERNION_TOLERANCE))
-            raise ValueError(
-                f"rotation must be unit quaternions (w, x, y, z); row {i} has norm "
-                f"{np.linalg.norm(rotation[i]):.6g}"
             )
         for name, value in (
             ("topic", topic),
@@ -176,6 +171,22 @@ class RosbagWriter:
                 raise ValueError(f"{name} must be a str, got {value!r}")
         if not topic:
             raise ValueError("topic must not be empty")
+        stamps = self._stamps_ns(timestamps, topic)
+        n = stamps.shape[0]
+        translation = _rows(translation, "translation", n, 3, topic)
+        rotation = _rows(rotation, "rotation", n, 4, topic)
+        present = np.isfinite(rotation).all(axis=1)
+        norm_error = np.abs(np.linalg.norm(rotation[present], axis=1) - 1.0)
+        if norm_error.size and norm_error.max() > UNIT_QUATERNION_TOLERANCE:
+            i = int(
+                np.flatnonzero(present)[
+                    np.argmax(norm_error > UNIT_QUATERNION_TOLERANCE)
+                ]
+            )
+            raise ValueError(
+                f"topic {topic!r}: rotation must be unit quaternions (w, x, y, z); "
+                f"row {i} has norm {np.linalg.norm(rotation[i]):.6g}"
+            )
         rows = encode_transform_stamped(
             stamps, translation, rotation, frame, child_frame, self.ros2
         )
@@ -223,7 +234,18 @@ class RosbagWriter:
             ds[timestamps].values, translation, rotation, topic, frame, child_frame
         )
 
-    def _stamps_ns(self, timestamps) -> np.ndarray:
+    def _stamps_ns(self, timestamps, topic: str) -> np.ndarray:
+        ns = self._stamps_ns_unchecked(timestamps)
+        back = np.flatnonzero(np.diff(ns) <= 0)
+        if back.size:
+            i = int(back[0]) + 1
+            raise ValueError(
+                f"topic {topic!r}: timestamps must be strictly increasing; stamp {i} "
+                f"({ns[i]} ns) is not after stamp {i - 1} ({ns[i - 1]} ns)"
+            )
+        return ns
+
+    def _stamps_ns_unchecked(self, timestamps) -> np.ndarray:
         stamps = np.asarray(timestamps)
         if stamps.ndim != 1:
             raise ValueError(
@@ -265,14 +287,21 @@ class RosbagWriter:
         return ns
 
 
-def _rows(values, name: str, n: int, width: int) -> np.ndarray:
+def _rows(values, name: str, n: int, width: int, topic: str) -> np.ndarray:
+    """Rows that are all finite (data) or all NaN (no data at that sample)."""
     arr = np.asarray(values, dtype=np.float64)
     if arr.shape != (n, width):
         raise ValueError(
-            f"{name} must have shape ({n}, {width}) to match timestamps, got {arr.shape}"
+            f"topic {topic!r}: {name} must have shape ({n}, {width}) to match "
+            f"timestamps, got {arr.shape}"
         )
-    if not np.isfinite(arr).all():
+    finite = np.isfinite(arr).all(axis=1)
+    missing = np.isnan(arr).all(axis=1)
+    bad = np.flatnonzero(~(finite | missing))
+    if bad.size:
+        i = int(bad[0])
         raise ValueError(
-            f"{name} must be finite; row {int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])} is not"
+            f"topic {topic!r}: {name} row {i} is {arr[i].tolist()}; a row must be all "
+            "finite, or all NaN for a sample without data"
         )
     return arr

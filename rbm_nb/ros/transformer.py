@@ -203,6 +203,40 @@ class Transformer:
                 transformer.set_transforms(node)
         return transformer
 
+    @staticmethod
+    def from_bag(bag_file, topics=None, cache_time=None) -> Transformer:
+        """A Transformer holding a bag's whole tf tree (``/tf`` and ``/tf_static``).
+
+        Parameters
+        ----------
+        bag_file : str or path-like
+            A ROS1 ``.bag`` or a ROS2 bag folder.
+        topics : sequence of str, optional
+            tf topics (default: ``/tf`` and ``/tf_static`` where present).
+        cache_time : float, optional
+            Seconds of history to keep; default: the bag's whole time span
+            (at least tf2's 10 s), so that nothing is dropped.
+
+        Returns
+        -------
+        Transformer
+
+        Raises
+        ------
+        ValueError
+            If the bag has no tf topic, or its transforms do not form trees.
+        rbm_nb.io.FileFormatError
+            If the bag is damaged.
+        """
+        from .tf_tree import fill_transformer, load_tf_tree, time_span
+
+        tree = load_tf_tree(bag_file, topics)
+        if cache_time is None:
+            cache_time = max(DEFAULT_CACHE_TIME, time_span(tree))
+        transformer = Transformer(cache_time=cache_time)
+        fill_transformer(transformer, tree)
+        return transformer
+
     def set_transform_static(self, reference_frame) -> None:
         """Add the static transform of a reference frame wrt its parent.
 

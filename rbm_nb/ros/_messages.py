@@ -257,12 +257,14 @@ def check_messages(messages: Messages, where: str, index=None) -> None:
             )
     q = messages.orientation
     finite = np.isfinite(q).all(axis=1)
-    error = np.abs(np.linalg.norm(q[finite], axis=1) - 1.0)
+    with np.errstate(over="ignore"):  # a damaged value may be ~1e300: inf norm, refused
+        norms = np.linalg.norm(q, axis=1)
+    error = np.abs(norms[finite] - 1.0)
     if error.size and error.max() > UNIT_QUATERNION_TOLERANCE:
         i = int(np.flatnonzero(finite)[np.argmax(error > UNIT_QUATERNION_TOLERANCE)])
         raise FileFormatError(
             f"{where}: message {number(i)} has orientation {q[i].tolist()} (w, x, y, z) of norm "
-            f"{np.linalg.norm(q[i]):.6g}, not a unit quaternion (tolerance "
+            f"{norms[i]:.6g}, not a unit quaternion (tolerance "
             f"{UNIT_QUATERNION_TOLERANCE}): the bag is damaged"
         )
 

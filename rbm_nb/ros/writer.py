@@ -406,7 +406,8 @@ def _rows(values, name: str, n: int, width: int, topic: str) -> np.ndarray:
 
 def _check_unit(rotation: np.ndarray, topic: str) -> None:
     present = np.isfinite(rotation).all(axis=1)
-    norm_error = np.abs(np.linalg.norm(rotation[present], axis=1) - 1.0)
+    with np.errstate(over="ignore"):  # huge values give an inf norm, refused below
+        norm_error = np.abs(np.linalg.norm(rotation[present], axis=1) - 1.0)
     if norm_error.size and norm_error.max() > UNIT_QUATERNION_TOLERANCE:
         i = int(
             np.flatnonzero(present)[np.argmax(norm_error > UNIT_QUATERNION_TOLERANCE)]

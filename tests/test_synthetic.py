@@ -391,3 +391,23 @@ def test_schema_equals_the_real_files_field_by_field(rec):
             )
         # the only extras are the synthetic recording's provenance attributes
         assert theirs.attrs == {} and ours.attrs["source"] == "synthetic (rbm_nb)"
+
+
+def test_tracker_flaws_close_to_the_real_recordings(rec):
+    """Measured on both with the same code: rates within a few percent."""
+    from recordings import real_recording
+
+    real = real_recording()
+    if real is None:
+        pytest.skip(
+            "the real recordings are not beside the repo (../shared/data/rbm-data)"
+        )
+    for ours, theirs in ((rec.left_eye, real[1]), (rec.right_eye, real[2])):
+        a, b = measures.tracker_quality(ours), measures.tracker_quality(theirs)
+        assert abs(a["nan_rows"] / a["rows"] - b["nan_rows"] / b["rows"]) < 0.05
+        assert abs(a["low_confidence"] - b["low_confidence"]) < 0.05
+        assert abs(a["rows_per_second"] / b["rows_per_second"] - 1) < 0.05
+        assert abs(a["median_interval"] / b["median_interval"] - 1) < 0.1
+        assert a["gaps_over_0.1s"] >= 1 and b["gaps_over_0.1s"] >= 1
+        ratio = a["position_std"] / b["position_std"]
+        assert ((ratio > 0.3) & (ratio < 3)).all(), ratio

@@ -227,9 +227,10 @@ def _eye_samples(eye, confidence):
 
 
 def _keys(t) -> np.ndarray:
+    """Sort keys: int64 ns for datetime64 (exact), float64 otherwise."""
     t = np.asarray(t)
     if np.issubdtype(t.dtype, np.datetime64):
-        return t.astype("datetime64[ns]").astype(np.int64).astype(float)
+        return t.astype("datetime64[ns]").astype(np.int64)
     if not np.issubdtype(t.dtype, np.number):
         raise ValueError(f"timestamps must be numeric or datetime64, got {t.dtype}")
     return t.astype(float)
@@ -237,31 +238,22 @@ def _keys(t) -> np.ndarray:
 
 def _match(own, times, name) -> np.ndarray:
     """Index into ``own`` of each of ``times`` (exact sample), -1 where none."""
-    if np.issubdtype(own.dtype, np.datetime64) != np.issubdtype(
-        np.asarray(times).dtype, np.datetime64
-    ):
+    own, times = np.asarray(own), np.asarray(times)
+    is_datetime = np.issubdtype(own.dtype, np.datetime64)
+    if is_datetime != np.issubdtype(times.dtype, np.datetime64):
         raise ValueError(
-            f"confidence times ({np.asarray(times).dtype}) and the timestamps of "
-            f"eye_frame {name!r} ({own.dtype}) must both be datetime64 or both numeric"
+            f"confidence times ({times.dtype}) and the timestamps of eye_frame "
+            f"{name!r} ({own.dtype}) must both be datetime64 or both numeric"
         )
     a, b = _keys(own), _keys(times)
+    if len(a) == 0:
+        return np.full(len(b), -1)
     # datetime64 keys are exact ns; numeric ones may have been through float
-    tol = (
-        0.0
-        if np.issubdtype(own.dtype, np.datetime64)
-        else 1e-9 * max(1.0, float(np.max(np.abs(a))))
-    )
-    j = (
-        np.clip(np.searchsorted(a, b), 1, len(a) - 1)
-        if len(a) > 1
-        else np.zeros(len(b), dtype=int)
-    )
-    best = j.copy()
-    if len(a) > 1:
-        left = j - 1
-        best = np.where(np.abs(a[left] - b) <= np.abs(a[j] - b), left, j)
-    hit = np.abs(a[best] - b) <= tol
-    return np.where(hit, best, -1)
+    tol = 0 if is_datetime else 1e-9 * max(1.0, float(np.max(np.abs(a))))
+    j = np.clip(np.searchsorted(a, b), 0, len(a) - 1)
+    left = np.maximum(j - 1, 0)
+    best = np.where(np.abs(a[left] - b) <= np.abs(a[j] - b), left, j)
+    return np.where(np.abs(a[best] - b) <= tol, best, -1)
 
 
 def _confidence_values(confidence, times, eye) -> np.ndarray:

@@ -188,7 +188,7 @@ def synthetic_head_eye(
         orientation[no_orientation] = np.nan
         position[no_position] = np.nan
         eyes[eye] = _eye_dataset(
-            eye_time, eye, orientation, position, confidence, attrs
+            eye_time, eye, orientation, position, confidence.copy(), attrs
         )
     return HeadEyeRecording(head_ds, eyes["left_eye"], eyes["right_eye"])
 

@@ -93,8 +93,8 @@ def test_reader_cache_of_another_bag_stays_beside_it(
 ):
     """As in rigid-body-motion: cache/<topic>.nc next to a user's own bag."""
     monkeypatch.setenv("RBM_NB_DATA_DIR", str(tmp_path / "data"))
-    monkeypatch.setenv("RBM_NB_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setenv("RBM_NB_CACHE_DIR", str(tmp_path / "derived"))
     bag = shutil.copy(shared_data / "test.bag", tmp_path / "mine.bag")
     RosbagReader(bag).load_dataset("/camera/odom/sample", cache=True)
     assert (tmp_path / "cache" / "_camera_odom_sample.nc").is_file()
-    assert not (tmp_path / "data").exists()
+    assert not (tmp_path / "data").exists() and not (tmp_path / "derived").exists()

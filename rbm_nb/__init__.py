@@ -91,6 +91,7 @@ _SUBMODULES = {
     "rigid_transform",
     "ros",
     "scene",
+    "se3",
     "transforms",
     "widgets",
 }

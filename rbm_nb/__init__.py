@@ -92,6 +92,7 @@ _SUBMODULES = {
     "ros",
     "scene",
     "se3",
+    "evaluation",
     "transforms",
     "widgets",
 }

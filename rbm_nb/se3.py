@@ -125,16 +125,15 @@ def _where(lead: tuple, flat: int) -> str:
 
 
 def _check_rotations(rot: np.ndarray, lead: tuple, name: str) -> None:
-    """Raise if a (n, 3, 3) block is not a rotation to within ``_ROTATION_TOLERANCE``."""
-    gram = np.einsum("nki,nkj->nij", rot, rot) - np.eye(3)
-    dev = np.abs(gram).reshape(len(rot), -1).max(axis=1)
-    det = np.linalg.det(rot) if len(rot) else np.empty(0)
-    bad = (dev > _ROTATION_TOLERANCE) | (det <= 0)
-    if bad.any():
-        i = int(np.argmax(np.where(bad, dev + (det <= 0), -1.0)))
+    """Raise if a (n, k, k) matrix's 3 x 3 block is not a rotation (``_ROTATION_TOLERANCE``)."""
+    i = _kernels().first_non_rotation(rot, _ROTATION_TOLERANCE)
+    if i >= 0:
+        r = rot[i, :3, :3]
+        dev = np.abs(r.T @ r - np.eye(3)).max()
         raise ValueError(
             f"{name}{_where(lead, i)} is not a rotation: |RᵀR - I| reaches "
-            f"{dev[i]:.3g} (tolerance {_ROTATION_TOLERANCE:g}) and det(R) = {det[i]:.6g}"
+            f"{dev:.3g} (tolerance {_ROTATION_TOLERANCE:g}) and det(R) = "
+            f"{np.linalg.det(r):.6g}"
         )
 
 
@@ -154,7 +153,7 @@ def _poses(value, name: str, rotation: bool = True) -> tuple[np.ndarray, tuple]:
             f"{rows[i, 3].tolist()}, expected [0, 0, 0, 1]"
         )
     if rotation:
-        _check_rotations(rows[:, :3, :3], lead, name)
+        _check_rotations(rows, lead, name)
     return rows, lead
 
 

@@ -352,3 +352,32 @@ def trinterp(q0, p0, q1, p1, s, shortest):
             out[i, r, 3] = (1.0 - si) * p0[i, r] + si * p1[i, r]
         out[i, 3, 3] = 1.0
     return out
+
+
+@njit(**NJIT_OPTIONS)
+def first_non_rotation(m, tol):
+    """First row of (n, k, k) matrices (k >= 3) whose top-left 3 x 3 block is
+    not a proper rotation: an entry of ``RᵀR - I`` beyond ``tol`` or
+    ``det(R) <= 0``. Returns -1 when every row is one.
+    """
+    for i in range(m.shape[0]):
+        worst = 0.0
+        for a in range(3):
+            for b in range(a, 3):
+                dot = (
+                    m[i, 0, a] * m[i, 0, b]
+                    + m[i, 1, a] * m[i, 1, b]
+                    + m[i, 2, a] * m[i, 2, b]
+                )
+                dev = abs(dot - (1.0 if a == b else 0.0))
+                # a NaN deviation must count as bad: compare negated
+                if not dev <= worst:
+                    worst = dev
+        det = (
+            m[i, 0, 0] * (m[i, 1, 1] * m[i, 2, 2] - m[i, 1, 2] * m[i, 2, 1])
+            - m[i, 0, 1] * (m[i, 1, 0] * m[i, 2, 2] - m[i, 1, 2] * m[i, 2, 0])
+            + m[i, 0, 2] * (m[i, 1, 0] * m[i, 2, 1] - m[i, 1, 1] * m[i, 2, 0])
+        )
+        if not (worst <= tol and det > 0.0):
+            return i
+    return -1

@@ -361,7 +361,14 @@ def _representation(representation) -> int:
 
 def _angles_of_rotations(rot: np.ndarray, lead: tuple, code: int) -> np.ndarray:
     """spatialmath's ``r2x``: the angle triple of each rotation matrix."""
-    _check_rotations(rot, lead, "Γ")
+    try:
+        _check_rotations(rot, lead, "Γ")
+    except ValueError as err:
+        # the likely mistake: a stack of exactly three angle triples
+        raise ValueError(
+            f"{err}. A trailing (3, 3) shape is read as rotation matrices (as in "
+            "spatialmath); to pass three angle triples, give them shape (3, 1, 3)"
+        ) from None
     q = conversions.quaternion_from_matrix(rot)
     if code == 4:
         return conversions.rotation_vector_from_quaternion(q)

@@ -370,12 +370,19 @@ def test_qlog_of_unit_quaternion_is_half_the_rotation_vector():
         (lambda: se3.trinterp(np.eye(3), np.eye(4), 0.5), "both be rotations"),
         (lambda: se3.trnorm(np.zeros((4, 4))), "cannot be normalised"),
         (lambda: se3.qlog([[1, 0, 0, 0], [0, 0, 0, 0]]), r"q\[1\] is zero"),
-        (lambda: se3.rotvelxform(np.ones((3, 3))), r"Γ is not a rotation"),
+        (lambda: se3.rotvelxform(np.ones((3, 3))), r"Γ is not a rotation.*\(3, 1, 3\)"),
     ],
 )
 def test_bad_input_is_named(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+def test_three_angle_triples_pass_as_shape_3_1_3():
+    ang = _rng(20).uniform(-1, 1, size=(3, 3))
+    np.testing.assert_array_equal(
+        se3.rotvelxform(ang[:, None, :])[:, 0], se3.rotvelxform(np.r_[ang, ang])[:3]
+    )
 
 
 def test_single_values_give_single_values():

@@ -197,7 +197,8 @@ def _trajectory(value, name: str, frame) -> Trajectory:
             name,
         )
     if isinstance(value, (tuple, list)) and len(value) == 3:
-        return _from_arrays(*value, name)
+        timestamps, positions, quaternions = value
+        return _from_arrays(timestamps, positions, quaternions, name)
     raise TypeError(
         f"{name} must be a frame name, a ReferenceFrame, an xarray Dataset with "
         f"position/orientation or a (timestamps, positions, quaternions) tuple, "
@@ -700,7 +701,11 @@ def rpe(
         raise ValueError(
             f"delta_unit must be one of {list(_DELTA_UNITS)}, got {delta_unit!r}"
         )
-    if not isinstance(delta, numbers.Real) or not np.isfinite(delta) or delta <= 0:
+    if (
+        not isinstance(delta, numbers.Real)
+        or not np.isfinite(float(delta))
+        or delta <= 0
+    ):
         raise ValueError(f"delta must be a positive number, got {delta!r}")
     ref, est, est_full = _inputs(reference, estimate, frame)
     est, est_full, alignment = _align(

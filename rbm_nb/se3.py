@@ -608,7 +608,7 @@ def trnorm(T) -> np.ndarray:
 
 def _fractions(s) -> np.ndarray:
     """``s`` as an array of fractions; an integer > 1 is a number of steps."""
-    if isinstance(s, numbers.Integral) and not isinstance(s, bool) and s > 1:
+    if isinstance(s, numbers.Integral) and not isinstance(s, bool) and int(s) > 1:
         return np.linspace(0.0, 1.0, int(s))
     arr = as_float_array(s, "s")
     if not np.isfinite(arr).all() or (arr < 0).any() or (arr > 1).any():

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from rbm_nb import se3
 from rbm_nb.conversions import matrix_from_quaternion
@@ -400,3 +402,57 @@ def test_docstring_examples_run():
 
     result = doctest.testmod(se3, optionflags=doctest.NORMALIZE_WHITESPACE)
     assert result.attempted > 10 and result.failed == 0
+
+
+# --------------------------------------------------------------------------- algebra (hypothesis)
+
+
+_unit = st.floats(-1.0, 1.0, allow_nan=False)
+_quat = st.tuples(_unit, _unit, _unit, _unit).filter(lambda q: 0.1 < np.linalg.norm(q))
+_vec = st.tuples(*[st.floats(-5.0, 5.0, allow_nan=False)] * 3)
+
+
+def _pose(q, t):
+    T = np.eye(4)
+    T[:3, :3] = matrix_from_quaternion(np.asarray(q) / np.linalg.norm(q))
+    T[:3, 3] = t
+    return T
+
+
+@settings(max_examples=60, deadline=None)
+@given(_quat, _vec, _quat, _vec)
+def test_adjoint_of_a_product_is_the_product_of_adjoints(q1, t1, q2, t2):
+    A, B = _pose(q1, t1), _pose(q2, t2)
+    np.testing.assert_allclose(
+        se3.tr2adjoint(A @ B), se3.tr2adjoint(A) @ se3.tr2adjoint(B), atol=1e-11
+    )
+    np.testing.assert_allclose(
+        se3.tr2adjoint(np.linalg.inv(A)), np.linalg.inv(se3.tr2adjoint(A)), atol=1e-10
+    )
+
+
+@settings(max_examples=60, deadline=None)
+@given(_quat, _vec, _quat, _vec, st.floats(0.0, 1.0))
+def test_trinterp_hits_its_endpoints_and_stays_a_pose(q1, t1, q2, t2, s):
+    A, B = _pose(q1, t1), _pose(q2, t2)
+    ends = se3.trinterp(A, B, np.array([0.0, 1.0]))
+    np.testing.assert_allclose(ends[0], A, atol=1e-12)
+    np.testing.assert_allclose(ends[1], B, atol=1e-12)
+    mid = se3.trinterp(A, B, s)
+    np.testing.assert_allclose(mid[:3, :3].T @ mid[:3, :3], np.eye(3), atol=1e-12)
+    np.testing.assert_allclose(
+        mid[:3, 3], (1 - s) * A[:3, 3] + s * B[:3, 3], atol=1e-12
+    )
+
+
+@settings(max_examples=60, deadline=None)
+@given(_vec)
+def test_exp_jacobian_inverse_undoes_it_below_a_full_turn(v):
+    v = np.asarray(v)
+    norm = np.linalg.norm(v)
+    if norm > 6.0:
+        v = v * 6.0 / norm
+    fwd = se3.exp2jac(v)
+    inv = se3.rotvelxform(v, inverse=True, representation="exp")
+    np.testing.assert_allclose(inv @ fwd, np.eye(3), atol=1e-9)
+    np.testing.assert_array_equal(se3.vex(se3.skew(v)), v)

@@ -375,3 +375,20 @@ def test_docstring_examples_run():
 
     result = doctest.testmod(ev, optionflags=doctest.NORMALIZE_WHITESPACE)
     assert result.attempted > 5 and result.failed == 0
+
+
+def test_frame_argument_looks_both_up_in_another_frame(walk):
+    ref, est = walk
+    rbm.register_frame("world")
+    rbm.register_frame("map", parent="world", translation=[1.0, 2.0, 3.0],
+                       rotation=quaternion_from_rotation_vector([0.0, 0.4, 1.0]))  # fmt: skip
+    rbm.register_frame("truth", parent="world", translation=ref[1], rotation=ref[2],
+                       timestamps=ref[0])  # fmt: skip
+    rbm.register_frame("odometry", parent="world", translation=est[1], rotation=est[2],
+                       timestamps=est[0])  # fmt: skip
+    in_world = ev.ape("truth", "odometry", pose_relation="full")
+    in_map = ev.ape("truth", "odometry", pose_relation="full", frame="map")
+    # a common rigid change of frame leaves every pose error unchanged
+    np.testing.assert_allclose(in_map.error.values, in_world.error.values, atol=1e-12)
+    p_map, _ = rbm.lookup_pose("truth", "map")
+    np.testing.assert_allclose(in_map.reference.positions, p_map, atol=1e-12)

@@ -143,17 +143,21 @@ def _poses(value, name: str, rotation: bool = True) -> tuple[np.ndarray, tuple]:
     ``rotation=False`` skips the SO(3) test (for first-order poses such as
     the output of ``delta2tr``).
     """
-    rows, lead = _rows(value, name, (4, 4))
-    last = np.abs(rows[:, 3, :] - (0.0, 0.0, 0.0, 1.0)).max(axis=1) if len(rows) else []
-    bad = np.asarray(last) > 1e-12
-    if bad.any():
-        i = int(np.argmax(bad))
+    arr = as_float_array(value, name)
+    if arr.ndim < 2 or arr.shape[-2:] != (4, 4):
+        raise ValueError(f"{name} must have shape (..., 4, 4), got {arr.shape}")
+    lead = arr.shape[:-2]
+    rows = np.ascontiguousarray(arr.reshape((-1, 4, 4)))
+    i, code = _kernels().first_bad_pose(rows, _ROTATION_TOLERANCE, rotation)
+    if code == 1:
+        raise ValueError(f"{name}{_where(lead, i)} is not finite")
+    if code == 2:
         raise ValueError(
             f"{name}{_where(lead, i)} is not a homogeneous matrix: its last row is "
             f"{rows[i, 3].tolist()}, expected [0, 0, 0, 1]"
         )
-    if rotation:
-        _check_rotations(rows, lead, name)
+    if code == 3:
+        _check_rotations(rows[i : i + 1], (), f"{name}{_where(lead, i)}")
     return rows, lead
 
 
@@ -641,6 +645,7 @@ def trinterp(start, end, s, shortest: bool = True) -> np.ndarray:
         Rotate along the shorter arc. With False the arc depends on the sign
         of each endpoint's quaternion; as in spatialmath, the quaternion of a
         matrix is the one whose largest-magnitude component is positive.
+        (The quaternions are computed in the kernel, Shepperd's method.)
 
     Returns
     -------
@@ -685,28 +690,22 @@ def trinterp(start, end, s, shortest: bool = True) -> np.ndarray:
     frac = _fractions(s)
     lead = _broadcast(start_lead, end_lead, "start", "end")
     lead = _broadcast(lead, frac.shape, "the poses", "s")
-    a = _expand(start_rows, start_lead, lead)
-    b = _expand(end_rows, end_lead, lead)
-    f = np.ascontiguousarray(np.broadcast_to(frac, lead)).reshape(-1)
-    qa = _largest_positive(conversions.quaternion_from_matrix(a[:, :3, :3]))
-    qb = _largest_positive(conversions.quaternion_from_matrix(b[:, :3, :3]))
-    out = _kernels().trinterp(
-        qa, np.ascontiguousarray(a[:, :3, 3]), qb, np.ascontiguousarray(b[:, :3, 3]),
-        f, bool(shortest),
-    )  # fmt: skip
+    # a stack whose leading shape is the result's, or a single value, is
+    # passed as is (the kernel reuses single rows); anything else is expanded
+    a = _rows_for(start_rows, start_lead, lead)
+    b = _rows_for(end_rows, end_lead, lead)
+    f = _rows_for(np.ascontiguousarray(frac.reshape(-1)), frac.shape, lead)
+    out = _kernels().trinterp(a, b, f, bool(shortest))
     if rotation_only:
         return np.ascontiguousarray(out[:, :3, :3]).reshape(lead + (3, 3))
     return out.reshape(lead + (4, 4))
 
 
-def _largest_positive(q: np.ndarray) -> np.ndarray:
-    """Flip each quaternion so that its largest-magnitude component is positive.
-
-    A matrix has two quaternions; which one is taken decides the arc of
-    ``shortest=False``. This is the sign spatialmath's ``r2q`` returns.
-    """
-    big = q[np.arange(len(q)), np.argmax(np.abs(q), axis=1)]
-    return np.ascontiguousarray(np.where(big[:, None] < 0, -q, q))
+def _rows_for(rows: np.ndarray, lead: tuple, target: tuple) -> np.ndarray:
+    """``rows`` as the kernel wants them for a result of leading shape ``target``."""
+    if lead == target or len(rows) == 1:
+        return rows
+    return _expand(rows, lead, target)
 
 
 def _embed(rot: np.ndarray) -> np.ndarray:

@@ -301,22 +301,69 @@ def trnorm(t):
     return out, bad
 
 
-@njit(**NJIT_OPTIONS)
-def trinterp(q0, p0, q1, p1, s, shortest):
-    """Slerp the rotations and lerp the translations, all (n, ...) -> (n, 4, 4).
+@njit(inline="always", **NJIT_OPTIONS)
+def _quaternion_of_block(m):
+    """Unit quaternion of the rotation block of a 4 x 4 matrix (Shepperd).
 
-    ``q0``, ``q1`` are unit quaternions (n, 4), ``p0``, ``p1`` positions
-    (n, 3) and ``s`` (n,) the fractions. With ``shortest`` the rotation takes
-    the shorter of the two arcs (``q1`` is flipped into ``q0``'s hemisphere).
+    The component of largest magnitude is computed from a square root and
+    is therefore positive: the sign spatialmath's ``r2q`` returns.
     """
-    n = s.shape[0]
+    m00, m11, m22 = m[0, 0], m[1, 1], m[2, 2]
+    trace = m00 + m11 + m22
+    if trace >= m00 and trace >= m11 and trace >= m22:
+        w = 0.5 * math.sqrt(max(1.0 + trace, 0.0))
+        f = 0.25 / w
+        return (
+            w,
+            (m[2, 1] - m[1, 2]) * f,
+            (m[0, 2] - m[2, 0]) * f,
+            (m[1, 0] - m[0, 1]) * f,
+        )
+    if m00 >= m11 and m00 >= m22:
+        x = 0.5 * math.sqrt(max(1.0 + m00 - m11 - m22, 0.0))
+        f = 0.25 / x
+        return (
+            (m[2, 1] - m[1, 2]) * f,
+            x,
+            (m[0, 1] + m[1, 0]) * f,
+            (m[0, 2] + m[2, 0]) * f,
+        )
+    if m11 >= m22:
+        y = 0.5 * math.sqrt(max(1.0 - m00 + m11 - m22, 0.0))
+        f = 0.25 / y
+        return (
+            (m[0, 2] - m[2, 0]) * f,
+            (m[0, 1] + m[1, 0]) * f,
+            y,
+            (m[1, 2] + m[2, 1]) * f,
+        )
+    z = 0.5 * math.sqrt(max(1.0 - m00 - m11 + m22, 0.0))
+    f = 0.25 / z
+    return (m[1, 0] - m[0, 1]) * f, (m[0, 2] + m[2, 0]) * f, (m[1, 2] + m[2, 1]) * f, z
+
+
+@njit(**NJIT_OPTIONS)
+def trinterp(t0, t1, s, shortest):
+    """Slerp the rotations and lerp the translations of pose pairs.
+
+    ``t0``, ``t1`` (n0 | 1, 4, 4) and ``s`` (ns | 1,) fractions; rows of
+    length 1 are reused. With ``shortest`` the rotation takes the shorter of
+    the two arcs (``q1`` is flipped into ``q0``'s hemisphere); otherwise the
+    arc between the quaternions of :func:`_quaternion_of_block`.
+    """
+    n = max(t0.shape[0], t1.shape[0], s.shape[0])
+    a_step = 1 if t0.shape[0] > 1 else 0
+    b_step = 1 if t1.shape[0] > 1 else 0
+    s_step = 1 if s.shape[0] > 1 else 0
     out = np.zeros((n, 4, 4))
     for i in range(n):
-        aw, ax, ay, az = q0[i, 0], q0[i, 1], q0[i, 2], q0[i, 3]
-        bw, bx, by, bz = q1[i, 0], q1[i, 1], q1[i, 2], q1[i, 3]
+        a = t0[i * a_step]
+        b = t1[i * b_step]
+        si = s[i * s_step]
+        aw, ax, ay, az = _quaternion_of_block(a)
+        bw, bx, by, bz = _quaternion_of_block(b)
         if shortest and aw * bw + ax * bx + ay * by + az * bz < 0.0:
             bw, bx, by, bz = -bw, -bx, -by, -bz
-        si = s[i]
         # the angle between the two unit 4-vectors, accurate at 0 and pi
         dw, dx, dy, dz = bw - aw, bx - ax, by - ay, bz - az
         sw, sx, sy, sz = bw + aw, bx + ax, by + ay, bz + az
@@ -349,7 +396,7 @@ def trinterp(q0, p0, q1, p1, s, shortest):
         out[i, 2, 1] = 2.0 * (y * z + w * x)
         out[i, 2, 2] = 1.0 - 2.0 * (x * x + y * y)
         for r in range(3):
-            out[i, r, 3] = (1.0 - si) * p0[i, r] + si * p1[i, r]
+            out[i, r, 3] = (1.0 - si) * a[r, 3] + si * b[r, 3]
         out[i, 3, 3] = 1.0
     return out
 
@@ -381,3 +428,29 @@ def first_non_rotation(m, tol):
         if not (worst <= tol and det > 0.0):
             return i
     return -1
+
+
+@njit(**NJIT_OPTIONS)
+def first_bad_pose(m, tol, rotation):
+    """First row of (n, 4, 4) matrices that is not a pose, and why.
+
+    Returns ``(i, code)``: code 1 a value is not finite, 2 the last row is
+    not (0, 0, 0, 1) within 1e-12, 3 (with ``rotation``) the rotation block
+    is not a rotation within ``tol``; ``(-1, 0)`` when every row is a pose.
+    One pass, so that validating costs about as much as computing.
+    """
+    for i in range(m.shape[0]):
+        for r in range(4):
+            for c in range(4):
+                if not math.isfinite(m[i, r, c]):
+                    return i, 1
+        if (
+            abs(m[i, 3, 0]) > 1e-12
+            or abs(m[i, 3, 1]) > 1e-12
+            or abs(m[i, 3, 2]) > 1e-12
+            or abs(m[i, 3, 3] - 1.0) > 1e-12
+        ):
+            return i, 2
+        if rotation and first_non_rotation(m[i : i + 1], tol) >= 0:
+            return i, 3
+    return -1, 0

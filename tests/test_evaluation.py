@@ -392,3 +392,23 @@ def test_frame_argument_looks_both_up_in_another_frame(walk):
     np.testing.assert_allclose(in_map.error.values, in_world.error.values, atol=1e-12)
     p_map, _ = rbm.lookup_pose("truth", "map")
     np.testing.assert_allclose(in_map.reference.positions, p_map, atol=1e-12)
+
+
+def test_aligned_frame_goes_into_a_scene_next_to_the_reference(walk, tmp_path):
+    from rbm_nb.scene import Scene
+
+    ref, est = walk
+    rbm.register_frame("world")
+    rbm.register_frame("truth", parent="world", translation=ref[1], rotation=ref[2],
+                       timestamps=ref[0])  # fmt: skip
+    ev.ape("truth", est, align=True).register_aligned("estimate_aligned", "world")
+    with Scene("world") as scene:
+        truth = scene.add_path("truth")
+        aligned = scene.add_path("estimate_aligned", color="#ff8000")
+        # the two drawn paths are the reference and the aligned estimate
+        np.testing.assert_allclose(truth.positions, ref[1], atol=1e-12)
+        p, _ = rbm.lookup_pose("estimate_aligned", "world")
+        np.testing.assert_allclose(aligned.positions, p, atol=1e-12)
+        scene.add_frame("estimate_aligned")
+        scene.to_html(tmp_path / "both.html")
+    assert "estimate_aligned" in (tmp_path / "both.html").read_text()

@@ -92,6 +92,8 @@ _SUBMODULES = {
     "rigid_transform",
     "ros",
     "scene",
+    "se3",
+    "evaluation",
     "transforms",
     "widgets",
 }

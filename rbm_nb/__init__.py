@@ -91,6 +91,7 @@ _SUBMODULES = {
     "rigid_transform",
     "ros",
     "scene",
+    "sdf",
     "transforms",
     "widgets",
 }

@@ -1,0 +1,296 @@
+"""Signed distance grids: trilinear sampling, gradients and sphere tracing.
+
+Conventions shared by every function here:
+
+* ``data`` is a C-contiguous float64 array of shape (nx, ny, nz), every
+  dimension at least 2; node ``(i, j, k)`` lies at
+  ``origin + (i, j, k) * resolution`` in the grid's frame;
+* points, origins and directions are C-contiguous float64 arrays of shape
+  (n, 3) in the grid's frame; directions are unit vectors;
+* a point is inside the grid when every coordinate lies in
+  ``[origin, origin + (n - 1) * resolution]`` (both ends included, as in
+  scipy's ``RegularGridInterpolator``);
+* nothing is validated: ``rbm_nb.sdf`` checks shapes and values first.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .._config import NJIT_OPTIONS
+
+# bisection steps that pin a bracketed zero crossing down to ~2**-50 of the
+# bracket (the last sphere-tracing step, at most a few cells)
+_BISECTIONS = 50
+
+
+@njit(**NJIT_OPTIONS)
+def _locate(x, n, resolution):
+    """Cell index and fraction of offset ``x`` along an axis of ``n`` nodes; -1 outside."""
+    if not (x >= 0.0 and x <= (n - 1) * resolution):
+        return -1, 0.0
+    i = int(math.floor(x / resolution))
+    if i > n - 2:
+        i = n - 2
+    lo = i * resolution
+    return i, (x - lo) / ((i + 1) * resolution - lo)
+
+
+@njit(**NJIT_OPTIONS)
+def _sample(data, origin, resolution, px, py, pz, fill_value):
+    """Trilinear value and its gradient at one point; (fill, nan, nan, nan) outside."""
+    nx, ny, nz = data.shape
+    i, fx = _locate(px - origin[0], nx, resolution)
+    j, fy = _locate(py - origin[1], ny, resolution)
+    k, fz = _locate(pz - origin[2], nz, resolution)
+    if i < 0 or j < 0 or k < 0:
+        return fill_value, np.nan, np.nan, np.nan
+    c000 = data[i, j, k]
+    c100 = data[i + 1, j, k]
+    c010 = data[i, j + 1, k]
+    c110 = data[i + 1, j + 1, k]
+    c001 = data[i, j, k + 1]
+    c101 = data[i + 1, j, k + 1]
+    c011 = data[i, j + 1, k + 1]
+    c111 = data[i + 1, j + 1, k + 1]
+    # interpolate along x first, then y, then z
+    c00 = c000 + fx * (c100 - c000)
+    c10 = c010 + fx * (c110 - c010)
+    c01 = c001 + fx * (c101 - c001)
+    c11 = c011 + fx * (c111 - c011)
+    c0 = c00 + fy * (c10 - c00)
+    c1 = c01 + fy * (c11 - c01)
+    value = c0 + fz * (c1 - c0)
+    # derivatives of the same trilinear polynomial inside this cell
+    dx0 = (c100 - c000) + fy * ((c110 - c010) - (c100 - c000))
+    dx1 = (c101 - c001) + fy * ((c111 - c011) - (c101 - c001))
+    gx = (dx0 + fz * (dx1 - dx0)) / resolution
+    dy0 = c10 - c00
+    dy1 = c11 - c01
+    gy = (dy0 + fz * (dy1 - dy0)) / resolution
+    gz = (c1 - c0) / resolution
+    return value, gx, gy, gz
+
+
+@njit(**NJIT_OPTIONS)
+def grid_values(data, origin, resolution, fill_value, points):
+    """Trilinear distances at (n, 3) points; ``fill_value`` outside the grid."""
+    n = points.shape[0]
+    out = np.empty(n)
+    for p in range(n):
+        out[p] = _sample(
+            data, origin, resolution, points[p, 0], points[p, 1], points[p, 2],
+            fill_value,
+        )[0]  # fmt: skip
+    return out
+
+
+@njit(**NJIT_OPTIONS)
+def grid_gradients(data, origin, resolution, points):
+    """Gradients (n, 3) of the trilinear interpolant; rows of nan outside the grid."""
+    n = points.shape[0]
+    out = np.empty((n, 3))
+    for p in range(n):
+        _, gx, gy, gz = _sample(
+            data, origin, resolution, points[p, 0], points[p, 1], points[p, 2], 0.0
+        )
+        out[p, 0] = gx
+        out[p, 1] = gy
+        out[p, 2] = gz
+    return out
+
+
+@njit(**NJIT_OPTIONS)
+def _box_segment(lo, hi, o, u, t_max):
+    """Parameter range [t0, t1] of the ray o + t u inside the box, within [0, t_max]."""
+    t0 = 0.0
+    t1 = t_max
+    for a in range(3):
+        if u[a] == 0.0:
+            if o[a] < lo[a] or o[a] > hi[a]:
+                return 1.0, 0.0
+            continue
+        ta = (lo[a] - o[a]) / u[a]
+        tb = (hi[a] - o[a]) / u[a]
+        if ta > tb:
+            ta, tb = tb, ta
+        t0 = max(t0, ta)
+        t1 = min(t1, tb)
+    return t0, t1
+
+
+@njit(**NJIT_OPTIONS)
+def _along(data, origin, resolution, lo, hi, o, u, t):
+    """Distance at o + t u, the point clamped into the box (t is inside up to rounding)."""
+    px = min(max(o[0] + t * u[0], lo[0]), hi[0])
+    py = min(max(o[1] + t * u[1], lo[1]), hi[1])
+    pz = min(max(o[2] + t * u[2], lo[2]), hi[2])
+    return _sample(data, origin, resolution, px, py, pz, np.inf)[0]
+
+
+@njit(**NJIT_OPTIONS)
+def sphere_trace(
+    data, origin, resolution, origins, directions, max_distance, tol, max_steps
+):
+    """March rays to the zero level set.
+
+    Parameters
+    ----------
+    origins, directions : (n, 3)
+        Directions of unit length.
+    max_distance : (n,)
+    tol : float
+        A sample with distance <= tol ends the march as a hit.
+    max_steps : int
+
+    Returns
+    -------
+    t : (n,)
+        Distance along the ray to the hit (nan for a miss).
+    hit : (n,) bool
+
+    A step of the current distance cannot pass the surface when the field
+    is a true distance; an interpolated grid may overestimate a little, so a
+    step that lands on a negative value is undone by bisection on the
+    bracket, which finds the first crossing the step jumped over.
+    """
+    n = origins.shape[0]
+    nx, ny, nz = data.shape
+    lo = origin.copy()
+    hi = np.empty(3)
+    hi[0] = origin[0] + (nx - 1) * resolution
+    hi[1] = origin[1] + (ny - 1) * resolution
+    hi[2] = origin[2] + (nz - 1) * resolution
+    t_out = np.full(n, np.nan)
+    hit = np.zeros(n, dtype=np.bool_)
+    for r in range(n):
+        o = origins[r]
+        u = directions[r]
+        t0, t1 = _box_segment(lo, hi, o, u, max_distance[r])
+        if t0 > t1:
+            continue
+        t = t0
+        d = _along(data, origin, resolution, lo, hi, o, u, t)
+        if d <= tol:
+            t_out[r] = t
+            hit[r] = True
+            continue
+        for _ in range(max_steps):
+            t_next = min(t + d, t1)
+            d_next = _along(data, origin, resolution, lo, hi, o, u, t_next)
+            if d_next < 0.0:
+                a = t
+                b = t_next
+                for _ in range(_BISECTIONS):
+                    m = 0.5 * (a + b)
+                    if _along(data, origin, resolution, lo, hi, o, u, m) < 0.0:
+                        b = m
+                    else:
+                        a = m
+                t_out[r] = 0.5 * (a + b)
+                hit[r] = True
+                break
+            if d_next <= tol:
+                t_out[r] = t_next
+                hit[r] = True
+                break
+            if t_next >= t1:
+                break
+            t = t_next
+            d = d_next
+    return t_out, hit
+
+
+@njit(**NJIT_OPTIONS)
+def _triangle_distance2(px, py, pz, tri):
+    """Squared distance from a point to a (3, 3) triangle (Ericson's regions)."""
+    ax, ay, az = tri[0, 0], tri[0, 1], tri[0, 2]
+    abx, aby, abz = tri[1, 0] - ax, tri[1, 1] - ay, tri[1, 2] - az
+    acx, acy, acz = tri[2, 0] - ax, tri[2, 1] - ay, tri[2, 2] - az
+    apx, apy, apz = px - ax, py - ay, pz - az
+    d1 = abx * apx + aby * apy + abz * apz
+    d2 = acx * apx + acy * apy + acz * apz
+    if d1 <= 0.0 and d2 <= 0.0:
+        return apx * apx + apy * apy + apz * apz
+    bpx, bpy, bpz = px - tri[1, 0], py - tri[1, 1], pz - tri[1, 2]
+    d3 = abx * bpx + aby * bpy + abz * bpz
+    d4 = acx * bpx + acy * bpy + acz * bpz
+    if d3 >= 0.0 and d4 <= d3:
+        return bpx * bpx + bpy * bpy + bpz * bpz
+    cpx, cpy, cpz = px - tri[2, 0], py - tri[2, 1], pz - tri[2, 2]
+    d5 = abx * cpx + aby * cpy + abz * cpz
+    d6 = acx * cpx + acy * cpy + acz * cpz
+    if d6 >= 0.0 and d5 <= d6:
+        return cpx * cpx + cpy * cpy + cpz * cpz
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+        v = d1 / (d1 - d3)
+        qx, qy, qz = apx - v * abx, apy - v * aby, apz - v * abz
+        return qx * qx + qy * qy + qz * qz
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+        w = d2 / (d2 - d6)
+        qx, qy, qz = apx - w * acx, apy - w * acy, apz - w * acz
+        return qx * qx + qy * qy + qz * qz
+    va = d3 * d6 - d5 * d4
+    if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
+        w = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        qx = bpx - w * (tri[2, 0] - tri[1, 0])
+        qy = bpy - w * (tri[2, 1] - tri[1, 1])
+        qz = bpz - w * (tri[2, 2] - tri[1, 2])
+        return qx * qx + qy * qy + qz * qz
+    denom = 1.0 / (va + vb + vc)
+    v = vb * denom
+    w = vc * denom
+    qx = apx - abx * v - acx * w
+    qy = apy - aby * v - acy * w
+    qz = apz - abz * v - acz * w
+    return qx * qx + qy * qy + qz * qz
+
+
+@njit(**NJIT_OPTIONS)
+def mesh_distances(points, triangles):
+    """Unsigned distances (n,) from points (n, 3) to the nearest of (m, 3, 3) triangles.
+
+    Exhaustive, but a triangle is skipped when its bounding sphere is
+    farther than the best distance so far, and each point starts from the
+    triangle that was nearest to the previous one (grid points come in
+    order, so that bound is tight from the start).
+    """
+    m = triangles.shape[0]
+    centres = np.empty((m, 3))
+    radii = np.empty(m)
+    for f in range(m):
+        for a in range(3):
+            centres[f, a] = (
+                triangles[f, 0, a] + triangles[f, 1, a] + triangles[f, 2, a]
+            ) / 3.0
+        r2 = 0.0
+        for v in range(3):
+            dx = triangles[f, v, 0] - centres[f, 0]
+            dy = triangles[f, v, 1] - centres[f, 1]
+            dz = triangles[f, v, 2] - centres[f, 2]
+            r2 = max(r2, dx * dx + dy * dy + dz * dz)
+        radii[f] = math.sqrt(r2)
+    n = points.shape[0]
+    out = np.empty(n)
+    best_face = 0
+    for p in range(n):
+        px, py, pz = points[p, 0], points[p, 1], points[p, 2]
+        best = _triangle_distance2(px, py, pz, triangles[best_face])
+        for f in range(m):
+            dx = px - centres[f, 0]
+            dy = py - centres[f, 1]
+            dz = pz - centres[f, 2]
+            reach = math.sqrt(dx * dx + dy * dy + dz * dz) - radii[f]
+            if reach > 0.0 and reach * reach >= best:
+                continue
+            d2 = _triangle_distance2(px, py, pz, triangles[f])
+            if d2 < best:
+                best = d2
+                best_face = f
+        out[p] = math.sqrt(best)
+    return out

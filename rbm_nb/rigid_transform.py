@@ -539,7 +539,8 @@ class Transform:
             offset = _rows(v, shape, 3)
         else:
             axes = self if ref == "local" else ref
-            shape = self._batch_shape("translate", v.shape[:-1], axes.shape)
+            extra = () if ref == "local" else (axes.shape,)
+            shape = self._batch_shape("translate", v.shape[:-1], *extra)
             offset = k.rotate_vectors(
                 _rows(axes._rotation, shape, 4), _rows(v, shape, 3)
             )

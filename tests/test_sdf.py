@@ -518,3 +518,12 @@ def test_bad_queries_are_refused_with_clear_messages():
 
 def test_the_package_exposes_sdf_lazily():
     assert rbm.sdf.GridSDF is GridSDF
+
+
+def test_docstring_examples_run():
+    import doctest
+    import importlib
+
+    module = importlib.import_module("rbm_nb.sdf")
+    result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
+    assert result.attempted > 0 and result.failed == 0

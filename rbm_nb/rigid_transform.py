@@ -626,7 +626,24 @@ class Transform:
         >>> Transform([1.0, 2.0, 3.0]).transform_vector([[1.0, 0.0, 0.0]])
         array([[2., 2., 3.]])
         """
-        return self.apply(points)
+        if self.shape:
+            return self.apply(points)
+        return self._single_matrix_apply(points, inverse=False)
+
+    def _single_matrix_apply(self, points, inverse: bool) -> np.ndarray:
+        """One transformation applied to many points as a matrix product (BLAS).
+
+        For a single pose and a large cloud this is several times faster than
+        rotating every point by the quaternion, and what scikit-robot does.
+        """
+        p = _as_float(points, "points", 3)
+        rot = homogeneous_from_transform(self._translation, self._rotation)[:3, :3]
+        rows = p.reshape(-1, 3).T  # (3, n): one BLAS call on the long axis
+        if inverse:
+            out = rot.T @ (rows - self._translation[:, None])
+        else:
+            out = rot @ rows + self._translation[:, None]
+        return out.T.reshape(p.shape)
 
     def inverse_transform_vector(self, points) -> np.ndarray:
         """World coordinates to local ones: ``rot(r⁻¹, p - t)``.
@@ -647,7 +664,9 @@ class Transform:
         >>> tf.inverse_transform_vector([1.0, 1.0, 0.0]).round(12) + 0.0
         array([1., 0., 0.])
         """
-        return self.inv().apply(points)
+        if self.shape:
+            return self.inv().apply(points)
+        return self._single_matrix_apply(points, inverse=True)
 
     def difference_position(self, other: Transform, position_mask=True) -> np.ndarray:
         """Where ``other``'s origin lies, in this transformation's local axes.

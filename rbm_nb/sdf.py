@@ -402,13 +402,6 @@ class GridSDF:
         """
         rows, lead, pose = self._in_grid(points, frame, timestamps, "gradient")
         g = _kernels().grid_gradients(self._data, self._origin, self._resolution, rows)
-        if self._use_abs:
-            sign = np.sign(
-                _kernels().grid_values(
-                    self._data, self._origin, self._resolution, 0.0, rows
-                )
-            )
-            g = g * np.where(sign == 0.0, 1.0, sign)[:, None]
         if normalize:
             norm = np.linalg.norm(g, axis=1, keepdims=True)
             with np.errstate(invalid="ignore", divide="ignore"):
@@ -513,9 +506,8 @@ class GridSDF:
         else:
             o_grid, u_grid = o, u
         k = _kernels()
-        data = np.abs(self._data) if self._use_abs else self._data
         t, hit = k.sphere_trace(
-            data,
+            self._data,
             self._origin,
             self._resolution,
             np.ascontiguousarray(o_grid.reshape(-1, 3)),

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import os
 import tempfile
-import weakref
 from typing import NamedTuple
 
 import numpy as np
@@ -684,8 +683,7 @@ class GridSDF:
         """Draw the level set in a :class:`rbm_nb.scene.Scene`, fixed in the grid's frame.
 
         The triangles go through ``Scene.add_mesh`` as a Wavefront ``.obj``
-        file written to a temporary location, removed again when the
-        returned handle is garbage-collected.
+        file in a temporary folder that is removed when Python exits.
 
         Parameters
         ----------
@@ -712,7 +710,7 @@ class GridSDF:
                 "with frame= so the scene knows where to draw it"
             )
         vertices, faces = self.surface_mesh(level)
-        fd, path = tempfile.mkstemp(prefix="rbm_nb_sdf_", suffix=".obj")
+        fd, path = tempfile.mkstemp(suffix=".obj", dir=_level_set_dir())
         with os.fdopen(fd, "w") as f:
             f.write(_obj_text(vertices, faces))
         try:
@@ -726,15 +724,22 @@ class GridSDF:
         except BaseException:
             os.remove(path)
             raise
-        weakref.finalize(handle, _remove_quietly, path)
         return handle
 
 
-def _remove_quietly(path: str) -> None:
-    try:
-        os.remove(path)
-    except OSError:
-        pass
+_LEVEL_SETS: tempfile.TemporaryDirectory | None = None
+
+
+def _level_set_dir() -> str:
+    """A folder for level-set files, removed when the interpreter exits.
+
+    The scene may read a mesh file when it is added or later (an export, a
+    browser reconnecting), so the files live as long as the session.
+    """
+    global _LEVEL_SETS
+    if _LEVEL_SETS is None:
+        _LEVEL_SETS = tempfile.TemporaryDirectory(prefix="rbm_nb_sdf_")
+    return _LEVEL_SETS.name
 
 
 def _obj_text(vertices: np.ndarray, faces: np.ndarray) -> str:

@@ -6,6 +6,8 @@ import sys
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 import rbm_nb as rbm
@@ -186,6 +188,34 @@ def test_timestamps_along_the_first_axis_of_a_cloud():
         np.testing.assert_allclose(
             out[i], grid.sdf(clouds[i], frame="world", timestamps=np.full(10, times[i]))
         )
+
+
+unit_quaternions = (
+    st.tuples(*[st.floats(-1, 1, allow_nan=False)] * 4)
+    .filter(lambda q: np.linalg.norm(q) > 0.1)
+    .map(lambda q: np.array(q) / np.linalg.norm(q))
+)
+offsets = st.tuples(*[st.floats(-5, 5, allow_nan=False)] * 3).map(np.array)
+
+
+@settings(max_examples=40, deadline=None)
+@given(offsets, unit_quaternions, st.integers(0, 2**32 - 1))
+def test_distances_do_not_depend_on_the_frame_the_points_are_given_in(t, q, seed):
+    rbm.clear_registry()
+    rbm.register_frame("world")
+    rbm.register_frame("object", parent="world", translation=t, rotation=q)
+    data, origin, res = ball_grid()
+    grid = GridSDF(data, origin, res, frame="object")
+    local = np.random.default_rng(seed).uniform(-0.55, 0.55, (50, 3))
+    world = Rotation.from_quat(q, scalar_first=True).apply(local) + t
+    np.testing.assert_allclose(
+        grid.sdf(world, frame="world"), grid.sdf(local), rtol=0, atol=1e-9
+    )
+    np.testing.assert_allclose(
+        grid.gradient(world, frame="world"),
+        Rotation.from_quat(q, scalar_first=True).apply(grid.gradient(local)),
+        atol=1e-6,
+    )
 
 
 # -- gradients ---------------------------------------------------------------------

@@ -485,7 +485,7 @@ class Transform:
     # -- pose algebra (scikit-robot's Coordinates methods, immutable) -------
 
     def _reference(self, wrt, what: str):
-        """``wrt`` as None (local axes), "world", or a Transform whose axes are meant."""
+        """``wrt`` as "local", "world" ("parent" is the same) or a Transform whose axes are meant."""
         if isinstance(wrt, Transform):
             return wrt
         if isinstance(wrt, str) and wrt in ("local", "world", "parent"):

@@ -425,8 +425,8 @@ class GridSDF:
 
         Each ray advances by the distance sampled at its tip until that
         distance falls below ``tolerance``; a step that lands inside the
-        object is refined onto the crossing (Illinois method). Only the part of a
-        ray inside the grid is traced.
+        object is refined onto the crossing (Illinois method). Only the part
+        of a ray inside the grid is traced.
 
         Parameters
         ----------

@@ -10,7 +10,7 @@ did the gaze ray land").
 
 Building a field from a mesh (:meth:`GridSDF.from_mesh`) and extracting its
 zero level set (:meth:`GridSDF.surface_mesh`, :meth:`GridSDF.add_to_scene`)
-need the optional extra ``rbm_nb[sdf]`` (trimesh, rtree and scikit-image).
+need the optional extra ``rbm_nb[sdf]`` (trimesh and scikit-image).
 """
 
 from __future__ import annotations
@@ -552,9 +552,11 @@ class GridSDF:
     ) -> GridSDF:
         """Sample the signed distance to a closed triangle mesh on a grid.
 
-        Distances are exact point-to-triangle distances (numba); their sign
-        comes from trimesh's inside test, so the mesh must be watertight
-        unless ``use_abs`` asks for unsigned distances.
+        Distances are exact point-to-triangle distances (numba). Their sign
+        needs a watertight mesh (unless ``use_abs`` asks for unsigned
+        distances): nodes farther than a cell from the surface fall into
+        regions that the surface does not cross, each decided by the winding
+        number of one of its nodes; the nodes near the surface get their own.
 
         Parameters
         ----------
@@ -575,7 +577,7 @@ class GridSDF:
         Raises
         ------
         ImportError
-            Without the ``sdf`` extra (trimesh, rtree).
+            Without the ``sdf`` extra (trimesh).
         ValueError
             For an empty or non-watertight mesh (unless ``use_abs``), or a
             grid of more than ``MAX_GRID_NODES`` nodes.
@@ -619,11 +621,14 @@ class GridSDF:
             )
         axes = [lower[a] + np.arange(counts[a]) * resolution for a in range(3)]
         nodes = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-        distance = _kernels().mesh_distances(
-            nodes, np.ascontiguousarray(tm.triangles, dtype=np.float64)
-        )
+        triangles = np.ascontiguousarray(tm.triangles, dtype=np.float64)
+        distance = _kernels().mesh_distances(nodes, triangles)
+        # nodes on the surface come out at ~1e-17 with a sign that is pure
+        # rounding (and the level set would zigzag through them): make them 0
+        distance[distance < 1e-9 * resolution] = 0.0
         if not use_abs:
-            distance = np.where(tm.contains(nodes), -distance, distance)
+            inside = _inside(nodes, distance, tuple(counts), resolution, triangles)
+            distance = np.where(inside, -distance, distance)
         return cls(
             distance.reshape(tuple(counts)),
             lower,
@@ -740,6 +745,38 @@ def _level_set_dir() -> str:
     if _LEVEL_SETS is None:
         _LEVEL_SETS = tempfile.TemporaryDirectory(prefix="rbm_nb_sdf_")
     return _LEVEL_SETS.name
+
+
+def _inside(nodes, distance, shape, resolution, triangles) -> np.ndarray:
+    """Which grid nodes lie inside a watertight mesh, flat boolean (n,).
+
+    A surface crossing the segment between two neighbouring nodes passes
+    within half a cell of one of them, so the nodes farther than that
+    (``far``) form 6-connected regions that lie wholly inside or wholly
+    outside; one winding number per region decides it. Only the thin shell
+    of nodes near the surface needs a winding number each, which keeps the
+    cost far below one per node.
+    """
+    from scipy import ndimage
+
+    # half a cell is the bound; 10 % more absorbs rounding in the distances
+    far = (distance > 0.55 * resolution).reshape(shape)
+    labels, count = ndimage.label(far)
+    labels = labels.reshape(-1)
+    regions, first = np.unique(labels, return_index=True)  # 0: the near shell
+    first = first[regions > 0]
+    near = np.flatnonzero(labels == 0)
+    queries = np.concatenate([near, first])
+    winding = _kernels().winding_numbers(
+        np.ascontiguousarray(nodes[queries]), triangles
+    )
+    # |w| copes with meshes whose faces all point inwards
+    inside_query = np.abs(winding) > 0.5
+    region_inside = np.zeros(count + 1, dtype=bool)
+    region_inside[regions[regions > 0]] = inside_query[len(near) :]
+    inside = region_inside[labels]
+    inside[near] = inside_query[: len(near)]
+    return inside
 
 
 def _obj_text(vertices: np.ndarray, faces: np.ndarray) -> str:

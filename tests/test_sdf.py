@@ -393,6 +393,56 @@ def test_from_mesh_matches_trimesh_signed_distance():
     np.testing.assert_allclose(grid.data[tuple(idx.T)], expected, atol=1e-9)
 
 
+def test_from_mesh_signs_a_hollow_shell_and_its_cavity():
+    outer = trimesh.creation.icosphere(subdivisions=2, radius=0.3)
+    inner = trimesh.creation.icosphere(subdivisions=2, radius=0.15)
+    inner.invert()  # faces towards the cavity: the solid is the shell between
+    shell = trimesh.util.concatenate([outer, inner])
+    assert shell.is_watertight
+    grid = GridSDF.from_mesh(shell, 0.02)
+    probes = np.array([[0.0, 0.0, 0.0], [0.22, 0.0, 0.0], [0.0, 0.0, 0.38]])
+    d = grid.sdf(probes)
+    assert d[0] > 0.1  # the cavity is outside the solid
+    assert d[1] < -0.05  # inside the shell's wall
+    assert d[2] > 0.05
+    idx = np.stack(
+        [np.random.default_rng(16).integers(0, s, 400) for s in grid.shape], 1
+    )
+    nodes = grid.origin + idx * grid.resolution
+    expected = -trimesh.proximity.signed_distance(shell, nodes)
+    np.testing.assert_allclose(grid.data[tuple(idx.T)], expected, atol=1e-9)
+
+
+def test_from_mesh_signs_every_node_like_the_winding_number():
+    # the region shortcut against a winding number at every node
+    from rbm_nb._kernels.sdf import winding_numbers
+
+    mesh = trimesh.creation.torus(major_radius=0.2, minor_radius=0.06)
+    grid = GridSDF.from_mesh(mesh, 0.02)
+    axes = [grid.origin[a] + np.arange(grid.shape[a]) * 0.02 for a in range(3)]
+    nodes = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    inside = np.abs(winding_numbers(nodes, np.ascontiguousarray(mesh.triangles))) > 0.5
+    signed = grid.data.reshape(-1)
+    np.testing.assert_array_equal((signed < 0)[signed != 0], inside[signed != 0])
+    assert inside.sum() > 100
+
+
+@pytest.mark.parametrize("n_triangles", [1, 3, 5, 60])
+def test_mesh_distance_kernel_against_brute_force(n_triangles):
+    from rbm_nb._kernels.sdf import mesh_distances
+
+    rng = np.random.default_rng(n_triangles)
+    triangles = rng.normal(size=(n_triangles, 3, 3))
+    triangles[0, 2] = triangles[0, 1]  # a degenerate (zero-area) triangle too
+    points = rng.normal(size=(300, 3)) * 2
+    # naive twin: trimesh's closest point on every triangle, smallest distance
+    pairs_t = np.repeat(triangles, len(points), axis=0)
+    pairs_p = np.tile(points, (n_triangles, 1))
+    closest = trimesh.triangles.closest_point(pairs_t, pairs_p)
+    naive = np.linalg.norm(closest - pairs_p, axis=1).reshape(n_triangles, -1).min(0)
+    np.testing.assert_allclose(mesh_distances(points, triangles), naive, atol=1e-9)
+
+
 def test_from_mesh_refuses_open_meshes_unless_unsigned():
     box = trimesh.creation.box(extents=[0.2, 0.2, 0.2])
     open_box = trimesh.Trimesh(box.vertices, box.faces[:-2])

@@ -275,46 +275,189 @@ def _triangle_distance2(px, py, pz, tri):
     return qx * qx + qy * qy + qz * qz
 
 
+# triangles per leaf of the bounding-volume hierarchy
+_LEAF_SIZE = 4
+
+
+@njit(**NJIT_OPTIONS)
+def _build_bvh(triangles):
+    """A bounding-volume hierarchy over (m, 3, 3) triangles, median splits.
+
+    Returns
+    -------
+    order : (m,) triangle indices, each leaf owning a contiguous run
+    box_lo, box_hi : (k, 3) node bounding boxes
+    first, count : (k,) a leaf's run in ``order`` (count 0 for inner nodes)
+    left : (k,) first child of an inner node (the second is ``left + 1``)
+    """
+    m = triangles.shape[0]
+    tri_lo = np.empty((m, 3))
+    tri_hi = np.empty((m, 3))
+    centre = np.empty((m, 3))
+    for f in range(m):
+        for a in range(3):
+            lo = min(triangles[f, 0, a], triangles[f, 1, a], triangles[f, 2, a])
+            hi = max(triangles[f, 0, a], triangles[f, 1, a], triangles[f, 2, a])
+            tri_lo[f, a] = lo
+            tri_hi[f, a] = hi
+            centre[f, a] = 0.5 * (lo + hi)
+    order = np.arange(m)
+    size = 2 * m + 1
+    box_lo = np.empty((size, 3))
+    box_hi = np.empty((size, 3))
+    first = np.zeros(size, dtype=np.int64)
+    count = np.zeros(size, dtype=np.int64)
+    left = np.full(size, -1, dtype=np.int64)
+    stack_node = np.empty(size, dtype=np.int64)
+    stack_start = np.empty(size, dtype=np.int64)
+    stack_stop = np.empty(size, dtype=np.int64)
+    stack_node[0], stack_start[0], stack_stop[0] = 0, 0, m
+    depth = 1
+    n_nodes = 1
+    while depth > 0:
+        depth -= 1
+        node = stack_node[depth]
+        start = stack_start[depth]
+        stop = stack_stop[depth]
+        for a in range(3):
+            lo = np.inf
+            hi = -np.inf
+            for i in range(start, stop):
+                lo = min(lo, tri_lo[order[i], a])
+                hi = max(hi, tri_hi[order[i], a])
+            box_lo[node, a] = lo
+            box_hi[node, a] = hi
+        if stop - start <= _LEAF_SIZE:
+            first[node] = start
+            count[node] = stop - start
+            continue
+        # split the widest spread of centres at the median
+        axis = 0
+        widest = -1.0
+        for a in range(3):
+            lo = np.inf
+            hi = -np.inf
+            for i in range(start, stop):
+                lo = min(lo, centre[order[i], a])
+                hi = max(hi, centre[order[i], a])
+            if hi - lo > widest:
+                widest = hi - lo
+                axis = a
+        run = order[start:stop].copy()
+        keys = np.empty(stop - start)
+        for i in range(stop - start):
+            keys[i] = centre[run[i], axis]
+        order[start:stop] = run[np.argsort(keys)]
+        middle = (start + stop) // 2
+        left[node] = n_nodes
+        stack_node[depth], stack_start[depth], stack_stop[depth] = (
+            n_nodes,
+            start,
+            middle,
+        )
+        stack_node[depth + 1] = n_nodes + 1
+        stack_start[depth + 1] = middle
+        stack_stop[depth + 1] = stop
+        depth += 2
+        n_nodes += 2
+    return order, box_lo[:n_nodes], box_hi[:n_nodes], first, count, left
+
+
+@njit(**NJIT_OPTIONS)
+def _box_distance2(px, py, pz, box_lo, box_hi, node):
+    d2 = 0.0
+    for a, v in ((0, px), (1, py), (2, pz)):
+        if v < box_lo[node, a]:
+            d2 += (box_lo[node, a] - v) ** 2
+        elif v > box_hi[node, a]:
+            d2 += (v - box_hi[node, a]) ** 2
+    return d2
+
+
 @njit(**NJIT_OPTIONS)
 def mesh_distances(points, triangles):
     """Unsigned distances (n,) from points (n, 3) to the nearest of (m, 3, 3) triangles.
 
-    Exhaustive, but a triangle is skipped when its bounding sphere is
-    farther than the best distance so far, and each point starts from the
-    triangle that was nearest to the previous one (grid points come in
-    order, so that bound is tight from the start).
+    Exact, through a bounding-volume hierarchy: a subtree is skipped when
+    its box is farther than the best distance so far, which starts from the
+    triangle nearest to the previous point (grid points come in order, so
+    that bound is tight from the start), and the nearer child is searched
+    first.
     """
-    m = triangles.shape[0]
-    centres = np.empty((m, 3))
-    radii = np.empty(m)
-    for f in range(m):
-        for a in range(3):
-            centres[f, a] = (
-                triangles[f, 0, a] + triangles[f, 1, a] + triangles[f, 2, a]
-            ) / 3.0
-        r2 = 0.0
-        for v in range(3):
-            dx = triangles[f, v, 0] - centres[f, 0]
-            dy = triangles[f, v, 1] - centres[f, 1]
-            dz = triangles[f, v, 2] - centres[f, 2]
-            r2 = max(r2, dx * dx + dy * dy + dz * dz)
-        radii[f] = math.sqrt(r2)
+    order, box_lo, box_hi, first, count, left = _build_bvh(triangles)
     n = points.shape[0]
     out = np.empty(n)
+    stack = np.empty(box_lo.shape[0], dtype=np.int64)
     best_face = 0
     for p in range(n):
         px, py, pz = points[p, 0], points[p, 1], points[p, 2]
         best = _triangle_distance2(px, py, pz, triangles[best_face])
-        for f in range(m):
-            dx = px - centres[f, 0]
-            dy = py - centres[f, 1]
-            dz = pz - centres[f, 2]
-            reach = math.sqrt(dx * dx + dy * dy + dz * dz) - radii[f]
-            if reach > 0.0 and reach * reach >= best:
+        stack[0] = 0
+        depth = 1
+        while depth > 0:
+            depth -= 1
+            node = stack[depth]
+            if _box_distance2(px, py, pz, box_lo, box_hi, node) >= best:
                 continue
-            d2 = _triangle_distance2(px, py, pz, triangles[f])
-            if d2 < best:
-                best = d2
-                best_face = f
+            if left[node] < 0:
+                for i in range(first[node], first[node] + count[node]):
+                    f = order[i]
+                    d2 = _triangle_distance2(px, py, pz, triangles[f])
+                    if d2 < best:
+                        best = d2
+                        best_face = f
+                continue
+            a = left[node]
+            b = a + 1
+            # push the farther child first so that the nearer one is searched next
+            if _box_distance2(px, py, pz, box_lo, box_hi, a) < _box_distance2(
+                px, py, pz, box_lo, box_hi, b
+            ):
+                a, b = b, a
+            stack[depth] = a
+            stack[depth + 1] = b
+            depth += 2
         out[p] = math.sqrt(best)
+    return out
+
+
+@njit(**NJIT_OPTIONS)
+def winding_numbers(points, triangles):
+    """Generalised winding numbers (n,) of (m, 3, 3) triangles around (n, 3) points.
+
+    The solid angle of every triangle seen from the point (Van Oosterom and
+    Strackee's formula), summed and divided by 4 pi: +-1 inside a closed,
+    consistently oriented mesh, 0 outside, whatever its shape.
+    """
+    n = points.shape[0]
+    m = triangles.shape[0]
+    out = np.empty(n)
+    for p in range(n):
+        total = 0.0
+        for f in range(m):
+            ax = triangles[f, 0, 0] - points[p, 0]
+            ay = triangles[f, 0, 1] - points[p, 1]
+            az = triangles[f, 0, 2] - points[p, 2]
+            bx = triangles[f, 1, 0] - points[p, 0]
+            by = triangles[f, 1, 1] - points[p, 1]
+            bz = triangles[f, 1, 2] - points[p, 2]
+            cx = triangles[f, 2, 0] - points[p, 0]
+            cy = triangles[f, 2, 1] - points[p, 1]
+            cz = triangles[f, 2, 2] - points[p, 2]
+            la = math.sqrt(ax * ax + ay * ay + az * az)
+            lb = math.sqrt(bx * bx + by * by + bz * bz)
+            lc = math.sqrt(cx * cx + cy * cy + cz * cz)
+            det = (
+                ax * (by * cz - bz * cy)
+                - ay * (bx * cz - bz * cx)
+                + az * (bx * cy - by * cx)
+            )
+            den = (
+                la * lb * lc
+                + (ax * bx + ay * by + az * bz) * lc
+                + (ax * cx + ay * cy + az * cz) * lb
+                + (bx * cx + by * cy + bz * cz) * la
+            )
+            total += 2.0 * math.atan2(det, den)
+        out[p] = total / (4.0 * math.pi)
     return out

@@ -604,6 +604,10 @@ def test_docstring_examples_run():
     import doctest
     import importlib
 
-    module = importlib.import_module("rbm_nb.sdf")
-    result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
-    assert result.attempted > 0 and result.failed == 0
+    attempted = 0
+    for name in ("rbm_nb.sdf", "rbm_nb.sdf._grid", "rbm_nb.sdf._mesh"):
+        module = importlib.import_module(name)
+        result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
+        assert result.failed == 0, name
+        attempted += result.attempted
+    assert attempted > 0

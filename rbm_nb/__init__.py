@@ -94,6 +94,7 @@ _SUBMODULES = {
     "scene",
     "se3",
     "evaluation",
+    "sdf",
     "transforms",
     "widgets",
 }

@@ -490,6 +490,25 @@ def _read_only_inputs() -> None:
     a.difference(a)
 
 
+def _signed_distances() -> None:
+    from .sdf import GridSDF
+
+    axis = np.linspace(-1.0, 1.0, 5)
+    x, y, z = np.meshgrid(axis, axis, axis, indexing="ij")
+    grid = GridSDF(np.sqrt(x**2 + y**2 + z**2) - 0.5, [-1.0, -1.0, -1.0], 0.5)
+    points = np.array([[0.1, 0.2, 0.3], [3.0, 0.0, 0.0]])
+    grid.sdf(points)
+    grid.gradient(points)
+    grid.ray_hits(points - [2.0, 0.0, 0.0], [1.0, 0.0, 0.0])
+    try:  # meshes need the optional 'sdf' extra
+        import trimesh  # noqa: F401
+    except ImportError:
+        return
+    tetrahedron = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    faces = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    GridSDF.from_mesh((tetrahedron, faces), 0.5)
+
+
 def _synthetic_data() -> None:
     from .data.synthetic import synthetic_head_eye
 
@@ -510,6 +529,7 @@ STEPS: tuple[tuple[str, Callable[[], None]], ...] = (
     ("xarray frames and accessor", _xarray),
     ("read-only inputs (frame properties)", _read_only_inputs),
     ("synthetic recording", _synthetic_data),
+    ("signed distance grids", _signed_distances),
 )
 
 

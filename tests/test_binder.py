@@ -47,7 +47,7 @@ REPO = Path(__file__).resolve().parents[1]
 BINDER = REPO / "binder"
 NOTEBOOK = "notebooks/06_head_eye_explorer.ipynb"
 ARTIFACT = REPO / "test-artifacts" / "binder_timing.json"
-EXTRAS = ("notebook", "data", "ros", "lab")
+EXTRAS = ("notebook", "data", "ros", "sdf", "lab")
 TEST_ONLY = {
     "rigid-body-motion",
     "pytest",

@@ -264,11 +264,6 @@ def test_transformer_lookup_sign_is_tf2_composition(seed):
         )  # fmt: skip
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: ros.Transformer.transform_quaternion/transform_pose "
-    "return the reference's sign (KDL's read-back of tf2's product)",
-)
 @pytest.mark.parametrize("seed", range(4))
 def test_transformer_transform_quaternion_and_pose_sign(seed):
     edges = _static_grid(seed)
@@ -558,10 +553,6 @@ def tf2_slerp(q1, q2, f):
     return (np.sin((1 - f) * theta) * q1 + np.sin(f * theta) * q2) / np.sin(theta)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: ros.Transformer interpolates with tf2's slerp signs",
-)
 def test_transformer_interpolation_sign_is_tf2_slerp():
     t, q = _alternating(6)
     rbm.register_frame("world")

@@ -73,7 +73,9 @@ def test_time_base_of_datetime_and_float_timestamps():
     floats = TimeBase.of(np.array([5.0, 6.0]))
     assert floats == TimeBase(t0_s=5.0) and not floats.absolute
     np.testing.assert_array_equal(floats.seconds([5.0, 7.5]), [0.0, 2.5])
-    with pytest.raises(ValueError, match="plain seconds but this time base is absolute"):
+    with pytest.raises(
+        ValueError, match="plain seconds but this time base is absolute"
+    ):
         base.seconds(np.array([1.0]))
     with pytest.raises(ValueError, match="datetime64 but this time base is in plain"):
         floats.seconds(stamps)

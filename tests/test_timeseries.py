@@ -82,13 +82,20 @@ def test_samples_go_once_as_binary_buffers(speed):
     np.testing.assert_array_equal(x, speed.time.values)
     np.testing.assert_array_equal(y[:, 0], speed.values.astype(np.float32))
     assert plot.panels == [
-        {"label": "head speed", "units": "m/s", "components": ["head speed"], "colors": ["#1f77b4"]}
+        {
+            "label": "head speed",
+            "units": "m/s",
+            "components": ["head speed"],
+            "colors": ["#1f77b4"],
+        }
     ]
     assert plot.t0_ns is None
     # moving the cursor sends a float, not the samples again
     plot.comm.messages.clear()
     plot.set_time(3.0)
-    assert plot.comm.messages == [({"method": "update", "state": {"time": 3.0}, "buffer_paths": []}, [])]
+    assert plot.comm.messages == [
+        ({"method": "update", "state": {"time": 3.0}, "buffer_paths": []}, [])
+    ]
 
 
 def test_components_of_a_dataarray_are_lines_of_one_panel():
@@ -100,7 +107,10 @@ def test_components_of_a_dataarray_are_lines_of_one_panel():
         attrs={"units": "deg"},
     )
     plot = TimeSeries({"gaze": gaze, "raw": (t, np.c_[t, t, t], ["a", "b", "c"])})
-    assert [p["components"] for p in plot.panels] == [["azimuth", "elevation"], ["a", "b", "c"]]
+    assert [p["components"] for p in plot.panels] == [
+        ["azimuth", "elevation"],
+        ["a", "b", "c"],
+    ]
     assert plot.panels[0]["units"] == "deg"
     x, y = _decoded(plot, 0)
     np.testing.assert_array_equal(y, np.c_[t, -t].astype(np.float32))
@@ -116,9 +126,7 @@ def test_datetime_data_is_rebased_exactly_to_seconds_from_start():
     np.testing.assert_array_equal(x, np.arange(200) * 5_000_001 / 1e9)
     plot.set_time(stamps[10])
     assert plot.time == pytest.approx(10 * 5_000_001 / 1e9, abs=1e-12)
-    assert plot.readout() == (
-        "t = 0.050 s \u00b7 2020-02-02 00:27:14.050   count: 10"
-    )
+    assert plot.readout() == ("t = 0.050 s \u00b7 2020-02-02 00:27:14.050   count: 10")
 
 
 def test_nan_values_stay_nan_and_time_gaps_get_a_nan_row():
@@ -167,7 +175,9 @@ def test_a_click_in_the_browser_without_a_player_sets_time(speed):
 def test_linking_a_datetime_player_rebases_to_its_start():
     stamps = START + np.arange(100).astype("timedelta64[s]")
     da = xr.DataArray(np.arange(100.0), dims="time", coords={"time": stamps})
-    earlier = int(START.astype(np.int64)) - 2_000_000_000  # the player starts 2 s before
+    earlier = (
+        int(START.astype(np.int64)) - 2_000_000_000
+    )  # the player starts 2 s before
     player = StandInPlayer(t0_ns=earlier)
     plot = TimeSeries({"count": da}, player=player)
     assert plot.t0_ns == earlier
@@ -200,7 +210,9 @@ def test_zoom_from_python(speed):
     ],
 )
 def test_bad_series_are_rejected_with_their_label(series, message):
-    with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
+    with pytest.raises(
+        ValueError, match=message.replace("(", r"\(").replace(")", r"\)")
+    ):
         TimeSeries(series)
 
 

@@ -163,10 +163,13 @@ class TimeSeries(anywidget.AnyWidget):
         traitlets.Dict(), help="label, units, components, colors of each panel."
     ).tag(sync=True)
     data = traitlets.List(
-        traitlets.Dict(), help="Per panel: x (float64 bytes) and y (float32 bytes each)."
+        traitlets.Dict(),
+        help="Per panel: x (float64 bytes) and y (float32 bytes each).",
     ).tag(sync=True)
     t0_ns = traitlets.Int(
-        None, allow_none=True, help="Absolute ns of second 0 (datetime64 data), or None."
+        None,
+        allow_none=True,
+        help="Absolute ns of second 0 (datetime64 data), or None.",
     ).tag(sync=True)
     time = traitlets.Float(
         0.0, help="Cursor time in seconds from the start, when no player is linked."
@@ -197,9 +200,13 @@ class TimeSeries(anywidget.AnyWidget):
                 f"DataArray or (timestamps, values), got {type(series).__name__}"
             )
         if gap is not None and not (float(gap) > 0):
-            raise ValueError(f"TimeSeries: gap must be a positive number of seconds, got {gap}")
+            raise ValueError(
+                f"TimeSeries: gap must be a positive number of seconds, got {gap}"
+            )
         if int(panel_height) < 40:
-            raise ValueError(f"TimeSeries: panel_height must be >= 40 pixels, got {panel_height}")
+            raise ValueError(
+                f"TimeSeries: panel_height must be >= 40 pixels, got {panel_height}"
+            )
         self._series = [_Series(str(k), v) for k, v in series.items()]
         kinds = {s.kind for s in self._series}
         if len(kinds) > 1:
@@ -210,9 +217,7 @@ class TimeSeries(anywidget.AnyWidget):
         self.timestamps_kind = kinds.pop()
         self._gap = None if gap is None else float(gap)
         self.gaps: list[float | None] = []
-        first = min(
-            (s.timestamps[:1] for s in self._series), key=lambda a: a[0]
-        )
+        first = min((s.timestamps[:1] for s in self._series), key=lambda a: a[0])
         self._own_base = self._base = TimeBase.of(first)
         # the samples go in the comm's open message, not in an update after it
         super().__init__(
@@ -234,7 +239,9 @@ class TimeSeries(anywidget.AnyWidget):
                     "label": s.label,
                     "units": s.units,
                     "components": s.components,
-                    "colors": [COLORS[i % len(COLORS)] for i in range(len(s.components))],
+                    "colors": [
+                        COLORS[i % len(COLORS)] for i in range(len(s.components))
+                    ],
                 }
             )
             data.append(

@@ -161,7 +161,7 @@ async function render({ model, el }) {
     const opts = {
       width: width(),
       height: height + (last ? 40 : 0),
-      scales: { x: { time: false, auto: false, range: () => [dataMin, dataMax] } },
+      scales: { x: { time: false } },
       series,
       axes: [
         {
@@ -205,7 +205,7 @@ async function render({ model, el }) {
           },
           mouseup: (u, targ, handler) => (e) => {
             if (e.button !== 0) return;
-            if (downAt && !panStart && e.target === u.over) {
+            if (downAt && !panStart && u.over.contains(e.target)) {
               const moved = Math.hypot(e.clientX - downAt[0], e.clientY - downAt[1]);
               if (moved < 4 && !e.shiftKey) {
                 const rect = u.over.getBoundingClientRect();

@@ -117,14 +117,17 @@ export function dataSeconds(player, t) {
 
 /**
  * "12.345 s", plus the absolute UTC time when t0_ns is known:
- * "12.345 s  2019-05-03 11:02:41.345".
+ * "12.345 s \u00b7 2020-02-02 00:27:26.345" (the same text as the Python readout).
  */
 export function formatTime(t, t0_ns = null) {
-  const seconds = `${t.toFixed(3)} s`;
+  if (t === null || t === undefined || !Number.isFinite(t)) {
+    return "\u2014";
+  }
+  const seconds = `${(t + 0).toFixed(3)} s`;
   if (t0_ns === null || t0_ns === undefined) {
     return seconds;
   }
-  const ms = Number(t0_ns) / 1e6 + t * 1e3;
-  const iso = new Date(Math.round(ms)).toISOString();
-  return `${seconds}  ${iso.replace("T", " ").replace("Z", "")}`;
+  const ms = Math.floor(Number(t0_ns) / 1e6 + t * 1e3 + 0.5);
+  const iso = new Date(ms).toISOString();
+  return `${seconds} \u00b7 ${iso.replace("T", " ").replace("Z", "")}`;
 }

@@ -281,6 +281,11 @@ class Player(anywidget.AnyWidget):
         return self.playback.index_at(self.time)
 
     @property
+    def t0_s(self) -> float:
+        """Second 0 on the data's float-seconds axis (the same as ``origin``)."""
+        return self.origin
+
+    @property
     def data_time(self) -> float:
         """The current time on the data's float-seconds axis (``origin + time``)."""
         return self.origin + self.time
@@ -426,7 +431,7 @@ class Player(anywidget.AnyWidget):
         """The text of the time display: seconds from the start, and the date if any."""
         text = f"{self.time:.3f} s"
         if self.timestamps_kind == DATETIME:
-            text += f"  {format_time(self.data_time, DATETIME)}"
+            text += f" \u00b7 {format_time(self.data_time, DATETIME)}"
         return text
 
     def __repr__(self) -> str:

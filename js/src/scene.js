@@ -25,6 +25,11 @@ const CSS = `
   background: rgba(0,0,0,.5); padding: 4px 8px; border-radius: 4px; pointer-events: none; line-height: 1.5; }
 .rbm-scene .rbm-swatch { display: inline-block; width: 14px; height: 4px; margin-right: 6px;
   vertical-align: middle; }
+.rbm-scene .rbm-tools { position: absolute; left: 6px; top: 6px; display: flex; gap: 4px; }
+.rbm-scene .rbm-tools button { font: 12px sans-serif; color: #fff; background: rgba(0,0,0,.55);
+  border: 1px solid rgba(255,255,255,.35); border-radius: 3px; padding: 2px 8px; cursor: pointer; }
+.rbm-scene .rbm-tools button:disabled { opacity: .45; cursor: default; }
+.rbm-scene .rbm-tools button.rbm-on { background: #d9a400; color: #000; }
 .rbm-scene .rbm-info { position: absolute; left: 6px; top: 6px; font: 12px sans-serif; color: #fff;
   background: rgba(0,0,0,.45); padding: 2px 6px; border-radius: 3px; pointer-events: none; }
 `;
@@ -166,7 +171,18 @@ class View {
     this.info = document.createElement("div");
     this.info.className = "rbm-info";
     this.info.style.display = "none";
-    this.root.append(this.pane, this.overlay, this.legend, this.info);
+    this.tools = document.createElement("div");
+    this.tools.className = "rbm-tools";
+    this.followButton = document.createElement("button");
+    this.followButton.type = "button";
+    this.followButton.className = "rbm-follow";
+    this.fitButton = document.createElement("button");
+    this.fitButton.type = "button";
+    this.fitButton.className = "rbm-fit";
+    this.fitButton.textContent = "fit";
+    this.fitButton.title = "Show the whole scene";
+    this.tools.append(this.followButton, this.fitButton);
+    this.root.append(this.pane, this.overlay, this.legend, this.info, this.tools);
     el.appendChild(this.root);
     this.root.style.height = `${model.get("height")}px`;
 
@@ -216,6 +232,22 @@ class View {
         this.posesDirty = true;
       });
     }
+    this.followButton.addEventListener("click", () => {
+      const following = model.get("follow");
+      model.set("follow", following ? null : model.get("selected") || null);
+      model.save_changes();
+      this.showTools();
+    });
+    this.fitButton.addEventListener("click", () => {
+      if (model.get("follow")) {
+        model.set("follow", null);
+        model.save_changes();
+      }
+      this.applyCamera();
+    });
+    model.on("change:follow", () => this.showTools());
+    model.on("change:selected", () => this.showTools());
+    this.showTools();
     this.installPicking();
     this.root.rbmView = this;
     this.loop = () => {
@@ -330,6 +362,23 @@ class View {
       viewer.camera.position.add(delta);
       viewer.controls.update();
       viewer.set_dirty();
+    }
+  }
+
+  showTools() {
+    const following = this.model.get("follow");
+    const selected = this.model.get("selected");
+    this.followButton.classList.toggle("rbm-on", Boolean(following));
+    if (following) {
+      this.followButton.textContent = `following ${following}`;
+      this.followButton.title = "Stop following";
+      this.followButton.disabled = false;
+    } else {
+      this.followButton.textContent = selected ? `follow ${selected}` : "follow";
+      this.followButton.title = selected
+        ? `Keep the camera on ${selected}`
+        : "Click a frame in the view to select it, then follow it";
+      this.followButton.disabled = !selected;
     }
   }
 

@@ -502,6 +502,9 @@ class Scene:
         self._check_open()
         check_kinds(self.state.kind, player.timestamps_kind, f"link(Scene {self.name!r})")
         self._player = player
+        if self.state.pins:  # the player drives everything from now on
+            self.state.pins.clear()
+            self._sync_widget("_pins")
         if self._widget is not None:
             self._widget.player = player
 

@@ -46,7 +46,9 @@ class RecordingComm:
     def receive_state(self, state):
         """What the browser sends when it updates traits."""
         msg = {
-            "content": {"data": {"method": "update", "state": state, "buffer_paths": []}},
+            "content": {
+                "data": {"method": "update", "state": state, "buffer_paths": []}
+            },
             "buffers": [],
         }
         for handler in self.handlers:
@@ -138,7 +140,12 @@ def test_index_counts_floating_point_neighbours_as_equal():
 
 @pytest.mark.parametrize(
     "seconds, message",
-    [([], "non-empty"), ([[0.0]], "1-D"), ([0.0, np.nan], "finite"), ([1.0, 0.0], "sorted")],
+    [
+        ([], "non-empty"),
+        ([[0.0]], "1-D"),
+        ([0.0, np.nan], "finite"),
+        ([1.0, 0.0], "sorted"),
+    ],
 )
 def test_playback_bad_axis(seconds, message):
     with pytest.raises(ValueError, match=message):
@@ -157,7 +164,9 @@ def test_traits_of_the_timeline_contract():
     assert p.speed == 2.0 and p.loop and not p.playing
     assert p.trait_metadata("time", "echo_update") is False
     state = p.get_state()
-    assert {"time", "playing", "speed", "loop", "duration", "t0_ns", "origin"} <= set(state)
+    assert {"time", "playing", "speed", "loop", "duration", "t0_ns", "origin"} <= set(
+        state
+    )
     assert "export default" in p._esm or "initialize" in p._esm
     floats = Player(np.array([3.0, 4.0, 5.5]))
     assert floats.t0_ns is None and floats.origin == 3.0 and floats.duration == 2.5
@@ -225,7 +234,9 @@ def test_browser_time_reaches_python_links_and_callbacks(recording_comm):
     assert follower.times[-1] == pytest.approx(2.3) and seen == [pytest.approx(2.3)]
     assert indexed.published[-1] == 9  # latest of its own samples at or before 2.3
     # the time is not sent back to the browser (no echo, no update)
-    back = [m for m in player_comm.messages[sent:] if m and "time" in m.get("state", {})]
+    back = [
+        m for m in player_comm.messages[sent:] if m and "time" in m.get("state", {})
+    ]
     assert back == []
 
 
@@ -245,7 +256,9 @@ def test_error_in_a_link_is_shown_and_playback_goes_on(recording_comm):
 def test_one_player_drives_several_views():
     rbm.register_frame("world")
     ts = np.arange(5) * 0.5
-    rbm.register_frame("body", parent="world", translation=np.zeros((5, 3)), timestamps=ts)
+    rbm.register_frame(
+        "body", parent="world", translation=np.zeros((5, 3)), timestamps=ts
+    )
     from rbm_nb.scene import Scene
 
     with Scene("world") as a, Scene("world") as b:
@@ -270,7 +283,9 @@ def test_unlink():
 def test_player_of_a_moving_frame_and_by_name():
     rbm.register_frame("world")
     ts = np.arange(4) * 0.5
-    rbm.register_frame("body", parent="world", translation=np.zeros((4, 3)), timestamps=ts)
+    rbm.register_frame(
+        "body", parent="world", translation=np.zeros((4, 3)), timestamps=ts
+    )
     assert Player("body").n == 4
     assert Player(rbm.registry["body"]).duration == pytest.approx(1.5)
 

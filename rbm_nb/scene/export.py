@@ -46,7 +46,9 @@ def _b64(data) -> str:
     return base64.b64encode(bytes(data)).decode("ascii")
 
 
-def _model_spec(widget, esm_index: dict, esm: list, overrides: dict | None = None) -> dict:
+def _model_spec(
+    widget, esm_index: dict, esm: list, overrides: dict | None = None
+) -> dict:
     from ipywidgets.widgets.widget import _remove_buffers
 
     state = widget.get_state()
@@ -61,13 +63,16 @@ def _model_spec(widget, esm_index: dict, esm: list, overrides: dict | None = Non
         "esm": esm_index[text],
         "state": state,
         "buffers": [
-            {"path": list(p), "data": _b64(b)} for p, b in zip(paths, buffers, strict=True)
+            {"path": list(p), "data": _b64(b)}
+            for p, b in zip(paths, buffers, strict=True)
         ],
         "messages": [],
     }
 
 
-def build_document(scene, *, series=(), player=None, max_frames=None, autoplay=False) -> dict:
+def build_document(
+    scene, *, series=(), player=None, max_frames=None, autoplay=False
+) -> dict:
     """The JSON document an export page runs (see ``js/src/export.js``)."""
     from ..widgets.player import Player, bundle
 
@@ -76,12 +81,17 @@ def build_document(scene, *, series=(), player=None, max_frames=None, autoplay=F
     if player is None:
         player = Player(scene)
     if not isinstance(player, Player):
-        raise ValueError(f"to_html: player must be a Player, got {type(player).__name__}")
+        raise ValueError(
+            f"to_html: player must be a Player, got {type(player).__name__}"
+        )
     esm: list[str] = []
     esm_index: dict[str, int] = {}
     widget = scene.widget
     scene_spec = _model_spec(
-        widget, esm_index, esm, {"player": f"IPY_MODEL_{player.model_id}", "height": 520}
+        widget,
+        esm_index,
+        esm,
+        {"player": f"IPY_MODEL_{player.model_id}", "height": 520},
     )
     content, buffers = scene._snapshot_message(max_samples=max_frames)
     scene_spec["messages"].append(

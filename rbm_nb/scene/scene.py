@@ -500,7 +500,9 @@ class Scene:
     def _attach_player(self, player) -> None:
         """Follow ``player`` (called by ``Player.link``)."""
         self._check_open()
-        check_kinds(self.state.kind, player.timestamps_kind, f"link(Scene {self.name!r})")
+        check_kinds(
+            self.state.kind, player.timestamps_kind, f"link(Scene {self.name!r})"
+        )
         self._player = player
         if self.state.pins:  # the player drives everything from now on
             self.state.pins.clear()
@@ -528,7 +530,14 @@ class Scene:
                     self._camera_is_auto = True
                 widget = SceneWidget(self._snapshot_message)
                 self._widget = widget
-                for name in ("_origin", "_camera", "_frames", "_labels", "_legend", "_pins"):
+                for name in (
+                    "_origin",
+                    "_camera",
+                    "_frames",
+                    "_labels",
+                    "_legend",
+                    "_pins",
+                ):
                     self._sync_widget(name)
                 if self._player is not None:
                     widget.player = self._player
@@ -609,7 +618,9 @@ class Scene:
         target = pose[:3, 3]
         if distance is None:
             handle = next(
-                h for h in self._handles.values() if isinstance(h, FrameHandle) and h.pose_path == paths[name]
+                h
+                for h in self._handles.values()
+                if isinstance(h, FrameHandle) and h.pose_path == paths[name]
             )
             distance = 10.0 * handle.style["scale"]
         direction = np.array([1.0, -1.4, 1.0]) / np.linalg.norm([1.0, -1.4, 1.0])
@@ -657,7 +668,11 @@ class Scene:
                 self._highlight = None
                 if kind == "scaled" and not handle.removed:
                     self._emit(
-                        [self.state.set_property(handle.geom_path, "scale", [1.0, 1.0, 1.0])]
+                        [
+                            self.state.set_property(
+                                handle.geom_path, "scale", [1.0, 1.0, 1.0]
+                            )
+                        ]
                     )
                 elif kind == "added":
                     handle.remove()
@@ -666,7 +681,9 @@ class Scene:
             frame = _resolve(frame, "highlight: frame")
             for handle in self._handles.values():
                 if isinstance(handle, FrameHandle) and handle.frame is frame:
-                    message = self.state.set_property(handle.geom_path, "scale", [2.0, 2.0, 2.0])
+                    message = self.state.set_property(
+                        handle.geom_path, "scale", [2.0, 2.0, 2.0]
+                    )
                     self._emit([message])
                     self._highlight = ("scaled", handle)
                     return
@@ -895,7 +912,10 @@ class Scene:
         step = nice_step(span)
         lo = np.floor(low / step) * step - step
         hi = np.ceil(high / step) * step + step
-        if self._grid_step == step and getattr(self, "_grid_box", None) == (tuple(lo), tuple(hi)):
+        if self._grid_step == step and getattr(self, "_grid_box", None) == (
+            tuple(lo),
+            tuple(hi),
+        ):
             return
         self._grid_step = step
         self._grid_box = (tuple(lo), tuple(hi))
@@ -908,7 +928,9 @@ class Scene:
             segments += [(lo[0], y, 0.0), (hi[0], y, 0.0)]
         g = commands.meshcat_geometry()
         lines = g.LineSegments(
-            g.PointsGeometry(np.ascontiguousarray(np.array(segments, dtype=np.float32).T)),
+            g.PointsGeometry(
+                np.ascontiguousarray(np.array(segments, dtype=np.float32).T)
+            ),
             g.LineBasicMaterial(color=color_int(GRID_COLOR)),
         )
         self._emit([self.state.set_object(GRID_PATH, lines)])
@@ -932,7 +954,9 @@ class Scene:
             color = f"#{color_int(handle.style['color']):06x}"
             rows.append({"text": handle.name.replace("_", " "), "color": color})
         if self._grid and self._grid_step is not None:
-            rows.append({"text": f"grid {format_length(self._grid_step)}", "color": GRID_COLOR})
+            rows.append(
+                {"text": f"grid {format_length(self._grid_step)}", "color": GRID_COLOR}
+            )
         return rows
 
     def _widget_value(self, name: str):
@@ -970,7 +994,9 @@ class Scene:
         sub = SceneState()
         sub.tracks = {p: self.state.tracks[p] for p in paths}
         meta, buffers = sub.track_payload(origin=origin)
-        self._widget.push({"type": "tracks", "tracks": meta, "remove": list(removed)}, buffers)
+        self._widget.push(
+            {"type": "tracks", "tracks": meta, "remove": list(removed)}, buffers
+        )
 
     def _snapshot_message(self, max_samples: int | None = None) -> tuple[dict, list]:
         """The content message that builds this scene in a fresh view."""

@@ -89,7 +89,9 @@ class SceneWidget(anywidget.AnyWidget):
     def _valid_height(self, proposal):
         value = int(proposal["value"])
         if value < 50:
-            raise traitlets.TraitError(f"height must be at least 50 pixels, got {value}")
+            raise traitlets.TraitError(
+                f"height must be at least 50 pixels, got {value}"
+            )
         return value
 
     def _on_message(self, _widget, content, _buffers) -> None:

@@ -118,7 +118,9 @@ def _positive(value, name: str) -> float:
     try:
         number = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"Player: {name} must be a positive number, got {value!r}") from None
+        raise ValueError(
+            f"Player: {name} must be a positive number, got {value!r}"
+        ) from None
     if isinstance(value, bool) or not (np.isfinite(number) and number > 0):
         raise ValueError(f"Player: {name} must be a positive number, got {value!r}")
     return number
@@ -134,12 +136,16 @@ def _resolve_timestamps(source) -> tuple[Any, str]:
         source = frames.registry[source]
     frames_mod = sys.modules.get("rbm_nb.frames")
     is_frame = frames_mod is not None and isinstance(source, frames_mod.ReferenceFrame)
-    if is_frame or (hasattr(source, "timestamps") and not isinstance(source, np.ndarray)):
+    if is_frame or (
+        hasattr(source, "timestamps") and not isinstance(source, np.ndarray)
+    ):
         name = getattr(source, "name", type(source).__name__)
         timestamps = source.timestamps
         if timestamps is None:
             what = "frame" if is_frame else type(source).__name__
-            raise ValueError(f"Player: {what} {name!r} is static, it has no timestamps to play")
+            raise ValueError(
+                f"Player: {what} {name!r} is static, it has no timestamps to play"
+            )
         return timestamps, f"timestamps of {name!r}"
     if source is None:
         raise ValueError("Player: timestamps must be given, got None")
@@ -182,23 +188,27 @@ class Player(anywidget.AnyWidget):
     time = traitlets.Float(0.0, help="Seconds from the first sample.").tag(
         sync=True, echo_update=False
     )
-    playing = traitlets.Bool(False, help="Whether the browser clock runs.").tag(sync=True)
+    playing = traitlets.Bool(False, help="Whether the browser clock runs.").tag(
+        sync=True
+    )
     speed = traitlets.Float(1.0, help="Playback speed relative to the recording.").tag(
         sync=True
     )
     loop = traitlets.Bool(False, help="Start over at the end instead of stopping.").tag(
         sync=True
     )
-    duration = traitlets.Float(0.0, help="Seconds from the first to the last sample.").tag(
-        sync=True
-    )
+    duration = traitlets.Float(
+        0.0, help="Seconds from the first to the last sample."
+    ).tag(sync=True)
     t0_ns = traitlets.Int(
         None, allow_none=True, help="Absolute time of second 0 (ns since the epoch)."
     ).tag(sync=True)
-    origin = traitlets.Float(0.0, help="Second 0 on the data's float-seconds axis.").tag(
+    origin = traitlets.Float(
+        0.0, help="Second 0 on the data's float-seconds axis."
+    ).tag(sync=True)
+    skip = traitlets.Float(1.0, help="Seconds of a small skip (arrow keys).").tag(
         sync=True
     )
-    skip = traitlets.Float(1.0, help="Seconds of a small skip (arrow keys).").tag(sync=True)
     big_skip = traitlets.Float(10.0, help="Seconds of a big skip (shift+arrows).").tag(
         sync=True
     )
@@ -214,7 +224,11 @@ class Player(anywidget.AnyWidget):
         loop: bool = False,
         **kwargs,
     ):
-        if isinstance(step, bool) or not isinstance(step, (int, np.integer)) or step < 1:
+        if (
+            isinstance(step, bool)
+            or not isinstance(step, (int, np.integer))
+            or step < 1
+        ):
             raise ValueError(f"Player: step must be a positive integer, got {step!r}")
         speed = check_speed(speed, "Player")
         skip = 1.0 if skip is None else _positive(skip, "skip")
@@ -307,7 +321,9 @@ class Player(anywidget.AnyWidget):
 
     def seek_time(self, t) -> None:
         """Go to ``t``: data seconds (epoch seconds for datetime data) or datetime64."""
-        self.time = self.playback.clamp(time_as_seconds(t, self.timestamps_kind) - self.origin)
+        self.time = self.playback.clamp(
+            time_as_seconds(t, self.timestamps_kind) - self.origin
+        )
 
     def step_forward(self) -> None:
         """Go ``step`` samples forward."""

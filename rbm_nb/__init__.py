@@ -84,6 +84,7 @@ _SUBMODULES = {
     "estimators",
     "explorer",
     "frames",
+    "gaze",
     "io",
     "lookups",
     "plot",

@@ -2,7 +2,8 @@
 
 ``rbm-nb demo`` opens JupyterLab on the head/eye explorer notebook (offline it
 uses the synthetic recording); ``rbm-nb demo --html out.html`` writes the
-explorer's scene as a self-contained animation with no Jupyter involved;
+explorer's dashboard (3D view, time series, player) as one self-contained page
+that plays offline, with no Jupyter involved;
 ``rbm-nb demo --text`` prints a lookup across a small moving frame tree.
 """
 
@@ -132,7 +133,7 @@ def main(argv: list[str] | None = None) -> int:
     mode.add_argument(
         "--html",
         metavar="OUT.html",
-        help="write the explorer's 3D scene as one self-contained HTML file and exit",
+        help="write the explorer's dashboard as one self-contained HTML file and exit",
     )
     mode.add_argument(
         "--text",
@@ -146,7 +147,10 @@ def main(argv: list[str] | None = None) -> int:
         help="example data for --html: the real recording, else synthetic (auto)",
     )
     demo.add_argument(
-        "--max-frames", type=int, default=3000, help="samples per object in --html"
+        "--max-frames",
+        type=int,
+        default=20000,
+        help="samples per moving object in --html (evenly spaced)",
     )
     demo.add_argument("--port", type=int, default=8888, help="JupyterLab port")
     demo.add_argument(

@@ -21,15 +21,14 @@ NAN_RUN = (8.0, 10.0)  # seconds with NaN values in the "wave" panel
 SETUP = f"""
 import numpy as np
 import ipywidgets as widgets
-from rbm_nb.widgets import TimeSeries
-from rbm_nb.widgets._timebase import format_time
-from dashboard_player import make_player
+import time
+from rbm_nb.widgets import Player, TimeSeries
 
 t = np.arange(0.0, 20.0, 0.01)
 wave = np.sin(t)
 wave[(t > {NAN_RUN[0]}) & (t < {NAN_RUN[1]})] = np.nan
 circle = np.c_[np.cos(t), np.sin(t)]
-player = make_player(t)
+player = Player(t)
 plot = TimeSeries(
     {{"wave": (t, wave), "circle": (t, circle, ["cos", "sin"])}},
     player=player, title="test plot", panel_height=160,
@@ -40,7 +39,9 @@ player.observe(lambda c: setattr(kernel_time, "value", f"KERNEL-TIME {{c.new:.3f
 plot.observe(lambda c: setattr(kernel_range, "value", f"KERNEL-RANGE {{c.new}}"), "x_range")
 jump = widgets.Button(description="jump to 15 s")
 jump.on_click(lambda _: setattr(player, "time", 15.0))
-widgets.VBox([player, plot, kernel_time, kernel_range, jump])
+busy = widgets.Button(description="keep the kernel busy")
+busy.on_click(lambda _: time.sleep(4))
+widgets.VBox([player, plot, kernel_time, kernel_range, jump, busy])
 """
 
 
@@ -61,13 +62,10 @@ def _notebook(path):
 
 @pytest.fixture(scope="module")
 def lab(tmp_path_factory):
-    from pathlib import Path
-
     tmp = tmp_path_factory.mktemp("dashboard")
     notebook = _notebook(tmp / "dashboard.ipynb")
-    helper = Path(__file__).with_name("dashboard_player.py")
     (tmp / "lab").mkdir()
-    server = JupyterLab(tmp / "lab", [notebook, helper])
+    server = JupyterLab(tmp / "lab", [notebook])
     try:
         yield server
     finally:
@@ -215,4 +213,43 @@ def test_click_seeks_the_player_and_the_cursor_follows_it(dashboard):
         )
         assert abs(left + 1 - expected) < 1.5
     save("dashboard_seeked.png", page.locator(".rbm-ts").screenshot())
+    assert not page.errors
+
+
+def cursor_left(page, i=0):
+    return float(
+        page.locator(".rbm-ts-cursor")
+        .nth(i)
+        .evaluate("el => parseFloat(el.style.left)")
+    )
+
+
+def test_cursor_follows_play_while_the_kernel_is_busy(dashboard):
+    page = dashboard
+    page.get_by_role("button", name="jump to 15 s").click()
+    page.wait_for_function(
+        "document.querySelector('.rbm-ts-time').textContent.startsWith('t = 15.000 s')",
+        timeout=30000,
+    )
+    page.locator(".rbm-player .rbm-big-back").click()  # back to 5 s
+    page.wait_for_timeout(300)
+    page.get_by_role("button", name="keep the kernel busy").click()
+    page.wait_for_timeout(300)  # the kernel now sleeps for 4 s
+    start = cursor_left(page)
+    page.locator(".rbm-player .rbm-play").click()
+    page.wait_for_timeout(1500)
+    moved = cursor_left(page)
+    per_second = chart(page, 0, "u.valToPos(1, 'x') - u.valToPos(0, 'x')")
+    # about 1.5 s of playback, counted in the page while the kernel sleeps
+    assert moved - start > 0.8 * per_second
+    readout = page.locator(".rbm-ts-time").inner_text()
+    player_readout = page.locator(".rbm-player .rbm-readout").inner_text()
+    save(
+        "dashboard_playing.png",
+        page.locator(".jp-OutputArea-output").first.screenshot(),
+    )
+    page.locator(".rbm-player .rbm-play").click()  # pause
+    # the plot and the Player print the time the same way
+    assert readout[len("t = ") :].split(" s")[0].replace(".", "").isdigit()
+    assert " s" in player_readout
     assert not page.errors

@@ -1,4 +1,4 @@
-"""The shared time readout: Python (_timebase.py) and browser (timebase.js) agree."""
+"""The shared time readout: Python (_timebase.py) and browser (timeline.js) agree."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import pytest
 
 from rbm_nb.widgets._timebase import TimeBase, format_time
 
-JS = Path(__file__).resolve().parents[1] / "js" / "src" / "shared" / "timebase.js"
+JS = Path(__file__).resolve().parents[1] / "js" / "src" / "timeline.js"
 T0 = int(np.datetime64("2020-02-02T00:27:14.123456789", "ns").astype(np.int64))
 
 CASES = [

@@ -15,7 +15,7 @@ import pytest
 import traitlets
 import xarray as xr
 
-from rbm_nb.widgets import TimeSeries
+from rbm_nb.widgets import Player, TimeSeries
 from rbm_nb.widgets._timebase import TimeBase
 
 
@@ -45,13 +45,6 @@ def recording_comm(monkeypatch):
     monkeypatch.setattr(comm, "create_comm", lambda **kwargs: RecordingComm(**kwargs))
     yield
     ipywidgets.Widget.close_all()
-
-
-class StandInPlayer(ipywidgets.Widget):
-    """The Player's contract as seen by a linked view: time (s from start), t0_ns."""
-
-    time = traitlets.Float(0.0).tag(sync=True)
-    t0_ns = traitlets.Int(None, allow_none=True).tag(sync=True)
 
 
 START = np.datetime64("2020-02-02T00:27:14.000000001", "ns")
@@ -152,7 +145,7 @@ def test_gap_threshold_can_be_chosen(gap, rows_added):
 
 
 def test_a_player_drives_the_cursor_and_clicks_seek_it(speed):
-    player = StandInPlayer()
+    player = Player(speed.time.values)
     plot = TimeSeries({"speed": speed}, player=player)
     assert plot.player is player
     player.time = 4.55
@@ -162,6 +155,19 @@ def test_a_player_drives_the_cursor_and_clicks_seek_it(speed):
     assert f"speed: {expected:.3g} m/s" in plot.readout()
     plot.set_time(2.0)  # from Python: moves the player
     assert player.time == 2.0
+    # Player.link gives a view the player's trait (the browser follows it)
+    other = TimeSeries({"speed": speed})
+    assert player.link(other) is other and other.player is player
+
+
+def test_a_float_seconds_player_lines_up_by_its_origin(speed):
+    later = speed.sel(time=slice(3.0, None))  # starts 3 s after the player
+    player = Player(speed.time.values)
+    plot = TimeSeries({"later": later}, player=player)
+    x, _ = _decoded(plot, 0)
+    assert x[0] == pytest.approx(3.0)
+    player.time = 3.05
+    assert plot.values_at()["later"] == pytest.approx([later.values[0]])
 
 
 def test_a_click_in_the_browser_without_a_player_sets_time(speed):
@@ -175,10 +181,8 @@ def test_a_click_in_the_browser_without_a_player_sets_time(speed):
 def test_linking_a_datetime_player_rebases_to_its_start():
     stamps = START + np.arange(100).astype("timedelta64[s]")
     da = xr.DataArray(np.arange(100.0), dims="time", coords={"time": stamps})
-    earlier = (
-        int(START.astype(np.int64)) - 2_000_000_000
-    )  # the player starts 2 s before
-    player = StandInPlayer(t0_ns=earlier)
+    earlier = int(START.astype(np.int64)) - 2_000_000_000  # 2 s before
+    player = Player(np.r_[np.datetime64(earlier, "ns"), stamps])
     plot = TimeSeries({"count": da}, player=player)
     assert plot.t0_ns == earlier
     x, _ = _decoded(plot, 0)
@@ -224,8 +228,8 @@ def test_mixed_timestamp_kinds_and_bad_options_are_rejected(speed):
         TimeSeries({"speed": speed}, gap=0)
     with pytest.raises(traitlets.TraitError, match="'time' and 't0_ns'"):
         TimeSeries({"speed": speed}, player=ipywidgets.IntSlider())
-    with pytest.raises(ValueError, match="not the same kind"):
-        TimeSeries({"speed": speed}, player=StandInPlayer(t0_ns=0))
+    with pytest.raises(traitlets.TraitError, match="not the same kind"):
+        TimeSeries({"speed": speed}, player=Player(np.array(["2020-01-01"], "M8[ns]")))
 
 
 def test_datetime_on_float_data_is_an_error(speed):

@@ -9,8 +9,8 @@
 // busy; without a Player it follows this widget's own `time`.
 
 import uPlot from "uplot";
-import uPlotCss from "uplot/dist/uPlot.min.css";
-import { formatAbsolute, formatTime } from "./shared/timebase.js";
+import uPlotCss from "uplot/dist/uPlot.min.css" with { type: "text" };
+import { followPlayer, formatTime, seek as seekPlayer } from "./timeline.js";
 
 const CSS = `
 .rbm-ts { font: 12px sans-serif; color: #222; }
@@ -57,8 +57,10 @@ function formatValue(v, units) {
   return units ? `${text} ${units}` : text;
 }
 
-function modelId(ref) {
-  return typeof ref === "string" && ref.startsWith("IPY_MODEL_") ? ref.slice(10) : ref;
+// "seconds since 2020-02-02 00:27:14.000": the absolute part of the shared readout
+function axisLabel(t0Ns) {
+  if (t0Ns === null || t0Ns === undefined) return "seconds since start";
+  return `seconds since ${formatTime(0, t0Ns).split(" \u00b7 ")[1]}`;
 }
 
 async function render({ model, el }) {
@@ -103,9 +105,12 @@ async function render({ model, el }) {
   }
 
   function seek(t) {
-    const target = player || model;
-    target.set("time", t);
-    target.save_changes();
+    if (player) {
+      seekPlayer(player, t); // every view linked to the player follows at once
+    } else {
+      model.set("time", t);
+      model.save_changes();
+    }
     placeCursors();
   }
 
@@ -166,9 +171,7 @@ async function render({ model, el }) {
       axes: [
         {
           size: last ? 40 : 8,
-          label: last
-            ? (t0Ns() != null ? `seconds since ${formatAbsolute(0, t0Ns())}` : "seconds since start")
-            : null,
+          label: last ? axisLabel(t0Ns()) : null,
           labelSize: 16,
           values: last ? (u, splits) => splits.map((v) => `${+v.toFixed(6)}`) : () => [],
         },
@@ -276,18 +279,12 @@ async function render({ model, el }) {
   model.on("change:time", onTime);
   model.on("change:t0_ns", onTime);
 
-  async function attachPlayer() {
-    if (player) player.off("change:time", onTime);
-    player = null;
-    const ref = model.get("player");
-    if (ref) {
-      player = await model.widget_manager.get_model(modelId(ref));
-      player.on("change:time", onTime);
-    }
-    placeCursors();
-  }
-  model.on("change:player", attachPlayer);
-  await attachPlayer();
+  const stopFollowing = followPlayer(model, () => placeCursors(), {
+    onPlayer: (p) => {
+      player = p;
+      placeCursors();
+    },
+  });
 
   const resize = new ResizeObserver(() => {
     const w = width();
@@ -306,8 +303,7 @@ async function render({ model, el }) {
     model.off("change:x_range", onRange);
     model.off("change:time", onTime);
     model.off("change:t0_ns", onTime);
-    model.off("change:player", attachPlayer);
-    if (player) player.off("change:time", onTime);
+    stopFollowing();
     charts.forEach((u) => u.destroy());
   };
 }

@@ -13,7 +13,6 @@ timestamps longer than ``gap`` (a NaN row is inserted there before sending).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from pathlib import Path
 
 import anywidget
 import numpy as np
@@ -22,8 +21,8 @@ from ipywidgets import Widget, widget_serialization
 
 from ._time import timestamps_as_seconds
 from ._timebase import TimeBase, format_time
+from .player import bundle
 
-STATIC = Path(__file__).with_name("static")
 #: Line colours of a panel's components, in order (matplotlib's tab10).
 COLORS = (
     "#1f77b4",
@@ -157,7 +156,7 @@ class TimeSeries(anywidget.AnyWidget):
     't = 5.000 s   speed: 1'
     """
 
-    _esm = STATIC / "timeseries.js"
+    _esm = traitlets.Unicode("", help="The bundle js/src/timeseries.js.").tag(sync=True)
 
     panels = traitlets.List(
         traitlets.Dict(), help="label, units, components, colors of each panel."
@@ -221,7 +220,10 @@ class TimeSeries(anywidget.AnyWidget):
         self._own_base = self._base = TimeBase.of(first)
         # the samples go in the comm's open message, not in an update after it
         super().__init__(
-            panel_height=int(panel_height), title=title or "", **self._encoded()
+            _esm=bundle("timeseries"),
+            panel_height=int(panel_height),
+            title=title or "",
+            **self._encoded(),
         )
         if player is not None:
             self.player = player
@@ -272,6 +274,13 @@ class TimeSeries(anywidget.AnyWidget):
                 "TimeSeries.player must be a Player (a widget with 'time' and "
                 f"'t0_ns' traits), got {type(player).__name__}"
             )
+        if player is not None and (player.t0_ns is None) != (
+            self.timestamps_kind != "datetime"
+        ):
+            raise traitlets.TraitError(
+                "TimeSeries.player: the player's timestamps and the series' are not "
+                "the same kind (datetime64 vs float seconds)"
+            )
         return player
 
     @traitlets.observe("player")
@@ -279,11 +288,6 @@ class TimeSeries(anywidget.AnyWidget):
         base = self._own_base
         player = change["new"]
         if player is not None:
-            if (player.t0_ns is None) != (self.timestamps_kind != "datetime"):
-                raise ValueError(
-                    "TimeSeries: the player's timestamps and the series' are not "
-                    "the same kind (datetime64 vs float seconds)"
-                )
             if player.t0_ns is not None:
                 base = TimeBase(t0_ns=int(player.t0_ns))
             else:

@@ -81,3 +81,18 @@ def test_time_base_of_datetime_and_float_timestamps():
         floats.seconds(stamps)
     with pytest.raises(ValueError, match="non-empty"):
         TimeBase.of(np.array([]))
+
+
+def test_player_readout_is_the_shared_one():
+    from rbm_nb.widgets import Player
+
+    stamps = np.datetime64(T0, "ns") + (np.arange(100) * 10).astype("timedelta64[ms]")
+    player = Player(stamps)
+    for t in (0.0, 0.0625, 0.3333, 0.99):
+        player.time = t
+        assert player.readout() == format_time(t, T0)
+    player.close()
+    floats = Player(np.arange(5.0, 10.0, 0.5))
+    floats.time = 1.25
+    assert floats.readout() == "1.250 s"
+    floats.close()

@@ -173,12 +173,17 @@ async function render({ model, el }) {
           size: last ? 40 : 8,
           label: last ? axisLabel(t0Ns()) : null,
           labelSize: 16,
+          labelFont: "bold 11px sans-serif",
+          font: "11px sans-serif",
           values: last ? (u, splits) => splits.map((v) => `${+v.toFixed(6)}`) : () => [],
         },
         {
           label: panel.units ? `${panel.label} (${panel.units})` : panel.label,
           size: 60,
           labelSize: 16,
+          // small enough that "head speed (m/s)" fits beside a 120 px panel
+          labelFont: "bold 11px sans-serif",
+          font: "11px sans-serif",
         },
       ],
       cursor: {

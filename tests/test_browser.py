@@ -225,9 +225,24 @@ def explorer_notebook(path: Path) -> Path:
 
 
 def run_cell(page, index: int) -> None:
+    """Run code cell ``index`` (shift+enter), retrying while the UI is not ready."""
+    from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
     cell = page.locator(".jp-Notebook .jp-CodeCell").nth(index)
-    cell.locator(".jp-InputArea-editor").click()
-    page.keyboard.press("Shift+Enter")
+    for _ in range(10):
+        cell.locator(".jp-InputArea-editor").click()
+        page.keyboard.press("Shift+Enter")
+        try:
+            page.wait_for_function(
+                """(i) => { const c = document.querySelectorAll('.jp-Notebook .jp-CodeCell')[i];
+                            return /\\[(\\*|\\d+)\\]/.test(c.querySelector('.jp-InputPrompt').innerText); }""",
+                arg=index,
+                timeout=5000,
+            )
+            return
+        except PlaywrightTimeout:
+            continue
+    raise AssertionError(f"cell {index} did not start running")
 
 
 def prompt(page, index: int) -> str:

@@ -51,7 +51,7 @@ function skipBy(model, seconds) {
   seek(model, clampTime(model, t));
 }
 
-export function initialize({ model }) {
+function initialize({ model }) {
   const key = model.get("_uid");
   const clock = new Clock(model);
   CLOCKS.set(key, clock);
@@ -61,7 +61,7 @@ export function initialize({ model }) {
   };
 }
 
-export function render({ model, el }) {
+function render({ model, el }) {
   injectStyle();
   const root = document.createElement("div");
   root.className = "rbm-player";

@@ -525,7 +525,7 @@ class View {
   }
 }
 
-export function initialize({ model }) {
+function initialize({ model }) {
   const store = storeFor(model);
   const onMessage = (msg, buffers) => store.handle(msg, buffers || []);
   model.on("msg:custom", onMessage);
@@ -536,7 +536,7 @@ export function initialize({ model }) {
   };
 }
 
-export function render({ model, el }) {
+function render({ model, el }) {
   injectStyle();
   const store = storeFor(model);
   const view = new View(model, el, store);

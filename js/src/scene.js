@@ -146,6 +146,17 @@ function searchTime(times, t, hint) {
   return lo;
 }
 
+function softwareRenderer(renderer) {
+  try {
+    const gl = renderer.getContext();
+    const info = gl.getExtension("WEBGL_debug_renderer_info");
+    const name = info ? String(gl.getParameter(info.UNMASKED_RENDERER_WEBGL)) : "";
+    return /swiftshader|llvmpipe|software/i.test(name);
+  } catch (err) {
+    return false;
+  }
+}
+
 function cssColor(value) {
   return typeof value === "number" ? `#${value.toString(16).padStart(6, "0")}` : String(value);
 }
@@ -192,6 +203,17 @@ class View {
     const original = viewer.set_3d_pane_size.bind(viewer);
     viewer.set_3d_pane_size = (w, h) =>
       original(w === undefined ? pane.clientWidth || 1 : w, h === undefined ? pane.clientHeight || 1 : h);
+    // lines and triads cast no useful shadows; shadow maps cost a second render per frame
+    viewer.renderer.shadowMap.enabled = false;
+    if (softwareRenderer(viewer.renderer)) {
+      // no GPU (remote desktops, CI, headless browsers): antialiasing is done on
+      // the CPU and halves the frame rate; draw without it
+      const plain = new this.THREE.WebGLRenderer({ antialias: false, alpha: true });
+      plain.shadowMap.enabled = false;
+      viewer.renderer.domElement.replaceWith(plain.domElement);
+      viewer.renderer.dispose();
+      viewer.renderer = plain;
+    }
     viewer.camera.far = 1e5;
     viewer.camera.near = 0.01;
     viewer.camera.updateProjectionMatrix();

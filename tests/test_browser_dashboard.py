@@ -1,4 +1,4 @@
-"""The TimeSeries widget in JupyterLab, in Debian's chromium (playwright).
+"""The dashboard widgets (TimeSeries, FrameTree, Scene, Player) in JupyterLab, in chromium.
 
 The notebook is written by the test: a plot of two panels (one with a run of
 NaN values) linked to a Player. Checked in the page: the panels render, the
@@ -14,7 +14,7 @@ import pytest
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
-from browser_support import JupyterLab, png_pixels, save  # noqa: E402
+from browser_support import JupyterLab, changed_pixels, png_pixels, save  # noqa: E402
 
 NAN_RUN = (8.0, 10.0)  # seconds with NaN values in the "wave" panel
 
@@ -22,13 +22,32 @@ SETUP = f"""
 import numpy as np
 import ipywidgets as widgets
 import time
-from rbm_nb.widgets import Player, TimeSeries
+import rbm_nb as rbm
+from rbm_nb.scene import Scene
+from rbm_nb.widgets import FrameTree, TimeSeries
 
 t = np.arange(0.0, 20.0, 0.01)
 wave = np.sin(t)
 wave[(t > {NAN_RUN[0]}) & (t < {NAN_RUN[1]})] = np.nan
 circle = np.c_[np.cos(t), np.sin(t)]
-player = Player(t)
+# a body circling the origin once in 20 s, drawn in 3D
+rbm.register_frame("world")
+angle = 2 * np.pi * t / 20
+rbm.register_frame(
+    "body", parent="world", timestamps=t,
+    translation=np.c_[2 * np.cos(angle), 2 * np.sin(angle), 0.5 + 0 * t],
+    rotation=np.c_[np.cos(angle / 2), 0 * t, 0 * t, np.sin(angle / 2)],
+)
+scene = Scene("world")
+scene.add_frame("world", scale=1.0)
+scene.add_frame("body", scale=0.8)
+scene.add_path("body", color="#ff00ff")
+scene.add_mesh("body", "box", size=(0.6, 0.4, 0.3), color="#00e0e0")
+scene.widget.height = 300
+scene.widget.layout.flex = "1 1 60%"
+player = scene.player()
+tree = FrameTree("world", scene=scene, player=player)
+tree.layout.flex = "0 0 38%"
 plot = TimeSeries(
     {{"wave": (t, wave), "circle": (t, circle, ["cos", "sin"])}},
     player=player, title="test plot", panel_height=160,
@@ -41,7 +60,7 @@ jump = widgets.Button(description="jump to 15 s")
 jump.on_click(lambda _: setattr(player, "time", 15.0))
 busy = widgets.Button(description="keep the kernel busy")
 busy.on_click(lambda _: time.sleep(4))
-widgets.VBox([player, plot, kernel_time, kernel_range, jump, busy])
+widgets.VBox([widgets.HBox([tree, scene.widget]), player, plot, kernel_time, kernel_range, jump, busy])
 """
 
 
@@ -182,6 +201,7 @@ def test_click_seeks_the_player_and_the_cursor_follows_it(dashboard):
     x, y, w, h = over_box(page, 1)
     per_px = chart(page, 1, "(u.scales.x.max - u.scales.x.min) / u.over.clientWidth")
     target = chart(page, 1, f"u.posToVal({0.3 * w}, 'x')")
+    before_click = png_pixels(page.locator(".rbm-scene canvas").first.screenshot())
     page.mouse.click(x + 0.3 * w, y + 0.9 * h)
     # the double click of the zoom test seeked too: wait for this click's time
     page.wait_for_function(
@@ -194,6 +214,10 @@ def test_click_seeks_the_player_and_the_cursor_follows_it(dashboard):
     )
     label = page.locator(".widget-label", has_text="KERNEL-TIME")
     seen = float(label.inner_text().split()[-1])
+    # the 3D view follows the same Player: the click moved the body
+    page.wait_for_timeout(500)
+    after_click = png_pixels(page.locator(".rbm-scene canvas").first.screenshot())
+    assert changed_pixels(before_click, after_click) > 200
     cursor = page.locator(".rbm-ts-cursor").nth(1)
     left = float(cursor.evaluate("el => parseFloat(el.style.left)"))
     assert abs(left + 1 - 0.3 * w) < 1.5
@@ -212,7 +236,9 @@ def test_click_seeks_the_player_and_the_cursor_follows_it(dashboard):
             .evaluate("el => parseFloat(el.style.left)")
         )
         assert abs(left + 1 - expected) < 1.5
-    save("dashboard_seeked.png", page.locator(".rbm-ts").screenshot())
+    save(
+        "dashboard_seeked.png", page.locator(".jp-OutputArea-output").first.screenshot()
+    )
     assert not page.errors
 
 
@@ -252,4 +278,20 @@ def test_cursor_follows_play_while_the_kernel_is_busy(dashboard):
     # the plot and the Player print the time the same way
     assert readout[len("t = ") :].split(" s")[0].replace(".", "").isdigit()
     assert " s" in player_readout
+    assert not page.errors
+
+
+def test_selecting_in_the_tree_selects_in_the_3d_view(dashboard):
+    page = dashboard
+    page.locator(".rbm-frame-node", has_text="body").first.click()
+    # the scene's view knows the selection: its follow button names the frame
+    page.locator(".rbm-scene .rbm-follow", has_text="body").wait_for(timeout=30000)
+    details = page.locator(".rbm-frame-details")
+    details.locator("text=pose wrt world").wait_for(timeout=30000)
+    text = details.inner_text()
+    assert "rotation yaw" in text and "quaternion (w, x, y, z)" in text
+    save(
+        "dashboard_selected.png",
+        page.locator(".jp-OutputArea-output").first.screenshot(),
+    )
     assert not page.errors

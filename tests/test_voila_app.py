@@ -83,7 +83,9 @@ class Voila:
                     break
             except OSError:
                 if time.monotonic() > deadline:
-                    raise RuntimeError(f"Voila did not start:\n{self.log_text()}") from None
+                    raise RuntimeError(
+                        f"Voila did not start:\n{self.log_text()}"
+                    ) from None
                 time.sleep(0.5)
 
     @property
@@ -121,7 +123,10 @@ def test_the_app_needs_its_token(voila):
             return None
 
     opener = urllib.request.build_opener(NoRedirect)
-    for url in (f"http://127.0.0.1:{voila.port}/", f"http://127.0.0.1:{voila.port}/?token=wrong"):
+    for url in (
+        f"http://127.0.0.1:{voila.port}/",
+        f"http://127.0.0.1:{voila.port}/?token=wrong",
+    ):
         with pytest.raises(urllib.error.HTTPError) as err:
             opener.open(url, timeout=60)
         # sent to the login page instead of running the notebook
@@ -137,8 +142,9 @@ def test_the_app_renders_tree_plot_and_3d_view(browser, voila):
     page.on("pageerror", lambda err: errors.append(str(err)))
 
     def only_voila(route):
-        if f"127.0.0.1:{voila.port}" in route.request.url or route.request.url.startswith(
-            ("data:", "blob:")
+        if (
+            f"127.0.0.1:{voila.port}" in route.request.url
+            or route.request.url.startswith(("data:", "blob:"))
         ):
             route.continue_()
         else:
@@ -171,7 +177,10 @@ def test_the_app_renders_tree_plot_and_3d_view(browser, voila):
         page.locator(".rbm-frame-node", has_text="head").first.click()
         details = page.locator(".rbm-frame-details")
         details.locator("text=yaw").first.wait_for(timeout=30000)
-        assert "yaw 90.00\u00b0, pitch 90.00\u00b0, roll 0.00\u00b0" in details.inner_text()
+        assert (
+            "yaw 90.00\u00b0, pitch 90.00\u00b0, roll 0.00\u00b0"
+            in details.inner_text()
+        )
         assert "quaternion (w, x, y, z) = (0.5, -0.5, 0.5, 0.5)" in details.inner_text()
         page.locator(".rbm-frame-node", has_text="head").first.click()  # unselect
         page.locator(".rbm-frame-node", has_text="t265/tracker").first.click()

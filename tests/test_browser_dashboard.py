@@ -1,10 +1,13 @@
-"""The dashboard widgets (TimeSeries, FrameTree, Scene, Player) in JupyterLab, in chromium.
+"""The dashboard widgets (TimeSeries, FrameTree, Scene, Player) in chromium.
 
-The notebook is written by the test: a plot of two panels (one with a run of
-NaN values) linked to a Player. Checked in the page: the panels render, the
-run of NaN is a break in the line, dragging zooms (the axis range changes and
-reaches the kernel), a click seeks the Player (the kernel sees the new time)
-and the cursor follows the Player's time. Screenshots go to test-artifacts/.
+JupyterLab runs a notebook written by the test: a frame tree and a 3D scene
+of a circling body, a Player, and a plot of two panels (one with a run of NaN
+values). Checked in the page: the panels render and the NaN run is a break in
+the line; dragging and the wheel zoom (the range reaches the kernel); a click
+in the plot seeks the Player (the kernel sees the new time) and moves the 3D
+view; the cursor follows the Player, also while it plays with the kernel
+asleep; selecting in the tree selects in the 3D view. Then the same plot in a
+``to_html`` export, offline. Screenshots go to test-artifacts/.
 """
 
 from __future__ import annotations
@@ -293,5 +296,57 @@ def test_selecting_in_the_tree_selects_in_the_3d_view(dashboard):
     save(
         "dashboard_selected.png",
         page.locator(".jp-OutputArea-output").first.screenshot(),
+    )
+    assert not page.errors
+
+
+def test_exported_dashboard_plot_works_offline(page, tmp_path):
+    """The plot in a to_html export: drawn, zooms, seeks the Player, follows play."""
+    import numpy as np
+
+    import rbm_nb as rbm
+    from rbm_nb.scene import Scene
+    from rbm_nb.widgets import TimeSeries
+
+    t = np.arange(0.0, 20.0, 0.01)
+    rbm.register_frame("world")
+    rbm.register_frame(
+        "body",
+        parent="world",
+        timestamps=t,
+        translation=np.c_[np.cos(t / 3), np.sin(t / 3), 0 * t],
+    )
+    wave = np.sin(t)
+    wave[(t > NAN_RUN[0]) & (t < NAN_RUN[1])] = np.nan
+    scene = Scene("world")
+    scene.add_frame("body", scale=0.5)
+    player = scene.player()
+    plot = TimeSeries({"wave": (t, wave)}, player=player)
+    out = scene.to_html(tmp_path / "dashboard.html", series=plot, player=player)
+    plot.close()
+    player.close()
+    scene.close()
+    requests = []
+    page.on("request", lambda r: requests.append(r.url))
+    page.goto(out.as_uri())
+    page.wait_for_function(
+        "document.querySelector('.rbm-ts') && document.querySelector('.rbm-ts').rbmCharts",
+        timeout=60000,
+    )
+    page.wait_for_timeout(300)
+    x, y, w, h = over_box(page, 0)
+    page.mouse.click(x + 0.5 * w, y + h / 2)  # seek to the middle
+    page.wait_for_function(
+        "Math.abs(parseFloat(document.querySelector('.rbm-readout').textContent) - 10) < 0.2",
+        timeout=30000,
+    )
+    start = cursor_left(page)
+    page.click(".rbm-play")
+    page.wait_for_timeout(1000)
+    page.click(".rbm-play")
+    assert cursor_left(page) > start
+    save("export_dashboard.png", page.screenshot(full_page=True))
+    assert all(url.startswith(("file:", "data:", "blob:")) for url in requests), (
+        requests
     )
     assert not page.errors

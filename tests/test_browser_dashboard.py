@@ -245,6 +245,37 @@ def test_click_seeks_the_player_and_the_cursor_follows_it(dashboard):
     assert not page.errors
 
 
+def test_dragging_the_red_line_scrubs_without_zooming(dashboard):
+    page = dashboard
+    x, y, w, h = over_box(page, 0)
+    before = chart(page, 0, "[u.scales.x.min, u.scales.x.max]")
+    line = (
+        float(
+            page.locator(".rbm-ts-cursor").first.evaluate(
+                "el => parseFloat(el.style.left)"
+            )
+        )
+        + 1
+    )
+    target = chart(page, 0, f"u.posToVal({0.2 * w}, 'x')")
+    page.mouse.move(x + line, y + h / 2)
+    page.mouse.down()
+    page.mouse.move(x + 0.5 * (line + 0.2 * w), y + h / 2, steps=5)
+    page.mouse.move(x + 0.2 * w, y + h / 2, steps=5)
+    page.mouse.up()
+    per_px = chart(page, 0, "(u.scales.x.max - u.scales.x.min) / u.over.clientWidth")
+    page.wait_for_function(
+        """([target, tol]) => [...document.querySelectorAll('.widget-label')].some((el) => {
+            const m = el.textContent.match(/KERNEL-TIME (\\S+)/);
+            return m && Math.abs(parseFloat(m[1]) - target) <= tol;
+        })""",
+        arg=[target, 2 * per_px + 1e-3],
+        timeout=30000,
+    )
+    assert chart(page, 0, "[u.scales.x.min, u.scales.x.max]") == before
+    assert abs(cursor_left(page) + 1 - 0.2 * w) < 2.5
+
+
 def cursor_left(page, i=0):
     return float(
         page.locator(".rbm-ts-cursor")

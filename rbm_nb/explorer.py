@@ -211,17 +211,18 @@ def explorer_scene(
     return scene
 
 
-def explorer_plot(series: dict, player):
+def explorer_plot(series: dict, player, *, max_points: int | None = None):
     """The time-series plot of the dashboard, following ``player``.
 
     None when :class:`~rbm_nb.widgets.TimeSeries` is not a widget that can
     follow a player in the browser (then the export has no plot).
+    ``max_points`` (per panel) keeps each stretch's extremes and gaps only.
     """
     from .widgets import TimeSeries
 
     if not hasattr(TimeSeries, "_esm"):
         return None
-    return TimeSeries(series, player=player)
+    return TimeSeries(series, player=player, max_points=max_points)
 
 
 def write_explorer_html(
@@ -259,7 +260,10 @@ def write_explorer_html(
         bar.set_postfix_str(steps[2])
         scene = explorer_scene()
         player = scene.player()
-        plot = explorer_plot(explorer_series(head, left_eye, right_eye), player)
+        # peaks and gaps kept, ~4 MB of samples down to ~0.6 MB (size budget)
+        plot = explorer_plot(
+            explorer_series(head, left_eye, right_eye), player, max_points=20000
+        )
         bar.update()
         bar.set_postfix_str(steps[3])
         out = scene.to_html(

@@ -4,7 +4,8 @@
 uses the synthetic recording); ``rbm-nb demo --html out.html`` writes the
 explorer's dashboard (3D view, time series, player) as one self-contained page
 that plays offline, with no Jupyter involved;
-``rbm-nb demo --text`` prints a lookup across a small moving frame tree.
+``rbm-nb demo --text`` prints a lookup across a small moving frame tree;
+``rbm-nb app`` serves the explorer as a standalone Voilà app (no code cells).
 """
 
 from __future__ import annotations
@@ -159,7 +160,28 @@ def main(argv: list[str] | None = None) -> int:
     demo.add_argument(
         "--notebook-dir", help="folder with the notebooks (default: the clone's)"
     )
+    app = sub.add_parser(
+        "app", help="serve the head/eye explorer as a standalone Voila app"
+    )
+    app.add_argument(
+        "--source",
+        choices=("auto", "remote", "synthetic"),
+        default="auto",
+        help="example data: the real recording, else synthetic (auto)",
+    )
+    app.add_argument("--port", type=int, default=8866, help="Voila port")
+    app.add_argument(
+        "--no-browser", action="store_true", help="do not open a browser window"
+    )
     args = parser.parse_args(argv)
+    if args.command == "app":
+        from .app import serve
+
+        return serve(
+            port=_free_port(args.port),
+            source=args.source,
+            open_browser=not args.no_browser,
+        )
     if args.command == "demo":
         if args.text:
             return _text_demo()

@@ -54,10 +54,10 @@ import traitlets
 from ._time import (
     DATETIME,
     check_kinds,
-    format_time,
     time_as_seconds,
     timestamps_as_seconds,
 )
+from ._timebase import format_time
 from .playback import Playback, check_speed
 
 STATIC = Path(__file__).resolve().parent / "static"
@@ -445,10 +445,7 @@ class Player(anywidget.AnyWidget):
     # -- display --------------------------------------------------------------------
     def readout(self) -> str:
         """The text of the time display: seconds from the start, and the date if any."""
-        text = f"{self.time:.3f} s"
-        if self.timestamps_kind == DATETIME:
-            text += f" \u00b7 {format_time(self.data_time, DATETIME)}"
-        return text
+        return format_time(self.time, self.t0_ns)
 
     def __repr__(self) -> str:
         state = "playing" if self.playing else "paused"

@@ -150,8 +150,8 @@ def main(argv: list[str] | None = None) -> int:
     demo.add_argument(
         "--max-frames",
         type=int,
-        default=20000,
-        help="samples per moving object in --html (evenly spaced)",
+        default=10000,
+        help="samples per moving object and plotted series in --html (evenly spaced)",
     )
     demo.add_argument("--port", type=int, default=8888, help="JupyterLab port")
     demo.add_argument(

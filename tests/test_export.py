@@ -213,4 +213,4 @@ def test_full_head_eye_explorer_exports_under_5_mb(tmp_path):
     player = document["models"][-1]["state"]
     assert player["duration"] == pytest.approx(330, abs=5) and player["t0_ns"] is not None
     _, tracks, _ = snapshot_of(document)
-    assert max(len(t["times"]) for t in tracks.values()) <= 20000
+    assert max(len(t["times"]) for t in tracks.values()) <= 10000

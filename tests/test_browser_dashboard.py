@@ -12,7 +12,10 @@ asleep; selecting in the tree selects in the 3D view. Then the same plot in a
 
 from __future__ import annotations
 
+import re
+
 import nbformat
+import numpy as np
 import pytest
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
@@ -170,6 +173,21 @@ def test_panels_render_with_a_break_at_the_nan_run(dashboard):
     assert inside.sum() == 0, "the NaN run should be a break in the line"
     legend = page.locator(".rbm-ts .u-legend").first.inner_text()
     assert "wave" in legend and "time" in legend
+    # hovering shows the values at the mouse in every panel's legend
+    x1, y1, w1, h1 = over_box(page, 1)
+    page.mouse.move(x1 + 0.25 * w1, y1 + h1 / 2)
+    at = chart(page, 1, f"u.posToVal({0.25 * w1}, 'x')")
+    page.wait_for_timeout(200)
+    circle = page.locator(".rbm-ts .u-legend").nth(1).inner_text()
+    per_px = chart(page, 1, "(u.scales.x.max - u.scales.x.min) / u.over.clientWidth")
+    shown = re.search(r"time\s*(-?[\d.]+) s", circle)
+    cos_value = re.search(r"cos\s*(-?[\d.]+)", circle)
+    assert shown and cos_value, circle
+    # the sample nearest the mouse, its time as the readout prints it
+    assert abs(float(shown.group(1)) - at) <= 2 * per_px
+    assert float(cos_value.group(1)) == pytest.approx(
+        np.cos(float(shown.group(1))), abs=1e-3
+    )
     assert page.locator(".rbm-ts .u-legend").nth(1).inner_text().count("sin") == 1
     assert not page.errors
 

@@ -187,6 +187,13 @@ def test_the_app_renders_tree_plot_and_3d_view(browser, voila):
         details.locator("text=t265/tracker \u2014 moving").wait_for(timeout=30000)
         # the sample's time as everywhere: seconds from the start · absolute date
         assert "(at 0.000 s \u00b7 2020-02-02 00:27:14.300)" in details.inner_text()
+        # the Player's clock runs in the page: play moves the plot's cursor
+        page.click(".rbm-play")
+        page.wait_for_function(
+            "parseFloat(document.querySelector('.rbm-ts-time').textContent.slice(4)) > 1.0",
+            timeout=30000,
+        )
+        page.click(".rbm-play")
         save("voila_app.png", page.screenshot(full_page=True))
         assert not errors, errors
         # Voila's lab template links Font Awesome's CSS from a CDN (its own

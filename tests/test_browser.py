@@ -418,3 +418,44 @@ def test_explorer_plays_in_the_browser_while_the_kernel_is_busy(
     finally:
         context.close()
         server.stop()
+
+
+def test_plot_click_seeks_and_moves_the_3d_view(page, tmp_path):
+    """One Player drives the plot and the 3D view: a click in the plot moves both."""
+    from rbm_nb.widgets import TimeSeries
+
+    if not hasattr(TimeSeries, "_esm"):
+        pytest.skip("TimeSeries is not the browser widget on this branch")
+    scene = circling_scene()
+    player = scene.player()
+    t = np.arange(0, 10.0, 0.02)
+    plot = TimeSeries({"angle": (t, np.degrees(2 * np.pi * t / 10))}, player=player)
+    out = scene.to_html(tmp_path / "dash.html", series=plot, player=player)
+    scene.close()
+    page.goto(out.as_uri())
+    page.wait_for_function("window.rbmExport && window.rbmExport.ready", timeout=60000)
+    page.wait_for_function(
+        "document.querySelector('.rbm-ts') && document.querySelector('.rbm-ts').rbmCharts",
+        timeout=30000,
+    )
+    page.wait_for_timeout(500)
+    canvas = page.locator(".rbm-scene canvas")
+    before = png_pixels(canvas.screenshot())
+    box = page.evaluate(
+        """() => { const u = document.querySelector('.rbm-ts').rbmCharts[0];
+                   const r = u.over.getBoundingClientRect();
+                   return [r.x, r.y, r.width, r.height, u.posToVal(0.6 * r.width, 'x')]; }"""
+    )
+    x, y, w, h, target = box
+    page.mouse.click(x + 0.6 * w, y + 0.5 * h)
+    view = "document.querySelector('.rbm-scene').rbmView"
+    page.wait_for_function(
+        f"Math.abs({view}.currentTime() - {target}) < 0.1", timeout=5000
+    )
+    page.wait_for_timeout(300)
+    after = png_pixels(canvas.screenshot())
+    assert changed_pixels(before, after) > 100  # the body moved to the clicked time
+    shown = float(page.inner_text(".rbm-readout").split()[0])  # the Player follows too
+    assert shown == pytest.approx(target, abs=0.05)
+    save("export_plot_seek.png", page.screenshot(full_page=True))
+    assert page.errors == []

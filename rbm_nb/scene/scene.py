@@ -576,11 +576,14 @@ class Scene:
         self.widget.selected = name
 
     def _on_selected(self, change) -> None:
+        # a drawn frame's triad is enlarged; other frames are selected without
+        # adding anything to the scene
         name = change["new"]
-        frames = self._frame_paths()
-        if name is None:
+        if self._closed:
+            return
+        if name is None or name not in self._frame_paths():
             self.highlight(None)
-        elif name in frames:
+        else:
             self.highlight(name)
 
     def follow(self, frame=None) -> None:

@@ -399,3 +399,36 @@ def test_exported_dashboard_plot_works_offline(page, tmp_path):
         requests
     )
     assert not page.errors
+
+
+def test_clicking_a_frame_in_3d_selects_it_in_the_tree(dashboard):
+    page = dashboard
+    # start from "world" alone selected (a click toggles a row)
+    for name in ("body", "world"):
+        row = page.locator(".rbm-frame-node", has_text=name).first
+        if "mod-active" in (row.get_attribute("class") or ""):
+            row.click()
+            page.wait_for_timeout(300)
+    page.locator(".rbm-frame-node", has_text="world").first.click()
+    page.locator(".rbm-frame-details", has_text="parent: none (root)").wait_for(
+        timeout=30000
+    )
+    where = page.evaluate(
+        """() => { const v = document.querySelector('.rbm-scene').rbmView;
+                   const box = v.pane.getBoundingClientRect();
+                   const xy = v.screenPosition(v.model.get('_frames').body);
+                   return [box.left + xy[0], box.top + xy[1]]; }"""
+    )
+    page.mouse.click(where[0] + 3, where[1] + 2)
+    # the scene's `selected` goes through the kernel to the FrameTree
+    page.locator(".rbm-frame-details", has_text="parent: world").wait_for(timeout=30000)
+    assert page.locator(".rbm-frame-details b").first.inner_text().startswith("body")
+    assert page.evaluate(
+        "[...document.querySelectorAll('.rbm-frame-node')]"
+        ".filter((b) => b.classList.contains('mod-active')).map((b) => b.textContent)"
+    ) == ["body"]
+    save(
+        "dashboard_3d_click.png",
+        page.locator(".jp-OutputArea-output").first.screenshot(),
+    )
+    assert not page.errors

@@ -6,7 +6,8 @@ values). Checked in the page: the panels render and the NaN run is a break in
 the line; dragging and the wheel zoom (the range reaches the kernel); a click
 in the plot seeks the Player (the kernel sees the new time) and moves the 3D
 view; the cursor follows the Player, also while it plays with the kernel
-asleep; selecting in the tree selects in the 3D view. Then the same plot in a
+asleep; selecting in the tree selects in the 3D view and a click on a frame
+in 3D selects it in the tree. Then the same plot in a
 ``to_html`` export, offline. Screenshots go to test-artifacts/.
 """
 

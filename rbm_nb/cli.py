@@ -2,9 +2,11 @@
 
 ``rbm-nb demo`` opens JupyterLab on the head/eye explorer notebook (offline it
 uses the synthetic recording); ``rbm-nb demo --html out.html`` writes the
-explorer's scene as a self-contained animation with no Jupyter involved;
-``rbm-nb demo --text`` prints a lookup across a small moving frame tree;
-``rbm-nb --version`` prints the installed version.
+explorer's dashboard (3D view, time series, player) as one self-contained page
+that plays offline, with no Jupyter involved; ``rbm-nb demo --text`` prints a
+lookup across a small moving frame tree; ``rbm-nb app`` serves the explorer as
+a standalone Voilà app (no code cells); ``rbm-nb --version`` prints the
+installed version.
 
 The notebooks come from the clone rbm_nb runs from, or, for an installed
 wheel, from the copies shipped in ``rbm_nb/_notebooks``: those are copied once
@@ -190,7 +192,7 @@ def main(argv: list[str] | None = None) -> int:
     mode.add_argument(
         "--html",
         metavar="OUT.html",
-        help="write the explorer's 3D scene as one self-contained HTML file and exit",
+        help="write the explorer's dashboard as one self-contained HTML file and exit",
     )
     mode.add_argument(
         "--text",
@@ -204,7 +206,10 @@ def main(argv: list[str] | None = None) -> int:
         help="example data for --html: the real recording, else synthetic (auto)",
     )
     demo.add_argument(
-        "--max-frames", type=int, default=3000, help="samples per object in --html"
+        "--max-frames",
+        type=int,
+        default=10000,
+        help="samples per moving object and plotted series in --html (evenly spaced)",
     )
     demo.add_argument("--port", type=int, default=8888, help="JupyterLab port")
     demo.add_argument(
@@ -215,7 +220,28 @@ def main(argv: list[str] | None = None) -> int:
         help="folder with the notebooks (default: the clone's, else a copy of "
         "the installed ones)",
     )
+    app = sub.add_parser(
+        "app", help="serve the head/eye explorer as a standalone Voila app"
+    )
+    app.add_argument(
+        "--source",
+        choices=("auto", "remote", "synthetic"),
+        default="auto",
+        help="example data: the real recording, else synthetic (auto)",
+    )
+    app.add_argument("--port", type=int, default=8866, help="Voila port")
+    app.add_argument(
+        "--no-browser", action="store_true", help="do not open a browser window"
+    )
     args = parser.parse_args(argv)
+    if args.command == "app":
+        from .app import serve
+
+        return serve(
+            port=_free_port(args.port),
+            source=args.source,
+            open_browser=not args.no_browser,
+        )
     if args.command == "demo":
         if args.text:
             return _text_demo()

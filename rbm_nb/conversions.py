@@ -44,6 +44,7 @@ from itertools import product
 import numpy as np
 
 from ._config import UNIT_QUATERNION_TOLERANCE
+from ._kernels import conversions as _kc
 from ._validation import as_float_array
 
 __all__ = [
@@ -199,13 +200,6 @@ def _parse_order(order) -> tuple[int, int, int]:
     raise ValueError(f"unknown Euler order {order!r}; {variants}")
 
 
-def _kernels():
-    # numba is imported on first use, not when rbm_nb.conversions is
-    from ._kernels import conversions
-
-    return conversions
-
-
 # ---------------------------------------------------------------------------
 # quaternion <-> rotation matrix
 # ---------------------------------------------------------------------------
@@ -239,7 +233,7 @@ def matrix_from_quaternion(quaternion) -> np.ndarray:
            [ 0.,  0.,  1.]])
     """
     rows, lead = _as_rows(quaternion, "quaternion", (4,))
-    out, n_invalid = _kernels().matrix_from_quaternion(rows, UNIT_QUATERNION_TOLERANCE)
+    out, n_invalid = _kc.matrix_from_quaternion(rows, UNIT_QUATERNION_TOLERANCE)
     if n_invalid:
         _report_quaternions("quaternion", rows, lead)
     return out.reshape(lead + (3, 3))
@@ -277,7 +271,7 @@ def quaternion_from_matrix(matrix, *, tol: float = MATRIX_TOLERANCE) -> np.ndarr
     """
     _check_tol(tol)
     rows, lead = _as_rows(matrix, "matrix", (3, 3))
-    out, n_invalid = _kernels().quaternion_from_matrix(rows, float(tol))
+    out, n_invalid = _kc.quaternion_from_matrix(rows, float(tol))
     if n_invalid:
         _report_matrices("matrix", rows, lead, tol)
     return out.reshape(lead + (4,))
@@ -315,7 +309,7 @@ def quaternion_from_rotation_vector(rotation_vector) -> np.ndarray:
     array([0., 0., 0., 1.])
     """
     rows, lead = _as_rows(rotation_vector, "rotation_vector", (3,))
-    out, n_invalid = _kernels().quaternion_from_rotation_vector(rows)
+    out, n_invalid = _kc.quaternion_from_rotation_vector(rows)
     if n_invalid:
         _report_non_finite(
             "rotation_vector", rows, lead, "rotation vectors must be finite"
@@ -350,7 +344,7 @@ def rotation_vector_from_quaternion(quaternion) -> np.ndarray:
     array([0.5, 0. , 0. ])
     """
     rows, lead = _as_rows(quaternion, "quaternion", (4,))
-    out, n_invalid = _kernels().rotation_vector_from_quaternion(
+    out, n_invalid = _kc.rotation_vector_from_quaternion(
         rows, UNIT_QUATERNION_TOLERANCE
     )
     if n_invalid:
@@ -392,7 +386,7 @@ def quaternion_from_axis_angle(axis, angle) -> np.ndarray:
     array([0., 0., 0., 1.])
     """
     axes, angles, lead = _paired_rows(axis, "axis", (3,), angle, "angle", ())
-    out, n_invalid = _kernels().quaternion_from_axis_angle(axes, angles)
+    out, n_invalid = _kc.quaternion_from_axis_angle(axes, angles)
     if n_invalid:
         length = np.linalg.norm(axes, axis=1)
         ok = np.isfinite(angles) & np.isfinite(length) & ((length > 0) | (angles == 0))
@@ -434,7 +428,7 @@ def axis_angle_from_quaternion(quaternion) -> tuple[np.ndarray, np.ndarray]:
     (array([ 0., -1.,  0.]), 1.0)
     """
     rows, lead = _as_rows(quaternion, "quaternion", (4,))
-    axis, angle, n_invalid = _kernels().axis_angle_from_quaternion(
+    axis, angle, n_invalid = _kc.axis_angle_from_quaternion(
         rows, UNIT_QUATERNION_TOLERANCE
     )
     if n_invalid:
@@ -485,7 +479,7 @@ def quaternion_from_euler(
     i, j, k = _parse_order(order)
     rows, lead = _as_rows(angles, "angles", (3,))
     radians = np.deg2rad(rows) if degrees else rows
-    out, n_invalid = _kernels().quaternion_from_euler(radians, i, j, k, bool(extrinsic))
+    out, n_invalid = _kc.quaternion_from_euler(radians, i, j, k, bool(extrinsic))
     if n_invalid:
         _report_non_finite("angles", rows, lead, "Euler angles must be finite")
     return out.reshape(lead + (4,))
@@ -533,7 +527,7 @@ def euler_from_quaternion(
     """
     i, j, k = _parse_order(order)
     rows, lead = _as_rows(quaternion, "quaternion", (4,))
-    out, n_invalid = _kernels().euler_from_quaternion(
+    out, n_invalid = _kc.euler_from_quaternion(
         rows, i, j, k, bool(extrinsic), UNIT_QUATERNION_TOLERANCE
     )
     if n_invalid:
@@ -582,7 +576,7 @@ def homogeneous_from_transform(translation, rotation) -> np.ndarray:
     t_rows, q_rows, lead = _paired_rows(
         translation, "translation", (3,), rotation, "rotation", (4,)
     )
-    out, bad_q, bad_t = _kernels().homogeneous_from_transform(
+    out, bad_q, bad_t = _kc.homogeneous_from_transform(
         t_rows, q_rows, UNIT_QUATERNION_TOLERANCE
     )
     if bad_q:
@@ -627,7 +621,7 @@ def transform_from_homogeneous(
     """
     _check_tol(tol)
     rows, lead = _as_rows(matrix, "matrix", (4, 4))
-    t, q, n_invalid = _kernels().transform_from_homogeneous(rows, float(tol))
+    t, q, n_invalid = _kc.transform_from_homogeneous(rows, float(tol))
     if n_invalid:
         _report_matrices("matrix", rows, lead, tol)
     return t.reshape(lead + (3,)), q.reshape(lead + (4,))

@@ -6,19 +6,30 @@ either once (static) or per timestamp (moving; ``discrete`` frames hold each
 value until the next event). Arrays are validated once, here, and stored
 read-only, so lookups never re-check them.
 
-The transforms and lookups themselves live in :mod:`rbm_nb.transforms` and
-:mod:`rbm_nb.lookups`; the methods here forward to them.
+This module is the one place where frame names are resolved
+(:func:`resolve_frame`); the methods here resolve their frame arguments and
+forward to the engine (:mod:`rbm_nb._engine`), which works on frame objects
+and never imports this module.
 """
 
 from __future__ import annotations
 
 import difflib
+import warnings
 from collections.abc import Callable, Iterator, Mapping
+from typing import Any
 
 import numpy as np
 
-from . import _timestamps
+from . import _frame_paths, _time
+from ._engine import chain as _chain
+from ._engine import transform as _transform
+from ._engine import twist as _twist
+from ._kernels import quaternion as kq
+from ._kernels import resample as kr
 from ._validation import as_float_array, check_finite, normalize_quaternions
+from ._xarray import dataarray_coordinate, dataset_variable
+from .conversions import quaternion_from_matrix
 
 __all__ = [
     "ReferenceFrame",
@@ -28,6 +39,8 @@ __all__ = [
     "clear_registry",
     "render_tree",
     "find_frame",
+    "frames_between",
+    "resolve_frame",
     "on_registry_change",
     "remove_registry_callback",
 ]
@@ -131,8 +144,23 @@ def _not_found_message(name: str) -> str:
     return msg
 
 
-def _resolve(frame, argument: str = "frame") -> ReferenceFrame:
-    """A ReferenceFrame from a frame or the name of a registered one."""
+def resolve_frame(frame: Any, argument: str = "frame") -> ReferenceFrame:
+    """A ReferenceFrame from a frame or the name of a registered one.
+
+    Parameters
+    ----------
+    frame : ReferenceFrame or str
+    argument : str
+        How the argument is called in error messages.
+
+    Raises
+    ------
+    ValueError
+        If no frame of that name is registered (the message suggests close
+        names).
+    TypeError
+        If ``frame`` is neither a frame nor a string.
+    """
     if isinstance(frame, ReferenceFrame):
         return frame
     if isinstance(frame, str):
@@ -200,18 +228,64 @@ def render_tree(root) -> None:
     ├── observer
     └── body
     """
-    for line in _tree_lines(_resolve(root, "root")):
+    for line in _tree_lines(resolve_frame(root, "root")):
         print(line)
+
+
+def _registry_frames() -> list[ReferenceFrame]:
+    """Every frame in the trees that registered frames belong to, roots first."""
+    seen: set[int] = set()
+    out: list[ReferenceFrame] = []
+    for frame in registry._frames.values():
+        root = frame.root
+        if id(root) in seen:
+            continue
+        seen.add(id(root))
+        out.append(root)
+        out.extend(root.descendants)
+    return out
 
 
 def find_frame(path: str) -> ReferenceFrame:
     """The one frame of the registry's trees matching ``path``, e.g. ``"world/.../eye"``.
 
-    See :func:`rbm_nb._frame_paths.find_frame` for the path syntax.
-    """
-    from ._frame_paths import find_frame as _find_frame
+    See :mod:`rbm_nb._frame_paths` for the path syntax.
 
-    return _find_frame(path)
+    Raises
+    ------
+    ValueError
+        If no frame matches (the message suggests close names) or several do
+        (the message lists their full paths).
+
+    Examples
+    --------
+    >>> world = ReferenceFrame("world"); world.register()
+    >>> head = ReferenceFrame("head", parent=world)
+    >>> eye = ReferenceFrame("left_eye", parent=head)
+    >>> find_frame("world/.../left_eye") is eye
+    True
+    >>> clear_registry()
+    """
+    return _frame_paths.find_frame(path, _registry_frames())
+
+
+def frames_between(
+    frame: ReferenceFrame | str,
+    to_frame: ReferenceFrame | str,
+    *,
+    include_self: bool = True,
+    include_to_frame: bool = True,
+) -> tuple[ReferenceFrame, ...]:
+    """The frames on the way from ``frame`` to ``to_frame`` (names resolved).
+
+    See :func:`rbm_nb._frame_paths.frames_between`.
+    """
+    return _frame_paths.frames_between(
+        resolve_frame(frame, "frame"),
+        resolve_frame(to_frame, "to_frame"),
+        include_self=include_self,
+        include_to_frame=include_to_frame,
+    )
 
 
 def _tree_lines(frame: ReferenceFrame, prefix: str = "", branch: str = ""):
@@ -297,7 +371,7 @@ class ReferenceFrame:
             self._r = np.array([[1.0, 0.0, 0.0, 0.0]])
             self._rotation_public = self._r
         else:
-            parent = _resolve(parent, "parent")
+            parent = resolve_frame(parent, "parent")
             self._init_arrays(translation, rotation, timestamps, inverse)
         if discrete and self._track is None:
             raise ValueError(
@@ -308,12 +382,9 @@ class ReferenceFrame:
             self.parent = parent
 
     def _init_arrays(self, translation, rotation, timestamps, inverse) -> None:
-        from ._kernels import quaternion as kq
-        from ._kernels import resample as kr
-
         label = f"frame {self.name!r}: " if self.name is not None else ""
         if timestamps is not None:
-            self._track = _timestamps.as_track(timestamps, f"{label}timestamps")
+            self._track = _time.as_track(timestamps, f"{label}timestamps")
             n = len(self._track)
             t_shape, r_shape = (n, 3), (n, 4)
         else:
@@ -371,8 +442,6 @@ class ReferenceFrame:
     def _squad_coefficients(self):
         # frames are immutable, so the spline coefficients can be kept
         if self._coefficients is None:
-            from ._kernels import quaternion as kq
-
             a_coef, b_coef = kq.squad_coefficients(self._r, self._track.base)
             seg = kq.squad_segments(self._r, a_coef, b_coef)
             self._coefficients = (a_coef, b_coef, seg)
@@ -393,7 +462,7 @@ class ReferenceFrame:
     @parent.setter
     def parent(self, parent) -> None:
         if parent is not None:
-            parent = _resolve(parent, "parent")
+            parent = resolve_frame(parent, "parent")
             node = parent
             while node is not None:
                 if node is self:
@@ -434,10 +503,11 @@ class ReferenceFrame:
 
         See :func:`rbm_nb._frame_paths.frames_between`.
         """
-        from ._frame_paths import frames_between
-
-        return frames_between(
-            self, to_frame, include_self=include_self, include_to_frame=include_to_frame
+        return _frame_paths.frames_between(
+            self,
+            resolve_frame(to_frame, "to_frame"),
+            include_self=include_self,
+            include_to_frame=include_to_frame,
         )
 
     @property
@@ -528,8 +598,6 @@ class ReferenceFrame:
         inverse, discrete : bool, default False
             As for :class:`ReferenceFrame`.
         """
-        from ._xarray import dataset_variable
-
         return cls(
             name,
             parent,
@@ -548,8 +616,6 @@ class ReferenceFrame:
 
         ``timestamps`` names the coordinate holding the n timestamps.
         """
-        from ._xarray import dataarray_coordinate
-
         return cls(
             name,
             parent,
@@ -567,8 +633,6 @@ class ReferenceFrame:
 
         ``timestamps`` names the coordinate holding the n timestamps.
         """
-        from ._xarray import dataarray_coordinate
-
         return cls(
             name,
             parent,
@@ -583,8 +647,6 @@ class ReferenceFrame:
         cls, mat, parent, name=None, inverse=False
     ) -> ReferenceFrame:
         """A static frame rotated by a (3, 3) rotation matrix wrt its parent."""
-        from .conversions import quaternion_from_matrix
-
         mat = as_float_array(mat, "mat")
         if mat.shape != (3, 3):
             raise ValueError(f"mat must have shape (3, 3), got {mat.shape}")
@@ -615,14 +677,10 @@ class ReferenceFrame:
         r : ndarray, shape (4,) or (n, 4)
         ts : ndarray, shape (n,), or None if static
         """
-        from .lookups import _frame_lookup_transform
-
-        return _frame_lookup_transform(self, to_frame)
+        return _chain.lookup_transform(self, resolve_frame(to_frame, "to_frame"))
 
     def get_transformation(self, to_frame):
         """Deprecated alias of :meth:`lookup_transform`."""
-        import warnings
-
         warnings.warn(
             "get_transformation is deprecated, use lookup_transform instead",
             DeprecationWarning,
@@ -645,10 +703,14 @@ class ReferenceFrame:
         Both default to the parent frame. Returns ``(linear, angular)``
         with shape (n, 3) each, plus the timestamps if ``return_timestamps``.
         """
-        from .lookups import _frame_lookup_twist
-
-        linear, angular, ts = _frame_lookup_twist(
-            self, reference, represent_in, outlier_thresh, cutoff, mode, allow_static
+        linear, angular, ts = _twist.lookup_twist(
+            self,
+            _optional(reference, "reference"),
+            _optional(represent_in, "represent_in"),
+            outlier_thresh,
+            cutoff,
+            mode,
+            allow_static,
         )
         return (linear, angular, ts) if return_timestamps else (linear, angular)
 
@@ -662,10 +724,13 @@ class ReferenceFrame:
         return_timestamps=False,
     ):
         """Linear velocity of this frame wrt ``reference``, shape (n, 3)."""
-        from .lookups import _frame_lookup_linear_velocity
-
-        linear, ts = _frame_lookup_linear_velocity(
-            self, reference, represent_in, outlier_thresh, cutoff, allow_static
+        linear, ts = _twist.lookup_linear_velocity(
+            self,
+            _optional(reference, "reference"),
+            _optional(represent_in, "represent_in"),
+            outlier_thresh,
+            cutoff,
+            allow_static,
         )
         return (linear, ts) if return_timestamps else linear
 
@@ -680,10 +745,14 @@ class ReferenceFrame:
         return_timestamps=False,
     ):
         """Angular velocity of this frame wrt ``reference``, shape (n, 3)."""
-        from .lookups import _frame_lookup_angular_velocity
-
-        angular, ts = _frame_lookup_angular_velocity(
-            self, reference, represent_in, outlier_thresh, cutoff, mode, allow_static
+        angular, ts = _twist.lookup_angular_velocity(
+            self,
+            _optional(reference, "reference"),
+            _optional(represent_in, "represent_in"),
+            outlier_thresh,
+            cutoff,
+            mode,
+            allow_static,
         )
         return (angular, ts) if return_timestamps else angular
 
@@ -697,10 +766,14 @@ class ReferenceFrame:
         return_timestamps=False,
     ):
         """Points given in this frame, expressed in ``to_frame``."""
-        from .transforms import _frame_transform
-
-        out, ts = _frame_transform(
-            self, "points", arr, to_frame, axis, time_axis, timestamps
+        out, ts = _transform.transform(
+            self,
+            "points",
+            arr,
+            resolve_frame(to_frame, "to_frame"),
+            axis,
+            time_axis,
+            timestamps,
         )
         return (out, ts) if return_timestamps else out
 
@@ -714,10 +787,14 @@ class ReferenceFrame:
         return_timestamps=False,
     ):
         """Vectors represented in this frame, represented in ``to_frame``."""
-        from .transforms import _frame_transform
-
-        out, ts = _frame_transform(
-            self, "vectors", arr, to_frame, axis, time_axis, timestamps
+        out, ts = _transform.transform(
+            self,
+            "vectors",
+            arr,
+            resolve_frame(to_frame, "to_frame"),
+            axis,
+            time_axis,
+            timestamps,
         )
         return (out, ts) if return_timestamps else out
 
@@ -731,10 +808,14 @@ class ReferenceFrame:
         return_timestamps=False,
     ):
         """Orientations wrt this frame, expressed wrt ``to_frame``."""
-        from .transforms import _frame_transform
-
-        out, ts = _frame_transform(
-            self, "quaternions", arr, to_frame, axis, time_axis, timestamps
+        out, ts = _transform.transform(
+            self,
+            "quaternions",
+            arr,
+            resolve_frame(to_frame, "to_frame"),
+            axis,
+            time_axis,
+            timestamps,
         )
         return (out, ts) if return_timestamps else out
 
@@ -750,10 +831,15 @@ class ReferenceFrame:
         cutoff=None,
     ):
         """Change the reference, moving or representation frame of angular velocities."""
-        from .transforms import _frame_transform_angular_velocity
-
-        out, ts = _frame_transform_angular_velocity(
-            self, arr, to_frame, what, axis, time_axis, timestamps, cutoff
+        out, ts = _twist.transform_angular_velocity(
+            self,
+            arr,
+            resolve_frame(to_frame, "to_frame"),
+            what,
+            axis,
+            time_axis,
+            timestamps,
+            cutoff,
         )
         return (out, ts) if return_timestamps else out
 
@@ -772,15 +858,13 @@ class ReferenceFrame:
         cutoff=None,
     ):
         """Change the reference, moving or representation frame of linear velocities."""
-        from .transforms import _frame_transform_linear_velocity
-
-        out, ts = _frame_transform_linear_velocity(
+        out, ts = _twist.transform_linear_velocity(
             self,
             arr,
-            to_frame,
+            resolve_frame(to_frame, "to_frame"),
             what,
-            moving_frame,
-            reference_frame,
+            _optional(moving_frame, "moving_frame"),
+            _optional(reference_frame, "reference_frame"),
             axis,
             time_axis,
             timestamps,
@@ -788,6 +872,15 @@ class ReferenceFrame:
             cutoff,
         )
         return (out, ts) if return_timestamps else out
+
+
+# the name other modules imported before resolve_frame was public
+_resolve = resolve_frame
+
+
+def _optional(frame: Any, argument: str) -> ReferenceFrame | None:
+    """``resolve_frame`` for arguments that may be None (a default applies)."""
+    return None if frame is None else resolve_frame(frame, argument)
 
 
 def _read_only(arr: np.ndarray) -> np.ndarray:

@@ -12,6 +12,9 @@ import numpy as np
 from matplotlib.patches import FancyArrowPatch
 from mpl_toolkits.mplot3d import proj3d
 
+from .frames import resolve_frame
+from .lookups import lookup_pose, lookup_transform
+
 __all__ = [
     "Arrow3D",
     "reference_frame",
@@ -161,9 +164,7 @@ def reference_frame(frame, world_frame=None, ax=None, figsize=(6, 6), arrow_len=
     ValueError
         If the frame (or its transform into ``world_frame``) moves.
     """
-    from .frames import _resolve
-
-    frame = _resolve(frame, "reference_frame: frame")
+    frame = resolve_frame(frame, "reference_frame: frame")
     if frame.timestamps is not None:
         raise ValueError(
             f"plot.reference_frame: frame {frame.name!r} is moving; "
@@ -176,9 +177,7 @@ def reference_frame(frame, world_frame=None, ax=None, figsize=(6, 6), arrow_len=
         [[0.0, 0.0, 0.0], [arrow_len, 0, 0], [0, arrow_len, 0], [0, 0, arrow_len]]
     )
     if world_frame is not None:
-        from .lookups import lookup_transform
-
-        world = _resolve(world_frame, "reference_frame: world_frame")
+        world = resolve_frame(world_frame, "reference_frame: world_frame")
         t, r, ts = lookup_transform(outof=frame, into=world, return_timestamps=True)
         if ts is not None:
             raise ValueError(
@@ -328,17 +327,15 @@ def trajectory(frame, reference=None, axes=None, figsize=(8, 6), **kwargs):
         Position (x, y, z in m) and orientation (roll, pitch, yaw in degrees,
         unwrapped) against time.
     """
-    from .frames import _resolve
-    from .lookups import lookup_pose
 
-    frame = _resolve(frame, "trajectory: frame")
+    frame = resolve_frame(frame, "trajectory: frame")
     if reference is None:
         if frame.parent is None:
             raise ValueError(
                 f"trajectory: frame {frame.name!r} is a root; give a reference frame"
             )
         reference = frame.parent
-    reference = _resolve(reference, "trajectory: reference")
+    reference = resolve_frame(reference, "trajectory: reference")
     position, orientation, ts = lookup_pose(frame, reference, return_timestamps=True)
     if ts is None:
         raise ValueError(

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._kernels import quaternion as _kq
 from ._validation import (
     as_float_array,
     check_finite,
@@ -84,12 +85,6 @@ def _mask(mask, name: str) -> np.ndarray:
             f"three 0/1 flags, got {mask!r}"
         )
     return arr.astype(np.float64)
-
-
-def _kernels():
-    from ._kernels import quaternion
-
-    return quaternion
 
 
 def _rows(arr: np.ndarray, shape: tuple, width: int) -> np.ndarray:
@@ -290,7 +285,7 @@ class Transform:
         if not isinstance(other, Transform):
             return NotImplemented
         shape = self._paired(other, "compose")
-        k = _kernels()
+        k = _kq
         qa = _rows(self._rotation, shape, 4)
         q = k.qmul(qa, _rows(other._rotation, shape, 4))
         t = k.rotate_vectors(qa, _rows(other._translation, shape, 3))
@@ -299,7 +294,7 @@ class Transform:
 
     def inv(self) -> Transform:
         """The inverse: ``self.inv() @ self`` is the identity."""
-        k = _kernels()
+        k = _kq
         q = k.qconj(self._rotation.reshape(-1, 4))
         t = -k.rotate_vectors(q, self._translation.reshape(-1, 3))
         return Transform._trusted(
@@ -315,7 +310,7 @@ class Transform:
                 f"{name} of shape {v.shape} do not broadcast against the Transform's "
                 f"batch shape {self.shape}"
             ) from None
-        out = _kernels().rotate_vectors(
+        out = _kq.rotate_vectors(
             _rows(self._rotation, shape, 4), _rows(v, shape, 3)
         )
         if shift:
@@ -386,7 +381,7 @@ class Transform:
             The rotation follows the shorter arc at constant angular speed.
         """
         shape, r, t = self._blend(other, ratio, "slerp")
-        q = _kernels().slerp(
+        q = _kq.slerp(
             _rows(self._rotation, shape, 4), _rows(other._rotation, shape, 4), r
         )
         return Transform._trusted(t.reshape(shape + (3,)), q.reshape(shape + (4,)))
@@ -453,7 +448,7 @@ class Transform:
         shape = self._paired(other, "difference")
         pmask = _mask(position_mask, "position_mask")
         rmask = _mask(rotation_mask, "rotation_mask")
-        k = _kernels()
+        k = _kq
         q_inv = k.qconj(_rows(self._rotation, shape, 4))
         offset = _rows(other._translation, shape, 3) - _rows(
             self._translation, shape, 3

@@ -17,15 +17,19 @@ The rules are those of the reference package, so results line up with it:
 
 Unlike the reference, an empty intersection is an error rather than an
 empty result, and datetime64 timestamps are never mixed with numbers.
+
+Frames arrive here resolved (objects, not names); this module reads their
+private arrays (``_t``, ``_r``, ``_track``) directly, which the frames
+validated once when they were built.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from . import _timestamps
-from ._kernels import quaternion as kq
-from ._kernels import resample as kr
+from .. import _time
+from .._kernels import quaternion as kq
+from .._kernels import resample as kr
 
 _IDENTITY_T = np.zeros((1, 3))
 _IDENTITY_R = np.array([[1.0, 0.0, 0.0, 0.0]])
@@ -97,14 +101,12 @@ def match(frames, arrays=(), arrays_first=True) -> Target:
     continuous = [f._track for f in frames if f._track is not None and not f.discrete]
     discrete = [f._track for f in frames if f._track is not None and f.discrete]
     ranged = continuous + array_tracks
-    _timestamps.check_compatible(ranged + discrete)
+    _time.check_compatible(ranged + discrete)
 
     ordered = array_tracks + continuous if arrays_first else continuous + array_tracks
     if not ordered:
         if discrete:
-            return Target(
-                _timestamps.union(discrete) if len(discrete) > 1 else discrete[0]
-            )
+            return Target(_time.union(discrete) if len(discrete) > 1 else discrete[0])
         return Target(None)
 
     source = ordered[0]
@@ -210,7 +212,7 @@ def held(steps, target: Target):
             tracks.append(frame._track)
     if not tracks or target.track is None:
         return None
-    events = _timestamps.union(tracks) if len(tracks) > 1 else tracks[0]
+    events = _time.union(tracks) if len(tracks) > 1 else tracks[0]
     t, r = compose(steps, Target(events))
     if t.shape[0] != len(events):
         t = np.repeat(t, len(events), axis=0)
@@ -247,3 +249,44 @@ def resample_array(data: np.ndarray, track, target: Target, quaternions: bool):
         else:
             out[:, j, :] = kr.interp_linear(track.base, column, t_out)
     return out
+
+
+def apply(kind: str, steps, target: Target, data: np.ndarray) -> np.ndarray:
+    """Apply a chain's transform to (n|1, k, c) data at the target times.
+
+    ``kind`` is "points", "vectors" or "quaternions".
+    """
+    discrete = held(steps, target)
+    if discrete is not None:
+        t, r, idx = discrete
+        if kind == "quaternions":
+            return kr.qmul_blocks_held(r, idx, data)
+        return kr.transform_blocks_held(r, t, idx, data, kind == "points")
+    t, r = compose(steps, target)
+    if kind == "quaternions":
+        return kr.qmul_blocks(r, data)
+    return kr.transform_blocks(r, t, data, kind == "points")
+
+
+def lookup(frame, to_frame):
+    """Translation (n|1, 3), rotation (n|1, 4) and Target from frame to to_frame."""
+    steps = chain(frame, to_frame)
+    target = match([f for f, _ in steps])
+    t, r = compose(steps, target)
+    n = len(target)
+    if target.track is not None and t.shape[0] != n:
+        t = np.repeat(t, n, axis=0)
+        r = np.repeat(r, n, axis=0)
+    return t, r, target
+
+
+def lookup_transform(frame, to_frame):
+    """Translation, rotation and timestamps (None if static) from frame to to_frame.
+
+    Static transforms come back with shapes (3,) and (4,), moving ones with
+    (n, 3) and (n, 4).
+    """
+    t, r, target = lookup(frame, to_frame)
+    if target.track is None:
+        return t[0], r[0], None
+    return t, r, target.timestamps

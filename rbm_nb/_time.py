@@ -27,6 +27,8 @@ from typing import Any
 
 import numpy as np
 
+from ._door import kernel_array
+
 __all__ = [
     "Track",
     "as_track",
@@ -187,8 +189,8 @@ def as_track(
             f"{name} must be strictly increasing: {name}[{i}] = {values[i]} is "
             f"{what} {name}[{i - 1}] = {values[i - 1]}"
         )
-    key = np.ascontiguousarray(key)
     if kind == "numeric":
+        key = kernel_array(key)  # the kernels interpolate on it directly
         return Track(values, key, key, 0, kind)
     origin = int(key[0])
     return Track(values, key, (key - origin) / _NS_PER_S, origin, kind)

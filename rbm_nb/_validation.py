@@ -7,45 +7,26 @@ expected. What comes out is C-contiguous float64, ready for the kernels.
 
 from __future__ import annotations
 
-import operator
-
 import numpy as np
 
 from ._config import UNIT_QUATERNION_TOLERANCE
+from ._door import float_array, kernel_array, resolve_axis
+
+__all__ = [
+    "as_float_array",
+    "resolve_axis",
+    "check_last_axis",
+    "normalize_quaternions",
+    "check_finite",
+    "check_what",
+    "check_mode",
+]
 
 WHAT_MODES = ("reference_frame", "moving_frame", "representation_frame")
 
 
-def as_float_array(arr, name: str) -> np.ndarray:
-    """``arr`` as a float64 ndarray, accepting numpy-quaternion dtype.
-
-    Quaternion-dtype arrays gain a trailing axis of length 4 (w, x, y, z).
-    """
-    arr = getattr(arr, "data", arr) if _is_xarray(arr) else arr
-    arr = np.asarray(arr)
-    if arr.dtype.name == "quaternion":
-        # numpy-quaternion stores four contiguous float64 per element
-        return np.ascontiguousarray(arr).view(np.float64).reshape(arr.shape + (4,))
-    if arr.dtype.kind not in "iufb":
-        raise ValueError(f"{name} must be numeric, got dtype {arr.dtype}")
-    return np.asarray(arr, dtype=np.float64)
-
-
-def _is_xarray(obj) -> bool:
-    return type(obj).__module__.startswith("xarray.")
-
-
-def resolve_axis(axis, ndim: int, name: str = "axis") -> int:
-    """Turn a possibly negative axis into a valid non-negative one."""
-    try:
-        axis = operator.index(axis)
-    except TypeError:
-        raise ValueError(f"{name} must be an integer, got {axis!r}") from None
-    if not -ndim <= axis < ndim:
-        raise ValueError(
-            f"{name}={axis} is out of range for an array with {ndim} dimension(s)"
-        )
-    return axis % ndim
+# the door's conversions under the names the core used before it existed
+as_float_array = float_array
 
 
 def check_last_axis(arr: np.ndarray, size: int, name: str) -> None:
@@ -85,9 +66,9 @@ def normalize_quaternions(
             f"(norm within {UNIT_QUATERNION_TOLERANCE} of 1)"
         )
     if np.all((norms == 1.0) | nan):
-        return np.ascontiguousarray(q, dtype=np.float64)
+        return kernel_array(q)
     with np.errstate(invalid="ignore"):
-        return np.ascontiguousarray(q / norms[..., None])
+        return kernel_array(q / norms[..., None])
 
 
 def check_finite(arr: np.ndarray, name: str) -> None:

@@ -44,6 +44,7 @@ from itertools import product
 import numpy as np
 
 from ._config import UNIT_QUATERNION_TOLERANCE
+from ._door import kernel_array
 from ._kernels import conversions as _kc
 from ._validation import as_float_array
 
@@ -94,7 +95,7 @@ def _as_rows(value, name: str, tail: tuple[int, ...]) -> tuple[np.ndarray, tuple
     """
     arr = _as_array(value, name, tail)
     lead = arr.shape[: arr.ndim - len(tail)]
-    return np.ascontiguousarray(arr.reshape((-1,) + tail)), lead
+    return kernel_array(arr.reshape((-1,) + tail)), lead
 
 
 def _paired_rows(a, a_name, a_tail, b, b_name, b_tail):
@@ -110,8 +111,8 @@ def _paired_rows(a, a_name, a_tail, b, b_name, b_tail):
             f"{a_name} of shape {a.shape} and {b_name} of shape {b.shape} do not "
             f"broadcast: their leading shapes {a_lead} and {b_lead} must be compatible"
         ) from None
-    a = np.ascontiguousarray(np.broadcast_to(a, lead + a_tail)).reshape((-1,) + a_tail)
-    b = np.ascontiguousarray(np.broadcast_to(b, lead + b_tail)).reshape((-1,) + b_tail)
+    a = kernel_array(np.broadcast_to(a, lead + a_tail)).reshape((-1,) + a_tail)
+    b = kernel_array(np.broadcast_to(b, lead + b_tail)).reshape((-1,) + b_tail)
     return a, b, lead
 
 

@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _time
+from ._door import kernel_array
 from ._engine.velocity import (
     angular_series as _angular_series,
 )
@@ -29,6 +30,7 @@ from ._engine.velocity import (
 from ._engine.velocity import (
     linear_series as _linear_series,
 )
+from ._kernels import conversions as _kc
 from ._kernels import quaternion as _qk
 from .coordinates import _is_dataarray, _replace_dim
 
@@ -425,7 +427,10 @@ def _check_rank(h: np.ndarray, what: str) -> None:
 
 
 def _quaternion(r: np.ndarray) -> np.ndarray:
-    return _qk.quaternion_from_matrix(np.ascontiguousarray(r[None]))[0]
+    # r comes from an SVD: orthonormal with det +1 to rounding, so the
+    # validity count of the kernel (tolerance 1: nothing is counted) is unused
+    q, _ = _kc.quaternion_from_matrix(np.array(r[None], dtype=np.float64), 1.0)
+    return q[0]
 
 
 def _fit_transform(p1: np.ndarray, p2: np.ndarray, check: bool):
@@ -618,7 +623,7 @@ def iterative_closest_point(
             )
         if not np.any(r0):
             raise ValueError("init_transform: the rotation is a zero quaternion")
-        moved = _qk.rotate_vectors(np.ascontiguousarray(r0[None]), moved) + t0
+        moved = _qk.rotate_vectors(kernel_array(r0[None]), moved) + t0
 
     tree = cKDTree(p2)
     prev_error = 0.0

@@ -415,7 +415,7 @@ class ReferenceFrame:
         self._t = t
         self._rotation_public = r
         # interpolation needs consecutive samples on the same hemisphere
-        self._r = kr.unflip(r) if self._track is not None and len(r) > 1 else r
+        self._r = kq.unflip(r) if self._track is not None and len(r) > 1 else r
 
     # -- data -------------------------------------------------------------
 

@@ -12,6 +12,8 @@ import numpy as np
 from matplotlib.patches import FancyArrowPatch
 from mpl_toolkits.mplot3d import proj3d
 
+from ._config import UNIT_QUATERNION_TOLERANCE
+from ._kernels import conversions as _kc
 from .frames import resolve_frame
 from .lookups import lookup_pose, lookup_transform
 
@@ -118,24 +120,14 @@ def _set_axes_equal(ax) -> None:
 
 def _rotation_matrices(q: np.ndarray) -> np.ndarray:
     """(n, 3, 3) rotation matrices of (n, 4) quaternions (w, x, y, z)."""
+    q = np.array(q, dtype=np.float64, order="C").reshape(-1, 4)
     norms = np.linalg.norm(q, axis=1)
     if np.any(norms == 0) or not np.isfinite(q).all():
         raise ValueError("quaternions must be finite and non-zero")
-    w, x, y, z = (q / norms[:, np.newaxis]).T
-    return np.stack(
-        [
-            np.stack(
-                [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1
-            ),
-            np.stack(
-                [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1
-            ),
-            np.stack(
-                [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1
-            ),
-        ],
-        axis=1,
-    )
+    # any non-zero norm is accepted here (the kernel normalises); its
+    # validity count against the unit tolerance is not needed
+    matrices, _ = _kc.matrix_from_quaternion(q, UNIT_QUATERNION_TOLERANCE)
+    return matrices
 
 
 def reference_frame(frame, world_frame=None, ax=None, figsize=(6, 6), arrow_len=1.0):

@@ -14,6 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from ._door import float_array as _door_float_array
+from ._door import kernel_array
 from ._kernels import quaternion as _qk
 from ._kernels import rotations as _rk
 
@@ -47,13 +49,7 @@ def _normalize_axis(axis: Any, ndim: int, name: str) -> int:
 
 
 def _float_array(obj: Any, name: str) -> np.ndarray:
-    arr = np.asarray(obj)
-    if arr.dtype != np.float64:
-        try:
-            arr = arr.astype(np.float64)
-        except (TypeError, ValueError):
-            raise ValueError(f"{name} must be numeric, got dtype {arr.dtype}") from None
-    return arr
+    return _door_float_array(obj, name)
 
 
 def _split(q: Any, qaxis: int, name: str) -> tuple[np.ndarray, bool]:
@@ -96,9 +92,9 @@ def _rows(arr: np.ndarray, shape: tuple[int, ...], width: int) -> np.ndarray:
     reuse such a row without it being copied n times)."""
     if arr.shape[:-1] != shape:
         if arr[..., 0].size == 1:
-            return np.ascontiguousarray(arr.reshape(1, width))
+            return kernel_array(arr.reshape(1, width))
         arr = np.broadcast_to(arr, shape + (width,))
-    return np.ascontiguousarray(arr.reshape(-1, width))
+    return kernel_array(arr.reshape(-1, width))
 
 
 def _broadcast(a: tuple[int, ...], b: tuple[int, ...], what: str) -> tuple[int, ...]:
@@ -156,7 +152,7 @@ def qinv(q, qaxis: int = -1):
     """
     template = q if _is_dataarray(q) else None
     qf, was_quaternion = _split(q, qaxis, "q")
-    out, zero = _rk.qinv_checked(np.ascontiguousarray(qf.reshape(-1, 4)))
+    out, zero = _rk.qinv_checked(kernel_array(qf.reshape(-1, 4)))
     if zero >= 0:
         _raise_zero("q", zero, "it has no inverse")
     return _like(template, _join(out.reshape(qf.shape), was_quaternion, qaxis))
@@ -367,7 +363,7 @@ def _squad_series(
     m = t_out.shape[0]
     out = np.empty((m, series.shape[1], 4))
     for b in range(series.shape[1]):
-        q_b = _rk.unflip(np.ascontiguousarray(series[:, b, :]))
+        q_b = _qk.unflip(kernel_array(series[:, b, :]))
         out[:, b, :] = _qk.squad(q_b, t_in, t_out)
     return out
 
@@ -379,11 +375,11 @@ def _squad_along(
     moved = np.moveaxis(qf, axis, 0)
     rest = moved.shape[1:-1]
     series = moved.reshape(moved.shape[0], -1, 4)
-    zero = _rk.first_zero_row(np.ascontiguousarray(series.reshape(-1, 4)))
+    zero = _rk.first_zero_row(kernel_array(series.reshape(-1, 4)))
     if zero >= 0:
         _raise_zero("q", zero, "it cannot be interpolated")
-    t_flat = np.ascontiguousarray(t_out.reshape(-1))
-    out = _squad_series(series, np.ascontiguousarray(t_in), t_flat)
+    t_flat = kernel_array(t_out.reshape(-1))
+    out = _squad_series(series, kernel_array(t_in), t_flat)
     out = out.reshape((t_flat.shape[0],) + rest + (4,))
     out = np.moveaxis(out, 0, axis)
     if t_out.ndim == 0:
@@ -593,7 +589,7 @@ def rotate_vectors(q, v, axis: int = -1, qaxis: int = -1, one_to_one: bool = Tru
         and va.flags.c_contiguous
         and (qa.shape[0] == va.shape[0] or qa.shape[0] == 1 or va.shape[0] == 1)
     ):
-        out, zero = _rk.rotate_vectors_checked(qa, va)
+        out, zero = _rk.rotate_vectors_checked(kernel_array(qa), kernel_array(va))
         if zero >= 0:
             _raise_zero("q", zero, "it does not describe a rotation")
         return _like(v if _is_dataarray(v) else None, out)
@@ -616,8 +612,8 @@ def rotate_vectors(q, v, axis: int = -1, qaxis: int = -1, one_to_one: bool = Tru
         out = np.moveaxis(out.reshape(shape + (3,)), -1, vax)
         return _like(v if _is_dataarray(v) else None, out)
 
-    q_rows = np.ascontiguousarray(qf.reshape(-1, 4))
-    v_rows = np.ascontiguousarray(vm.reshape(-1, 3))
+    q_rows = kernel_array(qf.reshape(-1, 4))
+    v_rows = kernel_array(vm.reshape(-1, 3))
     if not q_shape:
         out, zero = _rk.rotate_vectors_checked(q_rows, v_rows)
         if zero >= 0:

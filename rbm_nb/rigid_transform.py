@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._door import kernel_array
 from ._kernels import quaternion as _kq
 from ._validation import (
     as_float_array,
@@ -88,7 +89,7 @@ def _mask(mask, name: str) -> np.ndarray:
 
 
 def _rows(arr: np.ndarray, shape: tuple, width: int) -> np.ndarray:
-    return np.ascontiguousarray(np.broadcast_to(arr, shape + (width,))).reshape(
+    return kernel_array(np.broadcast_to(arr, shape + (width,))).reshape(
         -1, width
     )
 
@@ -295,8 +296,8 @@ class Transform:
     def inv(self) -> Transform:
         """The inverse: ``self.inv() @ self`` is the identity."""
         k = _kq
-        q = k.qconj(self._rotation.reshape(-1, 4))
-        t = -k.rotate_vectors(q, self._translation.reshape(-1, 3))
+        q = k.qconj(kernel_array(self._rotation.reshape(-1, 4)))
+        t = -k.rotate_vectors(q, kernel_array(self._translation.reshape(-1, 3)))
         return Transform._trusted(
             t.reshape(self.shape + (3,)), q.reshape(self.shape + (4,))
         )
@@ -359,7 +360,7 @@ class Transform:
             raise ValueError(
                 f"ratio of shape {r.shape} does not broadcast against batch shape {shape}"
             ) from None
-        r_rows = np.ascontiguousarray(np.broadcast_to(r, shape)).reshape(-1)
+        r_rows = kernel_array(np.broadcast_to(r, shape)).reshape(-1)
         t0 = _rows(self._translation, shape, 3)
         t1 = _rows(other._translation, shape, 3)
         t = t0 + r_rows[:, None] * (t1 - t0)

@@ -28,6 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _time
+from .._door import kernel_array
 from .._kernels import quaternion as kq
 from .._kernels import resample as kr
 
@@ -172,9 +173,11 @@ def resample_frame(frame, target: Target):
     if same is not None:
         return frame._t[same], frame._r[same]
     if frame.discrete:
+        # float seconds on one origin keep the order of the exact keys
+        t_out = tt.base_in(track.origin)
         return (
-            kr.hold_last(track.key, frame._t, tt.key),
-            kr.hold_last(track.key, frame._r, tt.key),
+            kr.hold_last(track.base, frame._t, t_out),
+            kr.hold_last(track.base, frame._r, t_out),
         )
     t_out = tt.base_in(track.origin)
     if len(track) < 2:
@@ -218,7 +221,7 @@ def held(steps, target: Target):
         t = np.repeat(t, len(events), axis=0)
     if r.shape[0] != len(events):
         r = np.repeat(r, len(events), axis=0)
-    return t, r, kr.hold_index(events.key, target.track.key)
+    return t, r, kr.hold_index(events.base, target.track.base_in(events.origin))
 
 
 def resample_array(data: np.ndarray, track, target: Target, quaternions: bool):
@@ -240,12 +243,12 @@ def resample_array(data: np.ndarray, track, target: Target, quaternions: bool):
     n, k, c = data.shape
     out = np.empty((len(t_out), k, c))
     for j in range(k):
-        column = np.ascontiguousarray(data[:, j, :])
+        column = kernel_array(data[:, j, :])
         if quaternions:
             if n < 2:
                 out[:, j, :] = column[0]
             else:
-                out[:, j, :] = kq.squad(kr.unflip(column), track.base, t_out)
+                out[:, j, :] = kq.squad(kq.unflip(column), track.base, t_out)
         else:
             out[:, j, :] = kr.interp_linear(track.base, column, t_out)
     return out

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _time
+from .._door import kernel_array
 from .._validation import as_float_array, normalize_quaternions, resolve_axis
 from . import chain as _chain
 
@@ -45,7 +46,7 @@ class Blocks:
             moved = (
                 np.moveaxis(arr, self.axis, -1) if self.axis != arr.ndim - 1 else arr
             )
-            self.data = np.ascontiguousarray(moved.reshape(1, -1, size))
+            self.data = kernel_array(moved.reshape(1, -1, size))
         else:
             self.time_axis = resolve_axis(time_axis, arr.ndim, "time_axis")
             if self.time_axis == self.axis:
@@ -64,7 +65,7 @@ class Blocks:
                     copy=False,
                 )
             moved = np.moveaxis(arr, (self.time_axis, self.axis), (0, -1))
-            self.data = np.ascontiguousarray(moved.reshape(moved.shape[0], -1, size))
+            self.data = kernel_array(moved.reshape(moved.shape[0], -1, size))
         self.moved_shape = moved.shape
 
     def restore(self, out: np.ndarray, target: _chain.Target) -> np.ndarray:

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._door import kernel_array
 from .._kernels import quaternion as kq
 from .._kernels import resample as kr
 from .._validation import check_mode, check_what
@@ -75,14 +76,15 @@ def _represent(vectors, track, outof, into, looked_up=None):
         if outof is frame and into is reference:
             return _rotate(r, vectors), track
         if outof is reference and into is frame:
-            return _rotate(kq.qconj(r), vectors), track
+            return _rotate(kq.qconj(kernel_array(r)), vectors), track
     out, ts = transform(outof, "vectors", vectors, into, timestamps=track)
     return out, track_of(track, ts)
 
 
 def _rotate(r, vectors):
+    r = kernel_array(r)
     return kr.transform_blocks(
-        r, r[:1, :3], np.ascontiguousarray(vectors)[:, None, :], False
+        r, kernel_array(r[:1, :3]), kernel_array(vectors)[:, None, :], False
     )[:, 0]
 
 
@@ -202,9 +204,7 @@ def _velocity_parts(arr_blocks, frame, to_frame, extra):
     target = _chain.match([f for f, _ in steps], [arr_blocks.track])
     data = _chain.resample_array(arr_blocks.data, arr_blocks.track, target, False)
     rotated = _chain.apply("vectors", steps, target, data)
-    ext_blocks = [
-        np.ascontiguousarray(np.reshape(e, (-1, 1, 3)), dtype=float) for e, _ in extra
-    ]
+    ext_blocks = [kernel_array(np.reshape(e, (-1, 1, 3))) for e, _ in extra]
     ext_tracks = [track for _, track in extra]
     final = _chain.match([], [target.track] + ext_tracks)
     rotated = _chain.resample_array(rotated, target.track, final, False)

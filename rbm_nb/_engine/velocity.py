@@ -20,7 +20,9 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _time
+from .._door import kernel_array
 from .._kernels import differences as _dk
+from .._kernels import quaternion as _qk
 from .._kernels import rotations as _rk
 
 __all__ = [
@@ -76,7 +78,7 @@ def _reject_outliers(t, values, score, thresh) -> np.ndarray:
             f"outlier_thresh={thresh} keeps only {kept.min()} sample(s) of a series; "
             f"at least 2 are needed to interpolate the others"
         )
-    return _dk.interpolate_rejected(t, np.ascontiguousarray(values), keep)
+    return _dk.interpolate_rejected(t, kernel_array(values), keep)
 
 
 def _lowpass(values: np.ndarray, cutoff: float) -> np.ndarray:
@@ -110,9 +112,9 @@ def linear_series(x: np.ndarray, t: np.ndarray, outlier_thresh, cutoff) -> np.nd
         raise ValueError(
             f"arr needs at least 2 samples to estimate a velocity, got {n}"
         )
-    v = _dk.gradient(np.ascontiguousarray(x.reshape(n, -1)), t).reshape(x.shape)
+    v = _dk.gradient(kernel_array(x.reshape(n, -1)), t).reshape(x.shape)
     if outlier_thresh is not None:
-        score = _dk.second_difference_score(np.ascontiguousarray(x))
+        score = _dk.second_difference_score(kernel_array(x))
         v = _reject_outliers(t, v, score, outlier_thresh)
     if cutoff is not None:
         v = _lowpass(v, cutoff)
@@ -123,7 +125,7 @@ def angular_series(
     q: np.ndarray, t: np.ndarray, mode, outlier_thresh, cutoff
 ) -> np.ndarray:
     n, nb, _ = q.shape
-    zero = _rk.first_zero_row(np.ascontiguousarray(q.reshape(-1, 4)))
+    zero = _rk.first_zero_row(kernel_array(q.reshape(-1, 4)))
     if zero >= 0:
         raise ValueError(f"arr contains a zero quaternion (row {zero} when flattened)")
     need_rv = mode == "rotation_vector" or outlier_thresh is not None
@@ -131,7 +133,7 @@ def angular_series(
     rv = np.empty((n, nb, 3)) if need_rv else None
     for b in range(nb):
         # q and -q are the same rotation: differentiate a sign-continuous series
-        qb = _rk.unflip(np.ascontiguousarray(q[:, b, :]))
+        qb = _qk.unflip(kernel_array(q[:, b, :]))
         if need_rv:
             rv[:, b, :] = _rk.rotation_vectors(qb)
         if mode == "rotation_vector":
@@ -139,7 +141,7 @@ def angular_series(
                 raise ValueError(
                     f"arr needs at least 2 samples to estimate a velocity, got {n}"
                 )
-            w[:, b, :] = _dk.gradient(np.ascontiguousarray(rv[:, b, :]), t)
+            w[:, b, :] = _dk.gradient(kernel_array(rv[:, b, :]), t)
             continue
         missing = _dk.nan_rows(qb)
         if not missing.any():
@@ -153,8 +155,8 @@ def angular_series(
                 f"arr needs at least 2 samples without NaN to estimate a velocity, "
                 f"got {valid.sum()}"
             )
-        qv = np.ascontiguousarray(qb[valid])
-        dq = _dk.spline_derivative(qv, np.ascontiguousarray(t[valid]))
+        qv = kernel_array(qb[valid])
+        dq = _dk.spline_derivative(qv, kernel_array(t[valid]))
         w[:, b, :] = np.nan
         w[valid, b, :] = _dk.angular_velocity_from_derivative(qv, dq)
     if outlier_thresh is not None:

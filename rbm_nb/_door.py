@@ -66,7 +66,7 @@ def float_array(value: Any, name: str) -> np.ndarray:
     if is_dataarray(value):
         value = value.data
     arr = np.asarray(value)
-    if arr.dtype.name == "quaternion":
+    if arr.dtype.kind not in "fiub" and arr.dtype.name == "quaternion":
         # numpy-quaternion stores four contiguous float64 per element
         flat = np.array(arr, order="C").view(np.float64)
         return flat.reshape(arr.shape + (4,))
@@ -138,7 +138,7 @@ def unpack(
         if dim is not None:
             raise ValueError("dim can only be given for DataArray input; use axis")
         data = np.asarray(arr)
-        if data.dtype.name == "quaternion":
+        if data.dtype.kind not in "fiub" and data.dtype.name == "quaternion":
             data = float_array(data, "arr")
         ndim = data.ndim
         axis = -1 if axis is None else axis

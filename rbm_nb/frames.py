@@ -121,6 +121,7 @@ def _register(frame: ReferenceFrame, update: bool = False) -> None:
             child.parent = frame
         old.parent = None
     registry._frames[name] = frame
+    _chain.invalidate()
     registry._notify("register", name)
 
 
@@ -128,6 +129,7 @@ def _deregister(name: str) -> None:
     if name not in registry._frames:
         raise ValueError(_not_found_message(name))
     del registry._frames[name]
+    _chain.invalidate()
     registry._notify("deregister", name)
 
 
@@ -212,6 +214,7 @@ def deregister_frame(name: str) -> None:
 def clear_registry() -> None:
     """Remove every frame from the registry."""
     registry._frames.clear()
+    _chain.invalidate()
     registry._notify("clear", None)
 
 
@@ -475,6 +478,7 @@ class ReferenceFrame:
         if self._parent is not None:
             self._parent._children.remove(self)
         self._parent = parent
+        _chain.invalidate()  # chains through this frame changed
         if parent is not None:
             parent._children.append(self)
 

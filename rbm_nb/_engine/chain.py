@@ -25,6 +25,8 @@ validated once when they were built.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from .. import _time
@@ -55,6 +57,34 @@ class Target:
         return 0 if self.track is None else len(self.track)
 
 
+# Resolved chains per (outof, into), valid while no frame of any tree changes
+# its parent (frames tell the engine through invalidate(); a frame's data never
+# changes after construction). Values keep the two frames alive, so their ids
+# cannot be reused while an entry exists.
+_CHAINS: dict[tuple[int, int], tuple[Any, Any, list, Any]] = {}
+_MAX_CACHED = 4096
+
+
+def invalidate() -> None:
+    """Forget every cached chain (the frame trees changed)."""
+    _CHAINS.clear()
+
+
+def _cached(outof, into) -> tuple[Any, Any, list, Any]:
+    key = (id(outof), id(into))
+    entry = _CHAINS.get(key)
+    if entry is None:
+        if len(_CHAINS) >= _MAX_CACHED:
+            _CHAINS.clear()
+        steps = _chain(outof, into)
+        static = None
+        if all(f._track is None for f, _ in steps):
+            static = compose(steps, Target(None))
+        entry = (outof, into, steps, static)
+        _CHAINS[key] = entry
+    return entry
+
+
 def chain(outof, into):
     """Frames to traverse from ``outof`` to ``into``, with their direction.
 
@@ -63,8 +93,21 @@ def chain(outof, into):
     list of (ReferenceFrame, bool)
         Upward steps (frame -> its parent, ``False``) from ``outof`` to the
         common ancestor, then downward steps (``True``: the frame's
-        transform inverted) from there to ``into``.
+        transform inverted) from there to ``into``. Cached per pair of
+        frames (do not modify the list).
     """
+    return _cached(outof, into)[2]
+
+
+def static_transform(outof, into):
+    """(t, r) of shapes (1, 3) and (1, 4) if no frame of the chain moves, else None.
+
+    Composed once per pair of frames and cached with the chain.
+    """
+    return _cached(outof, into)[3]
+
+
+def _chain(outof, into):
     up = outof._path_to_root()
     down = into._path_to_root()
     if up[-1] is not down[-1]:
@@ -289,7 +332,9 @@ def lookup_transform(frame, to_frame):
     Static transforms come back with shapes (3,) and (4,), moving ones with
     (n, 3) and (n, 4).
     """
+    static = static_transform(frame, to_frame)
+    if static is not None:
+        # copies: the cached transform is shared by every later call
+        return static[0][0].copy(), static[1][0].copy(), None
     t, r, target = lookup(frame, to_frame)
-    if target.track is None:
-        return t[0], r[0], None
     return t, r, target.timestamps

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _time
+from .._kernels import resample as kr
 from .._door import kernel_array
 from .._validation import as_float_array, normalize_quaternions, resolve_axis
 from . import chain as _chain
@@ -108,6 +109,10 @@ def transform(frame, kind: str, arr, to_frame, axis=-1, time_axis=0, timestamps=
     ts : ndarray or None
         The timestamps of ``out`` (None if neither array nor chain has any).
     """
+    if timestamps is None and kind != "quaternions":
+        fast = _static_rows(frame, kind, arr, to_frame, axis)
+        if fast is not None:
+            return fast, None
     blocks = Blocks(arr, SIZES[kind], axis, time_axis, timestamps, kind)
     steps = _chain.chain(frame, to_frame)
     target = _chain.match([f for f, _ in steps], [blocks.track])
@@ -116,6 +121,31 @@ def transform(frame, kind: str, arr, to_frame, axis=-1, time_axis=0, timestamps=
     )
     out = _chain.apply(kind, steps, target, data)
     return blocks.restore(out, target), target.timestamps
+
+
+def _static_rows(frame, kind, arr, to_frame, axis):
+    """The short way for (3,) or (n, 3) float64 rows through a static chain.
+
+    Returns None when it does not apply (then the general path runs).
+    """
+    if (
+        type(arr) is not np.ndarray
+        or arr.dtype.kind not in "fiu"
+        or arr.ndim > 2
+        or arr.shape[-1:] != (3,)
+    ):
+        return None
+    if axis != -1 and axis != arr.ndim - 1:
+        return None
+    static = _chain.static_transform(frame, to_frame)
+    if static is None:
+        return None
+    t, r = static
+    data = kernel_array(arr).reshape(1, -1, 3)
+    if not np.isfinite(data).all():  # the general path names the bad value
+        return None
+    out = kr.transform_blocks(r, t, data, kind == "points")
+    return out.reshape(arr.shape)
 
 
 def track_of(track, values):

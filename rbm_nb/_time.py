@@ -267,14 +267,26 @@ def seconds(timestamps: Any, n: int, name: str = "timestamps") -> np.ndarray:
     return as_track(values, name, copy=False).base
 
 
+def _raw_seconds(values: np.ndarray, origin: int | None) -> tuple[np.ndarray, int]:
+    """Seconds from ``origin`` (default: the first value); NaT becomes NaN."""
+    unit = "datetime64[ns]" if values.dtype.kind == "M" else "timedelta64[ns]"
+    key = values.astype(unit).view(np.int64)
+    nat = np.isnat(values)
+    if origin is None:
+        origin = int(key.reshape(-1)[0]) if key.size and not nat.reshape(-1)[0] else 0
+    out = np.asarray((key - origin) / _NS_PER_S, dtype=np.float64)
+    return np.where(nat, np.nan, out), origin
+
+
 def seconds_pair(
     t_in: Any, t_out: Any, names: tuple[str, str] = ("t_in", "t_out")
 ) -> tuple[np.ndarray, np.ndarray]:
     """Two time arrays as float64 seconds from one reference (``t_in[0]``).
 
     Numbers are taken as they are; datetime64/timedelta64 are converted
-    exactly as in :class:`Track`. No ordering is required here (the caller
-    checks what it needs); non-finite times and mixed kinds raise.
+    exactly as in :class:`Track`. Nothing else is checked here (NaT becomes
+    NaN): the caller checks order and finiteness as its rules need. Mixed
+    kinds raise.
     """
     a = np.asarray(getattr(t_in, "values", t_in))
     b = np.asarray(getattr(t_out, "values", t_out))
@@ -284,12 +296,11 @@ def seconds_pair(
             f"{names[0]} and {names[1]} must both be datetimes or both be numbers, "
             f"got dtypes {a.dtype} and {b.dtype}"
         )
-    ka, kind = _keys(a.reshape(-1), names[0])
-    kb, _ = _keys(b.reshape(-1), names[1])
-    if kind == "numeric":
-        return ka.reshape(a.shape), kb.reshape(b.shape)
-    origin = int(ka[0]) if ka.size else 0
-    return (
-        ((ka - origin) / _NS_PER_S).reshape(a.shape),
-        ((kb - origin) / _NS_PER_S).reshape(b.shape),
-    )
+    if kinds == {"numeric"}:
+        for arr, name in ((a, names[0]), (b, names[1])):
+            if arr.dtype.kind not in "iufb":
+                raise ValueError(f"{name} must be numeric, got dtype {arr.dtype}")
+        return kernel_array(a), kernel_array(b)
+    sa, origin = _raw_seconds(a, None)
+    sb, _ = _raw_seconds(b, origin)
+    return sa, sb

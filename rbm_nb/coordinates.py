@@ -12,6 +12,9 @@ from typing import Any
 
 import numpy as np
 
+from ._door import float_array
+from ._door import is_dataarray as _is_dataarray
+
 # system name -> (dimension name, axis labels) per dimensionality
 _SYSTEM_AXES: dict[tuple[str, int], tuple[str, list[str]]] = {
     ("cartesian", 2): ("cartesian_axis", ["x", "y"]),
@@ -24,7 +27,7 @@ _SYSTEM_AXES: dict[tuple[str, int], tuple[str, list[str]]] = {
 
 def _checked(arr: Any, axis: int, length: int, what: str) -> tuple[np.ndarray, int]:
     """Return ``arr`` as a float array and ``axis`` normalised, checking its length."""
-    arr = np.asarray(arr, dtype=float)
+    arr = float_array(arr, "arr")
     if arr.ndim == 0:
         raise ValueError(
             f"arr must have an axis of length {length} ({what}), got a scalar"
@@ -174,11 +177,6 @@ _CONVERTERS = {
     ("cartesian", "spherical"): cartesian_to_spherical,
     ("spherical", "cartesian"): spherical_to_cartesian,
 }
-
-
-def _is_dataarray(obj: Any) -> bool:
-    # Checked by duck type so that plain-array callers never import xarray.
-    return all(hasattr(obj, a) for a in ("values", "coords", "dims", "name", "attrs"))
 
 
 def _replace_dim(

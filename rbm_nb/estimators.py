@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _time
+from ._door import is_dataarray as _is_dataarray
 from ._door import kernel_array
 from ._engine.velocity import (
     angular_series as _angular_series,
@@ -32,7 +33,7 @@ from ._engine.velocity import (
 )
 from ._kernels import conversions as _kc
 from ._kernels import quaternion as _qk
-from .coordinates import _is_dataarray, _replace_dim
+from .coordinates import _replace_dim
 
 __all__ = [
     "best_fit_rotation",

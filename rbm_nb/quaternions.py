@@ -14,7 +14,9 @@ from typing import Any
 
 import numpy as np
 
+from . import _time
 from ._door import float_array as _door_float_array
+from ._door import is_dataarray as _is_dataarray
 from ._door import kernel_array
 from ._kernels import quaternion as _qk
 from ._kernels import rotations as _rk
@@ -25,11 +27,6 @@ __all__ = ["from_euler_angles", "qinterp", "qinv", "qmean", "qmul", "rotate_vect
 # ---------------------------------------------------------------------------
 # input handling shared by the public functions
 # ---------------------------------------------------------------------------
-
-
-def _is_dataarray(obj: Any) -> bool:
-    # duck-typed so that plain-array callers never import xarray
-    return all(hasattr(obj, a) for a in ("values", "coords", "dims", "name", "attrs"))
 
 
 def _is_quaternion_dtype(arr: np.ndarray) -> bool:
@@ -315,21 +312,8 @@ def _reduced_like(
 
 
 def _time_values(t_in: Any, t_out: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Both time arrays as float64 on a common origin, in seconds for
-    datetime64/timedelta64 (converted exactly, relative to ``t_in[0]``)."""
-    t_in = np.asarray(t_in)
-    t_out = np.asarray(t_out)
-    kinds = {t_in.dtype.kind, t_out.dtype.kind}
-    if kinds & {"M", "m"}:
-        if len(kinds) != 1:
-            raise ValueError(
-                f"t_in and t_out must both be datetimes or both be numbers, got "
-                f"dtypes {t_in.dtype} and {t_out.dtype}"
-            )
-        base = t_in.reshape(-1)[0] if t_in.size else t_in.dtype.type(0, "s")
-        one = np.timedelta64(1, "s")
-        return (t_in - base) / one, (t_out - base) / one
-    return _float_array(t_in, "t_in"), _float_array(t_out, "t_out")
+    """Both time arrays as float64 seconds on ``t_in[0]`` (see :mod:`rbm_nb._time`)."""
+    return _time.seconds_pair(t_in, t_out)
 
 
 def _check_times(t_in: np.ndarray, t_out: np.ndarray, n: int) -> None:

@@ -20,11 +20,17 @@ from __future__ import annotations
 
 import operator
 import sys
-from typing import Any
+from typing import Any, TypeAlias
 
 import numpy as np
 
+# An array argument of the public API: anything numpy turns into numbers
+# (lists, arrays, numpy-quaternion arrays) or an xarray.DataArray. Spelled
+# Any because the functions look at it (DataArray or not) before converting.
+ArrayInput: TypeAlias = Any
+
 __all__ = [
+    "ArrayInput",
     "is_dataarray",
     "float_array",
     "kernel_array",

@@ -7,6 +7,8 @@ expected. What comes out is C-contiguous float64, ready for the kernels.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ._config import UNIT_QUATERNION_TOLERANCE
@@ -15,6 +17,7 @@ from ._door import float_array, kernel_array, resolve_axis
 __all__ = [
     "as_float_array",
     "resolve_axis",
+    "is_scalar",
     "check_last_axis",
     "normalize_quaternions",
     "check_finite",
@@ -27,6 +30,11 @@ WHAT_MODES = ("reference_frame", "moving_frame", "representation_frame")
 
 # the door's conversions under the names the core used before it existed
 as_float_array = float_array
+
+
+def is_scalar(value: Any) -> bool:
+    """``np.isscalar`` as a plain bool (no type narrowing of ``value``)."""
+    return bool(np.isscalar(value))
 
 
 def check_last_axis(arr: np.ndarray, size: int, name: str) -> None:

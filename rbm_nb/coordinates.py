@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from ._door import float_array
+from ._door import ArrayInput, float_array
 from ._door import is_dataarray as _is_dataarray
 
 # system name -> (dimension name, axis labels) per dimensionality
@@ -43,7 +43,7 @@ def _checked(arr: Any, axis: int, length: int, what: str) -> tuple[np.ndarray, i
     return arr, axis
 
 
-def cartesian_to_polar(arr, axis: int = -1) -> np.ndarray:
+def cartesian_to_polar(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     """Convert 2-D cartesian coordinates (x, y) into polar coordinates (r, phi).
 
     Parameters
@@ -73,7 +73,7 @@ def cartesian_to_polar(arr, axis: int = -1) -> np.ndarray:
     return np.stack((np.hypot(x, y), np.arctan2(y, x)), axis=axis)
 
 
-def polar_to_cartesian(arr, axis: int = -1) -> np.ndarray:
+def polar_to_cartesian(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     """Convert polar coordinates (r, phi) into 2-D cartesian coordinates (x, y).
 
     Parameters
@@ -103,7 +103,7 @@ def polar_to_cartesian(arr, axis: int = -1) -> np.ndarray:
     return np.stack((r * np.cos(phi), r * np.sin(phi)), axis=axis)
 
 
-def cartesian_to_spherical(arr, axis: int = -1) -> np.ndarray:
+def cartesian_to_spherical(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     """Convert 3-D cartesian coordinates into spherical coordinates (ISO 80000-2).
 
     Parameters
@@ -138,7 +138,7 @@ def cartesian_to_spherical(arr, axis: int = -1) -> np.ndarray:
     return np.stack((np.hypot(rho, z), np.arctan2(rho, z), np.arctan2(y, x)), axis=axis)
 
 
-def spherical_to_cartesian(arr, axis: int = -1) -> np.ndarray:
+def spherical_to_cartesian(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     """Convert spherical coordinates (ISO 80000-2) into 3-D cartesian coordinates.
 
     Parameters
@@ -218,13 +218,13 @@ def _resolve_dim_axis(arr: Any, dim: str | None, axis: int | None) -> int:
 
 
 def transform_coordinates(
-    arr,
+    arr: ArrayInput,
     into: str,
     outof: str | None = None,
     dim: str | None = None,
     axis: int | None = None,
     replace_dim: bool = True,
-):
+) -> Any:
     """Convert an array between coordinate systems.
 
     Supported pairs: cartesian <-> polar (2-D) and cartesian <-> spherical (3-D).
@@ -286,7 +286,7 @@ def transform_coordinates(
 
     data = arr.values if is_da else arr
     out = convert(data, axis=ax)
-    if not is_da:
+    if not is_da or attrs is None:
         return out
 
     import xarray as xr

@@ -17,11 +17,13 @@ conversion and DataArray support around them.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from . import _time
+from ._door import ArrayInput, kernel_array
 from ._door import is_dataarray as _is_dataarray
-from ._door import kernel_array
 from ._engine.velocity import (
     angular_series as _angular_series,
 )
@@ -33,6 +35,7 @@ from ._engine.velocity import (
 )
 from ._kernels import conversions as _kc
 from ._kernels import quaternion as _qk
+from ._validation import is_scalar
 from .coordinates import _replace_dim
 
 __all__ = [
@@ -130,14 +133,14 @@ def _from_series(series, moved_shape, axis, time_axis, width):
 
 
 def estimate_linear_velocity(
-    arr,
-    dim=None,
-    axis=None,
-    timestamps=None,
-    time_axis=None,
-    outlier_thresh=None,
-    cutoff=None,
-):
+    arr: ArrayInput,
+    dim: str | None = None,
+    axis: int | None = None,
+    timestamps: Any = None,
+    time_axis: int | None = None,
+    outlier_thresh: float | None = None,
+    cutoff: float | None = None,
+) -> Any:
     """Estimate linear velocity from positions sampled in time.
 
     Parameters
@@ -192,15 +195,15 @@ def estimate_linear_velocity(
 
 
 def estimate_angular_velocity(
-    arr,
-    dim=None,
-    axis=None,
-    timestamps=None,
-    time_axis=None,
-    mode="quaternion",
-    outlier_thresh=None,
-    cutoff=None,
-):
+    arr: ArrayInput,
+    dim: str | None = None,
+    axis: int | None = None,
+    timestamps: Any = None,
+    time_axis: int | None = None,
+    mode: str = "quaternion",
+    outlier_thresh: float | None = None,
+    cutoff: float | None = None,
+) -> Any:
     """Estimate angular velocity from orientations (quaternions) sampled in time.
 
     Parameters
@@ -304,7 +307,9 @@ def _dim_axis(v1, dim, axis):
     return v1.dims.index(dim)
 
 
-def shortest_arc_rotation(v1, v2, dim=None, axis=None):
+def shortest_arc_rotation(
+    v1: ArrayInput, v2: ArrayInput, dim: str | None = None, axis: int | None = None
+) -> Any:
     """Rotation by the smallest angle that turns the direction of v1 into v2's.
 
     Finds ``r`` with ``v2 / |v2| = rot(r, v1) / |v1|``.
@@ -460,7 +465,9 @@ def _transform_dataarrays(translation, rotation):
     return translation, _rotation_dataarray(rotation)
 
 
-def best_fit_rotation(v1, v2, dim=None, axis=None):
+def best_fit_rotation(
+    v1: ArrayInput, v2: ArrayInput, dim: str | None = None, axis: int | None = None
+) -> Any:
     """Least-squares rotation between corresponding vectors (Kabsch).
 
     Finds the rotation ``r`` that minimises ``|| v2 - rot(r, v1) ||``.
@@ -501,7 +508,9 @@ def best_fit_rotation(v1, v2, dim=None, axis=None):
     return rotation
 
 
-def best_fit_transform(v1, v2, dim=None, axis=None):
+def best_fit_transform(
+    v1: ArrayInput, v2: ArrayInput, dim: str | None = None, axis: int | None = None
+) -> Any:
     """Least-squares rigid transform between corresponding points.
 
     Finds the rotation ``r`` and translation ``t`` that minimise
@@ -550,8 +559,14 @@ def best_fit_transform(v1, v2, dim=None, axis=None):
 
 
 def iterative_closest_point(
-    v1, v2, dim=None, axis=None, init_transform=None, max_iterations=20, tolerance=1e-3
-):
+    v1: ArrayInput,
+    v2: ArrayInput,
+    dim: str | None = None,
+    axis: int | None = None,
+    init_transform: Any = None,
+    max_iterations: int = 20,
+    tolerance: Any = 1e-3,
+) -> Any:
     """Rigid transform aligning two point sets without known correspondences.
 
     Repeatedly pairs every point of ``v1`` (moved by the current estimate)
@@ -604,7 +619,7 @@ def iterative_closest_point(
         raise ValueError(
             f"max_iterations must be a non-negative integer, got {max_iterations!r}"
         )
-    if not np.isscalar(tolerance) or not tolerance >= 0:
+    if not is_scalar(tolerance) or not tolerance >= 0:
         raise ValueError(f"tolerance must be a non-negative number, got {tolerance!r}")
 
     moved = p1.copy()

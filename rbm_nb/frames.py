@@ -17,16 +17,16 @@ from __future__ import annotations
 import difflib
 import warnings
 from collections.abc import Callable, Iterator, Mapping
-from typing import Any
+from typing import Any, TypeAlias
 
 import numpy as np
 
 from . import _frame_paths, _time
+from ._door import ArrayInput
 from ._engine import chain as _chain
 from ._engine import transform as _transform
 from ._engine import twist as _twist
 from ._kernels import quaternion as kq
-from ._kernels import resample as kr
 from ._validation import as_float_array, check_finite, normalize_quaternions
 from ._xarray import dataarray_coordinate, dataset_variable
 from .conversions import quaternion_from_matrix
@@ -40,11 +40,15 @@ __all__ = [
     "render_tree",
     "find_frame",
     "frames_between",
+    "FrameLike",
     "resolve_frame",
     "on_registry_change",
     "remove_registry_callback",
 ]
 
+
+# A frame argument: the frame itself or the name it is registered under.
+FrameLike: TypeAlias = "ReferenceFrame | str"
 
 # ---------------------------------------------------------------------------
 # registry
@@ -59,7 +63,7 @@ class FrameRegistry(Mapping):
     :func:`on_registry_change` are told about every change.
     """
 
-    def __init__(self):
+    def __init__(self) -> None:
         self._frames: dict[str, ReferenceFrame] = {}
         self._callbacks: list[Callable[[str, str | None], None]] = []
 
@@ -86,7 +90,7 @@ class FrameRegistry(Mapping):
 registry = FrameRegistry()
 
 
-def on_registry_change(callback: Callable[[str, str | None], None]):
+def on_registry_change(callback: Callable[[str, str | None], None]) -> Any:
     """Call ``callback(event, name)`` after every change of the registry.
 
     ``event`` is ``"register"``, ``"deregister"`` or ``"clear"`` (with
@@ -96,7 +100,7 @@ def on_registry_change(callback: Callable[[str, str | None], None]):
     return callback
 
 
-def remove_registry_callback(callback) -> None:
+def remove_registry_callback(callback: Any) -> None:
     """Stop calling a callback added with :func:`on_registry_change`."""
     try:
         registry._callbacks.remove(callback)
@@ -177,14 +181,14 @@ def resolve_frame(frame: Any, argument: str = "frame") -> ReferenceFrame:
 
 
 def register_frame(
-    name,
-    parent=None,
-    translation=None,
-    rotation=None,
-    timestamps=None,
-    inverse=False,
-    discrete=False,
-    update=False,
+    name: str | None,
+    parent: FrameLike | None = None,
+    translation: ArrayInput | None = None,
+    rotation: ArrayInput | None = None,
+    timestamps: Any = None,
+    inverse: bool = False,
+    discrete: bool = False,
+    update: bool = False,
 ) -> None:
     """Create a reference frame and register it under ``name``.
 
@@ -218,7 +222,7 @@ def clear_registry() -> None:
     registry._notify("clear", None)
 
 
-def render_tree(root) -> None:
+def render_tree(root: FrameLike) -> None:
     """Print the tree below ``root`` (a frame or a registered name).
 
     Examples
@@ -342,20 +346,21 @@ class ReferenceFrame:
 
     def __init__(
         self,
-        name=None,
-        parent=None,
-        translation=None,
-        rotation=None,
-        timestamps=None,
-        inverse=False,
-        discrete=False,
-    ):
+        name: str | None = None,
+        parent: FrameLike | None = None,
+        translation: ArrayInput | None = None,
+        rotation: ArrayInput | None = None,
+        timestamps: Any = None,
+        inverse: bool = False,
+        discrete: bool = False,
+    ) -> None:
         if name is not None and not isinstance(name, str):
             raise ValueError(f"name must be a string, got {type(name).__name__}")
         self.name = name
         self._parent: ReferenceFrame | None = None
         self._children: list[ReferenceFrame] = []
-        self._coefficients = None
+        self._coefficients: Any = None
+        self._track: _time.Track | None = None
         # frames created as roots have no transform of their own (None)
         self._has_transform = parent is not None
         if parent is None:
@@ -369,7 +374,6 @@ class ReferenceFrame:
                         f"frame {name!r}: {arg} given without a parent frame; a "
                         f"root frame has no transform"
                     )
-            self._track = None
             self._t = np.zeros((1, 3))
             self._r = np.array([[1.0, 0.0, 0.0, 0.0]])
             self._rotation_public = self._r
@@ -389,20 +393,21 @@ class ReferenceFrame:
         if timestamps is not None:
             self._track = _time.as_track(timestamps, f"{label}timestamps")
             n = len(self._track)
-            t_shape, r_shape = (n, 3), (n, 4)
+            t_shape: tuple[int, ...] = (n, 3)
+            r_shape: tuple[int, ...] = (n, 4)
         else:
             self._track = None
             t_shape, r_shape = (3,), (4,)
 
         if translation is None:
-            t = np.zeros(t_shape)
+            t: np.ndarray = np.zeros(t_shape)
         else:
             t = as_float_array(translation, f"{label}translation")
             if t.shape != t_shape:
                 raise ValueError(_shape_message(label, "translation", t.shape, t_shape))
             check_finite(t, f"{label}translation")
         if rotation is None:
-            r = np.zeros(r_shape)
+            r: np.ndarray = np.zeros(r_shape)
             r[..., 0] = 1.0
         else:
             r = as_float_array(rotation, f"{label}rotation")
@@ -423,14 +428,14 @@ class ReferenceFrame:
     # -- data -------------------------------------------------------------
 
     @property
-    def translation(self):
+    def translation(self) -> Any:
         """Translation wrt the parent, shape (3,) or (n, 3); None for a root."""
         if not self._has_transform:
             return None
         return _read_only(self._t if self._track is not None else self._t[0])
 
     @property
-    def rotation(self):
+    def rotation(self) -> Any:
         """Rotation wrt the parent, shape (4,) or (n, 4); None for a root."""
         if not self._has_transform:
             return None
@@ -438,7 +443,7 @@ class ReferenceFrame:
         return _read_only(r if self._track is not None else r[0])
 
     @property
-    def timestamps(self):
+    def timestamps(self) -> Any:
         """Timestamps of a moving frame as given, shape (n,); None if static."""
         return None if self._track is None else _read_only(self._track.values)
 
@@ -463,10 +468,10 @@ class ReferenceFrame:
         return self._parent
 
     @parent.setter
-    def parent(self, parent) -> None:
+    def parent(self, parent: FrameLike | None) -> None:
         if parent is not None:
             parent = resolve_frame(parent, "parent")
-            node = parent
+            node: ReferenceFrame | None = parent
             while node is not None:
                 if node is self:
                     raise ValueError(
@@ -487,22 +492,28 @@ class ReferenceFrame:
         """The frames whose parent this is, in order of attachment."""
         return tuple(self._children)
 
-    def _path_to_root(self) -> list:
+    def _path_to_root(self) -> list[ReferenceFrame]:
         path = []
-        node = self
+        node: ReferenceFrame | None = self
         while node is not None:
             path.append(node)
             node = node._parent
         return path
 
-    def iter_path_reverse(self):
+    def iter_path_reverse(self) -> Any:
         """Iterate from this frame up to the root (inclusive)."""
-        node = self
+        node: ReferenceFrame | None = self
         while node is not None:
             yield node
             node = node._parent
 
-    def frames_between(self, to_frame, *, include_self=True, include_to_frame=True):
+    def frames_between(
+        self,
+        to_frame: FrameLike,
+        *,
+        include_self: bool = True,
+        include_to_frame: bool = True,
+    ) -> Any:
         """The frames from this one up to the common ancestor and down to ``to_frame``.
 
         See :func:`rbm_nb._frame_paths.frames_between`.
@@ -579,14 +590,14 @@ class ReferenceFrame:
     @classmethod
     def from_dataset(
         cls,
-        ds,
-        translation,
-        rotation,
-        timestamps,
-        parent,
-        name=None,
-        inverse=False,
-        discrete=False,
+        ds: Any,
+        translation: ArrayInput | None,
+        rotation: ArrayInput | None,
+        timestamps: Any,
+        parent: FrameLike,
+        name: str | None = None,
+        inverse: bool = False,
+        discrete: bool = False,
     ) -> ReferenceFrame:
         """A moving frame from variables of an xarray Dataset.
 
@@ -614,7 +625,13 @@ class ReferenceFrame:
 
     @classmethod
     def from_translation_dataarray(
-        cls, da, timestamps, parent, name=None, inverse=False, discrete=False
+        cls,
+        da: Any,
+        timestamps: Any,
+        parent: FrameLike,
+        name: str | None = None,
+        inverse: bool = False,
+        discrete: bool = False,
     ) -> ReferenceFrame:
         """A moving frame (no rotation) from a translation DataArray, shape (n, 3).
 
@@ -631,7 +648,13 @@ class ReferenceFrame:
 
     @classmethod
     def from_rotation_dataarray(
-        cls, da, timestamps, parent, name=None, inverse=False, discrete=False
+        cls,
+        da: Any,
+        timestamps: Any,
+        parent: FrameLike,
+        name: str | None = None,
+        inverse: bool = False,
+        discrete: bool = False,
     ) -> ReferenceFrame:
         """A moving frame (no translation) from a rotation DataArray, shape (n, 4).
 
@@ -648,7 +671,11 @@ class ReferenceFrame:
 
     @classmethod
     def from_rotation_matrix(
-        cls, mat, parent, name=None, inverse=False
+        cls,
+        mat: ArrayInput,
+        parent: FrameLike,
+        name: str | None = None,
+        inverse: bool = False,
     ) -> ReferenceFrame:
         """A static frame rotated by a (3, 3) rotation matrix wrt its parent."""
         mat = as_float_array(mat, "mat")
@@ -668,11 +695,13 @@ class ReferenceFrame:
 
     def deregister(self) -> None:
         """Remove this frame's name from the registry."""
+        if self.name is None:
+            raise ValueError("a frame without a name is not registered")
         _deregister(self.name)
 
     # -- lookups and transforms (see rbm_nb.lookups / rbm_nb.transforms) ----
 
-    def lookup_transform(self, to_frame):
+    def lookup_transform(self, to_frame: FrameLike) -> Any:
         """Transform from this frame to ``to_frame``.
 
         Returns
@@ -683,7 +712,7 @@ class ReferenceFrame:
         """
         return _chain.lookup_transform(self, resolve_frame(to_frame, "to_frame"))
 
-    def get_transformation(self, to_frame):
+    def get_transformation(self, to_frame: FrameLike) -> Any:
         """Deprecated alias of :meth:`lookup_transform`."""
         warnings.warn(
             "get_transformation is deprecated, use lookup_transform instead",
@@ -694,14 +723,14 @@ class ReferenceFrame:
 
     def lookup_twist(
         self,
-        reference=None,
-        represent_in=None,
-        outlier_thresh=None,
-        cutoff=None,
-        mode="quaternion",
-        allow_static=False,
-        return_timestamps=False,
-    ):
+        reference: FrameLike | None = None,
+        represent_in: FrameLike | None = None,
+        outlier_thresh: float | None = None,
+        cutoff: float | None = None,
+        mode: str = "quaternion",
+        allow_static: bool = False,
+        return_timestamps: bool = False,
+    ) -> Any:
         """Linear and angular velocity of this frame wrt ``reference``.
 
         Both default to the parent frame. Returns ``(linear, angular)``
@@ -720,13 +749,13 @@ class ReferenceFrame:
 
     def lookup_linear_velocity(
         self,
-        reference=None,
-        represent_in=None,
-        outlier_thresh=None,
-        cutoff=None,
-        allow_static=False,
-        return_timestamps=False,
-    ):
+        reference: FrameLike | None = None,
+        represent_in: FrameLike | None = None,
+        outlier_thresh: float | None = None,
+        cutoff: float | None = None,
+        allow_static: bool = False,
+        return_timestamps: bool = False,
+    ) -> Any:
         """Linear velocity of this frame wrt ``reference``, shape (n, 3)."""
         linear, ts = _twist.lookup_linear_velocity(
             self,
@@ -740,14 +769,14 @@ class ReferenceFrame:
 
     def lookup_angular_velocity(
         self,
-        reference=None,
-        represent_in=None,
-        outlier_thresh=None,
-        cutoff=None,
-        mode="quaternion",
-        allow_static=False,
-        return_timestamps=False,
-    ):
+        reference: FrameLike | None = None,
+        represent_in: FrameLike | None = None,
+        outlier_thresh: float | None = None,
+        cutoff: float | None = None,
+        mode: str = "quaternion",
+        allow_static: bool = False,
+        return_timestamps: bool = False,
+    ) -> Any:
         """Angular velocity of this frame wrt ``reference``, shape (n, 3)."""
         angular, ts = _twist.lookup_angular_velocity(
             self,
@@ -762,13 +791,13 @@ class ReferenceFrame:
 
     def transform_points(
         self,
-        arr,
-        to_frame,
-        axis=-1,
-        time_axis=0,
-        timestamps=None,
-        return_timestamps=False,
-    ):
+        arr: ArrayInput,
+        to_frame: FrameLike,
+        axis: int | None = -1,
+        time_axis: int | None = 0,
+        timestamps: Any = None,
+        return_timestamps: bool = False,
+    ) -> Any:
         """Points given in this frame, expressed in ``to_frame``."""
         out, ts = _transform.transform(
             self,
@@ -783,13 +812,13 @@ class ReferenceFrame:
 
     def transform_vectors(
         self,
-        arr,
-        to_frame,
-        axis=-1,
-        time_axis=0,
-        timestamps=None,
-        return_timestamps=False,
-    ):
+        arr: ArrayInput,
+        to_frame: FrameLike,
+        axis: int | None = -1,
+        time_axis: int | None = 0,
+        timestamps: Any = None,
+        return_timestamps: bool = False,
+    ) -> Any:
         """Vectors represented in this frame, represented in ``to_frame``."""
         out, ts = _transform.transform(
             self,
@@ -804,13 +833,13 @@ class ReferenceFrame:
 
     def transform_quaternions(
         self,
-        arr,
-        to_frame,
-        axis=-1,
-        time_axis=0,
-        timestamps=None,
-        return_timestamps=False,
-    ):
+        arr: ArrayInput,
+        to_frame: FrameLike,
+        axis: int | None = -1,
+        time_axis: int | None = 0,
+        timestamps: Any = None,
+        return_timestamps: bool = False,
+    ) -> Any:
         """Orientations wrt this frame, expressed wrt ``to_frame``."""
         out, ts = _transform.transform(
             self,
@@ -825,15 +854,15 @@ class ReferenceFrame:
 
     def transform_angular_velocity(
         self,
-        arr,
-        to_frame,
-        what="reference_frame",
-        axis=-1,
-        time_axis=0,
-        timestamps=None,
-        return_timestamps=False,
-        cutoff=None,
-    ):
+        arr: ArrayInput,
+        to_frame: FrameLike,
+        what: str = "reference_frame",
+        axis: int | None = -1,
+        time_axis: int | None = 0,
+        timestamps: Any = None,
+        return_timestamps: bool = False,
+        cutoff: float | None = None,
+    ) -> Any:
         """Change the reference, moving or representation frame of angular velocities."""
         out, ts = _twist.transform_angular_velocity(
             self,
@@ -849,18 +878,18 @@ class ReferenceFrame:
 
     def transform_linear_velocity(
         self,
-        arr,
-        to_frame,
-        what="reference_frame",
-        moving_frame=None,
-        reference_frame=None,
-        axis=-1,
-        time_axis=0,
-        timestamps=None,
-        return_timestamps=False,
-        outlier_thresh=None,
-        cutoff=None,
-    ):
+        arr: ArrayInput,
+        to_frame: FrameLike,
+        what: str = "reference_frame",
+        moving_frame: FrameLike | None = None,
+        reference_frame: FrameLike | None = None,
+        axis: int | None = -1,
+        time_axis: int | None = 0,
+        timestamps: Any = None,
+        return_timestamps: bool = False,
+        outlier_thresh: float | None = None,
+        cutoff: float | None = None,
+    ) -> Any:
         """Change the reference, moving or representation frame of linear velocities."""
         out, ts = _twist.transform_linear_velocity(
             self,

@@ -12,12 +12,14 @@ a :class:`~rbm_nb.Transform`).
 
 from __future__ import annotations
 
+from typing import Any
+
 from . import _xarray
 from ._engine import at_time as _at_time
 from ._engine import chain as _chain
 from ._engine import twist as _twist
 from .conversions import homogeneous_from_transform
-from .frames import resolve_frame
+from .frames import FrameLike, ReferenceFrame, resolve_frame
 from .rigid_transform import Transform
 
 __all__ = [
@@ -30,15 +32,15 @@ __all__ = [
 
 
 def lookup_transform(
-    outof,
-    into,
-    as_dataset=False,
-    return_timestamps=False,
+    outof: FrameLike,
+    into: FrameLike,
+    as_dataset: bool = False,
+    return_timestamps: bool = False,
     *,
-    time=None,
-    as_matrix=False,
-    as_transform=False,
-):
+    time: Any = None,
+    as_matrix: bool = False,
+    as_transform: bool = False,
+) -> Any:
     """Look up the transform that maps points wrt ``outof`` to points wrt ``into``.
 
     The transform is a rotation r followed by a translation t:
@@ -96,15 +98,15 @@ def lookup_transform(
 
 
 def lookup_at(
-    outof,
-    into,
-    time=None,
+    outof: FrameLike,
+    into: FrameLike,
+    time: Any = None,
     *,
     as_matrix: bool = False,
     as_transform: bool = False,
     as_dataset: bool = False,
     return_timestamps: bool = False,
-):
+) -> Any:
     """``lookup_transform`` with every option (keyword-only beyond ``time``).
 
     Returns
@@ -124,6 +126,7 @@ def lookup_at(
         t, r, timestamps = _at_time.transform_at_times(outof, into, time)
     if as_dataset:
         return _xarray.transform_dataset(t, r, outof.name, timestamps)
+    out: Any
     if as_matrix:
         out = homogeneous_from_transform(t, r)
     elif as_transform:
@@ -133,7 +136,12 @@ def lookup_at(
     return (out, timestamps) if return_timestamps else out
 
 
-def lookup_pose(frame, reference, as_dataset=False, return_timestamps=False):
+def lookup_pose(
+    frame: FrameLike,
+    reference: FrameLike,
+    as_dataset: bool = False,
+    return_timestamps: bool = False,
+) -> Any:
     """Look up the position and orientation of ``frame`` wrt ``reference``.
 
     Parameters
@@ -163,7 +171,9 @@ def lookup_pose(frame, reference, as_dataset=False, return_timestamps=False):
     return position, orientation
 
 
-def _public_frames(frame, reference, represent_in):
+def _public_frames(
+    frame: FrameLike, reference: FrameLike | None, represent_in: FrameLike | None
+) -> tuple[ReferenceFrame, ReferenceFrame, ReferenceFrame]:
     frame = resolve_frame(frame, "frame")
     if reference is None:
         if frame.parent is None:
@@ -179,15 +189,15 @@ def _public_frames(frame, reference, represent_in):
 
 
 def lookup_twist(
-    frame,
-    reference=None,
-    represent_in=None,
-    outlier_thresh=None,
-    cutoff=None,
-    mode="quaternion",
-    as_dataset=False,
-    return_timestamps=False,
-):
+    frame: FrameLike,
+    reference: FrameLike | None = None,
+    represent_in: FrameLike | None = None,
+    outlier_thresh: float | None = None,
+    cutoff: float | None = None,
+    mode: str = "quaternion",
+    as_dataset: bool = False,
+    return_timestamps: bool = False,
+) -> Any:
     """Estimate the linear and angular velocity of ``frame`` wrt ``reference``.
 
     Parameters
@@ -228,14 +238,14 @@ def lookup_twist(
 
 
 def lookup_linear_velocity(
-    frame,
-    reference=None,
-    represent_in=None,
-    outlier_thresh=None,
-    cutoff=None,
-    as_dataarray=False,
-    return_timestamps=False,
-):
+    frame: FrameLike,
+    reference: FrameLike | None = None,
+    represent_in: FrameLike | None = None,
+    outlier_thresh: float | None = None,
+    cutoff: float | None = None,
+    as_dataarray: bool = False,
+    return_timestamps: bool = False,
+) -> Any:
     """Estimate the linear velocity of ``frame`` wrt ``reference``.
 
     Parameters are those of :func:`lookup_twist` (``as_dataarray`` returns
@@ -260,15 +270,15 @@ def lookup_linear_velocity(
 
 
 def lookup_angular_velocity(
-    frame,
-    reference=None,
-    represent_in=None,
-    outlier_thresh=None,
-    cutoff=None,
-    mode="quaternion",
-    as_dataarray=False,
-    return_timestamps=False,
-):
+    frame: FrameLike,
+    reference: FrameLike | None = None,
+    represent_in: FrameLike | None = None,
+    outlier_thresh: float | None = None,
+    cutoff: float | None = None,
+    mode: str = "quaternion",
+    as_dataarray: bool = False,
+    return_timestamps: bool = False,
+) -> Any:
     """Estimate the angular velocity of ``frame`` wrt ``reference``.
 
     Parameters are those of :func:`lookup_twist`; ``outlier_thresh`` here

@@ -15,9 +15,9 @@ from typing import Any
 import numpy as np
 
 from . import _time
+from ._door import ArrayInput, kernel_array
 from ._door import float_array as _door_float_array
 from ._door import is_dataarray as _is_dataarray
-from ._door import kernel_array
 from ._kernels import quaternion as _qk
 from ._kernels import rotations as _rk
 
@@ -121,7 +121,7 @@ def _raise_zero(name: str, idx: int, what: str) -> None:
 # ---------------------------------------------------------------------------
 
 
-def qinv(q, qaxis: int = -1):
+def qinv(q: ArrayInput, qaxis: int = -1) -> Any:
     """Inverse of quaternions, ``conj(q) / |q|**2``.
 
     Parameters
@@ -155,7 +155,7 @@ def qinv(q, qaxis: int = -1):
     return _like(template, _join(out.reshape(qf.shape), was_quaternion, qaxis))
 
 
-def qmul(*q, qaxis: int = -1):
+def qmul(*q, qaxis: int = -1) -> Any:
     """Hamilton product of two or more quaternion arrays, left to right.
 
     Parameters
@@ -217,7 +217,7 @@ def _resolve_reduce_axes(axis: Any, ndim: int) -> tuple[int, ...]:
     return out
 
 
-def qmean(q, axis=None, qaxis: int = -1):
+def qmean(q: ArrayInput, axis: int | None = None, qaxis: int = -1) -> Any:
     """Mean rotation of quaternions (Markley's eigenvector method).
 
     The mean is the unit eigenvector of the largest eigenvalue of the mean
@@ -371,7 +371,9 @@ def _squad_along(
     return out
 
 
-def qinterp(q, t_in, t_out, axis: int = 0, qaxis: int = -1):
+def qinterp(
+    q: ArrayInput, t_in: ArrayInput, t_out: ArrayInput, axis: int = 0, qaxis: int = -1
+) -> Any:
     """Interpolate quaternions in time with squad (a cubic spline on rotations).
 
     Parameters
@@ -478,7 +480,7 @@ def _qinterp_dataarray(
     ax = [d for d in da.dims if d != qdim].index(dim)
     values = np.full(data.shape[:ax] + (flat_out.size,) + data.shape[ax + 1 :], np.nan)
     if inside.any():
-        index = [slice(None)] * values.ndim
+        index: list[Any] = [slice(None)] * values.ndim
         index[ax] = inside
         values[tuple(index)] = _squad_along(data, ax, t_in_f, flat_out[inside])
     values = np.moveaxis(values, -1, da.dims.index(qdim))
@@ -509,7 +511,13 @@ def _qinterp_dataarray(
 # ---------------------------------------------------------------------------
 
 
-def rotate_vectors(q, v, axis: int = -1, qaxis: int = -1, one_to_one: bool = True):
+def rotate_vectors(
+    q: ArrayInput,
+    v: ArrayInput,
+    axis: int = -1,
+    qaxis: int = -1,
+    one_to_one: bool = True,
+) -> Any:
     """Rotate vectors by quaternions, ``q v q⁻¹``.
 
     Correct for quaternions of any non-zero norm (the rotation does not scale
@@ -619,14 +627,14 @@ _ELEMENTARY_AXIS = {"r": 1, "p": 2, "y": 3}
 
 
 def from_euler_angles(
-    rpy=None,
-    roll=None,
-    pitch=None,
-    yaw=None,
+    rpy: Any = None,
+    roll: Any = None,
+    pitch: Any = None,
+    yaw: Any = None,
     axis: int = -1,
     order: str = "rpy",
     return_quaternion: bool = False,
-):
+) -> Any:
     """Quaternions from roll, pitch and yaw angles (radians).
 
     Roll, pitch and yaw are rotations about the x, y and z axes. The result is
@@ -710,6 +718,7 @@ def from_euler_angles(
         rotor[:, 0] = np.cos(half)
         rotor[:, _ELEMENTARY_AXIS[key]] = np.sin(half)
         result = rotor if result is None else _qk.qmul(result, rotor)
+    assert result is not None  # at least one angle is given (checked above)
     result = result.reshape(shape + (4,))
     if return_quaternion:
         return _join(result, True, -1)

@@ -12,12 +12,14 @@ attributes updated.
 from __future__ import annotations
 
 import warnings
+from typing import Any
 
+from ._door import ArrayInput
 from ._engine import transform as _engine_transform
 from ._engine import twist as _twist
 from ._validation import check_what
 from ._xarray import unpack, wrap
-from .frames import resolve_frame
+from .frames import FrameLike, resolve_frame
 
 __all__ = [
     "transform_points",
@@ -94,15 +96,15 @@ def _quaternions(frame, arr, into, **kw):
 
 
 def transform_vectors(
-    arr,
-    into,
-    outof=None,
-    dim=None,
-    axis=None,
-    timestamps=None,
-    time_axis=None,
-    return_timestamps=False,
-):
+    arr: ArrayInput,
+    into: FrameLike,
+    outof: FrameLike | None = None,
+    dim: str | None = None,
+    axis: int | None = None,
+    timestamps: Any = None,
+    time_axis: int | None = None,
+    return_timestamps: bool = False,
+) -> Any:
     """Represent vectors given in one frame in another (rotation only).
 
     Parameters
@@ -139,15 +141,15 @@ def transform_vectors(
 
 
 def transform_points(
-    arr,
-    into,
-    outof=None,
-    dim=None,
-    axis=None,
-    timestamps=None,
-    time_axis=None,
-    return_timestamps=False,
-):
+    arr: ArrayInput,
+    into: FrameLike,
+    outof: FrameLike | None = None,
+    dim: str | None = None,
+    axis: int | None = None,
+    timestamps: Any = None,
+    time_axis: int | None = None,
+    return_timestamps: bool = False,
+) -> Any:
     """Express points given wrt one frame wrt another (rotation + translation).
 
     Parameters and returns are those of :func:`transform_vectors`, except
@@ -160,15 +162,15 @@ def transform_points(
 
 
 def transform_quaternions(
-    arr,
-    into,
-    outof=None,
-    dim=None,
-    axis=None,
-    timestamps=None,
-    time_axis=None,
-    return_timestamps=False,
-):
+    arr: ArrayInput,
+    into: FrameLike,
+    outof: FrameLike | None = None,
+    dim: str | None = None,
+    axis: int | None = None,
+    timestamps: Any = None,
+    time_axis: int | None = None,
+    return_timestamps: bool = False,
+) -> Any:
     """Express orientations (unit quaternions, axis of length 4) wrt another frame.
 
     Parameters and returns are those of :func:`transform_points`.
@@ -180,17 +182,17 @@ def transform_quaternions(
 
 
 def transform_angular_velocity(
-    arr,
-    into,
-    outof=None,
-    what="reference_frame",
-    dim=None,
-    axis=None,
-    timestamps=None,
-    time_axis=None,
-    cutoff=None,
-    return_timestamps=False,
-):
+    arr: ArrayInput,
+    into: FrameLike,
+    outof: FrameLike | None = None,
+    what: str = "reference_frame",
+    dim: str | None = None,
+    axis: int | None = None,
+    timestamps: Any = None,
+    time_axis: int | None = None,
+    cutoff: float | None = None,
+    return_timestamps: bool = False,
+) -> Any:
     """Change the reference, moving or representation frame of angular velocities.
 
     With ``what="reference_frame"`` (R -> R'): w_M/R' = w_M/R + w_R/R';
@@ -219,20 +221,20 @@ def transform_angular_velocity(
 
 
 def transform_linear_velocity(
-    arr,
-    into,
-    outof=None,
-    what="reference_frame",
-    moving_frame=None,
-    reference_frame=None,
-    dim=None,
-    axis=None,
-    timestamps=None,
-    time_axis=None,
-    cutoff=None,
-    outlier_thresh=None,
-    return_timestamps=False,
-):
+    arr: ArrayInput,
+    into: FrameLike,
+    outof: FrameLike | None = None,
+    what: str = "reference_frame",
+    moving_frame: FrameLike | None = None,
+    reference_frame: FrameLike | None = None,
+    dim: str | None = None,
+    axis: int | None = None,
+    timestamps: Any = None,
+    time_axis: int | None = None,
+    cutoff: float | None = None,
+    outlier_thresh: float | None = None,
+    return_timestamps: bool = False,
+) -> Any:
     """Change the reference, moving or representation frame of linear velocities.
 
     With ``what="reference_frame"`` (R -> R', needs ``moving_frame``):

@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _time
-from .._kernels import resample as kr
 from .._door import kernel_array
+from .._kernels import resample as kr
 from .._validation import as_float_array, normalize_quaternions, resolve_axis
 from . import chain as _chain
 
@@ -77,6 +77,7 @@ class Blocks:
         """
         c = out.shape[-1]
         if self.track is not None:
+            assert self.time_axis is not None  # set with the track
             out = out.reshape((out.shape[0],) + self.moved_shape[1:-1] + (c,))
             return np.moveaxis(out, (0, -1), (self.time_axis, self.axis))
         if target.track is None:

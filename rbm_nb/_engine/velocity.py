@@ -17,6 +17,8 @@ entry points used by the velocity lookups and by
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from .. import _time
@@ -24,6 +26,7 @@ from .._door import kernel_array
 from .._kernels import differences as _dk
 from .._kernels import quaternion as _qk
 from .._kernels import rotations as _rk
+from .._validation import is_scalar
 
 __all__ = [
     "check_options",
@@ -44,18 +47,20 @@ _FILTER_PADLEN = 3 * (_BUTTER_ORDER + 1)
 # ---------------------------------------------------------------------------
 
 
-def check_options(outlier_thresh, cutoff, n: int, mode: str | None = None) -> None:
+def check_options(
+    outlier_thresh: Any, cutoff: Any, n: int, mode: str | None = None
+) -> None:
     if mode is not None and mode not in _MODES:
         raise ValueError(
             f"mode must be 'quaternion' or 'rotation_vector', got {mode!r}"
         )
     if outlier_thresh is not None:
-        if not np.isscalar(outlier_thresh) or not outlier_thresh >= 0:
+        if not is_scalar(outlier_thresh) or not outlier_thresh >= 0:
             raise ValueError(
                 f"outlier_thresh must be a non-negative number, got {outlier_thresh!r}"
             )
     if cutoff is not None:
-        if not np.isscalar(cutoff) or not 0 < cutoff < 1:
+        if not is_scalar(cutoff) or not 0 < cutoff < 1:
             raise ValueError(
                 f"cutoff must be a fraction of the Nyquist frequency in (0, 1), got {cutoff!r}"
             )
@@ -130,7 +135,8 @@ def angular_series(
         raise ValueError(f"arr contains a zero quaternion (row {zero} when flattened)")
     need_rv = mode == "rotation_vector" or outlier_thresh is not None
     w = np.empty((n, nb, 3))
-    rv = np.empty((n, nb, 3)) if need_rv else None
+    # rotation vectors, needed by that mode and by the outlier score
+    rv = np.empty((n, nb, 3) if need_rv else (0, nb, 3))
     for b in range(nb):
         # q and -q are the same rotation: differentiate a sign-continuous series
         qb = _qk.unflip(kernel_array(q[:, b, :]))

@@ -259,6 +259,10 @@ def seconds(timestamps: Any, n: int, name: str = "timestamps") -> np.ndarray:
     ndarray, shape (n,), C-contiguous float64
     """
     values = np.asarray(getattr(timestamps, "values", timestamps))
+    if values.dtype.kind not in "iufbMm":
+        raise ValueError(
+            f"{name} must be numbers or datetime64, got dtype {values.dtype}"
+        )
     if values.ndim != 1 or values.shape[0] != n:
         raise ValueError(
             f"{name} must be one-dimensional with one entry per sample ({n}), "

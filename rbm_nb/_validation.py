@@ -21,6 +21,7 @@ __all__ = [
     "check_last_axis",
     "normalize_quaternions",
     "check_finite",
+    "check_no_inf",
     "check_what",
     "check_mode",
 ]
@@ -58,6 +59,10 @@ def normalize_quaternions(
     -------
     ndarray, shape like ``q``, C-contiguous float64
     """
+    inf = np.isinf(q).any(axis=-1)
+    if inf.any():
+        bad = np.argwhere(inf)[0]
+        raise ValueError(f"{name}{_index(bad)} is not finite: {q[tuple(bad)]}")
     norms = np.sqrt(np.einsum("...i,...i->...", q, q))
     nan = np.isnan(norms)
     if nan.any():
@@ -79,13 +84,25 @@ def normalize_quaternions(
         return kernel_array(q / norms[..., None])
 
 
-def check_finite(arr: np.ndarray, name: str) -> None:
+def check_no_inf(arr: np.ndarray, name: str, row_axis: bool = True) -> None:
+    """Raise for infinities (NaN passes: a missing sample, not a mistake).
+
+    With ``row_axis`` the message names the row (all but the last index).
+    """
+    inf = np.isinf(arr)
+    if inf.any():
+        bad = np.argwhere(inf)[0]
+        where = bad[:-1] if row_axis and arr.ndim > 1 else bad
+        raise ValueError(f"{name}{_index(where)} is not finite")
+
+
+def check_finite(arr: np.ndarray, name: str, row_axis: bool = True) -> None:
+    """Raise for NaN or infinities, naming the first bad row (or element)."""
     finite = np.isfinite(arr)
     if not finite.all():
         bad = np.argwhere(~finite)[0]
-        raise ValueError(
-            f"{name}{_index(bad[:-1] if arr.ndim > 1 else bad)} is not finite"
-        )
+        where = bad[:-1] if row_axis and arr.ndim > 1 else bad
+        raise ValueError(f"{name}{_index(where)} is not finite")
 
 
 def check_what(what) -> str:

@@ -130,6 +130,11 @@ def _report_quaternions(name: str, rows: np.ndarray, lead: tuple) -> None:
         norm = np.sqrt(np.einsum("ij,ij->i", rows, rows))
     dev = np.where(np.isnan(norm), np.inf, np.abs(norm - 1.0))
     idx = int(np.argmax(dev))
+    if not np.isfinite(norm[idx]):
+        raise ValueError(
+            f"{name}{_where(lead, idx)} has norm {norm[idx]:.6g}: it is not finite, "
+            f"so it is not a rotation"
+        )
     raise ValueError(
         f"{name}{_where(lead, idx)} has norm {norm[idx]:.6g}, which is not a "
         f"rotation: quaternions must have unit norm to within "

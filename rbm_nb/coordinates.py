@@ -14,6 +14,7 @@ import numpy as np
 
 from ._door import ArrayInput, float_array
 from ._door import is_dataarray as _is_dataarray
+from ._validation import check_no_inf
 
 # system name -> (dimension name, axis labels) per dimensionality
 _SYSTEM_AXES: dict[tuple[str, int], tuple[str, list[str]]] = {
@@ -40,6 +41,7 @@ def _checked(arr: Any, axis: int, length: int, what: str) -> tuple[np.ndarray, i
             f"arr must have length {length} ({what}) along axis {axis}, "
             f"got shape {arr.shape}"
         )
+    check_no_inf(np.moveaxis(arr, axis, -1), "arr")
     return arr, axis
 
 

@@ -35,7 +35,7 @@ from ._engine.velocity import (
 )
 from ._kernels import conversions as _kc
 from ._kernels import quaternion as _qk
-from ._validation import is_scalar
+from ._validation import check_no_inf, is_scalar
 from .coordinates import _replace_dim
 
 __all__ = [
@@ -119,7 +119,10 @@ def _unpack(arr, dim, axis, timestamps, time_axis):
     if axis == time_axis:
         raise ValueError(f"the spatial axis and the time axis are both axis {axis}")
     t = _time.seconds(timestamps, data.shape[time_axis])
-    return data.astype(np.float64, copy=False), axis, time_axis, t
+    data = kernel_array(data)
+    # NaN rows are missing samples (gaps); infinities are mistakes
+    check_no_inf(np.moveaxis(data, (time_axis, axis), (0, -1)), "arr")
+    return data, axis, time_axis, t
 
 
 def _to_series(data, axis, time_axis):
@@ -292,6 +295,11 @@ def _vectors(v, axis, name: str) -> tuple[np.ndarray, int]:
         raise ValueError(
             f"{name} must have length 3 (x, y, z) along axis {ax}, got shape {data.shape}"
         )
+    finite = np.isfinite(data)
+    if not finite.all():
+        bad = np.argwhere(~np.moveaxis(finite, ax, -1))[0][:-1]
+        where = "[" + ", ".join(str(int(i)) for i in bad) + "]" if len(bad) else ""
+        raise ValueError(f"{name} must be finite; {name}{where} is not finite")
     return data, ax
 
 

@@ -20,6 +20,7 @@ from ._door import float_array as _door_float_array
 from ._door import is_dataarray as _is_dataarray
 from ._kernels import quaternion as _qk
 from ._kernels import rotations as _rk
+from ._validation import check_finite, check_no_inf
 
 __all__ = ["from_euler_angles", "qinterp", "qinv", "qmean", "qmul", "rotate_vectors"]
 
@@ -67,7 +68,9 @@ def _split(q: Any, qaxis: int, name: str) -> tuple[np.ndarray, bool]:
         raise ValueError(
             f"{name} must have length 4 (w, x, y, z) along qaxis={qaxis}, got shape {arr.shape}"
         )
-    return np.moveaxis(arr, ax, -1), False
+    moved = np.moveaxis(arr, ax, -1)
+    check_no_inf(moved, name)
+    return moved, False
 
 
 def _join(out: np.ndarray, was_quaternion: bool, qpos: int) -> np.ndarray:
@@ -560,6 +563,7 @@ def rotate_vectors(
     qa = np.asarray(q)
     va = v.values if _is_dataarray(v) else v
     va = _float_array(va, "v")
+    check_no_inf(va, "v", row_axis=False)
     if va.ndim == 0:
         raise ValueError("v must have an axis of length 3 (x, y, z), got a scalar")
     vax = _normalize_axis(axis, va.ndim, "axis")
@@ -692,6 +696,7 @@ def from_euler_angles(
                 f"rpy must have length 3 (roll, pitch, yaw) along axis={axis}, got shape {arr.shape}"
             )
         arr = np.moveaxis(arr, ax, -1)
+        check_finite(arr, "rpy")
         angles = {"r": arr[..., 0], "p": arr[..., 1], "y": arr[..., 2]}
     else:
         for key, value, name in (
@@ -701,6 +706,7 @@ def from_euler_angles(
         ):
             if value is not None:
                 angles[key] = _float_array(value, name)
+                check_finite(angles[key], name, row_axis=False)
         if not angles:
             raise ValueError("give at least one of rpy, roll, pitch or yaw")
     shape: tuple[int, ...] = ()

@@ -245,9 +245,6 @@ def test_quaternions_stored_to_1e4_are_accepted_everywhere(name):
 # -- item 5: non-finite input, the same clear error everywhere -----------------
 
 
-@pytest.mark.xfail(
-    strict=True, reason="issue 12 item 5: non-finite input gets the same clear error"
-)
 def test_non_finite_input_never_returns_nan():
     rbm.register_frame("world")
     rbm.register_frame("s", parent="world", translation=[1.0, 2, 3])

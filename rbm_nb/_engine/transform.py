@@ -12,7 +12,12 @@ import numpy as np
 from .. import _time
 from .._door import kernel_array
 from .._kernels import resample as kr
-from .._validation import as_float_array, normalize_quaternions, resolve_axis
+from .._validation import (
+    as_float_array,
+    check_no_inf,
+    normalize_quaternions,
+    resolve_axis,
+)
 from . import chain as _chain
 
 __all__ = ["Blocks", "transform", "track_of", "SIZES"]
@@ -36,6 +41,8 @@ class Blocks:
                 f"arr must have length {size} along axis {axis} (the {kind}' "
                 f"coordinates), got shape {arr.shape}"
             )
+        # NaN rows are missing samples and pass through; infinities are mistakes
+        check_no_inf(np.moveaxis(arr, self.axis, -1), "arr")
         if size == 4:
             arr = normalize_quaternions(
                 np.moveaxis(arr, self.axis, -1), "arr", allow_nan=True

@@ -165,6 +165,12 @@ def unpack(
     if isinstance(timestamps, str):
         time_axis = _dim_index(arr, timestamps, "timestamps")
         time_dim = timestamps
+        if timestamps not in arr.coords:
+            # xarray would hand out 0, 1, 2, ...: positions are not times
+            raise ValueError(
+                f"timestamps={timestamps!r}: the time dimension of the DataArray has "
+                f"no coordinate; assign one (da.assign_coords({timestamps}=...))"
+            )
         timestamps = arr[timestamps].data
     elif timestamps is None:
         if arr.ndim > 1:

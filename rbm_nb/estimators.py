@@ -623,7 +623,12 @@ def iterative_closest_point(
         if len(rows) < 3:
             raise ValueError(f"{name} needs at least 3 points for ICP, got {len(rows)}")
     _check_rank((p1 - p1.mean(axis=0)).T @ (p1 - p1.mean(axis=0)), "the points of v1")
-    if int(max_iterations) != max_iterations or max_iterations < 0:
+    if (
+        not is_scalar(max_iterations)
+        or not np.isfinite(max_iterations)
+        or int(max_iterations) != max_iterations
+        or max_iterations < 0
+    ):
         raise ValueError(
             f"max_iterations must be a non-negative integer, got {max_iterations!r}"
         )
@@ -644,6 +649,11 @@ def iterative_closest_point(
             raise ValueError(
                 f"init_transform must hold a translation of shape (3,) and a rotation of "
                 f"shape (4,), got {t0.shape} and {r0.shape}"
+            )
+        if not (np.isfinite(t0).all() and np.isfinite(r0).all()):
+            raise ValueError(
+                f"init_transform is not finite: translation {t0.tolist()}, "
+                f"rotation {r0.tolist()}"
             )
         if not np.any(r0):
             raise ValueError("init_transform: the rotation is a zero quaternion")

@@ -21,6 +21,7 @@ from ._door import is_dataarray as _is_dataarray
 from ._kernels import quaternion as _qk
 from ._kernels import rotations as _rk
 from ._validation import check_finite, check_no_inf
+from .errors import UnsupportedError
 
 __all__ = ["from_euler_angles", "qinterp", "qinv", "qmean", "qmul", "rotate_vectors"]
 
@@ -468,7 +469,7 @@ def _qinterp_dataarray(
         t_in = da.coords[dim].values
     t_out_values = np.asarray(getattr(t_out, "values", t_out))
     if t_out_values.ndim > 1:
-        raise ValueError(
+        raise UnsupportedError(
             f"the new coordinate for {dim!r} must be a scalar or one-dimensional, "
             f"got shape {t_out_values.shape}"
         )

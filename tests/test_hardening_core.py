@@ -28,16 +28,7 @@ def _tree_text() -> str:
 
 @pytest.mark.parametrize(
     "mode",
-    [
-        pytest.param(
-            "quaternion",
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="issue 12 item 1: one-sample angular velocity is refused",
-            ),
-        ),
-        "rotation_vector",
-    ],
+    ["quaternion", "rotation_vector"],
 )
 def test_one_sample_angular_velocity_is_refused_every_time(mode):
     """300 calls in the issue gave NaN, -inf, zeros, ZeroDivisionError or 9e13."""
@@ -49,9 +40,6 @@ def test_one_sample_angular_velocity_is_refused_every_time(mode):
             rbm.estimate_angular_velocity(q, timestamps=[rng.normal()], mode=mode)
 
 
-@pytest.mark.xfail(
-    strict=True, reason="issue 12 item 1: one-sample frame angular velocity is refused"
-)
 def test_one_sample_frame_angular_velocity_is_refused():
     rbm.register_frame("world")
     rbm.register_frame(
@@ -132,10 +120,6 @@ def _moving():
     )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 12 item 3: a DataArray time dimension without coordinate raises",
-)
 @pytest.mark.parametrize(
     "func, width",
     [
@@ -293,11 +277,6 @@ def _body_and_short():
     )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 12 item 12: overlapping ranges with no sample in the window are "
-    "reported as such",
-)
 def test_no_sample_in_window_message():
     _body_and_short()
     with pytest.raises(ValueError) as info:
@@ -323,9 +302,6 @@ def test_truly_disjoint_ranges_still_say_do_not_overlap():
 # -- item 13: ICP validates at the door ---------------------------------------
 
 
-@pytest.mark.xfail(
-    strict=True, reason="issue 12 item 13: ICP validates init_transform/max_iterations"
-)
 @pytest.mark.parametrize(
     "kwargs, argument",
     [

@@ -448,10 +448,6 @@ def test_rejected_first_sample_is_not_a_silent_nan():
             assert np.isfinite(v).all(), "rows without a kept neighbour came back NaN"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: accessor qinterp raises the reference's NotImplementedError",
-)
 @pytest.mark.parametrize(
     "coords",
     [{"time": [0.5], "quaternion_axis": ["w"]}, {"time": np.zeros((2, 2))}],

@@ -161,13 +161,15 @@ def match(frames, arrays=(), arrays_first=True) -> Target:
     lo = int(np.searchsorted(source.key, first, side="left"))
     hi = int(np.searchsorted(source.key, last, side="right"))
     if hi <= lo:
+        if first <= last:
+            raise ValueError(_no_sample_message(frames, arrays, source, first, last))
         raise ValueError(_no_overlap_message(frames, arrays, ranged))
     if lo == 0 and hi == len(source):
         return Target(source, source)
     return Target(source.slice(lo, hi), source)
 
 
-def _no_overlap_message(frames, arrays, ranged) -> str:
+def _spans(frames, arrays) -> list[str]:
     parts = []
     for f in frames:
         if f._track is not None and not f.discrete:
@@ -175,10 +177,45 @@ def _no_overlap_message(frames, arrays, ranged) -> str:
     for k, a in enumerate(arrays):
         if a is not None:
             parts.append(f"array {k}: {_span(a)}")
+    return parts
+
+
+def _no_overlap_message(frames, arrays, ranged) -> str:
+    parts = _spans(frames, arrays)
     return (
         "the time ranges do not overlap, so there is no time at which the "
         "transformation and the data are both defined (" + "; ".join(parts) + ")"
     )
+
+
+def _no_sample_message(frames, arrays, source, first, last) -> str:
+    """The ranges overlap, but the sampling track has no sample inside."""
+    names = [f"frame {f.name!r}" for f in frames if f._track is source]
+    names += [f"array {k}" for k, a in enumerate(arrays) if a is source]
+    who = names[0] if names else "the sampling"
+    lo = int(np.searchsorted(source.key, first, side="left"))
+    around = []
+    if lo > 0:
+        around.append(f"the last one before is {source.values[lo - 1]}")
+    if lo < len(source):
+        around.append(f"the first one after is {source.values[lo]}")
+    return (
+        f"the time ranges overlap only from {_value(source, first)} to "
+        f"{_value(source, last)}, and none of the {len(source)} samples of {who} "
+        f"(which defines the timestamps of the result) falls within it "
+        f"({'; '.join(around)}); nothing can be returned ("
+        + "; ".join(_spans(frames, arrays))
+        + ")"
+    )
+
+
+def _value(track, key):
+    """A sort key as the user's kind of time (datetime64 or a number)."""
+    if track.kind == "datetime64":
+        return np.datetime64(int(key), "ns")
+    if track.kind == "timedelta64":
+        return np.timedelta64(int(key), "ns")
+    return key
 
 
 def _span(track) -> str:

@@ -130,6 +130,12 @@ def angular_series(
     q: np.ndarray, t: np.ndarray, mode, outlier_thresh, cutoff
 ) -> np.ndarray:
     n, nb, _ = q.shape
+    if n < 2:
+        # the spline derivative reads two samples at least (no kernel is
+        # called with less)
+        raise ValueError(
+            f"arr needs at least 2 samples to estimate a velocity, got {n}"
+        )
     zero = _rk.first_zero_row(kernel_array(q.reshape(-1, 4)))
     if zero >= 0:
         raise ValueError(f"arr contains a zero quaternion (row {zero} when flattened)")

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import difflib
 import warnings
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, MutableMapping
 from typing import Any, TypeAlias
 
 import numpy as np
@@ -55,20 +55,41 @@ FrameLike: TypeAlias = "ReferenceFrame | str"
 # ---------------------------------------------------------------------------
 
 
-class FrameRegistry(Mapping):
-    """Read-only mapping of names to registered frames.
+class FrameRegistry(MutableMapping):
+    """Mapping of names to registered frames.
 
     Change it with :func:`register_frame`, :meth:`ReferenceFrame.register`,
-    :func:`deregister_frame` and :func:`clear_registry`; observers added with
-    :func:`on_registry_change` are told about every change.
+    :func:`deregister_frame` and :func:`clear_registry`, or as a dict
+    (``registry[name] = frame``, ``del registry[name]``, as in
+    rigid-body-motion); observers added with :func:`on_registry_change` are
+    told about every change.
     """
 
     def __init__(self) -> None:
         self._frames: dict[str, ReferenceFrame] = {}
         self._callbacks: list[Callable[[str, str | None], None]] = []
 
-    def __getitem__(self, name):
+    def __getitem__(self, name: str) -> ReferenceFrame:
         return self._frames[name]
+
+    def __setitem__(self, name: str, frame: ReferenceFrame) -> None:
+        if not isinstance(frame, ReferenceFrame):
+            raise TypeError(
+                f"registry[{name!r}] must be a ReferenceFrame, got "
+                f"{type(frame).__name__}"
+            )
+        if not isinstance(name, str):
+            raise TypeError(f"registry keys are frame names (str), got {name!r}")
+        self._frames[name] = frame
+        _chain.invalidate()
+        self._notify("register", name)
+
+    def __delitem__(self, name: str) -> None:
+        if name not in self._frames:
+            raise KeyError(_not_found_message(name))
+        del self._frames[name]
+        _chain.invalidate()
+        self._notify("deregister", name)
 
     def __iter__(self) -> Iterator[str]:
         return iter(self._frames)
@@ -113,12 +134,22 @@ def _register(frame: ReferenceFrame, update: bool = False) -> None:
     if name is None:
         raise ValueError("cannot register a frame without a name; pass name=...")
     old = registry._frames.get(name)
+    if old is not None and not update:
+        # also for the same object again (as rigid-body-motion)
+        raise ValueError(
+            f"a frame named {name!r} is already registered; pass update=True "
+            f"to replace it"
+        )
     if old is not None and old is not frame:
-        if not update:
-            raise ValueError(
-                f"a frame named {name!r} is already registered; pass update=True "
-                f"to replace it"
-            )
+        # check first, change after: a failed update leaves the tree as it was
+        above = set(map(id, frame._path_to_root()))
+        for child in old.children:
+            if id(child) in above:
+                raise ValueError(
+                    f"cannot replace {name!r}: the new frame is {child.name!r} or "
+                    f"below it, and {child.name!r} would become its own ancestor "
+                    f"(a cycle)"
+                )
         # the new frame takes over the old one's children, so that frames
         # below it see the new data instead of a detached copy
         for child in old.children:
@@ -207,7 +238,11 @@ def register_frame(
         inverse=inverse,
         discrete=discrete,
     )
-    _register(frame, update=update)
+    try:
+        _register(frame, update=update)
+    except ValueError:
+        frame.parent = None  # not registered: not in the tree either
+        raise
 
 
 def deregister_frame(name: str) -> None:

@@ -66,10 +66,6 @@ def _abc_tree():
     rbm.register_frame("c", parent="a", translation=[0.0, 1, 0])
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 12 item 2: a register_frame(update=True) that fails leaves the tree as it was",
-)
 def test_failed_update_leaves_the_tree_unchanged():
     _abc_tree()
     before_tree = _tree_text()

@@ -361,10 +361,6 @@ def test_qinterp_quaternion_axis_first():
 # ---------------------------------------------------------------------------
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: del rbm.registry[name] and rbm.registry[name] = frame",
-)
 def test_registry_del_and_setitem_like_the_reference():
     for pkg in (rbm, ref):
         pkg.register_frame("world")
@@ -380,10 +376,6 @@ def test_registry_del_and_setitem_like_the_reference():
     assert sorted(rbm.registry) == sorted(ref.registry)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: registering the same frame object twice raises",
-)
 def test_registering_the_same_object_twice_raises_like_the_reference():
     for pkg in (ref, rbm):
         pkg.register_frame("world")

@@ -22,6 +22,7 @@ __all__ = [
     "normalize_quaternions",
     "check_finite",
     "check_no_inf",
+    "check_unit_norms",
     "check_what",
     "check_mode",
 ]
@@ -94,6 +95,26 @@ def check_no_inf(arr: np.ndarray, name: str, row_axis: bool = True) -> None:
         bad = np.argwhere(inf)[0]
         where = bad[:-1] if row_axis and arr.ndim > 1 else bad
         raise ValueError(f"{name}{_index(where)} is not finite")
+
+
+def check_unit_norms(q: np.ndarray, name: str) -> None:
+    """The one rule for quaternion arguments: unit norm within the tolerance.
+
+    Rows of ``q`` (components last) farther than ``UNIT_QUATERNION_TOLERANCE``
+    from unit norm, or zero, raise naming the first one; NaN rows (missing
+    samples) pass. Nothing is changed: the math normalises where it needs to.
+    """
+    with np.errstate(invalid="ignore"):
+        norms = np.sqrt(np.einsum("...i,...i->...", q, q))
+        off = np.abs(norms - 1.0) > UNIT_QUATERNION_TOLERANCE
+    if off.any():
+        bad = np.argwhere(off)[0]
+        norm = norms[tuple(bad)]
+        kind = "a zero quaternion" if norm == 0 else f"of norm {norm:.6g}"
+        raise ValueError(
+            f"{name}{_index(bad)} is {kind}; rotations must be unit quaternions "
+            f"(norm within {UNIT_QUATERNION_TOLERANCE} of 1)"
+        )
 
 
 def check_finite(arr: np.ndarray, name: str, row_axis: bool = True) -> None:

@@ -35,7 +35,7 @@ from ._engine.velocity import (
 )
 from ._kernels import conversions as _kc
 from ._kernels import quaternion as _qk
-from ._validation import check_no_inf, is_scalar
+from ._validation import check_no_inf, check_unit_norms, is_scalar
 from .coordinates import _replace_dim
 
 __all__ = [
@@ -260,6 +260,7 @@ def estimate_angular_velocity(
             f"arr must have length 4 (w, x, y, z) along axis {axis}, got shape {data.shape}"
         )
     _check_options(outlier_thresh, cutoff, data.shape[time_axis], mode)
+    check_unit_norms(np.moveaxis(data, (time_axis, axis), (0, -1)), "arr")
     series, moved_shape = _to_series(data, axis, time_axis)
     w = _angular_series(series, t, mode, outlier_thresh, cutoff)
     out = _from_series(w, moved_shape, axis, time_axis, 3)

@@ -20,7 +20,7 @@ from ._door import float_array as _door_float_array
 from ._door import is_dataarray as _is_dataarray
 from ._kernels import quaternion as _qk
 from ._kernels import rotations as _rk
-from ._validation import check_finite, check_no_inf
+from ._validation import check_finite, check_no_inf, check_unit_norms
 from .errors import UnsupportedError
 
 __all__ = ["from_euler_angles", "qinterp", "qinv", "qmean", "qmul", "rotate_vectors"]
@@ -269,6 +269,7 @@ def qmean(q: ArrayInput, axis: int | None = None, qaxis: int = -1) -> Any:
     keep_axes = tuple(a for a in range(nd) if a not in reduce_axes)
     moved = np.transpose(qf, keep_axes + reduce_axes + (nd,))
     keep_shape = moved.shape[: len(keep_axes)]
+    check_unit_norms(qf, "q")
     groups = moved.reshape(int(np.prod(keep_shape)), -1, 4)
     if groups.shape[1] == 0:
         raise ValueError(f"q has no quaternions to average along axis={axis!r}")
@@ -423,15 +424,20 @@ def qinterp(
     qpos = -1
     if not was_quaternion:
         qpos = _normalize_axis(qaxis, arr.ndim, "qaxis")
-        if ax == qpos:
-            raise ValueError(
-                f"axis={axis} and qaxis={qaxis} refer to the same axis of q"
-            )
+        # axis counts the axes of q without qaxis when both name the same
+        # axis (qinterp(q.T, ..., qaxis=0) with the default axis=0), as in
+        # rigid-body-motion; otherwise it counts all axes of q
         ax_without_q = ax - 1 if ax > qpos else ax
     else:
         ax_without_q = ax
+    if ax_without_q >= qf.ndim - 1:
+        raise ValueError(
+            f"axis={axis} and qaxis={qaxis} refer to the same axis of q, and q of "
+            f"shape {arr.shape} has no axis {axis} besides its quaternion axis"
+        )
     t_in_f, t_out_f = _time_values(t_in, t_out)
     _check_times(t_in_f, t_out_f.reshape(-1), qf.shape[ax_without_q])
+    check_unit_norms(qf, "q")
     out = _squad_along(qf, ax_without_q, t_in_f, t_out_f)
     if t_out_f.ndim == 0 and ax < qpos:
         qpos -= 1  # the sampled axis is gone

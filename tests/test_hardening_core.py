@@ -172,28 +172,16 @@ def _norm_calls(q):
     }
 
 
-ALREADY_STRICT = {"ReferenceFrame", "transform_quaternions"}
 
 
 @pytest.mark.parametrize(
     "name",
     [
-        pytest.param(
-            n,
-            marks=()
-            if n in ALREADY_STRICT
-            else pytest.mark.xfail(
-                strict=True,
-                reason="issue 12 item 4: far-from-unit quaternions refused everywhere",
-            ),
-        )
-        for n in [
-            "ReferenceFrame",
-            "transform_quaternions",
-            "estimate_angular_velocity",
-            "qinterp",
-            "qmean",
-        ]
+        "ReferenceFrame",
+        "transform_quaternions",
+        "estimate_angular_velocity",
+        "qinterp",
+        "qmean",
     ],
 )
 def test_far_from_unit_quaternion_is_refused_everywhere(name):

@@ -342,9 +342,6 @@ def _smooth_quaternions(n=8):
     return q / np.linalg.norm(q, axis=1, keepdims=True)
 
 
-@pytest.mark.xfail(
-    strict=True, reason="issue 11 item 1: qinterp(q.T, ..., qaxis=0) as the reference"
-)
 def test_qinterp_quaternion_axis_first():
     q = _smooth_quaternions()
     t_in = np.arange(8.0)

@@ -397,11 +397,6 @@ def _zigzag(n=86):
     return t, x
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: outlier_thresh that leaves samples without kept "
-    "neighbours raises one clear error (no NaN rows) in lookup_twist and the estimator",
-)
 def test_outlier_rejection_never_returns_nan_rows():
     t, x = _zigzag()
     rbm.register_frame("world")
@@ -414,10 +409,6 @@ def test_outlier_rejection_never_returns_nan_rows():
         rbm.lookup_linear_velocity("b", "world", outlier_thresh=0.5)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: a rejected first sample is not returned as a NaN row",
-)
 def test_rejected_first_sample_is_not_a_silent_nan():
     t = np.arange(86) * 0.01
     x = np.zeros((86, 3))

@@ -16,9 +16,9 @@ import numpy as np
 
 from . import _time
 from ._door import ArrayInput, kernel_array
-from ._engine.chain import stored_signs
 from ._door import float_array as _door_float_array
 from ._door import is_dataarray as _is_dataarray
+from ._engine.chain import stored_signs
 from ._kernels import quaternion as _qk
 from ._kernels import rotations as _rk
 from ._validation import check_finite, check_no_inf, check_unit_norms

@@ -444,20 +444,29 @@ class ReferenceFrame:
         if rotation is None:
             r: np.ndarray = np.zeros(r_shape)
             r[..., 0] = 1.0
+            stored = r
         else:
-            r = as_float_array(rotation, f"{label}rotation")
-            if r.shape != r_shape:
-                raise ValueError(_shape_message(label, "rotation", r.shape, r_shape))
-            r = normalize_quaternions(r, f"{label}rotation")
+            stored = as_float_array(rotation, f"{label}rotation")
+            if stored.shape != r_shape:
+                raise ValueError(
+                    _shape_message(label, "rotation", stored.shape, r_shape)
+                )
+            r = normalize_quaternions(stored, f"{label}rotation")
         # private copies: the caller's arrays may change later
         t = np.array(t.reshape(-1, 3), dtype=np.float64, order="C")
         r = np.array(r.reshape(-1, 4), dtype=np.float64, order="C")
         if inverse:
             r = kq.qconj(r)  # unit quaternions: the conjugate is the inverse
             t = -kq.rotate_vectors(r, t)
+            stored = r
         self._t = t
-        self._rotation_public = r
-        # interpolation needs consecutive samples on the same hemisphere
+        # the user's values as given (recordings store ~4 digits, so |q| - 1
+        # reaches 1e-4): returned by the rotation property and by lookups at
+        # the frame's own timestamps; the math below uses unit quaternions
+        self._rotation_public = np.array(
+            stored.reshape(-1, 4), dtype=np.float64, order="C"
+        )
+        # interpolation needs unit quaternions on the same hemisphere
         self._r = kq.unflip(r) if self._track is not None and len(r) > 1 else r
 
     # -- data -------------------------------------------------------------

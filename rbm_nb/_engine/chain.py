@@ -266,7 +266,25 @@ def resample_frame(frame, target: Target):
     a_coef, b_coef, seg = frame._squad_coefficients()
     rot = kq.squad_evaluate(frame._r, track.base, a_coef, b_coef, seg, t_out)
     stored_signs(rot, frame._r, frame._rotation_public, track.base, t_out)
-    return kr.interp_linear(track.base, frame._t, t_out), rot
+    trans = kr.interp_linear(track.base, frame._t, t_out)
+    if frame.max_gap is not None:
+        in_gap = _in_long_gap(track.base, t_out, frame.max_gap)
+        trans[in_gap] = np.nan
+        rot[in_gap] = np.nan
+    return trans, rot
+
+
+def _in_long_gap(t_in, t_out, max_gap: float) -> np.ndarray:
+    """Which ``t_out`` fall strictly inside a gap of ``t_in`` longer than max_gap.
+
+    Times equal to a sample are never inside a gap.
+    """
+    right = np.searchsorted(t_in, t_out, side="left")
+    inside = (right > 0) & (right < len(t_in))
+    idx = np.clip(right, 1, len(t_in) - 1)
+    gap = t_in[idx] - t_in[idx - 1]
+    exact = t_in[np.clip(right, 0, len(t_in) - 1)] == t_out
+    return inside & (gap > max_gap) & ~exact
 
 
 def stored_signs(out, unflipped, stored, t_in, t_out) -> None:

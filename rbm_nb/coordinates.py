@@ -12,6 +12,10 @@ from typing import Any
 
 import numpy as np
 
+from ._door import ArrayInput, float_array
+from ._door import is_dataarray as _is_dataarray
+from ._validation import check_no_inf
+
 # system name -> (dimension name, axis labels) per dimensionality
 _SYSTEM_AXES: dict[tuple[str, int], tuple[str, list[str]]] = {
     ("cartesian", 2): ("cartesian_axis", ["x", "y"]),
@@ -24,7 +28,7 @@ _SYSTEM_AXES: dict[tuple[str, int], tuple[str, list[str]]] = {
 
 def _checked(arr: Any, axis: int, length: int, what: str) -> tuple[np.ndarray, int]:
     """Return ``arr`` as a float array and ``axis`` normalised, checking its length."""
-    arr = np.asarray(arr, dtype=float)
+    arr = float_array(arr, "arr")
     if arr.ndim == 0:
         raise ValueError(
             f"arr must have an axis of length {length} ({what}), got a scalar"
@@ -37,10 +41,11 @@ def _checked(arr: Any, axis: int, length: int, what: str) -> tuple[np.ndarray, i
             f"arr must have length {length} ({what}) along axis {axis}, "
             f"got shape {arr.shape}"
         )
+    check_no_inf(np.moveaxis(arr, axis, -1), "arr")
     return arr, axis
 
 
-def cartesian_to_polar(arr, axis: int = -1) -> np.ndarray:
+def cartesian_to_polar(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     """Convert 2-D cartesian coordinates (x, y) into polar coordinates (r, phi).
 
     Parameters
@@ -70,7 +75,7 @@ def cartesian_to_polar(arr, axis: int = -1) -> np.ndarray:
     return np.stack((np.hypot(x, y), np.arctan2(y, x)), axis=axis)
 
 
-def polar_to_cartesian(arr, axis: int = -1) -> np.ndarray:
+def polar_to_cartesian(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     """Convert polar coordinates (r, phi) into 2-D cartesian coordinates (x, y).
 
     Parameters
@@ -100,7 +105,7 @@ def polar_to_cartesian(arr, axis: int = -1) -> np.ndarray:
     return np.stack((r * np.cos(phi), r * np.sin(phi)), axis=axis)
 
 
-def cartesian_to_spherical(arr, axis: int = -1) -> np.ndarray:
+def cartesian_to_spherical(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     """Convert 3-D cartesian coordinates into spherical coordinates (ISO 80000-2).
 
     Parameters
@@ -135,7 +140,7 @@ def cartesian_to_spherical(arr, axis: int = -1) -> np.ndarray:
     return np.stack((np.hypot(rho, z), np.arctan2(rho, z), np.arctan2(y, x)), axis=axis)
 
 
-def spherical_to_cartesian(arr, axis: int = -1) -> np.ndarray:
+def spherical_to_cartesian(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     """Convert spherical coordinates (ISO 80000-2) into 3-D cartesian coordinates.
 
     Parameters
@@ -174,11 +179,6 @@ _CONVERTERS = {
     ("cartesian", "spherical"): cartesian_to_spherical,
     ("spherical", "cartesian"): spherical_to_cartesian,
 }
-
-
-def _is_dataarray(obj: Any) -> bool:
-    # Checked by duck type so that plain-array callers never import xarray.
-    return all(hasattr(obj, a) for a in ("values", "coords", "dims", "name", "attrs"))
 
 
 def _replace_dim(
@@ -220,13 +220,13 @@ def _resolve_dim_axis(arr: Any, dim: str | None, axis: int | None) -> int:
 
 
 def transform_coordinates(
-    arr,
+    arr: ArrayInput,
     into: str,
     outof: str | None = None,
     dim: str | None = None,
     axis: int | None = None,
     replace_dim: bool = True,
-):
+) -> Any:
     """Convert an array between coordinate systems.
 
     Supported pairs: cartesian <-> polar (2-D) and cartesian <-> spherical (3-D).
@@ -288,7 +288,7 @@ def transform_coordinates(
 
     data = arr.values if is_da else arr
     out = convert(data, axis=ax)
-    if not is_da:
+    if not is_da or attrs is None:
         return out
 
     import xarray as xr

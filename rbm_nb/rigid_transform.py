@@ -16,6 +16,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._door import kernel_array
+from . import _pose_algebra as _pa
+from ._kernels import quaternion as _kq
 from ._validation import (
     as_float_array,
     check_finite,
@@ -86,20 +89,8 @@ def _mask(mask, name: str) -> np.ndarray:
     return arr.astype(np.float64)
 
 
-def _kernels():
-    from ._kernels import quaternion
-
-    return quaternion
-
-
-def _pose_algebra():
-    from . import _pose_algebra
-
-    return _pose_algebra
-
-
 def _rows(arr: np.ndarray, shape: tuple, width: int) -> np.ndarray:
-    return np.ascontiguousarray(np.broadcast_to(arr, shape + (width,))).reshape(
+    return kernel_array(np.broadcast_to(arr, shape + (width,))).reshape(
         -1, width
     )
 
@@ -296,7 +287,7 @@ class Transform:
         if not isinstance(other, Transform):
             return NotImplemented
         shape = self._paired(other, "compose")
-        k = _kernels()
+        k = _kq
         qa = _rows(self._rotation, shape, 4)
         q = k.qmul(qa, _rows(other._rotation, shape, 4))
         t = k.rotate_vectors(qa, _rows(other._translation, shape, 3))
@@ -305,9 +296,9 @@ class Transform:
 
     def inv(self) -> Transform:
         """The inverse: ``self.inv() @ self`` is the identity."""
-        k = _kernels()
-        q = k.qconj(self._rotation.reshape(-1, 4))
-        t = -k.rotate_vectors(q, self._translation.reshape(-1, 3))
+        k = _kq
+        q = k.qconj(kernel_array(self._rotation.reshape(-1, 4)))
+        t = -k.rotate_vectors(q, kernel_array(self._translation.reshape(-1, 3)))
         return Transform._trusted(
             t.reshape(self.shape + (3,)), q.reshape(self.shape + (4,))
         )
@@ -321,7 +312,7 @@ class Transform:
                 f"{name} of shape {v.shape} do not broadcast against the Transform's "
                 f"batch shape {self.shape}"
             ) from None
-        out = _kernels().rotate_vectors(
+        out = _kq.rotate_vectors(
             _rows(self._rotation, shape, 4), _rows(v, shape, 3)
         )
         if shift:
@@ -370,7 +361,7 @@ class Transform:
             raise ValueError(
                 f"ratio of shape {r.shape} does not broadcast against batch shape {shape}"
             ) from None
-        r_rows = np.ascontiguousarray(np.broadcast_to(r, shape)).reshape(-1)
+        r_rows = kernel_array(np.broadcast_to(r, shape)).reshape(-1)
         t0 = _rows(self._translation, shape, 3)
         t1 = _rows(other._translation, shape, 3)
         t = t0 + r_rows[:, None] * (t1 - t0)
@@ -392,7 +383,7 @@ class Transform:
             The rotation follows the shorter arc at constant angular speed.
         """
         shape, r, t = self._blend(other, ratio, "slerp")
-        q = _kernels().slerp(
+        q = _kq.slerp(
             _rows(self._rotation, shape, 4), _rows(other._rotation, shape, 4), r
         )
         return Transform._trusted(t.reshape(shape + (3,)), q.reshape(shape + (4,)))
@@ -459,7 +450,7 @@ class Transform:
         shape = self._paired(other, "difference")
         pmask = _mask(position_mask, "position_mask")
         rmask = _mask(rotation_mask, "rotation_mask")
-        k = _kernels()
+        k = _kq
         q_inv = k.qconj(_rows(self._rotation, shape, 4))
         offset = _rows(other._translation, shape, 3) - _rows(
             self._translation, shape, 3
@@ -533,7 +524,7 @@ class Transform:
         """
         v = _finite_translation(vec)
         ref = self._reference(wrt, "translate")
-        k = _kernels()
+        k = _kq
         if ref == "world":
             shape = self._batch_shape("translate", v.shape[:-1])
             offset = _rows(v, shape, 3)
@@ -586,16 +577,16 @@ class Transform:
         array([0., 1., 0.])
         """
         theta = _ratio(angle, "angle")
-        ax = _pose_algebra().axis_vectors(axis, "axis")
+        ax = _pa.axis_vectors(axis, "axis")
         ref = self._reference(wrt, "rotate")
         extra = (ref.shape,) if isinstance(ref, Transform) else ()
         shape = self._batch_shape("rotate", theta.shape, ax.shape[:-1], *extra)
-        pa = _pose_algebra()
+        pa = _pa
         unit = pa.unit_rows(_rows(ax, shape, 3), "axis")
         turn = pa.quaternion_rows_from_axis_angle(
             unit, np.broadcast_to(theta, shape).reshape(-1)
         )
-        k = _kernels()
+        k = _kq
         q = _rows(self._rotation, shape, 4)
         if ref == "local":
             q = k.qmul(q, turn)
@@ -699,7 +690,7 @@ class Transform:
         """
         shape = self._paired(other, "difference_position")
         mask = _mask(position_mask, "position_mask")
-        k = _kernels()
+        k = _kq
         offset = _rows(other._translation, shape, 3) - _rows(
             self._translation, shape, 3
         )
@@ -744,7 +735,7 @@ class Transform:
         """
         shape = self._paired(other, "difference_rotation")
         mask = _mask(rotation_mask, "rotation_mask")
-        k = _kernels()
+        k = _kq
         q_self = _rows(self._rotation, shape, 4)
         q_other = _rows(other._rotation, shape, 4)
         if rotation_mirror is not None:
@@ -762,7 +753,7 @@ class Transform:
             # Whether rounding leaves the cross product at exactly 0 is luck,
             # so (anti-)parallel within PARALLEL_TOLERANCE counts as parallel
             cross = np.linalg.norm(np.cross(a0, a1), axis=1)
-            parallel = cross < _pose_algebra().PARALLEL_TOLERANCE
+            parallel = cross < _pa.PARALLEL_TOLERANCE
             keep = (np.arccos(cos) < np.arccos(-cos)) & ~parallel
             half_turn = np.zeros((1, 4))
             half_turn[0, 1 + _AXES.index(rotation_mirror)] = 1.0
@@ -805,7 +796,7 @@ class Transform:
         >>> tf.apply_vectors([0.0, 0.0, 1.0]).round(12) + 0.0
         array([1., 0., 0.])
         """
-        pa = _pose_algebra()
+        pa = _pa
         d = pa.axis_vectors(direction, "direction")
         ax = pa.axis_vectors(axis, "axis")
         ref = self._reference(wrt, "align_axis_to_direction")
@@ -813,7 +804,7 @@ class Transform:
         shape = self._batch_shape(
             "align_axis_to_direction", d.shape[:-1], ax.shape[:-1], *extra
         )
-        k = _kernels()
+        k = _kq
         q = _rows(self._rotation, shape, 4)
         target = pa.unit_rows(_rows(d, shape, 3), "direction")
         if ref == "local":

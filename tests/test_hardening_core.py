@@ -28,16 +28,7 @@ def _tree_text() -> str:
 
 @pytest.mark.parametrize(
     "mode",
-    [
-        pytest.param(
-            "quaternion",
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="issue 12 item 1: one-sample angular velocity is refused",
-            ),
-        ),
-        "rotation_vector",
-    ],
+    ["quaternion", "rotation_vector"],
 )
 def test_one_sample_angular_velocity_is_refused_every_time(mode):
     """300 calls in the issue gave NaN, -inf, zeros, ZeroDivisionError or 9e13."""
@@ -49,9 +40,6 @@ def test_one_sample_angular_velocity_is_refused_every_time(mode):
             rbm.estimate_angular_velocity(q, timestamps=[rng.normal()], mode=mode)
 
 
-@pytest.mark.xfail(
-    strict=True, reason="issue 12 item 1: one-sample frame angular velocity is refused"
-)
 def test_one_sample_frame_angular_velocity_is_refused():
     rbm.register_frame("world")
     rbm.register_frame(
@@ -78,10 +66,6 @@ def _abc_tree():
     rbm.register_frame("c", parent="a", translation=[0.0, 1, 0])
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 12 item 2: a register_frame(update=True) that fails leaves the tree as it was",
-)
 def test_failed_update_leaves_the_tree_unchanged():
     _abc_tree()
     before_tree = _tree_text()
@@ -132,10 +116,6 @@ def _moving():
     )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 12 item 3: a DataArray time dimension without coordinate raises",
-)
 @pytest.mark.parametrize(
     "func, width",
     [
@@ -192,28 +172,16 @@ def _norm_calls(q):
     }
 
 
-ALREADY_STRICT = {"ReferenceFrame", "transform_quaternions"}
 
 
 @pytest.mark.parametrize(
     "name",
     [
-        pytest.param(
-            n,
-            marks=()
-            if n in ALREADY_STRICT
-            else pytest.mark.xfail(
-                strict=True,
-                reason="issue 12 item 4: far-from-unit quaternions refused everywhere",
-            ),
-        )
-        for n in [
-            "ReferenceFrame",
-            "transform_quaternions",
-            "estimate_angular_velocity",
-            "qinterp",
-            "qmean",
-        ]
+        "ReferenceFrame",
+        "transform_quaternions",
+        "estimate_angular_velocity",
+        "qinterp",
+        "qmean",
     ],
 )
 def test_far_from_unit_quaternion_is_refused_everywhere(name):
@@ -245,9 +213,6 @@ def test_quaternions_stored_to_1e4_are_accepted_everywhere(name):
 # -- item 5: non-finite input, the same clear error everywhere -----------------
 
 
-@pytest.mark.xfail(
-    strict=True, reason="issue 12 item 5: non-finite input gets the same clear error"
-)
 def test_non_finite_input_never_returns_nan():
     rbm.register_frame("world")
     rbm.register_frame("s", parent="world", translation=[1.0, 2, 3])
@@ -296,11 +261,6 @@ def _body_and_short():
     )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 12 item 12: overlapping ranges with no sample in the window are "
-    "reported as such",
-)
 def test_no_sample_in_window_message():
     _body_and_short()
     with pytest.raises(ValueError) as info:
@@ -326,9 +286,6 @@ def test_truly_disjoint_ranges_still_say_do_not_overlap():
 # -- item 13: ICP validates at the door ---------------------------------------
 
 
-@pytest.mark.xfail(
-    strict=True, reason="issue 12 item 13: ICP validates init_transform/max_iterations"
-)
 @pytest.mark.parametrize(
     "kwargs, argument",
     [

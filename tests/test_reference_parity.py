@@ -175,10 +175,6 @@ def test_from_rotation_matrix_sign_follows_the_convention(mat):
     np.testing.assert_allclose(matrix(got), mat, atol=1e-12)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: README 'What differs' documents the sign convention",
-)
 def test_readme_documents_the_sign_convention():
     text = (REPO / "README.md").read_text()
     start = text.index("What differs")
@@ -297,11 +293,6 @@ def head(shared_data):
     return xr.load_dataset(shared_data / "rbm-data" / "head.nc")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: stored quaternions come back exactly (normalise "
-    "only inside the math)",
-)
 def test_real_head_values_round_trip(head):
     # the file stores quaternions to 1e-4, so |q| - 1 reaches ~8e-5
     norms = np.linalg.norm(head.orientation.values, axis=1)
@@ -337,9 +328,6 @@ def _smooth_quaternions(n=8):
     return q / np.linalg.norm(q, axis=1, keepdims=True)
 
 
-@pytest.mark.xfail(
-    strict=True, reason="issue 11 item 1: qinterp(q.T, ..., qaxis=0) as the reference"
-)
 def test_qinterp_quaternion_axis_first():
     q = _smooth_quaternions()
     t_in = np.arange(8.0)
@@ -356,10 +344,6 @@ def test_qinterp_quaternion_axis_first():
 # ---------------------------------------------------------------------------
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: del rbm.registry[name] and rbm.registry[name] = frame",
-)
 def test_registry_del_and_setitem_like_the_reference():
     for pkg in (rbm, ref):
         pkg.register_frame("world")
@@ -375,10 +359,6 @@ def test_registry_del_and_setitem_like_the_reference():
     assert sorted(rbm.registry) == sorted(ref.registry)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: registering the same frame object twice raises",
-)
 def test_registering_the_same_object_twice_raises_like_the_reference():
     for pkg in (ref, rbm):
         pkg.register_frame("world")
@@ -403,11 +383,6 @@ def _zigzag(n=86):
     return t, x
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: outlier_thresh that leaves samples without kept "
-    "neighbours raises one clear error (no NaN rows) in lookup_twist and the estimator",
-)
 def test_outlier_rejection_never_returns_nan_rows():
     t, x = _zigzag()
     rbm.register_frame("world")
@@ -420,10 +395,6 @@ def test_outlier_rejection_never_returns_nan_rows():
         rbm.lookup_linear_velocity("b", "world", outlier_thresh=0.5)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: a rejected first sample is not returned as a NaN row",
-)
 def test_rejected_first_sample_is_not_a_silent_nan():
     t = np.arange(86) * 0.01
     x = np.zeros((86, 3))
@@ -443,10 +414,6 @@ def test_rejected_first_sample_is_not_a_silent_nan():
             assert np.isfinite(v).all(), "rows without a kept neighbour came back NaN"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: accessor qinterp raises the reference's NotImplementedError",
-)
 @pytest.mark.parametrize(
     "coords",
     [{"time": [0.5], "quaternion_axis": ["w"]}, {"time": np.zeros((2, 2))}],
@@ -498,20 +465,12 @@ def _assert_exact_sign(got, expected, what):
     )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: SQUAD signs follow the stored samples, as the reference",
-)
 def test_qinterp_sign_on_a_series_that_flips_sign():
     t, q = _alternating()
     t_out = np.arange(0.0, 7.0, 0.3)
     _assert_exact_sign(rbm.qinterp(q, t, t_out), ref.qinterp(q, t, t_out), "qinterp")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: lookups return the stored quaternions' signs, as the reference",
-)
 def test_lookup_signs_on_a_series_that_flips_sign():
     t, q = _alternating()
     t_out = np.arange(0.0, 7.0, 0.3)

@@ -19,6 +19,7 @@ _EXPORTS: dict[str, str] = {
     "ReferenceFrameTransformBroadcaster": "publishers",
     "ReferenceFrameMarkerPublisher": "publishers",
     "init_node": "publishers",
+    "ExtrapolationError": "transformer",
 }
 
 __all__ = sorted(_EXPORTS)

@@ -2,10 +2,11 @@
 
 Prints a table:
 
-* one Player step on a scene with 10 frames, 1 path and 2 gaze vectors, with
-  the scene shown on the viewer server and a websocket client reading (the
-  whole path a step takes in the kernel), and without a viewer;
-* the time to add those objects (one lookup per object);
+* the time to add 10 frames, 1 path and 2 gaze vectors (one lookup each);
+* the content message a browser gets when the view opens (built once, sent
+  once): time to build and bytes, all samples and decimated;
+* what the kernel does per seek from Python now that the browser plays
+  (a trait update: no pose data);
 * size and time of ``Scene.to_html`` for the recording.
 
 Run: ``.venv/bin/python benchmarks/bench_scene.py``
@@ -13,9 +14,7 @@ Run: ``.venv/bin/python benchmarks/bench_scene.py``
 
 from __future__ import annotations
 
-import statistics
 import tempfile
-import threading
 import time
 from pathlib import Path
 
@@ -24,7 +23,7 @@ import numpy as np
 import rbm_nb as rbm
 from rbm_nb.data import synthetic_head_eye
 from rbm_nb.explorer import register_head_eye_frames
-from rbm_nb.scene import Scene, shutdown_server
+from rbm_nb.scene import Scene
 from rbm_nb.widgets import Player
 
 FRAMES = (
@@ -59,51 +58,37 @@ def build_scene() -> Scene:
     return scene
 
 
-def time_steps(step, indices) -> np.ndarray:
-    out = np.empty(len(indices))
-    for k, i in enumerate(indices):
-        t0 = time.perf_counter()
-        step(int(i))
-        out[k] = time.perf_counter() - t0
-    return out * 1e3
-
-
-class Reader:
-    """A websocket client draining the viewer channel, like a browser would."""
-
-    def __init__(self, url: str):
-        import websocket
-
-        self.ws = websocket.create_connection(url, timeout=5)
-        self.count = 0
-        self.stop = threading.Event()
-        self.thread = threading.Thread(target=self.run, daemon=True)
-        self.thread.start()
-
-    def run(self):
-        import websocket
-
-        self.ws.settimeout(0.2)
-        while not self.stop.is_set():
-            try:
-                self.ws.recv()
-                self.count += 1
-            except websocket.WebSocketTimeoutException:
-                continue
-            except Exception:
-                return
-
-    def close(self):
-        self.stop.set()
-        self.thread.join(timeout=5)
-        self.ws.close()
-
-
 def row(name: str, value: str) -> None:
     print(f"| {name:<58} | {value:>22} |")
 
 
 def main() -> None:
+    import comm
+
+    class CountingComm:
+        """A comm that counts what the kernel would send (no browser needed)."""
+
+        kernel = "Truthy"
+
+        def __init__(self, *args, **kwargs):
+            import uuid
+
+            self.comm_id = uuid.uuid4().hex
+            self.bytes = 0
+
+        def open(self, *args, **kwargs):
+            pass
+
+        def on_msg(self, *args, **kwargs):
+            pass
+
+        def close(self, *args, **kwargs):
+            pass
+
+        def send(self, data=None, metadata=None, buffers=None):
+            self.bytes += len(str(data)) + sum(len(b) for b in buffers or [])
+
+    comm.create_comm = lambda **kwargs: CountingComm()
     t0 = time.perf_counter()
     recording = synthetic_head_eye()
     t_data = time.perf_counter() - t0
@@ -111,60 +96,60 @@ def main() -> None:
     t0 = time.perf_counter()
     scene = build_scene()
     t_add = time.perf_counter() - t0
-    n = len(scene.timestamps)
-    rng = np.random.default_rng(0)
-    indices = rng.integers(0, n, 2000)
-
     print(
-        f"\nscene: {len(FRAMES)} frames, 1 path, 2 gaze vectors; {len(scene._dynamic)} moving nodes; "
-        f"player axis {n} samples"
+        f"\nscene: {len(FRAMES)} frames, 1 path, 2 gaze vectors; "
+        f"{len(scene.state.tracks)} moving nodes; player axis {len(scene.timestamps)} samples"
     )
     print(f"| {'measurement':<58} | {'value':>22} |")
     print(f"|{'-' * 60}|{'-' * 24}|")
     row("synthetic_head_eye() (330 s, not rbm_nb.scene)", f"{t_data:.2f} s")
     row("add 10 frames + path + 2 vectors (lookups included)", f"{t_add * 1e3:.0f} ms")
+    for max_samples in (None, 10000):
+        t0 = time.perf_counter()
+        content, buffers = scene._snapshot_message(max_samples=max_samples)
+        dt = time.perf_counter() - t0
+        size = sum(len(b) for b in buffers)
+        label = "all samples" if max_samples is None else f"<= {max_samples} per track"
+        row(
+            f"content message ({label}): build / size",
+            f"{dt * 1e3:.0f} ms / {size / 1e6:.2f} MB",
+        )
+    row(
+        "scene widget module (meshcat viewer + scene.js)",
+        f"{len(scene.widget._esm) / 1e6:.2f} MB",
+    )
 
-    player = Player(scene, threaded=False)
+    player = Player(scene)
     player.link(scene)
-    time_steps(player.seek, indices[:50])  # warm-up
-    offline = time_steps(player.seek, indices)
+    before = player.comm.bytes + scene.widget.comm.bytes
+    n = 2000
+    t0 = time.perf_counter()
+    for i in np.random.default_rng(0).integers(0, player.n, n):
+        player.seek(int(i))
+    dt = (time.perf_counter() - t0) / n
+    sent = (player.comm.bytes + scene.widget.comm.bytes - before) / n
     row(
-        "Player step, no viewer: median / p95",
-        f"{np.median(offline):.3f} / {np.percentile(offline, 95):.3f} ms",
+        "Player.seek from Python: time / bytes sent",
+        f"{dt * 1e6:.0f} us / {sent:.0f} B",
     )
-
-    reader = Reader(scene.url.replace("http://", "ws://") + "ws")
-    time.sleep(0.5)
-    live = time_steps(player.seek, indices)
-    time.sleep(0.5)
-    reader.close()
-    row(
-        "Player step, live viewer + websocket client: median / p95",
-        f"{np.median(live):.3f} / {np.percentile(live, 95):.3f} ms",
-    )
-    row("Player step, live viewer: max", f"{live.max():.3f} ms")
-    set_time = time_steps(lambda i: scene.set_time(float(player.seconds[i])), indices)
-    row("Scene.set_time alone (live): median", f"{np.median(set_time):.3f} ms")
-    row("messages read by the websocket client", f"{reader.count}")
 
     with tempfile.TemporaryDirectory() as tmp:
         times = []
         for _ in range(3):
             t0 = time.perf_counter()
-            out = scene.to_html(Path(tmp) / "head_eye.html")
+            out = scene.to_html(Path(tmp) / "head_eye.html", max_frames=10000)
             times.append(time.perf_counter() - t0)
         size = out.stat().st_size
     row(
-        "to_html (max_frames=5000): first / best of 3",
-        f"{times[0]:.3f} / {min(times):.3f} s",
+        "to_html (max_frames=10000): first / best of 3",
+        f"{times[0]:.2f} / {min(times):.2f} s",
     )
-    row("to_html size", f"{size / 2**20:.2f} MiB")
-    print(
-        f"\nstep budget 10 ms: median live step uses {statistics.median(live) / 10 * 100:.1f}% of it"
-    )
+    row("to_html size", f"{size / 1e6:.2f} MB")
     player.close()
     scene.close()
-    shutdown_server()
+    import ipywidgets
+
+    ipywidgets.Widget.close_all()  # before the interpreter tears down their comms
 
 
 if __name__ == "__main__":

@@ -4,7 +4,10 @@
 
 Every number is measured from the generated datasets the way one would
 analyse a real recording (rbm_nb.data._measures); the right-hand column says
-what a person walking around a building produces.
+what a person walking around a building produces. The eye tracker's flaws
+(NaN rows, low confidence, dropouts) are compared with the real recording,
+measured live when ``RBM_NB_DATA_DIR`` holds it (else the numbers measured on
+it once are shown).
 """
 
 from __future__ import annotations
@@ -86,10 +89,11 @@ def main() -> None:
             "~1 for distant targets",
         ),
         (
-            "blink fraction (confidence < 0.5)",
+            "blink fraction (no data, confidence < 0.1)",
             f"{measures.blink_fraction(left):.3f}, {measures.blink_fraction(right):.3f}",
             "0.02-0.05",
         ),
+        *_tracker_rows(left, right),
         (
             "RMS |v - estimate_linear_velocity| (m/s)",
             f"{lin_rms:.2e} ({lin_rms / lin_scale:.1e} rel.)",
@@ -105,6 +109,53 @@ def main() -> None:
     print(f"synthetic_head_eye(duration={args.duration}, seed={args.seed})")
     for name, value, expected in rows:
         print(f"{name:<{width[0]}}  {value:>{width[1]}}  {expected}")
+
+
+def _real_eyes():
+    from rbm_nb.data import example_data
+    from rbm_nb.io import load_netcdf
+
+    if not all(example_data.is_available(n) for n in ("left_eye", "right_eye")):
+        return None
+    return load_netcdf(example_data.path("left_eye")), load_netcdf(
+        example_data.path("right_eye")
+    )
+
+
+# measured on the real left_eye.nc / right_eye.nc (left, right)
+_REAL_TEXT = {
+    "rows": "113373, 113373",
+    "median_interval": "2.503, 2.503",
+    "nan_rows": "36844, 35236",
+    "low_confidence": "0.305, 0.332",
+    "gaps_over_0.1s": "3, 3",
+}
+
+
+def _tracker_rows(left, right):
+    real = _real_eyes()
+    rows = []
+    for key, label, fmt in (
+        ("rows", "eye rows", "{:d}"),
+        ("median_interval", "eye clock median interval (ms)", "{:.3f}"),
+        ("nan_rows", "NaN orientation rows", "{:d}"),
+        ("low_confidence", "confidence < 0.6 (rows with data)", "{:.3f}"),
+        ("gaps_over_0.1s", "dropouts > 0.1 s", "{:d}"),
+    ):
+        scale = 1e3 if key == "median_interval" else 1
+
+        def value(eye, key=key, fmt=fmt, scale=scale):
+            v = measures.tracker_quality(eye)[key]
+            return fmt.format(v * scale if scale != 1 else v)
+
+        ours = f"{value(left)}, {value(right)}"
+        theirs = (
+            f"{value(real[0])}, {value(real[1])} (real, measured now)"
+            if real is not None
+            else f"{_REAL_TEXT[key]} (real)"
+        )
+        rows.append((label, ours, theirs))
+    return rows
 
 
 if __name__ == "__main__":

@@ -84,6 +84,7 @@ _SUBMODULES = {
     "estimators",
     "explorer",
     "frames",
+    "gaze",
     "io",
     "lookups",
     "plot",
@@ -92,6 +93,9 @@ _SUBMODULES = {
     "ros",
     "scene",
     "study",
+    "se3",
+    "evaluation",
+    "sdf",
     "transforms",
     "widgets",
 }

@@ -12,9 +12,9 @@ equals the eager result on the whole array:
   quaternions about 30 (its influence decays by 2 - sqrt(3) per sample), and
   the Butterworth low-pass as many as its slowest pole needs to decay to
   1e-16;
-- quaternion series are made sign-continuous once, lazily, before they are
-  cut (the eager functions make them sign-continuous from the first sample
-  on, which a chunk cannot see).
+- quaternion series whose velocity is estimated are made sign-continuous
+  once, lazily, before they are cut (the eager estimators make them
+  sign-continuous from the first sample on, which a chunk cannot see).
 
 Frames stay in memory. Nothing is computed until the caller computes the
 result; dask is imported only when dask-backed data arrives.
@@ -68,6 +68,7 @@ def over_time(
     start: int = 0,
     stop: int | None = None,
     fill: Any = 0.0,
+    global_seconds: bool = False,
 ):
     """Apply an eager DataArray function lazily, one time chunk at a time.
 
@@ -88,6 +89,12 @@ def over_time(
         Values of the stand-in data used to learn the result's layout without
         computing anything (e.g. the identity quaternion along the quaternion
         dimension).
+    global_seconds : bool
+        Hand each block a datetime64 time coordinate as float seconds from
+        the first sample of the whole array, computed as the eager functions
+        compute them, so that time differences -- and what is divided by
+        them -- are the same to the bit as in one eager call (for functions
+        that need no other timestamps, e.g. the velocity estimators).
 
     Returns
     -------
@@ -105,11 +112,14 @@ def over_time(
     layout = func(_stand_in(arr, time_dim, start, stop, fill))
     out_axis = layout.dims.index(time_dim)
 
+    source = arr
+    if global_seconds and arr[time_dim].dtype.kind == "M":
+        source = arr.assign_coords({time_dim: _seconds_from_first(arr[time_dim].values)})
     blocks = []
     run = dask.delayed(_run_block, pure=True)
     for lo, hi in _chunk_bounds(arr.chunks[t_axis], start, stop):
         read_lo, read_hi = max(0, lo - halo), min(n, hi + halo)
-        piece = arr.isel({time_dim: slice(read_lo, read_hi)})
+        piece = source.isel({time_dim: slice(read_lo, read_hi)})
         task = run(
             func,
             piece.data,
@@ -135,6 +145,13 @@ def over_time(
         {k: v.variable for k, v in layout.coords.items() if time_dim not in v.dims}
     )
     return xr.DataArray(data, coords, layout.dims, layout.name, layout.attrs)
+
+
+def _seconds_from_first(times: np.ndarray) -> np.ndarray:
+    """datetime64 times as float seconds from the first, as rbm_nb._time does."""
+    from ._time import seconds
+
+    return seconds(times, len(times), "time")
 
 
 def _chunk_bounds(chunks: Sequence[int], start: int, stop: int) -> list[tuple[int, int]]:
@@ -298,7 +315,7 @@ def estimate(eager: Callable, arr, dim, axis, timestamps, time_axis, halo: int,
         return eager(b, dim=dim, axis=axis, timestamps=time_dim, **options)
 
     fill = {comp_dim: (1.0, 0.0, 0.0, 0.0) if quaternions else 0.0}
-    out = over_time(block, arr, time_dim, halo=halo, fill=fill)
+    out = over_time(block, arr, time_dim, halo=halo, fill=fill, global_seconds=True)
     return out.data if plain else out
 
 
@@ -379,8 +396,9 @@ def qinterp(eager: Callable, da, dim: str, qdim: str, t_out, out_of_range: str):
 
     ``eager(da, dim, qdim, t_out, out_of_range=...)`` is the in-memory
     interpolation. Each output chunk reads the input samples around its
-    times plus the squad neighbours; the input is made sign-continuous over
-    the whole series first, as the eager version does.
+    times plus the squad neighbours. No sign correction is needed across
+    chunks: the eager version gives each value the sign of the stored sample
+    its segment starts from, which a chunk has.
     """
     import dask
     import dask.array as dsa
@@ -413,7 +431,7 @@ def qinterp(eager: Callable, da, dim: str, qdim: str, t_out, out_of_range: str):
     )
     layout = eager(stand_in, dim, qdim, t_out, out_of_range=out_of_range)
 
-    q = sign_continuous(da, dim, qdim).chunk({d: -1 for d in da.dims if d != dim})
+    q = da.chunk({d: -1 for d in da.dims if d != dim})
     size = max(q.chunksizes[dim])
     axis = layout.dims.index(dim)
     run = dask.delayed(_run_qinterp, pure=True)

@@ -18,66 +18,81 @@ path of frame names from an ancestor down to the frame, separated by ``/``:
 
 Exactly one frame must match: no match is an error that suggests close
 names, several matches an error that lists them.
+
+Everything here works on resolved frames; :mod:`rbm_nb.frames` resolves
+names and supplies the registry's frames (this module never imports it).
 """
 
 from __future__ import annotations
 
 import difflib
+from collections.abc import Iterable
 from fnmatch import fnmatchcase
+from typing import Any
 
-from .frames import ReferenceFrame, _resolve, registry
+from ._engine.chain import chain
 
 __all__ = ["find_frame", "frames_between", "frame_path"]
 
 _ANY_CHAIN = "..."
 
 
-def frame_path(frame: ReferenceFrame) -> str:
-    """The names from the root down to ``frame``, joined by ``/``."""
+def frame_path(frame: Any) -> str:
+    """The names from the root down to ``frame``, joined by ``/``.
+
+    Examples
+    --------
+    >>> from rbm_nb.frames import ReferenceFrame
+    >>> world = ReferenceFrame("world")
+    >>> eye = ReferenceFrame("eye", parent=ReferenceFrame("head", parent=world))
+    >>> frame_path(eye)
+    'world/head/eye'
+    >>> [f.name for f in frames_between(eye, world, include_self=False)]
+    ['head', 'world']
+    """
     return "/".join(str(f.name) for f in frame.path)
 
 
 def frames_between(
-    frame, to_frame, *, include_self: bool = True, include_to_frame: bool = True
+    start: Any, end: Any, *, include_self: bool = True, include_to_frame: bool = True
 ) -> tuple:
-    """The frames on the way from ``frame`` to ``to_frame``, in order.
+    """The frames on the way from ``start`` to ``end``, in order.
 
     Parameters
     ----------
-    frame, to_frame : ReferenceFrame or str
-        Frames of the same tree (or names of registered ones).
+    start, end : ReferenceFrame
+        Frames of the same tree.
     include_self, include_to_frame : bool, default True
         Whether the two end frames are part of the result.
 
     Returns
     -------
     tuple of ReferenceFrame
-        Up from ``frame`` to the closest common ancestor (included once),
-        then down to ``to_frame``. ``frames_between(a, a)`` is ``(a,)``.
+        Up from ``start`` to the closest common ancestor (included once),
+        then down to ``end``: the frames the transform chain of
+        :func:`rbm_nb._engine.chain.chain` steps through, plus the common
+        ancestor. ``frames_between(a, a)`` is ``(a,)``.
 
     Raises
     ------
     ValueError
         If the frames are in different trees.
     """
-    start = _resolve(frame, "frame")
-    end = _resolve(to_frame, "to_frame")
-    up = start._path_to_root()
-    down = end._path_to_root()
-    if up[-1] is not down[-1]:
-        raise ValueError(
-            f"frames {start.name!r} and {end.name!r} are in different trees (roots "
-            f"{up[-1].name!r} and {down[-1].name!r}): no chain of frames connects them"
-        )
-    on_down = {id(f) for f in down}
-    i = next(k for k, f in enumerate(up) if id(f) in on_down)
-    j = next(k for k, f in enumerate(down) if f is up[i])
-    chain = up[: i + 1] + list(reversed(down[:j]))
+    steps = chain(start, end)
+    up = [f for f, inverse in steps if not inverse]
+    down = [f for f, inverse in steps if inverse]
+    if up:
+        ancestor = up[-1].parent
+    elif down:
+        ancestor = down[0].parent
+    else:
+        ancestor = start
+    path = up + [ancestor] + down
     if not include_self:
-        chain = chain[1:]
-    if not include_to_frame and chain and chain[-1] is end:
-        chain = chain[:-1]
-    return tuple(chain)
+        path = path[1:]
+    if not include_to_frame and path and path[-1] is end:
+        path = path[:-1]
+    return tuple(path)
 
 
 def _parse(path):
@@ -128,22 +143,8 @@ def _matches(node, k, patterns, gaps, anchored) -> bool:
     )
 
 
-def _registry_frames() -> list:
-    """Every frame in the trees that registered frames belong to, roots first."""
-    seen: set[int] = set()
-    out = []
-    for frame in registry.values():
-        root = frame.root
-        if id(root) in seen:
-            continue
-        seen.add(id(root))
-        out.append(root)
-        out.extend(root.descendants)
-    return out
-
-
-def find_frame(path: str) -> ReferenceFrame:
-    """The single frame of the registry's trees that matches ``path``.
+def find_frame(path: str, frames: Iterable[Any]) -> Any:
+    """The single frame of ``frames`` that matches ``path``.
 
     Parameters
     ----------
@@ -151,6 +152,8 @@ def find_frame(path: str) -> ReferenceFrame:
         Frame names from an ancestor down to the wanted frame, separated by
         ``/``; ``...`` stands for any chain of frames, ``*``/``?``/``[...]``
         are name wildcards, a leading ``/`` anchors at a root.
+    frames : iterable of ReferenceFrame
+        The frames to search (the registry's trees, roots first).
 
     Returns
     -------
@@ -162,18 +165,9 @@ def find_frame(path: str) -> ReferenceFrame:
         If no frame matches (the message suggests close names) or several do
         (the message lists their full paths).
 
-    Examples
-    --------
-    >>> from rbm_nb.frames import ReferenceFrame, clear_registry
-    >>> world = ReferenceFrame("world"); world.register()
-    >>> head = ReferenceFrame("head", parent=world)
-    >>> eye = ReferenceFrame("left_eye", parent=head)
-    >>> find_frame("world/.../left_eye") is eye
-    True
-    >>> clear_registry()
     """
     patterns, gaps, anchored = _parse(path)
-    frames = _registry_frames()
+    frames = list(frames)
     found = [
         f for f in frames if _matches(f, len(patterns) - 1, patterns, gaps, anchored)
     ]

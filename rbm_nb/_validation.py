@@ -7,45 +7,39 @@ expected. What comes out is C-contiguous float64, ready for the kernels.
 
 from __future__ import annotations
 
-import operator
+from typing import Any
 
 import numpy as np
 
 from ._config import UNIT_QUATERNION_TOLERANCE
+from ._door import float_array, kernel_array, resolve_axis
+
+__all__ = [
+    "as_float_array",
+    "resolve_axis",
+    "is_scalar",
+    "check_last_axis",
+    "normalize_quaternions",
+    "check_finite",
+    "check_no_inf",
+    "check_missing_rows",
+    "check_unit_norms",
+    "check_what",
+    "check_mode",
+]
 
 WHAT_MODES = ("reference_frame", "moving_frame", "representation_frame")
 
 
-def as_float_array(arr, name: str) -> np.ndarray:
-    """``arr`` as a float64 ndarray, accepting numpy-quaternion dtype.
-
-    Quaternion-dtype arrays gain a trailing axis of length 4 (w, x, y, z).
-    """
-    arr = getattr(arr, "data", arr) if _is_xarray(arr) else arr
-    arr = np.asarray(arr)
-    if arr.dtype.name == "quaternion":
-        # numpy-quaternion stores four contiguous float64 per element
-        return np.ascontiguousarray(arr).view(np.float64).reshape(arr.shape + (4,))
-    if arr.dtype.kind not in "iufb":
-        raise ValueError(f"{name} must be numeric, got dtype {arr.dtype}")
-    return np.asarray(arr, dtype=np.float64)
+# the door's conversions under the names the core used before it existed
+as_float_array = float_array
 
 
-def _is_xarray(obj) -> bool:
-    return type(obj).__module__.startswith("xarray.")
-
-
-def resolve_axis(axis, ndim: int, name: str = "axis") -> int:
-    """Turn a possibly negative axis into a valid non-negative one."""
-    try:
-        axis = operator.index(axis)
-    except TypeError:
-        raise ValueError(f"{name} must be an integer, got {axis!r}") from None
-    if not -ndim <= axis < ndim:
-        raise ValueError(
-            f"{name}={axis} is out of range for an array with {ndim} dimension(s)"
-        )
-    return axis % ndim
+def is_scalar(value: Any) -> bool:
+    """Whether ``value`` is one real number (not a bool, string or array)."""
+    return isinstance(value, int | float | np.integer | np.floating) and not isinstance(
+        value, bool | np.bool_
+    )
 
 
 def check_last_axis(arr: np.ndarray, size: int, name: str) -> None:
@@ -69,13 +63,44 @@ def normalize_quaternions(
     -------
     ndarray, shape like ``q``, C-contiguous float64
     """
+    inf = np.isinf(q).any(axis=-1)
+    if inf.any():
+        bad = np.argwhere(inf)[0]
+        raise ValueError(f"{name}{_index(bad)} is not finite: {q[tuple(bad)]}")
     norms = np.sqrt(np.einsum("...i,...i->...", q, q))
     nan = np.isnan(norms)
-    if nan.any():
-        if not allow_nan or np.isinf(q).any():
-            bad = np.argwhere(~np.isfinite(norms))[0]
-            raise ValueError(f"{name}{_index(bad)} is not finite: {q[tuple(bad)]}")
-    off = np.abs(norms - 1.0) > UNIT_QUATERNION_TOLERANCE
+    if nan.any() and not allow_nan:
+        bad = np.argwhere(nan)[0]
+        raise ValueError(f"{name}{_index(bad)} is not finite: {q[tuple(bad)]}")
+    check_unit_norms(q, name)  # the one rule (NaN rows pass it)
+    if np.all((norms == 1.0) | nan):
+        return kernel_array(q)
+    with np.errstate(invalid="ignore"):
+        return kernel_array(q / norms[..., None])
+
+
+def check_no_inf(arr: np.ndarray, name: str, row_axis: bool = True) -> None:
+    """Raise for infinities (NaN passes: a missing sample, not a mistake).
+
+    With ``row_axis`` the message names the row (all but the last index).
+    """
+    inf = np.isinf(arr)
+    if inf.any():
+        bad = np.argwhere(inf)[0]
+        where = bad[:-1] if row_axis and arr.ndim > 1 else bad
+        raise ValueError(f"{name}{_index(where)} is not finite")
+
+
+def check_unit_norms(q: np.ndarray, name: str) -> None:
+    """The one rule for quaternion arguments: unit norm within the tolerance.
+
+    Rows of ``q`` (components last) farther than ``UNIT_QUATERNION_TOLERANCE``
+    from unit norm, or zero, raise naming the first one; NaN rows (missing
+    samples) pass. Nothing is changed: the math normalises where it needs to.
+    """
+    with np.errstate(invalid="ignore"):
+        norms = np.sqrt(np.einsum("...i,...i->...", q, q))
+        off = np.abs(norms - 1.0) > UNIT_QUATERNION_TOLERANCE
     if off.any():
         bad = np.argwhere(off)[0]
         norm = norms[tuple(bad)]
@@ -84,19 +109,31 @@ def normalize_quaternions(
             f"{name}{_index(bad)} is {kind}; rotations must be unit quaternions "
             f"(norm within {UNIT_QUATERNION_TOLERANCE} of 1)"
         )
-    if np.all((norms == 1.0) | nan):
-        return np.ascontiguousarray(q, dtype=np.float64)
-    with np.errstate(invalid="ignore"):
-        return np.ascontiguousarray(q / norms[..., None])
 
 
-def check_finite(arr: np.ndarray, name: str) -> None:
+def check_missing_rows(arr: np.ndarray, name: str) -> None:
+    """Rows of (n, k) data are finite or entirely NaN (a missing sample).
+
+    A partly NaN row or an infinity is a mistake, not missing data: raise
+    naming the first such row.
+    """
+    nan = np.isnan(arr)
+    partial = nan.any(axis=-1) & ~nan.all(axis=-1)
+    bad = partial | np.isinf(arr).any(axis=-1)
+    if bad.any():
+        row = np.argwhere(bad)[0]
+        raise ValueError(
+            f"{name}{_index(row)} is not finite (a missing sample is a row of NaN only)"
+        )
+
+
+def check_finite(arr: np.ndarray, name: str, row_axis: bool = True) -> None:
+    """Raise for NaN or infinities, naming the first bad row (or element)."""
     finite = np.isfinite(arr)
     if not finite.all():
         bad = np.argwhere(~finite)[0]
-        raise ValueError(
-            f"{name}{_index(bad[:-1] if arr.ndim > 1 else bad)} is not finite"
-        )
+        where = bad[:-1] if row_axis and arr.ndim > 1 else bad
+        raise ValueError(f"{name}{_index(where)} is not finite")
 
 
 def check_what(what) -> str:

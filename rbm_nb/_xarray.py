@@ -1,4 +1,4 @@
-"""DataArray in, DataArray out: unpacking arguments and wrapping results.
+"""DataArray out: wrapping results (arguments are unpacked by :mod:`rbm_nb._door`).
 
 xarray is imported inside the functions that build objects, so that plain
 numpy callers never pay for it.
@@ -6,14 +6,22 @@ numpy callers never pay for it.
 
 from __future__ import annotations
 
-import sys
-
 import numpy as np
 
+# the unpacking half lives in the door; these names stay importable from here
+from ._door import Unpacked, is_dataarray, unpack
 
-def is_dataarray(obj) -> bool:
-    xr = sys.modules.get("xarray")
-    return xr is not None and isinstance(obj, xr.DataArray)
+__all__ = [
+    "Unpacked",
+    "is_dataarray",
+    "unpack",
+    "wrap",
+    "dataset_variable",
+    "dataarray_coordinate",
+    "transform_dataset",
+    "twist_dataset",
+    "velocity_dataarray",
+]
 
 
 def dataset_variable(ds, name, argument: str):
@@ -33,97 +41,6 @@ def dataarray_coordinate(da, name):
             f"(it has {', '.join(repr(str(c)) for c in da.coords)})"
         )
     return da[name].data
-
-
-class Unpacked:
-    """An array argument split into data and what is needed to wrap it again."""
-
-    __slots__ = ("data", "axis", "time_axis", "time_dim", "timestamps", "source")
-
-    def __init__(self, data, axis, time_axis, time_dim, timestamps, source):
-        self.data = data
-        self.axis = axis
-        self.time_axis = time_axis
-        self.time_dim = time_dim
-        self.timestamps = timestamps
-        self.source = source  # the DataArray, or None for plain arrays
-
-    @property
-    def attrs(self):
-        return None if self.source is None else self.source.attrs
-
-
-def unpack(arr, dim=None, axis=None, time_axis=None, timestamps=None) -> Unpacked:
-    """Resolve the spatial and time axes of an array or DataArray argument.
-
-    For a DataArray, ``dim`` names the spatial dimension (default: the last),
-    and the timestamps come from the coordinate of the time dimension
-    (``timestamps`` may name it; default: the first dimension, if the array
-    has more than one; ``False``: none).
-
-    Raises
-    ------
-    ValueError
-        For ``dim`` without a DataArray, both ``dim`` and ``axis``, unknown
-        dimension names, or spatial and time axis being the same.
-    """
-    if not is_dataarray(arr):
-        if dim is not None:
-            raise ValueError("dim can only be given for DataArray input; use axis")
-        data = np.asarray(arr)
-        if data.dtype.name == "quaternion":
-            # numpy-quaternion dtype: four float64 per element, as a last axis
-            data = (
-                np.ascontiguousarray(data).view(np.float64).reshape(data.shape + (4,))
-            )
-        ndim = data.ndim
-        axis = -1 if axis is None else axis
-        time_axis = 0 if time_axis is None else time_axis
-        if timestamps is not None and ndim > 0 and axis % ndim == time_axis % ndim:
-            raise ValueError(
-                f"axis={axis} and time_axis={time_axis} refer to the same axis of the array"
-            )
-        return Unpacked(data, axis, time_axis, None, timestamps, None)
-
-    if dim is not None and axis is not None:
-        raise ValueError("give either dim or axis, not both")
-    if dim is not None:
-        axis = _dim_index(arr, dim, "dim")
-    elif axis is None:
-        axis = -1
-    time_dim = None
-    if isinstance(timestamps, str):
-        time_axis = _dim_index(arr, timestamps, "timestamps")
-        time_dim = timestamps
-        timestamps = arr[timestamps].data
-    elif timestamps is None:
-        if arr.ndim > 1:
-            time_axis = 0 if time_axis is None else time_axis
-            time_dim = arr.dims[time_axis]
-            timestamps = arr.coords[time_dim].data if time_dim in arr.coords else None
-            if timestamps is None:
-                time_dim = None
-    elif timestamps is False:
-        timestamps = None
-    else:
-        raise ValueError(
-            "for DataArray input, timestamps must be the name of a dimension, "
-            "None (the first dimension) or False (no timestamps)"
-        )
-    if time_dim is not None and axis % arr.ndim == time_axis % arr.ndim:
-        raise ValueError(
-            f"the spatial dimension {arr.dims[axis]!r} cannot also be the time dimension"
-        )
-    return Unpacked(arr.data, axis, time_axis, time_dim, timestamps, arr)
-
-
-def _dim_index(arr, dim, argument) -> int:
-    try:
-        return arr.dims.index(dim)
-    except ValueError:
-        raise ValueError(
-            f"{argument}={dim!r} is not a dimension of the DataArray (dims: {arr.dims})"
-        ) from None
 
 
 def wrap(unpacked: Unpacked, data, ts_out, attrs):

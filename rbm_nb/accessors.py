@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import xarray as xr
 
+from .errors import UnsupportedError
+
 
 @xr.register_dataarray_accessor("rbm")
 class DataArrayAccessor:
@@ -41,9 +43,12 @@ class DataArrayAccessor:
 
         Raises
         ------
+        rbm_nb.errors.UnsupportedError
+            (a NotImplementedError and a ValueError) if more than one
+            dimension is given or the new coordinate is not one-dimensional.
         ValueError
-            If not exactly one dimension is given, a dimension is missing, or
-            ``qdim`` does not have length 4.
+            If no dimension is given, a dimension is missing, or ``qdim``
+            does not have length 4.
 
         Examples
         --------
@@ -64,8 +69,12 @@ class DataArrayAccessor:
             )
         coords = dict(coords if coords is not None else coords_kwargs)
         if len(coords) != 1:
-            raise ValueError(
-                f"coords: qinterp interpolates along exactly one dimension, got {list(coords)}"
+            # several dimensions at once is unsupported (as in the reference);
+            # none at all is a wrong call
+            error = UnsupportedError if coords else ValueError
+            raise error(
+                f"coords: qinterp interpolates along exactly one dimension, got "
+                f"{list(coords)}"
             )
         ((dim, new),) = coords.items()
         return _qinterp_dataarray(self._obj, dim, qdim, new, out_of_range="nan")

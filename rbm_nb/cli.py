@@ -2,8 +2,16 @@
 
 ``rbm-nb demo`` opens JupyterLab on the head/eye explorer notebook (offline it
 uses the synthetic recording); ``rbm-nb demo --html out.html`` writes the
-explorer's scene as a self-contained animation with no Jupyter involved;
-``rbm-nb demo --text`` prints a lookup across a small moving frame tree.
+explorer's dashboard (3D view, time series, player) as one self-contained page
+that plays offline, with no Jupyter involved; ``rbm-nb demo --text`` prints a
+lookup across a small moving frame tree; ``rbm-nb app`` serves the explorer as
+a standalone Voilà app (no code cells); ``rbm-nb --version`` prints the
+installed version.
+
+The notebooks come from the clone rbm_nb runs from, or, for an installed
+wheel, from the copies shipped in ``rbm_nb/_notebooks``: those are copied once
+into a writable folder (the explorer writes its exports beside itself, and
+JupyterLab its checkpoints), which keeps the user's edits on later runs.
 """
 
 from __future__ import annotations
@@ -14,9 +22,14 @@ import secrets
 import shutil
 import socket
 import sys
+import tempfile
 from pathlib import Path
 
+from . import __version__
+
 EXPLORER = "06_head_eye_explorer.ipynb"
+CLONE_NOTEBOOKS = Path(__file__).resolve().parents[1] / "notebooks"
+PACKAGED_NOTEBOOKS = Path(__file__).resolve().parent / "_notebooks"
 
 
 def _text_demo() -> int:
@@ -58,15 +71,59 @@ def _text_demo() -> int:
 
 
 def _notebook_dir(given: str | None) -> Path:
-    """The notebooks folder: given, or the one of the clone rbm_nb runs from."""
-    folder = Path(given) if given else Path(__file__).resolve().parents[1] / "notebooks"
+    """The notebooks folder: given, the clone's, or a user copy of the packaged ones."""
+    if given:
+        folder = Path(given)
+    elif (CLONE_NOTEBOOKS / EXPLORER).is_file():
+        folder = CLONE_NOTEBOOKS
+    elif (PACKAGED_NOTEBOOKS / EXPLORER).is_file():
+        folder = _user_copy(PACKAGED_NOTEBOOKS)
+    else:
+        folder = PACKAGED_NOTEBOOKS
     if not (folder / EXPLORER).is_file():
         raise SystemExit(
-            f"rbm-nb demo: {EXPLORER} not found in {folder}. Run the demo from a clone "
-            "of the rbm_nb repository (it ships the notebooks), or pass "
-            "--notebook-dir pointing to its notebooks/ folder."
+            f"rbm-nb demo: {EXPLORER} not found in {folder}. Pass --notebook-dir "
+            "pointing to the notebooks/ folder of an rbm_nb clone, or reinstall "
+            "rbm_nb (its wheel ships the notebooks)."
         )
     return folder
+
+
+def _user_data_home() -> Path:
+    """``$XDG_DATA_HOME`` or ``~/.local/share`` (where per-user data lives)."""
+    xdg = os.environ.get("XDG_DATA_HOME")
+    return Path(xdg) if xdg else Path.home() / ".local" / "share"
+
+
+def _user_copy(packaged: Path) -> Path:
+    """Copy the packaged notebooks to a writable folder once; return that folder.
+
+    One folder per version, so an upgrade brings the new notebooks while the
+    user's edits of an older copy stay where they were. Files already there are
+    left alone. With no writable home (containers, HPC) a temporary folder is
+    used and the message says so.
+    """
+    target = _user_data_home() / "rbm_nb" / f"notebooks-{__version__}"
+    try:
+        target.mkdir(parents=True, exist_ok=True)
+        probe = target / ".rbm_nb-write-test"
+        probe.touch()
+        probe.unlink()
+    except OSError as err:
+        target = Path(tempfile.mkdtemp(prefix="rbm_nb-notebooks-"))
+        print(
+            f"rbm-nb demo: cannot write to {_user_data_home()} ({err.strerror}); "
+            f"the notebooks are copied to {target} and removed with it."
+        )
+    copied = 0
+    for src in sorted(packaged.glob("*.ipynb")):
+        dst = target / src.name
+        if not dst.exists():
+            shutil.copyfile(src, dst)
+            copied += 1
+    if copied:
+        print(f"rbm-nb demo: copied {copied} notebooks to {target}")
+    return target
 
 
 def _free_port(preferred: int) -> int:
@@ -124,6 +181,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="rbm-nb", description="rbm_nb: rigid body motion in Jupyter."
     )
+    parser.add_argument(
+        "--version", action="version", version=f"%(prog)s {__version__}"
+    )
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser(
         "demo", help="open JupyterLab on the head/eye explorer (or export it)"
@@ -132,7 +192,7 @@ def main(argv: list[str] | None = None) -> int:
     mode.add_argument(
         "--html",
         metavar="OUT.html",
-        help="write the explorer's 3D scene as one self-contained HTML file and exit",
+        help="write the explorer's dashboard as one self-contained HTML file and exit",
     )
     mode.add_argument(
         "--text",
@@ -146,16 +206,42 @@ def main(argv: list[str] | None = None) -> int:
         help="example data for --html: the real recording, else synthetic (auto)",
     )
     demo.add_argument(
-        "--max-frames", type=int, default=3000, help="samples per object in --html"
+        "--max-frames",
+        type=int,
+        default=10000,
+        help="samples per moving object and plotted series in --html (evenly spaced)",
     )
     demo.add_argument("--port", type=int, default=8888, help="JupyterLab port")
     demo.add_argument(
         "--no-browser", action="store_true", help="do not open a browser window"
     )
     demo.add_argument(
-        "--notebook-dir", help="folder with the notebooks (default: the clone's)"
+        "--notebook-dir",
+        help="folder with the notebooks (default: the clone's, else a copy of "
+        "the installed ones)",
+    )
+    app = sub.add_parser(
+        "app", help="serve the head/eye explorer as a standalone Voila app"
+    )
+    app.add_argument(
+        "--source",
+        choices=("auto", "remote", "synthetic"),
+        default="auto",
+        help="example data: the real recording, else synthetic (auto)",
+    )
+    app.add_argument("--port", type=int, default=8866, help="Voila port")
+    app.add_argument(
+        "--no-browser", action="store_true", help="do not open a browser window"
     )
     args = parser.parse_args(argv)
+    if args.command == "app":
+        from .app import serve
+
+        return serve(
+            port=_free_port(args.port),
+            source=args.source,
+            open_browser=not args.no_browser,
+        )
     if args.command == "demo":
         if args.text:
             return _text_demo()

@@ -44,6 +44,8 @@ from itertools import product
 import numpy as np
 
 from ._config import UNIT_QUATERNION_TOLERANCE
+from ._door import kernel_array
+from ._kernels import conversions as _kc
 from ._validation import as_float_array
 
 __all__ = [
@@ -93,7 +95,7 @@ def _as_rows(value, name: str, tail: tuple[int, ...]) -> tuple[np.ndarray, tuple
     """
     arr = _as_array(value, name, tail)
     lead = arr.shape[: arr.ndim - len(tail)]
-    return np.ascontiguousarray(arr.reshape((-1,) + tail)), lead
+    return kernel_array(arr.reshape((-1,) + tail)), lead
 
 
 def _paired_rows(a, a_name, a_tail, b, b_name, b_tail):
@@ -109,8 +111,8 @@ def _paired_rows(a, a_name, a_tail, b, b_name, b_tail):
             f"{a_name} of shape {a.shape} and {b_name} of shape {b.shape} do not "
             f"broadcast: their leading shapes {a_lead} and {b_lead} must be compatible"
         ) from None
-    a = np.ascontiguousarray(np.broadcast_to(a, lead + a_tail)).reshape((-1,) + a_tail)
-    b = np.ascontiguousarray(np.broadcast_to(b, lead + b_tail)).reshape((-1,) + b_tail)
+    a = kernel_array(np.broadcast_to(a, lead + a_tail)).reshape((-1,) + a_tail)
+    b = kernel_array(np.broadcast_to(b, lead + b_tail)).reshape((-1,) + b_tail)
     return a, b, lead
 
 
@@ -128,6 +130,11 @@ def _report_quaternions(name: str, rows: np.ndarray, lead: tuple) -> None:
         norm = np.sqrt(np.einsum("ij,ij->i", rows, rows))
     dev = np.where(np.isnan(norm), np.inf, np.abs(norm - 1.0))
     idx = int(np.argmax(dev))
+    if not np.isfinite(norm[idx]):
+        raise ValueError(
+            f"{name}{_where(lead, idx)} has norm {norm[idx]:.6g}: it is not finite, "
+            f"so it is not a rotation"
+        )
     raise ValueError(
         f"{name}{_where(lead, idx)} has norm {norm[idx]:.6g}, which is not a "
         f"rotation: quaternions must have unit norm to within "
@@ -199,13 +206,6 @@ def _parse_order(order) -> tuple[int, int, int]:
     raise ValueError(f"unknown Euler order {order!r}; {variants}")
 
 
-def _kernels():
-    # numba is imported on first use, not when rbm_nb.conversions is
-    from ._kernels import conversions
-
-    return conversions
-
-
 # ---------------------------------------------------------------------------
 # quaternion <-> rotation matrix
 # ---------------------------------------------------------------------------
@@ -239,7 +239,7 @@ def matrix_from_quaternion(quaternion) -> np.ndarray:
            [ 0.,  0.,  1.]])
     """
     rows, lead = _as_rows(quaternion, "quaternion", (4,))
-    out, n_invalid = _kernels().matrix_from_quaternion(rows, UNIT_QUATERNION_TOLERANCE)
+    out, n_invalid = _kc.matrix_from_quaternion(rows, UNIT_QUATERNION_TOLERANCE)
     if n_invalid:
         _report_quaternions("quaternion", rows, lead)
     return out.reshape(lead + (3, 3))
@@ -277,7 +277,7 @@ def quaternion_from_matrix(matrix, *, tol: float = MATRIX_TOLERANCE) -> np.ndarr
     """
     _check_tol(tol)
     rows, lead = _as_rows(matrix, "matrix", (3, 3))
-    out, n_invalid = _kernels().quaternion_from_matrix(rows, float(tol))
+    out, n_invalid = _kc.quaternion_from_matrix(rows, float(tol))
     if n_invalid:
         _report_matrices("matrix", rows, lead, tol)
     return out.reshape(lead + (4,))
@@ -315,7 +315,7 @@ def quaternion_from_rotation_vector(rotation_vector) -> np.ndarray:
     array([0., 0., 0., 1.])
     """
     rows, lead = _as_rows(rotation_vector, "rotation_vector", (3,))
-    out, n_invalid = _kernels().quaternion_from_rotation_vector(rows)
+    out, n_invalid = _kc.quaternion_from_rotation_vector(rows)
     if n_invalid:
         _report_non_finite(
             "rotation_vector", rows, lead, "rotation vectors must be finite"
@@ -350,7 +350,7 @@ def rotation_vector_from_quaternion(quaternion) -> np.ndarray:
     array([0.5, 0. , 0. ])
     """
     rows, lead = _as_rows(quaternion, "quaternion", (4,))
-    out, n_invalid = _kernels().rotation_vector_from_quaternion(
+    out, n_invalid = _kc.rotation_vector_from_quaternion(
         rows, UNIT_QUATERNION_TOLERANCE
     )
     if n_invalid:
@@ -392,7 +392,7 @@ def quaternion_from_axis_angle(axis, angle) -> np.ndarray:
     array([0., 0., 0., 1.])
     """
     axes, angles, lead = _paired_rows(axis, "axis", (3,), angle, "angle", ())
-    out, n_invalid = _kernels().quaternion_from_axis_angle(axes, angles)
+    out, n_invalid = _kc.quaternion_from_axis_angle(axes, angles)
     if n_invalid:
         length = np.linalg.norm(axes, axis=1)
         ok = np.isfinite(angles) & np.isfinite(length) & ((length > 0) | (angles == 0))
@@ -434,7 +434,7 @@ def axis_angle_from_quaternion(quaternion) -> tuple[np.ndarray, np.ndarray]:
     (array([ 0., -1.,  0.]), 1.0)
     """
     rows, lead = _as_rows(quaternion, "quaternion", (4,))
-    axis, angle, n_invalid = _kernels().axis_angle_from_quaternion(
+    axis, angle, n_invalid = _kc.axis_angle_from_quaternion(
         rows, UNIT_QUATERNION_TOLERANCE
     )
     if n_invalid:
@@ -485,7 +485,7 @@ def quaternion_from_euler(
     i, j, k = _parse_order(order)
     rows, lead = _as_rows(angles, "angles", (3,))
     radians = np.deg2rad(rows) if degrees else rows
-    out, n_invalid = _kernels().quaternion_from_euler(radians, i, j, k, bool(extrinsic))
+    out, n_invalid = _kc.quaternion_from_euler(radians, i, j, k, bool(extrinsic))
     if n_invalid:
         _report_non_finite("angles", rows, lead, "Euler angles must be finite")
     return out.reshape(lead + (4,))
@@ -533,7 +533,7 @@ def euler_from_quaternion(
     """
     i, j, k = _parse_order(order)
     rows, lead = _as_rows(quaternion, "quaternion", (4,))
-    out, n_invalid = _kernels().euler_from_quaternion(
+    out, n_invalid = _kc.euler_from_quaternion(
         rows, i, j, k, bool(extrinsic), UNIT_QUATERNION_TOLERANCE
     )
     if n_invalid:
@@ -582,7 +582,7 @@ def homogeneous_from_transform(translation, rotation) -> np.ndarray:
     t_rows, q_rows, lead = _paired_rows(
         translation, "translation", (3,), rotation, "rotation", (4,)
     )
-    out, bad_q, bad_t = _kernels().homogeneous_from_transform(
+    out, bad_q, bad_t = _kc.homogeneous_from_transform(
         t_rows, q_rows, UNIT_QUATERNION_TOLERANCE
     )
     if bad_q:
@@ -627,7 +627,7 @@ def transform_from_homogeneous(
     """
     _check_tol(tol)
     rows, lead = _as_rows(matrix, "matrix", (4, 4))
-    t, q, n_invalid = _kernels().transform_from_homogeneous(rows, float(tol))
+    t, q, n_invalid = _kc.transform_from_homogeneous(rows, float(tol))
     if n_invalid:
         _report_matrices("matrix", rows, lead, tol)
     return t.reshape(lead + (3,)), q.reshape(lead + (4,))

@@ -10,11 +10,12 @@ from __future__ import annotations
 
 from typing import Any
 
-import sys
-
 import numpy as np
 
 from . import _dask
+from ._door import ArrayInput, float_array
+from ._door import is_dataarray as _is_dataarray
+from ._validation import check_no_inf
 
 # system name -> (dimension name, axis labels) per dimensionality
 _SYSTEM_AXES: dict[tuple[str, int], tuple[str, list[str]]] = {
@@ -28,7 +29,7 @@ _SYSTEM_AXES: dict[tuple[str, int], tuple[str, list[str]]] = {
 
 def _checked(arr: Any, axis: int, length: int, what: str) -> tuple[np.ndarray, int]:
     """Return ``arr`` as a float array and ``axis`` normalised, checking its length."""
-    arr = np.asarray(arr, dtype=float)
+    arr = float_array(arr, "arr")
     if arr.ndim == 0:
         raise ValueError(
             f"arr must have an axis of length {length} ({what}), got a scalar"
@@ -41,10 +42,11 @@ def _checked(arr: Any, axis: int, length: int, what: str) -> tuple[np.ndarray, i
             f"arr must have length {length} ({what}) along axis {axis}, "
             f"got shape {arr.shape}"
         )
+    check_no_inf(np.moveaxis(arr, axis, -1), "arr")
     return arr, axis
 
 
-def cartesian_to_polar(arr, axis: int = -1) -> np.ndarray:
+def cartesian_to_polar(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     """Convert 2-D cartesian coordinates (x, y) into polar coordinates (r, phi).
 
     Parameters
@@ -76,7 +78,7 @@ def cartesian_to_polar(arr, axis: int = -1) -> np.ndarray:
     return np.stack((np.hypot(x, y), np.arctan2(y, x)), axis=axis)
 
 
-def polar_to_cartesian(arr, axis: int = -1) -> np.ndarray:
+def polar_to_cartesian(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     """Convert polar coordinates (r, phi) into 2-D cartesian coordinates (x, y).
 
     Parameters
@@ -108,7 +110,7 @@ def polar_to_cartesian(arr, axis: int = -1) -> np.ndarray:
     return np.stack((r * np.cos(phi), r * np.sin(phi)), axis=axis)
 
 
-def cartesian_to_spherical(arr, axis: int = -1) -> np.ndarray:
+def cartesian_to_spherical(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     """Convert 3-D cartesian coordinates into spherical coordinates (ISO 80000-2).
 
     Parameters
@@ -145,7 +147,7 @@ def cartesian_to_spherical(arr, axis: int = -1) -> np.ndarray:
     return np.stack((np.hypot(rho, z), np.arctan2(rho, z), np.arctan2(y, x)), axis=axis)
 
 
-def spherical_to_cartesian(arr, axis: int = -1) -> np.ndarray:
+def spherical_to_cartesian(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     """Convert spherical coordinates (ISO 80000-2) into 3-D cartesian coordinates.
 
     Parameters
@@ -188,12 +190,6 @@ _CONVERTERS = {
 }
 
 
-def _is_dataarray(obj: Any) -> bool:
-    # Checked by duck type so that plain-array callers never import xarray.
-    xarray = sys.modules.get("xarray")
-    return xarray is not None and isinstance(obj, xarray.DataArray)
-
-
 def _replace_dim(
     coords: dict, dims: tuple, axis: int, system: str, length: int
 ) -> tuple[dict, tuple]:
@@ -233,13 +229,13 @@ def _resolve_dim_axis(arr: Any, dim: str | None, axis: int | None) -> int:
 
 
 def transform_coordinates(
-    arr,
+    arr: ArrayInput,
     into: str,
     outof: str | None = None,
     dim: str | None = None,
     axis: int | None = None,
     replace_dim: bool = True,
-):
+) -> Any:
     """Convert an array between coordinate systems.
 
     Supported pairs: cartesian <-> polar (2-D) and cartesian <-> spherical (3-D).
@@ -312,7 +308,7 @@ def transform_coordinates(
 
     data = arr.values if is_da else arr
     out = convert(data, axis=ax)
-    if not is_da:
+    if not is_da or attrs is None:
         return out
 
     import xarray as xr

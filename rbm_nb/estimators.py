@@ -10,9 +10,9 @@ the derivative of the not-a-knot cubic spline through the quaternions
 ("quaternion" mode) or the gradient of the rotation vectors
 ("rotation_vector" mode).
 
-``_linear_velocity`` and ``_angular_velocity`` are the array-level entry
-points used by the frame lookups; the public functions add axis handling,
-timestamp conversion and DataArray support around them.
+The numerics live in :mod:`rbm_nb._engine.velocity` (shared with the
+velocity lookups); the public functions here add axis handling, timestamp
+conversion and DataArray support around them.
 """
 
 from __future__ import annotations
@@ -21,12 +21,28 @@ from typing import Any
 
 import numpy as np
 
-from . import _dask
+from . import _dask, _time
 from ._dask import GRADIENT_HALO, SPLINE_HALO, filter_halo
-from ._kernels import differences as _dk
+from ._door import ArrayInput, kernel_array
+from ._door import is_dataarray as _is_dataarray
+from ._engine.velocity import (
+    angular_series as _angular_series,
+)
+from ._engine.velocity import (
+    _BUTTER_ORDER,
+    _FILTER_PADLEN,
+)
+from ._engine.velocity import (
+    check_options as _check_options,
+)
+from ._engine.velocity import (
+    linear_series as _linear_series,
+)
+from ._kernels import conversions as _kc
 from ._kernels import quaternion as _qk
-from ._kernels import rotations as _rk
-from .coordinates import _is_dataarray, _replace_dim
+from ._validation import check_no_inf, check_unit_norms, is_scalar
+from .coordinates import _replace_dim
+from .errors import UnsupportedError
 
 __all__ = [
     "best_fit_rotation",
@@ -36,223 +52,6 @@ __all__ = [
     "iterative_closest_point",
     "shortest_arc_rotation",
 ]
-
-_MODES = ("quaternion", "rotation_vector")
-_BUTTER_ORDER = 7
-# filtfilt's default padding, 3 * (number of filter coefficients)
-_FILTER_PADLEN = 3 * (_BUTTER_ORDER + 1)
-
-
-# ---------------------------------------------------------------------------
-# argument checks shared by the public and the array-level functions
-# ---------------------------------------------------------------------------
-
-
-def _check_options(outlier_thresh, cutoff, n: int, mode: str | None = None) -> None:
-    if mode is not None and mode not in _MODES:
-        raise ValueError(
-            f"mode must be 'quaternion' or 'rotation_vector', got {mode!r}"
-        )
-    if outlier_thresh is not None:
-        if not np.isscalar(outlier_thresh) or not outlier_thresh >= 0:
-            raise ValueError(
-                f"outlier_thresh must be a non-negative number, got {outlier_thresh!r}"
-            )
-    if cutoff is not None:
-        if not np.isscalar(cutoff) or not 0 < cutoff < 1:
-            raise ValueError(
-                f"cutoff must be a fraction of the Nyquist frequency in (0, 1), got {cutoff!r}"
-            )
-        if n <= _FILTER_PADLEN:
-            raise ValueError(
-                f"cutoff: the low-pass filter needs more than {_FILTER_PADLEN} samples, got {n}"
-            )
-
-
-def _seconds(timestamps: Any, n: int) -> np.ndarray:
-    """Timestamps as float64 seconds, validated against ``n`` samples.
-
-    datetime64/timedelta64 are converted exactly by their unit, relative to the
-    first sample (converting epoch nanoseconds to float directly, as the
-    reference does, rounds them to 256 ns around the year 2020).
-    """
-    t = np.asarray(getattr(timestamps, "values", timestamps))
-    if t.dtype.kind in "Mm":
-        if t.ndim == 1 and t.size:
-            if np.isnat(t).any():
-                raise ValueError("timestamps must not contain NaT")
-            t = (t - t[0]) / np.timedelta64(1, "s")
-    elif t.dtype.kind in "biuf":
-        t = t.astype(np.float64)
-    else:
-        raise ValueError(
-            f"timestamps must be numbers or datetime64, got dtype {t.dtype}"
-        )
-    if t.ndim != 1 or t.shape[0] != n:
-        raise ValueError(
-            f"timestamps must be one-dimensional with one entry per sample ({n}), "
-            f"got shape {t.shape}"
-        )
-    if not np.all(np.isfinite(t)):
-        raise ValueError("timestamps must be finite")
-    if n > 1 and not np.all(np.diff(t) > 0):
-        raise ValueError("timestamps must be strictly increasing")
-    return np.ascontiguousarray(t)
-
-
-# ---------------------------------------------------------------------------
-# numerics on (n, b, k) arrays: time first, b independent series
-# ---------------------------------------------------------------------------
-
-
-def _reject_outliers(t, values, score, thresh) -> np.ndarray:
-    keep = score <= thresh  # NaN scores are rejected too
-    kept = keep.sum(axis=0)
-    if kept.min() < 2:
-        raise ValueError(
-            f"outlier_thresh={thresh} keeps only {kept.min()} sample(s) of a series; "
-            f"at least 2 are needed to interpolate the others"
-        )
-    return _dk.interpolate_rejected(t, np.ascontiguousarray(values), keep)
-
-
-def _lowpass(values: np.ndarray, cutoff: float) -> np.ndarray:
-    """Zero-phase Butterworth low-pass along axis 0 of (n, ...).
-
-    Stretches of NaN (from gaps in the data or from rejected samples at the
-    ends) are left out: every finite stretch is filtered on its own, and those
-    too short for the filter become NaN, instead of the NaN spreading over
-    the whole series.
-    """
-    from scipy.signal import butter, filtfilt
-
-    b, a = butter(_BUTTER_ORDER, cutoff)
-    finite = np.isfinite(values)
-    if finite.all():
-        return filtfilt(b, a, values, axis=0)
-    flat = values.reshape(values.shape[0], -1)
-    out = np.full(flat.shape, np.nan)
-    for col in range(flat.shape[1]):
-        ok = np.isfinite(flat[:, col])
-        edges = np.flatnonzero(np.diff(np.concatenate(([0], ok.view(np.int8), [0]))))
-        for start, stop in zip(edges[::2], edges[1::2], strict=True):
-            if stop - start > _FILTER_PADLEN:
-                out[start:stop, col] = filtfilt(b, a, flat[start:stop, col])
-    return out.reshape(values.shape)
-
-
-def _linear_series(x: np.ndarray, t: np.ndarray, outlier_thresh, cutoff) -> np.ndarray:
-    n = x.shape[0]
-    if n < 2:
-        raise ValueError(
-            f"arr needs at least 2 samples to estimate a velocity, got {n}"
-        )
-    v = _dk.gradient(np.ascontiguousarray(x.reshape(n, -1)), t).reshape(x.shape)
-    if outlier_thresh is not None:
-        score = _dk.second_difference_score(np.ascontiguousarray(x))
-        v = _reject_outliers(t, v, score, outlier_thresh)
-    if cutoff is not None:
-        v = _lowpass(v, cutoff)
-    return v
-
-
-def _angular_series(
-    q: np.ndarray, t: np.ndarray, mode, outlier_thresh, cutoff
-) -> np.ndarray:
-    n, nb, _ = q.shape
-    zero = _rk.first_zero_row(np.ascontiguousarray(q.reshape(-1, 4)))
-    if zero >= 0:
-        raise ValueError(f"arr contains a zero quaternion (row {zero} when flattened)")
-    need_rv = mode == "rotation_vector" or outlier_thresh is not None
-    w = np.empty((n, nb, 3))
-    rv = np.empty((n, nb, 3)) if need_rv else None
-    for b in range(nb):
-        # q and -q are the same rotation: differentiate a sign-continuous series
-        qb = _rk.unflip(np.ascontiguousarray(q[:, b, :]))
-        if need_rv:
-            rv[:, b, :] = _rk.rotation_vectors(qb)
-        if mode == "rotation_vector":
-            if n < 2:
-                raise ValueError(
-                    f"arr needs at least 2 samples to estimate a velocity, got {n}"
-                )
-            w[:, b, :] = _dk.gradient(np.ascontiguousarray(rv[:, b, :]), t)
-            continue
-        missing = _dk.nan_rows(qb)
-        if not missing.any():
-            w[:, b, :] = _dk.angular_velocity_from_derivative(
-                qb, _dk.spline_derivative(qb, t)
-            )
-            continue
-        valid = ~missing
-        if valid.sum() < 2:
-            raise ValueError(
-                f"arr needs at least 2 samples without NaN to estimate a velocity, "
-                f"got {valid.sum()}"
-            )
-        qv = np.ascontiguousarray(qb[valid])
-        dq = _dk.spline_derivative(qv, np.ascontiguousarray(t[valid]))
-        w[:, b, :] = np.nan
-        w[valid, b, :] = _dk.angular_velocity_from_derivative(qv, dq)
-    if outlier_thresh is not None:
-        score = _dk.second_difference_score(rv)
-        w = _reject_outliers(t, w, score, outlier_thresh)
-    if cutoff is not None:
-        w = _lowpass(w, cutoff)
-    return w
-
-
-def _linear_velocity(arr, timestamps, outlier_thresh=None, cutoff=None) -> np.ndarray:
-    """Linear velocity of positions sampled in time (array level).
-
-    Parameters
-    ----------
-    arr : ndarray, shape (n, 3)
-        Positions, time along axis 0 (float64).
-    timestamps : ndarray, shape (n,)
-        Strictly increasing times in seconds (float64).
-    outlier_thresh, cutoff : float, optional
-        As in :func:`estimate_linear_velocity`.
-
-    Returns
-    -------
-    ndarray, shape (n, 3)
-    """
-    x = np.asarray(arr, dtype=np.float64)
-    t = _seconds(timestamps, x.shape[0])
-    _check_options(outlier_thresh, cutoff, x.shape[0])
-    return _linear_series(
-        x.reshape(x.shape[0], 1, -1), t, outlier_thresh, cutoff
-    ).reshape(x.shape)
-
-
-def _angular_velocity(
-    q, timestamps, mode="quaternion", outlier_thresh=None, cutoff=None
-) -> np.ndarray:
-    """Angular velocity of orientations sampled in time (array level).
-
-    Parameters
-    ----------
-    q : ndarray, shape (n, 4)
-        Quaternions (w, x, y, z), time along axis 0 (float64).
-    timestamps : ndarray, shape (n,)
-        Strictly increasing times in seconds (float64).
-    mode, outlier_thresh, cutoff
-        As in :func:`estimate_angular_velocity`.
-
-    Returns
-    -------
-    ndarray, shape (n, 3)
-        In "quaternion" mode the vector part of ``2 q⁻¹ dq/dt``, i.e. the
-        angular velocity in the rotated (body) frame.
-    """
-    qa = np.asarray(q, dtype=np.float64)
-    if qa.ndim != 2 or qa.shape[1] != 4:
-        raise ValueError(f"q must have shape (n, 4), got {qa.shape}")
-    t = _seconds(timestamps, qa.shape[0])
-    _check_options(outlier_thresh, cutoff, qa.shape[0], mode)
-    return _angular_series(qa[:, None, :], t, mode, outlier_thresh, cutoff)[:, 0, :]
-
 
 # ---------------------------------------------------------------------------
 # public velocity estimators
@@ -325,8 +124,11 @@ def _unpack(arr, dim, axis, timestamps, time_axis):
     axis, time_axis = axis % data.ndim, time_axis % data.ndim
     if axis == time_axis:
         raise ValueError(f"the spatial axis and the time axis are both axis {axis}")
-    t = _seconds(timestamps, data.shape[time_axis])
-    return data.astype(np.float64, copy=False), axis, time_axis, t
+    t = _time.seconds(timestamps, data.shape[time_axis])
+    data = kernel_array(data)
+    # NaN rows are missing samples (gaps); infinities are mistakes
+    check_no_inf(np.moveaxis(data, (time_axis, axis), (0, -1)), "arr")
+    return data, axis, time_axis, t
 
 
 def _to_series(data, axis, time_axis):
@@ -340,11 +142,12 @@ def _from_series(series, moved_shape, axis, time_axis, width):
 
 
 def _lazy_estimate(eager, arr, dim, axis, timestamps, time_axis, halo, **options):
+    """A velocity estimate of dask-backed data, chunk by chunk with a halo (see _dask)."""
     if options.get("outlier_thresh") is not None:
-        raise NotImplementedError(
+        raise UnsupportedError(
             "outlier_thresh on dask-backed data is not lazy: a rejected sample "
             "is re-interpolated from kept samples that may lie any distance "
-            "away, beyond what a chunk can see; call .compute() first"
+            "away, beyond what a chunk sees; call .compute() first"
         )
     if options.get("cutoff") is not None:
         _check_options(None, options["cutoff"], _FILTER_PADLEN + 1)
@@ -356,14 +159,14 @@ def _lazy_estimate(eager, arr, dim, axis, timestamps, time_axis, halo, **options
 
 
 def estimate_linear_velocity(
-    arr,
-    dim=None,
-    axis=None,
-    timestamps=None,
-    time_axis=None,
-    outlier_thresh=None,
-    cutoff=None,
-):
+    arr: ArrayInput,
+    dim: str | None = None,
+    axis: int | None = None,
+    timestamps: Any = None,
+    time_axis: int | None = None,
+    outlier_thresh: float | None = None,
+    cutoff: float | None = None,
+) -> Any:
     """Estimate linear velocity from positions sampled in time.
 
     Parameters
@@ -423,15 +226,15 @@ def estimate_linear_velocity(
 
 
 def estimate_angular_velocity(
-    arr,
-    dim=None,
-    axis=None,
-    timestamps=None,
-    time_axis=None,
-    mode="quaternion",
-    outlier_thresh=None,
-    cutoff=None,
-):
+    arr: ArrayInput,
+    dim: str | None = None,
+    axis: int | None = None,
+    timestamps: Any = None,
+    time_axis: int | None = None,
+    mode: str = "quaternion",
+    outlier_thresh: float | None = None,
+    cutoff: float | None = None,
+) -> Any:
     """Estimate angular velocity from orientations (quaternions) sampled in time.
 
     Parameters
@@ -492,6 +295,7 @@ def estimate_angular_velocity(
             f"arr must have length 4 (w, x, y, z) along axis {axis}, got shape {data.shape}"
         )
     _check_options(outlier_thresh, cutoff, data.shape[time_axis], mode)
+    check_unit_norms(np.moveaxis(data, (time_axis, axis), (0, -1)), "arr")
     series, moved_shape = _to_series(data, axis, time_axis)
     w = _angular_series(series, t, mode, outlier_thresh, cutoff)
     out = _from_series(w, moved_shape, axis, time_axis, 3)
@@ -527,6 +331,11 @@ def _vectors(v, axis, name: str) -> tuple[np.ndarray, int]:
         raise ValueError(
             f"{name} must have length 3 (x, y, z) along axis {ax}, got shape {data.shape}"
         )
+    finite = np.isfinite(data)
+    if not finite.all():
+        bad = np.argwhere(~np.moveaxis(finite, ax, -1))[0][:-1]
+        where = "[" + ", ".join(str(int(i)) for i in bad) + "]" if len(bad) else ""
+        raise ValueError(f"{name} must be finite; {name}{where} is not finite")
     return data, ax
 
 
@@ -542,7 +351,9 @@ def _dim_axis(v1, dim, axis):
     return v1.dims.index(dim)
 
 
-def shortest_arc_rotation(v1, v2, dim=None, axis=None):
+def shortest_arc_rotation(
+    v1: ArrayInput, v2: ArrayInput, dim: str | None = None, axis: int | None = None
+) -> Any:
     """Rotation by the smallest angle that turns the direction of v1 into v2's.
 
     Finds ``r`` with ``v2 / |v2| = rot(r, v1) / |v1|``.
@@ -666,7 +477,10 @@ def _check_rank(h: np.ndarray, what: str) -> None:
 
 
 def _quaternion(r: np.ndarray) -> np.ndarray:
-    return _qk.quaternion_from_matrix(np.ascontiguousarray(r[None]))[0]
+    # r comes from an SVD: orthonormal with det +1 to rounding, so the
+    # validity count of the kernel (tolerance 1: nothing is counted) is unused
+    q, _ = _kc.quaternion_from_matrix(np.array(r[None], dtype=np.float64), 1.0)
+    return q[0]
 
 
 def _fit_transform(p1: np.ndarray, p2: np.ndarray, check: bool):
@@ -695,7 +509,9 @@ def _transform_dataarrays(translation, rotation):
     return translation, _rotation_dataarray(rotation)
 
 
-def best_fit_rotation(v1, v2, dim=None, axis=None):
+def best_fit_rotation(
+    v1: ArrayInput, v2: ArrayInput, dim: str | None = None, axis: int | None = None
+) -> Any:
     """Least-squares rotation between corresponding vectors (Kabsch).
 
     Finds the rotation ``r`` that minimises ``|| v2 - rot(r, v1) ||``.
@@ -736,7 +552,9 @@ def best_fit_rotation(v1, v2, dim=None, axis=None):
     return rotation
 
 
-def best_fit_transform(v1, v2, dim=None, axis=None):
+def best_fit_transform(
+    v1: ArrayInput, v2: ArrayInput, dim: str | None = None, axis: int | None = None
+) -> Any:
     """Least-squares rigid transform between corresponding points.
 
     Finds the rotation ``r`` and translation ``t`` that minimise
@@ -785,8 +603,14 @@ def best_fit_transform(v1, v2, dim=None, axis=None):
 
 
 def iterative_closest_point(
-    v1, v2, dim=None, axis=None, init_transform=None, max_iterations=20, tolerance=1e-3
-):
+    v1: ArrayInput,
+    v2: ArrayInput,
+    dim: str | None = None,
+    axis: int | None = None,
+    init_transform: Any = None,
+    max_iterations: int = 20,
+    tolerance: Any = 1e-3,
+) -> Any:
     """Rigid transform aligning two point sets without known correspondences.
 
     Repeatedly pairs every point of ``v1`` (moved by the current estimate)
@@ -835,11 +659,16 @@ def iterative_closest_point(
         if len(rows) < 3:
             raise ValueError(f"{name} needs at least 3 points for ICP, got {len(rows)}")
     _check_rank((p1 - p1.mean(axis=0)).T @ (p1 - p1.mean(axis=0)), "the points of v1")
-    if int(max_iterations) != max_iterations or max_iterations < 0:
+    if (
+        not is_scalar(max_iterations)
+        or not np.isfinite(max_iterations)
+        or int(max_iterations) != max_iterations
+        or max_iterations < 0
+    ):
         raise ValueError(
             f"max_iterations must be a non-negative integer, got {max_iterations!r}"
         )
-    if not np.isscalar(tolerance) or not tolerance >= 0:
+    if not is_scalar(tolerance) or not tolerance >= 0:
         raise ValueError(f"tolerance must be a non-negative number, got {tolerance!r}")
 
     moved = p1.copy()
@@ -857,9 +686,14 @@ def iterative_closest_point(
                 f"init_transform must hold a translation of shape (3,) and a rotation of "
                 f"shape (4,), got {t0.shape} and {r0.shape}"
             )
+        if not (np.isfinite(t0).all() and np.isfinite(r0).all()):
+            raise ValueError(
+                f"init_transform is not finite: translation {t0.tolist()}, "
+                f"rotation {r0.tolist()}"
+            )
         if not np.any(r0):
             raise ValueError("init_transform: the rotation is a zero quaternion")
-        moved = _qk.rotate_vectors(np.ascontiguousarray(r0[None]), moved) + t0
+        moved = _qk.rotate_vectors(kernel_array(r0[None]), moved) + t0
 
     tree = cKDTree(p2)
     prev_error = 0.0

@@ -1,7 +1,7 @@
 """The head/eye explorer: one definition shared by notebook 06 and ``rbm-nb demo``.
 
 The recording is the example head/eye dataset (real when it can be had, else
-the synthetic one). Its frame tree follows guide 1.6 of rigid-body-motion:
+the synthetic one). Its frame tree follows guide 1.6 of rigid-body-motion::
 
     world
     └── t265/world        VR axes (x right, y up, z back) of the head tracker
@@ -116,17 +116,37 @@ def register_head_eye_frames(
             ).register(update=True)
 
 
-def gaze_angles(eye):
+def gaze_angles(eye, name: str | None = None, *, min_confidence: float = 0.6):
     """Azimuth (right) and elevation (up) of an eye's line of sight, in degrees.
 
     The line of sight is the eye frame's z axis expressed in the scene camera
-    (x right, y down, z forward).
+    (x right, y down, z forward). With ``name`` (``"left_eye"`` or
+    ``"right_eye"``) and the explorer's frames registered, the angles come
+    from :mod:`rbm_nb.gaze`: samples below ``min_confidence`` and missing
+    ones are NaN, so plots show them as gaps. Without it they are computed
+    from the dataset's orientations alone (no confidence masking).
 
     Returns
     -------
     xarray.DataArray, dims (time, angle)
     """
     import xarray as xr
+
+    from . import frames
+
+    if name is not None and f"pupil/{name}" in frames.registry:
+        from . import gaze
+
+        sight = gaze.directions(
+            f"pupil/{name}",
+            "pupil/scene_cam",
+            confidence=eye.confidence if "confidence" in eye else None,
+            min_confidence=min_confidence,
+            max_gap=0.1,
+        )
+        out = gaze.angles(sight, "pupil/scene_cam")
+        out.attrs = {"long_name": "Gaze angles", "units": "deg"}
+        return out
 
     from .quaternions import rotate_vectors
 
@@ -152,11 +172,15 @@ def head_speed(head):
 
 
 def explorer_series(head, left_eye, right_eye) -> dict:
-    """The explorer's time series: head speed and both eyes' gaze angles."""
+    """The explorer's time series: head speed and both eyes' gaze angles.
+
+    Register the frames first (:func:`register_head_eye_frames`) for gaze
+    angles with low-confidence samples masked.
+    """
     return {
         "head speed": head_speed(head),
-        "left gaze": gaze_angles(left_eye),
-        "right gaze": gaze_angles(right_eye),
+        "left gaze": gaze_angles(left_eye, "left_eye"),
+        "right gaze": gaze_angles(right_eye, "right_eye"),
     }
 
 
@@ -187,12 +211,29 @@ def explorer_scene(
     return scene
 
 
-def write_explorer_html(
-    path, *, source: str = "auto", max_frames: int = 3000, progress: bool = True
-) -> Path:
-    """Build the explorer's scene from the example data and write it as HTML.
+def explorer_plot(series: dict, player, *, max_points: int | None = None):
+    """The time-series plot of the dashboard, following ``player``.
 
-    The file plays offline in any browser (see :meth:`Scene.to_html`).
+    None when :class:`~rbm_nb.widgets.TimeSeries` is not a widget that can
+    follow a player in the browser (then the export has no plot).
+    ``max_points`` (per panel) keeps each stretch's extremes and gaps only.
+    """
+    from .widgets import TimeSeries
+
+    if not hasattr(TimeSeries, "_esm"):
+        return None
+    return TimeSeries(series, player=player, max_points=max_points)
+
+
+def write_explorer_html(
+    path, *, source: str = "auto", max_frames: int | None = 10000, progress: bool = True
+) -> Path:
+    """Build the explorer's dashboard from the example data and write it as HTML.
+
+    The page (3D view, time series, player) plays offline in any browser
+    (see :meth:`Scene.to_html`). Moving objects and plotted series keep at
+    most ``max_frames`` samples each (10000 over the 5.5 minutes is 30 per
+    second), which keeps the file under 5 MB.
 
     Returns
     -------
@@ -210,7 +251,7 @@ def write_explorer_html(
     ]
     bar = make_bar(len(steps), "rbm-nb demo --html", progress=progress)
     previous = dict(frames.registry)
-    scene = None
+    scene = player = plot = None
     try:
         bar.set_postfix_str(steps[0])
         head, left_eye, right_eye, note = load_head_eye(source)
@@ -220,14 +261,29 @@ def write_explorer_html(
         bar.update()
         bar.set_postfix_str(steps[2])
         scene = explorer_scene()
+        player = scene.player()
+        # each panel: every stretch's extremes and first gap (saccade peaks
+        # and gaps survive), at most ~max_frames samples
+        plot = explorer_plot(
+            explorer_series(head, left_eye, right_eye),
+            player,
+            max_points=None if max_frames is None else max(int(max_frames), 10),
+        )
         bar.update()
         bar.set_postfix_str(steps[3])
         out = scene.to_html(
-            Path(path), max_frames=max_frames, title=f"rbm_nb head/eye explorer: {note}"
+            Path(path),
+            series=[] if plot is None else [plot],
+            player=player,
+            max_frames=max_frames,
+            title=f"rbm_nb head/eye explorer: {note}",
         )
         bar.update()
     finally:
         bar.close()
+        for widget in (plot, player):
+            if widget is not None:
+                widget.close()
         if scene is not None:
             scene.close()
         # leave the registry as the caller had it

@@ -6,19 +6,36 @@ either once (static) or per timestamp (moving; ``discrete`` frames hold each
 value until the next event). Arrays are validated once, here, and stored
 read-only, so lookups never re-check them.
 
-The transforms and lookups themselves live in :mod:`rbm_nb.transforms` and
-:mod:`rbm_nb.lookups`; the methods here forward to them.
+This module is the one place where frame names are resolved
+(:func:`resolve_frame`); the methods here resolve their frame arguments and
+forward to the engine (:mod:`rbm_nb._engine`), which works on frame objects
+and never imports this module.
 """
 
 from __future__ import annotations
 
 import difflib
-from collections.abc import Callable, Iterator, Mapping
+import warnings
+from collections.abc import Callable, Iterator, MutableMapping
+from typing import Any, TypeAlias
 
 import numpy as np
 
-from . import _timestamps
-from ._validation import as_float_array, check_finite, normalize_quaternions
+from . import _frame_paths, _time
+from ._door import ArrayInput
+from ._engine import chain as _chain
+from ._engine import transform as _transform
+from ._engine import twist as _twist
+from ._kernels import quaternion as kq
+from ._validation import (
+    as_float_array,
+    check_finite,
+    check_missing_rows,
+    is_scalar,
+    normalize_quaternions,
+)
+from ._xarray import dataarray_coordinate, dataset_variable
+from .conversions import quaternion_from_matrix
 
 __all__ = [
     "ReferenceFrame",
@@ -28,30 +45,57 @@ __all__ = [
     "clear_registry",
     "render_tree",
     "find_frame",
+    "frames_between",
+    "FrameLike",
+    "resolve_frame",
     "on_registry_change",
     "remove_registry_callback",
 ]
 
+
+# A frame argument: the frame itself or the name it is registered under.
+FrameLike: TypeAlias = "ReferenceFrame | str"
 
 # ---------------------------------------------------------------------------
 # registry
 # ---------------------------------------------------------------------------
 
 
-class FrameRegistry(Mapping):
-    """Read-only mapping of names to registered frames.
+class FrameRegistry(MutableMapping):
+    """Mapping of names to registered frames.
 
     Change it with :func:`register_frame`, :meth:`ReferenceFrame.register`,
-    :func:`deregister_frame` and :func:`clear_registry`; observers added with
-    :func:`on_registry_change` are told about every change.
+    :func:`deregister_frame` and :func:`clear_registry`, or as a dict
+    (``registry[name] = frame``, ``del registry[name]``, as in
+    rigid-body-motion); observers added with :func:`on_registry_change` are
+    told about every change.
     """
 
-    def __init__(self):
+    def __init__(self) -> None:
         self._frames: dict[str, ReferenceFrame] = {}
         self._callbacks: list[Callable[[str, str | None], None]] = []
 
-    def __getitem__(self, name):
+    def __getitem__(self, name: str) -> ReferenceFrame:
         return self._frames[name]
+
+    def __setitem__(self, name: str, frame: ReferenceFrame) -> None:
+        if not isinstance(frame, ReferenceFrame):
+            raise TypeError(
+                f"registry[{name!r}] must be a ReferenceFrame, got "
+                f"{type(frame).__name__}"
+            )
+        if not isinstance(name, str):
+            raise TypeError(f"registry keys are frame names (str), got {name!r}")
+        self._frames[name] = frame
+        _chain.invalidate()
+        self._notify("register", name)
+
+    def __delitem__(self, name: str) -> None:
+        if name not in self._frames:
+            raise KeyError(_not_found_message(name))
+        del self._frames[name]
+        _chain.invalidate()
+        self._notify("deregister", name)
 
     def __iter__(self) -> Iterator[str]:
         return iter(self._frames)
@@ -73,7 +117,7 @@ class FrameRegistry(Mapping):
 registry = FrameRegistry()
 
 
-def on_registry_change(callback: Callable[[str, str | None], None]):
+def on_registry_change(callback: Callable[[str, str | None], None]) -> Any:
     """Call ``callback(event, name)`` after every change of the registry.
 
     ``event`` is ``"register"``, ``"deregister"`` or ``"clear"`` (with
@@ -83,7 +127,7 @@ def on_registry_change(callback: Callable[[str, str | None], None]):
     return callback
 
 
-def remove_registry_callback(callback) -> None:
+def remove_registry_callback(callback: Any) -> None:
     """Stop calling a callback added with :func:`on_registry_change`."""
     try:
         registry._callbacks.remove(callback)
@@ -96,18 +140,29 @@ def _register(frame: ReferenceFrame, update: bool = False) -> None:
     if name is None:
         raise ValueError("cannot register a frame without a name; pass name=...")
     old = registry._frames.get(name)
+    if old is not None and not update:
+        # also for the same object again (as rigid-body-motion)
+        raise ValueError(
+            f"a frame named {name!r} is already registered; pass update=True "
+            f"to replace it"
+        )
     if old is not None and old is not frame:
-        if not update:
-            raise ValueError(
-                f"a frame named {name!r} is already registered; pass update=True "
-                f"to replace it"
-            )
+        # check first, change after: a failed update leaves the tree as it was
+        above = set(map(id, frame._path_to_root()))
+        for child in old.children:
+            if id(child) in above:
+                raise ValueError(
+                    f"cannot replace {name!r}: the new frame is {child.name!r} or "
+                    f"below it, and {child.name!r} would become its own ancestor "
+                    f"(a cycle)"
+                )
         # the new frame takes over the old one's children, so that frames
         # below it see the new data instead of a detached copy
         for child in old.children:
             child.parent = frame
         old.parent = None
     registry._frames[name] = frame
+    _chain.invalidate()
     registry._notify("register", name)
 
 
@@ -115,6 +170,7 @@ def _deregister(name: str) -> None:
     if name not in registry._frames:
         raise ValueError(_not_found_message(name))
     del registry._frames[name]
+    _chain.invalidate()
     registry._notify("deregister", name)
 
 
@@ -131,8 +187,23 @@ def _not_found_message(name: str) -> str:
     return msg
 
 
-def _resolve(frame, argument: str = "frame") -> ReferenceFrame:
-    """A ReferenceFrame from a frame or the name of a registered one."""
+def resolve_frame(frame: Any, argument: str = "frame") -> ReferenceFrame:
+    """A ReferenceFrame from a frame or the name of a registered one.
+
+    Parameters
+    ----------
+    frame : ReferenceFrame or str
+    argument : str
+        How the argument is called in error messages.
+
+    Raises
+    ------
+    ValueError
+        If no frame of that name is registered (the message suggests close
+        names).
+    TypeError
+        If ``frame`` is neither a frame nor a string.
+    """
     if isinstance(frame, ReferenceFrame):
         return frame
     if isinstance(frame, str):
@@ -147,18 +218,20 @@ def _resolve(frame, argument: str = "frame") -> ReferenceFrame:
 
 
 def register_frame(
-    name,
-    parent=None,
-    translation=None,
-    rotation=None,
-    timestamps=None,
-    inverse=False,
-    discrete=False,
-    update=False,
+    name: str | None,
+    parent: FrameLike | None = None,
+    translation: ArrayInput | None = None,
+    rotation: ArrayInput | None = None,
+    timestamps: Any = None,
+    inverse: bool = False,
+    discrete: bool = False,
+    update: bool = False,
+    max_gap: float | None = None,
 ) -> None:
     """Create a reference frame and register it under ``name``.
 
-    Parameters are those of :class:`ReferenceFrame`, plus
+    Parameters are those of :class:`ReferenceFrame` (including ``max_gap``,
+    the longest gap in seconds interpolated across), plus
 
     update : bool, default False
         Replace a frame already registered under this name (its children
@@ -172,8 +245,13 @@ def register_frame(
         timestamps=timestamps,
         inverse=inverse,
         discrete=discrete,
+        max_gap=max_gap,
     )
-    _register(frame, update=update)
+    try:
+        _register(frame, update=update)
+    except ValueError:
+        frame.parent = None  # not registered: not in the tree either
+        raise
 
 
 def deregister_frame(name: str) -> None:
@@ -184,10 +262,11 @@ def deregister_frame(name: str) -> None:
 def clear_registry() -> None:
     """Remove every frame from the registry."""
     registry._frames.clear()
+    _chain.invalidate()
     registry._notify("clear", None)
 
 
-def render_tree(root) -> None:
+def render_tree(root: FrameLike) -> None:
     """Print the tree below ``root`` (a frame or a registered name).
 
     Examples
@@ -200,18 +279,64 @@ def render_tree(root) -> None:
     ├── observer
     └── body
     """
-    for line in _tree_lines(_resolve(root, "root")):
+    for line in _tree_lines(resolve_frame(root, "root")):
         print(line)
+
+
+def _registry_frames() -> list[ReferenceFrame]:
+    """Every frame in the trees that registered frames belong to, roots first."""
+    seen: set[int] = set()
+    out: list[ReferenceFrame] = []
+    for frame in registry._frames.values():
+        root = frame.root
+        if id(root) in seen:
+            continue
+        seen.add(id(root))
+        out.append(root)
+        out.extend(root.descendants)
+    return out
 
 
 def find_frame(path: str) -> ReferenceFrame:
     """The one frame of the registry's trees matching ``path``, e.g. ``"world/.../eye"``.
 
-    See :func:`rbm_nb._frame_paths.find_frame` for the path syntax.
-    """
-    from ._frame_paths import find_frame as _find_frame
+    See :mod:`rbm_nb._frame_paths` for the path syntax.
 
-    return _find_frame(path)
+    Raises
+    ------
+    ValueError
+        If no frame matches (the message suggests close names) or several do
+        (the message lists their full paths).
+
+    Examples
+    --------
+    >>> world = ReferenceFrame("world"); world.register()
+    >>> head = ReferenceFrame("head", parent=world)
+    >>> eye = ReferenceFrame("left_eye", parent=head)
+    >>> find_frame("world/.../left_eye") is eye
+    True
+    >>> clear_registry()
+    """
+    return _frame_paths.find_frame(path, _registry_frames())
+
+
+def frames_between(
+    frame: ReferenceFrame | str,
+    to_frame: ReferenceFrame | str,
+    *,
+    include_self: bool = True,
+    include_to_frame: bool = True,
+) -> tuple[ReferenceFrame, ...]:
+    """The frames on the way from ``frame`` to ``to_frame`` (names resolved).
+
+    See :func:`rbm_nb._frame_paths.frames_between`.
+    """
+    return _frame_paths.frames_between(
+        resolve_frame(frame, "frame"),
+        resolve_frame(to_frame, "to_frame"),
+        include_self=include_self,
+        include_to_frame=include_to_frame,
+    )
 
 
 def _tree_lines(frame: ReferenceFrame, prefix: str = "", branch: str = ""):
@@ -242,11 +367,13 @@ class ReferenceFrame:
         parent the frame is the root of a new tree.
     translation : array_like, shape (3,) or (n, 3), optional
         Position of this frame's origin in the parent frame (zeros if
-        omitted). Shape (n, 3) with ``timestamps``.
+        omitted). Shape (n, 3) with ``timestamps``; NaN rows of a moving
+        frame mean "no data at that sample" (blinks, lost tracking).
     rotation : array_like, shape (4,) or (n, 4), optional
         Orientation of this frame wrt the parent as unit quaternions w, x, y,
         z (identity if omitted). Norms within ``UNIT_QUATERNION_TOLERANCE``
-        of 1 are normalised.
+        of 1 are accepted (and normalised inside the math); NaN rows of a
+        moving frame are missing samples.
     timestamps : array_like, shape (n,), optional
         Strictly increasing numeric or datetime64 times of a moving frame.
     inverse : bool, default False
@@ -254,6 +381,10 @@ class ReferenceFrame:
     discrete : bool, default False
         The timestamps are events: each transform holds until the next one
         instead of being interpolated.
+    max_gap : float, optional
+        The longest gap between two samples (in seconds) that lookups
+        interpolate across; times inside a longer gap get NaN. Default None:
+        no limit.
 
     Raises
     ------
@@ -265,20 +396,22 @@ class ReferenceFrame:
 
     def __init__(
         self,
-        name=None,
-        parent=None,
-        translation=None,
-        rotation=None,
-        timestamps=None,
-        inverse=False,
-        discrete=False,
-    ):
+        name: str | None = None,
+        parent: FrameLike | None = None,
+        translation: ArrayInput | None = None,
+        rotation: ArrayInput | None = None,
+        timestamps: Any = None,
+        inverse: bool = False,
+        discrete: bool = False,
+        max_gap: float | None = None,
+    ) -> None:
         if name is not None and not isinstance(name, str):
             raise ValueError(f"name must be a string, got {type(name).__name__}")
         self.name = name
         self._parent: ReferenceFrame | None = None
         self._children: list[ReferenceFrame] = []
-        self._coefficients = None
+        self._coefficients: Any = None
+        self._track: _time.Track | None = None
         # frames created as roots have no transform of their own (None)
         self._has_transform = parent is not None
         if parent is None:
@@ -292,71 +425,92 @@ class ReferenceFrame:
                         f"frame {name!r}: {arg} given without a parent frame; a "
                         f"root frame has no transform"
                     )
-            self._track = None
             self._t = np.zeros((1, 3))
             self._r = np.array([[1.0, 0.0, 0.0, 0.0]])
             self._rotation_public = self._r
         else:
-            parent = _resolve(parent, "parent")
+            parent = resolve_frame(parent, "parent")
             self._init_arrays(translation, rotation, timestamps, inverse)
         if discrete and self._track is None:
             raise ValueError(
                 f"frame {name!r}: discrete=True needs timestamps (the times of the events)"
             )
         self.discrete = bool(discrete)
+        if max_gap is not None:
+            if not is_scalar(max_gap) or not max_gap > 0 or not np.isfinite(max_gap):
+                raise ValueError(
+                    f"frame {name!r}: max_gap must be a positive number of seconds "
+                    f"or None, got {max_gap!r}"
+                )
+            max_gap = float(max_gap)
+        self.max_gap = max_gap
         if parent is not None:
             self.parent = parent
 
     def _init_arrays(self, translation, rotation, timestamps, inverse) -> None:
-        from ._kernels import quaternion as kq
-        from ._kernels import resample as kr
-
         label = f"frame {self.name!r}: " if self.name is not None else ""
         if timestamps is not None:
-            self._track = _timestamps.as_track(timestamps, f"{label}timestamps")
+            self._track = _time.as_track(timestamps, f"{label}timestamps")
             n = len(self._track)
-            t_shape, r_shape = (n, 3), (n, 4)
+            t_shape: tuple[int, ...] = (n, 3)
+            r_shape: tuple[int, ...] = (n, 4)
         else:
             self._track = None
             t_shape, r_shape = (3,), (4,)
 
         if translation is None:
-            t = np.zeros(t_shape)
+            t: np.ndarray = np.zeros(t_shape)
         else:
             t = as_float_array(translation, f"{label}translation")
             if t.shape != t_shape:
                 raise ValueError(_shape_message(label, "translation", t.shape, t_shape))
-            check_finite(t, f"{label}translation")
+            if self._track is None:
+                check_finite(t, f"{label}translation")
+            else:  # NaN rows: missing samples; anything else: mistakes
+                check_missing_rows(t, f"{label}translation")
         if rotation is None:
-            r = np.zeros(r_shape)
+            r: np.ndarray = np.zeros(r_shape)
             r[..., 0] = 1.0
+            stored = r
         else:
-            r = as_float_array(rotation, f"{label}rotation")
-            if r.shape != r_shape:
-                raise ValueError(_shape_message(label, "rotation", r.shape, r_shape))
-            r = normalize_quaternions(r, f"{label}rotation")
+            stored = as_float_array(rotation, f"{label}rotation")
+            if stored.shape != r_shape:
+                raise ValueError(
+                    _shape_message(label, "rotation", stored.shape, r_shape)
+                )
+            if self._track is not None:
+                check_missing_rows(stored, f"{label}rotation")
+            r = normalize_quaternions(
+                stored, f"{label}rotation", allow_nan=self._track is not None
+            )
         # private copies: the caller's arrays may change later
         t = np.array(t.reshape(-1, 3), dtype=np.float64, order="C")
         r = np.array(r.reshape(-1, 4), dtype=np.float64, order="C")
         if inverse:
             r = kq.qconj(r)  # unit quaternions: the conjugate is the inverse
             t = -kq.rotate_vectors(r, t)
+            stored = r
         self._t = t
-        self._rotation_public = r
-        # interpolation needs consecutive samples on the same hemisphere
-        self._r = kr.unflip(r) if self._track is not None and len(r) > 1 else r
+        # the user's values as given (recordings store ~4 digits, so |q| - 1
+        # reaches 1e-4): returned by the rotation property and by lookups at
+        # the frame's own timestamps; the math below uses unit quaternions
+        self._rotation_public = np.array(
+            stored.reshape(-1, 4), dtype=np.float64, order="C"
+        )
+        # interpolation needs unit quaternions on the same hemisphere
+        self._r = kq.unflip(r) if self._track is not None and len(r) > 1 else r
 
     # -- data -------------------------------------------------------------
 
     @property
-    def translation(self):
+    def translation(self) -> Any:
         """Translation wrt the parent, shape (3,) or (n, 3); None for a root."""
         if not self._has_transform:
             return None
         return _read_only(self._t if self._track is not None else self._t[0])
 
     @property
-    def rotation(self):
+    def rotation(self) -> Any:
         """Rotation wrt the parent, shape (4,) or (n, 4); None for a root."""
         if not self._has_transform:
             return None
@@ -364,15 +518,13 @@ class ReferenceFrame:
         return _read_only(r if self._track is not None else r[0])
 
     @property
-    def timestamps(self):
+    def timestamps(self) -> Any:
         """Timestamps of a moving frame as given, shape (n,); None if static."""
         return None if self._track is None else _read_only(self._track.values)
 
     def _squad_coefficients(self):
         # frames are immutable, so the spline coefficients can be kept
         if self._coefficients is None:
-            from ._kernels import quaternion as kq
-
             a_coef, b_coef = kq.squad_coefficients(self._r, self._track.base)
             seg = kq.squad_segments(self._r, a_coef, b_coef)
             self._coefficients = (a_coef, b_coef, seg)
@@ -391,10 +543,10 @@ class ReferenceFrame:
         return self._parent
 
     @parent.setter
-    def parent(self, parent) -> None:
+    def parent(self, parent: FrameLike | None) -> None:
         if parent is not None:
-            parent = _resolve(parent, "parent")
-            node = parent
+            parent = resolve_frame(parent, "parent")
+            node: ReferenceFrame | None = parent
             while node is not None:
                 if node is self:
                     raise ValueError(
@@ -406,6 +558,7 @@ class ReferenceFrame:
         if self._parent is not None:
             self._parent._children.remove(self)
         self._parent = parent
+        _chain.invalidate()  # chains through this frame changed
         if parent is not None:
             parent._children.append(self)
 
@@ -414,30 +567,37 @@ class ReferenceFrame:
         """The frames whose parent this is, in order of attachment."""
         return tuple(self._children)
 
-    def _path_to_root(self) -> list:
+    def _path_to_root(self) -> list[ReferenceFrame]:
         path = []
-        node = self
+        node: ReferenceFrame | None = self
         while node is not None:
             path.append(node)
             node = node._parent
         return path
 
-    def iter_path_reverse(self):
+    def iter_path_reverse(self) -> Any:
         """Iterate from this frame up to the root (inclusive)."""
-        node = self
+        node: ReferenceFrame | None = self
         while node is not None:
             yield node
             node = node._parent
 
-    def frames_between(self, to_frame, *, include_self=True, include_to_frame=True):
+    def frames_between(
+        self,
+        to_frame: FrameLike,
+        *,
+        include_self: bool = True,
+        include_to_frame: bool = True,
+    ) -> Any:
         """The frames from this one up to the common ancestor and down to ``to_frame``.
 
         See :func:`rbm_nb._frame_paths.frames_between`.
         """
-        from ._frame_paths import frames_between
-
-        return frames_between(
-            self, to_frame, include_self=include_self, include_to_frame=include_to_frame
+        return _frame_paths.frames_between(
+            self,
+            resolve_frame(to_frame, "to_frame"),
+            include_self=include_self,
+            include_to_frame=include_to_frame,
         )
 
     @property
@@ -505,14 +665,15 @@ class ReferenceFrame:
     @classmethod
     def from_dataset(
         cls,
-        ds,
-        translation,
-        rotation,
-        timestamps,
-        parent,
-        name=None,
-        inverse=False,
-        discrete=False,
+        ds: Any,
+        translation: ArrayInput | None,
+        rotation: ArrayInput | None,
+        timestamps: Any,
+        parent: FrameLike,
+        name: str | None = None,
+        inverse: bool = False,
+        discrete: bool = False,
+        max_gap: float | None = None,
     ) -> ReferenceFrame:
         """A moving frame from variables of an xarray Dataset.
 
@@ -527,9 +688,10 @@ class ReferenceFrame:
         name : str, optional
         inverse, discrete : bool, default False
             As for :class:`ReferenceFrame`.
+        max_gap : float, optional
+            The longest gap (seconds) interpolated across, as for
+            :class:`ReferenceFrame`; NaN rows (missing samples) are accepted.
         """
-        from ._xarray import dataset_variable
-
         return cls(
             name,
             parent,
@@ -538,18 +700,24 @@ class ReferenceFrame:
             timestamps=dataset_variable(ds, timestamps, "timestamps"),
             inverse=inverse,
             discrete=discrete,
+            max_gap=max_gap,
         )
 
     @classmethod
     def from_translation_dataarray(
-        cls, da, timestamps, parent, name=None, inverse=False, discrete=False
+        cls,
+        da: Any,
+        timestamps: Any,
+        parent: FrameLike,
+        name: str | None = None,
+        inverse: bool = False,
+        discrete: bool = False,
+        max_gap: float | None = None,
     ) -> ReferenceFrame:
         """A moving frame (no rotation) from a translation DataArray, shape (n, 3).
 
         ``timestamps`` names the coordinate holding the n timestamps.
         """
-        from ._xarray import dataarray_coordinate
-
         return cls(
             name,
             parent,
@@ -557,18 +725,24 @@ class ReferenceFrame:
             timestamps=dataarray_coordinate(da, timestamps),
             inverse=inverse,
             discrete=discrete,
+            max_gap=max_gap,
         )
 
     @classmethod
     def from_rotation_dataarray(
-        cls, da, timestamps, parent, name=None, inverse=False, discrete=False
+        cls,
+        da: Any,
+        timestamps: Any,
+        parent: FrameLike,
+        name: str | None = None,
+        inverse: bool = False,
+        discrete: bool = False,
+        max_gap: float | None = None,
     ) -> ReferenceFrame:
         """A moving frame (no translation) from a rotation DataArray, shape (n, 4).
 
         ``timestamps`` names the coordinate holding the n timestamps.
         """
-        from ._xarray import dataarray_coordinate
-
         return cls(
             name,
             parent,
@@ -576,15 +750,18 @@ class ReferenceFrame:
             timestamps=dataarray_coordinate(da, timestamps),
             inverse=inverse,
             discrete=discrete,
+            max_gap=max_gap,
         )
 
     @classmethod
     def from_rotation_matrix(
-        cls, mat, parent, name=None, inverse=False
+        cls,
+        mat: ArrayInput,
+        parent: FrameLike,
+        name: str | None = None,
+        inverse: bool = False,
     ) -> ReferenceFrame:
         """A static frame rotated by a (3, 3) rotation matrix wrt its parent."""
-        from .conversions import quaternion_from_matrix
-
         mat = as_float_array(mat, "mat")
         if mat.shape != (3, 3):
             raise ValueError(f"mat must have shape (3, 3), got {mat.shape}")
@@ -602,11 +779,13 @@ class ReferenceFrame:
 
     def deregister(self) -> None:
         """Remove this frame's name from the registry."""
+        if self.name is None:
+            raise ValueError("a frame without a name is not registered")
         _deregister(self.name)
 
     # -- lookups and transforms (see rbm_nb.lookups / rbm_nb.transforms) ----
 
-    def lookup_transform(self, to_frame):
+    def lookup_transform(self, to_frame: FrameLike) -> Any:
         """Transform from this frame to ``to_frame``.
 
         Returns
@@ -615,14 +794,10 @@ class ReferenceFrame:
         r : ndarray, shape (4,) or (n, 4)
         ts : ndarray, shape (n,), or None if static
         """
-        from .lookups import _frame_lookup_transform
+        return _chain.lookup_transform(self, resolve_frame(to_frame, "to_frame"))
 
-        return _frame_lookup_transform(self, to_frame)
-
-    def get_transformation(self, to_frame):
+    def get_transformation(self, to_frame: FrameLike) -> Any:
         """Deprecated alias of :meth:`lookup_transform`."""
-        import warnings
-
         warnings.warn(
             "get_transformation is deprecated, use lookup_transform instead",
             DeprecationWarning,
@@ -632,155 +807,181 @@ class ReferenceFrame:
 
     def lookup_twist(
         self,
-        reference=None,
-        represent_in=None,
-        outlier_thresh=None,
-        cutoff=None,
-        mode="quaternion",
-        allow_static=False,
-        return_timestamps=False,
-    ):
+        reference: FrameLike | None = None,
+        represent_in: FrameLike | None = None,
+        outlier_thresh: float | None = None,
+        cutoff: float | None = None,
+        mode: str = "quaternion",
+        allow_static: bool = False,
+        return_timestamps: bool = False,
+    ) -> Any:
         """Linear and angular velocity of this frame wrt ``reference``.
 
         Both default to the parent frame. Returns ``(linear, angular)``
         with shape (n, 3) each, plus the timestamps if ``return_timestamps``.
         """
-        from .lookups import _frame_lookup_twist
-
-        linear, angular, ts = _frame_lookup_twist(
-            self, reference, represent_in, outlier_thresh, cutoff, mode, allow_static
+        linear, angular, ts = _twist.lookup_twist(
+            self,
+            _optional(reference, "reference"),
+            _optional(represent_in, "represent_in"),
+            outlier_thresh,
+            cutoff,
+            mode,
+            allow_static,
         )
         return (linear, angular, ts) if return_timestamps else (linear, angular)
 
     def lookup_linear_velocity(
         self,
-        reference=None,
-        represent_in=None,
-        outlier_thresh=None,
-        cutoff=None,
-        allow_static=False,
-        return_timestamps=False,
-    ):
+        reference: FrameLike | None = None,
+        represent_in: FrameLike | None = None,
+        outlier_thresh: float | None = None,
+        cutoff: float | None = None,
+        allow_static: bool = False,
+        return_timestamps: bool = False,
+    ) -> Any:
         """Linear velocity of this frame wrt ``reference``, shape (n, 3)."""
-        from .lookups import _frame_lookup_linear_velocity
-
-        linear, ts = _frame_lookup_linear_velocity(
-            self, reference, represent_in, outlier_thresh, cutoff, allow_static
+        linear, ts = _twist.lookup_linear_velocity(
+            self,
+            _optional(reference, "reference"),
+            _optional(represent_in, "represent_in"),
+            outlier_thresh,
+            cutoff,
+            allow_static,
         )
         return (linear, ts) if return_timestamps else linear
 
     def lookup_angular_velocity(
         self,
-        reference=None,
-        represent_in=None,
-        outlier_thresh=None,
-        cutoff=None,
-        mode="quaternion",
-        allow_static=False,
-        return_timestamps=False,
-    ):
+        reference: FrameLike | None = None,
+        represent_in: FrameLike | None = None,
+        outlier_thresh: float | None = None,
+        cutoff: float | None = None,
+        mode: str = "quaternion",
+        allow_static: bool = False,
+        return_timestamps: bool = False,
+    ) -> Any:
         """Angular velocity of this frame wrt ``reference``, shape (n, 3)."""
-        from .lookups import _frame_lookup_angular_velocity
-
-        angular, ts = _frame_lookup_angular_velocity(
-            self, reference, represent_in, outlier_thresh, cutoff, mode, allow_static
+        angular, ts = _twist.lookup_angular_velocity(
+            self,
+            _optional(reference, "reference"),
+            _optional(represent_in, "represent_in"),
+            outlier_thresh,
+            cutoff,
+            mode,
+            allow_static,
         )
         return (angular, ts) if return_timestamps else angular
 
     def transform_points(
         self,
-        arr,
-        to_frame,
-        axis=-1,
-        time_axis=0,
-        timestamps=None,
-        return_timestamps=False,
-    ):
+        arr: ArrayInput,
+        to_frame: FrameLike,
+        axis: int | None = -1,
+        time_axis: int | None = 0,
+        timestamps: Any = None,
+        return_timestamps: bool = False,
+    ) -> Any:
         """Points given in this frame, expressed in ``to_frame``."""
-        from .transforms import _frame_transform
-
-        out, ts = _frame_transform(
-            self, "points", arr, to_frame, axis, time_axis, timestamps
+        out, ts = _transform.transform(
+            self,
+            "points",
+            arr,
+            resolve_frame(to_frame, "to_frame"),
+            axis,
+            time_axis,
+            timestamps,
         )
         return (out, ts) if return_timestamps else out
 
     def transform_vectors(
         self,
-        arr,
-        to_frame,
-        axis=-1,
-        time_axis=0,
-        timestamps=None,
-        return_timestamps=False,
-    ):
+        arr: ArrayInput,
+        to_frame: FrameLike,
+        axis: int | None = -1,
+        time_axis: int | None = 0,
+        timestamps: Any = None,
+        return_timestamps: bool = False,
+    ) -> Any:
         """Vectors represented in this frame, represented in ``to_frame``."""
-        from .transforms import _frame_transform
-
-        out, ts = _frame_transform(
-            self, "vectors", arr, to_frame, axis, time_axis, timestamps
+        out, ts = _transform.transform(
+            self,
+            "vectors",
+            arr,
+            resolve_frame(to_frame, "to_frame"),
+            axis,
+            time_axis,
+            timestamps,
         )
         return (out, ts) if return_timestamps else out
 
     def transform_quaternions(
         self,
-        arr,
-        to_frame,
-        axis=-1,
-        time_axis=0,
-        timestamps=None,
-        return_timestamps=False,
-    ):
+        arr: ArrayInput,
+        to_frame: FrameLike,
+        axis: int | None = -1,
+        time_axis: int | None = 0,
+        timestamps: Any = None,
+        return_timestamps: bool = False,
+    ) -> Any:
         """Orientations wrt this frame, expressed wrt ``to_frame``."""
-        from .transforms import _frame_transform
-
-        out, ts = _frame_transform(
-            self, "quaternions", arr, to_frame, axis, time_axis, timestamps
+        out, ts = _transform.transform(
+            self,
+            "quaternions",
+            arr,
+            resolve_frame(to_frame, "to_frame"),
+            axis,
+            time_axis,
+            timestamps,
         )
         return (out, ts) if return_timestamps else out
 
     def transform_angular_velocity(
         self,
-        arr,
-        to_frame,
-        what="reference_frame",
-        axis=-1,
-        time_axis=0,
-        timestamps=None,
-        return_timestamps=False,
-        cutoff=None,
-    ):
+        arr: ArrayInput,
+        to_frame: FrameLike,
+        what: str = "reference_frame",
+        axis: int | None = -1,
+        time_axis: int | None = 0,
+        timestamps: Any = None,
+        return_timestamps: bool = False,
+        cutoff: float | None = None,
+    ) -> Any:
         """Change the reference, moving or representation frame of angular velocities."""
-        from .transforms import _frame_transform_angular_velocity
-
-        out, ts = _frame_transform_angular_velocity(
-            self, arr, to_frame, what, axis, time_axis, timestamps, cutoff
+        out, ts = _twist.transform_angular_velocity(
+            self,
+            arr,
+            resolve_frame(to_frame, "to_frame"),
+            what,
+            axis,
+            time_axis,
+            timestamps,
+            cutoff,
         )
         return (out, ts) if return_timestamps else out
 
     def transform_linear_velocity(
         self,
-        arr,
-        to_frame,
-        what="reference_frame",
-        moving_frame=None,
-        reference_frame=None,
-        axis=-1,
-        time_axis=0,
-        timestamps=None,
-        return_timestamps=False,
-        outlier_thresh=None,
-        cutoff=None,
-    ):
+        arr: ArrayInput,
+        to_frame: FrameLike,
+        what: str = "reference_frame",
+        moving_frame: FrameLike | None = None,
+        reference_frame: FrameLike | None = None,
+        axis: int | None = -1,
+        time_axis: int | None = 0,
+        timestamps: Any = None,
+        return_timestamps: bool = False,
+        outlier_thresh: float | None = None,
+        cutoff: float | None = None,
+    ) -> Any:
         """Change the reference, moving or representation frame of linear velocities."""
-        from .transforms import _frame_transform_linear_velocity
-
-        out, ts = _frame_transform_linear_velocity(
+        out, ts = _twist.transform_linear_velocity(
             self,
             arr,
-            to_frame,
+            resolve_frame(to_frame, "to_frame"),
             what,
-            moving_frame,
-            reference_frame,
+            _optional(moving_frame, "moving_frame"),
+            _optional(reference_frame, "reference_frame"),
             axis,
             time_axis,
             timestamps,
@@ -788,6 +989,15 @@ class ReferenceFrame:
             cutoff,
         )
         return (out, ts) if return_timestamps else out
+
+
+# the name other modules imported before resolve_frame was public
+_resolve = resolve_frame
+
+
+def _optional(frame: Any, argument: str) -> ReferenceFrame | None:
+    """``resolve_frame`` for arguments that may be None (a default applies)."""
+    return None if frame is None else resolve_frame(frame, argument)
 
 
 def _read_only(arr: np.ndarray) -> np.ndarray:

@@ -12,6 +12,11 @@ import numpy as np
 from matplotlib.patches import FancyArrowPatch
 from mpl_toolkits.mplot3d import proj3d
 
+from ._config import UNIT_QUATERNION_TOLERANCE
+from ._kernels import conversions as _kc
+from .frames import resolve_frame
+from .lookups import lookup_pose, lookup_transform
+
 __all__ = [
     "Arrow3D",
     "reference_frame",
@@ -115,24 +120,14 @@ def _set_axes_equal(ax) -> None:
 
 def _rotation_matrices(q: np.ndarray) -> np.ndarray:
     """(n, 3, 3) rotation matrices of (n, 4) quaternions (w, x, y, z)."""
+    q = np.array(q, dtype=np.float64, order="C").reshape(-1, 4)
     norms = np.linalg.norm(q, axis=1)
     if np.any(norms == 0) or not np.isfinite(q).all():
         raise ValueError("quaternions must be finite and non-zero")
-    w, x, y, z = (q / norms[:, np.newaxis]).T
-    return np.stack(
-        [
-            np.stack(
-                [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1
-            ),
-            np.stack(
-                [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1
-            ),
-            np.stack(
-                [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1
-            ),
-        ],
-        axis=1,
-    )
+    # any non-zero norm is accepted here (the kernel normalises); its
+    # validity count against the unit tolerance is not needed
+    matrices, _ = _kc.matrix_from_quaternion(q, UNIT_QUATERNION_TOLERANCE)
+    return matrices
 
 
 def reference_frame(frame, world_frame=None, ax=None, figsize=(6, 6), arrow_len=1.0):
@@ -161,9 +156,7 @@ def reference_frame(frame, world_frame=None, ax=None, figsize=(6, 6), arrow_len=
     ValueError
         If the frame (or its transform into ``world_frame``) moves.
     """
-    from .frames import _resolve
-
-    frame = _resolve(frame, "reference_frame: frame")
+    frame = resolve_frame(frame, "reference_frame: frame")
     if frame.timestamps is not None:
         raise ValueError(
             f"plot.reference_frame: frame {frame.name!r} is moving; "
@@ -176,9 +169,7 @@ def reference_frame(frame, world_frame=None, ax=None, figsize=(6, 6), arrow_len=
         [[0.0, 0.0, 0.0], [arrow_len, 0, 0], [0, arrow_len, 0], [0, 0, arrow_len]]
     )
     if world_frame is not None:
-        from .lookups import lookup_transform
-
-        world = _resolve(world_frame, "reference_frame: world_frame")
+        world = resolve_frame(world_frame, "reference_frame: world_frame")
         t, r, ts = lookup_transform(outof=frame, into=world, return_timestamps=True)
         if ts is not None:
             raise ValueError(
@@ -328,17 +319,15 @@ def trajectory(frame, reference=None, axes=None, figsize=(8, 6), **kwargs):
         Position (x, y, z in m) and orientation (roll, pitch, yaw in degrees,
         unwrapped) against time.
     """
-    from .frames import _resolve
-    from .lookups import lookup_pose
 
-    frame = _resolve(frame, "trajectory: frame")
+    frame = resolve_frame(frame, "trajectory: frame")
     if reference is None:
         if frame.parent is None:
             raise ValueError(
                 f"trajectory: frame {frame.name!r} is a root; give a reference frame"
             )
         reference = frame.parent
-    reference = _resolve(reference, "trajectory: reference")
+    reference = resolve_frame(reference, "trajectory: reference")
     position, orientation, ts = lookup_pose(frame, reference, return_timestamps=True)
     if ts is None:
         raise ValueError(

@@ -12,13 +12,22 @@ from __future__ import annotations
 
 from typing import Any
 
-import sys
-
 import numpy as np
 
-from . import _dask
+from . import _dask, _time
+from ._door import ArrayInput, kernel_array
+from ._door import float_array as _door_float_array
+from ._door import is_dataarray as _is_dataarray
+from ._engine.chain import stored_signs
 from ._kernels import quaternion as _qk
 from ._kernels import rotations as _rk
+from ._validation import (
+    check_finite,
+    check_missing_rows,
+    check_no_inf,
+    check_unit_norms,
+)
+from .errors import UnsupportedError
 
 __all__ = ["from_euler_angles", "qinterp", "qinv", "qmean", "qmul", "rotate_vectors"]
 
@@ -26,12 +35,6 @@ __all__ = ["from_euler_angles", "qinterp", "qinv", "qmean", "qmul", "rotate_vect
 # ---------------------------------------------------------------------------
 # input handling shared by the public functions
 # ---------------------------------------------------------------------------
-
-
-def _is_dataarray(obj: Any) -> bool:
-    # duck-typed so that plain-array callers never import xarray
-    xarray = sys.modules.get("xarray")
-    return xarray is not None and isinstance(obj, xarray.DataArray)
 
 
 def _is_quaternion_dtype(arr: np.ndarray) -> bool:
@@ -51,13 +54,7 @@ def _normalize_axis(axis: Any, ndim: int, name: str) -> int:
 
 
 def _float_array(obj: Any, name: str) -> np.ndarray:
-    arr = np.asarray(obj)
-    if arr.dtype != np.float64:
-        try:
-            arr = arr.astype(np.float64)
-        except (TypeError, ValueError):
-            raise ValueError(f"{name} must be numeric, got dtype {arr.dtype}") from None
-    return arr
+    return _door_float_array(obj, name)
 
 
 def _split(q: Any, qaxis: int, name: str) -> tuple[np.ndarray, bool]:
@@ -78,7 +75,9 @@ def _split(q: Any, qaxis: int, name: str) -> tuple[np.ndarray, bool]:
         raise ValueError(
             f"{name} must have length 4 (w, x, y, z) along qaxis={qaxis}, got shape {arr.shape}"
         )
-    return np.moveaxis(arr, ax, -1), False
+    moved = np.moveaxis(arr, ax, -1)
+    check_no_inf(moved, name)
+    return moved, False
 
 
 def _join(out: np.ndarray, was_quaternion: bool, qpos: int) -> np.ndarray:
@@ -100,9 +99,9 @@ def _rows(arr: np.ndarray, shape: tuple[int, ...], width: int) -> np.ndarray:
     reuse such a row without it being copied n times)."""
     if arr.shape[:-1] != shape:
         if arr[..., 0].size == 1:
-            return np.ascontiguousarray(arr.reshape(1, width))
+            return kernel_array(arr.reshape(1, width))
         arr = np.broadcast_to(arr, shape + (width,))
-    return np.ascontiguousarray(arr.reshape(-1, width))
+    return kernel_array(arr.reshape(-1, width))
 
 
 def _broadcast(a: tuple[int, ...], b: tuple[int, ...], what: str) -> tuple[int, ...]:
@@ -132,7 +131,7 @@ def _raise_zero(name: str, idx: int, what: str) -> None:
 # ---------------------------------------------------------------------------
 
 
-def qinv(q, qaxis: int = -1):
+def qinv(q: ArrayInput, qaxis: int = -1) -> Any:
     """Inverse of quaternions, ``conj(q) / |q|**2``.
 
     Parameters
@@ -165,13 +164,14 @@ def qinv(q, qaxis: int = -1):
         )
     template = q if _is_dataarray(q) else None
     qf, was_quaternion = _split(q, qaxis, "q")
-    out, zero = _rk.qinv_checked(np.ascontiguousarray(qf.reshape(-1, 4)))
+    out, zero = _rk.qinv_checked(kernel_array(qf.reshape(-1, 4)))
     if zero >= 0:
         _raise_zero("q", zero, "it has no inverse")
     return _like(template, _join(out.reshape(qf.shape), was_quaternion, qaxis))
 
 
 def _lazy_qmul(q, qaxis: int):
+    """qmul of dask-backed quaternions, chunk by chunk."""
     if all(_is_dataarray(x) for x in q):
         core = [x.dims[qaxis] for x in q]
         out = _dask.blockwise(qmul, q, core, core[0], qaxis=-1)
@@ -181,8 +181,8 @@ def _lazy_qmul(q, qaxis: int):
         return out
     if any(_is_dataarray(x) for x in q):
         raise ValueError(
-            "q: mix DataArrays and plain arrays in qmul only in memory; with "
-            "dask-backed data pass all DataArrays or all arrays"
+            "q: with dask-backed data pass qmul all DataArrays or all arrays, "
+            "not a mix"
         )
     import dask.array as dsa
 
@@ -191,7 +191,7 @@ def _lazy_qmul(q, qaxis: int):
     return dsa.map_blocks(lambda *b: qmul(*b, qaxis=qaxis), *parts, dtype=np.float64)
 
 
-def qmul(*q, qaxis: int = -1):
+def qmul(*q, qaxis: int = -1) -> Any:
     """Hamilton product of two or more quaternion arrays, left to right.
 
     Parameters
@@ -255,7 +255,7 @@ def _resolve_reduce_axes(axis: Any, ndim: int) -> tuple[int, ...]:
     return out
 
 
-def qmean(q, axis=None, qaxis: int = -1):
+def qmean(q: ArrayInput, axis: int | None = None, qaxis: int = -1) -> Any:
     """Mean rotation of quaternions (Markley's eigenvector method).
 
     The mean is the unit eigenvector of the largest eigenvalue of the mean
@@ -303,6 +303,7 @@ def qmean(q, axis=None, qaxis: int = -1):
     keep_axes = tuple(a for a in range(nd) if a not in reduce_axes)
     moved = np.transpose(qf, keep_axes + reduce_axes + (nd,))
     keep_shape = moved.shape[: len(keep_axes)]
+    check_unit_norms(qf, "q")
     groups = moved.reshape(int(np.prod(keep_shape)), -1, 4)
     if groups.shape[1] == 0:
         raise ValueError(f"q has no quaternions to average along axis={axis!r}")
@@ -350,21 +351,8 @@ def _reduced_like(
 
 
 def _time_values(t_in: Any, t_out: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Both time arrays as float64 on a common origin, in seconds for
-    datetime64/timedelta64 (converted exactly, relative to ``t_in[0]``)."""
-    t_in = np.asarray(t_in)
-    t_out = np.asarray(t_out)
-    kinds = {t_in.dtype.kind, t_out.dtype.kind}
-    if kinds & {"M", "m"}:
-        if len(kinds) != 1:
-            raise ValueError(
-                f"t_in and t_out must both be datetimes or both be numbers, got "
-                f"dtypes {t_in.dtype} and {t_out.dtype}"
-            )
-        base = t_in.reshape(-1)[0] if t_in.size else t_in.dtype.type(0, "s")
-        one = np.timedelta64(1, "s")
-        return (t_in - base) / one, (t_out - base) / one
-    return _float_array(t_in, "t_in"), _float_array(t_out, "t_out")
+    """Both time arrays as float64 seconds on ``t_in[0]`` (see :mod:`rbm_nb._time`)."""
+    return _time.seconds_pair(t_in, t_out)
 
 
 def _check_times(t_in: np.ndarray, t_out: np.ndarray, n: int) -> None:
@@ -398,8 +386,11 @@ def _squad_series(
     m = t_out.shape[0]
     out = np.empty((m, series.shape[1], 4))
     for b in range(series.shape[1]):
-        q_b = _rk.unflip(np.ascontiguousarray(series[:, b, :]))
-        out[:, b, :] = _qk.squad(q_b, t_in, t_out)
+        stored = kernel_array(series[:, b, :])
+        q_b = _qk.unflip(stored)
+        rot = _qk.squad(q_b, t_in, t_out)
+        stored_signs(rot, q_b, stored, t_in, t_out)
+        out[:, b, :] = rot
     return out
 
 
@@ -410,11 +401,11 @@ def _squad_along(
     moved = np.moveaxis(qf, axis, 0)
     rest = moved.shape[1:-1]
     series = moved.reshape(moved.shape[0], -1, 4)
-    zero = _rk.first_zero_row(np.ascontiguousarray(series.reshape(-1, 4)))
+    zero = _rk.first_zero_row(kernel_array(series.reshape(-1, 4)))
     if zero >= 0:
         _raise_zero("q", zero, "it cannot be interpolated")
-    t_flat = np.ascontiguousarray(t_out.reshape(-1))
-    out = _squad_series(series, np.ascontiguousarray(t_in), t_flat)
+    t_flat = kernel_array(t_out.reshape(-1))
+    out = _squad_series(series, kernel_array(t_in), t_flat)
     out = out.reshape((t_flat.shape[0],) + rest + (4,))
     out = np.moveaxis(out, 0, axis)
     if t_out.ndim == 0:
@@ -422,7 +413,9 @@ def _squad_along(
     return out
 
 
-def qinterp(q, t_in, t_out, axis: int = 0, qaxis: int = -1):
+def qinterp(
+    q: ArrayInput, t_in: ArrayInput, t_out: ArrayInput, axis: int = 0, qaxis: int = -1
+) -> Any:
     """Interpolate quaternions in time with squad (a cubic spline on rotations).
 
     Parameters
@@ -478,15 +471,20 @@ def qinterp(q, t_in, t_out, axis: int = 0, qaxis: int = -1):
     qpos = -1
     if not was_quaternion:
         qpos = _normalize_axis(qaxis, arr.ndim, "qaxis")
-        if ax == qpos:
-            raise ValueError(
-                f"axis={axis} and qaxis={qaxis} refer to the same axis of q"
-            )
+        # axis counts the axes of q without qaxis when both name the same
+        # axis (qinterp(q.T, ..., qaxis=0) with the default axis=0), as in
+        # rigid-body-motion; otherwise it counts all axes of q
         ax_without_q = ax - 1 if ax > qpos else ax
     else:
         ax_without_q = ax
+    if ax_without_q >= qf.ndim - 1:
+        raise ValueError(
+            f"axis={axis} and qaxis={qaxis} refer to the same axis of q, and q of "
+            f"shape {arr.shape} has no axis {axis} besides its quaternion axis"
+        )
     t_in_f, t_out_f = _time_values(t_in, t_out)
     _check_times(t_in_f, t_out_f.reshape(-1), qf.shape[ax_without_q])
+    check_unit_norms(qf, "q")
     out = _squad_along(qf, ax_without_q, t_in_f, t_out_f)
     if t_out_f.ndim == 0 and ax < qpos:
         qpos -= 1  # the sampled axis is gone
@@ -528,7 +526,7 @@ def _qinterp_dataarray(
         t_in = da.coords[dim].values
     t_out_values = np.asarray(getattr(t_out, "values", t_out))
     if t_out_values.ndim > 1:
-        raise ValueError(
+        raise UnsupportedError(
             f"the new coordinate for {dim!r} must be a scalar or one-dimensional, "
             f"got shape {t_out_values.shape}"
         )
@@ -543,7 +541,7 @@ def _qinterp_dataarray(
     ax = [d for d in da.dims if d != qdim].index(dim)
     values = np.full(data.shape[:ax] + (flat_out.size,) + data.shape[ax + 1 :], np.nan)
     if inside.any():
-        index = [slice(None)] * values.ndim
+        index: list[Any] = [slice(None)] * values.ndim
         index[ax] = inside
         values[tuple(index)] = _squad_along(data, ax, t_in_f, flat_out[inside])
     values = np.moveaxis(values, -1, da.dims.index(qdim))
@@ -575,13 +573,14 @@ def _qinterp_dataarray(
 
 
 def _lazy_rotate_vectors(q, v, axis: int, qaxis: int, one_to_one: bool):
+    """rotate_vectors with dask-backed quaternions or vectors, chunk by chunk."""
     if not one_to_one:
-        raise NotImplementedError(
+        raise UnsupportedError(
             "one_to_one=False with dask-backed data is not lazy (its result "
             "has the shape of q times v); call .compute() first"
         )
     if not _dask.is_dask(q) and np.ndim(q) == 1:
-        single = np.asarray(getattr(q, "values", q), dtype=np.float64)
+        single = _door_float_array(getattr(q, "values", q), "q")
         core = v.dims[axis] if _is_dataarray(v) else axis
         return _dask.elementwise(
             lambda block: rotate_vectors(single, block, axis=axis), v, core
@@ -601,10 +600,16 @@ def _lazy_rotate_vectors(q, v, axis: int, qaxis: int, one_to_one: bool):
     return dsa.map_blocks(
         lambda a, b: rotate_vectors(a, b, axis=axis, qaxis=qaxis),
         qd, vd, dtype=np.float64, chunks=vd.chunks,
-    )
+    )  # fmt: skip
 
 
-def rotate_vectors(q, v, axis: int = -1, qaxis: int = -1, one_to_one: bool = True):
+def rotate_vectors(
+    q: ArrayInput,
+    v: ArrayInput,
+    axis: int = -1,
+    qaxis: int = -1,
+    one_to_one: bool = True,
+) -> Any:
     """Rotate vectors by quaternions, ``q v q⁻¹``.
 
     Correct for quaternions of any non-zero norm (the rotation does not scale
@@ -649,6 +654,7 @@ def rotate_vectors(q, v, axis: int = -1, qaxis: int = -1, one_to_one: bool = Tru
     qa = np.asarray(q)
     va = v.values if _is_dataarray(v) else v
     va = _float_array(va, "v")
+    check_no_inf(va, "v", row_axis=False)
     if va.ndim == 0:
         raise ValueError("v must have an axis of length 3 (x, y, z), got a scalar")
     vax = _normalize_axis(axis, va.ndim, "axis")
@@ -670,7 +676,7 @@ def rotate_vectors(q, v, axis: int = -1, qaxis: int = -1, one_to_one: bool = Tru
         and va.flags.c_contiguous
         and (qa.shape[0] == va.shape[0] or qa.shape[0] == 1 or va.shape[0] == 1)
     ):
-        out, zero = _rk.rotate_vectors_checked(qa, va)
+        out, zero = _rk.rotate_vectors_checked(kernel_array(qa), kernel_array(va))
         if zero >= 0:
             _raise_zero("q", zero, "it does not describe a rotation")
         return _like(v if _is_dataarray(v) else None, out)
@@ -693,8 +699,8 @@ def rotate_vectors(q, v, axis: int = -1, qaxis: int = -1, one_to_one: bool = Tru
         out = np.moveaxis(out.reshape(shape + (3,)), -1, vax)
         return _like(v if _is_dataarray(v) else None, out)
 
-    q_rows = np.ascontiguousarray(qf.reshape(-1, 4))
-    v_rows = np.ascontiguousarray(vm.reshape(-1, 3))
+    q_rows = kernel_array(qf.reshape(-1, 4))
+    v_rows = kernel_array(vm.reshape(-1, 3))
     if not q_shape:
         out, zero = _rk.rotate_vectors_checked(q_rows, v_rows)
         if zero >= 0:
@@ -716,14 +722,14 @@ _ELEMENTARY_AXIS = {"r": 1, "p": 2, "y": 3}
 
 
 def from_euler_angles(
-    rpy=None,
-    roll=None,
-    pitch=None,
-    yaw=None,
+    rpy: Any = None,
+    roll: Any = None,
+    pitch: Any = None,
+    yaw: Any = None,
     axis: int = -1,
     order: str = "rpy",
     return_quaternion: bool = False,
-):
+) -> Any:
     """Quaternions from roll, pitch and yaw angles (radians).
 
     Roll, pitch and yaw are rotations about the x, y and z axes. The result is
@@ -781,6 +787,9 @@ def from_euler_angles(
                 f"rpy must have length 3 (roll, pitch, yaw) along axis={axis}, got shape {arr.shape}"
             )
         arr = np.moveaxis(arr, ax, -1)
+        # a row of NaN only is a missing sample (an untracked frame) and
+        # stays NaN; a partly NaN row or an infinity is a mistake
+        check_missing_rows(arr, "rpy")
         angles = {"r": arr[..., 0], "p": arr[..., 1], "y": arr[..., 2]}
     else:
         for key, value, name in (
@@ -790,6 +799,7 @@ def from_euler_angles(
         ):
             if value is not None:
                 angles[key] = _float_array(value, name)
+                check_finite(angles[key], name, row_axis=False)
         if not angles:
             raise ValueError("give at least one of rpy, roll, pitch or yaw")
     shape: tuple[int, ...] = ()
@@ -807,6 +817,7 @@ def from_euler_angles(
         rotor[:, 0] = np.cos(half)
         rotor[:, _ELEMENTARY_AXIS[key]] = np.sin(half)
         result = rotor if result is None else _qk.qmul(result, rotor)
+    assert result is not None  # at least one angle is given (checked above)
     result = result.reshape(shape + (4,))
     if return_quaternion:
         return _join(result, True, -1)

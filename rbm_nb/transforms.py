@@ -1,28 +1,27 @@
 """Transform points, vectors, quaternions and velocities between frames.
 
-Each public function resolves the frames, matches the array's timestamps
-with those of the frames along the way (see :mod:`rbm_nb._matching`),
-applies the chained transform with a numba kernel and, for DataArray input,
-returns a DataArray with coordinates and attributes kept and the frame
+Each public function unpacks its array argument, resolves the frames and
+hands both to the engine (:mod:`rbm_nb._engine.transform` and
+:mod:`rbm_nb._engine.twist`), which matches the array's timestamps with
+those of the frames along the way (see :mod:`rbm_nb._engine.chain`) and
+applies the chained transform with a numba kernel. DataArray input comes
+back as a DataArray with coordinates and attributes kept and the frame
 attributes updated.
 """
 
 from __future__ import annotations
 
 import warnings
+from typing import Any
 
-import numpy as np
-
-from . import _dask, _matching, _timestamps
-from ._kernels import resample as kr
-from ._validation import (
-    as_float_array,
-    check_what,
-    normalize_quaternions,
-    resolve_axis,
-)
+from . import _dask
+from ._door import ArrayInput
+from ._engine import transform as _engine_transform
+from ._engine import twist as _twist
+from ._validation import check_what
 from ._xarray import unpack, wrap
-from .frames import _resolve
+from .errors import UnsupportedError
+from .frames import FrameLike, resolve_frame
 
 __all__ = [
     "transform_points",
@@ -31,272 +30,6 @@ __all__ = [
     "transform_angular_velocity",
     "transform_linear_velocity",
 ]
-
-_SIZES = {"points": 3, "vectors": 3, "quaternions": 4}
-
-
-# ---------------------------------------------------------------------------
-# array layout: (time, ..., component) <-> (n, k, c) blocks
-# ---------------------------------------------------------------------------
-
-
-class _Blocks:
-    """An array argument rearranged to (n, k, c) blocks, and how to undo it."""
-
-    __slots__ = ("data", "track", "moved_shape", "axis", "time_axis", "ndim")
-
-    def __init__(self, arr, size, axis, time_axis, timestamps, kind):
-        arr = as_float_array(arr, "arr")
-        if arr.ndim == 0:
-            raise ValueError(f"arr must have an axis of length {size}, got a scalar")
-        self.ndim = arr.ndim
-        self.axis = resolve_axis(axis, arr.ndim, "axis")
-        if arr.shape[self.axis] != size:
-            raise ValueError(
-                f"arr must have length {size} along axis {axis} (the {kind}' "
-                f"coordinates), got shape {arr.shape}"
-            )
-        if size == 4:
-            arr = normalize_quaternions(
-                np.moveaxis(arr, self.axis, -1), "arr", allow_nan=True
-            )
-            arr = np.moveaxis(arr, -1, self.axis)
-        if timestamps is None:
-            self.track = None
-            self.time_axis = None
-            moved = np.moveaxis(arr, self.axis, -1)
-            self.data = np.ascontiguousarray(moved.reshape(1, -1, size))
-        else:
-            self.time_axis = resolve_axis(time_axis, arr.ndim, "time_axis")
-            if self.time_axis == self.axis:
-                raise ValueError(
-                    f"time_axis={time_axis} and axis={axis} are the same axis of arr"
-                )
-            if isinstance(timestamps, _timestamps.Track):
-                if len(timestamps) != arr.shape[self.time_axis]:
-                    raise ValueError("timestamps and arr differ in length")
-                self.track = timestamps
-            else:
-                self.track = _timestamps.as_track(
-                    timestamps,
-                    "timestamps",
-                    length=arr.shape[self.time_axis],
-                    copy=False,
-                )
-            moved = np.moveaxis(arr, (self.time_axis, self.axis), (0, -1))
-            self.data = np.ascontiguousarray(moved.reshape(moved.shape[0], -1, size))
-        self.moved_shape = moved.shape
-
-    def restore(self, out: np.ndarray, target) -> np.ndarray:
-        """Undo the rearrangement on a result of shape (m, k, c).
-
-        Untimestamped input transformed by a moving chain gains a leading
-        time axis (a leading axis of length 1 is replaced by it).
-        """
-        c = out.shape[-1]
-        if self.track is not None:
-            out = out.reshape((out.shape[0],) + self.moved_shape[1:-1] + (c,))
-            return np.moveaxis(out, (0, -1), (self.time_axis, self.axis))
-        if target.track is None:
-            out = out.reshape(self.moved_shape[:-1] + (c,))
-            return np.moveaxis(out, -1, self.axis)
-        out = out.reshape((out.shape[0],) + self.moved_shape[:-1] + (c,))
-        out = np.moveaxis(out, -1, self.axis + 1)
-        if self.ndim >= 2 and out.shape[1] == 1:
-            out = out[:, 0]
-        return out
-
-
-# ---------------------------------------------------------------------------
-# frame-level implementation (ReferenceFrame.transform_* forward here)
-# ---------------------------------------------------------------------------
-
-
-def _apply(kind, steps, target, data):
-    """Apply the chain's transform to (n|1, k, c) data at the target times."""
-    discrete = _matching.held(steps, target)
-    if discrete is not None:
-        t, r, idx = discrete
-        if kind == "quaternions":
-            return kr.qmul_blocks_held(r, idx, data)
-        return kr.transform_blocks_held(r, t, idx, data, kind == "points")
-    t, r = _matching.compose(steps, target)
-    if kind == "quaternions":
-        return kr.qmul_blocks(r, data)
-    return kr.transform_blocks(r, t, data, kind == "points")
-
-
-def _frame_transform(frame, kind, arr, to_frame, axis=-1, time_axis=0, timestamps=None):
-    """Transform ``arr`` (points, vectors or quaternions) out of ``frame``.
-
-    Returns
-    -------
-    out : ndarray
-    ts : ndarray or None
-        The timestamps of ``out`` (None if neither array nor chain has any).
-    """
-    to_frame = _resolve(to_frame, "to_frame")
-    blocks = _Blocks(arr, _SIZES[kind], axis, time_axis, timestamps, kind)
-    steps = _matching.chain(frame, to_frame)
-    target = _matching.match([f for f, _ in steps], [blocks.track])
-    data = _matching.resample_array(
-        blocks.data, blocks.track, target, kind == "quaternions"
-    )
-    out = _apply(kind, steps, target, data)
-    return blocks.restore(out, target), target.timestamps
-
-
-def _velocity_parts(arr_blocks, frame, to_frame, extra):
-    """Represent the input in ``to_frame`` and match it with looked-up terms.
-
-    ``extra`` is a list of (array of shape (3,) or (n, 3), Track or None).
-    Returns the matched (n, k, 3) input, the matched extras as (n|1, 1, 3)
-    arrays, and the target.
-    """
-    steps = _matching.chain(frame, to_frame)
-    target = _matching.match([f for f, _ in steps], [arr_blocks.track])
-    data = _matching.resample_array(arr_blocks.data, arr_blocks.track, target, False)
-    rotated = _apply("vectors", steps, target, data)
-    ext_blocks = [
-        np.ascontiguousarray(np.reshape(e, (-1, 1, 3)), dtype=float) for e, _ in extra
-    ]
-    ext_tracks = [track for _, track in extra]
-    final = _matching.match([], [target.track] + ext_tracks)
-    rotated = _matching.resample_array(rotated, target.track, final, False)
-    ext = [
-        _matching.resample_array(b, track, final, False)
-        for b, track in zip(ext_blocks, ext_tracks, strict=True)
-    ]
-    return rotated, ext, final
-
-
-def _frame_transform_angular_velocity(
-    frame,
-    arr,
-    to_frame,
-    what="reference_frame",
-    axis=-1,
-    time_axis=0,
-    timestamps=None,
-    cutoff=None,
-):
-    from .lookups import _frame_lookup_angular_velocity
-
-    check_what(what)
-    to_frame = _resolve(to_frame, "to_frame")
-    if what == "representation_frame":
-        return _frame_transform(
-            frame, "vectors", arr, to_frame, axis, time_axis, timestamps
-        )
-    if what == "reference_frame":
-        # w_M/R' = w_M/R + w_R/R'
-        angular, ang_ts = _frame_lookup_angular_velocity(
-            frame, to_frame, to_frame, None, cutoff, "quaternion", True, as_track=True
-        )
-    else:
-        # w_M'/R = w_M/R + w_M'/M
-        angular, ang_ts = _frame_lookup_angular_velocity(
-            to_frame, frame, to_frame, None, cutoff, "quaternion", True, as_track=True
-        )
-    blocks = _Blocks(arr, 3, axis, time_axis, timestamps, "vectors")
-    rotated, (w,), final = _velocity_parts(blocks, frame, to_frame, [(angular, ang_ts)])
-    return blocks.restore(rotated + w, final), final.timestamps
-
-
-def _frame_transform_linear_velocity(
-    frame,
-    arr,
-    to_frame,
-    what="reference_frame",
-    moving_frame=None,
-    reference_frame=None,
-    axis=-1,
-    time_axis=0,
-    timestamps=None,
-    outlier_thresh=None,
-    cutoff=None,
-):
-    from .lookups import (
-        _frame_lookup_angular_velocity,
-        _frame_lookup_linear_velocity,
-        _frame_lookup_twist,
-        _lookup,
-    )
-
-    check_what(what)
-    to_frame = _resolve(to_frame, "to_frame")
-    if what == "representation_frame":
-        return _frame_transform(
-            frame, "vectors", arr, to_frame, axis, time_axis, timestamps
-        )
-    if what == "reference_frame":
-        # v_M/R' = v_M/R + v_R/R' + w_R/R' x t_M/R
-        if moving_frame is None:
-            raise ValueError(
-                "moving_frame must be given to transform the reference frame of a "
-                "linear velocity (its position enters the three-term formula)"
-            )
-        moving_frame = _resolve(moving_frame, "moving_frame")
-        linear, angular, twist_ts = _frame_lookup_twist(
-            frame,
-            to_frame,
-            to_frame,
-            outlier_thresh,
-            cutoff,
-            "quaternion",
-            True,
-            as_track=True,
-        )
-        lin_ts = ang_ts = twist_ts
-        translation, _, trans_target = _lookup(moving_frame, frame)
-    else:
-        # v_M'/R = v_M/R + v_M'/M + w_M/R x t_M'/M
-        if reference_frame is None:
-            raise ValueError(
-                "reference_frame must be given to transform the moving frame of a "
-                "linear velocity (its angular velocity enters the three-term formula)"
-            )
-        reference_frame = _resolve(reference_frame, "reference_frame")
-        linear, lin_ts = _frame_lookup_linear_velocity(
-            to_frame, frame, to_frame, outlier_thresh, cutoff, True, as_track=True
-        )
-        angular, ang_ts = _frame_lookup_angular_velocity(
-            frame,
-            reference_frame,
-            to_frame,
-            None,
-            cutoff,
-            "quaternion",
-            True,
-            as_track=True,
-        )
-        translation, _, trans_target = _lookup(to_frame, frame)
-    # the lever arm, represented in to_frame like everything else
-    trans, trans_ts = _frame_transform(
-        frame, "vectors", translation, to_frame, -1, 0, trans_target.track
-    )
-    trans_track = None if trans_ts is None else _track_of(trans_target.track, trans_ts)
-    blocks = _Blocks(arr, 3, axis, time_axis, timestamps, "vectors")
-    rotated, (v, w, lever), final = _velocity_parts(
-        blocks,
-        frame,
-        to_frame,
-        [(linear, lin_ts), (angular, ang_ts), (trans, trans_track)],
-    )
-    out = rotated + v + np.cross(w, lever)
-    return blocks.restore(out, final), final.timestamps
-
-
-def _track_of(track, values):
-    """The Track for ``values``, a contiguous run of ``track``'s timestamps."""
-    if track is not None and len(values) == len(track):
-        return track
-    return _timestamps.as_track(values)
-
-
-# ---------------------------------------------------------------------------
-# public functions
-# ---------------------------------------------------------------------------
 
 
 def _transform(
@@ -324,21 +57,21 @@ def _transform(
     attrs = None if unpacked.source is None else dict(unpacked.attrs)
     if outof is None:
         if attrs is not None and attr in attrs:
-            outof = _resolve(attrs[attr], f"the DataArray's {attr} attribute")
+            outof = resolve_frame(attrs[attr], f"the DataArray's {attr} attribute")
         else:
             raise ValueError(
                 f"outof must be given unless arr is a DataArray whose attrs name a "
                 f"registered frame under {attr!r}"
             )
     else:
-        outof = _resolve(outof, "outof")
+        outof = resolve_frame(outof, "outof")
         if attrs is not None and attr in attrs and attrs[attr] != outof.name:
             warnings.warn(
                 f"transforming the {attr!r} of the array out of {outof.name!r}, but "
                 f"its attrs say its {attr} is {attrs[attr]!r}",
                 stacklevel=3,
             )
-    into = _resolve(into, "into")
+    into = resolve_frame(into, "into")
     out, ts_out = method(
         outof,
         unpacked.data,
@@ -360,11 +93,12 @@ def _transform(
 def _lazy_transform(
     method, arr, into, outof, dim, axis, timestamps, time_axis, attr, return_timestamps
 ):
+    """The transform of dask-backed data, one task per time chunk (see _dask)."""
     if method not in (_points, _vectors, _quaternions):
-        raise NotImplementedError(
-            "velocity transforms of dask-backed arrays are not lazy yet (each "
-            "chunk would re-estimate the frames' velocities); call .compute() "
-            "on the array first"
+        raise UnsupportedError(
+            "velocity transforms of dask-backed arrays are not lazy (each chunk "
+            "would estimate the frames' velocities again); call .compute() on "
+            "the array first"
         )
 
     def eager(block, into, outof, dim, axis, timestamps):
@@ -374,32 +108,32 @@ def _lazy_transform(
 
     return _dask.transform(
         eager, arr, into, outof, dim, axis, timestamps, time_axis,
-        return_timestamps, _resolve, attr, method is _quaternions,
+        return_timestamps, resolve_frame, attr, method is _quaternions,
     )  # fmt: skip
 
 
 def _points(frame, arr, into, **kw):
-    return _frame_transform(frame, "points", arr, into, **kw)
+    return _engine_transform.transform(frame, "points", arr, into, **kw)
 
 
 def _vectors(frame, arr, into, **kw):
-    return _frame_transform(frame, "vectors", arr, into, **kw)
+    return _engine_transform.transform(frame, "vectors", arr, into, **kw)
 
 
 def _quaternions(frame, arr, into, **kw):
-    return _frame_transform(frame, "quaternions", arr, into, **kw)
+    return _engine_transform.transform(frame, "quaternions", arr, into, **kw)
 
 
 def transform_vectors(
-    arr,
-    into,
-    outof=None,
-    dim=None,
-    axis=None,
-    timestamps=None,
-    time_axis=None,
-    return_timestamps=False,
-):
+    arr: ArrayInput,
+    into: FrameLike,
+    outof: FrameLike | None = None,
+    dim: str | None = None,
+    axis: int | None = None,
+    timestamps: Any = None,
+    time_axis: int | None = None,
+    return_timestamps: bool = False,
+) -> Any:
     """Represent vectors given in one frame in another (rotation only).
 
     Parameters
@@ -436,15 +170,15 @@ def transform_vectors(
 
 
 def transform_points(
-    arr,
-    into,
-    outof=None,
-    dim=None,
-    axis=None,
-    timestamps=None,
-    time_axis=None,
-    return_timestamps=False,
-):
+    arr: ArrayInput,
+    into: FrameLike,
+    outof: FrameLike | None = None,
+    dim: str | None = None,
+    axis: int | None = None,
+    timestamps: Any = None,
+    time_axis: int | None = None,
+    return_timestamps: bool = False,
+) -> Any:
     """Express points given wrt one frame wrt another (rotation + translation).
 
     Parameters and returns are those of :func:`transform_vectors`, except
@@ -457,15 +191,15 @@ def transform_points(
 
 
 def transform_quaternions(
-    arr,
-    into,
-    outof=None,
-    dim=None,
-    axis=None,
-    timestamps=None,
-    time_axis=None,
-    return_timestamps=False,
-):
+    arr: ArrayInput,
+    into: FrameLike,
+    outof: FrameLike | None = None,
+    dim: str | None = None,
+    axis: int | None = None,
+    timestamps: Any = None,
+    time_axis: int | None = None,
+    return_timestamps: bool = False,
+) -> Any:
     """Express orientations (unit quaternions, axis of length 4) wrt another frame.
 
     Parameters and returns are those of :func:`transform_points`.
@@ -477,17 +211,17 @@ def transform_quaternions(
 
 
 def transform_angular_velocity(
-    arr,
-    into,
-    outof=None,
-    what="reference_frame",
-    dim=None,
-    axis=None,
-    timestamps=None,
-    time_axis=None,
-    cutoff=None,
-    return_timestamps=False,
-):
+    arr: ArrayInput,
+    into: FrameLike,
+    outof: FrameLike | None = None,
+    what: str = "reference_frame",
+    dim: str | None = None,
+    axis: int | None = None,
+    timestamps: Any = None,
+    time_axis: int | None = None,
+    cutoff: float | None = None,
+    return_timestamps: bool = False,
+) -> Any:
     """Change the reference, moving or representation frame of angular velocities.
 
     With ``what="reference_frame"`` (R -> R'): w_M/R' = w_M/R + w_R/R';
@@ -516,20 +250,20 @@ def transform_angular_velocity(
 
 
 def transform_linear_velocity(
-    arr,
-    into,
-    outof=None,
-    what="reference_frame",
-    moving_frame=None,
-    reference_frame=None,
-    dim=None,
-    axis=None,
-    timestamps=None,
-    time_axis=None,
-    cutoff=None,
-    outlier_thresh=None,
-    return_timestamps=False,
-):
+    arr: ArrayInput,
+    into: FrameLike,
+    outof: FrameLike | None = None,
+    what: str = "reference_frame",
+    moving_frame: FrameLike | None = None,
+    reference_frame: FrameLike | None = None,
+    dim: str | None = None,
+    axis: int | None = None,
+    timestamps: Any = None,
+    time_axis: int | None = None,
+    cutoff: float | None = None,
+    outlier_thresh: float | None = None,
+    return_timestamps: bool = False,
+) -> Any:
     """Change the reference, moving or representation frame of linear velocities.
 
     With ``what="reference_frame"`` (R -> R', needs ``moving_frame``):
@@ -563,7 +297,7 @@ def transform_linear_velocity(
 def _frame_transform_angular_velocity_kw(
     frame, arr, into, axis, time_axis, timestamps, what, cutoff
 ):
-    return _frame_transform_angular_velocity(
+    return _twist.transform_angular_velocity(
         frame, arr, into, what, axis, time_axis, timestamps, cutoff
     )
 
@@ -572,7 +306,15 @@ def _frame_transform_linear_velocity_kw(
     frame, arr, into, axis, time_axis, timestamps, what, moving_frame, reference_frame,
     cutoff, outlier_thresh,
 ):  # fmt: skip
-    return _frame_transform_linear_velocity(
+    moving_frame = (
+        None if moving_frame is None else resolve_frame(moving_frame, "moving_frame")
+    )
+    reference_frame = (
+        None
+        if reference_frame is None
+        else resolve_frame(reference_frame, "reference_frame")
+    )
+    return _twist.transform_linear_velocity(
         frame, arr, into, what, moving_frame, reference_frame, axis, time_axis,
         timestamps, outlier_thresh, cutoff,
     )  # fmt: skip

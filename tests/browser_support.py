@@ -66,9 +66,25 @@ def free_port() -> int:
 
 
 class JupyterLab:
-    """A JupyterLab server on loopback in a temporary home, and its cleanup."""
+    """A Jupyter server on loopback in a temporary home, and its cleanup.
 
-    def __init__(self, tmp: Path, notebooks: list[Path], base_url: str = "/"):
+    ``app`` is ``"lab"`` (JupyterLab) or ``"notebook"`` (Notebook 7). With
+    ``proxy=False`` the jupyter-server-proxy extension is disabled, as on a
+    hub or in VS Code where it is not installed.
+    """
+
+    def __init__(
+        self,
+        tmp: Path,
+        notebooks: list[Path],
+        base_url: str = "/",
+        *,
+        app: str = "lab",
+        proxy: bool = True,
+    ):
+        if app not in ("lab", "notebook"):
+            raise ValueError(f"app must be 'lab' or 'notebook', got {app!r}")
+        self.app = app
         self.tmp = tmp
         self.root = tmp / "root"
         self.root.mkdir()
@@ -94,14 +110,19 @@ class JupyterLab:
         (
             settings / "apputils-extension" / "notification.jupyterlab-settings"
         ).write_text(json.dumps({"fetchNews": "false", "checkForUpdates": False}))
-        env.pop("RBM_NB_VIEWER_PROXY", None)
+        if not proxy:
+            (tmp / "config" / "jupyter_server_config.json").write_text(
+                json.dumps(
+                    {"ServerApp": {"jpserver_extensions": {"jupyter_server_proxy": False}}}
+                )
+            )
         self.log = open(tmp / "jupyter.log", "wb")
         self.process = subprocess.Popen(
             [
                 sys.executable,
                 "-m",
                 "jupyter",
-                "lab",
+                app,
                 "--no-browser",
                 "--ServerApp.open_browser=False",
                 "--ServerApp.ip=127.0.0.1",
@@ -110,9 +131,15 @@ class JupyterLab:
                 f"--ServerApp.base_url={base_url}",
                 f"--IdentityProvider.token={self.token}",
                 f"--ServerApp.root_dir={self.root}",
-                "--LabApp.news_url=",
-                "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate",
             ]
+            + (
+                [
+                    "--LabApp.news_url=",
+                    "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate",
+                ]
+                if app == "lab"
+                else []
+            )
             + (
                 ["--allow-root"] if os.geteuid() == 0 else []
             ),  # CI containers run as root
@@ -154,6 +181,22 @@ class JupyterLab:
     def url(self, path: str) -> str:
         return f"{self.base}{path}?token={self.token}"
 
+    def notebook_url(self, name: str) -> str:
+        """Address of a notebook in this server's user interface."""
+        if self.app == "lab":
+            return self.url(f"lab/tree/{name}")
+        return self.url(f"notebooks/{name}")
+
+    def kernel_pids(self) -> list[int]:
+        """Process ids of the kernels this server started."""
+        import psutil
+
+        return [
+            child.pid
+            for child in psutil.Process(self.process.pid).children(recursive=True)
+            if "ipykernel" in " ".join(child.cmdline())
+        ]
+
     def stop(self) -> None:
         import psutil
 
@@ -183,3 +226,58 @@ class JupyterLab:
             except psutil.TimeoutExpired:
                 child.kill()
         self.log.close()
+
+
+def block_other_ports(context, port: int) -> list[str]:
+    """Abort every request of ``context`` to a port other than ``port``.
+
+    Returns the list the blocked URLs are appended to (the widgets must not
+    need any: the scene comes over the kernel's own connection).
+    """
+    from urllib.parse import urlsplit
+
+    blocked: list[str] = []
+
+    def handle(route):
+        url = route.request.url
+        parts = urlsplit(url)
+        if parts.scheme in ("http", "https", "ws", "wss"):
+            other = parts.port or (443 if parts.scheme in ("https", "wss") else 80)
+            if parts.hostname not in ("127.0.0.1", "localhost") or other != port:
+                blocked.append(url)
+                route.abort()
+                return
+        route.continue_()
+
+    context.route("**/*", handle)
+    return blocked
+
+
+def listening_sockets(pid: int) -> set:
+    """(address, port) pairs the process listens on (TCP)."""
+    import psutil
+
+    return {
+        (c.laddr.ip, c.laddr.port)
+        for c in psutil.Process(pid).net_connections(kind="inet")
+        if c.status == psutil.CONN_LISTEN
+    }
+
+
+# frames per second of requestAnimationFrame and of the 3D view's renders,
+# and how far the scene's time moved, over ``ms`` milliseconds
+MEASURE_JS = """async (ms) => {
+  const view = document.querySelector('.rbm-scene').rbmView;
+  const f0 = view.frames, s0 = view.currentTime(), t0 = performance.now();
+  let n = 0;
+  await new Promise((resolve) => {
+    function tick() {
+      n += 1;
+      if (performance.now() - t0 < ms) { requestAnimationFrame(tick); } else { resolve(); }
+    }
+    requestAnimationFrame(tick);
+  });
+  const seconds = (performance.now() - t0) / 1000;
+  return {raf: n / seconds, rendered: (view.frames - f0) / seconds,
+          advanced: view.currentTime() - s0, seconds: seconds};
+}"""

@@ -1,61 +1,80 @@
-"""Shared fixtures: every test starts and ends with an empty frame registry."""
+"""Shared fixtures of the tests (the registry is cleared by ../conftest.py).
+
+Fast local selection (no browser, nothing over a few seconds):
+``python -m pytest -m "not slow and not browser"``.
+"""
 
 from __future__ import annotations
 
+import importlib.abc
+import importlib.util
+import os
 import sys
+import warnings
 from pathlib import Path
 
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
-SHARED_DATA = REPO.parent / "shared" / "data"
+# The real recordings live beside the clone; RBM_NB_SHARED points elsewhere
+# (an unpacked sdist, a worktree).
+SHARED = Path(os.environ.get("RBM_NB_SHARED", REPO.parent / "shared"))
+SHARED_DATA = SHARED / "data"
+ORACLE = "rigid_body_motion"
 
 
-def _import_oracle_first() -> None:
-    """Import the test-only oracle up front, then make ``DataArray.rbm`` ours again.
+class _ReclaimAccessorAfterOracle(importlib.abc.MetaPathFinder):
+    """Make ``DataArray.rbm`` ours again right after the oracle is imported.
 
     rigid-body-motion registers an xarray accessor under the same name as ours
-    when it is imported, and whichever registers last wins. Importing it once
-    here, before any test, and re-registering ours afterwards means the oracle
-    can be imported anywhere in the tests without hijacking ``da.rbm``.
+    when it is imported, and whichever registers last wins. Instead of
+    importing the oracle up front for every test (seconds before the first
+    one), this finder waits for a test module to import it and re-registers
+    ours the moment that import has finished.
     """
-    try:
-        import rigid_body_motion  # noqa: F401
-    except ImportError:  # the oracle is a dev extra; tests that need it say so
-        return
-    import warnings
 
+    def find_spec(self, fullname, path=None, target=None):
+        if fullname != ORACLE:
+            return None
+        sys.meta_path.remove(self)
+        spec = importlib.util.find_spec(fullname)
+        if spec is None or spec.loader is None:
+            return None  # not installed: the importing test module says so
+        exec_module = spec.loader.exec_module
+
+        def exec_then_reclaim(module):
+            exec_module(module)
+            _register_our_accessor()
+
+        spec.loader.exec_module = exec_then_reclaim  # type: ignore[method-assign]
+        return spec
+
+
+def _register_our_accessor() -> None:
     import xarray as xr
 
-    with warnings.catch_warnings():
-        # importing rbm_nb registers ours over the oracle's: expected here
-        warnings.simplefilter("ignore")
-        from rbm_nb.accessors import DataArrayAccessor
+    from rbm_nb.accessors import DataArrayAccessor
 
+    with warnings.catch_warnings():
+        # "overriding a preexisting attribute": the oracle's, on purpose
+        warnings.simplefilter("ignore")
         xr.register_dataarray_accessor("rbm")(DataArrayAccessor)
 
 
-_import_oracle_first()
-
-
-@pytest.fixture(autouse=True)
-def _empty_registry():
-    """Clear the frame registry around each test (only if frames are loaded)."""
-    frames = sys.modules.get("rbm_nb.frames")
-    if frames is not None:
-        frames.clear_registry()
-    yield
-    frames = sys.modules.get("rbm_nb.frames")
-    if frames is not None:
-        frames.clear_registry()
+if ORACLE in sys.modules:
+    _register_our_accessor()
+else:
+    sys.meta_path.insert(0, _ReclaimAccessorAfterOracle())
 
 
 @pytest.fixture(scope="session")
 def shared_data() -> Path:
-    """The real recordings beside the repo (``../shared/data``)."""
+    """The real recordings beside the repo (``../shared/data``, or
+    ``$RBM_NB_SHARED/data``)."""
     if not SHARED_DATA.is_dir():
         pytest.fail(
-            f"{SHARED_DATA} is missing: CI must have ../shared beside the clone"
+            f"{SHARED_DATA} is missing: CI must have ../shared beside the clone "
+            "(or RBM_NB_SHARED naming a folder with data/)"
         )
     return SHARED_DATA
 

@@ -47,7 +47,7 @@ REPO = Path(__file__).resolve().parents[1]
 BINDER = REPO / "binder"
 NOTEBOOK = "notebooks/06_head_eye_explorer.ipynb"
 ARTIFACT = REPO / "test-artifacts" / "binder_timing.json"
-EXTRAS = ("notebook", "data", "ros", "lab")
+EXTRAS = ("notebook", "data", "ros", "sdf", "lab")
 TEST_ONLY = {
     "rigid-body-motion",
     "pytest",
@@ -409,6 +409,7 @@ def test_binder_files_are_what_repo2docker_runs():
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(900)  # builds a venv with pip (about 70 s here)
 def test_requirements_install_alone_and_pin_every_package(binder):
     pins, installed = _pins(), binder.installed  # installed: before postBuild
     unpinned = {n: v for n, v in installed.items() if n not in {*pins, *VENV_SEED}}
@@ -419,6 +420,7 @@ def test_requirements_install_alone_and_pin_every_package(binder):
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(900)  # builds a venv with pip (about 70 s here)
 def test_postbuild_installs_fetches_and_warms_the_cache(binder, timings):
     out = binder.postbuild_output
     assert "Successfully installed rbm_nb-" in out
@@ -467,6 +469,7 @@ def test_postbuild_installs_fetches_and_warms_the_cache(binder, timings):
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(900)  # builds a venv with pip (about 70 s here)
 def test_first_frame_core_call_loads_its_kernels_from_the_cache(binder, timings):
     rc, out, wall = binder.run_python(FIRST_CALL)
     assert rc == 0, out
@@ -664,6 +667,7 @@ class KernelChannel:
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(900)  # builds a venv with pip (about 70 s here)
 def test_explorer_notebook_runs_in_the_binder_jupyter_server(binder, jupyter, timings):
     # JupyterLab itself and jupyter-server-proxy are served
     status, _ = jupyter.request("GET", "/lab")
@@ -752,6 +756,7 @@ def test_explorer_notebook_runs_in_the_binder_jupyter_server(binder, jupyter, ti
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(900)  # builds a venv with pip (about 70 s here)
 def test_warm_up_leaves_the_registry_as_it_was():
     import rbm_nb as rbm
     from rbm_nb._warmup import kernel_dispatchers, warm_up

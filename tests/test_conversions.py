@@ -29,6 +29,7 @@ from scipy.spatial.transform import RigidTransform, Rotation
 import rbm_nb as rbm
 from rbm_nb import conversions as conv
 from rbm_nb._kernels import conversions as kern
+from rbm_nb._kernels import scalar
 
 ORDERS = conv.EULER_ORDERS
 VARIANTS = [(o, e) for o in ORDERS for e in (False, True)]
@@ -810,7 +811,7 @@ def _sincos_array(x):
     s = np.empty_like(x)
     c = np.empty_like(x)
     for i in range(x.size):
-        s[i], c[i] = kern._sincos(x[i])
+        s[i], c[i] = scalar.sincos(x[i])
     return s, c
 
 
@@ -818,7 +819,7 @@ def _sincos_array(x):
 def _atan2_array(y, x):
     out = np.empty_like(x)
     for i in range(x.size):
-        out[i] = kern._atan2(y[i], x[i])
+        out[i] = scalar.atan2(y[i], x[i])
     return out
 
 
@@ -877,9 +878,9 @@ def _economised_atan_coefficients(degree=11, interval=Fraction(1716, 10000), ter
 
 def test_atan_coefficients_rederived():
     coefficients, dropped = _economised_atan_coefficients()
-    assert tuple(coefficients) == kern._ATAN_P
+    assert tuple(coefficients) == scalar.ATAN_P
     assert dropped < 1.3e-18
-    assert kern._TAN_PI_8**2 <= 0.1716
+    assert scalar.TAN_PI_8**2 <= 0.1716
 
 
 # ---------------------------------------------------------------------------

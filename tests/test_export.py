@@ -14,12 +14,10 @@ import re
 import numpy as np
 import pytest
 import umsgpack
-from hypothesis import given, settings
-from hypothesis import strategies as st
 
 import rbm_nb as rbm
 from rbm_nb.scene import Scene, export
-from rbm_nb.scene.server import meshcat_js_path
+from rbm_nb.scene.commands import meshcat_js_path
 
 
 @pytest.fixture
@@ -50,76 +48,74 @@ def scene():
     s.close()
 
 
-def payload_of(path) -> dict:
+def document_of(path) -> dict:
     text = path.read_text(encoding="utf-8")
     match = re.search(
-        r'<script id="rbm-data" type="application/json">(.*?)</script>', text, re.S
+        r'<script id="rbm-export-data" type="application/json">(.*?)</script>', text, re.S
     )
     return json.loads(match.group(1))
 
 
-def floats(b64: str, width: int) -> np.ndarray:
-    return np.frombuffer(base64.b64decode(b64), dtype="<f4").reshape(-1, width)
+def snapshot_of(document) -> tuple[list, dict, dict]:
+    """(commands, tracks by path as arrays, scene model state) of the export's 3D view."""
+    scene_model = document["models"][0]
+    [message] = scene_model["messages"]
+    content = message["content"]
+    buffers = [base64.b64decode(b) for b in message["buffers"]]
+    commands = [umsgpack.unpackb(b) for b in buffers[: content["commands"]]]
+    tracks = {}
+    for t in content["tracks"]:
+        tracks[t["path"]] = {
+            "times": np.frombuffer(buffers[t["times"]], "<f8"),
+            "translation": np.frombuffer(buffers[t["translation"]], "<f4").reshape(-1, 3),
+            "rotation": np.frombuffer(buffers[t["rotation"]], "<f4").reshape(-1, 4),
+        }
+    return commands, tracks, scene_model["state"]
 
 
 def test_export_is_one_self_contained_file(scene, tmp_path):
     out = scene.to_html(tmp_path / "scene.html")
     text = out.read_text(encoding="utf-8")
-    assert (
-        meshcat_js_path().read_text(encoding="utf-8") in text
-    )  # the viewer is inlined
+    document = document_of(out)
+    meshcat = meshcat_js_path().read_text(encoding="utf-8")
+    assert meshcat[:5000] in document["esm"][0]  # meshcat's viewer is inlined
     assert not re.search(r"<script[^>]+src=", text)  # nothing fetched from elsewhere
     assert not re.search(r"<link[^>]+href=", text)
-    assert "rbmViewer.loadExport" in text
+    assert "</script" not in json.dumps(document)  # the JSON cannot end its element
     assert out.stat().st_size < 2_000_000
+    # the dashboard: the 3D view and the player, wired by the player's model id
+    models = {m["id"]: m for m in document["models"]}
+    scene_state = document_of(out)["models"][0]["state"]
+    player_id = scene_state["player"].removeprefix("IPY_MODEL_")
+    assert document["layout"] == [scene.widget.model_id, player_id]
+    assert models[player_id]["state"]["duration"] == pytest.approx(1.0)
 
 
 def test_export_data_decodes_to_the_scene(scene, tmp_path):
     out = scene.to_html(tmp_path / "scene.html", max_frames=1000)
-    data = payload_of(out)
-    commands = [umsgpack.unpackb(base64.b64decode(c)) for c in data["commands"]]
+    commands, tracks, state = snapshot_of(document_of(out))
     objects = {c["path"] for c in commands if c["type"] == "set_object"}
-    assert objects == {h.geom_path for h in scene.handles.values()}
-    tracks = {t["path"]: t for t in data["tracks"]}
-    assert set(tracks) == {node.path for node in scene._dynamic}
-    body = scene._nodes[scene["frame_body"].pose_path].track
+    assert objects == {h.geom_path for h in scene.handles.values()} | {"/rbm/grid"}
+    assert set(tracks) == set(scene.state.tracks)
+    body = scene.state.tracks[scene["frame_body"].pose_path]
     track = tracks[scene["frame_body"].pose_path]
-    np.testing.assert_allclose(floats(track["times"], 1)[:, 0], body.seconds, atol=1e-6)
-    np.testing.assert_allclose(
-        floats(track["position"], 3), body.translation, atol=1e-6
-    )
-    np.testing.assert_allclose(
-        floats(track["quaternion"], 4), body.rotation[:, [1, 2, 3, 0]], atol=1e-6
-    )
-    assert data["t0"] == 0.0 and data["duration"] == pytest.approx(1.0)
-    assert data["datetime"] is False and data["camera"]["type"] == "rbm_camera"
+    np.testing.assert_allclose(track["times"], body.seconds, atol=1e-12)
+    np.testing.assert_allclose(track["translation"], body.translation, atol=1e-6)
+    np.testing.assert_allclose(track["rotation"], body.rotation[:, [1, 2, 3, 0]], atol=1e-6)
     late = tracks[scene["frame_late"].pose_path]
-    assert late["visible"] == {
-        "times": [0.0, 0.5],
-        "values": [False, True],
-    }  # hidden until it starts
+    assert late["times"][0] == pytest.approx(0.5)  # hidden in the page until then
+    assert state["_frames"] == {"body": scene["frame_body"].pose_path, "late": scene["frame_late"].pose_path}
+    assert [row["text"] for row in state["_legend"]][-1] == "grid 50 cm"
 
 
 def test_max_frames_bounds_every_track(scene, tmp_path):
     out = scene.to_html(tmp_path / "small.html", max_frames=7)
-    for track in payload_of(out)["tracks"]:
-        times = floats(track["times"], 1)[:, 0]
-        assert 2 <= len(times) <= 7
-    body = payload_of(out)["tracks"][0]
-    assert floats(body["times"], 1)[-1, 0] == pytest.approx(
-        1.0
-    )  # the last sample is kept
-
-
-@settings(max_examples=200, deadline=None)
-@given(st.integers(1, 5000), st.integers(2, 600))
-def test_subsample_indices(n, max_frames):
-    idx = export.subsample_indices(n, max_frames)
-    assert idx[0] == 0 and idx[-1] == n - 1
-    assert len(idx) <= max(max_frames, 1)
-    assert (np.diff(idx) > 0).all()
-    if n <= max_frames:
-        assert len(idx) == n
+    _, tracks, _ = snapshot_of(document_of(out))
+    for track in tracks.values():
+        assert 2 <= len(track["times"]) <= 7
+    body = tracks[scene["frame_body"].pose_path]
+    assert body["times"][-1] == pytest.approx(1.0)  # the last sample is kept
+    assert body["times"][0] == 0.0
 
 
 def test_datetime_export(tmp_path):
@@ -130,11 +126,33 @@ def test_datetime_export(tmp_path):
     )
     with Scene("world") as s:
         s.add_frame("head")
-        data = payload_of(s.to_html(tmp_path / "dt.html"))
-    assert data["datetime"] is True
-    assert data["t0"] == pytest.approx(
-        ts[0].astype("datetime64[ns]").astype(np.int64) / 1e9
-    )
+        document = document_of(s.to_html(tmp_path / "dt.html"))
+    player = document["models"][-1]["state"]
+    assert player["t0_ns"] == ts[0].astype("datetime64[ns]").astype(np.int64)
+    assert player["duration"] == pytest.approx(0.4)
+
+
+def test_series_views_are_included(scene, tmp_path):
+    import anywidget
+    import traitlets
+    from ipywidgets import widget_serialization
+
+    from rbm_nb.widgets import Player
+
+    class Plot(anywidget.AnyWidget):
+        _esm = "export default { render({ el }) { el.textContent = 'plot'; } }"
+        player = traitlets.Instance(Player, allow_none=True).tag(sync=True, **widget_serialization)
+        values = traitlets.Bytes(b"").tag(sync=True)
+
+    plot = Plot(values=np.arange(3, dtype="<f8").tobytes())
+    player = scene.player()
+    document = document_of(scene.to_html(tmp_path / "d.html", series=plot, player=player))
+    assert document["layout"] == [scene.widget.model_id, plot.model_id, player.model_id]
+    spec = document["models"][1]
+    assert spec["state"]["player"] == f"IPY_MODEL_{player.model_id}"
+    assert spec["buffers"] == [{"path": ["values"], "data": base64.b64encode(plot.values).decode()}]
+    with pytest.raises(ValueError, match="anywidgets"):
+        scene.to_html(tmp_path / "e.html", series=[object()])
 
 
 def test_failed_write_keeps_the_old_file(scene, tmp_path, monkeypatch):
@@ -185,28 +203,14 @@ def register_head_eye(recording):
 
 
 @pytest.mark.slow
-def test_full_head_eye_recording_exports_under_20_mb(tmp_path):
-    from rbm_nb.data import synthetic_head_eye
+def test_full_head_eye_explorer_exports_under_5_mb(tmp_path):
+    from rbm_nb.explorer import write_explorer_html
 
-    register_head_eye(synthetic_head_eye())  # 5.5 minutes, 200 Hz head, ~343 Hz eyes
-    with Scene("world") as s:
-        for name in (
-            "t265/world",
-            "t265/tracker",
-            "head",
-            "pupil/scene_cam",
-            "pupil/left_eye",
-            "left_eye",
-            "pupil/right_eye",
-            "right_eye",
-        ):
-            s.add_frame(name, scale=0.3)
-        s.add_path("head", color="#ff00ff")
-        s.add_vectors("left_eye", (1, 0, 0), length=3)
-        s.add_vectors("right_eye", (1, 0, 0), length=3)
-        out = s.to_html(tmp_path / "head_eye.html")
+    out = write_explorer_html(tmp_path / "explorer.html", source="synthetic", progress=False)
     size = out.stat().st_size
-    assert size <= 20 * 1024 * 1024
-    data = payload_of(out)
-    assert data["datetime"] is True and data["duration"] == pytest.approx(330, abs=5)
-    assert max(len(base64.b64decode(t["times"])) // 4 for t in data["tracks"]) <= 5000
+    assert size <= 5 * 1024 * 1024
+    document = document_of(out)
+    player = document["models"][-1]["state"]
+    assert player["duration"] == pytest.approx(330, abs=5) and player["t0_ns"] is not None
+    _, tracks, _ = snapshot_of(document)
+    assert max(len(t["times"]) for t in tracks.values()) <= 10000

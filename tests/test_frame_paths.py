@@ -5,7 +5,8 @@ from __future__ import annotations
 import pytest
 
 import rbm_nb as rbm
-from rbm_nb._frame_paths import find_frame, frame_path, frames_between
+from rbm_nb._frame_paths import frame_path
+from rbm_nb.frames import find_frame, frames_between
 from rbm_nb.frames import ReferenceFrame
 
 
@@ -68,11 +69,11 @@ def test_frames_between_end_flags(tree):
 
 def test_frames_between_matches_the_transform_chain(tree):
     """The frames a lookup composes are exactly the chain between the ends."""
-    from rbm_nb import _matching
+    from rbm_nb._engine.chain import chain
 
     eye = find_frame("head/left_eye")
     hand = find_frame("left_hand")
-    steps = _matching.chain(eye, hand)
+    steps = chain(eye, hand)
     between = frames_between(eye, hand)
     up = [f for f, inverse in steps if not inverse]
     down = [f for f, inverse in steps if inverse]

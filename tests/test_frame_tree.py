@@ -16,7 +16,15 @@ from scipy.spatial.transform import Rotation
 import rbm_nb as rbm
 from rbm_nb import frames
 from rbm_nb.widgets import FrameTree, Player
-from rbm_nb.widgets.frame_tree import frame_info, roll_pitch_yaw
+from rbm_nb.widgets.frame_details import (
+    EULER_ORDER,
+    Attitude,
+    FrameDetails,
+    PairDetails,
+    details_html,
+    details_text,
+)
+from rbm_nb.widgets.frame_tree import frame_info
 
 
 class RecordingComm:
@@ -112,12 +120,19 @@ def test_single_selection_shows_pose_wrt_parent_at_the_current_time(tree_frames)
     assert "parent: world" in text
     assert "children: body2" in text
     assert "path to root: body \u2192 world" in text
-    assert "(at 0.000 s)" in text and "translation [0, 0, 0] m" in text
+    assert "(at 0.000 s)" in text and "translation (0, 0, 0) m" in text
     tree.set_time(1.2)  # latest sample at or before: index 2 (t=1.0)
+    details = tree.details
+    assert isinstance(details, FrameDetails)
+    assert details.parent == "world" and details.children == ("body2",)
+    assert details.pose.when == "at 1.000 s"
+    assert details.pose.translation == (2.0, 0.0, 0.0)
+    np.testing.assert_allclose(details.pose.attitude.euler, (45.0, 0.0, 0.0), atol=1e-9)
     text = tree.details_text()
-    assert "(at 1.000 s)" in text
-    assert "translation [2, 0, 0] m" in text
-    assert "yaw 45.00\u00b0" in text
+    assert "translation (2, 0, 0) m" in text
+    assert "rotation yaw 45.00\u00b0, pitch 0.00\u00b0, roll 0.00\u00b0" in text
+    assert "quaternion (w, x, y, z) = (0.9239, 0, 0, 0.3827)" in text
+    assert tree._details.value == details_html(details)
 
 
 def test_static_frame_details(tree_frames):
@@ -125,8 +140,8 @@ def test_static_frame_details(tree_frames):
     tree.select("observer")
     text = tree.details_text()
     assert "pose wrt world (static)" in text
-    assert "translation [5, 0, 0] m" in text
-    assert "roll 0.00\u00b0, pitch 0.00\u00b0, yaw 90.00\u00b0" in text
+    assert "translation (5, 0, 0) m" in text
+    assert "yaw 90.00\u00b0, pitch 0.00\u00b0, roll 0.00\u00b0" in text
     tree.select("world")
     assert "parent: none (root)" in tree.details_text()
 
@@ -141,10 +156,13 @@ def test_two_frames_show_the_chain_and_the_transform(tree_frames):
         outof="body2", into="observer", return_timestamps=True
     )
     i = int(np.searchsorted(ts, 2.0, side="right")) - 1
-    expected_t = "[" + ", ".join(f"{v:.4g}" for v in t[i]) + "]"
-    roll, pitch, yaw = roll_pitch_yaw(r[i])
-    assert f"translation {expected_t} m" in text
-    assert f"yaw {yaw:.2f}\u00b0" in text
+    details = tree.details
+    assert isinstance(details, PairDetails)
+    assert details.chain == ("body2", "body", "world", "observer")
+    np.testing.assert_allclose(details.pose.translation, t[i])
+    assert details.pose.attitude == Attitude.of(r[i])
+    assert details.pose.attitude.euler_text() in text
+    assert details_text(details) == text
 
 
 def test_time_before_the_start_says_so(tree_frames):
@@ -205,27 +223,58 @@ def test_collapse_and_expand(tree_frames):
 
 
 def test_player_time_drives_the_details(tree_frames):
-    player = Player(tree_frames, threaded=False)
+    player = Player(tree_frames)
     tree = FrameTree("world", player=player)
     tree.select("body")
     player.seek(3)
     assert tree.time == pytest.approx(1.5)
-    assert "translation [3, 0, 0] m" in tree.details_text()
+    assert tree.details.pose.translation == (3.0, 0.0, 0.0)
+    player.time = 0.7  # what the browser tells the kernel, throttled
+    assert tree.details.pose.when == "at 0.500 s"
+    player.unlink(tree)
+    player.time = 2.0
+    assert tree.details.pose.when == "at 0.500 s"  # no longer follows
 
 
-def test_selection_highlights_in_a_linked_scene(tree_frames):
+def test_datetime_frames_print_the_shared_readout():
+    rbm.register_frame("world")
+    start = np.datetime64("2020-02-02T00:27:14", "ns")
+    stamps = start + (np.arange(5) * 250).astype("timedelta64[ms]")
+    rbm.register_frame(
+        "head", parent="world", translation=np.zeros((5, 3)), timestamps=stamps
+    )
+    player = Player(stamps)
+    tree = FrameTree("world", player=player)
+    tree.select("head")
+    player.time = 0.6
+    assert tree.details.pose.when == "at 0.500 s \u00b7 2020-02-02 00:27:14.500"
+    standalone = FrameTree("world")  # no player: counts from the first sample
+    standalone.select("head")
+    assert standalone.details.pose.when == "at 0.000 s \u00b7 2020-02-02 00:27:14.000"
+
+
+def test_selection_goes_both_ways_with_a_scene(tree_frames):
     from rbm_nb.scene import Scene
 
     scene = Scene("world")
     body = scene.add_frame("body")
+    scene.add_frame("observer")
     tree = FrameTree("world", scene=scene)
-    tree.select("body")
+    tree.select("body")  # tree -> scene: selected and highlighted
+    assert scene.selected == "body"
     assert scene._highlight == ("scaled", body)
-    tree.select("observer")  # not in the scene: a highlight triad is added
-    kind, handle = scene._highlight
-    assert kind == "added" and handle.frame is rbm.registry["observer"]
-    tree.select()
-    assert scene._highlight is None and handle.removed
+    scene.widget.set_state({"selected": "observer"})  # a click in the 3D view
+    assert tree.selected == ("observer",)
+    assert tree.details.name == "observer"
+    tree.select("body2", "observer")  # a pair: the scene gets the last one
+    assert scene.selected == "observer" and tree.selected == ("body2", "observer")
+    scene.widget.set_state({"selected": None})  # click on empty space
+    assert tree.selected == ()
+    tree.select("events")  # not drawn in the scene: selected there, no highlight
+    assert scene.selected == "events" and scene._highlight is None
+    tree.close()
+    scene.widget.set_state({"selected": "body"})
+    assert tree.selected == ("events",)  # a closed tree no longer follows
     scene.close()
 
 
@@ -241,27 +290,62 @@ def test_bad_selection_and_root(tree_frames):
     assert other.nodes == [] and "no frame named 'nope'" in other._message.value
 
 
-def _naive_rpy(q):
-    """scipy's intrinsic z-y'-x'' angles, as (roll, pitch, yaw) in degrees."""
-    yaw, pitch, roll = Rotation.from_quat([q[1], q[2], q[3], q[0]]).as_euler(
-        "ZYX", degrees=True
-    )
-    return roll, pitch, yaw
+def _scipy_zyx(q):
+    """scipy's intrinsic Z-Y'-X'' angles (yaw, pitch, roll) in degrees."""
+    return Rotation.from_quat([q[1], q[2], q[3], q[0]]).as_euler("ZYX", degrees=True)
 
 
-@pytest.mark.parametrize(
-    "q",
-    [
-        (1.0, 0.0, 0.0, 0.0),
-        (np.sqrt(2) / 2, 0.0, 0.0, np.sqrt(2) / 2),
-        (np.sqrt(2) / 2, np.sqrt(2) / 2, 0.0, 0.0),
-        (0.9, 0.1, -0.3, 0.2),
-    ],
-)
-def test_roll_pitch_yaw_matches_scipy(q):
-    np.testing.assert_allclose(
-        roll_pitch_yaw(q), _naive_rpy(np.asarray(q) / np.linalg.norm(q)), atol=1e-9
+def _rebuilt(euler):
+    """The quaternion (w, x, y, z) the shown angles stand for, by scipy."""
+    x, y, z, w = Rotation.from_euler("ZYX", euler, degrees=True).as_quat()
+    return np.array([w, x, y, z])
+
+
+def _same_rotation(q1, q2):
+    return abs(float(np.dot(q1, q2))) == pytest.approx(1.0, abs=1e-9)
+
+
+def test_head_frame_of_the_explorer_shows_yaw_90_pitch_90():
+    from rbm_nb.explorer import R_T265_ROS
+
+    rbm.register_frame("world")
+    rbm.ReferenceFrame.from_rotation_matrix(
+        R_T265_ROS, parent="world", name="head", inverse=True
+    ).register()
+    tree = FrameTree("world")
+    tree.select("head")
+    attitude = tree.details.pose.attitude
+    np.testing.assert_allclose(attitude.euler, (90.0, 90.0, 0.0), atol=1e-6)
+    np.testing.assert_allclose(attitude.quaternion, (0.5, -0.5, 0.5, 0.5), atol=1e-12)
+    assert "yaw 90.00\u00b0, pitch 90.00\u00b0, roll 0.00\u00b0" in tree.details_text()
+
+
+# a grid of attitudes with every pitch from -90 to 90, gimbal lock included
+GRID = [
+    (yaw, pitch, roll)
+    for yaw in (-180.0, -135.0, -30.0, 0.0, 45.0, 90.0, 179.0)
+    for pitch in (-90.0, -89.999, -60.0, -1.0, 0.0, 30.0, 89.0, 90.0)
+    for roll in (-170.0, -45.0, 0.0, 10.0, 120.0)
+]
+
+
+@pytest.mark.parametrize("yaw, pitch, roll", GRID)
+def test_attitude_angles_stand_for_the_rotation_at_every_attitude(yaw, pitch, roll):
+    q = _rebuilt((yaw, pitch, roll))
+    attitude = Attitude.of(-q if q[0] > 0 else q)  # either sign of q
+    assert attitude.quaternion[0] >= 0
+    assert _same_rotation(attitude.quaternion, q)
+    shown = attitude.euler
+    assert _same_rotation(_rebuilt(shown), q)  # the angles give back the rotation
+    assert (
+        -90.0 <= shown[1] <= 90.0 and abs(shown[0]) <= 180.0 and abs(shown[2]) <= 180.0
     )
+    if abs(pitch) < 89.0:  # away from gimbal lock the angles are unique
+        wrapped = (np.asarray(shown) - _scipy_zyx(q) + 180.0) % 360.0 - 180.0
+        np.testing.assert_allclose(wrapped, 0.0, atol=1e-7)  # -180 is 180
+    elif abs(pitch) == 90.0:  # at gimbal lock roll is 0 and yaw carries the rest
+        assert shown[1] == pytest.approx(pitch, abs=1e-6)
+        assert shown[2] == pytest.approx(0.0, abs=1e-6)
 
 
 unit = st.floats(-1, 1, allow_nan=False)
@@ -269,18 +353,21 @@ unit = st.floats(-1, 1, allow_nan=False)
 
 @settings(max_examples=200, deadline=None)
 @given(st.tuples(unit, unit, unit, unit))
-def test_roll_pitch_yaw_round_trip(q):
+def test_attitude_round_trip(q):
     q = np.asarray(q)
     if np.linalg.norm(q) < 1e-3:
         return
     q = q / np.linalg.norm(q)
-    roll, pitch, yaw = roll_pitch_yaw(q)
-    if abs(pitch) > 89.0:  # gimbal lock: roll and yaw are not unique
-        return
-    back = Rotation.from_euler("ZYX", [yaw, pitch, roll], degrees=True).as_quat()
-    np.testing.assert_allclose(
-        abs(np.dot(back, [q[1], q[2], q[3], q[0]])), 1.0, atol=1e-9
-    )
+    attitude = Attitude.of(q)
+    assert _same_rotation(_rebuilt(attitude.euler), q)
+    assert _same_rotation(attitude.quaternion, q)
+
+
+def test_attitude_rejects_bad_quaternions():
+    for bad in ([0, 0, 0, 0], [1, 0, 0], [np.nan, 0, 0, 1]):
+        with pytest.raises(ValueError, match="Attitude.of"):
+            Attitude.of(bad)
+    assert EULER_ORDER == "zyx"
 
 
 def test_show_lookup_highlights_the_chain(tree_frames):
@@ -292,7 +379,9 @@ def test_show_lookup_highlights_the_chain(tree_frames):
     assert styles["body2"] == styles["observer"] == "info"  # the two ends
     assert styles["body"] == styles["world"] == "warning"  # passed through
     assert all(s == "" for n, s in styles.items() if n not in chain)
-    assert "chain: body2 \u2192 body \u2192 world \u2192 observer" in tree.details_text()
+    assert (
+        "chain: body2 \u2192 body \u2192 world \u2192 observer" in tree.details_text()
+    )
     tree.select("body")  # one frame: no chain
     assert tree.chain == ()
     assert tree._rows["world"]["button"].button_style == ""

@@ -62,11 +62,15 @@ def test_static_frame_arrays_are_stored_read_only():
     assert world.translation is None and world.rotation is None
 
 
-def test_rotation_within_tolerance_is_normalised():
+def test_rotation_within_tolerance_is_kept_and_normalised_inside():
+    """Issue 11 item 1: the user's values come back; the math uses unit ones."""
     world = rbm.ReferenceFrame("world")
     q = np.array([1.004, 0.0, 0.0, 0.0])
     f = rbm.ReferenceFrame("f", parent=world, rotation=q)
-    np.testing.assert_allclose(f.rotation, [1, 0, 0, 0], atol=1e-15)
+    np.testing.assert_array_equal(f.rotation, q)
+    np.testing.assert_allclose(
+        rbm.transform_vectors([[0.0, 3.0, 4.0]], world, f), [[0.0, 3.0, 4.0]]
+    )
 
 
 def test_moving_frame_keeps_timestamps_exactly():
@@ -284,3 +288,23 @@ def test_frame_methods_return_conventions():
     np.testing.assert_allclose(ang, 0.0, atol=1e-12)
     ang = f.lookup_angular_velocity(world, world)
     np.testing.assert_allclose(ang, 0.0, atol=1e-12)
+
+
+def test_cached_chains_follow_tree_changes():
+    """Resolved chains are cached per pair of frames and forgotten on any change."""
+    world = rbm.ReferenceFrame("world")
+    a = rbm.ReferenceFrame("a", parent=world, translation=(1.0, 0, 0))
+    b = rbm.ReferenceFrame("b", parent=world, translation=(0, 2.0, 0))
+    c = rbm.ReferenceFrame("c", parent=a, translation=(0, 0, 3.0))
+    origin = np.zeros(3)
+    np.testing.assert_allclose(rbm.transform_points(origin, world, c), [1, 0, 3])
+    c.parent = b
+    np.testing.assert_allclose(rbm.transform_points(origin, world, c), [0, 2, 3])
+    t, _ = rbm.lookup_transform(c, world)
+    t[0] = 99.0  # the caller owns what it gets; the cache keeps its own
+    np.testing.assert_allclose(rbm.lookup_transform(c, world)[0], [0, 2, 3])
+    rbm.register_frame("w2")
+    rbm.register_frame("moved", parent="w2", translation=(5.0, 0, 0))
+    np.testing.assert_allclose(rbm.transform_points(origin, "w2", "moved"), [5, 0, 0])
+    rbm.register_frame("moved", parent="w2", translation=(6.0, 0, 0), update=True)
+    np.testing.assert_allclose(rbm.transform_points(origin, "w2", "moved"), [6, 0, 0])

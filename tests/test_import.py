@@ -32,7 +32,7 @@ def test_frame_core_modules_compile_nothing_at_import():
     out = run(
         """
         import json
-        import rbm_nb.frames, rbm_nb.lookups, rbm_nb.transforms, rbm_nb._matching
+        import rbm_nb.frames, rbm_nb.lookups, rbm_nb.transforms, rbm_nb._engine.chain
         from rbm_nb._kernels import quaternion, resample
         compiled = {
             f"{mod.__name__}.{name}": len(obj.signatures)

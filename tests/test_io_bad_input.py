@@ -272,3 +272,72 @@ def test_bad_import_format(csv):
 def test_missing_csv(tmp_path):
     with pytest.raises(FileNotFoundError, match="missing.csv"):
         load_optitrack(tmp_path / "missing.csv")
+
+
+# -- random corruption: a clear error or valid data, never garbage -------------
+
+TOPICS = (ODOM, "/vicon/t265_tracker/t265_tracker")
+
+
+def _valid(messages: dict) -> bool:
+    """What a caller may rely on: finite stamps, finite (or all-NaN) fields, unit q."""
+    if not np.isfinite(messages["timestamps"]).all():
+        return False
+    for name, values in messages.items():
+        if name == "timestamps":
+            continue
+        ok = np.isfinite(values).all(axis=1) | np.isnan(values).all(axis=1)
+        if not ok.all():
+            return False
+    q = messages["orientation"]
+    q = q[np.isfinite(q).all(axis=1)]
+    return bool(np.all(np.abs(np.linalg.norm(q, axis=1) - 1.0) <= 1e-2))
+
+
+def test_random_corruptions_give_a_clear_error_or_valid_data(bag, tmp_path):
+    """150 random 8-byte overwrites of a copy of the real bag (fixed seed)."""
+    rng = np.random.default_rng(2024)
+    original = bag.read_bytes()
+    target = tmp_path / "corrupt.bag"
+    outcomes = {"error": 0, "valid": 0}
+    for trial in range(150):
+        data = bytearray(original)
+        at = int(rng.integers(0, len(data) - 8))
+        data[at : at + 8] = rng.integers(0, 256, 8, dtype=np.uint8).tobytes()
+        target.write_bytes(bytes(data))
+        for topic in TOPICS:
+            try:
+                messages = RosbagReader(target).load_messages(topic)
+            except FileFormatError as err:
+                assert str(target) in str(err), (trial, at, err)
+                outcomes["error"] += 1
+            except ValueError as err:  # e.g. the topic's connection record was hit
+                assert topic in str(err) and str(target) in str(err), (trial, at, err)
+                outcomes["error"] += 1
+            else:
+                assert _valid(messages), (trial, at, topic)
+                outcomes["valid"] += 1
+    assert outcomes["error"] > 0 and outcomes["valid"] > 0, outcomes
+
+
+def test_non_unit_quaternion_in_a_bag_names_topic_and_message(bag):
+    """The reader checks decoded poses: a quaternion scaled by 1.5 in message 7."""
+    with RosbagReader(bag) as reader:
+        q = reader.load_messages(ODOM)["orientation"]
+    data = bytearray(bag.read_bytes())
+    # x, y, z, w of message 7 are stored as little-endian float64 in that order
+    raw = np.array(q[7][[1, 2, 3, 0]], "<f8").tobytes()
+    at = data.find(raw)
+    assert at > 0 and data.find(raw, at + 1) == -1
+    data[at : at + 32] = (np.frombuffer(raw, "<f8") * 1.5).tobytes()
+    bag.write_bytes(bytes(data))
+    with pytest.raises(
+        FileFormatError,
+        match=r"topic '/camera/odom/sample': message 7 has orientation .* norm 1\.5",
+    ):
+        RosbagReader(bag).load_messages(ODOM)
+    partly_nan = bytearray(data)
+    partly_nan[at : at + 8] = np.array([np.nan], "<f8").tobytes()
+    bag.write_bytes(bytes(partly_nan))
+    with pytest.raises(FileFormatError, match="message 7 has orientation .* all NaN"):
+        RosbagReader(bag).load_messages(ODOM)

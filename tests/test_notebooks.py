@@ -14,6 +14,8 @@ SAYS_ITS_DATA = {
     "04_xarray.ipynb": "data source:",
     "05_rosbag_and_3d.ipynb": "bag:",
     "06_head_eye_explorer.ipynb": "data:",
+    "08_sdf_and_pose_algebra.ipynb": "data: synthetic",
+    "09_velocity_tools_and_evaluation.ipynb": "data:",
 }
 
 
@@ -25,6 +27,8 @@ def test_the_six_notebooks_are_there():
         "04_xarray.ipynb",
         "05_rosbag_and_3d.ipynb",
         "06_head_eye_explorer.ipynb",
+        "08_sdf_and_pose_algebra.ipynb",
+        "09_velocity_tools_and_evaluation.ipynb",
     ]
 
 

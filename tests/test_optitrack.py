@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 import rbm_nb as rbm
-from rbm_nb.io import load_optitrack
+from rbm_nb.io import FileFormatError, load_optitrack
 
 BODIES = ["RigidBody 01", "RigidBody 02"]
 
@@ -222,7 +222,16 @@ def test_untracked_frames_stay_nan(csv_path, tmp_path):
 
 def test_header_only_export_gives_empty_arrays(csv_path, tmp_path):
     path = tmp_path / "no_frames.csv"
-    path.write_text("".join(csv_path.read_text().splitlines(keepends=True)[:7]))
+    header = "".join(csv_path.read_text().splitlines(keepends=True)[:7])
+    path.write_text(header)
+    # the header still announces 227 frames: that is a truncated file
+    with pytest.raises(
+        FileFormatError, match="announces 227 exported frames.*0 data rows"
+    ):
+        load_optitrack(path)
+    path.write_text(
+        header.replace("Total Exported Frames,227", "Total Exported Frames,0")
+    )
     data = load_optitrack(path)
     assert sorted(data) == BODIES
     position, orientation, timestamps = data["RigidBody 01"]
@@ -232,3 +241,45 @@ def test_header_only_export_gives_empty_arrays(csv_path, tmp_path):
         and timestamps.shape == (0,)
     )
     assert load_optitrack(path, "xarray")["RigidBody 02"].sizes["time"] == 0
+
+
+def test_truncated_at_a_line_boundary_names_file_and_counts(csv_path, tmp_path):
+    """Cut after a whole row: every line parses, but rows are missing."""
+    lines = csv_path.read_text().splitlines(keepends=True)
+    path = tmp_path / "cut.csv"
+    path.write_text("".join(lines[: 7 + 110]))
+    with pytest.raises(
+        FileFormatError,
+        match=r"cut\.csv: the header announces 227 .* 110 data rows: it is truncated",
+    ):
+        load_optitrack(path)
+    path.write_text("".join(lines + lines[-3:]))
+    with pytest.raises(FileFormatError, match="230 data rows: it has rows beyond them"):
+        load_optitrack(path)
+
+
+@pytest.mark.parametrize(
+    ("edit", "match"),
+    [
+        (
+            lambda rows: rows[:50] + [rows[49]] + rows[51:],
+            "line 58 has frame number 49, not after 49 on line 57",
+        ),
+        (
+            lambda rows: rows[:50] + [rows[51], rows[50]] + rows[52:],
+            "line 59 has frame number 50, not after 51 on line 58",
+        ),
+        (
+            lambda rows: (
+                rows[:50] + [rows[50].replace("50,0.833333,", "50,0.8,", 1)] + rows[51:]
+            ),
+            "line 58 has time 0.8, not after 0.816667 on line 57",
+        ),
+    ],
+)
+def test_duplicated_or_reordered_rows_raise(csv_path, tmp_path, edit, match):
+    lines = csv_path.read_text().splitlines(keepends=True)
+    path = tmp_path / "rows.csv"
+    path.write_text("".join(lines[:7] + edit(lines[7:])))
+    with pytest.raises(FileFormatError, match=match):
+        load_optitrack(path)

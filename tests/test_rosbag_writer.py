@@ -224,8 +224,14 @@ BAD_CALLS = [
     ({"rotation": np.zeros((3, 3))}, r"rotation must have shape \(3, 4\)"),
     (
         {"translation": [[0, 0, 0], [np.nan, 0, 0], [0, 0, 0]]},
-        "translation must be finite; row 1",
+        "topic '/x': translation row 1 .* all finite, or all NaN",
     ),
+    (
+        {"rotation": [[1, 0, 0, 0], [np.inf, 0, 0, 0], [1, 0, 0, 0]]},
+        "topic '/x': rotation row 1 .* all finite, or all NaN",
+    ),
+    ({"timestamps": [2.0, 1.0, 3.0]}, "topic '/x'.*strictly increasing; stamp 1"),
+    ({"timestamps": [1.0, 2.0, 2.0]}, "topic '/x'.*strictly increasing; stamp 2"),
     (
         {"rotation": [[1, 0, 0, 0], [2, 0, 0, 0], [1, 0, 0, 0]]},
         "unit quaternions.*row 1",

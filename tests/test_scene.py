@@ -1,8 +1,8 @@
 """Scene logic without a browser: tracks, lowered commands, handles, publishers.
 
 The commands are checked as the lowered msgpack the viewer would receive
-(``Scene._snapshot`` and the nodes' messages); the real server and websocket
-path is covered in ``test_scene_server.py``.
+(``scene.state``) and the messages the widget sends over the comm; the
+browser side is covered in ``test_browser.py``.
 """
 
 from __future__ import annotations
@@ -94,12 +94,17 @@ def decode(messages):
 
 
 def transforms(scene):
-    """Path -> 4x4 matrix of every set_transform a fresh viewer would get."""
-    result = {}
-    for cmd in decode(scene._snapshot()):
-        if cmd["type"] == "set_transform":
-            result[cmd["path"]] = np.asarray(cmd["matrix"]).reshape(4, 4).T
-    return result
+    """Path -> 4x4 pose of every placed node, as a viewer shows it at the scene's time.
+
+    Nodes hidden because their data has not started yet are left out.
+    """
+    t = scene.time if scene.time is not None else scene.state.origin
+    out = {}
+    for path in [*scene.state.statics, *scene.state.tracks]:
+        matrix = scene.state.pose_at(path, t)
+        if matrix is not None:
+            out[path] = matrix
+    return out
 
 
 def naive_matrix(t, q):
@@ -187,8 +192,10 @@ def test_objects_are_laid_out_under_rbm(moving):
     assert frame.name == "frame_body" and moving["frame_body"] is frame
     assert frame.geom_path == "/rbm/root/frame_body/pose/geom"
     objects = {
-        c["path"]: c for c in decode(moving._snapshot()) if c["type"] == "set_object"
+        c["path"]: c for c in decode(moving.state.snapshot()) if c["type"] == "set_object"
     }
+    grid = objects.pop("/rbm/grid")  # sized to the content, see test_grid_legend_labels
+    assert grid["object"]["object"]["type"] == "LineSegments"
     assert set(objects) == {frame.geom_path, path.geom_path, vectors.geom_path}
     assert objects[path.geom_path]["object"]["object"]["type"] == "Line"
     assert objects[path.geom_path]["object"]["materials"][0]["color"] == 0xFF00FF
@@ -215,19 +222,10 @@ def test_set_time_moves_everything_to_its_latest_sample(moving):
 
 def test_objects_are_hidden_before_their_data_starts(moving):
     late = moving.add_frame("late")
-    node = moving._nodes[late.pose_path]
     moving.set_time(0.3)
-    hidden = decode(node.current_messages())
-    assert {
-        "type": "set_property",
-        "path": late.pose_path,
-        "property": "visible",
-        "value": False,
-    } in hidden
-    messages = decode(node.messages_at_time(0.6))
-    assert messages[0]["property"] == "visible" and messages[0]["value"] is True
-    assert messages[1]["type"] == "set_transform"
-    assert decode(node.messages_at_time(0.61)) == []  # same sample: nothing to send
+    assert late.pose_path not in transforms(moving)  # hidden: nothing recorded yet
+    assert moving.state.pose_at(late.pose_path, 0.6)[0, 3] == pytest.approx(0.55)
+    assert moving.state.world_pose(late.geom_path, 0.3) is None
 
 
 def test_timestamps_shared_or_a_grid(moving):
@@ -271,7 +269,7 @@ def test_datetime_scene():
 def test_handles_update_hide_and_remove(moving):
     frame = moving.add_frame("body", scale=0.5)
     frame.update(scale=2.0)
-    obj = next(c for c in decode(moving._snapshot()) if c["type"] == "set_object")
+    obj = next(c for c in decode(moving.state.snapshot()) if c["type"] == "set_object")
     positions = np.frombuffer(
         obj["object"]["geometries"][0]["data"]["attributes"]["position"]["array"].data,
         np.float32,
@@ -280,7 +278,7 @@ def test_handles_update_hide_and_remove(moving):
     frame.visible = False
     props = [
         c
-        for c in decode(moving._snapshot())
+        for c in decode(moving.state.snapshot())
         if c["type"] == "set_property" and c["path"] == frame.root_path
     ]
     assert props == [
@@ -297,7 +295,7 @@ def test_handles_update_hide_and_remove(moving):
         frame.update(scale=-1)
     frame.remove()
     frame.remove()
-    assert len(moving) == 0 and moving._snapshot()[1:] == []
+    assert len(moving) == 0 and [m for m in moving.state.snapshot()[1:] if m.path.startswith("/rbm/root")] == []
     with pytest.raises(RuntimeError, match="removed"):
         frame.update(scale=1.0)
 
@@ -305,7 +303,7 @@ def test_handles_update_hide_and_remove(moving):
 def test_objects_in_a_moving_base_hang_below_an_anchor(moving):
     eye_in_body = moving.add_vectors("eye", (1, 0, 0), base="body")
     assert eye_in_body.root_path.startswith("/rbm/anchor_body/")
-    assert "/rbm/anchor_body" in moving._nodes
+    assert "/rbm/anchor_body" in moving.state.tracks
     moving.set_time(0.3)
     poses = transforms(moving)
     t, r, _ = rbm.lookup_transform(outof="body", into="world", return_timestamps=True)
@@ -314,16 +312,16 @@ def test_objects_in_a_moving_base_hang_below_an_anchor(moving):
     )
     np.testing.assert_allclose(poses[eye_in_body.pose_path][:3, 3], [0.1, 0.0, 0.2])
     eye_in_body.remove()
-    assert "/rbm/anchor_body" not in moving._nodes  # unused anchors go too
+    assert "/rbm/anchor_body" not in moving.state.tracks  # unused anchors go too
 
 
 def test_time_varying_vector_is_turned_and_scaled(moving):
     ts = np.array([0.0, 0.5])
     vecs = np.array([[0.0, 2.0, 0.0], [0.0, 0.0, -3.0]])
     handle = moving.add_vectors("world", vecs, timestamps=ts, origins=(1, 1, 1))
-    node = moving._nodes[f"{handle.pose_path}/data"]
+    track = moving.state.tracks[f"{handle.pose_path}/data"]
     for i in range(2):
-        m = node.track.matrix(i)
+        m = track.matrix(i)
         np.testing.assert_allclose(m[:3, :3] @ [1, 0, 0], vecs[i], atol=1e-12)
         np.testing.assert_allclose(m[:3, 3], [1, 1, 1])
 
@@ -332,7 +330,7 @@ def test_points_static_cloud_and_moving_marker(moving):
     cloud = moving.add_points(
         np.random.default_rng(0).normal(size=(7, 3)), frame="body", size=0.02
     )
-    obj = next(c for c in decode(moving._snapshot()) if c["path"] == cloud.geom_path)
+    obj = next(c for c in decode(moving.state.snapshot()) if c["path"] == cloud.geom_path)
     assert obj["object"]["object"]["type"] == "Points"
     ts = np.array([0.0, 1.0])
     marker = moving.add_points([[0, 0, 0], [1, 2, 3]], timestamps=ts, color="#00ff00")
@@ -356,7 +354,7 @@ def test_meshes_primitives_and_files(moving, tmp_path):
         "body", obj, offset=(0, 0, 1), color="#ff0000", opacity=0.5
     )
     geometry = next(
-        c for c in decode(moving._snapshot()) if c["path"] == handle.geom_path
+        c for c in decode(moving.state.snapshot()) if c["path"] == handle.geom_path
     )["object"]
     assert geometry["geometries"][0]["format"] == "obj"
     np.testing.assert_allclose(transforms(moving)[handle.geom_path][:3, 3], [0, 0, 1])
@@ -385,7 +383,7 @@ def test_bad_meshes(moving, mesh, size, message):
 def test_highlight(moving):
     frame = moving.add_frame("body")
     moving.highlight("body")
-    scale = [c for c in decode(moving._snapshot()) if c.get("property") == "scale"]
+    scale = [c for c in decode(moving.state.snapshot()) if c.get("property") == "scale"]
     assert scale == [
         {
             "type": "set_property",
@@ -403,10 +401,7 @@ def test_highlight(moving):
 def test_camera_fits_the_objects(moving):
     moving.add_path("body")
     moving.fit_camera()
-    camera = [m for m in moving._snapshot() if m.op == "json"][0]
-    import json
-
-    data = json.loads(camera.data)
+    data = moving.widget._camera
     np.testing.assert_allclose(data["target"], [5.0, 0.0, 1.0])
     assert np.linalg.norm(np.subtract(data["position"], data["target"])) > 5.0
 
@@ -414,10 +409,13 @@ def test_camera_fits_the_objects(moving):
 # -- playback -------------------------------------------------------------------------
 def test_player_drives_the_scene(moving):
     frame = moving.add_frame("body")
-    player = moving.player(threaded=False)
-    assert moving in player.linked
+    player = moving.player()
+    assert moving.widget.player is player  # the view follows it in the browser
     player.seek(7)
+    assert moving.time == pytest.approx(0.7)
     np.testing.assert_allclose(transforms(moving)[frame.pose_path][0, 3], 7.0)
+    moving.set_time(0.3)  # setting the scene's time moves its player
+    assert player.index == 3
     player.close()
 
 
@@ -429,7 +427,8 @@ def test_frame_publisher_moves_only_its_frame(moving):
     pub.publish(4)
     poses = transforms(moving)
     assert poses[pub.handle.pose_path][0, 3] == 4.0
-    assert moving._nodes[other.pose_path].index == 0  # untouched
+    assert other.pose_path not in moving.state.pins  # untouched
+    assert moving.widget._pins == {pub.handle.pose_path: pytest.approx(0.4)}
     pub.publish(0)  # index 0 is honoured (the reference treats it as "default")
     assert transforms(moving)[pub.handle.pose_path][0, 3] == 0.0
     with pytest.raises(IndexError, match="idx"):
@@ -449,10 +448,11 @@ def test_subscribed_publisher_follows_the_nearest_sample(moving):
         "pupil", base="body", scene=moving, subscribe="body", pose_arrow=True
     )
     head.publish(5)  # t = 0.5: nearest eye sample 0.51 (index 17)
-    assert moving._nodes[eye.handle.pose_path].index == 17
-    assert moving._nodes[eye.pose_handle.pose_path].index == 17
+    pins = moving.state.pins
+    assert pins[eye.handle.pose_path] == pytest.approx(0.51)
+    assert pins[eye.pose_handle.pose_path] == pytest.approx(0.51)
     # the eye is drawn in the body frame, whose anchor moved with the head
-    assert moving._nodes["/rbm/anchor_body"].index == 5
+    assert pins["/rbm/anchor_body"] == pytest.approx(0.5)
 
 
 def test_publisher_spin_and_stop(moving):
@@ -484,7 +484,7 @@ def test_ros_names_and_play_publisher(moving):
     marker.publish()
     assert marker.topic == "/body/path" and len(marker.points) <= 6
     player = rbm.ros.play_publisher(broadcaster, step=2, speed=0.5)
-    assert player.interval == pytest.approx(0.4)
+    assert player.step == 2 and player.speed == 0.5
     player.seek(6)
     assert transforms(moving)[broadcaster.handle.pose_path][0, 3] == 6.0
     static = rbm.ros.ReferenceFrameTransformBroadcaster("eye", scene=moving)
@@ -554,7 +554,7 @@ def test_closed_scene_cannot_be_used(moving):
         lambda: moving.set_time(0.0),
         lambda: moving.publish(0),
         lambda: moving.to_html("x.html"),
-        lambda: moving.server,
+        lambda: moving.widget,
         lambda: moving.player(),
     ):
         with pytest.raises(RuntimeError, match="closed"):
@@ -638,33 +638,174 @@ def test_guide_1_6_visualisation_cells_run_without_ros():
         "frame_left_eye",
         "pose_left_eye",
     }
-    assert player.interval == pytest.approx(2 * 0.005 / 0.5, rel=1e-3)
+    assert player.step == 2 and player.speed == 0.5
     player.seek(3000)  # the eye follows the head to the nearest of its own samples
     eye_seconds = tf_head_left_eye._seconds
-    eye_index = scene._nodes[tf_head_left_eye.handle.pose_path].index
-    nearest = np.argmin(np.abs(eye_seconds - player.time))
-    assert eye_index == nearest
+    pinned = scene.state.pins[tf_head_left_eye.handle.pose_path]
+    nearest = np.argmin(np.abs(eye_seconds - player.data_time))
+    assert pinned == eye_seconds[nearest]
     tf_head_left_eye.stop()
     player.close()
     master.shutdown()
     assert scene.closed
 
 
-def test_viewer_output_decides_the_address_in_the_browser(monkeypatch):
-    from rbm_nb.scene.display import viewer_html
+# -- the widget and its transport ---------------------------------------------------
+class RecordingComm(DummyComm):
+    """Keeps what the kernel would send to the browser."""
 
-    monkeypatch.delenv("RBM_NB_VIEWER_PROXY", raising=False)
-    out = viewer_html(1234, "demo", "http://127.0.0.1:1234/demo/", height=300)
-    assert 'mode = "auto"' in out and '"proxy/" + port' in out
-    assert 'title="rbm_nb scene demo"' in out and "height:300px" in out
-    assert (
-        " src=" not in out.split("<script>")[0]
-    )  # nothing is loaded before the script decides
-    assert 'data-direct="http://127.0.0.1:1234/demo/"' in out
-    assert 'mode = "proxy"' in viewer_html(1234, "demo", "u", proxy=True)
-    assert 'mode = "direct"' in viewer_html(1234, "demo", "u", proxy=False)
-    monkeypatch.setenv("RBM_NB_VIEWER_PROXY", "always")
-    assert 'mode = "proxy"' in viewer_html(1234, "demo", "u")
-    monkeypatch.setenv("RBM_NB_VIEWER_PROXY", "sometimes")
-    with pytest.raises(ValueError, match="RBM_NB_VIEWER_PROXY"):
-        viewer_html(1234, "demo", "u")
+    def __init__(self, *args, **kwargs):
+        super().__init__()
+        self.sent = []
+        self.handlers = []
+
+    def on_msg(self, callback):
+        self.handlers.append(callback)
+
+    def send(self, data=None, metadata=None, buffers=None):
+        self.sent.append((data, [bytes(b) for b in buffers or []]))
+
+    def receive(self, content):
+        for handler in self.handlers:
+            handler({"content": {"data": {"method": "custom", "content": content}}, "buffers": []})
+
+
+@pytest.fixture
+def recorded(monkeypatch):
+    monkeypatch.setattr(comm, "create_comm", lambda **kwargs: RecordingComm())
+
+
+def custom_messages(widget):
+    return [
+        (data["content"], buffers)
+        for data, buffers in widget.comm.sent
+        if data and data.get("method") == "custom"
+    ]
+
+
+def test_scene_is_a_dom_widget_for_layouts(moving):
+    moving.add_frame("body")
+    box = ipywidgets.HBox([moving.widget, ipywidgets.Label("x")])
+    assert isinstance(moving.widget, ipywidgets.DOMWidget)
+    assert box.children[0] is moving.widget
+    assert "application/vnd.jupyter.widget-view+json" in moving._repr_mimebundle_()[0]
+    # meshcat's own viewer is the 3D engine, inlined in the widget's module
+    from rbm_nb.scene.commands import meshcat_js_path
+
+    assert meshcat_js_path().read_text()[:2000] in moving.widget._esm
+
+
+def test_content_goes_over_the_comm_after_ready(moving, recorded):
+    frame = moving.add_frame("body")
+    widget = moving.widget
+    assert custom_messages(widget) == []  # nothing before the browser listens
+    widget.comm.receive({"type": "ready"})
+    [(content, buffers)] = custom_messages(widget)
+    assert content["type"] == "snapshot"
+    commands = [umsgpack.unpackb(b) for b in buffers[: content["commands"]]]
+    assert commands[0] == {"type": "delete", "path": "/rbm"}
+    assert {"set_object", "set_property"} <= {c["type"] for c in commands}
+    [track] = content["tracks"]
+    assert track["path"] == frame.pose_path and track["n"] == 11
+    times = np.frombuffer(buffers[track["times"]], "<f8")
+    xyz = np.frombuffer(buffers[track["translation"]], "<f4").reshape(-1, 3)
+    xyzw = np.frombuffer(buffers[track["rotation"]], "<f4").reshape(-1, 4)
+    np.testing.assert_allclose(times, np.arange(11) * 0.1)
+    np.testing.assert_allclose(xyz[:, 0], np.arange(11.0))
+    _, r = rbm.lookup_transform(outof="body", into="world")
+    np.testing.assert_allclose(xyzw, r[:, [1, 2, 3, 0]], atol=1e-7)
+    # later changes go as deltas: a restyle is one command, a new mover one track
+    frame.update(scale=1.0)
+    content, buffers = custom_messages(widget)[-1]
+    assert content == {"type": "commands"} and len(buffers) == 1
+    sent = len(custom_messages(widget))
+    moving.add_frame("late")
+    [content] = [c for c, _ in custom_messages(widget)[sent:] if c["type"] == "tracks"]
+    assert content["type"] == "tracks" and [t["path"] for t in content["tracks"]] == [
+        "/rbm/root/frame_late/pose"
+    ]
+    # tracks with the same timestamps share one time buffer; decimation on request
+    state = moving.state
+    meta, buffers = state.track_payload(max_samples=4)
+    assert [m["n"] for m in meta] == [4, 4]
+    assert len(buffers) == 2 + 2 * 2
+
+
+def test_playback_moves_no_kernel_data(moving, recorded):
+    """Setting the time from Python is one small trait update, not pose data."""
+    moving.add_frame("body")
+    widget = moving.widget
+    widget.comm.receive({"type": "ready"})
+    player = moving.player()
+    before = len(widget.comm.sent)
+    player.seek(5)
+    assert len(widget.comm.sent) == before  # the scene's comm is silent
+    updates = [d for d, _ in player.comm.sent if d and d.get("method") == "update"]
+    assert updates[-1]["state"] == {"time": pytest.approx(0.5)}
+
+
+def test_grid_legend_and_labels(moving):
+    frame = moving.add_frame("body", scale=0.5)
+    moving.add_path("body", color="#ff00ff")
+    legend = moving.legend()
+    assert legend[0]["text"] == "frame axes x, y, z"
+    assert {"text": "path body", "color": "#ff00ff"} in legend
+    assert legend[-1] == {"text": "grid 1 m", "color": "#5a5a5a"}  # the path spans 10 m
+    grid = umsgpack.unpackb(moving.state.objects["/rbm/grid"].data)
+    xyz = np.frombuffer(
+        grid["object"]["geometries"][0]["data"]["attributes"]["position"]["array"].data,
+        np.float32,
+    ).reshape(-1, 3)
+    assert xyz[:, 0].min() <= 0 and xyz[:, 0].max() >= 10 and (xyz[:, 2] == 0).all()
+    assert moving.widget._labels == {frame.pose_path: "body"}
+    assert moving.widget._frames == {"body": frame.pose_path}
+    from rbm_nb.scene.scene import format_length, nice_step
+
+    assert [nice_step(s) for s in (0.7, 10, 33, 120)] == [0.1, 1.0, 5.0, 20.0]
+    assert [format_length(v) for v in (0.005, 0.5, 20, 2000)] == [
+        "5 mm",
+        "50 cm",
+        "20 m",
+        "2 km",
+    ]
+
+
+def test_selection_follow_and_focus(moving):
+    frame = moving.add_frame("body", scale=0.5)
+    widget = moving.widget
+    widget.selected = "body"  # what a click in 3D does (from the browser)
+    assert moving.selected == "body"
+    assert moving.state.properties[(frame.geom_path, "scale")] is not None
+    scale = umsgpack.unpackb(moving.state.properties[(frame.geom_path, "scale")].data)
+    assert scale["value"] == [2.0, 2.0, 2.0]
+    moving.selected = None
+    scale = umsgpack.unpackb(moving.state.properties[(frame.geom_path, "scale")].data)
+    assert scale["value"] == [1.0, 1.0, 1.0]
+    moving.follow("body")
+    assert widget.follow == "body"
+    moving.follow(None)
+    assert widget.follow is None
+    with pytest.raises(ValueError, match="not drawn in this scene"):
+        moving.follow("eye")
+    moving.set_time(0.5)
+    moving.focus("body")
+    np.testing.assert_allclose(widget._camera["target"], [5.0, 0.0, 1.0])
+    distance = np.linalg.norm(np.subtract(widget._camera["position"], [5.0, 0.0, 1.0]))
+    assert distance == pytest.approx(5.0)  # ten triads
+
+
+def test_no_socket_is_opened(moving):
+    import psutil
+
+    def listening():
+        return {
+            c.laddr
+            for c in psutil.Process().net_connections(kind="inet")
+            if c.status == psutil.CONN_LISTEN
+        }
+
+    before = listening()
+    moving.add_frame("body")
+    moving.show()
+    moving.player().play()
+    assert listening() == before

@@ -1,14 +1,53 @@
-"""TimeSeries: a static plot whose cursor follows a Player."""
+"""TimeSeries: what goes over the comm, gaps, the shared time base, the Player link.
+
+The browser side (zoom, hover, click-to-seek, the cursor) is tested in
+``test_browser_dashboard.py``; here the widget runs against a recording comm.
+"""
 
 from __future__ import annotations
 
-import io
+import uuid
 
+import comm
+import ipywidgets
 import numpy as np
 import pytest
+import traitlets
 import xarray as xr
 
 from rbm_nb.widgets import Player, TimeSeries
+from rbm_nb.widgets._timebase import TimeBase
+
+
+class RecordingComm:
+    kernel = "Truthy"
+
+    def __init__(self, *args, **kwargs):
+        self.comm_id = uuid.uuid4().hex
+        self.messages = []  # (data, buffers)
+        self.opened = (kwargs.get("data"), kwargs.get("buffers"))
+
+    def open(self, *args, **kwargs):
+        pass
+
+    def on_msg(self, *args, **kwargs):
+        pass
+
+    def send(self, data=None, metadata=None, buffers=None):
+        self.messages.append((data, buffers))
+
+    def close(self, *args, **kwargs):
+        pass
+
+
+@pytest.fixture(autouse=True)
+def recording_comm(monkeypatch):
+    monkeypatch.setattr(comm, "create_comm", lambda **kwargs: RecordingComm(**kwargs))
+    yield
+    ipywidgets.Widget.close_all()
+
+
+START = np.datetime64("2020-02-02T00:27:14.000000001", "ns")
 
 
 @pytest.fixture
@@ -19,67 +58,148 @@ def speed():
     )
 
 
-def _spine_columns(png: bytes) -> tuple[int, int]:
-    """Columns of the left and right axes spines in the rendered image."""
-    import matplotlib.image
-
-    img = matplotlib.image.imread(io.BytesIO(png))[..., :3]
-    dark = (img.sum(axis=2) < 0.6).sum(axis=0)  # dark pixels per column
-    columns = np.flatnonzero(dark > 0.5 * dark.max())
-    return int(columns.min()), int(columns.max())
+def _decoded(plot, panel):
+    d = plot.data[panel]
+    x = np.frombuffer(d["x"], dtype=np.float64)
+    y = np.column_stack([np.frombuffer(b, dtype=np.float32) for b in d["y"]])
+    return x, y
 
 
-def test_cursor_spans_the_time_axis_of_the_rendered_image(speed):
-    plot = TimeSeries({"head speed": speed}, width=800)
-    width = 800
-    left, right = _spine_columns(plot.image.value)
-    plot.set_time(0.0)
-    assert abs(plot.cursor_fraction * width - left) <= 1.5
-    plot.set_time(float(speed.time[-1]))
-    assert abs(plot.cursor_fraction * width - right) <= 1.5
-    assert f"left:{100 * plot.cursor_fraction:.3f}%" in plot.cursor.value
+def test_samples_go_once_as_binary_buffers(speed):
+    plot = TimeSeries({"head speed": speed})
+    opened_state, buffers = plot.comm.opened
+    # every array travels as a buffer, none as JSON numbers
+    assert len(buffers) == 2
+    assert sorted(len(b) for b in buffers) == [100 * 4, 100 * 8]
+    x, y = _decoded(plot, 0)
+    np.testing.assert_array_equal(x, speed.time.values)
+    np.testing.assert_array_equal(y[:, 0], speed.values.astype(np.float32))
+    assert plot.panels == [
+        {
+            "label": "head speed",
+            "units": "m/s",
+            "components": ["head speed"],
+            "colors": ["#1f77b4"],
+        }
+    ]
+    assert plot.t0_ns is None
+    # moving the cursor sends a float, not the samples again
+    plot.comm.messages.clear()
+    plot.set_time(3.0)
+    assert plot.comm.messages == [
+        ({"method": "update", "state": {"time": 3.0}, "buffer_paths": []}, [])
+    ]
 
 
-def test_cursor_moves_monotonically_and_clamps(speed):
-    plot = TimeSeries({"speed": speed})
-    fractions = []
-    for t in (-5.0, 0.0, 2.5, 5.0, 9.9, 50.0):
-        plot.set_time(t)
-        fractions.append(plot.cursor_fraction)
-    assert fractions[0] == fractions[1]  # before the data: at the start
-    assert fractions[-1] == fractions[-2]  # after the data: at the end
-    assert np.all(np.diff(fractions[1:-1]) > 0)
-
-
-def test_readout_shows_latest_sample_at_or_before_t(speed):
-    t = np.arange(0.0, 10.0, 1.0)
-    angles = np.column_stack([t, -t])
-    plot = TimeSeries(
-        {"speed": speed, "gaze": (t + 2.0, angles, ["azimuth", "elevation"])}
+def test_components_of_a_dataarray_are_lines_of_one_panel():
+    t = np.arange(0.0, 2.0, 0.5)
+    gaze = xr.DataArray(
+        np.c_[t, -t],
+        dims=("time", "angle"),
+        coords={"time": t, "angle": ["azimuth", "elevation"]},
+        attrs={"units": "deg"},
     )
-    plot.set_time(4.55)
-    expected_speed = float(speed.sel(time=4.5, method="nearest"))
-    assert f"speed: {expected_speed:.3g} m/s" in plot.readout.value
-    assert "gaze: azimuth 2, elevation -2" in plot.readout.value
-    plot.set_time(1.0)  # gaze starts at t = 2: not shown yet
-    assert "gaze" not in plot.readout.value
+    plot = TimeSeries({"gaze": gaze, "raw": (t, np.c_[t, t, t], ["a", "b", "c"])})
+    assert [p["components"] for p in plot.panels] == [
+        ["azimuth", "elevation"],
+        ["a", "b", "c"],
+    ]
+    assert plot.panels[0]["units"] == "deg"
+    x, y = _decoded(plot, 0)
+    np.testing.assert_array_equal(y, np.c_[t, -t].astype(np.float32))
 
 
-def test_follows_a_player_with_datetime_timestamps():
-    start = np.datetime64("2020-02-02T00:27:14", "ns")
-    stamps = start + (np.arange(200) * 5_000_000).astype("timedelta64[ns]")
+def test_datetime_data_is_rebased_exactly_to_seconds_from_start():
+    stamps = START + (np.arange(200) * 5_000_001).astype("timedelta64[ns]")
     da = xr.DataArray(np.arange(200.0), dims="time", coords={"time": stamps})
-    player = Player(stamps, threaded=False)
+    plot = TimeSeries({"count": da})
+    assert plot.t0_ns == int(START.astype(np.int64))
+    x, _ = _decoded(plot, 0)
+    # int64 ns subtraction first: no epoch-sized float rounding
+    np.testing.assert_array_equal(x, np.arange(200) * 5_000_001 / 1e9)
+    plot.set_time(stamps[10])
+    assert plot.time == pytest.approx(10 * 5_000_001 / 1e9, abs=1e-12)
+    assert plot.readout() == ("t = 0.050 s \u00b7 2020-02-02 00:27:14.050   count: 10")
+
+
+def test_nan_values_stay_nan_and_time_gaps_get_a_nan_row():
+    t = np.r_[np.arange(0.0, 1.0, 0.1), np.arange(5.0, 6.0, 0.1)]  # 4 s pause
+    v = np.sin(t)
+    v[3] = np.nan
+    plot = TimeSeries({"v": (t, v)})
+    x, y = _decoded(plot, 0)
+    assert x.size == t.size + 1  # one row inserted in the pause
+    inserted = int(np.flatnonzero(~np.isin(x, t))[0])
+    assert 0.9 < x[inserted] < 5.0 and np.isnan(y[inserted, 0])
+    assert np.isnan(y[3, 0])
+    assert np.isfinite(np.delete(y[:, 0], [3, inserted])).all()
+    assert plot.gaps == [pytest.approx(1.0)]  # 10 x the 0.1 s median interval
+
+
+@pytest.mark.parametrize("gap, rows_added", [(0.05, 19), (2.0, 1), (np.inf, 0)])
+def test_gap_threshold_can_be_chosen(gap, rows_added):
+    t = np.r_[np.arange(0.0, 1.0, 0.1), np.arange(5.0, 6.0, 0.1)]
+    plot = TimeSeries({"v": (t, t)}, gap=gap)
+    x, _ = _decoded(plot, 0)
+    assert x.size - t.size == rows_added
+
+
+def test_a_player_drives_the_cursor_and_clicks_seek_it(speed):
+    player = Player(speed.time.values)
+    plot = TimeSeries({"speed": speed}, player=player)
+    assert plot.player is player
+    player.time = 4.55
+    assert plot.current_time == 4.55
+    expected = float(speed.sel(time=4.5, method="nearest"))
+    assert plot.values_at()["speed"] == pytest.approx([expected])
+    assert f"speed: {expected:.3g} m/s" in plot.readout()
+    plot.set_time(2.0)  # from Python: moves the player
+    assert player.time == 2.0
+    # Player.link gives a view the player's trait (the browser follows it)
+    other = TimeSeries({"speed": speed})
+    assert player.link(other) is other and other.player is player
+
+
+def test_a_float_seconds_player_lines_up_by_its_origin(speed):
+    later = speed.sel(time=slice(3.0, None))  # starts 3 s after the player
+    player = Player(speed.time.values)
+    plot = TimeSeries({"later": later}, player=player)
+    x, _ = _decoded(plot, 0)
+    assert x[0] == pytest.approx(3.0)
+    player.time = 3.05
+    assert plot.values_at()["later"] == pytest.approx([later.values[0]])
+
+
+def test_a_click_in_the_browser_without_a_player_sets_time(speed):
+    plot = TimeSeries({"speed": speed})
+    # what the comm delivers when the browser sets `time` and `x_range`
+    plot.set_state({"time": 7.25, "x_range": [2.0, 4.0]})
+    assert plot.current_time == 7.25
+    assert plot.x_range == [2.0, 4.0]
+
+
+def test_linking_a_datetime_player_rebases_to_its_start():
+    stamps = START + np.arange(100).astype("timedelta64[s]")
+    da = xr.DataArray(np.arange(100.0), dims="time", coords={"time": stamps})
+    earlier = int(START.astype(np.int64)) - 2_000_000_000  # 2 s before
+    player = Player(np.r_[np.datetime64(earlier, "ns"), stamps])
     plot = TimeSeries({"count": da}, player=player)
-    assert plot.time == pytest.approx(player.time)
-    player.seek(120)
-    assert plot.time == pytest.approx(player.time)
-    assert "count: 120" in plot.readout.value
-    assert "0.60 s since start" in plot.readout.value
-    plot.set_time(stamps[10])  # a datetime64 works too
-    assert "count: 10" in plot.readout.value
-    player.close()
-    plot.close()
+    assert plot.t0_ns == earlier
+    x, _ = _decoded(plot, 0)
+    assert x[0] == 2.0 and x[-1] == 101.0
+    player.time = 12.0
+    assert plot.values_at()["count"] == [10.0]
+    assert plot.timebase == TimeBase(t0_ns=earlier)
+
+
+def test_zoom_from_python(speed):
+    plot = TimeSeries({"speed": speed})
+    plot.zoom(1.0, 2.5)
+    assert plot.x_range == [1.0, 2.5]
+    plot.zoom()
+    assert plot.x_range == []
+    with pytest.raises(ValueError, match="start < end"):
+        plot.zoom(3.0, 1.0)
 
 
 @pytest.mark.parametrize(
@@ -94,14 +214,22 @@ def test_follows_a_player_with_datetime_timestamps():
     ],
 )
 def test_bad_series_are_rejected_with_their_label(series, message):
-    with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
+    with pytest.raises(
+        ValueError, match=message.replace("(", r"\(").replace(")", r"\)")
+    ):
         TimeSeries(series)
 
 
-def test_mixed_timestamp_kinds_are_rejected():
+def test_mixed_timestamp_kinds_and_bad_options_are_rejected(speed):
     stamps = np.datetime64("2020-01-01", "ns") + np.arange(3).astype("timedelta64[s]")
     with pytest.raises(ValueError, match="same kind of timestamps"):
         TimeSeries({"a": (stamps, np.ones(3)), "b": (np.arange(3.0), np.ones(3))})
+    with pytest.raises(ValueError, match="gap must be a positive"):
+        TimeSeries({"speed": speed}, gap=0)
+    with pytest.raises(traitlets.TraitError, match="'time' and 't0_ns'"):
+        TimeSeries({"speed": speed}, player=ipywidgets.IntSlider())
+    with pytest.raises(traitlets.TraitError, match="not the same kind"):
+        TimeSeries({"speed": speed}, player=Player(np.array(["2020-01-01"], "M8[ns]")))
 
 
 def test_datetime_on_float_data_is_an_error(speed):
@@ -110,3 +238,24 @@ def test_datetime_on_float_data_is_an_error(speed):
         plot.set_time(np.datetime64("2020-01-01"))
     with pytest.raises(ValueError, match="finite"):
         plot.set_time(float("nan"))
+
+
+def test_max_points_keeps_peaks_and_gaps():
+    t = np.arange(0.0, 100.0, 0.001)  # 100k samples
+    v = np.sin(t)
+    v[50_000] = 7.0  # a one-sample spike
+    v[70_000:70_010] = np.nan  # a short gap
+    full = TimeSeries({"v": (t, v)})
+    small = TimeSeries({"v": (t, v)}, max_points=1000)
+    x, y = _decoded(small, 0)
+    assert x.size <= 1000 < _decoded(full, 0)[0].size
+    assert np.all(np.diff(x) > 0)
+    assert np.nanmax(y) == 7.0 and np.nanmin(y) == pytest.approx(-1.0, abs=1e-3)
+    # the NaN run still breaks the line, and no value is invented
+    gap = np.flatnonzero(np.isnan(y[:, 0]))
+    assert gap.size >= 1 and 70.0 <= x[gap[0]] < 70.01
+    index = np.round(x * 1000).astype(int)
+    np.testing.assert_array_equal(x, t[index])  # only real samples are sent
+    np.testing.assert_array_equal(y[:, 0], v[index].astype(np.float32))
+    with pytest.raises(ValueError, match="max_points"):
+        TimeSeries({"v": (t, v)}, max_points=3)

@@ -315,3 +315,113 @@ def test_docstring_examples_run():
     module = importlib.import_module("rbm_nb.ros.transformer")
     result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
     assert result.attempted > 0 and result.failed == 0
+
+
+# ---------------------------------------------------------------------------
+# signs: the numbers the reference returns, not just the same rotations
+# ---------------------------------------------------------------------------
+
+
+def hamilton(p, q):
+    """The Hamilton product p * q, written out (w, x, y, z)."""
+    pw, px, py, pz = p
+    qw, qx, qy, qz = q
+    return np.array(
+        [
+            pw * qw - px * qx - py * qy - pz * qz,
+            pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx,
+            pw * qz + px * qy - py * qx + pz * qw,
+        ]
+    )
+
+
+def conj(q):
+    return np.array([q[0], -q[1], -q[2], -q[3]])
+
+
+def kdl_get_quaternion(m):
+    """PyKDL's Rotation::GetQuaternion (frames.cpp), returned as w, x, y, z."""
+    trace = m[0, 0] + m[1, 1] + m[2, 2]
+    if trace > 1e-12:
+        s = 0.5 / np.sqrt(trace + 1.0)
+        w, x = 0.25 / s, (m[2, 1] - m[1, 2]) * s
+        y, z = (m[0, 2] - m[2, 0]) * s, (m[1, 0] - m[0, 1]) * s
+    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
+        w, x = (m[2, 1] - m[1, 2]) / s, 0.25 * s
+        y, z = (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s
+    elif m[1, 1] > m[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
+        w, x = (m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s
+        y, z = 0.25 * s, (m[1, 2] + m[2, 1]) / s
+    else:
+        s = 2.0 * np.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
+        w, x = (m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s
+        y, z = (m[1, 2] + m[2, 1]) / s, 0.25 * s
+    return np.array([w, x, y, z])
+
+
+def _random_quaternions(rng, n):
+    q = rng.normal(size=(n, 4))
+    return q / np.linalg.norm(q, axis=1, keepdims=True)  # both signs of w
+
+
+def test_transform_quaternion_and_pose_have_the_references_sign():
+    """do_transform_pose multiplies KDL frames and reads the matrix back."""
+    rng = np.random.default_rng(11)
+    flipped_products = 0
+    pairs = zip(
+        _random_quaternions(rng, 200), _random_quaternions(rng, 200), strict=True
+    )
+    for r_stored, q in pairs:
+        tf = Transformer()
+        tf.set_transform([0.1, 0.2, 0.3], r_stored, "a", "b")
+        _, r = tf.lookup_transform("a", "b")
+        np.testing.assert_allclose(r, r_stored, atol=1e-15)  # tf2 keeps the stored sign
+        product = hamilton(r_stored, q)
+        m = (
+            Rotation.from_quat(r_stored, scalar_first=True).as_matrix()
+            @ Rotation.from_quat(q, scalar_first=True).as_matrix()
+        )
+        expected = kdl_get_quaternion(m)
+        out = np.array(tf.transform_quaternion(q, "a", "b"))
+        np.testing.assert_allclose(out, expected, atol=1e-12)
+        assert min(np.abs(out - product).max(), np.abs(out + product).max()) < 1e-14
+        flipped_products += np.abs(out + product).max() < 1e-14
+        _, o = tf.transform_pose([1.0, 0.0, 0.0], q, "a", "b")
+        np.testing.assert_array_equal(o, out)
+    # the grid covers both signs of the algebraic product
+    assert 20 < flipped_products < 180
+
+
+def test_lookup_transform_has_tf2s_composition_sign():
+    """Stored quaternions multiplied up the tree, as tf2's TransformAccum does."""
+    rng = np.random.default_rng(5)
+    q = _random_quaternions(rng, 6)
+    times = np.array([1.0, 2.0, 3.0])  # time 0 means "latest" in tf2
+    moving_q = _random_quaternions(rng, 3)
+    tf = Transformer()
+    tf.set_transform([0, 0, 1.0], q[0], "world", "a")
+    tf.set_transform([1.0, 0, 0], q[1], "a", "b")
+    tf.set_transform(np.zeros((3, 3)), moving_q, "b", "c", time=times)
+    tf.set_transform([0, 1.0, 0], q[2], "world", "d")
+    tf.set_transform([0, 0, 2.0], q[3], "d", "e")
+    for i, when in enumerate(times):
+        c_to_world = hamilton(q[0], hamilton(q[1], moving_q[i]))
+        cases = {
+            ("world", "c"): c_to_world,  # target above source
+            ("a", "c"): hamilton(q[1], moving_q[i]),
+            ("c", "a"): conj(hamilton(q[1], moving_q[i])),  # source above target
+            # full path: conj(target_to_root) * source_to_root
+            ("e", "c"): hamilton(conj(hamilton(q[2], q[3])), c_to_world),
+            ("c", "e"): hamilton(conj(c_to_world), hamilton(q[2], q[3])),
+        }
+        for (target, source), expected in cases.items():
+            _, r = tf.lookup_transform(target, source, when)
+            np.testing.assert_allclose(
+                r, expected, atol=1e-12, err_msg=f"{target}<-{source}"
+            )
+    # between samples: on the hemisphere of the earlier sample
+    _, r = tf.lookup_transform("b", "c", 1.5)
+    assert np.dot(r, moving_q[0]) > 0

@@ -1,6 +1,48 @@
-"""numba kernels: unchecked, contiguous float64 in, arrays out.
+"""numba kernels: unchecked, C-contiguous writeable float64 in, arrays out.
 
 Nothing here validates its input; the public modules do that before calling
-in. Nothing here compiles at import time either: ``@njit`` compiles on first
-call (and then from the on-disk cache).
+in, through the door (:mod:`rbm_nb._door`). Nothing here compiles at import
+time either: kernels compile on first call, or in the warm-up
+(``python -m rbm_nb._warmup``), both from numba's on-disk cache when it is
+there.
+
+Modules: ``scalar`` (sin/cos/atan2 and short series, inlined), ``quaternion``
+(quaternion algebra, slerp/squad), ``resample`` (interpolation, holding,
+chain composition, applying transforms to blocks), ``rotations`` (checked
+rotations, rotation vectors), ``differences`` (finite differences, splines,
+outliers), ``conversions`` (rotation representations, vectorised).
+
+Adding a kernel module
+----------------------
+Every numba function is made with one of the decorators of
+:mod:`rbm_nb._kernels._jit`, never with ``numba.njit`` directly::
+
+    from ._jit import F, F2, helper, kernel
+    from .._config import VECTOR_KERNEL  # only for branch-free vector loops
+
+    @helper(inline=True)          # called only from kernels
+    def _distance1(x, y, z):
+        ...
+
+    @kernel(F2, F2, F)            # called from Python: ONE signature,
+    def signed_distance(points, centers, radius):   # one type per argument
+        ...
+
+* ``@kernel(*argtypes)`` declares the argument types of the one signature
+  the kernel is compiled for (``F``/``I``/``B`` scalars, ``F1``/``F2``/``F3``
+  C-contiguous float64 arrays of 1-3 dimensions, ``I1``, ``B2``; or any numba
+  type string). Callers hand it exactly those types: arrays go through
+  :func:`rbm_nb._door.float_array` or :func:`rbm_nb._door.kernel_array`.
+* The module is picked up automatically (any non-underscore module of this
+  package): the warm-up compiles its declared signatures, and
+  ``tests/test_zz_kernel_signatures.py`` checks that every numba function of
+  the module is declared and that the test suite compiled no other
+  signature.
+* Options come from :mod:`rbm_nb._config` (``KERNEL`` by default,
+  ``options=VECTOR_KERNEL`` for loops that must vectorise); scalar math comes
+  from :mod:`rbm_nb._kernels.scalar` (one implementation of each function).
 """
+
+from .._numba_cache import configure as _configure_numba_cache
+
+_configure_numba_cache()  # before any kernel is decorated: a writable cache or none

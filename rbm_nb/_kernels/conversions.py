@@ -22,8 +22,8 @@ hot loops, calls to libm's sin/cos/atan2 (LLVM has no vector versions of them
 here), data-dependent branches (written as conditional expressions instead)
 and argmax-style bookkeeping (replaced by integer counts). Hence:
 
-* ``_sincos`` and ``_atan2`` below are polynomial implementations accurate
-  to about one unit in the last place; arguments too large for ``_sincos``'s
+* ``sincos`` and ``atan2`` (from :mod:`rbm_nb._kernels.scalar`) are
+  polynomial implementations accurate to about one unit in the last place; arguments too large for ``_sincos``'s
   argument reduction are recomputed with libm in a second, scalar pass that
   only runs when such rows exist;
 * the kernels are compiled with ``error_model="numpy"`` so that a division
@@ -37,188 +37,40 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from .._config import NJIT_OPTIONS
+from .._config import VECTOR_KERNEL
+from ._jit import F1, F2, F3, B, F, I, helper, kernel
+from .scalar import PI as _PI
+from .scalar import PIO2 as _PIO2
+from .scalar import SINCOS_LIMIT as _SINCOS_LIMIT
+from .scalar import TINY_ANGLE as _SMALL_ANGLE
+from .scalar import atan2 as _atan2
+from .scalar import atan2_pos as _atan2_pos
+from .scalar import sincos as _sincos
+from .scalar import wrap_angle as _wrap
 
-_OPTS = dict(NJIT_OPTIONS, error_model="numpy", fastmath={"contract"})
-
-# Rotation angles below this are treated with series expansions in the
-# exponential and logarithm maps (where sin(x)/x and atan2(s, w)/s are 0/0).
-_SMALL_ANGLE = 1e-6
 # Middle Euler angle this close to a singular value counts as gimbal lock.
 # Exactly singular input lands within ~1e-16 of it; below the threshold the
 # third angle is zeroed, which moves the rotation by at most the threshold,
 # hence a value far smaller than scipy's 1e-7 (whose round trips are off by
 # up to that much).
 _GIMBAL_EPS = 1e-13
-# |x| below which _sincos's reduction by multiples of pi/2 is exact enough:
-# k * _PIO2_HI is exact for |k| < 2**20, i.e. |x| < 1.6e6.
-_SINCOS_LIMIT = 1e5
-
 # Below this, x² + y² + z² may have lost digits to underflow; such rows are
 # recomputed after scaling by _TINY_SCALE (powers of two, so exactly).
 _TINY_SQUARE = 2.0**-1000
 _TINY_SCALE = 2.0**600
-
-_PI = math.pi
-_PIO2 = 0.5 * math.pi
-_PIO4 = 0.25 * math.pi
-_TWO_OVER_PI = 2.0 / math.pi
-# pi/2 split into 33 + 33 + 53 significant bits (Cody-Waite reduction)
-_PIO2_HI = 1.5707963267341256
-_PIO2_MID = 6.077100506303966e-11
-_PIO2_LO = 2.0222662487959506e-21
-_TAN_PI_8 = math.sqrt(2.0) - 1.0
-
-# atan(u) = u * P(u²) for |u| <= tan(pi/8): the Taylor series of
-# atan(√s)/√s, economised with Chebyshev polynomials to degree 11 on
-# s in [0, 0.1716]; truncation error below 1.3e-18 (the derivation is
-# re-run in tests/test_conversions.py).
-_ATAN_P = (
-    1.0,
-    -0.33333333333333126,
-    0.19999999999942258,
-    -0.1428571427937341,
-    0.11111110750611304,
-    -0.09090896962572438,
-    0.07692047912901954,
-    -0.06662979711761823,
-    0.05847071977809275,
-    -0.050359375323660804,
-    0.037985607685565206,
-    -0.01782681529846552,
-)
-_A0, _A1, _A2, _A3, _A4, _A5, _A6, _A7, _A8, _A9, _A10, _A11 = _ATAN_P
-
 
 # ---------------------------------------------------------------------------
 # scalar helpers (inlined into the loops)
 # ---------------------------------------------------------------------------
 
 
-@njit(inline="always", **_OPTS)
-def _sincos(x):
-    """(sin x, cos x) for |x| < _SINCOS_LIMIT, branch-free.
-
-    x = k pi/2 + r with |r| <= pi/4; Taylor polynomials of degree 15 (sin)
-    and 16 (cos) are exact to below half an ulp on that range, and the
-    quadrant k picks signs and swaps.
-    """
-    k = math.floor(x * _TWO_OVER_PI + 0.5)
-    r = ((x - k * _PIO2_HI) - k * _PIO2_MID) - k * _PIO2_LO
-    z = r * r
-    s = r + r * z * (
-        -1.0 / 6.0
-        + z
-        * (
-            1.0 / 120.0
-            + z
-            * (
-                -1.0 / 5040.0
-                + z
-                * (
-                    1.0 / 362880.0
-                    + z
-                    * (
-                        -1.0 / 39916800.0
-                        + z * (1.0 / 6227020800.0 + z * (-1.0 / 1307674368000.0))
-                    )
-                )
-            )
-        )
-    )
-    c = 1.0 + z * (
-        -0.5
-        + z
-        * (
-            1.0 / 24.0
-            + z
-            * (
-                -1.0 / 720.0
-                + z
-                * (
-                    1.0 / 40320.0
-                    + z
-                    * (
-                        -1.0 / 3628800.0
-                        + z
-                        * (
-                            1.0 / 479001600.0
-                            + z * (-1.0 / 87178291200.0 + z * (1.0 / 20922789888000.0))
-                        )
-                    )
-                )
-            )
-        )
-    )
-    q = np.int64(k)
-    swap = (q & 1) != 0
-    sin_x = c if swap else s
-    cos_x = s if swap else c
-    sin_x = -sin_x if (q & 2) != 0 else sin_x
-    cos_x = -cos_x if ((q + 1) & 2) != 0 else cos_x
-    return sin_x, cos_x
-
-
-@njit(inline="always", **_OPTS)
-def _atan_ratio(num, den):
-    """atan(num / den) for 0 <= num <= den, den > 0, with one division."""
-    high = num > _TAN_PI_8 * den
-    # atan(t) = pi/4 + atan((t - 1) / (t + 1)) brings t into |u| <= tan(pi/8)
-    u = (num - den if high else num) / (num + den if high else den)
-    s = u * u
-    p = _A11
-    p = p * s + _A10
-    p = p * s + _A9
-    p = p * s + _A8
-    p = p * s + _A7
-    p = p * s + _A6
-    p = p * s + _A5
-    p = p * s + _A4
-    p = p * s + _A3
-    p = p * s + _A2
-    p = p * s + _A1
-    p = p * s + _A0
-    a = u * p
-    return a + _PIO4 if high else a
-
-
-@njit(inline="always", **_OPTS)
-def _atan2_pos(y, x):
-    """atan2(y, x) for y >= 0 and x >= 0 (0 when both are 0)."""
-    swap = y > x
-    num = x if swap else y
-    den = y if swap else x
-    den = den if den > 0.0 else 1.0
-    a = _atan_ratio(num, den)
-    return _PIO2 - a if swap else a
-
-
-@njit(inline="always", **_OPTS)
-def _atan2(y, x):
-    """atan2(y, x) with libm's signs, also for signed zeros."""
-    a = _atan2_pos(abs(y), abs(x))
-    a = _PI - a if math.copysign(1.0, x) < 0.0 else a
-    return math.copysign(a, y)
-
-
-@njit(inline="always", **_OPTS)
-def _wrap(angle):
-    """Map an angle in [-2 pi, 2 pi] into [-pi, pi]."""
-    if angle > _PI:
-        return angle - 2.0 * _PI
-    if angle < -_PI:
-        return angle + 2.0 * _PI
-    return angle
-
-
-@njit(inline="always", **_OPTS)
+@helper(inline=True, options=VECTOR_KERNEL)
 def _pick(axis, x, y, z):
     return x if axis == 0 else (y if axis == 1 else z)
 
 
-@njit(inline="always", **_OPTS)
+@helper(inline=True, options=VECTOR_KERNEL)
 def _canonical_sign(w, x, y, z):
     """-1 if -q is the canonical one of q and -q, else +1.
 
@@ -231,19 +83,19 @@ def _canonical_sign(w, x, y, z):
     return -1.0 if flip else 1.0
 
 
-@njit(inline="always", **_OPTS)
+@helper(inline=True, options=VECTOR_KERNEL)
 def _indicator(flag):
     return 1.0 if flag else 0.0
 
 
-@njit(inline="always", **_OPTS)
+@helper(inline=True, options=VECTOR_KERNEL)
 def _unit_norm_bounds(tol):
     """Bounds on ‖q‖² equivalent to |‖q‖ - 1| <= tol."""
     low = max(1.0 - tol, 0.0)
     return low * low, (1.0 + tol) * (1.0 + tol)
 
 
-@njit(inline="always", **_OPTS)
+@helper(inline=True, options=VECTOR_KERNEL)
 def _rotation_ok(m00, m01, m02, m10, m11, m12, m20, m21, m22, tol):
     """Entries of |RᵀR - I| all <= tol and det R > 0 (False for NaN)."""
     ok = abs(m00 * m00 + m10 * m10 + m20 * m20 - 1.0) <= tol
@@ -261,7 +113,7 @@ def _rotation_ok(m00, m01, m02, m10, m11, m12, m20, m21, m22, tol):
     return ok
 
 
-@njit(inline="always", **_OPTS)
+@helper(inline=True, options=VECTOR_KERNEL)
 def _quaternion_of_matrix(m00, m01, m02, m10, m11, m12, m20, m21, m22):
     """Unit quaternion with w >= 0 from a rotation matrix (Shepperd's choice).
 
@@ -289,7 +141,7 @@ def _quaternion_of_matrix(m00, m01, m02, m10, m11, m12, m20, m21, m22):
     return w * inv, x * inv, y * inv, z * inv
 
 
-@njit(inline="always", **_OPTS)
+@helper(inline=True, options=VECTOR_KERNEL)
 def _exp_row(theta2, theta, sin_h, cos_h):
     """(w, k) with q = (w, k v) for a rotation vector v of norm theta."""
     small = theta2 < _SMALL_ANGLE * _SMALL_ANGLE
@@ -299,7 +151,7 @@ def _exp_row(theta2, theta, sin_h, cos_h):
     return w, k
 
 
-@njit(inline="always", **_OPTS)
+@helper(inline=True, options=VECTOR_KERNEL)
 def _euler_row(s1, c1, s2, c2, s3, c3, i, j, proper, eps):
     """Intrinsic product q_i(a) q_j(b) q_k(c) from half-angle sines/cosines.
 
@@ -330,7 +182,7 @@ def _euler_row(s1, c1, s2, c2, s3, c3, i, j, proper, eps):
 # ---------------------------------------------------------------------------
 
 
-@njit(**_OPTS)
+@kernel(F2, F, options=VECTOR_KERNEL)
 def matrix_from_quaternion(q, tol):
     """Rotation matrices of (normalised) quaternions.
 
@@ -371,7 +223,7 @@ def matrix_from_quaternion(q, tol):
     return out.reshape((n, 3, 3)), n_invalid
 
 
-@njit(**_OPTS)
+@kernel(F3, F, options=VECTOR_KERNEL)
 def quaternion_from_matrix(m, tol):
     """Unit quaternions (w >= 0) of rotation matrices.
 
@@ -410,7 +262,7 @@ def quaternion_from_matrix(m, tol):
 # ---------------------------------------------------------------------------
 
 
-@njit(**_OPTS)
+@kernel(F2, options=VECTOR_KERNEL)
 def quaternion_from_rotation_vector(v):
     """exp of rotation vectors: angle ‖v‖ about v / ‖v‖.
 
@@ -460,7 +312,7 @@ def quaternion_from_rotation_vector(v):
     return out.reshape((n, 4)), n_invalid
 
 
-@njit(**_OPTS)
+@kernel(F2, F, options=VECTOR_KERNEL)
 def rotation_vector_from_quaternion(q, tol):
     """log of (normalised) quaternions as rotation vectors of norm <= pi.
 
@@ -504,7 +356,7 @@ def rotation_vector_from_quaternion(q, tol):
 # ---------------------------------------------------------------------------
 
 
-@njit(**_OPTS)
+@kernel(F2, F1, options=VECTOR_KERNEL)
 def quaternion_from_axis_angle(axis, angle):
     """Rotations by ``angle`` about ``axis`` (normalised here).
 
@@ -572,7 +424,7 @@ def quaternion_from_axis_angle(axis, angle):
     return out.reshape((n, 4)), n_invalid
 
 
-@njit(inline="always", **_OPTS)
+@helper(inline=True, options=VECTOR_KERNEL)
 def _axis_angle_row(w, x, y, z, s2, axis, angle, i):
     sign = _canonical_sign(w, x, y, z)
     s = math.sqrt(s2)
@@ -584,7 +436,7 @@ def _axis_angle_row(w, x, y, z, s2, axis, angle, i):
     axis[3 * i + 2] = k * z
 
 
-@njit(**_OPTS)
+@kernel(F2, F, options=VECTOR_KERNEL)
 def axis_angle_from_quaternion(q, tol):
     """Unit axes and angles in [0, pi] of (normalised) quaternions.
 
@@ -637,7 +489,7 @@ def axis_angle_from_quaternion(q, tol):
 # ---------------------------------------------------------------------------
 
 
-@njit(**_OPTS)
+@kernel(F2, I, I, I, B, options=VECTOR_KERNEL)
 def quaternion_from_euler(angles, i, j, k, extrinsic):
     """Compose three elementary rotations about axes i, j, k.
 
@@ -710,7 +562,7 @@ def quaternion_from_euler(angles, i, j, k, extrinsic):
     return out.reshape((n, 4)), n_invalid
 
 
-@njit(**_OPTS)
+@kernel(F2, I, I, I, B, F, options=VECTOR_KERNEL)
 def euler_from_quaternion(q, i, j, k, extrinsic, tol):
     """Euler angles of (normalised) quaternions for the sequence i, j, k.
 
@@ -792,7 +644,7 @@ def euler_from_quaternion(q, i, j, k, extrinsic, tol):
 # ---------------------------------------------------------------------------
 
 
-@njit(**_OPTS)
+@kernel(F2, F2, F, options=VECTOR_KERNEL)
 def homogeneous_from_transform(t, q, tol):
     """4 x 4 matrices [[R(q), t], [0, 1]].
 
@@ -848,7 +700,7 @@ def homogeneous_from_transform(t, q, tol):
     return out.reshape((n, 4, 4)), n_bad_q, n_bad_t
 
 
-@njit(**_OPTS)
+@kernel(F3, F, options=VECTOR_KERNEL)
 def transform_from_homogeneous(h, tol):
     """Translations and unit quaternions (w >= 0) of 4 x 4 matrices.
 

@@ -20,12 +20,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from .._config import NJIT_OPTIONS
+from ._jit import B2, F1, F2, F3, kernel
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F1)
 def gradient(f, t):
     """First derivative by central differences on uneven spacing (numpy's).
 
@@ -59,7 +58,7 @@ def gradient(f, t):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F1)
 def spline_derivative(f, t):
     """Slopes at the samples of the not-a-knot cubic interpolating spline.
 
@@ -152,7 +151,7 @@ def spline_derivative(f, t):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2)
 def nan_rows(x):
     """Whether each row of ``x`` (n, k) contains a NaN, shape (n,)."""
     n, k = x.shape
@@ -165,7 +164,7 @@ def nan_rows(x):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F3)
 def second_difference_score(x):
     """Outlier score of each sample from second-order differences.
 
@@ -197,7 +196,7 @@ def second_difference_score(x):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F1, F3, B2)
 def interpolate_rejected(t, values, keep):
     """Replace rejected samples by linear interpolation between kept ones.
 
@@ -243,7 +242,7 @@ def interpolate_rejected(t, values, keep):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F2)
 def angular_velocity_from_derivative(q, dq):
     """Angular velocity as the vector part of 2 q⁻¹ dq/dt.
 

@@ -18,9 +18,18 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from .._config import NJIT_OPTIONS
+from ._jit import F1, F2, helper, kernel
+from .scalar import (
+    SERIES_ANGLE,
+    SERIES_RATIO,
+    SINCOS_LIMIT,
+    atan2,
+    atan_over_x,
+    cos_series,
+    sinc_series,
+    sincos,
+)
 
 # Below this relative size the vector part of a quaternion counts as zero in
 # exp/log, as in numpy-quaternion (whose results squad must reproduce).
@@ -33,7 +42,7 @@ _SQRT2 = 1.414213562373096
 # ---------------------------------------------------------------------------
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _qmul1(aw, ax, ay, az, bw, bx, by, bz):
     return (
         aw * bw - ax * bx - ay * by - az * bz,
@@ -43,13 +52,13 @@ def _qmul1(aw, ax, ay, az, bw, bx, by, bz):
     )
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _qinv1(w, x, y, z):
     n2 = w * w + x * x + y * y + z * z
     return w / n2, -x / n2, -y / n2, -z / n2
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _qdiv1(aw, ax, ay, az, bw, bx, by, bz):
     """a * b⁻¹, evaluated in one step like numpy-quaternion's division."""
     n2 = bw * bw + bx * bx + by * by + bz * bz
@@ -61,7 +70,7 @@ def _qdiv1(aw, ax, ay, az, bw, bx, by, bz):
     )
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _qexp1(w, x, y, z):
     vnorm = math.sqrt(x * x + y * y + z * z)
     e = math.exp(w)
@@ -71,7 +80,7 @@ def _qexp1(w, x, y, z):
     return e, 0.0, 0.0, 0.0
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _qlog1(w, x, y, z):
     b = math.sqrt(x * x + y * y + z * z)
     if b <= _EPS * abs(w):
@@ -86,7 +95,7 @@ def _qlog1(w, x, y, z):
     return math.log(w * w + b * b) / 2.0, f * x, f * y, f * z
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _qpow1(w, x, y, z, s):
     if w == 0.0 and x == 0.0 and y == 0.0 and z == 0.0:
         if s == 0.0:
@@ -96,7 +105,7 @@ def _qpow1(w, x, y, z, s):
     return _qexp1(s * lw, s * lx, s * ly, s * lz)
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _qslerp1(aw, ax, ay, az, bw, bx, by, bz, tau):
     """Geodesic from a (tau=0) to b (tau=1), taking the shorter way round."""
     dw, dx, dy, dz = aw - bw, ax - bx, ay - by, az - bz
@@ -107,77 +116,15 @@ def _qslerp1(aw, ax, ay, az, bw, bx, by, bz, tau):
     return _qmul1(pw, px, py, pz, aw, ax, ay, az)
 
 
-# Taylor coefficients for the small angles that dominate interpolation of
-# densely sampled rotations: within the thresholds below, the truncated
-# series are exact to well under one rounding error, and about 3x cheaper
-# than the libm calls (atan2 costs as much as sin and cos together).
-_SMALL_ANGLE = 0.1
-_SMALL_RATIO = 0.05
-
-
-@njit(**NJIT_OPTIONS)
-def _sinc_series(y2):
-    """sin(y) / y from y², for |y| < _SMALL_ANGLE."""
-    return 1.0 + y2 * (
-        -1.0 / 6.0
-        + y2
-        * (1.0 / 120.0 + y2 * (-1.0 / 5040.0 + y2 * (1.0 / 362880.0 - y2 / 39916800.0)))
-    )
-
-
-@njit(**NJIT_OPTIONS)
-def _cos_series(y2):
-    """cos(y) from y², for |y| < _SMALL_ANGLE."""
-    return 1.0 + y2 * (
-        -0.5
-        + y2
-        * (
-            1.0 / 24.0
-            + y2
-            * (
-                -1.0 / 720.0
-                + y2 * (1.0 / 40320.0 + y2 * (-1.0 / 3628800.0 + y2 / 479001600.0))
-            )
-        )
-    )
-
-
-@njit(**NJIT_OPTIONS)
-def _atan_over_x(x2):
-    """atan(x) / x from x², for 0 <= x < _SMALL_RATIO."""
-    return 1.0 + x2 * (
-        -1.0 / 3.0
-        + x2
-        * (
-            1.0 / 5.0
-            + x2
-            * (
-                -1.0 / 7.0
-                + x2 * (1.0 / 9.0 + x2 * (-1.0 / 11.0 + x2 * (1.0 / 13.0 - x2 / 15.0)))
-            )
-        )
-    )
-
-
-@njit(**NJIT_OPTIONS)
+@helper
 def _sincos(y):
-    """(sin y, cos y)."""
-    if abs(y) < _SMALL_ANGLE:
-        y2 = y * y
-        return y * _sinc_series(y2), _cos_series(y2)
+    """(sin y, cos y): the polynomial within its range, libm beyond it."""
+    if abs(y) < SINCOS_LIMIT:
+        return sincos(y)
     return math.sin(y), math.cos(y)
 
 
-@njit(**NJIT_OPTIONS)
-def _atan2(y, x):
-    """atan2(y, x) for y >= 0."""
-    if x > 0.0 and y < _SMALL_RATIO * x:
-        r = y / x
-        return r * _atan_over_x(r * r)
-    return math.atan2(y, x)
-
-
-@njit(**NJIT_OPTIONS)
+@helper
 def _geodesic1(aw, ax, ay, az, bw, bx, by, bz):
     """Arc from unit a towards unit b: (θ, u) with b = cos θ a + sin θ u.
 
@@ -194,15 +141,15 @@ def _geodesic1(aw, ax, ay, az, bw, bx, by, bz):
     if so == 0.0:
         return 0.0, 0.0, 0.0, 0.0, 0.0
     k = 1.0 / so
-    return _atan2(so, d), ow * k, ox * k, oy * k, oz * k
+    return atan2(so, d), ow * k, ox * k, oy * k, oz * k
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _is_unit(w, x, y, z):
     return abs(w * w + x * x + y * y + z * z - 1.0) <= 1e-12
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _qslerp_unit1(aw, ax, ay, az, bw, bx, by, bz, tau):
     """:func:`_qslerp1` for unit quaternions, along the great circle.
 
@@ -219,25 +166,25 @@ def _qslerp_unit1(aw, ax, ay, az, bw, bx, by, bz, tau):
     d = aw * bw + ax * bx + ay * by + az * bz
     ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
     o2 = ow * ow + ox * ox + oy * oy + oz * oz
-    if d > 0.0 and o2 < (_SMALL_RATIO * d) ** 2:
+    if d > 0.0 and o2 < (SERIES_RATIO * d) ** 2:
         # small arcs (the rule in squad's outer slerp): with x = tan θ and
         # y = τθ, the result is cos(y) a + τ (θ/x) (sin y / y) / d o, and
         # every factor is a short series in x² or y², so neither sqrt nor
         # atan2 is needed
         inv_d = 1.0 / d
         x2 = o2 * inv_d * inv_d
-        p = _atan_over_x(x2)
+        p = atan_over_x(x2)
         y2 = tau * tau * x2 * p * p
-        if y2 < _SMALL_ANGLE * _SMALL_ANGLE:
-            c = _cos_series(y2)
-            k = _sinc_series(y2) * tau * p * inv_d
+        if y2 < SERIES_ANGLE * SERIES_ANGLE:
+            c = cos_series(y2)
+            k = sinc_series(y2) * tau * p * inv_d
             return c * aw + k * ow, c * ax + k * ox, c * ay + k * oy, c * az + k * oz
     theta, uw, ux, uy, uz = _geodesic1(aw, ax, ay, az, bw, bx, by, bz)
     s, c = _sincos(tau * theta)
     return c * aw + s * uw, c * ax + s * ux, c * ay + s * uy, c * az + s * uz
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _rotate1(w, x, y, z, vx, vy, vz):
     """q v q⁻¹ for any non-zero q (dividing by |q|², so the norm of v is kept)."""
     n2 = w * w + x * x + y * y + z * z
@@ -256,7 +203,7 @@ def _rotate1(w, x, y, z, vx, vy, vz):
     )
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def search_right(t_in, t_out):
     """For each t_out[j], the index i with t_in[i] <= t_out[j] < t_in[i+1].
 
@@ -300,7 +247,7 @@ def search_right(t_in, t_out):
 # ---------------------------------------------------------------------------
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F2)
 def qmul(p, q):
     """Hamilton product p * q, shapes (n, 4) x (n, 4) -> (n, 4) (n or 1)."""
     n = max(p.shape[0], q.shape[0])
@@ -320,7 +267,7 @@ def qmul(p, q):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2)
 def qconj(q):
     """Conjugate (w, -x, -y, -z), shape (n, 4) -> (n, 4)."""
     out = np.empty_like(q)
@@ -332,50 +279,7 @@ def qconj(q):
     return out
 
 
-@njit(**NJIT_OPTIONS)
-def qinv(q):
-    """Inverse conj(q) / |q|², shape (n, 4) -> (n, 4)."""
-    out = np.empty_like(q)
-    for i in range(q.shape[0]):
-        w, x, y, z = _qinv1(q[i, 0], q[i, 1], q[i, 2], q[i, 3])
-        out[i, 0] = w
-        out[i, 1] = x
-        out[i, 2] = y
-        out[i, 3] = z
-    return out
-
-
-@njit(**NJIT_OPTIONS)
-def qnorm(q):
-    """Euclidean norm |q|, shape (n, 4) -> (n,)."""
-    out = np.empty(q.shape[0])
-    for i in range(q.shape[0]):
-        out[i] = math.sqrt(
-            q[i, 0] * q[i, 0]
-            + q[i, 1] * q[i, 1]
-            + q[i, 2] * q[i, 2]
-            + q[i, 3] * q[i, 3]
-        )
-    return out
-
-
-@njit(**NJIT_OPTIONS)
-def qnormalize(q):
-    """q / |q|, shape (n, 4) -> (n, 4)."""
-    out = np.empty_like(q)
-    for i in range(q.shape[0]):
-        n = math.sqrt(
-            q[i, 0] * q[i, 0]
-            + q[i, 1] * q[i, 1]
-            + q[i, 2] * q[i, 2]
-            + q[i, 3] * q[i, 3]
-        )
-        for k in range(4):
-            out[i, k] = q[i, k] / n
-    return out
-
-
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F2)
 def rotate_vectors(q, v):
     """Rotate v by q as q v q⁻¹, shapes (n, 4) x (n, 3) -> (n, 3) (n or 1).
 
@@ -398,7 +302,7 @@ def rotate_vectors(q, v):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F2)
 def rotate_vectors_outer(q, v):
     """Every q applied to every v, shapes (nq, 4) x (nv, 3) -> (nq, nv, 3)."""
     nq = q.shape[0]
@@ -415,37 +319,7 @@ def rotate_vectors_outer(q, v):
     return out
 
 
-@njit(**NJIT_OPTIONS)
-def qexp(q):
-    """Quaternion exponential, shape (n, 4) -> (n, 4) (numpy-quaternion's)."""
-    out = np.empty_like(q)
-    for i in range(q.shape[0]):
-        w, x, y, z = _qexp1(q[i, 0], q[i, 1], q[i, 2], q[i, 3])
-        out[i, 0] = w
-        out[i, 1] = x
-        out[i, 2] = y
-        out[i, 3] = z
-    return out
-
-
-@njit(**NJIT_OPTIONS)
-def qlog(q):
-    """Principal quaternion logarithm, shape (n, 4) -> (n, 4).
-
-    Negative real quaternions get the vector part (pi, 0, 0), the choice
-    numpy-quaternion makes.
-    """
-    out = np.empty_like(q)
-    for i in range(q.shape[0]):
-        w, x, y, z = _qlog1(q[i, 0], q[i, 1], q[i, 2], q[i, 3])
-        out[i, 0] = w
-        out[i, 1] = x
-        out[i, 2] = y
-        out[i, 3] = z
-    return out
-
-
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F2, F1)
 def slerp(q0, q1, tau):
     """Spherical linear interpolation along the shorter arc.
 
@@ -480,7 +354,7 @@ def slerp(q0, q1, tau):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F1)
 def squad_coefficients(r, t):
     """Control points of the squad spline, as numpy-quaternion builds them.
 
@@ -564,7 +438,7 @@ def squad_coefficients(r, t):
     return a_coef, b_coef
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F2, F2)
 def squad_segments(r, a_coef, b_coef):
     """Per-segment great circles for :func:`squad_evaluate`, shape (n, 11).
 
@@ -607,7 +481,7 @@ def squad_segments(r, a_coef, b_coef):
     return seg
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _along1(seg, i, o, tau, qw, qx, qy, qz):
     """cos(τθ) q + sin(τθ) u for the great circle stored at seg[i, o:o+5]."""
     s, c = _sincos(tau * seg[i, o])
@@ -619,7 +493,7 @@ def _along1(seg, i, o, tau, qw, qx, qy, qz):
     )
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F1, F2, F2, F2, F1)
 def squad_evaluate(q_in, t_in, a_coef, b_coef, seg, t_out):
     """Evaluate a squad spline whose coefficients are already known.
 
@@ -691,7 +565,7 @@ def squad_evaluate(q_in, t_in, a_coef, b_coef, seg, t_out):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F1, F1)
 def squad(q_in, t_in, t_out):
     """Cubic spline ("squad") interpolation of a rotation time series.
 
@@ -727,70 +601,36 @@ def squad(q_in, t_in, t_out):
     return squad_evaluate(q_in, t_in, a_coef, b_coef, seg, t_out)
 
 
-@njit(**NJIT_OPTIONS)
-def matrix_from_quaternion(q):
-    """Rotation matrices, shape (n, 4) -> (n, 3, 3); non-unit q are normalised."""
-    n = q.shape[0]
-    out = np.empty((n, 3, 3))
-    for i in range(n):
-        w, x, y, z = q[i, 0], q[i, 1], q[i, 2], q[i, 3]
-        s = 2.0 / (w * w + x * x + y * y + z * z)
-        out[i, 0, 0] = 1.0 - s * (y * y + z * z)
-        out[i, 0, 1] = s * (x * y - w * z)
-        out[i, 0, 2] = s * (x * z + w * y)
-        out[i, 1, 0] = s * (x * y + w * z)
-        out[i, 1, 1] = 1.0 - s * (x * x + z * z)
-        out[i, 1, 2] = s * (y * z - w * x)
-        out[i, 2, 0] = s * (x * z - w * y)
-        out[i, 2, 1] = s * (y * z + w * x)
-        out[i, 2, 2] = 1.0 - s * (x * x + y * y)
-    return out
+@kernel(F2)
+def unflip(q):
+    """Flip signs along axis 0 so that successive quaternions are closest.
 
+    ``q`` and ``-q`` are the same rotation; series converted from matrices or
+    recorded by trackers may switch between them, which ruins derivatives and
+    interpolation (squad between q[i] and a flipped q[i+1] turns the long way
+    round). Each row is negated when its dot product with the previous
+    valid (non-NaN) row, after that row's own correction, is negative: gaps
+    of missing samples are bridged. The first valid row keeps its sign.
 
-@njit(**NJIT_OPTIONS)
-def quaternion_from_matrix(m):
-    """Unit quaternions (w >= 0) from rotation matrices, (n, 3, 3) -> (n, 4).
+    Parameters
+    ----------
+    q : ndarray, shape (n, 4)
 
-    Shepperd's method: the square root is taken of the largest of the four
-    candidates (trace and diagonal), which keeps the division well away
-    from zero for every rotation.
+    Returns
+    -------
+    ndarray, shape (n, 4)
     """
-    n = m.shape[0]
+    n = q.shape[0]
     out = np.empty((n, 4))
+    prev = -1
     for i in range(n):
-        m00, m01, m02 = m[i, 0, 0], m[i, 0, 1], m[i, 0, 2]
-        m10, m11, m12 = m[i, 1, 0], m[i, 1, 1], m[i, 1, 2]
-        m20, m21, m22 = m[i, 2, 0], m[i, 2, 1], m[i, 2, 2]
-        tr = m00 + m11 + m22
-        if tr >= m00 and tr >= m11 and tr >= m22:
-            s = 2.0 * math.sqrt(1.0 + tr)
-            w = 0.25 * s
-            x = (m21 - m12) / s
-            y = (m02 - m20) / s
-            z = (m10 - m01) / s
-        elif m00 >= m11 and m00 >= m22:
-            s = 2.0 * math.sqrt(1.0 + m00 - m11 - m22)
-            w = (m21 - m12) / s
-            x = 0.25 * s
-            y = (m01 + m10) / s
-            z = (m02 + m20) / s
-        elif m11 >= m22:
-            s = 2.0 * math.sqrt(1.0 - m00 + m11 - m22)
-            w = (m02 - m20) / s
-            x = (m01 + m10) / s
-            y = 0.25 * s
-            z = (m12 + m21) / s
-        else:
-            s = 2.0 * math.sqrt(1.0 - m00 - m11 + m22)
-            w = (m10 - m01) / s
-            x = (m02 + m20) / s
-            y = (m12 + m21) / s
-            z = 0.25 * s
-        norm = math.sqrt(w * w + x * x + y * y + z * z)
-        if w < 0.0:
-            norm = -norm
-        out[i, 0] = w / norm
-        out[i, 1] = x / norm
-        out[i, 2] = y / norm
-        out[i, 3] = z / norm
+        d = 0.0
+        if prev >= 0:
+            for j in range(4):
+                d += out[prev, j] * q[i, j]
+        sign = -1.0 if d < 0.0 else 1.0
+        for j in range(4):
+            out[i, j] = sign * q[i, j]
+        if not math.isnan(q[i, 0] + q[i, 1] + q[i, 2] + q[i, 3]):
+            prev = i
     return out

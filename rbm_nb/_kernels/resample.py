@@ -8,26 +8,12 @@ and an operand of length 1 is reused for every row. Times are float64
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
-from .._config import NJIT_OPTIONS
+from ._jit import F1, F2, F3, I1, B, kernel
 from .quaternion import _qmul1, _rotate1, search_right
 
 
-@njit(**NJIT_OPTIONS)
-def first_unordered(key):
-    """Index of the first entry not greater than the one before it, or -1.
-
-    The check for strictly increasing timestamps, without the temporary
-    arrays of ``np.diff(key) > 0``.
-    """
-    for i in range(1, key.shape[0]):
-        if not key[i] > key[i - 1]:
-            return i
-    return -1
-
-
-@njit(**NJIT_OPTIONS)
+@kernel(F1, F2, F1)
 def interp_linear(t_in, y_in, t_out):
     """Piecewise-linear resampling of (n, k) samples at times t_out.
 
@@ -71,7 +57,7 @@ def interp_linear(t_in, y_in, t_out):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F1, F2, F1)
 def hold_last(t_events, y_events, t_out):
     """Discrete resampling: the last event at or before each time.
 
@@ -103,7 +89,7 @@ def hold_last(t_events, y_events, t_out):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F2, F2, F2, B)
 def chain_step(t_acc, r_acc, t, r, inverse):
     """Append one transform to an accumulated transform.
 
@@ -163,7 +149,7 @@ def chain_step(t_acc, r_acc, t, r, inverse):
     return t_new, r_new
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F2, F3, B)
 def transform_blocks(r, t, v, translate):
     """Apply per-time transforms to blocks of vectors.
 
@@ -206,7 +192,7 @@ def transform_blocks(r, t, v, translate):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F3)
 def qmul_blocks(r, q):
     """Left-multiply blocks of quaternions by per-time rotations.
 
@@ -239,7 +225,7 @@ def qmul_blocks(r, q):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F1, F1)
 def hold_index(t_events, t_out):
     """Index of the last event at or before each time (0 before the first)."""
     idx = search_right(t_events, t_out)
@@ -249,7 +235,7 @@ def hold_index(t_events, t_out):
     return idx
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F2, I1, F3, B)
 def transform_blocks_held(r, t, idx, v, translate):
     """:func:`transform_blocks` with row i using transform ``idx[i]``.
 
@@ -289,7 +275,7 @@ def transform_blocks_held(r, t, idx, v, translate):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, I1, F3)
 def qmul_blocks_held(r, idx, q):
     """:func:`qmul_blocks` with row i using rotation ``idx[i]``."""
     n = idx.shape[0]
@@ -308,37 +294,4 @@ def qmul_blocks_held(r, idx, q):
             out[i, j, 1] = x
             out[i, j, 2] = y
             out[i, j, 3] = z
-    return out
-
-
-@njit(**NJIT_OPTIONS)
-def unflip(q):
-    """Flip signs so consecutive quaternions have non-negative dot products.
-
-    q and -q are the same rotation, but interpolation between q[i] and a
-    sign-flipped q[i+1] would turn the long way round.
-    """
-    n = q.shape[0]
-    out = np.empty_like(q)
-    sign = 1.0
-    prev = -1  # last row without NaN: gaps of missing samples are bridged
-    for i in range(n):
-        if prev >= 0:
-            d = (
-                q[i, 0] * q[prev, 0]
-                + q[i, 1] * q[prev, 1]
-                + q[i, 2] * q[prev, 2]
-                + q[i, 3] * q[prev, 3]
-            )
-            if d < 0.0:
-                sign = -sign
-        if not (
-            q[i, 0] != q[i, 0]
-            or q[i, 1] != q[i, 1]
-            or q[i, 2] != q[i, 2]
-            or q[i, 3] != q[i, 3]
-        ):
-            prev = i
-        for c in range(4):
-            out[i, c] = sign * q[i, c]
     return out

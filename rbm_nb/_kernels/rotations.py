@@ -13,16 +13,13 @@ equal or one of them is 1.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
-from numba import njit
 
-from .._config import NJIT_OPTIONS
+from ._jit import F2, kernel
 from .quaternion import _qinv1, _qlog1, _rotate1
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F2)
 def rotate_vectors_checked(q, v):
     """q v q⁻¹ row by row, and the first row whose quaternion is zero.
 
@@ -60,7 +57,7 @@ def rotate_vectors_checked(q, v):
     return out, zero_idx
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2)
 def qinv_checked(q):
     """conj(q) / |q|² row by row, and the first row that is zero (or -1).
 
@@ -92,7 +89,7 @@ def qinv_checked(q):
     return out, zero_idx
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2)
 def first_zero_row(q):
     """Index of the first all-zero row of ``q`` (n, k), or -1."""
     for i in range(q.shape[0]):
@@ -106,41 +103,7 @@ def first_zero_row(q):
     return -1
 
 
-@njit(**NJIT_OPTIONS)
-def unflip(q):
-    """Flip signs along axis 0 so that successive quaternions are closest.
-
-    ``q`` and ``-q`` are the same rotation; series converted from matrices or
-    recorded by trackers may switch between them, which ruins derivatives and
-    interpolation. Each row is negated when its dot product with the previous
-    valid (non-NaN) row, after that row's own correction, is negative. The
-    first valid row keeps its sign.
-
-    Parameters
-    ----------
-    q : ndarray, shape (n, 4)
-
-    Returns
-    -------
-    ndarray, shape (n, 4)
-    """
-    n = q.shape[0]
-    out = np.empty((n, 4))
-    prev = -1
-    for i in range(n):
-        d = 0.0
-        if prev >= 0:
-            for j in range(4):
-                d += out[prev, j] * q[i, j]
-        sign = -1.0 if d < 0.0 else 1.0
-        for j in range(4):
-            out[i, j] = sign * q[i, j]
-        if not math.isnan(q[i, 0] + q[i, 1] + q[i, 2] + q[i, 3]):
-            prev = i
-    return out
-
-
-@njit(**NJIT_OPTIONS)
+@kernel(F2)
 def rotation_vectors(q):
     """2 log(q), vector part: numpy-quaternion's ``as_rotation_vector``.
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._kernels.quaternion import qconj, rotate_vectors
-from ._profiles import RandomSines, bump, smootherstep
+from ._profiles import bump, smootherstep
 from ._walking import HeadMotion
 
 # scene camera (x right, y down, z forward) in the head frame (x right, y up,
@@ -220,9 +220,13 @@ def _slerp_directions(a: np.ndarray, b: np.ndarray, u: np.ndarray) -> np.ndarray
 
 
 def eye_orientation(
-    rng, head: HeadMotion, index: np.ndarray, eye: str, fixations: tuple, noise: float
+    rng, head: HeadMotion, index: np.ndarray, eye: str, fixations: tuple, error
 ) -> np.ndarray:
-    """Eye-in-camera quaternions (n, 4) at the head-grid samples ``index``."""
+    """Eye-in-camera quaternions (n, 4) at the head-grid samples ``index``.
+
+    ``error`` (n,) is each sample's angular tracking error in rad, applied
+    in a random direction.
+    """
     t = head.t[index]
     onsets = np.array([f.onset for f in fixations])
     targets = np.array([f.target for f in fixations])
@@ -232,15 +236,22 @@ def eye_orientation(
     current = _gaze_in_camera(pos, q, EYE_CENTERS[eye], targets[k])
     previous = _gaze_in_camera(pos, q, EYE_CENTERS[eye], targets[np.maximum(k - 1, 0)])
     progress = smootherstep((t - onsets[k]) / durations[k])
-    gaze = _slerp_directions(previous, current, progress)
-    # tracker noise, a few hundredths of a degree
-    gaze = gaze + rng.normal(0.0, noise, gaze.shape)
-    gaze /= np.linalg.norm(gaze, axis=1, keepdims=True)
+    gaze = _tilt(rng, _slerp_directions(previous, current, progress), error)
     # shortest arc from the camera's z axis to the gaze direction
     quat = np.stack(
         [1.0 + gaze[:, 2], -gaze[:, 1], gaze[:, 0], np.zeros_like(t)], axis=1
     )
     return quat / np.linalg.norm(quat, axis=1, keepdims=True)
+
+
+def _tilt(rng, directions: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Unit directions turned by ``angle`` (rad) towards random perpendiculars."""
+    side = np.cross(directions, rng.normal(size=directions.shape))
+    side /= np.linalg.norm(side, axis=1, keepdims=True)
+    out = np.cos(angle)[:, None] * directions + np.sin(angle)[:, None] * side
+    # never behind the camera: the pupil would not be seen
+    out[:, 2] = np.maximum(out[:, 2], 0.05)
+    return out / np.linalg.norm(out, axis=1, keepdims=True)
 
 
 def draw_blinks(rng, start: float, end: float) -> np.ndarray:
@@ -254,15 +265,12 @@ def draw_blinks(rng, start: float, end: float) -> np.ndarray:
     return np.array(blinks).reshape(-1, 2)
 
 
-def detection_confidence(rng, t: np.ndarray, blinks: np.ndarray) -> np.ndarray:
-    """Pupil detection confidence in [0, 1], collapsing during blinks."""
-    wobble = RandomSines.draw(rng, 0.015, (0.05, 0.5))
-    confidence = 0.95 + wobble.evaluate(t)[0] + rng.normal(0.0, 0.01, t.shape)
+def lid_closure(t: np.ndarray, blinks: np.ndarray) -> np.ndarray:
+    """How far the lids are closed at ``t`` (0 open, 1 shut), shape of ``t``."""
     closed = np.zeros_like(t)
     edge = 0.03  # lids take ~30 ms to close and to open
     for onset, duration in blinks:
         i0, i1 = np.searchsorted(t, [onset, onset + duration])
         value, _ = bump(t[i0:i1], onset, edge, duration - 2.0 * edge)
         closed[i0:i1] = np.maximum(closed[i0:i1], value)
-    confidence = confidence * (1.0 - 0.97 * closed)
-    return np.clip(confidence, 0.0, 1.0)
+    return closed

@@ -70,8 +70,19 @@ def _interp_rows(t: np.ndarray, t_in: np.ndarray, values: np.ndarray) -> np.ndar
     )
 
 
+def usable_eye_rows(eye, min_confidence: float = 0.6) -> np.ndarray:
+    """Rows with an orientation and a confidence of at least ``min_confidence``."""
+    finite = np.isfinite(eye.orientation.values).all(axis=1)
+    return finite & (eye.confidence.values >= min_confidence)
+
+
 def _gaze(eye, head):
-    """Eye times (s), gaze in the head frame and in world, head orientation there."""
+    """Eye times (s), gaze in the head frame and in world, head orientation there.
+
+    Only usable rows (:func:`usable_eye_rows`) are kept: missing and
+    low-confidence samples would be read as eye movements.
+    """
+    eye = eye.isel(time=usable_eye_rows(eye))
     origin = head.time.values[0]
     t = _seconds(eye.time.values, origin)
     t_head = _seconds(head.time.values, origin)
@@ -146,19 +157,34 @@ def vor_gain(eye, head) -> float:
     w_head = rotate_vectors(qconj(q_head), w_world)
     w_head_perp = w_head - np.einsum("ij,ij->i", w_head, in_head)[:, None] * in_head
     gaze_speed = np.linalg.norm(_angular_rate(t, in_world), axis=1)
-    confident = eye.confidence.values > 0.5
-    use = (
-        (gaze_speed < FIXATION_THRESHOLD)
-        & (np.linalg.norm(w_head_perp, axis=1) > HEAD_TURN_THRESHOLD)
-        & confident
+    use = (gaze_speed < FIXATION_THRESHOLD) & (
+        np.linalg.norm(w_head_perp, axis=1) > HEAD_TURN_THRESHOLD
     )
     a, b = w_eye[use], w_head_perp[use]
     return float(-np.sum(a * b) / np.sum(b * b))
 
 
-def blink_fraction(eye, threshold: float = 0.5) -> float:
-    """Fraction of samples whose detection confidence is below ``threshold``."""
-    return float(np.mean(eye.confidence.values < threshold))
+def blink_fraction(eye, threshold: float = 0.1) -> float:
+    """Fraction of samples with (nearly) closed lids: no data and confidence below ``threshold``."""
+    missing = ~np.isfinite(eye.position.values).all(axis=1)
+    return float(np.mean(missing & (eye.confidence.values < threshold)))
+
+
+def tracker_quality(eye) -> dict:
+    """Rates of the tracker's flaws: NaN rows, low confidence, dropouts."""
+    missing = ~np.isfinite(eye.orientation.values).all(axis=1)
+    confidence = eye.confidence.values
+    dt = np.diff(_seconds(eye.time.values, eye.time.values[0]))
+    return {
+        "rows": int(missing.size),
+        "rows_per_second": float(missing.size / (dt.sum() or np.nan)),
+        "median_interval": float(np.median(dt)),
+        "nan_rows": int(missing.sum()),
+        "low_confidence": float(np.mean(confidence[~missing] < 0.6)),
+        "gaps_over_0.1s": int(np.sum(dt > 0.1)),
+        "largest_gap": float(dt.max()),
+        "position_std": np.nanstd(eye.position.values, axis=0),
+    }
 
 
 def estimator_consistency(head) -> tuple[float, float]:

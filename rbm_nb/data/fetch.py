@@ -9,7 +9,7 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 from .._progress import download_bar
-from .registry import BASE_URL, DATA_DIR_ENV, REGISTRY
+from .registry import BASE_URL, CACHE_DIR_ENV, DATA_DIR_ENV, REGISTRY
 
 # connect fast or give up: offline, an answer within seconds beats a long hang
 DEFAULT_TIMEOUT = (3.05, 60.0)  # (connect, read) seconds
@@ -185,6 +185,38 @@ class ExampleDataStore(Mapping):
             if bar is not False:
                 bar.close()
         return Path(fetched)
+
+
+def cache_dir() -> Path:
+    """The folder for files rbm_nb derives; never the example-data folder.
+
+    ``RBM_NB_CACHE_DIR`` if set (read at each call), else ``derived`` in the
+    user's cache folder for rbm_nb (pooch's ``os_cache("rbm_nb")``, or
+    ``~/.cache/rbm_nb`` without pooch). The synthetic example bag and the
+    rosbag caches of bags in the example-data folder go here, so that only
+    the registry's files are ever written into ``RBM_NB_DATA_DIR``.
+    """
+    if os.environ.get(CACHE_DIR_ENV):
+        return Path(os.environ[CACHE_DIR_ENV]).expanduser()
+    try:
+        base = Path(_pooch().os_cache("rbm_nb"))
+    except ImportError:
+        base = (
+            Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "rbm_nb"
+        )
+    return base / "derived"
+
+
+def example_data_dirs() -> tuple:
+    """Folders that hold example data: ``RBM_NB_DATA_DIR`` and the default store's."""
+    folders = set()
+    try:
+        folders.add(example_data.data_dir.resolve())
+    except ImportError:  # no pooch: no default folder either
+        pass
+    if os.environ.get(DATA_DIR_ENV):
+        folders.add(Path(os.environ[DATA_DIR_ENV]).expanduser().resolve())
+    return tuple(folders)
 
 
 def sha256(path: Path) -> str:

@@ -8,13 +8,13 @@ import warnings
 from pathlib import Path
 
 from ..io._files import load_netcdf
-from .fetch import ExampleDataStore, ExampleDataUnavailable, example_data
+from .fetch import ExampleDataStore, ExampleDataUnavailable, cache_dir, example_data
 from .synthetic import synthetic_head_eye
 
 SOURCES = ("auto", "remote", "synthetic")
 DATASETS = ("head", "left_eye", "right_eye")
 # bump when the generator's output changes, so that cached bags are rebuilt
-SYNTHETIC_VERSION = 2
+SYNTHETIC_VERSION = 3
 
 # topic -> (recording part, frame, child frame), as in the real example bag
 ROSBAG_TOPICS = {
@@ -48,7 +48,9 @@ def load_example(
         it can be had, else the synthetic one with a ``UserWarning`` saying so.
     store : ExampleDataStore, optional
         Where real files come from (default :data:`rbm_nb.example_data`).
-        The synthetic bag is cached in its data folder.
+        Nothing is written into its folder but the registry's files: the
+        synthetic bag is built once into :func:`rbm_nb.data.fetch.cache_dir`
+        (``RBM_NB_CACHE_DIR``).
     seed : int, default 0
         Seed of the synthetic recording.
 
@@ -88,7 +90,7 @@ def load_example(
 def _synthetic(name: str, store: ExampleDataStore, seed: int):
     if name == "rosbag":
         path = (
-            store.data_dir
+            cache_dir()
             / "synthetic"
             / f"example-synthetic-v{SYNTHETIC_VERSION}-seed{seed}.bag"
         )

@@ -31,3 +31,6 @@ REGISTRY: dict[str, tuple[str, str]] = {
 
 # a folder holding the files (or where they should be downloaded to)
 DATA_DIR_ENV = "RBM_NB_DATA_DIR"
+# a folder for files rbm_nb derives (synthetic bag, rosbag caches of example
+# bags); default: a "derived" folder in the user's cache folder for rbm_nb
+CACHE_DIR_ENV = "RBM_NB_CACHE_DIR"

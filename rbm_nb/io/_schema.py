@@ -47,9 +47,18 @@ def motion_dataset(
             values,
             variable_attrs.get(name, STANDARD_ATTRS.get(name, {})),
         )
+    # fixed-width strings and long names, as in the example recordings' files
     coords = {
-        "time": time,
-        "cartesian_axis": np.array(["x", "y", "z"], dtype=object),
-        "quaternion_axis": np.array(["w", "x", "y", "z"], dtype=object),
+        "time": ("time", np.asarray(time), {"long_name": "Time"}),
+        "cartesian_axis": (
+            "cartesian_axis",
+            np.array(["x", "y", "z"], dtype="<U1"),
+            {"long_name": "Axis"},
+        ),
+        "quaternion_axis": (
+            "quaternion_axis",
+            np.array(["w", "x", "y", "z"], dtype="<U1"),
+            {"long_name": "Axis"},
+        ),
     }
     return xr.Dataset(data_vars, coords, attrs)

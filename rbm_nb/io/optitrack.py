@@ -59,8 +59,10 @@ def load_optitrack(filepath: str | os.PathLike, import_format: str = "numpy") ->
     FileNotFoundError
         If the file does not exist.
     rbm_nb.io.FileFormatError
-        If the file is not a Motive CSV export, is truncated or has
-        malformed rows; the message names the file and the problem.
+        If the file is not a Motive CSV export, is truncated (fewer rows
+        than the header's "Total Exported Frames") or has malformed,
+        duplicated or reordered rows (frame numbers and times must
+        increase); the message names the file and the problem.
     ValueError
         If ``import_format`` is not one of the three formats.
     """
@@ -74,6 +76,7 @@ def load_optitrack(filepath: str | os.PathLike, import_format: str = "numpy") ->
     meta = _metadata(path, header)
     columns = _rigid_body_columns(path, header)
     data = _numbers(path, lines[_N_HEADER_ROWS:], len(header[-1]))
+    _check_frames(path, meta, data)
     timestamps = _timestamps(path, meta, data[:, 1])
     scale = _length_scale(path, meta)
     bodies = {
@@ -200,6 +203,34 @@ def _numbers(path: Path, rows: list[str], width: int) -> np.ndarray:
         )
         raise FileFormatError(f"{path}: line {line} has no frame number or time")
     return data
+
+
+def _check_frames(path: Path, meta: dict, data: np.ndarray) -> None:
+    """As many rows as the header announces; frame numbers and times increasing."""
+    announced = meta.get("Total Exported Frames")
+    if announced is not None:
+        try:
+            expected = int(announced)
+        except ValueError:
+            raise FileFormatError(
+                f"{path}: 'Total Exported Frames' is {announced!r}, not a number"
+            ) from None
+        if expected != len(data):
+            what = "is truncated" if len(data) < expected else "has rows beyond them"
+            raise FileFormatError(
+                f"{path}: the header announces {expected} exported frames but the file "
+                f"has {len(data)} data rows: it {what}"
+            )
+    for column, name in ((0, "frame number"), (1, "time")):
+        back = np.flatnonzero(np.diff(data[:, column]) <= 0)
+        if back.size:
+            i = int(back[0]) + 1
+            line = _N_HEADER_ROWS + 1 + i
+            raise FileFormatError(
+                f"{path}: line {line} has {name} {data[i, column]:g}, not after "
+                f"{data[i - 1, column]:g} on line {line - 1} (duplicated or "
+                f"reordered rows); {name}s must increase"
+            )
 
 
 def _timestamps(path: Path, meta: dict, seconds: np.ndarray) -> np.ndarray:

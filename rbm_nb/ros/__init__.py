@@ -14,9 +14,12 @@ _EXPORTS: dict[str, str] = {
     "RosbagWriter": "writer",
     "play_publisher": "playback",
     "Transformer": "transformer",
+    "load_tf_tree": "tf_tree",
+    "register_frames_from_bag": "tf_tree",
     "ReferenceFrameTransformBroadcaster": "publishers",
     "ReferenceFrameMarkerPublisher": "publishers",
     "init_node": "publishers",
+    "ExtrapolationError": "transformer",
 }
 
 __all__ = sorted(_EXPORTS)

@@ -15,6 +15,10 @@ from dataclasses import dataclass
 import numpy as np
 
 TRANSFORM_STAMPED = "geometry_msgs/TransformStamped"
+TF_MESSAGE = "tf2_msgs/TFMessage"
+# tf (not tf2) spelling of the same message in old ROS1 bags
+TF_TYPES = (TF_MESSAGE, "tf/tfMessage")
+_TF_DEFINITION = "geometry_msgs/TransformStamped[] transforms"
 ODOMETRY = "nav_msgs/Odometry"
 POSE_STAMPED = "geometry_msgs/PoseStamped"
 
@@ -211,6 +215,196 @@ def _pose(msg, name: str) -> tuple:
 def _twist(twist) -> tuple:
     lin, ang = twist.linear, twist.angular
     return (lin.x, lin.y, lin.z, ang.x, ang.y, ang.z)
+
+
+def check_messages(messages: Messages, where: str, index=None) -> None:
+    """Raise FileFormatError unless the decoded values are what a bag can hold.
+
+    Each pose field (position, orientation, each twist part) of a message is
+    all finite, or all NaN (a sample without data, written so on purpose);
+    finite orientations are unit quaternions within
+    ``UNIT_QUATERNION_TOLERANCE``; nanoseconds are below 1e9. ``where``
+    names the bag and topic in the message, which also gives the index of
+    the first bad message (row ``i`` is message ``index[i]`` if given).
+    """
+    from .._config import UNIT_QUATERNION_TOLERANCE
+    from ..io._files import FileFormatError
+
+    def number(i):
+        return int(i if index is None else index[i])
+
+    bad_nsec = np.flatnonzero((messages.nsec < 0) | (messages.nsec >= 1_000_000_000))
+    if bad_nsec.size:
+        i = int(bad_nsec[0])
+        raise FileFormatError(
+            f"{where}: message {number(i)} has a header stamp with {messages.nsec[i]} "
+            "nanoseconds (must be below 1e9): the bag is damaged"
+        )
+    fields = [("position", messages.position), ("orientation", messages.orientation)]
+    if messages.linear_velocity is not None:
+        fields += [
+            ("linear velocity", messages.linear_velocity),
+            ("angular velocity", messages.angular_velocity),
+        ]
+    for name, values in fields:
+        finite = np.isfinite(values).all(axis=1)
+        bad = np.flatnonzero(~(finite | np.isnan(values).all(axis=1)))
+        if bad.size:
+            i = int(bad[0])
+            raise FileFormatError(
+                f"{where}: message {number(i)} has {name} {values[i].tolist()}; a field must be "
+                "all finite, or all NaN for a sample without data: the bag is damaged"
+            )
+    q = messages.orientation
+    finite = np.isfinite(q).all(axis=1)
+    with np.errstate(over="ignore"):  # a damaged value may be ~1e300: inf norm, refused
+        norms = np.linalg.norm(q, axis=1)
+    error = np.abs(norms[finite] - 1.0)
+    if error.size and error.max() > UNIT_QUATERNION_TOLERANCE:
+        i = int(np.flatnonzero(finite)[np.argmax(error > UNIT_QUATERNION_TOLERANCE)])
+        raise FileFormatError(
+            f"{where}: message {number(i)} has orientation {q[i].tolist()} (w, x, y, z) of norm "
+            f"{norms[i]:.6g}, not a unit quaternion (tolerance "
+            f"{UNIT_QUATERNION_TOLERANCE}): the bag is damaged"
+        )
+
+
+def register_tf_message(typestore) -> None:
+    """Teach a rosbags typestore ``tf2_msgs/msg/TFMessage`` (ROS1 stores lack it)."""
+    if "tf2_msgs/msg/TFMessage" not in typestore.types:
+        from rosbags.typesys import get_types_from_msg
+
+        typestore.register(get_types_from_msg(_TF_DEFINITION, "tf2_msgs/msg/TFMessage"))
+
+
+@dataclass
+class TfPair:
+    """Every transform of one parent/child pair found in tf messages."""
+
+    frame_id: str
+    child_frame_id: str
+    static: bool
+    stamps_ns: np.ndarray  # (n,) int64, increasing
+    position: np.ndarray  # (n, 3)
+    orientation: np.ndarray  # (n, 4) w, x, y, z
+    message_index: np.ndarray  # (n,) index of the tf message in its topic
+
+    @property
+    def timestamps(self) -> np.ndarray:
+        """Header stamps as float seconds."""
+        sec, nsec = np.divmod(self.stamps_ns, 1_000_000_000)
+        return sec.astype(np.float64) + nsec.astype(np.float64) / 1e9
+
+
+def split_tf(msgs: list, static: bool) -> dict:
+    """Transforms of deserialized tf messages, per (frame_id, child_frame_id).
+
+    Samples of a moving pair are sorted by stamp; of several with the same
+    stamp the last one received is kept (a newer one replaces an older one,
+    as in tf2's buffer). A static pair keeps its last transform only.
+    """
+    rows: dict = {}
+    for index, msg in enumerate(msgs):
+        for tr in msg.transforms:
+            key = (tr.header.frame_id, tr.child_frame_id)
+            t, r = tr.transform.translation, tr.transform.rotation
+            stamp = int(tr.header.stamp.sec) * 1_000_000_000 + int(
+                tr.header.stamp.nanosec
+            )
+            rows.setdefault(key, []).append(
+                (
+                    stamp,
+                    t.x,
+                    t.y,
+                    t.z,
+                    r.w,
+                    r.x,
+                    r.y,
+                    r.z,
+                    index,
+                    int(tr.header.stamp.nanosec),
+                )
+            )
+    pairs = {}
+    for (frame, child), values in rows.items():
+        arr = np.array(values, dtype=object)
+        stamps = arr[:, 0].astype(np.int64)
+        floats = arr[:, 1:8].astype(np.float64)
+        index = arr[:, 8].astype(np.int64)
+        nsec = arr[:, 9].astype(np.int64)
+        if static:
+            keep = np.array([len(values) - 1])
+        else:
+            order = np.argsort(stamps, kind="stable")
+            # last of equal stamps: unique on the reversed order
+            _, last = np.unique(stamps[order][::-1], return_index=True)
+            keep = order[len(order) - 1 - last]
+        pairs[(frame, child)] = (
+            TfPair(
+                frame, child, static, stamps[keep], floats[keep, :3], floats[keep, 3:],
+                index[keep],
+            ),
+            nsec,
+            index,
+        )  # fmt: skip
+    return pairs
+
+
+def check_tf(pair: TfPair, nsec: np.ndarray, index: np.ndarray, where: str) -> None:
+    """:func:`check_messages` for one tf pair; errors name the tf message index."""
+    from ..io._files import FileFormatError
+
+    bad = np.flatnonzero((nsec < 0) | (nsec >= 1_000_000_000))
+    if bad.size:
+        raise FileFormatError(
+            f"{where}: message {int(index[bad[0]])} has a stamp with {int(nsec[bad[0]])} "
+            "nanoseconds (must be below 1e9): the bag is damaged"
+        )
+    n = len(pair.stamps_ns)
+    messages = Messages(
+        np.zeros(n, np.int64), np.zeros(n, np.int64), pair.position, pair.orientation
+    )
+    check_messages(
+        messages,
+        f"{where} ({pair.frame_id} -> {pair.child_frame_id})",
+        pair.message_index,
+    )
+
+
+def tf_message(typestore, stamps_ns, frames, children, translation, rotation):
+    """A ``tf2_msgs/msg/TFMessage`` object holding one transform per row."""
+    types = typestore.types
+    Time = types["builtin_interfaces/msg/Time"]
+    Header = types["std_msgs/msg/Header"]
+    Vector3 = types["geometry_msgs/msg/Vector3"]
+    Quaternion = types["geometry_msgs/msg/Quaternion"]
+    Transform = types["geometry_msgs/msg/Transform"]
+    Stamped = types["geometry_msgs/msg/TransformStamped"]
+    has_seq = "seq" in Header.__dataclass_fields__
+    transforms = []
+    for stamp, frame, child, t, r in zip(
+        stamps_ns, frames, children, translation, rotation, strict=True
+    ):
+        sec, nsec = divmod(int(stamp), 1_000_000_000)
+        time = Time(sec=sec, nanosec=nsec)
+        header = (
+            Header(seq=0, stamp=time, frame_id=frame)
+            if has_seq
+            else Header(stamp=time, frame_id=frame)
+        )
+        transforms.append(
+            Stamped(
+                header=header,
+                child_frame_id=child,
+                transform=Transform(
+                    translation=Vector3(x=float(t[0]), y=float(t[1]), z=float(t[2])),
+                    rotation=Quaternion(
+                        x=float(r[1]), y=float(r[2]), z=float(r[3]), w=float(r[0])
+                    ),
+                ),
+            )
+        )
+    return types["tf2_msgs/msg/TFMessage"](transforms=transforms)
 
 
 # ---------------------------------------------------------------------------

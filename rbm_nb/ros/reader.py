@@ -15,10 +15,14 @@ from ..io._schema import motion_dataset
 from ._messages import (
     KINDS,
     SUPPORTED_TYPES,
+    TF_TYPES,
     Messages,
+    check_messages,
+    check_tf,
     decode_objects,
     decode_raw,
     ros1_type_name,
+    split_tf,
 )
 
 # decoding goes at ~1 µs per message on the fast path and ~25 µs per message
@@ -43,8 +47,11 @@ class RosbagReader:
     Notes
     -----
     Readable message types: ``geometry_msgs/TransformStamped``,
-    ``nav_msgs/Odometry`` and ``geometry_msgs/PoseStamped``. Timestamps come
-    from each message's header stamp, messages stay in recording order.
+    ``nav_msgs/Odometry`` and ``geometry_msgs/PoseStamped`` by topic
+    (:meth:`load_messages`, :meth:`load_dataset`), and the tf tree of
+    ``tf2_msgs/TFMessage`` on ``/tf`` and ``/tf_static`` (:meth:`load_tf`).
+    Timestamps come from each message's header stamp, messages stay in
+    recording order.
     """
 
     def __init__(self, bag_file: str | os.PathLike):
@@ -138,7 +145,10 @@ class RosbagReader:
             If the topic is not in the bag (the message lists the topics) or
             its message type is not supported (the message lists those).
         rbm_nb.io.FileFormatError
-            If the bag is damaged.
+            If the bag is damaged, including decoded values no bag should
+            hold: a pose field partly NaN or infinite (all NaN is a sample
+            without data), a non-unit quaternion, a stamp with 1e9 ns or
+            more. The message names the topic and the message index.
         """
         messages, _ = self._read(topic, progress)
         out = {
@@ -178,6 +188,7 @@ class RosbagReader:
                     f"{self.bag_file} is damaged: reading {topic!r} failed after "
                     f"{len(raws)} of {count} messages ({type(err).__name__}: {err})"
                 ) from err
+        check_messages(messages, f"{self.bag_file}, topic {topic!r}")
         return messages, name
 
     def _message_type(self, reader, topic: str) -> str:
@@ -202,12 +213,105 @@ class RosbagReader:
                 f"topic {topic!r} in {self.bag_file} mixes message types {types}"
             )
         name = ros1_type_name(msgtype)
+        if name in TF_TYPES:
+            raise ValueError(
+                f"topic {topic!r} carries tf messages ({name}), several transforms each; "
+                "read them with RosbagReader.load_tf, which splits them per "
+                "parent/child pair"
+            )
         if name not in KINDS:
             raise ValueError(
                 f"topic {topic!r} has message type {name}, which RosbagReader cannot load; "
                 f"supported types: {', '.join(SUPPORTED_TYPES)}"
             )
         return name
+
+    def load_tf(self, topics=None, *, progress: bool | None = None) -> dict:
+        """Every transform of every tf message, split per parent/child pair.
+
+        Parameters
+        ----------
+        topics : sequence of str, optional
+            tf topics to read (type ``tf2_msgs/TFMessage``). Default: those of
+            ``/tf`` and ``/tf_static`` that are in the bag. Topics whose name
+            ends in ``_static`` hold static transforms.
+        progress : bool, optional
+            See :meth:`load_messages`.
+
+        Returns
+        -------
+        dict
+            ``{(frame_id, child_frame_id): TfPair}``. A ``TfPair`` has
+            ``static`` (bool), ``stamps_ns`` (n,) int64 and ``timestamps`` (n,)
+            float seconds, ``position`` (n, 3), ``orientation`` (n, 4) w, x, y,
+            z and ``message_index`` (n,). Moving pairs are sorted by stamp
+            (of equal stamps the last received is kept, as tf2 does); a
+            static pair has one transform, the last one sent.
+
+        Raises
+        ------
+        ValueError
+            If a topic is missing or not a tf topic, no tf topic is in the
+            bag, or a pair is both static and moving.
+        rbm_nb.io.FileFormatError
+            If the bag is damaged (the message names topic and message index).
+        """
+        with self._session() as reader:
+            if topics is None:
+                topics = [t for t in ("/tf", "/tf_static") if t in reader.topics]
+                if not topics:
+                    raise ValueError(
+                        f"{self.bag_file} has no /tf or /tf_static topic; its topics: "
+                        f"{sorted(reader.topics)}"
+                    )
+            elif isinstance(topics, str):
+                topics = [topics]
+            pairs: dict = {}
+            for topic in topics:
+                self._check_tf_topic(reader, topic)
+                static = topic.endswith("_static")
+                msgs = self._deserialize_all(reader, topic, progress)
+                for key, (pair, nsec, index) in split_tf(msgs, static).items():
+                    check_tf(pair, nsec, index, f"{self.bag_file}, topic {topic!r}")
+                    if key in pairs and pairs[key].static != static:
+                        raise ValueError(
+                            f"{self.bag_file}: the transform {key[0]} -> {key[1]} is both "
+                            "static and moving"
+                        )
+                    pairs[key] = (
+                        pair if key not in pairs or static else _merge(pairs[key], pair)
+                    )
+        return pairs
+
+    def _check_tf_topic(self, reader, topic: str) -> None:
+        if topic not in reader.topics:
+            raise ValueError(
+                f"topic {topic!r} is not in {self.bag_file}; topics: {sorted(reader.topics)}"
+            )
+        msgtype = reader.topics[topic].msgtype
+        if msgtype is None or ros1_type_name(msgtype) not in TF_TYPES:
+            raise ValueError(
+                f"topic {topic!r} has message type {msgtype and ros1_type_name(msgtype)}, "
+                f"not a tf message type ({', '.join(TF_TYPES)})"
+            )
+
+    def _deserialize_all(self, reader, topic: str, progress) -> list:
+        connections = [c for c in reader.connections if c.topic == topic]
+        count = sum(c.msgcount for c in connections)
+        msgs = []
+        try:
+            with progress_bar(
+                count, topic, progress=progress, threshold=LARGE_TOPIC
+            ) as bar:
+                for connection, _, raw in reader.messages(connections=connections):
+                    msgs.append(reader.deserialize(raw, connection.msgtype))
+                    bar.update(1)
+        except Exception as err:  # rosbags raises many kinds for damaged bags
+            raise FileFormatError(
+                f"{self.bag_file} is damaged: reading {topic!r} failed after "
+                f"{len(msgs)} of {count} messages ({type(err).__name__}: {err})"
+            ) from err
+        return msgs
 
     def load_dataset(
         self, topic: str, cache: bool = False, *, progress: bool | None = None
@@ -220,9 +324,11 @@ class RosbagReader:
             Name of the topic.
         cache : bool, default False
             Keep the dataset in ``cache/<topic>.nc`` beside the bag (slashes in
-            the topic become underscores) and read it from there next time.
-            A cache made from another bag or from an older version of this
-            bag is rebuilt.
+            the topic become underscores) and read it from there next time;
+            for a bag in the example-data folder (``RBM_NB_DATA_DIR``), in
+            rbm_nb's cache folder instead (see :meth:`cache_file`). A cache
+            made from another bag or from an older version of this bag is
+            rebuilt.
         progress : bool, optional
             See :meth:`load_messages`.
 
@@ -250,8 +356,23 @@ class RosbagReader:
         return self._export(topic, path, progress)
 
     def cache_file(self, topic: str) -> Path:
-        """Where :meth:`load_dataset` caches ``topic``."""
-        return self.bag_file.parent / "cache" / f"{topic.replace('/', '_')}.nc"
+        """Where :meth:`load_dataset` caches ``topic``.
+
+        ``cache/<topic>.nc`` beside the bag, as rigid-body-motion does; but
+        never in the example-data folder, which holds only the registry's
+        files: a bag there is cached under ``rosbag/<bag name>-<path hash>/``
+        in :func:`rbm_nb.data.fetch.cache_dir` (``RBM_NB_CACHE_DIR``).
+        """
+        name = f"{topic.replace('/', '_')}.nc"
+        folder = self.bag_file.parent.resolve()
+        from ..data.fetch import cache_dir, example_data_dirs
+
+        if any(folder == d or d in folder.parents for d in example_data_dirs()):
+            import hashlib
+
+            key = hashlib.sha1(str(self.bag_file.resolve()).encode()).hexdigest()[:12]
+            return cache_dir() / "rosbag" / f"{self.bag_file.name}-{key}" / name
+        return self.bag_file.parent / "cache" / name
 
     def export(self, topic: str, output_file: str | os.PathLike | None = None) -> Path:
         """Write the messages of a topic to a netCDF4 file.
@@ -317,3 +438,21 @@ class RosbagReader:
             if f.is_file()
         ]
         return ";".join(parts)
+
+
+def _merge(a, b):
+    """One moving pair from two tf topics: sorted by stamp, later topic wins."""
+    import numpy as np
+
+    from ._messages import TfPair
+
+    stamps = np.concatenate([a.stamps_ns, b.stamps_ns])
+    order = np.argsort(stamps, kind="stable")
+    _, last = np.unique(stamps[order][::-1], return_index=True)
+    keep = order[len(order) - 1 - last]
+    return TfPair(
+        a.frame_id, a.child_frame_id, a.static, stamps[keep],
+        np.concatenate([a.position, b.position])[keep],
+        np.concatenate([a.orientation, b.orientation])[keep],
+        np.concatenate([a.message_index, b.message_index])[keep],
+    )  # fmt: skip

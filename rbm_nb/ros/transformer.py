@@ -18,7 +18,19 @@ Conventions follow tf2:
   raises :class:`~rbm_nb._at_time.ExtrapolationError`.
 
 Results are tuples of floats, quaternions in ``w, x, y, z`` order, as in the
-reference API.
+reference API. Their signs are the reference's too (q and -q are the same
+rotation, but stored results are compared number by number):
+
+* ``lookup_transform`` returns tf2's algebraic composition: the stored
+  quaternions multiplied up the tree from source and target (tf2's
+  ``TransformAccum``), between two samples on the hemisphere of the earlier
+  one (tf2's slerp);
+* ``transform_quaternion`` and ``transform_pose`` go, in the reference,
+  through ``tf2_geometry_msgs.do_transform_pose``, which multiplies PyKDL
+  frames and reads the quaternion back from the rotation matrix
+  (``Rotation.GetQuaternion``): w > 0 when the trace exceeds 1e-12, else the
+  component of the largest diagonal element is positive. The value here is
+  the Hamilton product ``r * q`` with that sign.
 """
 
 from __future__ import annotations
@@ -189,6 +201,40 @@ class Transformer:
                 transformer.set_transform_static(node)
             else:
                 transformer.set_transforms(node)
+        return transformer
+
+    @staticmethod
+    def from_bag(bag_file, topics=None, cache_time=None) -> Transformer:
+        """A Transformer holding a bag's whole tf tree (``/tf`` and ``/tf_static``).
+
+        Parameters
+        ----------
+        bag_file : str or path-like
+            A ROS1 ``.bag`` or a ROS2 bag folder.
+        topics : sequence of str, optional
+            tf topics (default: ``/tf`` and ``/tf_static`` where present).
+        cache_time : float, optional
+            Seconds of history to keep; default: the bag's whole time span
+            (at least tf2's 10 s), so that nothing is dropped.
+
+        Returns
+        -------
+        Transformer
+
+        Raises
+        ------
+        ValueError
+            If the bag has no tf topic, or its transforms do not form trees.
+        rbm_nb.io.FileFormatError
+            If the bag is damaged.
+        """
+        from .tf_tree import fill_transformer, load_tf_tree, time_span
+
+        tree = load_tf_tree(bag_file, topics)
+        if cache_time is None:
+            cache_time = max(DEFAULT_CACHE_TIME, time_span(tree))
+        transformer = Transformer(cache_time=cache_time)
+        fill_transformer(transformer, tree)
         return transformer
 
     def set_transform_static(self, reference_frame) -> None:
@@ -382,7 +428,47 @@ class Transformer:
             if latest is None:  # all static: any time will do
                 latest = 0.0
             when = float(latest)
-        return transform_at_times(source, target, when)
+        t, r = transform_at_times(source, target, when)
+        r = np.asarray(r, dtype=np.float64)
+        if np.dot(r, self._tf2_rotation(source.name, target.name, when)) < 0:
+            r = -r
+        return t, r
+
+    def _chain_rotation(self, start: str, stop: str | None, when: float) -> np.ndarray:
+        """tf2's accumulated rotation from ``start`` up to (not including) ``stop``."""
+        acc = np.array([1.0, 0.0, 0.0, 0.0])
+        node = start
+        while node != stop and node in self._edges:
+            edge = self._edges[node]
+            q = edge.rotation
+            if edge.times is not None:
+                # at a sample: that sample; between two: tf2's slerp stays on
+                # the earlier one's hemisphere
+                i = int(np.searchsorted(edge.times, when, side="right")) - 1
+                q = q[min(max(i, 0), len(q) - 1)]
+            acc = _qmul(np.asarray(q, dtype=np.float64), acc)
+            node = edge.parent
+        return acc
+
+    def _ancestors(self, name: str) -> list:
+        chain = [name]
+        while chain[-1] in self._edges:
+            chain.append(self._edges[chain[-1]].parent)
+        return chain
+
+    def _tf2_rotation(self, source: str, target: str, when: float) -> np.ndarray:
+        """The rotation tf2's lookupTransform composes, with tf2's sign (w, x, y, z)."""
+        if source == target:
+            return np.array([1.0, 0.0, 0.0, 0.0])
+        if target in self._ancestors(source):  # target is above source
+            return self._chain_rotation(source, target, when)
+        if source in self._ancestors(target):  # source is above target
+            return _qconj(self._chain_rotation(target, source, when))
+        # both up to the root: conj(target_to_top) * source_to_top
+        return _qmul(
+            _qconj(self._chain_rotation(target, None, when)),
+            self._chain_rotation(source, None, when),
+        )
 
     # -- queries ------------------------------------------------------------
 
@@ -474,11 +560,12 @@ class Transformer:
         Returns
         -------
         tuple, len 4
-            ``w, x, y, z``.
+            ``w, x, y, z``: the Hamilton product of the looked-up rotation and
+            ``q``, with the sign the reference returns (see the module notes).
         """
         q = normalize_quaternions(_vector(q, 4, "q"), "q")
         _, r = self._lookup(target_frame, source_frame, time)
-        return tuple(map(float, _qmul(r, q)))
+        return tuple(map(float, _kdl_sign(_qmul(r, q))))
 
     def transform_pose(self, p, o, target_frame, source_frame, time=0.0):
         """A pose (position and orientation) from ``source_frame`` to ``target_frame``.
@@ -498,10 +585,39 @@ class Transformer:
         p = _vector(p, 3, "p")
         o = normalize_quaternions(_vector(o, 4, "o"), "o")
         t, r = self._lookup(target_frame, source_frame, time)
-        return tuple(map(float, self._rotate(r, p) + t)), tuple(map(float, _qmul(r, o)))
+        return (
+            tuple(map(float, self._rotate(r, p) + t)),
+            tuple(map(float, _kdl_sign(_qmul(r, o)))),
+        )
 
 
 def _qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     from .._kernels import quaternion as kq
 
     return kq.qmul(np.ascontiguousarray(a[None]), np.ascontiguousarray(b[None]))[0]
+
+
+def _qconj(q: np.ndarray) -> np.ndarray:
+    return np.array([q[0], -q[1], -q[2], -q[3]])
+
+
+def _kdl_sign(q: np.ndarray) -> np.ndarray:
+    """``q`` or ``-q``: the sign PyKDL's ``Rotation.GetQuaternion`` gives.
+
+    GetQuaternion reads a quaternion from a rotation matrix: if the trace is
+    above 1e-12 it makes w positive; otherwise the component that belongs to
+    the largest diagonal element (x for m00, y for m11, else z).
+    """
+    w, x, y, z = q
+    m00 = w * w + x * x - y * y - z * z
+    m11 = w * w - x * x + y * y - z * z
+    m22 = w * w - x * x - y * y + z * z
+    if m00 + m11 + m22 > 1e-12:
+        positive = w
+    elif m00 > m11 and m00 > m22:
+        positive = x
+    elif m11 > m22:
+        positive = y
+    else:
+        positive = z
+    return -q if positive < 0 else q

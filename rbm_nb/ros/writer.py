@@ -10,7 +10,14 @@ import numpy as np
 from .._atomic import atomic_path
 from .._config import UNIT_QUATERNION_TOLERANCE
 from .._xarray import dataset_variable
-from ._messages import TRANSFORM_STAMPED, encode_transform_stamped, rosbags_type_name
+from ._messages import (
+    TF_MESSAGE,
+    TRANSFORM_STAMPED,
+    encode_transform_stamped,
+    register_tf_message,
+    rosbags_type_name,
+    tf_message,
+)
 
 STORAGES = ("sqlite3", "mcap")
 _MAX_SEC = {False: 2**32, True: 2**31}  # ROS1 stamps are uint32 s, ROS2 int32 s
@@ -71,6 +78,7 @@ class RosbagWriter:
         self._typestore = get_typestore(
             Stores.ROS2_HUMBLE if self.ros2 else Stores.ROS1_NOETIC
         )
+        register_tf_message(self._typestore)
         self._atomic = atomic_path(self.bag_file)
         tmp = self._atomic.__enter__()
         try:
@@ -135,6 +143,10 @@ class RosbagWriter:
             Translations (x, y, z).
         rotation : array_like, shape (n, 4)
             Rotations as unit quaternions (w, x, y, z); written as they are.
+
+            A row of ``translation`` or ``rotation`` that is all NaN is a
+            sample without data (as in real eye-tracking recordings): it is
+            written as NaN and read back bit for bit.
         topic : str
             Topic of the messages.
         frame : str
@@ -145,37 +157,22 @@ class RosbagWriter:
         Raises
         ------
         ValueError
-            If shapes do not match, values are not finite, a stamp is before
-            1970 or beyond what the bag format can hold, or a rotation is
-            not a unit quaternion (within ``UNIT_QUATERNION_TOLERANCE``).
+            If shapes do not match, a row is partly NaN or has an infinity,
+            the stamps are not strictly increasing, a stamp is before 1970 or
+            beyond what the bag format can hold, or a rotation is not a unit
+            quaternion (within ``UNIT_QUATERNION_TOLERANCE``). The message
+            names the topic and the row.
         RuntimeError
             If called outside the ``with`` block.
         """
-        if self._writer is None:
-            raise RuntimeError(
-                "RosbagWriter writes inside a with block: "
-                f"with RosbagWriter({str(self.bag_file)!r}) as writer: ..."
-            )
-        stamps = self._stamps_ns(timestamps)
-        n = stamps.shape[0]
-        translation = _rows(translation, "translation", n, 3)
-        rotation = _rows(rotation, "rotation", n, 4)
-        norm_error = np.abs(np.linalg.norm(rotation, axis=1) - 1.0)
-        if n and norm_error.max() > UNIT_QUATERNION_TOLERANCE:
-            i = int(np.argmax(norm_error > UNIT_QUATERNION_TOLERANCE))
-            raise ValueError(
-                f"rotation must be unit quaternions (w, x, y, z); row {i} has norm "
-                f"{np.linalg.norm(rotation[i]):.6g}"
-            )
-        for name, value in (
-            ("topic", topic),
-            ("frame", frame),
-            ("child_frame", child_frame),
-        ):
-            if not isinstance(value, str):
-                raise ValueError(f"{name} must be a str, got {value!r}")
+        self._check_open()
+        if not isinstance(topic, str):
+            raise ValueError(f"topic must be a str, got {topic!r}")
         if not topic:
             raise ValueError("topic must not be empty")
+        stamps, translation, rotation = self._checked_rows(
+            timestamps, translation, rotation, topic, frame, child_frame
+        )
         rows = encode_transform_stamped(
             stamps, translation, rotation, frame, child_frame, self.ros2
         )
@@ -183,6 +180,117 @@ class RosbagWriter:
         write = self._writer.write
         for stamp, row in zip(stamps.tolist(), rows, strict=True):
             write(connection, stamp, row.tobytes())
+
+    def _check_open(self) -> None:
+        if self._writer is None:
+            raise RuntimeError(
+                "RosbagWriter writes inside a with block: "
+                f"with RosbagWriter({str(self.bag_file)!r}) as writer: ..."
+            )
+
+    def write_tf(
+        self,
+        timestamps,
+        translation,
+        rotation,
+        frame: str,
+        child_frame: str,
+        *,
+        static: bool = False,
+    ) -> None:
+        """Write transforms of one parent/child pair as tf messages.
+
+        Each row becomes one ``tf2_msgs/TFMessage`` holding one transform, on
+        ``/tf`` (or ``/tf_static`` with ``static=True``), as a tf broadcaster
+        sends them. Several pairs may be written to the same bag.
+
+        Parameters
+        ----------
+        timestamps : array_like, shape (n,)
+            Header stamps: float seconds since the epoch, or datetime64;
+            strictly increasing.
+        translation : array_like, shape (n, 3)
+        rotation : array_like, shape (n, 4)
+            Unit quaternions w, x, y, z.
+        frame, child_frame : str
+            ``header.frame_id`` and ``child_frame_id``.
+        static : bool, default False
+            Write to ``/tf_static`` (then usually n = 1).
+
+        Raises
+        ------
+        ValueError
+            As :meth:`write_transform_stamped`.
+        """
+        self._check_open()
+        topic = "/tf_static" if static else "/tf"
+        stamps, translation, rotation = self._checked_rows(
+            timestamps, translation, rotation, topic, frame, child_frame
+        )
+        connection = self._connection(topic, TF_MESSAGE)
+        serialize = self._serializer()
+        for i, stamp in enumerate(stamps.tolist()):
+            msg = tf_message(
+                self._typestore, [stamp], [frame], [child_frame],
+                translation[i : i + 1], rotation[i : i + 1],
+            )  # fmt: skip
+            self._writer.write(connection, stamp, serialize(msg))
+
+    def write_tf_message(self, transforms, *, static: bool = False) -> None:
+        """Write one tf message holding several transforms.
+
+        Parameters
+        ----------
+        transforms : sequence of tuple
+            ``(timestamp, frame, child_frame, translation, rotation)`` per
+            transform: seconds or datetime64, two str, (3,) and (4,) w, x, y, z.
+        static : bool, default False
+            Write to ``/tf_static`` instead of ``/tf``.
+        """
+        self._check_open()
+        topic = "/tf_static" if static else "/tf"
+        if not transforms:
+            raise ValueError(
+                f"topic {topic!r}: a tf message needs at least one transform"
+            )
+        rows = []
+        for k, item in enumerate(transforms):
+            if len(item) != 5:
+                raise ValueError(
+                    f"topic {topic!r}: transform {k} must be (timestamp, frame, "
+                    f"child_frame, translation, rotation), got {item!r}"
+                )
+            stamp, frame, child, t, r = item
+            stamps, t, r = self._checked_rows(
+                np.asarray([stamp]), np.asarray(t, float).reshape(1, -1),
+                np.asarray(r, float).reshape(1, -1), topic, frame, child,
+            )  # fmt: skip
+            rows.append((int(stamps[0]), frame, child, t[0], r[0]))
+        stamps, frames, children, t, r = zip(*rows, strict=True)
+        msg = tf_message(self._typestore, stamps, frames, children, t, r)
+        self._writer.write(
+            self._connection(topic, TF_MESSAGE), max(stamps), self._serializer()(msg)
+        )
+
+    def _serializer(self):
+        store = self._typestore
+        typename = "tf2_msgs/msg/TFMessage"
+        if self.ros2:
+            return lambda msg: bytes(store.serialize_cdr(msg, typename))
+        return lambda msg: bytes(store.serialize_ros1(msg, typename))
+
+    def _checked_rows(self, timestamps, translation, rotation, topic, frame, child):
+        for name, value in (("frame", frame), ("child_frame", child)):
+            if not isinstance(value, str):
+                raise ValueError(
+                    f"topic {topic!r}: {name} must be a str, got {value!r}"
+                )
+        stamps = self._stamps_ns(timestamps, topic)
+        n = stamps.shape[0]
+        translation = _rows(translation, "translation", n, 3, topic)
+        rotation = _rows(rotation, "rotation", n, 4, topic)
+        _check_unit(rotation, topic)
+        return stamps, translation, rotation
 
     def write_transform_stamped_dataset(
         self,
@@ -223,7 +331,18 @@ class RosbagWriter:
             ds[timestamps].values, translation, rotation, topic, frame, child_frame
         )
 
-    def _stamps_ns(self, timestamps) -> np.ndarray:
+    def _stamps_ns(self, timestamps, topic: str) -> np.ndarray:
+        ns = self._stamps_ns_unchecked(timestamps)
+        back = np.flatnonzero(np.diff(ns) <= 0)
+        if back.size:
+            i = int(back[0]) + 1
+            raise ValueError(
+                f"topic {topic!r}: timestamps must be strictly increasing; stamp {i} "
+                f"({ns[i]} ns) is not after stamp {i - 1} ({ns[i - 1]} ns)"
+            )
+        return ns
+
+    def _stamps_ns_unchecked(self, timestamps) -> np.ndarray:
         stamps = np.asarray(timestamps)
         if stamps.ndim != 1:
             raise ValueError(
@@ -265,14 +384,35 @@ class RosbagWriter:
         return ns
 
 
-def _rows(values, name: str, n: int, width: int) -> np.ndarray:
+def _rows(values, name: str, n: int, width: int, topic: str) -> np.ndarray:
+    """Rows that are all finite (data) or all NaN (no data at that sample)."""
     arr = np.asarray(values, dtype=np.float64)
     if arr.shape != (n, width):
         raise ValueError(
-            f"{name} must have shape ({n}, {width}) to match timestamps, got {arr.shape}"
+            f"topic {topic!r}: {name} must have shape ({n}, {width}) to match "
+            f"timestamps, got {arr.shape}"
         )
-    if not np.isfinite(arr).all():
+    finite = np.isfinite(arr).all(axis=1)
+    missing = np.isnan(arr).all(axis=1)
+    bad = np.flatnonzero(~(finite | missing))
+    if bad.size:
+        i = int(bad[0])
         raise ValueError(
-            f"{name} must be finite; row {int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])} is not"
+            f"topic {topic!r}: {name} row {i} is {arr[i].tolist()}; a row must be all "
+            "finite, or all NaN for a sample without data"
         )
     return arr
+
+
+def _check_unit(rotation: np.ndarray, topic: str) -> None:
+    present = np.isfinite(rotation).all(axis=1)
+    with np.errstate(over="ignore"):  # huge values give an inf norm, refused below
+        norm_error = np.abs(np.linalg.norm(rotation[present], axis=1) - 1.0)
+    if norm_error.size and norm_error.max() > UNIT_QUATERNION_TOLERANCE:
+        i = int(
+            np.flatnonzero(present)[np.argmax(norm_error > UNIT_QUATERNION_TOLERANCE)]
+        )
+        raise ValueError(
+            f"topic {topic!r}: rotation must be unit quaternions (w, x, y, z); "
+            f"row {i} has norm {np.linalg.norm(rotation[i]):.6g}"
+        )

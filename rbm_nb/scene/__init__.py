@@ -1,4 +1,4 @@
-"""meshcat scenes in the notebook: live viewer, handles, publishers, HTML export.
+"""meshcat scenes in the notebook: a widget over the kernel comm, handles, publishers, HTML export.
 
 Names are resolved on first use, so ``import rbm_nb.scene`` stays cheap.
 """
@@ -11,9 +11,8 @@ _EXPORTS = {
     "Scene": "scene",
     "FramePublisher": "publishers",
     "PathPublisher": "publishers",
-    "ViewerServer": "server",
-    "get_server": "server",
-    "shutdown_server": "server",
+    "SceneState": "state",
+    "SceneWidget": "widget",
     "default_scene": "scene",
 }
 

@@ -8,14 +8,49 @@ per path and the 16 matrix entries.
 
 from __future__ import annotations
 
-import json
+import importlib.util
 import math
 import warnings
+from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import umsgpack
 
-from .server import Message
+
+@dataclass(frozen=True)
+class Message:
+    """One lowered meshcat command.
+
+    Attributes
+    ----------
+    op : str
+        ``set_object``, ``set_transform``, ``set_property`` or ``delete``.
+    path : str
+        Scene path, e.g. ``/rbm/root/head/pose``.
+    data : bytes
+        The msgpack bytes meshcat's viewer decodes.
+    prop : str
+        Property name for ``set_property``.
+    """
+
+    op: str
+    path: str
+    data: bytes
+    prop: str = ""
+
+
+def meshcat_js_path() -> Path:
+    """Path of meshcat's own viewer bundle (``meshcat/viewer/dist/main.min.js``)."""
+    spec = importlib.util.find_spec("meshcat")
+    if spec is None or not spec.submodule_search_locations:
+        raise ModuleNotFoundError(
+            "the 3D scene needs meshcat: pip install 'rbm_nb[notebook]'"
+        )
+    path = Path(list(spec.submodule_search_locations)[0]) / "viewer" / "dist" / "main.min.js"
+    if not path.is_file():
+        raise FileNotFoundError(f"meshcat's viewer bundle is missing: {path}")
+    return path
 
 
 def _msgpack_str(text: str) -> bytes:
@@ -130,18 +165,6 @@ def set_property(path: str, key: str, value) -> Message:
 
 def delete(path: str) -> Message:
     return Message("delete", path, umsgpack.packb({"type": "delete", "path": path}))
-
-
-def camera(position, target) -> Message:
-    """Our viewer page's camera placement (world coordinates, z up)."""
-    text = json.dumps(
-        {
-            "type": "rbm_camera",
-            "position": [float(v) for v in position],
-            "target": [float(v) for v in target],
-        }
-    )
-    return Message("json", "camera", text)
 
 
 def color_int(color, name: str = "color") -> int:

@@ -1,10 +1,11 @@
-"""A scene as one self-contained HTML file that plays offline.
+"""The dashboard (3D view, plots, player) as one self-contained HTML file.
 
-The file inlines meshcat's viewer bundle (``main.min.js``), our glue
-(``viewer.js``) and the data: the static objects as lowered meshcat commands
-and every moving node as float32 keyframes (times, positions, quaternions),
-turned into three.js animation clips in the browser. No server, no network.
-Size is bounded by keeping at most ``max_frames`` samples per moving node.
+The page runs the same widget code as the notebook (the bundles in
+``rbm_nb/widgets/static`` and meshcat's viewer) on a small offline stand-in
+for the kernel (``js/src/export.js``): each widget's state and the content
+messages the kernel would send are inlined as JSON with base64 buffers. No
+server, no network, no kernel; the player's clock runs in the page. Size is
+bounded by keeping at most ``max_frames`` samples per moving object.
 """
 
 from __future__ import annotations
@@ -17,8 +18,6 @@ from pathlib import Path
 
 import numpy as np
 
-from .server import VIEWER_DIR, meshcat_js_path
-
 _TEMPLATE = """<!DOCTYPE html>
 <html>
 <head>
@@ -26,119 +25,106 @@ _TEMPLATE = """<!DOCTYPE html>
 <meta name="generator" content="rbm_nb">
 <title>{title}</title>
 <style>
-  body {{ margin: 0; overflow: hidden; font: 13px sans-serif; }}
-  #meshcat-pane {{ width: 100vw; height: 100vh; overflow: hidden; }}
-  #rbm-controls {{
-    position: fixed; left: 0; right: 0; bottom: 0; display: flex; align-items: center;
-    gap: 8px; padding: 6px 10px; background: rgba(0, 0, 0, 0.5); color: #fff;
-  }}
-  #rbm-controls button {{ width: 44px; }}
-  #rbm-slider {{ flex: 1; }}
-  #rbm-time {{ min-width: 190px; text-align: right; font-variant-numeric: tabular-nums; }}
+  body {{ margin: 0; font: 13px sans-serif; background: #fafafa; }}
+  h1 {{ font-size: 15px; font-weight: normal; margin: 8px 10px 0; color: #333; }}
+  #rbm-dashboard {{ display: flex; flex-direction: column; gap: 6px; padding: 6px 10px; }}
 </style>
 </head>
 <body>
-<div id="meshcat-pane"></div>
-<div id="rbm-controls">
-  <button id="rbm-play" type="button" title="Play / pause">&#9654;</button>
-  <input id="rbm-slider" type="range" min="0" max="1000" step="any" value="0" aria-label="time">
-  <span id="rbm-time"></span>
-</div>
-<script>
-{meshcat_js}
-</script>
-<script>
-{viewer_js}
-</script>
-<script id="rbm-data" type="application/json">{data}</script>
-<script>
-  (function () {{
-    var data = JSON.parse(document.getElementById("rbm-data").textContent);
-    rbmViewer.loadExport(document.getElementById("meshcat-pane"), data, {{
-      play: document.getElementById("rbm-play"),
-      slider: document.getElementById("rbm-slider"),
-      readout: document.getElementById("rbm-time"),
-    }});
-  }})();
+<h1>{title}</h1>
+<div id="rbm-dashboard"></div>
+<script id="rbm-export-data" type="application/json">{data}</script>
+<script type="module">
+{runtime}
 </script>
 </body>
 </html>
 """
 
 
-def _b64(array: np.ndarray) -> str:
-    return base64.b64encode(np.ascontiguousarray(array, dtype="<f4").tobytes()).decode(
-        "ascii"
-    )
+def _b64(data) -> str:
+    return base64.b64encode(bytes(data)).decode("ascii")
 
 
-def subsample_indices(n: int, max_frames: int) -> np.ndarray:
-    """At most ``max_frames`` evenly strided indices of ``n``, always with the last."""
-    stride = max(int(np.ceil(n / max_frames)), 1)
-    idx = np.arange(0, n, stride)
-    if idx[-1] != n - 1:
-        if len(idx) >= max_frames:
-            idx[-1] = n - 1
-        else:
-            idx = np.append(idx, n - 1)
-    return idx
+def _model_spec(
+    widget, esm_index: dict, esm: list, overrides: dict | None = None
+) -> dict:
+    from ipywidgets.widgets.widget import _remove_buffers
 
-
-def build_payload(scene, max_frames: int, autoplay: bool) -> dict:
-    """The data the export page loads: commands, keyframe tracks, camera."""
-    from .scene import ROOT
-
-    if scene._camera is None:
-        scene.fit_camera()
-    commands = [m.data for m in scene._objects.values()]
-    commands += [m.data for m in scene._static_transforms.values()]
-    commands += [m.data for m in scene._properties.values()]
-    nodes = list(scene._dynamic)
-    t0 = min((n.track.start for n in nodes), default=0.0)
-    t1 = max((n.track.end for n in nodes), default=0.0)
-    tracks = []
-    for node in nodes:
-        track = node.track
-        idx = subsample_indices(len(track), max_frames)
-        entry = {
-            "path": node.path,
-            "times": _b64(track.seconds[idx] - t0),
-            "position": _b64(track.translation[idx]),
-            # three.js quaternions are (x, y, z, w)
-            "quaternion": _b64(track.rotation[idx][:, [1, 2, 3, 0]]),
-        }
-        if track.scale is not None:
-            entry["scale"] = _b64(np.repeat(track.scale[idx, np.newaxis], 3, axis=1))
-        start = track.start - t0
-        if start > 0:
-            entry["visible"] = {"times": [0.0, start], "values": [False, True]}
-        tracks.append(entry)
-    camera = json.loads(scene._camera.data) if scene._camera is not None else None
+    state = widget.get_state()
+    text = state.pop("_esm")
+    if text not in esm_index:
+        esm_index[text] = len(esm)
+        esm.append(text)
+    state.update(overrides or {})
+    state, paths, buffers = _remove_buffers(state)
     return {
-        "root": ROOT,
-        "commands": [base64.b64encode(c).decode("ascii") for c in commands],
-        "tracks": tracks,
-        "t0": t0,
-        "duration": t1 - t0,
-        "datetime": scene.timestamps_kind == "datetime",
-        "camera": camera,
-        "autoplay": bool(autoplay and tracks),
+        "id": widget.model_id,
+        "esm": esm_index[text],
+        "state": state,
+        "buffers": [
+            {"path": list(p), "data": _b64(b)}
+            for p, b in zip(paths, buffers, strict=True)
+        ],
+        "messages": [],
     }
 
 
-def render_html(payload: dict, title: str) -> str:
-    """The export page for ``payload``."""
-    data = json.dumps(payload, separators=(",", ":")).replace("</", "<\\/")
-    meshcat_js = meshcat_js_path().read_text(encoding="utf-8")
-    viewer_js = (VIEWER_DIR / "viewer.js").read_text(encoding="utf-8")
-    for name, code in (("meshcat", meshcat_js), ("viewer", viewer_js)):
-        if "</script" in code.lower():
-            raise RuntimeError(
-                f"the {name} script contains '</script' and cannot be inlined"
-            )
-    return _TEMPLATE.format(
-        title=html.escape(title), meshcat_js=meshcat_js, viewer_js=viewer_js, data=data
+def build_document(
+    scene, *, series=(), player=None, max_frames=None, autoplay=False
+) -> dict:
+    """The JSON document an export page runs (see ``js/src/export.js``)."""
+    from ..widgets.player import Player, bundle
+
+    if player is None:
+        player = scene._player
+    if player is None:
+        player = Player(scene)
+    if not isinstance(player, Player):
+        raise ValueError(
+            f"to_html: player must be a Player, got {type(player).__name__}"
+        )
+    esm: list[str] = []
+    esm_index: dict[str, int] = {}
+    widget = scene.widget
+    scene_spec = _model_spec(
+        widget,
+        esm_index,
+        esm,
+        {"player": f"IPY_MODEL_{player.model_id}", "height": 520},
     )
+    content, buffers = scene._snapshot_message(max_samples=max_frames)
+    scene_spec["messages"].append(
+        {"content": content, "buffers": [_b64(b) for b in buffers]}
+    )
+    specs = [scene_spec]
+    layout = [widget.model_id]
+    for view in series:
+        overrides = {}
+        if hasattr(view, "has_trait") and view.has_trait("player"):
+            overrides["player"] = f"IPY_MODEL_{player.model_id}"
+        if not hasattr(view, "_esm"):
+            raise ValueError(
+                f"to_html: series must be anywidgets (with _esm), got {type(view).__name__}"
+            )
+        specs.append(_model_spec(view, esm_index, esm, overrides))
+        layout.append(view.model_id)
+    specs.append(_model_spec(player, esm_index, esm, {"time": 0.0, "playing": False}))
+    layout.append(player.model_id)
+    return {
+        "esm": esm,
+        "models": specs,
+        "layout": layout,
+        "autoplay": bool(autoplay),
+        "runtime": bundle("export"),
+    }
+
+
+def render_html(document: dict, title: str) -> str:
+    runtime = document.pop("runtime")
+    # "</" inside the JSON would end the script element early
+    data = json.dumps(document, separators=(",", ":")).replace("</", "<\\/")
+    return _TEMPLATE.format(title=html.escape(title), data=data, runtime=runtime)
 
 
 def write_atomic(path: Path, text: str, what: str = "to_html") -> None:
@@ -170,18 +156,20 @@ def write_html(
     scene,
     path,
     *,
-    max_frames: int = 5000,
+    series=None,
+    player=None,
+    max_frames: int | None = 20000,
     title: str | None = None,
-    autoplay: bool = True,
+    autoplay: bool = False,
 ) -> Path:
-    """Write ``scene`` to ``path`` as a self-contained animation (see :meth:`Scene.to_html`)."""
-    if (
+    """Write ``scene`` (and ``series``) to ``path`` as a self-contained page (see :meth:`Scene.to_html`)."""
+    if max_frames is not None and (
         isinstance(max_frames, bool)
         or not isinstance(max_frames, (int, np.integer))
         or max_frames < 2
     ):
         raise ValueError(
-            f"to_html: max_frames must be an integer >= 2, got {max_frames!r}"
+            f"to_html: max_frames must be an integer >= 2 or None, got {max_frames!r}"
         )
     if len(scene) == 0:
         raise ValueError(
@@ -193,7 +181,17 @@ def write_html(
         raise ValueError(
             f"to_html: path must be a file path, got {type(path).__name__}"
         ) from None
-    payload = build_payload(scene, int(max_frames), autoplay)
-    text = render_html(payload, title or f"rbm_nb scene {scene.name}")
+    if series is None:
+        series = []
+    elif not isinstance(series, (list, tuple)):
+        series = [series]
+    document = build_document(
+        scene,
+        series=series,
+        player=player,
+        max_frames=None if max_frames is None else int(max_frames),
+        autoplay=autoplay,
+    )
+    text = render_html(document, title or f"rbm_nb scene {scene.name}")
     write_atomic(path, text)
     return path

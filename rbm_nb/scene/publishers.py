@@ -87,8 +87,7 @@ class FramePublisher:
                 color="#ffff00",
                 label=f"pose {self.frame.name}",
             )
-        node = self.scene._nodes.get(self.handle.pose_path)
-        self._track = node.track if node is not None else None
+        self._track = self.scene._track(self.handle.pose_path)
         if self._track is None:
             from .tracks import Track
 

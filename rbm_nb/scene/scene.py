@@ -1,19 +1,24 @@
-"""A meshcat scene of reference frames, played back in time.
+"""A 3-D scene of reference frames, played back in time, as a notebook widget.
 
 :class:`Scene` is the facade: ``add_frame``, ``add_path``, ``add_points``,
 ``add_vectors`` and ``add_mesh`` return handles; ``set_time`` / ``publish``
-move everything that moves; ``player()`` returns a linked
-:class:`~rbm_nb.widgets.Player`; ``show()`` displays the live viewer and
-``to_html()`` writes a self-contained animation.
+choose the time shown; ``player()`` returns a linked
+:class:`~rbm_nb.widgets.Player`; ``show()`` displays the view, ``scene.widget``
+is the ``DOMWidget`` to put in layouts; ``to_html()`` writes a self-contained
+page.
 
+What the scene contains lives in a :class:`~rbm_nb.scene.state.SceneState`
+(plain data, tested without a browser); the widget
+(:class:`~rbm_nb.scene.widget.SceneWidget`) is only its transport and view.
 Poses are looked up once per object for the whole recording (see
-:mod:`rbm_nb.scene.tracks`); a step only does one binary search and one
-msgpack encoding per moving node.
+:mod:`rbm_nb.scene.tracks`) and sent once as float buffers: the browser
+moves the objects while the player plays, the kernel does nothing per frame.
 """
 
 from __future__ import annotations
 
 import itertools
+import math
 import re
 import threading
 import uuid
@@ -27,7 +32,7 @@ from ..widgets._time import (
     time_as_seconds,
 )
 from . import commands
-from .commands import TransformPacker
+from .commands import Message, color_int
 from .handles import (
     FrameHandle,
     MeshHandle,
@@ -37,11 +42,13 @@ from .handles import (
     VectorsHandle,
     _points_array,
 )
-from .server import Message
+from .state import ROOT, SceneState
 from .tracks import Track
 
-ROOT = "/rbm"
 _counter = itertools.count(1)
+GRID_PATH = f"{ROOT}/grid"
+GRID_COLOR = "#5a5a5a"
+AXIS_COLORS = ["#ff0000", "#00ff00", "#0000ff"]
 
 
 def _resolve(frame, argument: str):
@@ -54,46 +61,25 @@ def _slug(text: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.\-]+", "_", str(text)).strip("_") or "object"
 
 
-class _Node:
-    """A group in the meshcat tree whose pose follows a track."""
+def nice_step(span: float, lines: int = 10) -> float:
+    """A 1, 2 or 5 times a power of ten close to ``span / lines`` (grid spacing)."""
+    raw = max(float(span), 1e-9) / lines
+    power = 10.0 ** math.floor(math.log10(raw))
+    for factor in (1.0, 2.0, 5.0, 10.0):
+        if raw <= factor * power * 1.0000001:
+            return factor * power
+    return 10.0 * power
 
-    __slots__ = ("path", "track", "packer", "index", "shown")
 
-    def __init__(self, path: str, track: Track):
-        self.path = path
-        self.track = track
-        self.packer = TransformPacker(path)
-        self.index: int | None = None
-        self.shown = True
-
-    def messages_at_time(self, t: float) -> list[Message]:
-        return self.messages_at_index(self.track.index_at(t))
-
-    def messages_at_index(self, index: int) -> list[Message]:
-        out = []
-        if index < 0:  # nothing recorded yet: hide instead of guessing
-            if self.shown:
-                self.shown = False
-                out.append(commands.set_property(self.path, "visible", False))
-            self.index = -1
-            return out
-        if not self.shown:
-            self.shown = True
-            out.append(commands.set_property(self.path, "visible", True))
-        if index != self.index:
-            self.index = index
-            out.append(self.packer.message(self.track.matrix(index)))
-        return out
-
-    def current_messages(self) -> list[Message]:
-        """What a freshly attached viewer needs to show this node as it is."""
-        out = []
-        index = self.index if self.index is not None else 0
-        if index >= 0:
-            out.append(self.packer.message(self.track.matrix(index)))
-        if not self.shown:
-            out.append(commands.set_property(self.path, "visible", False))
-        return out
+def format_length(metres: float) -> str:
+    """``0.5 m``, ``20 m``, ``2 km``, ``5 cm``."""
+    if metres >= 1000:
+        return f"{metres / 1000:g} km"
+    if metres < 0.01:
+        return f"{metres * 1000:g} mm"
+    if metres < 1:
+        return f"{metres * 100:g} cm"
+    return f"{metres:g} m"
 
 
 class Scene:
@@ -104,7 +90,10 @@ class Scene:
     base : str or ReferenceFrame, default "world"
         The fixed frame of the scene: everything is drawn in its coordinates.
     name : str, optional
-        Channel name on the viewer server (letters, digits, ``-``, ``_``).
+        Name of the scene (letters, digits, ``-``, ``_``).
+    grid : bool, default True
+        Draw a grid in the base's xy plane, sized to the scene; its spacing
+        is in the legend.
 
     Examples
     --------
@@ -118,7 +107,7 @@ class Scene:
     >>> scene.close()
     """
 
-    def __init__(self, base="world", *, name: str | None = None):
+    def __init__(self, base="world", *, name: str | None = None, grid: bool = True):
         self.base = _resolve(base, "Scene: base")
         if name is None:
             name = f"scene-{next(_counter)}-{uuid.uuid4().hex[:6]}"
@@ -127,23 +116,22 @@ class Scene:
                 f"Scene: name must be letters, digits, '-' or '_', got {name!r}"
             )
         self.name = name
+        self.state = SceneState()
         self._lock = threading.RLock()
-        self._server = None
+        self._widget = None
+        self._player = None
         self._closed = False
+        self._grid = bool(grid)
+        self._grid_step: float | None = None
         self._handles: dict[str, SceneHandle] = {}
-        self._anchors: dict[str, list] = {}  # key -> [node or None, users, base frame]
-        self._nodes: dict[str, _Node] = {}
-        self._dynamic: list[_Node] = []
-        self._objects: dict[str, Message] = {}
-        self._properties: dict[tuple, Message] = {}
-        self._static_transforms: dict[str, Message] = {}
-        self._camera: Message | None = None
+        self._anchors: dict[str, list] = {}  # path -> [moving?, users, base frame]
+        self._camera: dict | None = None
         self._camera_is_auto = True
         self._time: float | None = None
-        self.timestamps_kind: str | None = None
-        self._timestamps_cache = None
         self._highlight: tuple | None = None
-        self._listeners: list = []
+        # meshcat's own grid and axes are 1 m wide at the origin: ours fits the data
+        self.state.set_property("/Grid", "visible", False)
+        self.state.set_property("/Axes", "visible", False)
 
     # -- adding objects ---------------------------------------------------------
     def add_frame(
@@ -414,33 +402,38 @@ class Scene:
     def __len__(self) -> int:
         return len(self._handles)
 
-    # -- time -------------------------------------------------------------------
+    # -- time ---------------------------------------------------------------------
+    @property
+    def timestamps_kind(self) -> str | None:
+        """``"datetime"`` or ``"float"`` for the moving objects' timestamps; None if static."""
+        return self.state.kind
+
     def set_time(self, t) -> None:
-        """Move every moving object to its latest sample at or before ``t``.
+        """Show every object as it is at ``t``.
 
-        Objects whose data starts after ``t`` are hidden until it starts.
-
-        Parameters
-        ----------
-        t : float or datetime64
-            Float seconds (since the epoch for datetime recordings) or a
-            datetime64.
+        ``t`` is float seconds (epoch seconds for datetime data) or a
+        datetime64 value. With a linked player this moves the player (and so
+        every view following it).
         """
         self._check_open()
-        seconds = time_as_seconds(t, self.timestamps_kind)
+        seconds = time_as_seconds(t, self.state.kind)
         with self._lock:
             self._time = seconds
-            messages = []
-            for node in self._dynamic:
-                messages.extend(node.messages_at_time(seconds))
-            self._emit(messages)
+            if self.state.pins:
+                self.state.pins.clear()
+                self._sync_widget("_pins")
+            if self._player is not None:
+                self._player.seek_time(seconds)
+            elif self._widget is not None:
+                self._widget.time = seconds - self.state.origin
 
     def publish(self, idx: int | None = None) -> None:
         """Show sample ``idx`` of :attr:`timestamps` (the first by default)."""
         self._check_open()
-        seconds = self._timeline()
-        if seconds is None:
+        timeline = self.state.timeline()
+        if timeline is None:
             return
+        seconds = timeline[0]
         idx = 0 if idx is None else int(idx)
         if not -len(seconds) <= idx < len(seconds):
             raise IndexError(
@@ -450,7 +443,12 @@ class Scene:
 
     @property
     def time(self) -> float | None:
-        """The time last shown (float seconds), None before the first step."""
+        """The time shown (float seconds), None before any was set.
+
+        With a linked player, the player's time as the kernel last learned it.
+        """
+        if self._player is not None:
+            return self._player.data_time
         return self._time
 
     @property
@@ -461,124 +459,182 @@ class Scene:
         as they are; otherwise a regular grid spanning all of them at the
         finest mean sampling interval.
         """
-        seconds = self._timeline()
-        if seconds is None:
+        timeline = self.state.timeline()
+        if timeline is None:
             return None
-        original = self._timestamps_cache[1]
+        seconds, original = timeline
         if original is not None:
             return original
-        if self.timestamps_kind == DATETIME:
+        if self.state.kind == DATETIME:
             return seconds_to_datetime64(seconds)
         return seconds
 
-    def _timeline(self) -> np.ndarray | None:
-        with self._lock:
-            if self._timestamps_cache is not None:
-                return self._timestamps_cache[0]
-            tracks = [node.track for node in self._dynamic]
-            if not tracks:
-                return None
-            first = tracks[0].seconds
-            original = None
-            if all(
-                t.seconds is first or np.array_equal(t.seconds, first) for t in tracks
-            ):
-                seconds = first
-                original = tracks[0].original_timestamps
-            else:
-                start = min(t.start for t in tracks)
-                end = max(t.end for t in tracks)
-                steps = [
-                    (t.end - t.start) / (len(t) - 1)
-                    for t in tracks
-                    if len(t) > 1 and t.end > t.start
-                ]
-                if not steps or end <= start:
-                    seconds = np.unique(np.concatenate([t.seconds for t in tracks]))
-                else:
-                    n = int(np.ceil((end - start) / min(steps) - 1e-9)) + 1
-                    seconds = np.linspace(start, end, n)
-            self._timestamps_cache = (seconds, original)
-            return seconds
-
     def player(
-        self, step: int = 1, speed: float = 1.0, skip: int | None = None, **kwargs
+        self,
+        step: int = 1,
+        speed: float = 1.0,
+        skip: float | None = None,
+        *,
+        loop: bool = False,
     ):
-        """A :class:`~rbm_nb.widgets.Player` over :attr:`timestamps`, linked to this scene."""
+        """A :class:`~rbm_nb.widgets.Player` over :attr:`timestamps`, driving this scene.
+
+        The player's clock runs in the browser; the scene's view follows it
+        there. One player can drive several scenes and plots
+        (``player.link(other)``).
+        """
         self._check_open()
-        if self._timeline() is None:
+        if self.state.timeline() is None:
             raise ValueError(
                 f"Scene {self.name!r} has no moving objects, there is nothing to play; "
                 "add a moving frame first"
             )
         from ..widgets.player import Player
 
-        player = Player(self, step=step, speed=speed, skip=skip, **kwargs)
+        player = Player(self, step=step, speed=speed, skip=skip, loop=loop)
+        if self._time is not None:
+            player.seek_time(self._time)
         player.link(self)
         return player
 
-    # -- viewer -----------------------------------------------------------------
+    def _attach_player(self, player) -> None:
+        """Follow ``player`` (called by ``Player.link``)."""
+        self._check_open()
+        check_kinds(
+            self.state.kind, player.timestamps_kind, f"link(Scene {self.name!r})"
+        )
+        self._player = player
+        if self.state.pins:  # the player drives everything from now on
+            self.state.pins.clear()
+            self._sync_widget("_pins")
+        if self._widget is not None:
+            self._widget.player = player
+
+    def _detach_player(self, player) -> None:
+        if self._player is player:
+            self._player = None
+            if self._widget is not None:
+                self._widget.player = None
+
+    # -- the widget -----------------------------------------------------------------
     @property
-    def server(self):
-        """The viewer server this scene is shown on (started on first use)."""
+    def widget(self):
+        """The scene's ``DOMWidget`` (created on first use): put it in any layout."""
         self._check_open()
         with self._lock:
-            if self._server is None or self._server.closed:
-                from .server import get_server
+            if self._widget is None:
+                from .widget import SceneWidget
 
-                server = get_server()
-                server.add_channel(self.name)
-                self._server = server
                 if self._camera is None:
-                    self._camera = commands.camera(*self._fitted_camera())
+                    self._camera = self._fitted_camera()
                     self._camera_is_auto = True
-                server.send(self.name, self._snapshot())
-            return self._server
+                widget = SceneWidget(self._snapshot_message)
+                self._widget = widget
+                for name in (
+                    "_origin",
+                    "_camera",
+                    "_frames",
+                    "_labels",
+                    "_legend",
+                    "_pins",
+                ):
+                    self._sync_widget(name)
+                if self._player is not None:
+                    widget.player = self._player
+                elif self._time is not None:
+                    widget.time = self._time - self.state.origin
+                widget.observe(self._on_selected, "selected")
+            return self._widget
 
-    @property
-    def url(self) -> str:
-        """Direct URL of the live viewer page (loopback)."""
-        return self.server.channel_url(self.name)
-
-    def proxy_path(self, base_url: str = "/") -> str:
-        """Path of the viewer page through jupyter-server-proxy under ``base_url``."""
-        return f"{base_url.rstrip('/')}/proxy/{self.server.port}/{self.name}/"
-
-    def show(self, *, height: int = 480, proxy: bool | None = None) -> None:
-        """Display the live viewer in the notebook.
+    def show(self, *, height: int | None = None) -> None:
+        """Display the view in the notebook.
 
         Parameters
         ----------
-        height : int, default 480
-            Height of the view in pixels.
-        proxy : bool, optional
-            Load the viewer through jupyter-server-proxy (``<base_url>proxy/<port>/``).
-            By default it is used unless the notebook itself is opened on the
-            loopback over http (``$RBM_NB_VIEWER_PROXY`` = ``always`` / ``never``
-            overrides that).
+        height : int, optional
+            Height of the view in pixels (480 by default).
         """
-        from IPython.display import HTML, display
+        from IPython.display import display
 
-        display(HTML(self._viewer_html(height=height, proxy=proxy)))
+        widget = self.widget
+        if height is not None:
+            widget.height = height
+        display(widget)
 
-    def _repr_html_(self) -> str:
-        return self._viewer_html()
+    def _repr_mimebundle_(self, **kwargs):
+        return self.widget._repr_mimebundle_(**kwargs)
 
-    def _viewer_html(self, height: int = 480, proxy: bool | None = None) -> str:
-        from .display import viewer_html
+    @property
+    def selected(self) -> str | None:
+        """Name of the selected frame (clicked in 3D, or set here or by a FrameTree)."""
+        return None if self._widget is None else self._widget.selected
 
-        if self._camera is None:
-            self.fit_camera()
-        server = self.server
-        return viewer_html(
-            server.port, self.name, server.channel_url(self.name), height, proxy
-        )
+    @selected.setter
+    def selected(self, name) -> None:
+        if name is not None:
+            name = _resolve(name, "Scene.selected").name
+        self.widget.selected = name
+
+    def _on_selected(self, change) -> None:
+        # a drawn frame's triad is enlarged; other frames are selected without
+        # adding anything to the scene
+        name = change["new"]
+        if self._closed:
+            return
+        if name is None or name not in self._frame_paths():
+            self.highlight(None)
+        else:
+            self.highlight(name)
+
+    def follow(self, frame=None) -> None:
+        """Keep the camera on ``frame`` (drawn with ``add_frame``) as it moves; None stops."""
+        name = None
+        if frame is not None:
+            name = _resolve(frame, "Scene.follow: frame").name
+            if name not in self._frame_paths():
+                raise ValueError(
+                    f"Scene.follow: frame {name!r} is not drawn in this scene; "
+                    f"add_frame({name!r}) first (drawn: {sorted(self._frame_paths())})"
+                )
+        self.widget.follow = name
+
+    def focus(self, frame, *, distance: float | None = None) -> None:
+        """Point the camera at ``frame`` as it is at the current time.
+
+        Parameters
+        ----------
+        frame : str or ReferenceFrame
+            A frame drawn with ``add_frame``.
+        distance : float, optional
+            Camera distance in metres (ten times the triad's size by default).
+        """
+        name = _resolve(frame, "Scene.focus: frame").name
+        paths = self._frame_paths()
+        if name not in paths:
+            raise ValueError(
+                f"Scene.focus: frame {name!r} is not drawn in this scene; add_frame({name!r}) first"
+            )
+        t = self.time if self.time is not None else self.state.origin
+        pose = self.state.world_pose(paths[name], t)
+        if pose is None:
+            pose = self.state.world_pose(paths[name], math.inf)
+        target = pose[:3, 3]
+        if distance is None:
+            handle = next(
+                h
+                for h in self._handles.values()
+                if isinstance(h, FrameHandle) and h.pose_path == paths[name]
+            )
+            distance = 10.0 * handle.style["scale"]
+        direction = np.array([1.0, -1.4, 1.0]) / np.linalg.norm([1.0, -1.4, 1.0])
+        self._set_camera(target + direction * float(distance), target, auto=False)
 
     def fit_camera(self) -> None:
         """Point the camera at everything in the scene."""
-        self._set_camera(*self._fitted_camera(), auto=True)
+        position, target = self._fitted_camera_parts()
+        self._set_camera(position, target, auto=True)
 
-    def _fitted_camera(self) -> tuple[np.ndarray, np.ndarray]:
+    def _fitted_camera_parts(self) -> tuple[np.ndarray, np.ndarray]:
         points = self._extent_points()
         if len(points) == 0:
             points = np.zeros((1, 3))
@@ -589,6 +645,10 @@ class Scene:
         position = target + direction / np.linalg.norm(direction) * radius * 1.7
         return position, target
 
+    def _fitted_camera(self) -> dict:
+        position, target = self._fitted_camera_parts()
+        return _camera_dict(position, target)
+
     def set_camera(self, position, target) -> None:
         """Place the camera at ``position`` looking at ``target`` (scene base coordinates)."""
         p = _points_array(position, "position", "set_camera")[0]
@@ -598,9 +658,9 @@ class Scene:
     def _set_camera(self, position, target, auto: bool) -> None:
         self._check_open()
         with self._lock:
-            self._camera = commands.camera(position, target)
+            self._camera = _camera_dict(position, target)
             self._camera_is_auto = auto
-            self._emit([self._camera])
+            self._sync_widget("_camera")
 
     def highlight(self, frame=None) -> None:
         """Emphasise ``frame`` (enlarged triad); None removes the emphasis."""
@@ -612,7 +672,7 @@ class Scene:
                 if kind == "scaled" and not handle.removed:
                     self._emit(
                         [
-                            commands.set_property(
+                            self.state.set_property(
                                 handle.geom_path, "scale", [1.0, 1.0, 1.0]
                             )
                         ]
@@ -624,7 +684,7 @@ class Scene:
             frame = _resolve(frame, "highlight: frame")
             for handle in self._handles.values():
                 if isinstance(handle, FrameHandle) and handle.frame is frame:
-                    message = commands.set_property(
+                    message = self.state.set_property(
                         handle.geom_path, "scale", [2.0, 2.0, 2.0]
                     )
                     self._emit([message])
@@ -638,23 +698,32 @@ class Scene:
         self,
         path,
         *,
-        max_frames: int = 5000,
+        series=None,
+        player=None,
+        max_frames: int | None = 20000,
         title: str | None = None,
-        autoplay: bool = True,
+        autoplay: bool = False,
     ):
-        """Write one self-contained HTML file that plays the scene offline.
+        """Write the dashboard (3D view, plots, player) as one self-contained HTML file.
 
-        meshcat's viewer bundle and the animation data are inlined: the file
-        needs no server and no network. Each moving object keeps at most
-        ``max_frames`` samples (evenly subsampled), which bounds the size.
+        The page needs no kernel, no server and no network: meshcat's viewer,
+        the widgets' JavaScript and the data are inlined; the player's clock
+        runs in the page as in the notebook.
 
         Parameters
         ----------
         path : str or os.PathLike
             Output file; written atomically (a temporary file, then renamed).
-        max_frames : int, default 5000
+        series : widget or list of widgets, optional
+            Other views to include below the 3D view (e.g. a time-series plot
+            linked to the same player); any anywidget works.
+        player : Player, optional
+            The player to include (the scene's linked one, else a new one).
+        max_frames : int or None, default 20000
+            Keep at most this many samples per moving object (evenly spaced);
+            None keeps all.
         title : str, optional
-        autoplay : bool, default True
+        autoplay : bool, default False
 
         Returns
         -------
@@ -672,7 +741,13 @@ class Scene:
 
         self._check_open()
         return write_html(
-            self, path, max_frames=max_frames, title=title, autoplay=autoplay
+            self,
+            path,
+            series=series,
+            player=player,
+            max_frames=max_frames,
+            title=title,
+            autoplay=autoplay,
         )
 
     # -- life cycle -------------------------------------------------------------
@@ -681,21 +756,17 @@ class Scene:
         return self._closed
 
     def close(self) -> None:
-        """Remove the scene from the viewer server; idempotent.
-
-        The kernel's server keeps running for other scenes (see
-        :func:`rbm_nb.scene.shutdown_server`).
-        """
+        """Close the scene and its widget; idempotent."""
         if self._closed:
             return
         with self._lock:
             self._closed = True
-            server, self._server = self._server, None
+            widget, self._widget = self._widget, None
             for handle in self._handles.values():
                 handle.removed = True
             self._handles.clear()
-        if server is not None and not server.closed:
-            server.remove_channel(self.name)
+        if widget is not None:
+            widget.close()
 
     def __enter__(self):
         return self
@@ -736,11 +807,10 @@ class Scene:
         entry = self._anchors.get(path)
         messages: list[Message] = []
         if entry is None:
-            node = None
+            moving = False
             if base is not self.base:
-                track = Track.lookup(base, self.base)
-                node, messages = self._add_node(path, track)
-            entry = [node, 0, base]
+                moving, messages = self._add_node(path, Track.lookup(base, self.base))
+            entry = [moving, 0, base]
             self._anchors[path] = entry
         entry[1] += 1
         return path, messages
@@ -750,28 +820,19 @@ class Scene:
         if entry is None:
             return []
         entry[1] -= 1
-        if entry[1] > 0 or entry[0] is None:
-            if entry[1] <= 0:
-                del self._anchors[path]
+        if entry[1] > 0:
             return []
         del self._anchors[path]
-        self._drop_prefix(path)
-        return [commands.delete(path)]
+        if path == f"{ROOT}/root":
+            return []
+        return [self.state.delete(path)]
 
-    def _add_node(self, path: str, track: Track) -> tuple[_Node | None, list[Message]]:
+    def _add_node(self, path: str, track: Track) -> tuple[bool, list[Message]]:
+        """Place the node at ``path``: fixed, or following a track. Returns (moving, commands)."""
         if track.static:
-            message = TransformPacker(path).message(track.matrix())
-            self._static_transforms[path] = message
-            return None, [message]
-        check_kinds(self.timestamps_kind, track.kind, f"scene {self.name!r}")
-        self.timestamps_kind = track.kind
-        node = _Node(path, track)
-        self._nodes[path] = node
-        self._dynamic.append(node)
-        self._timestamps_cache = None
-        if self._time is not None:
-            return node, node.messages_at_time(self._time)
-        return node, node.messages_at_index(0)
+            return False, [self.state.set_static(path, track.matrix())]
+        self.state.add_track(path, track, f"scene {self.name!r}")
+        return True, []
 
     def _install(
         self,
@@ -783,48 +844,42 @@ class Scene:
         with self._lock:
             kinds = [t.kind for t in (carrier, inner) if t is not None and not t.static]
             for kind in kinds:
-                check_kinds(self.timestamps_kind, kind, f"scene {self.name!r}")
+                check_kinds(self.state.kind, kind, f"scene {self.name!r}")
+            moving_before = set(self.state.tracks)
             anchor, messages = self._acquire_anchor(handle.base)
             handle.root_path = f"{anchor}/{handle.name}"
             handle.pose_path = f"{handle.root_path}/pose"
             leaf = handle.pose_path
-            _, more = self._add_node(handle.pose_path, carrier)
-            messages += more
+            messages += self._add_node(handle.pose_path, carrier)[1]
             if inner is not None:
                 leaf = f"{handle.pose_path}/data"
-                _, more = self._add_node(leaf, inner)
-                messages += more
+                messages += self._add_node(leaf, inner)[1]
             handle.geom_path = f"{leaf}/geom"
             if offset is not None:
-                message = TransformPacker(handle.geom_path).message(offset)
-                self._static_transforms[handle.geom_path] = message
-                messages.append(message)
+                messages.append(self.state.set_static(handle.geom_path, offset))
             messages += self._object_messages(handle)
             self._handles[handle.name] = handle
             self._emit(messages)
-            if self._camera is not None and self._camera_is_auto:
-                self._camera = None  # refit when next shown
-                if self._server is not None and not self._server.closed:
-                    self.fit_camera()
+            added = [p for p in self.state.tracks if p not in moving_before]
+            if added:
+                self._emit_tracks(added)
+            self._content_changed()
 
     def _object_messages(self, handle: SceneHandle) -> list[Message]:
         messages = []
         for rel, obj in handle._objects():
             path = handle.geom_path + (f"/{rel}" if rel else "")
-            message = commands.set_object(path, obj)
-            self._objects[path] = message
-            messages.append(message)
+            messages.append(self.state.set_object(path, obj))
         return messages
 
     def _redraw(self, handle: SceneHandle) -> None:
         with self._lock:
             self._emit(self._object_messages(handle))
+            self._content_changed()
 
     def _set_visible(self, handle: SceneHandle, visible: bool) -> None:
         with self._lock:
-            message = commands.set_property(handle.root_path, "visible", visible)
-            self._properties[(handle.root_path, "visible")] = message
-            self._emit([message])
+            self._emit([self.state.set_property(handle.root_path, "visible", visible)])
 
     def _remove_handle(self, handle: SceneHandle) -> None:
         self._check_open()
@@ -833,56 +888,140 @@ class Scene:
                 self._highlight = None
             self._handles.pop(handle.name, None)
             handle.removed = True
-            self._drop_prefix(handle.root_path)
-            messages = [commands.delete(handle.root_path)]
+            before = set(self.state.tracks)
+            messages = [self.state.delete(handle.root_path)]
             messages += self._release_anchor(self._anchor_path(handle.base))
             self._emit(messages)
+            gone = [p for p in before if p not in self.state.tracks]
+            if gone:
+                self._emit_tracks([], removed=gone)
+            self._content_changed()
 
-    def _drop_prefix(self, path: str) -> None:
-        prefix = path + "/"
+    def _content_changed(self) -> None:
+        """Refresh what depends on the whole content: grid, legend, labels, camera."""
+        if self._grid:
+            self._update_grid()
+        for name in ("_origin", "_frames", "_labels", "_legend"):
+            self._sync_widget(name)
+        if self._camera is not None and self._camera_is_auto:
+            self.fit_camera()
 
-        def gone(p: str) -> bool:
-            return p == path or p.startswith(prefix)
+    def _update_grid(self) -> None:
+        points = self._extent_points()
+        if len(points) == 0:
+            return
+        low, high = points.min(axis=0)[:2], points.max(axis=0)[:2]
+        span = float(max(np.max(high - low), 1.0))
+        step = nice_step(span)
+        lo = np.floor(low / step) * step - step
+        hi = np.ceil(high / step) * step + step
+        if self._grid_step == step and getattr(self, "_grid_box", None) == (
+            tuple(lo),
+            tuple(hi),
+        ):
+            return
+        self._grid_step = step
+        self._grid_box = (tuple(lo), tuple(hi))
+        xs = np.arange(lo[0], hi[0] + step / 2, step)
+        ys = np.arange(lo[1], hi[1] + step / 2, step)
+        segments = []
+        for x in xs:
+            segments += [(x, lo[1], 0.0), (x, hi[1], 0.0)]
+        for y in ys:
+            segments += [(lo[0], y, 0.0), (hi[0], y, 0.0)]
+        g = commands.meshcat_geometry()
+        lines = g.LineSegments(
+            g.PointsGeometry(
+                np.ascontiguousarray(np.array(segments, dtype=np.float32).T)
+            ),
+            g.LineBasicMaterial(color=color_int(GRID_COLOR)),
+        )
+        self._emit([self.state.set_object(GRID_PATH, lines)])
 
-        for table in (self._objects, self._static_transforms, self._nodes):
-            for key in [k for k in table if gone(k)]:
-                del table[key]
-        for key in [k for k in self._properties if gone(k[0])]:
-            del self._properties[key]
-        self._dynamic = [n for n in self._dynamic if not gone(n.path)]
-        self._timestamps_cache = None
-        if not self._dynamic:
-            self.timestamps_kind = None
+    def _frame_paths(self) -> dict[str, str]:
+        """Frame name -> pose path of its (first) triad."""
+        out: dict[str, str] = {}
+        for handle in self._handles.values():
+            if isinstance(handle, FrameHandle) and handle.frame.name not in out:
+                out[handle.frame.name] = handle.pose_path
+        return out
+
+    def legend(self) -> list[dict]:
+        """The colour legend: ``{"text", "color"}`` rows (colour a hex string or a list)."""
+        rows: list[dict] = []
+        if any(isinstance(h, FrameHandle) for h in self._handles.values()):
+            rows.append({"text": "frame axes x, y, z", "color": AXIS_COLORS})
+        for handle in self._handles.values():
+            if isinstance(handle, FrameHandle) or "color" not in handle.style:
+                continue
+            color = f"#{color_int(handle.style['color']):06x}"
+            rows.append({"text": handle.name.replace("_", " "), "color": color})
+        if self._grid and self._grid_step is not None:
+            rows.append(
+                {"text": f"grid {format_length(self._grid_step)}", "color": GRID_COLOR}
+            )
+        return rows
+
+    def _widget_value(self, name: str):
+        if name == "_origin":
+            return self.state.origin
+        if name == "_camera":
+            return dict(self._camera or {})
+        if name == "_frames":
+            return self._frame_paths()
+        if name == "_labels":
+            return {path: frame for frame, path in self._frame_paths().items()}
+        if name == "_legend":
+            return self.legend()
+        if name == "_pins":
+            origin = self.state.origin
+            return {path: t - origin for path, t in self.state.pins.items()}
+        raise KeyError(name)
+
+    def _sync_widget(self, name: str) -> None:
+        if self._widget is not None:
+            setattr(self._widget, name, self._widget_value(name))
 
     def _emit(self, messages: list[Message]) -> None:
-        if messages and self._server is not None and not self._server.closed:
-            self._server.send(self.name, messages)
+        if messages and self._widget is not None:
+            self._widget.push({"type": "commands"}, [m.data for m in messages])
 
-    def _snapshot(self) -> list[Message]:
-        """Everything a viewer needs to show the scene as it is now."""
-        messages = [commands.delete(ROOT)]
-        messages += list(self._objects.values())
-        messages += list(self._static_transforms.values())
-        for node in self._nodes.values():
-            messages += node.current_messages()
-        messages += list(self._properties.values())
-        if self._highlight is not None and self._highlight[0] == "scaled":
-            handle = self._highlight[1]
-            messages.append(
-                commands.set_property(handle.geom_path, "scale", [2.0, 2.0, 2.0])
-            )
-        if self._camera is not None:
-            messages.append(self._camera)
-        return messages
+    def _emit_tracks(self, paths: list[str], removed: list[str] = ()) -> None:
+        if self._widget is None or not self._widget.ready:
+            return
+        origin = self.state.origin
+        if self._widget._origin != origin:  # the time base moved: resend everything
+            self._widget._origin = origin
+            self._widget.push(*self._snapshot_message())
+            return
+        sub = SceneState()
+        sub.tracks = {p: self.state.tracks[p] for p in paths}
+        meta, buffers = sub.track_payload(origin=origin)
+        self._widget.push(
+            {"type": "tracks", "tracks": meta, "remove": list(removed)}, buffers
+        )
+
+    def _snapshot_message(self, max_samples: int | None = None) -> tuple[dict, list]:
+        """The content message that builds this scene in a fresh view."""
+        with self._lock:
+            commands_ = [m.data for m in self.state.snapshot()]
+            meta, buffers = self.state.track_payload(max_samples=max_samples)
+            offset = len(commands_)
+            for entry in meta:
+                for key in ("times", "translation", "rotation", "scale"):
+                    if entry[key] is not None:
+                        entry[key] += offset
+            content = {"type": "snapshot", "commands": offset, "tracks": meta}
+            return content, commands_ + buffers
 
     def _extent_points(self) -> np.ndarray:
         """Points (scene base coordinates, roughly) that the camera should see."""
         chunks = []
         for handle in self._handles.values():
-            node = self._nodes.get(handle.pose_path)
+            track = self.state.tracks.get(handle.pose_path)
             origins = (
-                node.track.positions()
-                if node is not None
+                track.positions()
+                if track is not None
                 else self._static_offset(handle.pose_path)
             )
             local = np.asarray(handle._extent(), dtype=float).reshape(-1, 3)
@@ -892,40 +1031,48 @@ class Scene:
                 points = local + origins.mean(axis=0)  # the geometry is the data
             else:
                 points = np.vstack([origins, local + origins.mean(axis=0)])
-            anchor = self._anchors.get(self._anchor_path(handle.base))
-            if anchor is not None and anchor[0] is not None:
-                points = anchor[0].track.positions() + points.mean(axis=0)
+            anchor = self.state.tracks.get(self._anchor_path(handle.base))
+            if anchor is not None:
+                points = anchor.positions() + points.mean(axis=0)
             chunks.append(points)
         if not chunks:
             return np.zeros((0, 3))
         return np.vstack(chunks)
 
     def _static_offset(self, path: str) -> np.ndarray:
-        message = self._static_transforms.get(path)
-        if message is None:
-            return np.zeros((1, 3))
-        import umsgpack
+        pose = self.state.pose_at(path, 0.0)
+        return pose[:3, 3].reshape(1, 3)
 
-        matrix = np.asarray(umsgpack.unpackb(message.data)["matrix"]).reshape(4, 4).T
-        return matrix[:3, 3].reshape(1, 3)
+    def _track(self, path: str) -> Track | None:
+        return self.state.tracks.get(path)
 
     # publishers drive single handles by sample index
     def _show_handle_index(self, handle: SceneHandle, index: int) -> float | None:
-        """Move ``handle``'s pose to sample ``index`` of its own track."""
+        """Show ``handle``'s pose at sample ``index`` of its own track."""
         self._check_open()
         with self._lock:
-            node = self._nodes.get(handle.pose_path)
-            if node is None:
+            track = self.state.tracks.get(handle.pose_path)
+            if track is None:
                 return None
-            self._emit(node.messages_at_index(index))
-            return float(node.track.seconds[index])
+            seconds = float(track.seconds[index])
+            self.state.pins[handle.pose_path] = seconds
+            self._sync_widget("_pins")
+            return seconds
 
     def _sync_anchor(self, frame, seconds: float) -> None:
         """Move anchors based on ``frame`` (objects expressed in it) to ``seconds``."""
         with self._lock:
-            entry = self._anchors.get(self._anchor_path(frame))
-            if entry is not None and entry[0] is not None:
-                self._emit(entry[0].messages_at_time(seconds))
+            path = self._anchor_path(frame)
+            if path in self.state.tracks:
+                self.state.pins[path] = float(seconds)
+                self._sync_widget("_pins")
+
+
+def _camera_dict(position, target) -> dict:
+    return {
+        "position": [float(v) for v in position],
+        "target": [float(v) for v in target],
+    }
 
 
 def _rotations_from_x(vectors: np.ndarray, norms: np.ndarray) -> np.ndarray:

@@ -13,31 +13,25 @@ the plain-text view.
 from __future__ import annotations
 
 import html
-import math
 import sys
 import threading
 import weakref
+from typing import Any
 
 import ipywidgets as widgets
 import numpy as np
 import traitlets
 
-from ._time import format_time, time_as_seconds, timestamps_as_seconds
-
-
-def roll_pitch_yaw(q) -> tuple[float, float, float]:
-    """Roll, pitch and yaw in degrees of a quaternion (w, x, y, z).
-
-    Angles of the z-y'-x'' (yaw, pitch, roll) sequence: the rotation is
-    ``Rz(yaw) @ Ry(pitch) @ Rx(roll)``.
-    """
-    w, x, y, z = (float(v) for v in q)
-    n = math.sqrt(w * w + x * x + y * y + z * z)
-    w, x, y, z = w / n, x / n, y / n, z / n
-    roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
-    pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
-    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-    return math.degrees(roll), math.degrees(pitch), math.degrees(yaw)
+from ._time import time_as_seconds, timestamps_as_seconds
+from ._timebase import format_time
+from .frame_details import (
+    Details,
+    FrameDetails,
+    PairDetails,
+    details_html,
+    details_text,
+    pose_at,
+)
 
 
 def frame_kind(frame) -> str:
@@ -60,7 +54,7 @@ def frame_info(frame) -> dict:
         unless moving with at least two samples) and ``time_kind``.
     """
     kind = frame_kind(frame)
-    info = {
+    info: dict[str, Any] = {
         "kind": kind,
         "samples": 1,
         "start": None,
@@ -95,10 +89,6 @@ def _describe(info: dict) -> str:
     return text
 
 
-def _fmt_vector(v) -> str:
-    return "[" + ", ".join(f"{float(x):.4g}" for x in v) + "]"
-
-
 def _registry_listener(tree_ref):
     """A registry callback that keeps only a weak reference to the tree."""
 
@@ -125,9 +115,11 @@ class FrameTree(widgets.VBox):
     root : str, default "world"
         Name of the registered frame at the top of the tree.
     scene : rbm_nb.scene.Scene, optional
-        A scene in which the selected frame is highlighted.
+        Selection goes both ways: selecting a frame here selects (highlights)
+        it in the scene, clicking a frame in the 3D view selects it here.
     player : rbm_nb.widgets.Player, optional
-        Link to this player: poses are shown at its current time.
+        Link to this player: poses are shown at its current time, and times
+        are printed from its start (``12.345 s · 2020-02-02 00:27:26.345``).
 
     Examples
     --------
@@ -149,7 +141,9 @@ class FrameTree(widgets.VBox):
         help="Frames a lookup between the two selected frames goes through, in order."
     )
     time = traitlets.Float(
-        None, allow_none=True, help="Time shown (float seconds); None: first sample."
+        None,
+        allow_none=True,
+        help="Time shown, in data seconds (epoch seconds for datetime frames); None: first sample.",
     )
 
     def __init__(self, root: str = "world", *, scene=None, player=None):
@@ -165,6 +159,9 @@ class FrameTree(widgets.VBox):
         self._updating = False
         self._lock = threading.RLock()
         self._lookup_cache: dict = {}
+        self._current: Details = None
+        self._player: Any = None  # the linked Player
+        self._scene_widget: Any = None  # the linked Scene's widget
         self._message = widgets.HTML(value="")
         self._rows_box = widgets.VBox(
             [], layout=widgets.Layout(overflow="auto", max_height="360px")
@@ -182,6 +179,10 @@ class FrameTree(widgets.VBox):
         )
         self.add_class("rbm-frame-tree")
         self.scene = scene
+        if scene is not None:
+            # the 3D view's `selected` (a click on a frame) selects here too
+            self._scene_widget = scene.widget
+            self._scene_widget.observe(self._on_scene_selected, "selected")
         self.root = root
         from .. import frames
 
@@ -209,12 +210,14 @@ class FrameTree(widgets.VBox):
         """The description shown in the row of ``name``."""
         return self._rows[name]["label"].value
 
-    def details_text(self) -> str:
-        """The details panel as plain text."""
-        import re
+    @property
+    def details(self) -> Details:
+        """What the details panel shows: FrameDetails, PairDetails or None."""
+        return self._current
 
-        text = re.sub(r"<br\s*/?>|</(div|p|li|tr)>", "\n", self._details.value)
-        return html.unescape(re.sub(r"<[^>]+>", "", text))
+    def details_text(self) -> str:
+        """The details panel as plain text (rendered from :attr:`details`)."""
+        return details_text(self._current)
 
     def refresh(self) -> None:
         """Rebuild the tree from the registry."""
@@ -258,7 +261,29 @@ class FrameTree(widgets.VBox):
         if self._listener is None:  # no registry hook: notice changes on steps
             self._poll_registry()
 
+    def _attach_player(self, player) -> None:
+        """Follow ``player`` (called by ``Player.link``): its time and its start."""
+        if self._player is not None and self._player is not player:
+            self._detach_player(self._player)
+        self._player = player
+        player.observe(self._on_player_time, "time")
+        self._on_player_time()
+
+    def _detach_player(self, player) -> None:
+        if self._player is player:
+            player.unobserve(self._on_player_time, "time")
+            self._player = None
+            self._update_details()
+
+    def _on_player_time(self, change=None) -> None:
+        self.set_time(self._player.data_time)
+
     def close(self) -> None:
+        if self._player is not None:
+            self._detach_player(self._player)
+        if self._scene_widget is not None:
+            self._scene_widget.unobserve(self._on_scene_selected, "selected")
+            self._scene_widget = None
         frames = sys.modules.get("rbm_nb.frames")
         if self._listener is not None and frames is not None:
             try:
@@ -303,13 +328,25 @@ class FrameTree(widgets.VBox):
         finally:
             self._updating = False
         self._update_details()
-        if self.scene is not None and not getattr(self.scene, "closed", False):
-            try:
-                self.scene.highlight(self.selected[-1] if self.selected else None)
-            except (ValueError, RuntimeError) as err:
-                self._message.value = (
-                    f"<i>highlight failed: {html.escape(str(err))}</i>"
-                )
+        if self._scene_widget is not None:
+            name = self.selected[-1] if self.selected else None
+            if self._scene_widget.selected != name:
+                try:
+                    self.scene.selected = name  # the scene highlights it
+                except (ValueError, RuntimeError) as err:
+                    self._message.value = (
+                        f"<i>selecting in the scene failed: {html.escape(str(err))}</i>"
+                    )
+
+    def _on_scene_selected(self, change) -> None:
+        name = change["new"]
+        current = self.selected[-1] if self.selected else None
+        if name == current:
+            return
+        if name is None:
+            self.selected = ()
+        elif name in self._rows:
+            self.selected = (name,)
 
     def _chain_names(self) -> tuple:
         if len(self.selected) != 2:
@@ -471,118 +508,97 @@ class FrameTree(widgets.VBox):
         return self._rows[name]["frame"]
 
     def _update_details(self) -> None:
-        names = [n for n in self.selected if n in self._rows]
         try:
-            if not names:
-                text = "<i>select a frame for details, two for the transform between them</i>"
-            elif len(names) == 1:
-                text = self._single_details(self._frame(names[0]))
-            else:
-                text = self._pair_details(self._frame(names[0]), self._frame(names[1]))
+            self._current = self._build_details()
+            text = details_html(self._current)
         except Exception as err:  # shown, not raised: the panel must stay usable
+            self._current = None
             text = f"<span style='color:#b00'>{html.escape(type(err).__name__)}: {html.escape(str(err))}</span>"
         self._details.value = text
 
-    def _time_text(self, seconds: float | None, time_kind: str | None) -> str:
-        if seconds is None:
-            return "the first sample"
-        return format_time(seconds, time_kind or "float")
+    def _build_details(self) -> Details:
+        names = [n for n in self.selected if n in self._rows]
+        if not names:
+            return None
+        if len(names) == 1:
+            return self._single_details(self._frame(names[0]))
+        return self._pair_details(self._frame(names[0]), self._frame(names[1]))
 
-    def _single_details(self, frame) -> str:
+    # -- one time base: seconds from the start, plus the date if any ---------------
+    def _time_base(self) -> tuple[float, int | None]:
+        """(second 0 in data seconds, its absolute ns or None)."""
+        player = self._player
+        if player is not None:
+            return float(player.origin), player.t0_ns
+        first = None
+        for row in self._rows.values():
+            frame = row["frame"]
+            if frame.timestamps is None:
+                continue
+            stamps = np.asarray(getattr(frame.timestamps, "values", frame.timestamps))
+            seconds = row["info"]["start"]
+            if first is None or seconds < first[0]:
+                first = (seconds, stamps[:1])
+        if first is None:
+            return 0.0, None
+        seconds, stamp = first
+        if np.issubdtype(stamp.dtype, np.datetime64):
+            ns = int(stamp.astype("datetime64[ns]").astype(np.int64)[0])
+            return ns / 1e9, ns
+        return seconds, None
+
+    def format_time(self, seconds: float) -> str:
+        """Data seconds (epoch seconds for datetime frames) as the shared readout."""
+        origin, t0_ns = self._time_base()
+        if t0_ns is not None:
+            # exact: data seconds are epoch floats, the readout counts from t0_ns
+            return format_time(seconds - t0_ns / 1e9, t0_ns)
+        return format_time(seconds - origin)
+
+    def _single_details(self, frame) -> FrameDetails:
         info = self._rows[frame.name]["info"]
-        parent = frame.parent.name if frame.parent is not None else "none (root)"
-        children = (
-            ", ".join(c.name for c in frame.children if c.name in self._rows) or "none"
-        )
-        path = " \u2192 ".join(f.name for f in _path_to_root(frame))
-        lines = [
-            f"<b>{html.escape(frame.name)}</b> \u2014 {html.escape(_describe(info))}",
-            f"parent: {html.escape(parent)}",
-            f"children: {html.escape(children)}",
-            f"path to root: {html.escape(path)}",
-        ]
+        pose = None
         if frame.parent is not None:
-            t, r, when = self._pose_wrt_parent(frame, info)
-            lines.append(self._pose_text(f"wrt {frame.parent.name}", t, r, when))
-        return "<br>".join(lines)
-
-    def _pose_wrt_parent(self, frame, info):
-        translation = np.asarray(frame.translation, dtype=float)
-        rotation = np.asarray(frame.rotation, dtype=float)
-        if frame.timestamps is None:
-            return translation, rotation, "static"
-        seconds, time_kind = timestamps_as_seconds(
-            frame.timestamps, f"timestamps of {frame.name!r}"
-        )
-        index = self._index_at(seconds)
-        if index < 0:
-            return (
-                None,
-                None,
-                f"not defined before {format_time(seconds[0], time_kind)}",
+            seconds = None
+            if frame.timestamps is not None:
+                seconds, _ = timestamps_as_seconds(
+                    frame.timestamps, f"timestamps of {frame.name!r}"
+                )
+            pose = pose_at(
+                f"wrt {frame.parent.name}",
+                np.asarray(frame.translation, dtype=float),
+                np.asarray(frame.rotation, dtype=float),
+                seconds,
+                self.time,
+                self.format_time,
             )
-        return (
-            translation[index],
-            rotation[index],
-            f"at {format_time(seconds[index], time_kind)}",
+        return FrameDetails(
+            name=frame.name,
+            summary=_describe(info),
+            parent=None if frame.parent is None else frame.parent.name,
+            children=tuple(c.name for c in frame.children if c.name in self._rows),
+            path=tuple(f.name for f in _path_to_root(frame)),
+            pose=pose,
         )
 
-    def _index_at(self, seconds: np.ndarray) -> int:
-        if self.time is None:
-            return 0
-        return int(np.searchsorted(seconds, self.time, side="right")) - 1
-
-    def _pose_text(self, what: str, t, r, when: str) -> str:
-        if t is None:
-            return f"pose {html.escape(what)}: {html.escape(when)}"
-        roll, pitch, yaw = roll_pitch_yaw(r)
-        return (
-            f"pose {html.escape(what)} ({html.escape(when)}):<br>"
-            f"&nbsp;&nbsp;translation {_fmt_vector(t)} m<br>"
-            f"&nbsp;&nbsp;roll {roll:.2f}\u00b0, pitch {pitch:.2f}\u00b0, yaw {yaw:.2f}\u00b0"
-        )
-
-    def _pair_details(self, a, b) -> str:
-        chain = a.frames_between(b)
-        lines = [
-            f"<b>{html.escape(a.name)}</b> \u2192 <b>{html.escape(b.name)}</b>",
-            "chain: " + html.escape(" \u2192 ".join(f.name for f in chain)),
-        ]
+    def _pair_details(self, a, b) -> PairDetails:
+        chain = tuple(f.name for f in a.frames_between(b))
         key = (a.name, b.name, id(a), id(b))
         if key not in self._lookup_cache:
             from .. import lookups
 
             t, r, ts = lookups.lookup_transform(outof=a, into=b, return_timestamps=True)
-            seconds, kind = (
-                (None, None)
+            seconds = (
+                None
                 if ts is None
-                else timestamps_as_seconds(ts, "transform timestamps")
+                else timestamps_as_seconds(ts, "transform timestamps")[0]
             )
-            self._lookup_cache[key] = (np.asarray(t), np.asarray(r), seconds, kind)
-        t, r, seconds, kind = self._lookup_cache[key]
-        if seconds is None:
-            lines.append(self._pose_text(f"of {a.name} in {b.name}", t, r, "static"))
-        else:
-            index = self._index_at(seconds)
-            if index < 0:
-                lines.append(
-                    self._pose_text(
-                        f"of {a.name} in {b.name}",
-                        None,
-                        None,
-                        f"not defined before {format_time(seconds[0], kind)}",
-                    )
-                )
-            else:
-                lines.append(
-                    self._pose_text(
-                        f"of {a.name} in {b.name}",
-                        t[index],
-                        r[index],
-                        f"at {format_time(seconds[index], kind)}",
-                    )
-                )
-        return "<br>".join(lines)
+            self._lookup_cache[key] = (np.asarray(t), np.asarray(r), seconds)
+        t, r, seconds = self._lookup_cache[key]
+        pose = pose_at(
+            f"of {a.name} in {b.name}", t, r, seconds, self.time, self.format_time
+        )
+        return PairDetails(outof=a.name, into=b.name, chain=chain, pose=pose)
 
     def __repr__(self) -> str:
         return f"<FrameTree root={self.root!r} frames={len(self._order)} selected={self.selected}>"

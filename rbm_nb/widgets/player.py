@@ -1,48 +1,93 @@
-"""Playback of timestamped data as an ipywidgets control.
+"""Playback of timestamped data: a widget whose clock runs in the browser.
 
-A :class:`Player` owns a time axis (the timestamps it was built from) and a
-set of linked objects. While playing, a background thread computes from the
-wall clock which sample is due and publishes only that one: when a linked
-object is slower than the play interval, intermediate samples are skipped
-instead of piling up, so pausing stops at once.
+The :class:`Player` is an anywidget (``js/src/player.js``). Pressing play
+starts a ``requestAnimationFrame`` clock in the browser: the time moves, and
+every view linked to the player (the 3D :class:`~rbm_nb.scene.Scene`, the
+time-series plot) follows it there, with no message through the kernel. So
+play, pause, skip, scrub, speed and loop keep working while the kernel is busy.
+The kernel has no playback thread; it learns the time at a throttled rate
+(``THROTTLE_MS`` in ``js/src/timeline.js``, 200 ms) and then calls the Python
+callbacks and objects linked with :meth:`Player.link`.
+
+Contract for other views (also in ``js/src/timeline.js``)
+---------------------------------------------------------
+Synced traits of the Player:
+
+``time`` (float)
+    Seconds from the start of the recording, in ``[0, duration]``. Set by the
+    browser clock every animation frame, pushed to the kernel throttled (and
+    at once on pause and seek); setting it in Python moves every view and the
+    clock continues from there. It is not echoed back to the browser.
+``playing`` (bool), ``speed`` (float), ``loop`` (bool)
+``duration`` (float)
+    Seconds from the first to the last sample.
+``t0_ns`` (int or None)
+    Absolute time of second 0 in ns since the Unix epoch, or None when the
+    timestamps are plain seconds.
+``origin`` (float)
+    Second 0 on the data's own float-seconds axis (epoch seconds for
+    datetime data): ``data seconds = origin + time``.
+
+A linked view declares ``player = Instance(Player, allow_none=True).tag(sync=True,
+**widget_serialization)``; in JS it gets the player's model with
+``await model.widget_manager.get_model(id)`` and listens to ``change:time``
+(``followPlayer`` in ``js/src/timeline.js`` does this). To seek from a view,
+``seek(player, t)`` from timeline.js. :meth:`Player.link` sets such a view's
+``player`` trait.
+
+The time arithmetic (seek, skips in seconds, loop) is
+:class:`rbm_nb.widgets.playback.Playback`, tested without a browser.
 """
 
 from __future__ import annotations
 
 import sys
-import threading
-import time
+import uuid
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
-import ipywidgets as widgets
+import anywidget
 import numpy as np
 import traitlets
 
-from ._time import check_kinds, format_time, time_as_seconds, timestamps_as_seconds
+from ._time import (
+    DATETIME,
+    check_kinds,
+    time_as_seconds,
+    timestamps_as_seconds,
+)
+from ._timebase import format_time
+from .playback import Playback, check_speed
 
-SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0)
+STATIC = Path(__file__).resolve().parent / "static"
 
-# Widgets in the browser are updated at most this often while playing; linked
-# objects still get every step. The frontend cannot show more and every update
-# is a message through the kernel.
-UI_INTERVAL = 0.05
+
+def bundle(name: str) -> str:
+    """Text of the built JS bundle ``rbm_nb/widgets/static/<name>.js``."""
+    path = STATIC / f"{name}.js"
+    if not path.is_file():
+        raise FileNotFoundError(
+            f"the widget bundle {path} is missing; rebuild it with "
+            "npm --prefix js ci && npm --prefix js run build"
+        )
+    return path.read_text(encoding="utf-8")
 
 
 class _Link:
-    """A linked object and how to drive it."""
+    """A Python object the kernel drives when it learns the player's time."""
 
     def __init__(self, obj: Any, player_kind: str):
         self.obj = obj
-        self.set_time = getattr(obj, "set_time", None)
+        set_time = getattr(obj, "set_time", None)
         publish = getattr(obj, "publish", None)
-        if not callable(self.set_time):
-            self.set_time = None
-        if self.set_time is None and not callable(publish):
+        self.set_time = set_time if callable(set_time) else None
+        self.publish = publish if callable(publish) else None
+        if self.set_time is None and self.publish is None:
             raise TypeError(
-                f"cannot link {type(obj).__name__}: it needs a set_time(t) or a publish(idx) method"
+                f"cannot link {type(obj).__name__}: it needs a set_time(t) or a publish(idx) "
+                "method, or a 'player' trait"
             )
-        self.publish = publish
         self.seconds = None
         kind = getattr(obj, "timestamps_kind", None)
         if self.set_time is None:
@@ -52,16 +97,16 @@ class _Link:
                     timestamps, f"timestamps of the linked {type(obj).__name__}"
                 )
         check_kinds(player_kind, kind, f"link({type(obj).__name__})")
-        self.last = None
+        self.last: int | None = None
 
-    def show(self, index: int, t: float) -> None:
+    def show(self, index: int, seconds: float) -> None:
         if self.set_time is not None:
-            self.set_time(t)
+            self.set_time(seconds)
             return
         if self.seconds is None:
             idx = index
         else:
-            idx = int(np.searchsorted(self.seconds, t, side="right")) - 1
+            idx = int(np.searchsorted(self.seconds, seconds + 1e-6, side="right")) - 1
             if idx < 0:  # nothing recorded yet at this time
                 return
         if idx != self.last:
@@ -69,9 +114,16 @@ class _Link:
             self.last = idx
 
 
-def _check_positive_int(value, name: str) -> None:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ValueError(f"Player: {name} must be a positive integer, got {value!r}")
+def _positive(value, name: str) -> float:
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"Player: {name} must be a positive number, got {value!r}"
+        ) from None
+    if isinstance(value, bool) or not (np.isfinite(number) and number > 0):
+        raise ValueError(f"Player: {name} must be a positive number, got {value!r}")
+    return number
 
 
 def _resolve_timestamps(source) -> tuple[Any, str]:
@@ -100,8 +152,8 @@ def _resolve_timestamps(source) -> tuple[Any, str]:
     return source, "timestamps"
 
 
-class Player(widgets.VBox):
-    """Play/pause, slider, stepping and speed control over a time axis.
+class Player(anywidget.AnyWidget):
+    """Play/pause, skips, slider, speed and loop over a time axis.
 
     Parameters
     ----------
@@ -110,122 +162,118 @@ class Player(widgets.VBox):
         the name of a registered one) or any object with a ``timestamps``
         attribute (a publisher, a :class:`~rbm_nb.scene.Scene`).
     step : int, default 1
-        Index difference between consecutive samples shown while playing.
+        Samples moved by :meth:`step_forward` / :meth:`step_back`.
     speed : float, default 1.0
         Playback speed relative to the recording.
-    skip : int, optional
-        Samples jumped by the skip buttons; ``10 * step`` by default.
+    skip : float, optional
+        Seconds jumped by the arrow keys and the small skip buttons (1 s by
+        default); shift+arrows and the big buttons jump ``10 * skip``.
     loop : bool, default False
         Start over at the end instead of stopping.
-    max_rate : float, default 100.0
-        Upper bound on steps per wall-clock second. Playback time still follows
-        the wall clock, faster recordings just show fewer of their samples.
-    clock : callable, optional
-        Returns the wall-clock time in seconds (``time.monotonic`` by default);
-        tests inject their own to be deterministic.
-    threaded : bool, default True
-        Run playback in a background thread. With False nothing happens on its
-        own after :meth:`play`: call :meth:`tick` to advance (tests, custom
-        event loops).
 
     Examples
     --------
     >>> import numpy as np
     >>> player = Player(np.arange(10) * 0.1, step=2)
-    >>> round(player.interval, 3)
-    0.2
+    >>> player.duration
+    0.9
     >>> player.step_forward(); player.index
     2
+    >>> player.skip_forward(); player.time  # 1 s later is past the end
+    0.9
     """
 
-    index = traitlets.Int(0, help="Index of the sample being shown.")
-    playing = traitlets.Bool(False, help="Whether the playback thread is running.")
-    speed = traitlets.Float(1.0, help="Playback speed relative to the recording.")
-    step = traitlets.Int(1, help="Index difference between consecutive steps.")
-    skip = traitlets.Int(10, help="Samples jumped by the skip buttons.")
-    loop = traitlets.Bool(False, help="Start over at the end instead of stopping.")
+    _esm = traitlets.Unicode("").tag(sync=True)
+    _uid = traitlets.Unicode("").tag(sync=True)
+    time = traitlets.Float(0.0, help="Seconds from the first sample.").tag(
+        sync=True, echo_update=False
+    )
+    playing = traitlets.Bool(False, help="Whether the browser clock runs.").tag(
+        sync=True
+    )
+    speed = traitlets.Float(1.0, help="Playback speed relative to the recording.").tag(
+        sync=True
+    )
+    loop = traitlets.Bool(False, help="Start over at the end instead of stopping.").tag(
+        sync=True
+    )
+    duration = traitlets.Float(
+        0.0, help="Seconds from the first to the last sample."
+    ).tag(sync=True)
+    t0_ns = traitlets.Int(
+        None, allow_none=True, help="Absolute time of second 0 (ns since the epoch)."
+    ).tag(sync=True)
+    origin = traitlets.Float(
+        0.0, help="Second 0 on the data's float-seconds axis."
+    ).tag(sync=True)
+    skip = traitlets.Float(1.0, help="Seconds of a small skip (arrow keys).").tag(
+        sync=True
+    )
+    big_skip = traitlets.Float(10.0, help="Seconds of a big skip (shift+arrows).").tag(
+        sync=True
+    )
+    error = traitlets.Unicode("", help="Last error of a linked object.").tag(sync=True)
 
     def __init__(
         self,
         timestamps,
         step: int = 1,
         speed: float = 1.0,
-        skip: int | None = None,
+        skip: float | None = None,
         *,
         loop: bool = False,
-        max_rate: float = 100.0,
-        clock: Callable[[], float] | None = None,
-        threaded: bool = True,
+        **kwargs,
     ):
-        _check_positive_int(step, "step")
-        if skip is not None:
-            _check_positive_int(skip, "skip")
-        if not (
-            isinstance(speed, (int, float, np.number))
-            and np.isfinite(speed)
-            and speed > 0
+        if (
+            isinstance(step, bool)
+            or not isinstance(step, (int, np.integer))
+            or step < 1
         ):
-            raise ValueError(f"Player: speed must be a positive number, got {speed!r}")
+            raise ValueError(f"Player: step must be a positive integer, got {step!r}")
+        speed = check_speed(speed, "Player")
+        skip = 1.0 if skip is None else _positive(skip, "skip")
         raw, what = _resolve_timestamps(timestamps)
-        self._seconds, self.timestamps_kind = timestamps_as_seconds(raw, what)
+        seconds, self.timestamps_kind = timestamps_as_seconds(raw, what)
         self._raw = np.asarray(getattr(raw, "values", raw))
-        if not (np.isfinite(max_rate) and max_rate > 0):
-            raise ValueError(
-                f"Player: max_rate must be a positive number, got {max_rate}"
-            )
-        self.max_rate = float(max_rate)
-        self._clock = clock or time.monotonic
-        self._threaded = bool(threaded)
+        self._seconds = seconds
+        self.playback = Playback(seconds, speed=speed, loop=loop)
+        self.step = int(step)
         self._links: list[_Link] = []
-        self._lock = threading.RLock()
-        self._thread: threading.Thread | None = None
-        self._stop_event = threading.Event()
-        self._anchor_index = 0
-        self._anchor_time = float(self._seconds[0])
-        self._anchor_wall = 0.0
-        self._last_ui = -np.inf
-        self._updating_ui = False
-        self.error: BaseException | None = None
-        self._build_ui()
-        super().__init__(children=[self._controls, self._slider, self._error])
-        self.step = step
-        self.speed = speed
-        self.skip = skip if skip is not None else 10 * self.step
-        self.loop = loop
-        self._sync_ui()
+        self._callbacks: list[Callable[[float], Any]] = []
+        t0_ns = None
+        if self.timestamps_kind == DATETIME:
+            t0_ns = int(self._raw[:1].astype("datetime64[ns]").astype(np.int64)[0])
+        super().__init__(
+            _esm=bundle("player"),
+            _uid=uuid.uuid4().hex,
+            duration=self.playback.duration,
+            origin=self.playback.origin,
+            t0_ns=t0_ns,
+            speed=speed,
+            loop=bool(loop),
+            skip=skip,
+            big_skip=10.0 * skip,
+            **kwargs,
+        )
+        self.error_object: BaseException | None = None
 
-    # -- validation -----------------------------------------------------------
-    @traitlets.validate("step")
-    def _valid_step(self, proposal):
-        value = proposal["value"]
-        if value < 1:
-            raise traitlets.TraitError(f"step must be a positive integer, got {value}")
-        return value
+    # -- validation -------------------------------------------------------------
+    @traitlets.validate("time")
+    def _valid_time(self, proposal):
+        value = float(proposal["value"])
+        if not np.isfinite(value):
+            raise traitlets.TraitError(f"time must be finite, got {value}")
+        return min(max(value, 0.0), self.duration)
 
-    @traitlets.validate("skip")
-    def _valid_skip(self, proposal):
-        value = proposal["value"]
-        if value < 1:
-            raise traitlets.TraitError(f"skip must be a positive integer, got {value}")
-        return value
-
-    @traitlets.validate("speed")
-    def _valid_speed(self, proposal):
-        value = proposal["value"]
+    @traitlets.validate("speed", "skip", "big_skip")
+    def _valid_positive(self, proposal):
+        value = float(proposal["value"])
         if not (np.isfinite(value) and value > 0):
-            raise traitlets.TraitError(f"speed must be a positive number, got {value}")
+            name = proposal["trait"].name
+            raise traitlets.TraitError(f"{name} must be a positive number, got {value}")
         return value
 
-    @traitlets.validate("index")
-    def _valid_index(self, proposal):
-        value = proposal["value"]
-        if not 0 <= value < len(self._seconds):
-            raise traitlets.TraitError(
-                f"index must be in [0, {len(self._seconds) - 1}], got {value}"
-            )
-        return value
-
-    # -- the time axis --------------------------------------------------------
+    # -- the time axis ------------------------------------------------------------
     @property
     def n(self) -> int:
         """Number of samples on the time axis."""
@@ -238,105 +286,80 @@ class Player(widgets.VBox):
 
     @property
     def seconds(self) -> np.ndarray:
-        """The time axis as float seconds."""
+        """The time axis as float seconds (epoch seconds for datetime64)."""
         return self._seconds
 
     @property
-    def time(self) -> float:
-        """Time of the current sample in float seconds."""
-        return float(self._seconds[self.index])
+    def index(self) -> int:
+        """Index of the latest sample at or before the current time."""
+        return self.playback.index_at(self.time)
+
+    @property
+    def t0_s(self) -> float:
+        """Second 0 on the data's float-seconds axis (the same as ``origin``)."""
+        return self.origin
+
+    @property
+    def data_time(self) -> float:
+        """The current time on the data's float-seconds axis (``origin + time``)."""
+        return self.origin + self.time
 
     @property
     def timestamp(self):
-        """Time of the current sample as given (float or datetime64)."""
+        """The current sample's timestamp as given (float or datetime64)."""
         return self._raw[self.index]
 
-    @property
-    def _mean_dt(self) -> float:
-        if self.n < 2:
-            return 0.0
-        return float(self._seconds[-1] - self._seconds[0]) / (self.n - 1)
-
-    @property
-    def interval(self) -> float:
-        """Wall-clock seconds between steps: mean timestamp difference x step / speed."""
-        if self.n < 2:
-            return float("inf")
-        return max(self._mean_dt * self.step / self.speed, 1.0 / self.max_rate)
-
     def index_at(self, t) -> int:
-        """Index of the latest sample at or before ``t`` (0 before the start)."""
+        """Index of the latest sample at or before ``t`` (data seconds or datetime64)."""
         seconds = time_as_seconds(t, self.timestamps_kind)
-        return max(int(np.searchsorted(self._seconds, seconds, side="right")) - 1, 0)
+        return self.playback.index_at(seconds - self.origin)
 
-    # -- linked objects -------------------------------------------------------
-    def link(self, obj):
-        """Drive ``obj`` from this player and show it the current time.
-
-        ``obj`` needs ``set_time(t)`` (called with float seconds) or
-        ``publish(idx)``. With ``publish`` and a ``timestamps`` attribute, the
-        index is that of its latest sample at or before the player's time, so
-        objects recorded at different rates stay in sync; without timestamps it
-        gets the player's own index.
-
-        Returns
-        -------
-        obj
-            The linked object.
-        """
-        link = _Link(obj, self.timestamps_kind)
-        with self._lock:
-            self._links.append(link)
-            link.show(self.index, self.time)
-        return obj
-
-    def unlink(self, obj) -> None:
-        """Stop driving ``obj``."""
-        with self._lock:
-            self._links = [link for link in self._links if link.obj is not obj]
-
-    @property
-    def linked(self) -> list:
-        """The linked objects."""
-        return [link.obj for link in self._links]
-
-    # -- navigation -----------------------------------------------------------
+    # -- navigation (kernel side; the browser does the same without the kernel) ----
     def seek(self, index: int) -> None:
-        """Show sample ``index`` (clipped to the time axis)."""
-        index = int(np.clip(index, 0, self.n - 1))
-        self._go_to(index, source="api")
-        if self.playing:
-            self._anchor(self._clock())
+        """Go to sample ``index`` (clipped to the axis)."""
+        self.time = self.playback.time_of(int(index))
 
     def seek_time(self, t) -> None:
-        """Show the latest sample at or before ``t`` (float seconds or datetime64)."""
-        self.seek(self.index_at(t))
+        """Go to ``t``: data seconds (epoch seconds for datetime data) or datetime64."""
+        self.time = self.playback.clamp(
+            time_as_seconds(t, self.timestamps_kind) - self.origin
+        )
 
     def step_forward(self) -> None:
+        """Go ``step`` samples forward."""
         self.seek(self.index + self.step)
 
     def step_back(self) -> None:
+        """Go ``step`` samples back."""
         self.seek(self.index - self.step)
 
-    def skip_forward(self) -> None:
-        self.seek(self.index + self.skip)
+    def skip_forward(self, seconds: float | None = None) -> None:
+        """Jump ``seconds`` (``skip`` by default) forward; wraps with ``loop``."""
+        self._skip(self.skip if seconds is None else float(seconds))
 
-    def skip_back(self) -> None:
-        self.seek(self.index - self.skip)
+    def skip_back(self, seconds: float | None = None) -> None:
+        """Jump ``seconds`` (``skip`` by default) back; wraps with ``loop``."""
+        self._skip(-(self.skip if seconds is None else float(seconds)))
 
-    # -- playback -------------------------------------------------------------
+    def _skip(self, seconds: float) -> None:
+        model = self.playback
+        model.loop = self.loop
+        model.playing = False
+        model.time = self.time
+        self.time = model.skip(seconds, now=0.0)
+
+    # -- playback: the browser's clock runs it --------------------------------------
     def play(self) -> None:
-        """Start playing from the current sample (from the start when at the end)."""
-        if self.playing or self.n < 2:
+        """Start the browser clock (from the start when at the end)."""
+        if self.duration <= 0:
             return
-        if self.index >= self._last_reachable(self.index):
-            self._go_to(0, source="api")
-        self.error = None
-        self._anchor(self._clock())
-        self.playing = True
+        with self.hold_sync():
+            if self.time >= self.duration:
+                self.time = 0.0
+            self.playing = True
 
     def pause(self) -> None:
-        """Stop playing; returns once no further sample will be published."""
+        """Stop the browser clock."""
         self.playing = False
 
     def toggle(self) -> None:
@@ -346,265 +369,84 @@ class Player(widgets.VBox):
         else:
             self.play()
 
-    def tick(self, now: float | None = None) -> bool:
-        """Publish the sample that is due at wall-clock time ``now``.
+    # -- linked objects -----------------------------------------------------------
+    def link(self, obj):
+        """Drive ``obj`` from this player and show it the current time.
 
-        Only the latest due sample is published; the ones in between are
-        dropped. Called by the playback thread; tests call it directly with
-        their own clock values.
+        A widget with a ``player`` trait (the 3D scene, the time-series plot)
+        follows the player in the browser: its ``player`` is set to this one.
+        Any other object needs ``set_time(t)`` (called with data seconds,
+        epoch seconds for datetime data) or ``publish(idx)``; the kernel calls
+        it when it learns a new time. With ``publish`` and a ``timestamps``
+        attribute, the index is that of its latest sample at or before the
+        player's time.
 
         Returns
         -------
-        bool
-            Whether playback goes on (False once stopped or at the end).
+        obj
+            The linked object.
         """
-        if not self.playing:
-            return False
-        now = self._clock() if now is None else now
-        target = self._anchor_time + (now - self._anchor_wall) * self.speed
-        # a sample due within a thousandth of the sampling interval counts as
-        # due: wall-clock arithmetic is not exact
-        target += 1e-3 * self._mean_dt
-        due = max(int(np.searchsorted(self._seconds, target, side="right")) - 1, 0)
-        start = self._anchor_index
-        index = start + max(due - start, 0) // self.step * self.step
-        last = self._last_reachable(start)
-        if index >= last and self.loop:
-            self._go_to(0, source="loop")
-            self._anchor(now)
-            return self.playing
-        if index >= last:
-            self._go_to(last, source="loop")
-            self._finish()
-            return False
-        if index != self.index:
-            self._go_to(index, source="loop")
-        return self.playing
+        attach = getattr(obj, "_attach_player", None)
+        if callable(attach):
+            attach(self)
+            return obj
+        if isinstance(obj, traitlets.HasTraits) and obj.has_trait("player"):
+            obj.player = self
+            return obj
+        link = _Link(obj, self.timestamps_kind)
+        self._links.append(link)
+        self._show(link)
+        return obj
 
-    def _last_reachable(self, start: int) -> int:
-        return start + (self.n - 1 - start) // self.step * self.step
+    def unlink(self, obj) -> None:
+        """Stop driving ``obj``."""
+        self._links = [link for link in self._links if link.obj is not obj]
+        if isinstance(obj, traitlets.HasTraits) and obj.has_trait("player"):
+            if obj.player is self:
+                obj.player = None
+        detach = getattr(obj, "_detach_player", None)
+        if callable(detach):
+            detach(self)
 
-    def _anchor(self, now: float) -> None:
-        self._anchor_index = self.index
-        self._anchor_time = self.time
-        self._anchor_wall = now
+    @property
+    def linked(self) -> list:
+        """The Python objects driven by the kernel."""
+        return [link.obj for link in self._links]
 
-    def _finish(self) -> None:
-        self._stop_event.set()
-        self.playing = False
+    def on_time(self, callback: Callable[[float], Any]) -> Callable[[float], Any]:
+        """Call ``callback(data_seconds)`` whenever the kernel learns a new time.
 
-    @traitlets.observe("playing")
-    def _on_playing(self, change) -> None:
-        if change["new"]:
-            self._start_thread()
-        else:
-            self._stop_thread()
-            self._sync_ui()
-        self._sync_button()
+        Returns the callback (usable as a decorator).
+        """
+        self._callbacks.append(callback)
+        return callback
 
-    @traitlets.observe("speed", "step")
-    def _on_rate(self, change) -> None:
-        if self.playing:
-            self._anchor(self._clock())
-        self._sync_ui()
+    def _show(self, link: _Link) -> None:
+        try:
+            link.show(self.index, self.data_time)
+        except Exception as err:
+            self.error_object = err
+            self.error = f"{type(err).__name__}: {err}"
+            raise
 
-    def _start_thread(self) -> None:
-        self._stop_event = threading.Event()
-        if not self._threaded:
-            return
-        self._thread = threading.Thread(
-            target=self._run,
-            args=(self._stop_event,),
-            name="rbm_nb-player",
-            daemon=True,
-        )
-        self._thread.start()
-
-    def _stop_thread(self) -> None:
-        self._stop_event.set()
-        thread = self._thread
-        if thread is not None and thread is not threading.current_thread():
-            thread.join(timeout=10.0)
-        self._thread = None
-
-    def _run(self, stop: threading.Event) -> None:
-        deadline = self._clock()
-        while not stop.is_set():
-            if not self.tick():
-                break
-            deadline += self.interval
-            now = self._clock()
-            if deadline < now:  # late: drop what was missed instead of catching up
-                deadline = now
-            stop.wait(deadline - now)
-
-    def _go_to(self, index: int, source: str) -> None:
-        with self._lock:
-            if source == "loop" and self._stop_event.is_set():
-                return
+    @traitlets.observe("time")
+    def _on_time(self, change) -> None:
+        seconds = self.data_time
+        index = self.index
+        for link in list(self._links):
             try:
-                self.index = index
-                t = self.time
-                for link in self._links:
-                    link.show(index, t)
-            except Exception as err:
-                self.error = err
-                self._show_error(err)
-                if source == "loop":
-                    self._finish()
-                elif source == "api":
-                    raise
-                return
-        now = time.monotonic()
-        if source != "loop" or now - self._last_ui >= UI_INTERVAL:
-            self._last_ui = now
-            self._sync_ui()
+                link.show(index, seconds)
+            except Exception as err:  # shown in the widget; playback goes on
+                self.error_object = err
+                self.error = f"{type(err).__name__}: {err}"
+        for callback in list(self._callbacks):
+            callback(seconds)
 
-    # -- widgets --------------------------------------------------------------
-    def _build_ui(self) -> None:
-        button = widgets.Layout(width="40px")
-        self._play_button = widgets.ToggleButton(
-            value=False, icon="play", tooltip="Play / pause", layout=button
-        )
-        self._step_back_button = widgets.Button(
-            icon="step-backward", tooltip="Step back", layout=button
-        )
-        self._step_forward_button = widgets.Button(
-            icon="step-forward", tooltip="Step forward", layout=button
-        )
-        self._skip_back_button = widgets.Button(
-            icon="backward", tooltip="Skip back", layout=button
-        )
-        self._skip_forward_button = widgets.Button(
-            icon="forward", tooltip="Skip forward", layout=button
-        )
-        self._speed_box = widgets.Dropdown(
-            options=[(f"{s:g}\u00d7", s) for s in SPEEDS],
-            value=1.0,
-            tooltip="Playback speed",
-            layout=widgets.Layout(width="80px"),
-        )
-        self._readout = widgets.Label(value="")
-        self._readout.add_class("rbm-player-readout")
-        self._slider = widgets.IntSlider(
-            value=0,
-            min=0,
-            max=max(self.n - 1, 0),
-            readout=False,
-            continuous_update=True,
-            layout=widgets.Layout(width="100%"),
-        )
-        self._error = widgets.HTML(value="", layout=widgets.Layout(display="none"))
-        self._controls = widgets.HBox(
-            [
-                self._play_button,
-                self._skip_back_button,
-                self._step_back_button,
-                self._step_forward_button,
-                self._skip_forward_button,
-                self._speed_box,
-                self._readout,
-            ]
-        )
-        self._play_button.observe(self._on_play_button, "value")
-        self._slider.observe(self._on_slider, "value")
-        self._speed_box.observe(self._on_speed_box, "value")
-        self._step_back_button.on_click(lambda _: self._ui_call(self.step_back))
-        self._step_forward_button.on_click(lambda _: self._ui_call(self.step_forward))
-        self._skip_back_button.on_click(lambda _: self._ui_call(self.skip_back))
-        self._skip_forward_button.on_click(lambda _: self._ui_call(self.skip_forward))
-
-    def _ui_call(self, action) -> None:
-        try:
-            action()
-        except Exception:  # already shown in the error box
-            pass
-
-    def _on_play_button(self, change) -> None:
-        if self._updating_ui:
-            return
-        if change["new"]:
-            self.play()
-        else:
-            self.pause()
-        self._sync_button()
-
-    def _on_slider(self, change) -> None:
-        if self._updating_ui or change["new"] == self.index:
-            return
-        self._go_to(int(change["new"]), source="ui")
-        if self.playing:
-            self._anchor(self._clock())
-
-    def _on_speed_box(self, change) -> None:
-        if not self._updating_ui:
-            self.speed = float(change["new"])
-
-    @traitlets.observe("speed")
-    def _on_speed(self, change) -> None:
-        value = change["new"]
-        options = list(self._speed_box.options)
-        if value not in [v for _, v in options]:
-            options = sorted(
-                options + [(f"{value:g}\u00d7", value)], key=lambda o: o[1]
-            )
-        self._updating_ui = True
-        try:
-            self._speed_box.options = options
-            self._speed_box.value = value
-        finally:
-            self._updating_ui = False
-
-    def _sync_button(self) -> None:
-        self._updating_ui = True
-        try:
-            self._play_button.value = self.playing
-            self._play_button.icon = "pause" if self.playing else "play"
-        finally:
-            self._updating_ui = False
-
-    def _sync_ui(self) -> None:
-        self._updating_ui = True
-        try:
-            self._slider.value = self.index
-            self._readout.value = self.readout()
-        finally:
-            self._updating_ui = False
-
+    # -- display --------------------------------------------------------------------
     def readout(self) -> str:
-        """The text of the index/time display."""
-        return f"{self.index} / {self.n - 1}  {format_time(self.time, self.timestamps_kind)}"
-
-    def _show_error(self, err: BaseException) -> None:
-        import html
-
-        self._error.value = (
-            f"<span style='color:#b00'>{html.escape(type(err).__name__)}: "
-            f"{html.escape(str(err))}</span>"
-        )
-        self._error.layout.display = None
-
-    def close(self) -> None:
-        """Stop playing and close the widgets."""
-        if not hasattr(self, "_controls"):  # construction failed half-way
-            super().close()
-            return
-        self.pause()
-        for child in (
-            self._play_button,
-            self._step_back_button,
-            self._step_forward_button,
-            self._skip_back_button,
-            self._skip_forward_button,
-            self._speed_box,
-            self._readout,
-            self._slider,
-            self._error,
-            self._controls,
-        ):
-            child.close()
-        super().close()
+        """The text of the time display: seconds from the start, and the date if any."""
+        return format_time(self.time, self.t0_ns)
 
     def __repr__(self) -> str:
         state = "playing" if self.playing else "paused"
-        return f"<Player {self.readout().strip()} ({state}, {len(self._links)} linked)>"
+        return f"<Player {self.readout()} of {self.duration:.3f} s ({state}, {len(self._links)} linked)>"

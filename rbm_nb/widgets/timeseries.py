@@ -1,26 +1,47 @@
-"""A time-series plot whose cursor follows a Player.
+"""An interactive time-series plot (uPlot in the browser) sharing the Player's time.
 
-The plot is drawn once with matplotlib (Agg) into a PNG; only a thin cursor
-overlaid on it moves as the player plays. Each step therefore sends a few
-bytes (the cursor's position as a percentage) instead of a new image, so the
-plot keeps up with any playback speed.
+The samples go to the browser once, as binary buffers over the widget comm
+(x as float64 seconds from the recording's start, values as float32); zoom,
+pan, hover values, click-to-seek and the cursor all run in the browser
+(``js/src/timeseries.js``). The cursor listens to the linked Player's ``time``
+in the browser, so it keeps following playback while the kernel is busy.
+
+Gaps are drawn as gaps: NaN values break the line, and so does a pause in the
+timestamps longer than ``gap`` (a NaN row is inserted there before sending).
 """
 
 from __future__ import annotations
 
-import io
 from collections.abc import Mapping
 
-import ipywidgets as widgets
+import anywidget
 import numpy as np
+import traitlets
+from ipywidgets import Widget, widget_serialization
 
-from ._time import DATETIME, time_as_seconds, timestamps_as_seconds
+from ._time import timestamps_as_seconds
+from ._timebase import TimeBase, format_time
+from .player import bundle
 
-CURSOR_COLOR = "#d62728"
+#: Line colours of a panel's components, in order (matplotlib's tab10).
+COLORS = (
+    "#1f77b4",
+    "#ff7f0e",
+    "#2ca02c",
+    "#d62728",
+    "#9467bd",
+    "#8c564b",
+    "#e377c2",
+    "#7f7f7f",
+    "#bcbd22",
+    "#17becf",
+)
+#: A pause longer than this many median sample intervals is drawn as a gap.
+GAP_FACTOR = 10.0
 
 
 class _Series:
-    """One panel of the plot: timestamps as seconds, values (n, k), labels."""
+    """One panel: raw timestamps, values (n, k), component names and units."""
 
     def __init__(self, label: str, source):
         self.label = label
@@ -32,7 +53,7 @@ class _Series:
                     f"of {len(source)}"
                 )
             timestamps, values = source[0], np.asarray(source[1], dtype=float)
-            components = list(source[2]) if len(source) == 3 else None
+            components = [str(c) for c in source[2]] if len(source) == 3 else None
             self.units = ""
         else:
             if "time" not in getattr(source, "dims", ()):
@@ -40,19 +61,33 @@ class _Series:
                     f"TimeSeries: series {label!r} must be a DataArray with a "
                     f"'time' dimension, got {type(source).__name__}"
                 )
+            if source.ndim > 2:
+                raise ValueError(
+                    f"TimeSeries: series {label!r} has dims {source.dims}; expected "
+                    "'time' and at most one other dimension"
+                )
             source = source.transpose("time", ...)
             timestamps = source["time"].values
             values = np.asarray(source.values, dtype=float)
             other = [d for d in source.dims if d != "time"]
-            components = [str(c) for c in source[other[0]].values] if other else None
+            if other and other[0] in source.coords:
+                components = [str(c) for c in source[other[0]].values]
+            elif other:
+                components = [f"{other[0]} {i}" for i in range(source.shape[1])]
+            else:
+                components = None
             self.units = str(source.attrs.get("units", ""))
-        self.seconds, self.kind = timestamps_as_seconds(
+        # validates (1-d, finite, sorted, no NaT); the raw stamps are kept so
+        # datetime64 data is re-based exactly in int64 ns
+        seconds, self.kind = timestamps_as_seconds(
             timestamps, f"timestamps of series {label!r}"
         )
-        if values.ndim not in (1, 2) or values.shape[0] != self.seconds.size:
+        raw = np.asarray(getattr(timestamps, "values", timestamps))
+        self.timestamps = raw if self.kind == "datetime" else seconds
+        if values.ndim not in (1, 2) or values.shape[0] != seconds.size:
             raise ValueError(
                 f"TimeSeries: series {label!r} has values of shape {values.shape}, "
-                f"expected ({self.seconds.size},) or ({self.seconds.size}, k)"
+                f"expected ({seconds.size},) or ({seconds.size}, k)"
             )
         if values.ndim == 1:
             values = values[:, None]
@@ -62,16 +97,59 @@ class _Series:
                 f"{len(components)} component names"
             )
         self.values = values
-        self.components = components
-
-    def value_at(self, t: float) -> np.ndarray | None:
-        """The latest sample at or before ``t`` (None before the first one)."""
-        idx = int(np.searchsorted(self.seconds, t, side="right")) - 1
-        return None if idx < 0 else self.values[idx]
+        self.components = components or [label]
 
 
-class TimeSeries(widgets.VBox):
-    """Stacked time-series panels with a cursor at the player's time.
+def _with_gaps(x: np.ndarray, y: np.ndarray, gap: float | None):
+    """Insert a NaN row in the middle of every pause longer than the threshold.
+
+    Returns the new x (n + g,), y (n + g, k) and the threshold used.
+    """
+    if x.size < 2:
+        return x, y, gap
+    dt = np.diff(x)
+    if gap is None:
+        positive = dt[dt > 0]
+        if positive.size == 0:
+            return x, y, None
+        gap = GAP_FACTOR * float(np.median(positive))
+    where = np.flatnonzero(dt > gap)
+    if where.size == 0:
+        return x, y, gap
+    mid = x[where] + dt[where] / 2
+    x = np.insert(x, where + 1, mid)
+    y = np.insert(y, where + 1, np.nan, axis=0)
+    return x, y, gap
+
+
+def _envelope(x: np.ndarray, y: np.ndarray, max_points: int | None):
+    """At most about ``max_points`` rows that keep each bucket's extremes and gaps.
+
+    The rows are cut into buckets of equal count; in each, the rows of every
+    component's minimum and maximum are kept (so peaks such as saccades
+    survive), and the first NaN row (so gaps stay gaps). Returns x, y.
+    """
+    n, k = y.shape
+    if max_points is None or n <= max_points:
+        return x, y
+    buckets = max(1, max_points // (2 * k + 1))
+    size = -(-n // buckets)  # ceil
+    padded = np.full((buckets * size, k), np.nan)
+    padded[:n] = y
+    blocks = padded.reshape(buckets, size, k)
+    missing = np.isnan(blocks)
+    lows = np.where(missing, np.inf, blocks).argmin(axis=1)
+    highs = np.where(missing, -np.inf, blocks).argmax(axis=1)
+    # argmax of an all-False column is 0: the first row, harmless to keep
+    first_nan = missing.argmax(axis=1)
+    offsets = (np.arange(buckets) * size)[:, None]
+    keep = np.concatenate([lows, highs, first_nan], axis=1) + offsets
+    keep = np.unique(keep[keep < n])
+    return x[keep], y[keep]
+
+
+class TimeSeries(anywidget.AnyWidget):
+    """Stacked time-series panels with zoom, hover values and click-to-seek.
 
     Parameters
     ----------
@@ -83,10 +161,20 @@ class TimeSeries(widgets.VBox):
         (n, k). Timestamps are float seconds or datetime64, the same kind for
         every series.
     player : Player, optional
-        Link the cursor to this player right away.
-    width, panel_height : int
-        Size of the rendered image in pixels (it scales with the notebook).
+        The cursor follows this player's ``time`` and clicks seek it. Any
+        widget with ``time`` (seconds from the start) and ``t0_ns`` traits
+        works.
+    panel_height : int, default 150
+        Height of each panel in pixels (the width follows the notebook).
     title : str, optional
+    gap : float, optional
+        Pauses in the timestamps longer than this (seconds) are drawn as gaps.
+        Default: ``GAP_FACTOR`` times each panel's median sample interval.
+        ``numpy.inf`` joins every pause.
+    max_points : int, optional
+        Send at most about this many samples per panel: each stretch of
+        samples is reduced to its minimum and maximum (per component) and its
+        first gap, so peaks and gaps survive. Default: every sample.
 
     Examples
     --------
@@ -94,25 +182,69 @@ class TimeSeries(widgets.VBox):
     >>> t = np.arange(0.0, 10.0, 0.5)
     >>> plot = TimeSeries({"speed": (t, np.ones_like(t))})
     >>> plot.set_time(5.0)
-    >>> round(plot.cursor_fraction, 3) > 0
-    True
-    >>> plot.readout.value
-    '<b>t = 5.00 s</b> &nbsp; speed: 1'
+    >>> plot.readout()
+    't = 5.000 s   speed: 1'
     """
+
+    _esm = traitlets.Unicode("", help="The bundle js/src/timeseries.js.").tag(sync=True)
+
+    panels = traitlets.List(
+        traitlets.Dict(), help="label, units, components, colors of each panel."
+    ).tag(sync=True)
+    data = traitlets.List(
+        traitlets.Dict(),
+        help="Per panel: x (float64 bytes) and y (float32 bytes each).",
+    ).tag(sync=True)
+    t0_ns = traitlets.Int(
+        None,
+        allow_none=True,
+        help="Absolute ns of second 0 (datetime64 data), or None.",
+    ).tag(sync=True)
+    time = traitlets.Float(
+        0.0, help="Cursor time in seconds from the start, when no player is linked."
+    ).tag(sync=True)
+    x_range = traitlets.List(
+        traitlets.Float(), help="Shown time range [start, end] in seconds; [] = all."
+    ).tag(sync=True)
+    player = traitlets.Instance(
+        Widget, allow_none=True, help="The Player the cursor follows."
+    ).tag(sync=True, **widget_serialization)
+    panel_height = traitlets.Int(150, help="Height of each panel in pixels.").tag(
+        sync=True
+    )
+    title = traitlets.Unicode("", help="Title above the panels.").tag(sync=True)
 
     def __init__(
         self,
         series: Mapping,
         *,
         player=None,
-        width: int = 900,
         panel_height: int = 150,
         title: str | None = None,
+        gap: float | None = None,
+        max_points: int | None = None,
     ):
         if not isinstance(series, Mapping) or not series:
             raise ValueError(
                 "TimeSeries: series must be a non-empty mapping of label -> "
                 f"DataArray or (timestamps, values), got {type(series).__name__}"
+            )
+        if gap is not None and not (float(gap) > 0):
+            raise ValueError(
+                f"TimeSeries: gap must be a positive number of seconds, got {gap}"
+            )
+        if max_points is not None and (
+            isinstance(max_points, bool)
+            or int(max_points) != max_points
+            or max_points < 10
+        ):
+            raise ValueError(
+                f"TimeSeries: max_points must be an integer >= 10, got {max_points!r}"
+            )
+        self._max_points = None if max_points is None else int(max_points)
+        if int(panel_height) < 40:
+            raise ValueError(
+                f"TimeSeries: panel_height must be >= 40 pixels, got {panel_height}"
             )
         self._series = [_Series(str(k), v) for k, v in series.items()]
         kinds = {s.kind for s in self._series}
@@ -122,110 +254,174 @@ class TimeSeries(widgets.VBox):
                 "both datetime64 and float seconds"
             )
         self.timestamps_kind = kinds.pop()
-        self._t0 = min(float(s.seconds[0]) for s in self._series)
-        self._t1 = max(float(s.seconds[-1]) for s in self._series)
-        png, self._x_span, self._y_span = self._render(width, panel_height, title)
-        self.image = widgets.Image(
-            value=png,
-            format="png",
-            layout=widgets.Layout(width="100%", grid_area="plot"),
+        self._gap = None if gap is None else float(gap)
+        self.gaps: list[float | None] = []
+        first = min((s.timestamps[:1] for s in self._series), key=lambda a: a[0])
+        self._own_base = self._base = TimeBase.of(first)
+        # the samples go in the comm's open message, not in an update after it
+        super().__init__(
+            _esm=bundle("timeseries"),
+            panel_height=int(panel_height),
+            title=title or "",
+            **self._encoded(),
         )
-        self.cursor = widgets.HTML(layout=widgets.Layout(grid_area="plot"))
-        self.readout = widgets.HTML()
-        canvas = widgets.GridBox(
-            [self.image, self.cursor],
-            layout=widgets.Layout(
-                grid_template_areas='"plot"', width="100%", max_width=f"{width}px"
-            ),
-        )
-        super().__init__([canvas, self.readout])
-        self.cursor_fraction: float | None = None
-        self.time: float | None = None
         if player is not None:
-            player.link(self)
-            self.set_time(player.time)
+            self.player = player
 
-    # -- drawing ----------------------------------------------------------------
-    def _render(self, width: int, panel_height: int, title: str | None):
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-        from matplotlib.figure import Figure
-
-        dpi = 100
-        n = len(self._series)
-        fig = Figure(figsize=(width / dpi, (panel_height * n + 40) / dpi), dpi=dpi)
-        FigureCanvasAgg(fig)
-        axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
-        for ax, s in zip(axes, self._series, strict=True):
-            lines = ax.plot(s.seconds - self._t0, s.values, linewidth=0.8)
-            ax.set_ylabel(f"{s.label} ({s.units})" if s.units else s.label, fontsize=9)
-            ax.grid(True, alpha=0.3)
-            if s.components:
-                ax.legend(
-                    lines, s.components, loc="upper right", fontsize=8, ncol=len(lines)
-                )
-        axes[-1].set_xlim(0.0, self._t1 - self._t0)
-        axes[-1].set_xlabel("time since start (s)", fontsize=9)
-        if title:
-            axes[0].set_title(title, fontsize=10)
-        fig.tight_layout()
-        fig.canvas.draw()
-        # Where the time axis lies on the image, as fractions of its size: the
-        # cursor is placed in percent so it stays aligned when the image scales.
-        w, h = fig.canvas.get_width_height()
-        x0 = axes[-1].transData.transform((0.0, 0.0))[0] / w
-        x1 = axes[-1].transData.transform((self._t1 - self._t0, 0.0))[0] / w
-        top = 1.0 - axes[0].get_window_extent().y1 / h
-        bottom = 1.0 - axes[-1].get_window_extent().y0 / h
-        buffer = io.BytesIO()
-        fig.savefig(buffer, format="png", dpi=dpi)
-        return buffer.getvalue(), (x0, x1), (top, bottom)
-
-    # -- following the player -------------------------------------------------------
-    def set_time(self, t) -> None:
-        """Move the cursor to ``t``.
-
-        ``t`` is float seconds (since the epoch for datetime64 data, which is
-        what a Player passes) or a datetime64 value.
-        """
-        try:
-            t = time_as_seconds(t, self.timestamps_kind)
-        except ValueError as err:
-            raise ValueError(f"TimeSeries.set_time: {err}") from None
-        self.time = t
-        span = max(self._t1 - self._t0, 1e-12)
-        along = min(max((t - self._t0) / span, 0.0), 1.0)
-        fraction = float(self._x_span[0] + along * (self._x_span[1] - self._x_span[0]))
-        if self.cursor_fraction is None or abs(fraction - self.cursor_fraction) > 2e-4:
-            self.cursor_fraction = fraction
-            top, bottom = self._y_span
-            self.cursor.value = (
-                '<div style="position:relative;width:100%;height:100%;pointer-events:none">'
-                f'<div style="position:absolute;left:{100 * fraction:.3f}%;'
-                f"top:{100 * top:.2f}%;height:{100 * (bottom - top):.2f}%;"
-                f'border-left:2px solid {CURSOR_COLOR}"></div></div>'
-            )
-        self.readout.value = self._readout(t)
-
-    def _readout(self, t: float) -> str:
-        if self.timestamps_kind == DATETIME:
-            stamp = f"t = {t - self._t0:.2f} s since start"
-        else:
-            stamp = f"t = {t:.2f} s"
-        parts = [f"<b>{stamp}</b>"]
+    # -- data to the browser ---------------------------------------------------
+    def _encoded(self) -> dict:
+        """``t0_ns``, ``panels`` and ``data`` in the current time base."""
+        panels, data, self.gaps = [], [], []
         for s in self._series:
-            value = s.value_at(t)
-            if value is None:
-                continue
-            if s.components:
-                shown = ", ".join(
-                    f"{c} {v:.3g}" for c, v in zip(s.components, value, strict=True)
-                )
+            x = self._base.seconds(s.timestamps, f"timestamps of series {s.label!r}")
+            x, y, used = _with_gaps(x, s.values, self._gap)
+            x, y = _envelope(x, y, self._max_points)
+            self.gaps.append(used)
+            panels.append(
+                {
+                    "label": s.label,
+                    "units": s.units,
+                    "components": s.components,
+                    "colors": [
+                        COLORS[i % len(COLORS)] for i in range(len(s.components))
+                    ],
+                }
+            )
+            data.append(
+                {
+                    "x": np.ascontiguousarray(x, dtype=np.float64).tobytes(),
+                    "y": [
+                        np.ascontiguousarray(y[:, k], dtype=np.float32).tobytes()
+                        for k in range(y.shape[1])
+                    ],
+                }
+            )
+        return {"t0_ns": self._base.t0_ns, "panels": panels, "data": data}
+
+    def _encode(self) -> None:
+        """Resend every panel's samples (after the time base changed)."""
+        state = self._encoded()
+        with self.hold_sync():
+            for name, value in state.items():
+                setattr(self, name, value)
+
+    @traitlets.validate("player")
+    def _valid_player(self, proposal):
+        player = proposal["value"]
+        if player is not None and not (
+            player.has_trait("time") and player.has_trait("t0_ns")
+        ):
+            raise traitlets.TraitError(
+                "TimeSeries.player must be a Player (a widget with 'time' and "
+                f"'t0_ns' traits), got {type(player).__name__}"
+            )
+        if player is not None and (player.t0_ns is None) != (
+            self.timestamps_kind != "datetime"
+        ):
+            raise traitlets.TraitError(
+                "TimeSeries.player: the player's timestamps and the series' are not "
+                "the same kind (datetime64 vs float seconds)"
+            )
+        return player
+
+    @traitlets.observe("player")
+    def _on_player(self, change) -> None:
+        base = self._own_base
+        player = change["new"]
+        if player is not None:
+            if player.t0_ns is not None:
+                base = TimeBase(t0_ns=int(player.t0_ns))
             else:
-                shown = ", ".join(f"{v:.3g}" for v in value)
+                # a Player on float seconds starts at its first timestamp; the
+                # player tells which when it can, else the series' own start
+                t0_s = getattr(player, "t0_s", None)
+                base = TimeBase(t0_s=float(t0_s)) if t0_s is not None else base
+        if base != self._base:
+            self._base = base
+            self._encode()
+
+    # -- time ----------------------------------------------------------------
+    @property
+    def timebase(self) -> TimeBase:
+        """Second 0 of the x axis."""
+        return self._base
+
+    @property
+    def current_time(self) -> float:
+        """The cursor's time (seconds from the start): the player's, if linked."""
+        return float(self.player.time) if self.player is not None else float(self.time)
+
+    def set_time(self, t) -> None:
+        """Move the cursor (or the linked player) to ``t``.
+
+        ``t`` is seconds from the start, or a datetime64 value for datetime
+        data.
+        """
+        target = self.player if self.player is not None else self
+        target.time = self._seconds(t)
+
+    def _seconds(self, t) -> float:
+        if isinstance(t, np.datetime64) or hasattr(t, "to_datetime64"):
+            t = getattr(t, "to_datetime64", lambda: t)()
+            try:
+                return float(self._base.seconds(np.asarray([t]), "time")[0])
+            except ValueError as err:
+                raise ValueError(f"TimeSeries.set_time: {err}") from None
+        value = float(t)
+        if not np.isfinite(value):
+            raise ValueError(f"TimeSeries.set_time: time must be finite, got {t}")
+        return value
+
+    def zoom(self, start: float | None = None, end: float | None = None) -> None:
+        """Show ``[start, end]`` seconds (both None: everything)."""
+        if start is None and end is None:
+            self.x_range = []
+            return
+        if start is None or end is None or not float(start) < float(end):
+            raise ValueError(
+                f"TimeSeries.zoom: need start < end in seconds, got {start}, {end}"
+            )
+        self.x_range = [float(start), float(end)]
+
+    # -- values at a time ------------------------------------------------------
+    def values_at(self, t: float | None = None) -> dict:
+        """The latest sample at or before ``t`` of every panel.
+
+        Parameters
+        ----------
+        t : float, optional
+            Seconds from the start; default the cursor's time.
+
+        Returns
+        -------
+        dict of str to ndarray, shape (k,)
+            Panels with no sample yet at ``t`` are left out.
+        """
+        t = self.current_time if t is None else self._seconds(t)
+        out = {}
+        for s in self._series:
+            x = self._base.seconds(s.timestamps)
+            idx = int(np.searchsorted(x, t + 1e-12, side="right")) - 1
+            if idx >= 0:
+                out[s.label] = s.values[idx]
+        return out
+
+    def readout(self, t: float | None = None) -> str:
+        """The time and the values at ``t`` as one line of text."""
+        t = self.current_time if t is None else self._seconds(t)
+        parts = [f"t = {format_time(t, self._base.t0_ns)}"]
+        values = self.values_at(t)
+        for s in self._series:
+            if s.label not in values:
+                continue
+            shown = ", ".join(
+                f"{c} {v:.3g}" if len(s.components) > 1 else f"{v:.3g}"
+                for c, v in zip(s.components, values[s.label], strict=True)
+            )
             unit = f" {s.units}" if s.units else ""
             parts.append(f"{s.label}: {shown}{unit}")
-        return " &nbsp; ".join(parts)
+        return "   ".join(parts)
 
     def __repr__(self) -> str:
         labels = ", ".join(s.label for s in self._series)
-        return f"<TimeSeries [{labels}] time={self.time}>"
+        return f"<TimeSeries [{labels}] time={self.current_time:.3f}>"

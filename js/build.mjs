@@ -1,0 +1,39 @@
+// Bundle every entry js/src/<name>.js into rbm_nb/widgets/static/<name>.js.
+//
+//   npm --prefix js ci && npm --prefix js run build
+//   node js/build.mjs --outdir /some/where     (what tests/test_js_bundle.py does)
+//
+// The bundles are ES modules (anywidget's `_esm`) and are committed as package
+// data, so installing rbm_nb needs no node. esbuild's output depends only on
+// its version (pinned in package-lock.json) and the sources, so a fresh build
+// must equal the committed files byte for byte.
+import { build } from "esbuild";
+import { readdirSync } from "node:fs";
+import { dirname, join, resolve } from "node:path";
+import { fileURLToPath } from "node:url";
+
+const here = dirname(fileURLToPath(import.meta.url));
+const srcdir = join(here, "src");
+let outdir = resolve(here, "..", "rbm_nb", "widgets", "static");
+const flag = process.argv.indexOf("--outdir");
+if (flag >= 0) {
+  outdir = resolve(process.argv[flag + 1]);
+}
+
+const entries = readdirSync(srcdir)
+  .filter((name) => name.endsWith(".js"))
+  .sort()
+  .map((name) => join(srcdir, name));
+
+await build({
+  entryPoints: entries,
+  outdir,
+  bundle: true,
+  format: "esm",
+  target: "es2020",
+  minify: true,
+  legalComments: "inline",
+  charset: "utf8",
+  logLevel: "warning",
+});
+console.log(`built ${entries.length} bundles into ${outdir}`);

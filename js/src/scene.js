@@ -1,0 +1,569 @@
+// The 3D view: meshcat's own viewer inside an anywidget.
+//
+// meshcat's viewer bundle (the meshcat Python package's
+// viewer/dist/main.min.js) is prepended to this module by the Python side and
+// defines globalThis.MeshCat. Scene content arrives over the widget comm:
+//   {type: "snapshot", commands: n, tracks: [...], pins: {...}}  after "ready"
+//   {type: "commands"}        meshcat msgpack commands, one per buffer
+//   {type: "tracks", tracks: [...], remove: [...]}
+// A track is {path, n, times, translation, rotation, scale}: buffer indices of
+// float64 seconds from the scene's origin, float32 xyz, xyzw and scale.
+// Poses are applied here every animation frame from the linked Player's time
+// (timeline.js), so playback needs no kernel.
+import { followPlayer } from "./timeline.js";
+
+const STORES = new Map();
+const CSS = `
+.rbm-scene { position: relative; width: 100%; overflow: hidden; background: #222; outline: none;
+  resize: vertical; min-height: 120px; }
+.rbm-scene .rbm-pane { position: absolute; inset: 0; }
+.rbm-scene .rbm-overlay { position: absolute; inset: 0; pointer-events: none; overflow: hidden; }
+.rbm-scene .rbm-label { position: absolute; transform: translate(6px, -50%); font: 12px sans-serif;
+  color: #fff; background: rgba(0,0,0,.55); padding: 1px 5px; border-radius: 3px; white-space: nowrap; }
+.rbm-scene .rbm-label.rbm-selected { background: #d9a400; color: #000; font-weight: bold; }
+.rbm-scene .rbm-legend { position: absolute; left: 6px; bottom: 6px; font: 12px sans-serif; color: #fff;
+  background: rgba(0,0,0,.5); padding: 4px 8px; border-radius: 4px; pointer-events: none; line-height: 1.5; }
+.rbm-scene .rbm-swatch { display: inline-block; width: 14px; height: 4px; margin-right: 6px;
+  vertical-align: middle; }
+.rbm-scene .rbm-tools { position: absolute; left: 6px; top: 6px; display: flex; gap: 4px; }
+.rbm-scene .rbm-tools button { font: 12px sans-serif; color: #fff; background: rgba(0,0,0,.55);
+  border: 1px solid rgba(255,255,255,.35); border-radius: 3px; padding: 2px 8px; cursor: pointer; }
+.rbm-scene .rbm-tools button:disabled { opacity: .45; cursor: default; }
+.rbm-scene .rbm-tools button.rbm-on { background: #d9a400; color: #000; }
+.rbm-scene .rbm-info { position: absolute; left: 6px; top: 6px; font: 12px sans-serif; color: #fff;
+  background: rgba(0,0,0,.45); padding: 2px 6px; border-radius: 3px; pointer-events: none; }
+`;
+
+function injectStyle() {
+  if (document.getElementById("rbm-scene-style")) {
+    return;
+  }
+  const style = document.createElement("style");
+  style.id = "rbm-scene-style";
+  style.textContent = CSS;
+  document.head.appendChild(style);
+}
+
+function bytesOf(buffer) {
+  if (buffer instanceof Uint8Array) {
+    return buffer;
+  }
+  if (ArrayBuffer.isView(buffer)) {
+    return new Uint8Array(buffer.buffer, buffer.byteOffset, buffer.byteLength);
+  }
+  return new Uint8Array(buffer);
+}
+
+function typed(Kind, buffer) {
+  // copy: comm buffers need not be aligned for Float64Array
+  const bytes = bytesOf(buffer);
+  return new Kind(bytes.slice().buffer);
+}
+
+function decodeTracks(meta, buffers) {
+  return meta.map((m) => ({
+    path: m.path,
+    parts: m.path.split("/").filter((p) => p.length > 0),
+    times: typed(Float64Array, buffers[m.times]),
+    translation: typed(Float32Array, buffers[m.translation]),
+    rotation: typed(Float32Array, buffers[m.rotation]),
+    scale: m.scale === null || m.scale === undefined ? null : typed(Float32Array, buffers[m.scale]),
+    hint: 0,
+  }));
+}
+
+class Store {
+  constructor() {
+    this.commands = [];
+    this.tracks = new Map();
+    this.pins = {};
+    this.views = new Set();
+  }
+
+  handle(msg, buffers) {
+    if (msg.type === "snapshot") {
+      this.commands = buffers.slice(0, msg.commands).map((b) => bytesOf(b).slice());
+      this.tracks = new Map(decodeTracks(msg.tracks, buffers).map((t) => [t.path, t]));
+      this.pins = msg.pins || {};
+      for (const view of this.views) {
+        view.rebuild();
+      }
+    } else if (msg.type === "commands") {
+      const fresh = buffers.map((b) => bytesOf(b).slice());
+      this.commands.push(...fresh);
+      for (const view of this.views) {
+        view.apply(fresh);
+      }
+    } else if (msg.type === "tracks") {
+      for (const path of msg.remove || []) {
+        this.tracks.delete(path);
+      }
+      for (const t of decodeTracks(msg.tracks || [], buffers)) {
+        this.tracks.set(t.path, t);
+      }
+      if (msg.pins) {
+        this.pins = msg.pins;
+      }
+      for (const view of this.views) {
+        view.posesDirty = true;
+      }
+    }
+  }
+}
+
+function storeFor(model) {
+  const key = model.get("_uid");
+  let store = STORES.get(key);
+  if (!store) {
+    store = new Store();
+    STORES.set(key, store);
+  }
+  return store;
+}
+
+/** Index of the latest time <= t, -1 before the first (hint: last answer). */
+function searchTime(times, t, hint) {
+  const n = times.length;
+  if (n === 0 || t < times[0]) {
+    return -1;
+  }
+  if (hint >= 0 && hint < n && times[hint] <= t && (hint + 1 === n || times[hint + 1] > t)) {
+    return hint;
+  }
+  if (hint + 1 < n && times[hint + 1] <= t && (hint + 2 >= n || times[hint + 2] > t)) {
+    return hint + 1;
+  }
+  let lo = 0;
+  let hi = n - 1;
+  while (lo < hi) {
+    const mid = (lo + hi + 1) >> 1;
+    if (times[mid] <= t) {
+      lo = mid;
+    } else {
+      hi = mid - 1;
+    }
+  }
+  return lo;
+}
+
+function softwareRenderer(renderer) {
+  try {
+    const gl = renderer.getContext();
+    const info = gl.getExtension("WEBGL_debug_renderer_info");
+    const name = info ? String(gl.getParameter(info.UNMASKED_RENDERER_WEBGL)) : "";
+    return /swiftshader|llvmpipe|software/i.test(name);
+  } catch (err) {
+    return false;
+  }
+}
+
+function cssColor(value) {
+  return typeof value === "number" ? `#${value.toString(16).padStart(6, "0")}` : String(value);
+}
+
+class View {
+  constructor(model, el, store) {
+    const MeshCat = globalThis.MeshCat;
+    if (!MeshCat) {
+      throw new Error("rbm_nb: meshcat's viewer did not load");
+    }
+    this.THREE = MeshCat.THREE;
+    this.model = model;
+    this.store = store;
+    this.root = document.createElement("div");
+    this.root.className = "rbm-scene";
+    this.root.tabIndex = 0;
+    this.pane = document.createElement("div");
+    this.pane.className = "rbm-pane";
+    this.overlay = document.createElement("div");
+    this.overlay.className = "rbm-overlay";
+    this.legend = document.createElement("div");
+    this.legend.className = "rbm-legend";
+    this.info = document.createElement("div");
+    this.info.className = "rbm-info";
+    this.info.style.display = "none";
+    this.tools = document.createElement("div");
+    this.tools.className = "rbm-tools";
+    this.followButton = document.createElement("button");
+    this.followButton.type = "button";
+    this.followButton.className = "rbm-follow";
+    this.fitButton = document.createElement("button");
+    this.fitButton.type = "button";
+    this.fitButton.className = "rbm-fit";
+    this.fitButton.textContent = "fit";
+    this.fitButton.title = "Show the whole scene";
+    this.tools.append(this.followButton, this.fitButton);
+    this.root.append(this.pane, this.overlay, this.legend, this.info, this.tools);
+    el.appendChild(this.root);
+    this.root.style.height = `${model.get("height")}px`;
+
+    const viewer = new MeshCat.Viewer(this.pane, false);
+    // meshcat sizes itself to the window; a widget has its own box
+    const pane = this.pane;
+    const original = viewer.set_3d_pane_size.bind(viewer);
+    viewer.set_3d_pane_size = (w, h) =>
+      original(w === undefined ? pane.clientWidth || 1 : w, h === undefined ? pane.clientHeight || 1 : h);
+    // lines and triads cast no useful shadows; shadow maps cost a second render per frame
+    viewer.renderer.shadowMap.enabled = false;
+    if (softwareRenderer(viewer.renderer)) {
+      // no GPU (remote desktops, CI, headless browsers): antialiasing is done on
+      // the CPU and halves the frame rate; draw without it
+      const plain = new this.THREE.WebGLRenderer({ antialias: false, alpha: true });
+      plain.shadowMap.enabled = false;
+      viewer.renderer.domElement.replaceWith(plain.domElement);
+      viewer.renderer.dispose();
+      viewer.renderer = plain;
+    }
+    viewer.camera.far = 1e5;
+    viewer.camera.near = 0.01;
+    viewer.camera.updateProjectionMatrix();
+    if (viewer.gui && viewer.gui.domElement) {
+      viewer.gui.domElement.style.zIndex = "2";
+    }
+    this.viewer = viewer;
+    this.resize = new ResizeObserver(() => viewer.set_3d_pane_size());
+    this.resize.observe(this.pane);
+
+    this.player = null;
+    this.stopFollowing = followPlayer(model, () => {}, {
+      onPlayer: (player) => {
+        this.player = player;
+        this.posesDirty = true;
+      },
+    });
+    this.lastTime = NaN;
+    this.posesDirty = true;
+    this.labels = new Map();
+    this.frames = 0;
+    this.nodes = new Map();
+    this.rebuild();
+    this.applyCamera();
+    this.showLegend();
+    this.showLabels();
+
+    model.on("change:_camera", () => this.applyCamera());
+    model.on("change:_legend", () => this.showLegend());
+    model.on("change:_labels", () => this.showLabels());
+    model.on("change:labels", () => this.showLabels());
+    model.on("change:selected", () => this.showLabels());
+    model.on("change:height", () => {
+      this.root.style.height = `${model.get("height")}px`;
+    });
+    for (const name of ["time", "_origin", "_pins"]) {
+      model.on(`change:${name}`, () => {
+        this.posesDirty = true;
+      });
+    }
+    this.followButton.addEventListener("click", () => {
+      const following = model.get("follow");
+      model.set("follow", following ? null : model.get("selected") || null);
+      model.save_changes();
+      this.showTools();
+    });
+    this.fitButton.addEventListener("click", () => {
+      if (model.get("follow")) {
+        model.set("follow", null);
+        model.save_changes();
+      }
+      this.applyCamera();
+    });
+    model.on("change:follow", () => this.showTools());
+    model.on("change:selected", () => this.showTools());
+    this.showTools();
+    this.installPicking();
+    this.root.rbmView = this;
+    this.loop = () => {
+      this.handle = requestAnimationFrame(this.loop);
+      this.tick();
+    };
+    this.handle = requestAnimationFrame(this.loop);
+  }
+
+  /** Seconds from the scene's origin that should be shown now. */
+  currentTime() {
+    if (this.player) {
+      const origin = Number(this.player.get("origin")) || 0;
+      return origin + Number(this.player.get("time")) - (Number(this.model.get("_origin")) || 0);
+    }
+    const t = this.model.get("time");
+    return t === null || t === undefined ? 0 : Number(t);
+  }
+
+  rebuild() {
+    this.viewer.delete_path(["rbm"]);
+    this.nodes.clear();
+    this.apply(this.store.commands);
+    this.posesDirty = true;
+  }
+
+  apply(commands) {
+    for (const bytes of commands) {
+      this.viewer.handle_command_bytearray(bytes);
+    }
+    this.nodes.clear();
+    this.posesDirty = true;
+    this.viewer.set_dirty();
+  }
+
+  node(path) {
+    let object = this.nodes.get(path);
+    if (object === undefined) {
+      object = this.viewer.scene_tree.find(path.split("/").filter((p) => p.length > 0)).object;
+      this.nodes.set(path, object);
+    }
+    return object;
+  }
+
+  applyPoses(t) {
+    const pins = this.model.get("_pins") || {};
+    for (const track of this.store.tracks.values()) {
+      const object = this.node(track.path);
+      const at = Object.prototype.hasOwnProperty.call(pins, track.path) ? pins[track.path] : t;
+      const i = searchTime(track.times, at + 1e-6, track.hint);
+      if (i < 0) {
+        object.visible = false;
+        continue;
+      }
+      track.hint = i;
+      object.visible = true;
+      const p = track.translation;
+      const q = track.rotation;
+      object.position.set(p[3 * i], p[3 * i + 1], p[3 * i + 2]);
+      object.quaternion.set(q[4 * i], q[4 * i + 1], q[4 * i + 2], q[4 * i + 3]);
+      if (track.scale) {
+        object.scale.setScalar(track.scale[i]);
+      }
+    }
+    this.viewer.set_dirty();
+  }
+
+  // scene (z-up) coordinates -> the node the camera lives in (meshcat turns
+  // its three.js scene to make z point up; OrbitControls work in that node)
+  toCameraNode(point) {
+    const parent = this.viewer.camera.parent;
+    this.viewer.scene.updateMatrixWorld(true);
+    const world = this.viewer.scene.localToWorld(new this.THREE.Vector3().fromArray(point));
+    return parent ? parent.worldToLocal(world) : world;
+  }
+
+  applyCamera() {
+    const cam = this.model.get("_camera");
+    if (!cam || !cam.position) {
+      return;
+    }
+    const viewer = this.viewer;
+    viewer.camera.position.copy(this.toCameraNode(cam.position));
+    viewer.controls.target.copy(this.toCameraNode(cam.target));
+    viewer.controls.update();
+    viewer.set_dirty();
+  }
+
+  worldPosition(path) {
+    const object = this.node(path);
+    object.updateWorldMatrix(true, false);
+    return object.getWorldPosition(new this.THREE.Vector3());
+  }
+
+  follow() {
+    const name = this.model.get("follow");
+    const frames = this.model.get("_frames") || {};
+    if (!name || !frames[name]) {
+      return;
+    }
+    const object = this.node(frames[name]);
+    if (!object.visible) {
+      return;
+    }
+    const viewer = this.viewer;
+    const parent = viewer.camera.parent;
+    const world = this.worldPosition(frames[name]);
+    const target = parent ? parent.worldToLocal(world) : world;
+    const delta = target.clone().sub(viewer.controls.target);
+    if (delta.lengthSq() > 0) {
+      viewer.controls.target.add(delta);
+      viewer.camera.position.add(delta);
+      viewer.controls.update();
+      viewer.set_dirty();
+    }
+  }
+
+  showTools() {
+    const following = this.model.get("follow");
+    const selected = this.model.get("selected");
+    this.followButton.classList.toggle("rbm-on", Boolean(following));
+    if (following) {
+      this.followButton.textContent = `following ${following}`;
+      this.followButton.title = "Stop following";
+      this.followButton.disabled = false;
+    } else {
+      this.followButton.textContent = selected ? `follow ${selected}` : "follow";
+      this.followButton.title = selected
+        ? `Keep the camera on ${selected}`
+        : "Click a frame in the view to select it, then follow it";
+      this.followButton.disabled = !selected;
+    }
+  }
+
+  showLegend() {
+    const entries = this.model.get("_legend") || [];
+    this.legend.replaceChildren(
+      ...entries.map((entry) => {
+        const row = document.createElement("div");
+        const swatch = document.createElement("span");
+        swatch.className = "rbm-swatch";
+        const colors = Array.isArray(entry.color) ? entry.color : [entry.color];
+        swatch.style.background =
+          colors.length > 1
+            ? `linear-gradient(90deg, ${colors.map(cssColor).join(", ")})`
+            : cssColor(colors[0]);
+        row.append(swatch, entry.text);
+        return row;
+      }),
+    );
+    this.legend.style.display = entries.length ? "" : "none";
+  }
+
+  showLabels() {
+    const wanted = this.model.get("labels") ? this.model.get("_labels") || {} : {};
+    for (const [path, div] of this.labels) {
+      if (!(path in wanted)) {
+        div.remove();
+        this.labels.delete(path);
+      }
+    }
+    const frames = this.model.get("_frames") || {};
+    const selected = this.model.get("selected");
+    const selectedPath = selected ? frames[selected] : null;
+    for (const [path, text] of Object.entries(wanted)) {
+      let div = this.labels.get(path);
+      if (!div) {
+        div = document.createElement("div");
+        div.className = "rbm-label";
+        this.overlay.appendChild(div);
+        this.labels.set(path, div);
+      }
+      div.textContent = text;
+      div.classList.toggle("rbm-selected", path === selectedPath);
+    }
+  }
+
+  screenPosition(path) {
+    const object = this.node(path);
+    let visible = true;
+    for (let o = object; o; o = o.parent) {
+      if (!o.visible) {
+        visible = false;
+        break;
+      }
+    }
+    if (!visible) {
+      return null;
+    }
+    const v = this.worldPosition(path).project(this.viewer.camera);
+    if (v.z > 1 || v.z < -1) {
+      return null;
+    }
+    const w = this.pane.clientWidth;
+    const h = this.pane.clientHeight;
+    return [((v.x + 1) / 2) * w, ((1 - v.y) / 2) * h];
+  }
+
+  placeLabels() {
+    for (const [path, div] of this.labels) {
+      const xy = this.screenPosition(path);
+      if (xy === null) {
+        div.style.display = "none";
+      } else {
+        div.style.display = "";
+        div.style.left = `${xy[0]}px`;
+        div.style.top = `${xy[1]}px`;
+      }
+    }
+  }
+
+  /** Name of the frame drawn nearest to (x, y) in pixels, within 24 px. */
+  pick(x, y) {
+    const frames = this.model.get("_frames") || {};
+    let best = null;
+    let bestDistance = 24;
+    for (const [name, path] of Object.entries(frames)) {
+      const xy = this.screenPosition(path);
+      if (xy === null) {
+        continue;
+      }
+      const d = Math.hypot(xy[0] - x, xy[1] - y);
+      if (d < bestDistance) {
+        bestDistance = d;
+        best = name;
+      }
+    }
+    return best;
+  }
+
+  installPicking() {
+    let down = null;
+    this.pane.addEventListener("pointerdown", (event) => {
+      down = [event.clientX, event.clientY];
+    });
+    this.pane.addEventListener("pointerup", (event) => {
+      if (down === null || Math.hypot(event.clientX - down[0], event.clientY - down[1]) > 4) {
+        down = null;
+        return;
+      }
+      down = null;
+      const box = this.pane.getBoundingClientRect();
+      const name = this.pick(event.clientX - box.left, event.clientY - box.top);
+      if (name !== null && name !== this.model.get("selected")) {
+        this.model.set("selected", name);
+        this.model.save_changes();
+      }
+    });
+  }
+
+  tick() {
+    const t = this.currentTime();
+    if (t !== this.lastTime || this.posesDirty) {
+      this.lastTime = t;
+      this.posesDirty = false;
+      this.applyPoses(t);
+    }
+    this.follow();
+    if (this.viewer.needs_render) {
+      this.viewer.render();
+      this.frames += 1;
+    }
+    if (this.labels.size) {
+      this.placeLabels();
+    }
+  }
+
+  dispose() {
+    cancelAnimationFrame(this.handle);
+    this.resize.disconnect();
+    this.stopFollowing();
+    this.store.views.delete(this);
+    this.viewer.renderer.dispose();
+    this.root.remove();
+  }
+}
+
+function initialize({ model }) {
+  const store = storeFor(model);
+  const onMessage = (msg, buffers) => store.handle(msg, buffers || []);
+  model.on("msg:custom", onMessage);
+  // ask the kernel for the content (also after a page reload)
+  model.send({ type: "ready" });
+  return () => {
+    model.off("msg:custom", onMessage);
+  };
+}
+
+function render({ model, el }) {
+  injectStyle();
+  const store = storeFor(model);
+  const view = new View(model, el, store);
+  store.views.add(view);
+  return () => view.dispose();
+}
+
+export default { initialize, render };

@@ -1,0 +1,345 @@
+// TimeSeries widget: stacked uPlot panels over one time axis.
+//
+// The kernel sends each panel's samples once, as binary buffers (x: float64
+// seconds from the recording's start, y: float32 per component, NaN where there
+// is no value or a time gap). Everything interactive happens here: drag to
+// zoom, wheel to zoom, shift+drag to pan, double-click to see everything,
+// hover for the values, click to seek. The cursor follows the linked Player's
+// `time` as the browser's clock moves it, so it keeps up while the kernel is
+// busy; without a Player it follows this widget's own `time`.
+
+import uPlot from "uplot";
+import uPlotCss from "uplot/dist/uPlot.min.css" with { type: "text" };
+import { followPlayer, formatTime, seek as seekPlayer } from "./timeline.js";
+
+const CSS = `
+.rbm-ts { font: 12px sans-serif; color: #222; }
+.rbm-ts-head { display: flex; gap: 1em; align-items: baseline; margin: 2px 0 4px 4px; }
+.rbm-ts-title { font-weight: bold; }
+.rbm-ts-time { font-variant-numeric: tabular-nums; }
+.rbm-ts-hint { color: #777; margin-left: auto; font-size: 11px; }
+.rbm-ts .u-legend { font-size: 11px; text-align: left; margin-left: 50px; }
+.rbm-ts .u-legend .u-value { font-variant-numeric: tabular-nums; }
+.rbm-ts-cursor { position: absolute; top: 0; bottom: 0; width: 0;
+  border-left: 2px solid #d62728; pointer-events: none; }
+`;
+
+function injectCss() {
+  if (document.getElementById("rbm-ts-css")) return;
+  const style = document.createElement("style");
+  style.id = "rbm-ts-css";
+  style.textContent = uPlotCss + CSS;
+  document.head.appendChild(style);
+}
+
+// A DataView from the comm as a typed array (copied when misaligned).
+function typed(view, Kind) {
+  const { buffer, byteOffset, byteLength } = view;
+  if (byteOffset % Kind.BYTES_PER_ELEMENT === 0) {
+    return new Kind(buffer, byteOffset, byteLength / Kind.BYTES_PER_ELEMENT);
+  }
+  return new Kind(buffer.slice(byteOffset, byteOffset + byteLength));
+}
+
+// uPlot draws a gap at null, not at NaN.
+function withNulls(values) {
+  const out = new Array(values.length);
+  for (let i = 0; i < values.length; i++) {
+    out[i] = Number.isNaN(values[i]) ? null : values[i];
+  }
+  return out;
+}
+
+function formatValue(v, units) {
+  if (v === null || v === undefined || Number.isNaN(v)) return "\u2014";
+  const text = Math.abs(v) >= 1e4 || (Math.abs(v) < 1e-3 && v !== 0)
+    ? v.toExponential(3) : v.toPrecision(4).replace(/(\.\d*?)0+$/, "$1").replace(/\.$/, "");
+  return units ? `${text} ${units}` : text;
+}
+
+// "seconds since 2020-02-02 00:27:14.000": the absolute part of the shared readout
+function axisLabel(t0Ns) {
+  if (t0Ns === null || t0Ns === undefined) return "seconds since start";
+  return `seconds since ${formatTime(0, t0Ns).split(" \u00b7 ")[1]}`;
+}
+
+async function render({ model, el }) {
+  injectCss();
+  const root = document.createElement("div");
+  root.className = "rbm-ts";
+  const head = document.createElement("div");
+  head.className = "rbm-ts-head";
+  const title = document.createElement("span");
+  title.className = "rbm-ts-title";
+  title.textContent = model.get("title") || "";
+  const readout = document.createElement("span");
+  readout.className = "rbm-ts-time";
+  const hint = document.createElement("span");
+  hint.className = "rbm-ts-hint";
+  hint.textContent =
+    "drag/wheel: zoom \u00b7 shift+drag: pan \u00b7 double-click: all \u00b7 click or drag the red line: seek";
+  head.append(title, readout, hint);
+  const body = document.createElement("div");
+  root.append(head, body);
+  el.appendChild(root);
+
+  const t0Ns = () => model.get("t0_ns");
+  let player = null;
+  const currentTime = () => (player ? player.get("time") : model.get("time"));
+
+  const panels = model.get("panels");
+  const data = model.get("data");
+  const charts = [];
+  const cursors = [];
+  let syncing = false;
+  const syncKey = `rbm-ts-${Math.random().toString(36).slice(2)}`;
+
+  function placeCursors() {
+    const t = currentTime();
+    readout.textContent = `t = ${formatTime(t, t0Ns())}`;
+    charts.forEach((u, i) => {
+      const x = u.valToPos(t, "x");
+      const inside = Number.isFinite(x) && x >= 0 && x <= u.over.clientWidth;
+      cursors[i].style.display = inside ? "block" : "none";
+      if (inside) cursors[i].style.left = `${x - 1}px`;
+    });
+  }
+
+  function seek(t) {
+    if (player) {
+      seekPlayer(player, t); // every view linked to the player follows at once
+    } else {
+      model.set("time", t);
+      model.save_changes();
+    }
+    placeCursors();
+  }
+
+  // within a few pixels of the red line: a drag there scrubs instead of zooming
+  function nearCursor(u, e) {
+    const x = u.valToPos(currentTime(), "x");
+    const rect = u.over.getBoundingClientRect();
+    return Number.isFinite(x) && Math.abs(e.clientX - rect.left - x) <= 5;
+  }
+
+  function publishRange(u) {
+    const { min, max } = u.scales.x;
+    const old = model.get("x_range") || [];
+    if (old.length === 2 && old[0] === min && old[1] === max) return;
+    model.set("x_range", [min, max]);
+    model.save_changes();
+  }
+
+  function setRangeEverywhere(min, max, source) {
+    syncing = true;
+    try {
+      charts.forEach((u) => {
+        if (u !== source) u.setScale("x", { min, max });
+      });
+    } finally {
+      syncing = false;
+    }
+  }
+
+  let dataMin = Infinity;
+  let dataMax = -Infinity;
+  data.forEach((d) => {
+    const x = typed(d.x, Float64Array);
+    if (x.length) {
+      dataMin = Math.min(dataMin, x[0]);
+      dataMax = Math.max(dataMax, x[x.length - 1]);
+    }
+  });
+  if (!(dataMax > dataMin)) dataMax = dataMin + 1;
+
+  const width = () => Math.max(200, (body.clientWidth || el.clientWidth || 800) - 4);
+  const height = model.get("panel_height");
+
+  panels.forEach((panel, i) => {
+    const x = typed(data[i].x, Float64Array);
+    const ys = data[i].y.map((v) => withNulls(typed(v, Float32Array)));
+    const last = i === panels.length - 1;
+    const series = [
+      { label: "time", value: (u, v) => (v === null ? "\u2014" : formatTime(v, t0Ns())) },
+      ...panel.components.map((name, k) => ({
+        label: name,
+        stroke: panel.colors[k],
+        width: 1.25,
+        spanGaps: false,
+        value: (u, v) => formatValue(v, panel.units),
+      })),
+    ];
+    let panStart = null;
+    let downAt = null;
+    let scrubbing = false;
+    const opts = {
+      width: width(),
+      height: height + (last ? 40 : 0),
+      scales: { x: { time: false } },
+      series,
+      axes: [
+        {
+          size: last ? 40 : 8,
+          label: last ? axisLabel(t0Ns()) : null,
+          labelSize: 16,
+          labelFont: "bold 11px sans-serif",
+          font: "11px sans-serif",
+          values: last ? (u, splits) => splits.map((v) => `${+v.toFixed(6)}`) : () => [],
+        },
+        {
+          label: panel.units ? `${panel.label} (${panel.units})` : panel.label,
+          size: 60,
+          labelSize: 16,
+          // small enough that "head speed (m/s)" fits beside a 120 px panel
+          labelFont: "bold 11px sans-serif",
+          font: "11px sans-serif",
+        },
+      ],
+      cursor: {
+        sync: { key: syncKey, filters: { pub: (type) => type === "mousemove" || type === "mouseleave" } },
+        drag: { x: true, y: false, setScale: true, dist: 5 },
+        bind: {
+          mousedown: (u, targ, handler) => (e) => {
+            if (e.button !== 0 || e.target !== targ) return;
+            downAt = [e.clientX, e.clientY];
+            if (nearCursor(u, e)) {
+              // drag the red line: scrub the player (and every view it drives)
+              scrubbing = true;
+              const move = (ev) => {
+                const rect = u.over.getBoundingClientRect();
+                seek(u.posToVal(Math.min(Math.max(ev.clientX - rect.left, 0), rect.width), "x"));
+              };
+              const up = () => {
+                document.removeEventListener("mousemove", move);
+                document.removeEventListener("mouseup", up);
+                scrubbing = false;
+                downAt = null;
+              };
+              document.addEventListener("mousemove", move);
+              document.addEventListener("mouseup", up);
+              return;
+            }
+            if (e.shiftKey) {
+              const { min, max } = u.scales.x;
+              panStart = { x: e.clientX, min, max, perPx: (max - min) / u.over.clientWidth };
+              const move = (ev) => {
+                const shift = (ev.clientX - panStart.x) * panStart.perPx;
+                u.setScale("x", { min: panStart.min - shift, max: panStart.max - shift });
+              };
+              const up = () => {
+                document.removeEventListener("mousemove", move);
+                document.removeEventListener("mouseup", up);
+                panStart = null;
+              };
+              document.addEventListener("mousemove", move);
+              document.addEventListener("mouseup", up);
+              return;
+            }
+            handler(e);
+          },
+          mouseup: (u, targ, handler) => (e) => {
+            if (e.button !== 0) return;
+            if (downAt && !panStart && u.over.contains(e.target)) {
+              const moved = Math.hypot(e.clientX - downAt[0], e.clientY - downAt[1]);
+              if (moved < 4 && !e.shiftKey) {
+                const rect = u.over.getBoundingClientRect();
+                seek(u.posToVal(e.clientX - rect.left, "x"));
+              }
+            }
+            downAt = null;
+            handler(e);
+          },
+          dblclick: (u, targ, handler) => (e) => {
+            if (e.button !== 0 || e.target !== targ) return;
+            u.setScale("x", { min: dataMin, max: dataMax });
+          },
+        },
+      },
+      legend: { live: true },
+      hooks: {
+        setScale: [
+          (u, key) => {
+            if (key !== "x") return;
+            placeCursors();
+            if (syncing) return;
+            setRangeEverywhere(u.scales.x.min, u.scales.x.max, u);
+            publishRange(u);
+          },
+        ],
+      },
+    };
+    const u = new uPlot(opts, [x, ...ys], body);
+    const cursor = document.createElement("div");
+    cursor.className = "rbm-ts-cursor";
+    u.over.appendChild(cursor);
+    u.over.addEventListener("mousemove", (e) => {
+      u.over.style.cursor = scrubbing || nearCursor(u, e) ? "ew-resize" : "";
+    });
+    u.over.addEventListener(
+      "wheel",
+      (e) => {
+        e.preventDefault();
+        const { min, max } = u.scales.x;
+        const rect = u.over.getBoundingClientRect();
+        const at = u.posToVal(e.clientX - rect.left, "x");
+        const factor = e.deltaY < 0 ? 0.8 : 1.25;
+        const lo = Math.max(dataMin - (dataMax - dataMin), at - (at - min) * factor);
+        const hi = Math.min(dataMax + (dataMax - dataMin), at + (max - at) * factor);
+        u.setScale("x", { min: lo, max: hi });
+      },
+      { passive: false },
+    );
+    charts.push(u);
+    cursors.push(cursor);
+  });
+
+  // a range set from Python (or kept from an earlier view) wins over "everything"
+  const initial = model.get("x_range");
+  const first = charts[0];
+  if (first) {
+    if (initial && initial.length === 2) first.setScale("x", { min: initial[0], max: initial[1] });
+    else first.setScale("x", { min: dataMin, max: dataMax });
+  }
+
+  const onRange = () => {
+    const r = model.get("x_range");
+    if (!first || !r || r.length !== 2) return;
+    const { min, max } = first.scales.x;
+    if (r[0] !== min || r[1] !== max) first.setScale("x", { min: r[0], max: r[1] });
+  };
+  model.on("change:x_range", onRange);
+
+  const onTime = () => placeCursors();
+  model.on("change:time", onTime);
+  model.on("change:t0_ns", onTime);
+
+  const stopFollowing = followPlayer(model, () => placeCursors(), {
+    onPlayer: (p) => {
+      player = p;
+      placeCursors();
+    },
+  });
+
+  const resize = new ResizeObserver(() => {
+    const w = width();
+    charts.forEach((u) => {
+      if (Math.abs(u.width - w) > 1) u.setSize({ width: w, height: u.height });
+    });
+    placeCursors();
+  });
+  resize.observe(body);
+
+  // for tests and debugging: the uPlot instances of this view
+  root.rbmCharts = charts;
+
+  return () => {
+    resize.disconnect();
+    model.off("change:x_range", onRange);
+    model.off("change:time", onTime);
+    model.off("change:t0_ns", onTime);
+    stopFollowing();
+    charts.forEach((u) => u.destroy());
+  };
+}
+
+export default { render };

@@ -1,0 +1,127 @@
+"""Point-in-time lookups: a transform between two resolved frames at chosen times.
+
+A lookup without a time returns the transform at the timestamps the frames
+were recorded at (matched by the rules in :mod:`rbm_nb._engine.chain`). Here
+the caller names the times instead, tf2 style: every moving frame of the
+chain is interpolated at exactly those times (translation linearly, rotation
+by squad, as the core resamples; discrete frames hold their last event) and
+the chain is composed.
+
+Nothing is extrapolated: a time before the first or after the last sample
+of a continuous moving frame on the chain raises
+:class:`~rbm_nb.errors.ExtrapolationError` naming the frame, its time range
+and the offending time.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import _time
+from ..errors import ExtrapolationError
+from . import chain as _chain
+
+__all__ = ["transform_at_times", "latest_common_time"]
+
+
+def _moving(steps):
+    continuous = [f for f, _ in steps if f._track is not None and not f.discrete]
+    discrete = [f for f, _ in steps if f._track is not None and f.discrete]
+    return continuous, discrete
+
+
+def _check_range(frames, track) -> None:
+    """Raise ExtrapolationError if ``track`` leaves any frame's time range."""
+    for frame in frames:
+        own = frame._track
+        first, last = own.values[0], own.values[-1]
+        span = f"has data from {first} to {last} ({len(own)} samples)"
+        if track.key[0] < own.key[0]:
+            raise ExtrapolationError(
+                f"frame {frame.name!r} {span}; the requested time {track.values[0]} "
+                f"is before its first sample (lookups do not extrapolate into the past)"
+            )
+        if track.key[-1] > own.key[-1]:
+            raise ExtrapolationError(
+                f"frame {frame.name!r} {span}; the requested time {track.values[-1]} "
+                f"is after its last sample (lookups do not extrapolate into the future)"
+            )
+
+
+def transform_at_times(outof, into, times):
+    """Transform from ``outof`` to ``into`` at the given times.
+
+    Parameters
+    ----------
+    outof, into : ReferenceFrame
+        Resolved frames of the same tree.
+    times : scalar or array_like, shape (n,)
+        Numeric or datetime64 times, like the moving frames' timestamps. Any
+        order, repeats allowed.
+
+    Returns
+    -------
+    translation : ndarray, shape (3,) or (n, 3)
+    rotation : ndarray, shape (4,) or (n, 4)
+        Such that ``p_into = rot(rotation, p_outof) + translation`` at each
+        requested time, in the order requested.
+    timestamps : ndarray, shape (n,), or None
+        The requested times as given (None for a scalar time).
+
+    Raises
+    ------
+    ExtrapolationError
+        If a requested time lies outside the range of a continuous moving
+        frame on the chain.
+    ValueError
+        If the frames are in different trees, the times are invalid, or
+        datetime64 and numeric times meet.
+    """
+    track, inverse, scalar, values = _time.requested_times(times)
+    steps = _chain.chain(outof, into)
+    continuous, discrete = _moving(steps)
+    _time.check_compatible([f._track for f in continuous + discrete] + [track])
+    _check_range(continuous, track)
+    t, r = _chain.compose(steps, _chain.Target(track, None))
+    t = np.broadcast_to(t, (len(track), 3))[inverse]
+    r = np.broadcast_to(r, (len(track), 4))[inverse]
+    return (t[0], r[0], None) if scalar else (t, r, values)
+
+
+def latest_common_time(outof, into):
+    """The latest time at which the whole chain from ``outof`` to ``into`` has data.
+
+    That is the earliest last sample among the continuous moving frames on
+    the chain (discrete frames hold their value and do not limit it), or the
+    latest event of the discrete frames if there is no continuous one.
+
+    Returns
+    -------
+    scalar or None
+        A timestamp in the frames' dtype, or None if the chain is static.
+
+    Raises
+    ------
+    ExtrapolationError
+        If the continuous frames' time ranges do not overlap.
+    """
+    continuous, discrete = _moving(_chain.chain(outof, into))
+    if continuous:
+        _time.check_compatible([f._track for f in continuous])
+        ends = [f._track.key[-1] for f in continuous]
+        starts = [f._track.key[0] for f in continuous]
+        latest = continuous[int(np.argmin(ends))]
+        earliest = continuous[int(np.argmax(starts))]
+        if max(starts) > min(ends):
+            raise ExtrapolationError(
+                f"no common time: frame {earliest.name!r} starts at "
+                f"{earliest._track.values[0]}, after frame {latest.name!r} ends at "
+                f"{latest._track.values[-1]}"
+            )
+        return latest._track.values[-1]
+    if discrete:
+        _time.check_compatible([f._track for f in discrete])
+        return discrete[
+            int(np.argmax([f._track.key[-1] for f in discrete]))
+        ]._track.values[-1]
+    return None

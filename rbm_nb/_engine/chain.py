@@ -1,0 +1,449 @@
+"""Timestamp matching: which times a chain of frames and arrays is defined at.
+
+The rules are those of the reference package, so results line up with it:
+
+1. The range: every continuous moving frame and every timestamped array
+   contributes its first and last timestamp; the range is the intersection.
+   Discrete frames do not limit it (they hold their value before the first
+   and after the last event).
+2. The sampling: the first timestamped array (or, without arrays, the first
+   continuous moving frame along the chain) defines the timestamps, kept
+   where they fall inside the range. With only discrete frames, the sorted
+   union of their events is used. With nothing timestamped the result is
+   static.
+3. Everything else is resampled onto those timestamps: translations and
+   arrays linearly, rotations and quaternion arrays by squad, discrete
+   frames by holding the last event.
+
+Unlike the reference, an empty intersection is an error rather than an
+empty result, and datetime64 timestamps are never mixed with numbers.
+
+Frames arrive here resolved (objects, not names); this module reads their
+private arrays (``_t``, ``_r``, ``_track``) directly, which the frames
+validated once when they were built.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .. import _time
+from .._door import kernel_array
+from .._kernels import quaternion as kq
+from .._kernels import resample as kr
+
+_IDENTITY_T = np.zeros((1, 3))
+_IDENTITY_R = np.array([[1.0, 0.0, 0.0, 0.0]])
+
+
+class Target:
+    """The timestamps a matched operation produces (``None`` track: static)."""
+
+    __slots__ = ("track", "source")
+
+    def __init__(self, track, source=None):
+        self.track = track
+        # the Track the timestamps were sliced from: resampling it is a slice
+        self.source = source
+
+    @property
+    def timestamps(self):
+        """The timestamps for the caller (a copy: tracks belong to frames)."""
+        return None if self.track is None else self.track.values.copy()
+
+    def __len__(self) -> int:
+        return 0 if self.track is None else len(self.track)
+
+
+# Resolved chains per (outof, into), valid while no frame of any tree changes
+# its parent (frames tell the engine through invalidate(); a frame's data never
+# changes after construction). Values keep the two frames alive, so their ids
+# cannot be reused while an entry exists.
+_CHAINS: dict[tuple[int, int], tuple[Any, Any, list, Any]] = {}
+_MAX_CACHED = 4096
+
+
+def invalidate() -> None:
+    """Forget every cached chain (the frame trees changed)."""
+    _CHAINS.clear()
+
+
+def _cached(outof, into) -> tuple[Any, Any, list, Any]:
+    key = (id(outof), id(into))
+    entry = _CHAINS.get(key)
+    if entry is None:
+        if len(_CHAINS) >= _MAX_CACHED:
+            _CHAINS.clear()
+        steps = _chain(outof, into)
+        static = None
+        if all(f._track is None for f, _ in steps):
+            static = compose(steps, Target(None))
+        entry = (outof, into, steps, static)
+        _CHAINS[key] = entry
+    return entry
+
+
+def chain(outof, into):
+    """Frames to traverse from ``outof`` to ``into``, with their direction.
+
+    Returns
+    -------
+    list of (ReferenceFrame, bool)
+        Upward steps (frame -> its parent, ``False``) from ``outof`` to the
+        common ancestor, then downward steps (``True``: the frame's
+        transform inverted) from there to ``into``. Cached per pair of
+        frames (do not modify the list).
+    """
+    return _cached(outof, into)[2]
+
+
+def static_transform(outof, into):
+    """(t, r) of shapes (1, 3) and (1, 4) if no frame of the chain moves, else None.
+
+    Composed once per pair of frames and cached with the chain.
+    """
+    return _cached(outof, into)[3]
+
+
+def _chain(outof, into):
+    up = outof._path_to_root()
+    down = into._path_to_root()
+    if up[-1] is not down[-1]:
+        raise ValueError(
+            f"frames {outof.name!r} and {into.name!r} are in different trees "
+            f"(roots {up[-1].name!r} and {down[-1].name!r}); no transform connects them"
+        )
+    # drop the shared part above (and including) the common ancestor
+    i, j = len(up), len(down)
+    while i > 0 and j > 0 and up[i - 1] is down[j - 1]:
+        i -= 1
+        j -= 1
+    return [(f, False) for f in up[:i]] + [(f, True) for f in reversed(down[:j])]
+
+
+def match(frames, arrays=(), arrays_first=True) -> Target:
+    """Find the timestamps a set of frames and arrays is matched to.
+
+    Parameters
+    ----------
+    frames : sequence of ReferenceFrame
+        The frames of the chain (direction does not matter here).
+    arrays : sequence of Track or None
+        Timestamps of the arrays taking part (None: not timestamped).
+    arrays_first : bool
+        Whether arrays take precedence over frames in defining the sampling.
+
+    Raises
+    ------
+    ValueError
+        If datetime64 and numeric timestamps meet, or the time ranges of
+        the participants do not overlap.
+    """
+    array_tracks = [a for a in arrays if a is not None]
+    continuous = [f._track for f in frames if f._track is not None and not f.discrete]
+    discrete = [f._track for f in frames if f._track is not None and f.discrete]
+    ranged = continuous + array_tracks
+    _time.check_compatible(ranged + discrete)
+
+    ordered = array_tracks + continuous if arrays_first else continuous + array_tracks
+    if not ordered:
+        if discrete:
+            return Target(_time.union(discrete) if len(discrete) > 1 else discrete[0])
+        return Target(None)
+
+    source = ordered[0]
+    if len(ranged) == 1:
+        return Target(source, source)
+    first = max(t.key[0] for t in ranged)
+    last = min(t.key[-1] for t in ranged)
+    lo = int(np.searchsorted(source.key, first, side="left"))
+    hi = int(np.searchsorted(source.key, last, side="right"))
+    if hi <= lo:
+        if first <= last:
+            raise ValueError(_no_sample_message(frames, arrays, source, first, last))
+        raise ValueError(_no_overlap_message(frames, arrays, ranged))
+    if lo == 0 and hi == len(source):
+        return Target(source, source)
+    return Target(source.slice(lo, hi), source)
+
+
+def _spans(frames, arrays) -> list[str]:
+    parts = []
+    for f in frames:
+        if f._track is not None and not f.discrete:
+            parts.append(f"frame {f.name!r}: {_span(f._track)}")
+    for k, a in enumerate(arrays):
+        if a is not None:
+            parts.append(f"array {k}: {_span(a)}")
+    return parts
+
+
+def _no_overlap_message(frames, arrays, ranged) -> str:
+    parts = _spans(frames, arrays)
+    return (
+        "the time ranges do not overlap, so there is no time at which the "
+        "transformation and the data are both defined (" + "; ".join(parts) + ")"
+    )
+
+
+def _no_sample_message(frames, arrays, source, first, last) -> str:
+    """The ranges overlap, but the sampling track has no sample inside."""
+    names = [f"frame {f.name!r}" for f in frames if f._track is source]
+    names += [f"array {k}" for k, a in enumerate(arrays) if a is source]
+    who = names[0] if names else "the sampling"
+    lo = int(np.searchsorted(source.key, first, side="left"))
+    around = []
+    if lo > 0:
+        around.append(f"the last one before is {source.values[lo - 1]}")
+    if lo < len(source):
+        around.append(f"the first one after is {source.values[lo]}")
+    return (
+        f"the time ranges overlap only from {_value(source, first)} to "
+        f"{_value(source, last)}, and none of the {len(source)} samples of {who} "
+        f"(which defines the timestamps of the result) falls within it "
+        f"({'; '.join(around)}); nothing can be returned ("
+        + "; ".join(_spans(frames, arrays))
+        + ")"
+    )
+
+
+def _value(track, key):
+    """A sort key as the user's kind of time (datetime64 or a number)."""
+    if track.kind == "datetime64":
+        return np.datetime64(int(key), "ns")
+    if track.kind == "timedelta64":
+        return np.timedelta64(int(key), "ns")
+    return key
+
+
+def _span(track) -> str:
+    return f"{track.values[0]} to {track.values[-1]}"
+
+
+def _same_times(track, target_track) -> slice | None:
+    """The slice of ``track`` equal to the target's timestamps, if there is one."""
+    n = len(target_track)
+    if len(track) < n:
+        return None
+    lo = int(np.searchsorted(track.key, target_track.key[0], side="left"))
+    if lo + n > len(track):
+        return None
+    if (
+        track.key[lo] == target_track.key[0]
+        and track.key[lo + n - 1] == target_track.key[-1]
+    ):
+        if np.array_equal(track.key[lo : lo + n], target_track.key):
+            return slice(lo, lo + n)
+    return None
+
+
+def resample_frame(frame, target: Target):
+    """A frame's translation (n|1, 3) and rotation (n|1, 4) at the target times."""
+    track = frame._track
+    if track is None:
+        return frame._t, frame._rotation_public
+    tt = target.track
+    if tt is None:
+        raise ValueError(
+            f"frame {frame.name!r} is timestamped; it has no single static transform"
+        )
+    same = _same_times(track, tt)
+    if same is not None:
+        # the stored values, with their signs (the reference returns them)
+        t, r = frame._t[same], frame._rotation_public[same]
+        gaps = _unusable(frame)
+        if gaps is not None and gaps[same].any():
+            t, r = t.copy(), r.copy()
+            t[gaps[same]] = np.nan
+            r[gaps[same]] = np.nan
+        return t, r
+    if frame.discrete:
+        # float seconds on one origin keep the order of the exact keys
+        t_out = tt.base_in(track.origin)
+        return (
+            kr.hold_last(track.base, frame._t, t_out),
+            kr.hold_last(track.base, frame._rotation_public, t_out),
+        )
+    t_out = tt.base_in(track.origin)
+    if len(track) < 2:
+        return frame._t, frame._rotation_public
+    a_coef, b_coef, seg = frame._squad_coefficients()
+    rot = kq.squad_evaluate(frame._r, track.base, a_coef, b_coef, seg, t_out)
+    stored_signs(rot, frame._r, frame._rotation_public, track.base, t_out)
+    trans = kr.interp_linear(track.base, frame._t, t_out)
+    if frame.max_gap is not None:
+        in_gap = in_long_gap(track.base, t_out, frame.max_gap)
+        trans[in_gap] = np.nan
+        rot[in_gap] = np.nan
+    return trans, rot
+
+
+def _unusable(frame):
+    """Samples whose interpolation reads a missing one, or None if none is missing.
+
+    At a sample's own time the interpolation is the sample itself, but its
+    SQUAD segment reads samples i-1 .. i+2 (and a missing neighbour makes the
+    whole segment unknown). Marking those rows keeps lookups at the frame's
+    own timestamps consistent with lookups between them, and with
+    rigid-body-motion. Cached on the frame (its data never changes).
+    """
+    cached = frame.__dict__.get("_unusable_rows", False)
+    if cached is not False:
+        return cached
+    missing = np.isnan(frame._t).any(axis=1) | np.isnan(frame._r).any(axis=1)
+    out = None
+    if missing.any():
+        out = missing.copy()
+        out[:-1] |= missing[1:]  # i + 1
+        out[:-2] |= missing[2:]  # i + 2
+        out[1:] |= missing[:-1]  # i - 1
+    frame._unusable_rows = out
+    return out
+
+
+def in_long_gap(t_in, t_out, max_gap: float) -> np.ndarray:
+    """Which ``t_out`` fall strictly inside a gap of ``t_in`` longer than max_gap.
+
+    Times equal to a sample are never inside a gap.
+    """
+    right = np.searchsorted(t_in, t_out, side="left")
+    inside = (right > 0) & (right < len(t_in))
+    idx = np.clip(right, 1, len(t_in) - 1)
+    gap = t_in[idx] - t_in[idx - 1]
+    exact = t_in[np.clip(right, 0, len(t_in) - 1)] == t_out
+    return inside & (gap > max_gap) & ~exact
+
+
+def stored_signs(out, unflipped, stored, t_in, t_out) -> None:
+    """Give interpolated quaternions the sign of the stored sample they start from.
+
+    Interpolation runs on the sign-continuous series (``unflip``); the value
+    between samples i and i+1 is then negated wherever the stored sample i
+    has the other sign, which is what SQUAD on the stored samples gives (and
+    what rigid-body-motion returns). ``out`` (m, 4) is changed in place.
+    """
+    n = len(t_in)
+    if n < 2:
+        return
+    with np.errstate(invalid="ignore"):
+        flipped = np.einsum("ij,ij->i", unflipped, stored) < 0.0
+    if not flipped.any():
+        return
+    seg = np.searchsorted(t_in, t_out, side="right") - 1
+    np.clip(seg, 0, n - 2, out=seg)
+    out[flipped[seg]] *= -1.0
+
+
+def compose(steps, target: Target):
+    """Translation (n|1, 3) and rotation (n|1, 4) of a chain at the target times."""
+    t_acc, r_acc = _IDENTITY_T, _IDENTITY_R
+    for k, (frame, inverse) in enumerate(steps):
+        t, r = resample_frame(frame, target)
+        if k == 0 and not inverse:
+            t_acc, r_acc = t, r  # identity followed by (t, r) is (t, r)
+        else:
+            t_acc, r_acc = kr.chain_step(t_acc, r_acc, t, r, inverse)
+    return t_acc, r_acc
+
+
+def held(steps, target: Target):
+    """A chain whose moving frames are all discrete, as (t, r, idx), or None.
+
+    Such a transform is piecewise constant: it changes only at the events.
+    Composing it once per event (e rows) and indexing each target time into
+    those events is exact and avoids one transform per time step. Returns
+    None if the chain has a continuous moving frame (or nothing moves).
+    """
+    tracks = []
+    for frame, _ in steps:
+        if frame._track is not None:
+            if not frame.discrete:
+                return None
+            tracks.append(frame._track)
+    if not tracks or target.track is None:
+        return None
+    events = _time.union(tracks) if len(tracks) > 1 else tracks[0]
+    t, r = compose(steps, Target(events))
+    if t.shape[0] != len(events):
+        t = np.repeat(t, len(events), axis=0)
+    if r.shape[0] != len(events):
+        r = np.repeat(r, len(events), axis=0)
+    return t, r, kr.hold_index(events.base, target.track.base_in(events.origin))
+
+
+def resample_array(data: np.ndarray, track, target: Target, quaternions: bool):
+    """An array of shape (n, k, c) at the target times.
+
+    Static arrays (``track`` None) come back unchanged (shape (1, k, c)) and
+    broadcast; timestamped ones are sliced when their timestamps are the
+    target's, else interpolated (squad for quaternions, c == 4).
+    """
+    if track is None:
+        return data
+    tt = target.track
+    if tt is None:
+        raise ValueError("a timestamped array cannot be matched to a static transform")
+    same = _same_times(track, tt)
+    if same is not None:
+        return data[same]
+    t_out = tt.base_in(track.origin)
+    n, k, c = data.shape
+    out = np.empty((len(t_out), k, c))
+    for j in range(k):
+        column = kernel_array(data[:, j, :])
+        if quaternions:
+            if n < 2:
+                out[:, j, :] = column[0]
+            else:
+                unflipped = kq.unflip(column)
+                rot = kq.squad(unflipped, track.base, t_out)
+                stored_signs(rot, unflipped, column, track.base, t_out)
+                out[:, j, :] = rot
+        else:
+            out[:, j, :] = kr.interp_linear(track.base, column, t_out)
+    return out
+
+
+def apply(kind: str, steps, target: Target, data: np.ndarray) -> np.ndarray:
+    """Apply a chain's transform to (n|1, k, c) data at the target times.
+
+    ``kind`` is "points", "vectors" or "quaternions".
+    """
+    discrete = held(steps, target)
+    if discrete is not None:
+        t, r, idx = discrete
+        if kind == "quaternions":
+            return kr.qmul_blocks_held(r, idx, data)
+        return kr.transform_blocks_held(r, t, idx, data, kind == "points")
+    t, r = compose(steps, target)
+    if kind == "quaternions":
+        return kr.qmul_blocks(r, data)
+    return kr.transform_blocks(r, t, data, kind == "points")
+
+
+def lookup(frame, to_frame):
+    """Translation (n|1, 3), rotation (n|1, 4) and Target from frame to to_frame."""
+    steps = chain(frame, to_frame)
+    target = match([f for f, _ in steps])
+    t, r = compose(steps, target)
+    n = len(target)
+    if target.track is not None and t.shape[0] != n:
+        t = np.repeat(t, n, axis=0)
+        r = np.repeat(r, n, axis=0)
+    return t, r, target
+
+
+def lookup_transform(frame, to_frame):
+    """Translation, rotation and timestamps (None if static) from frame to to_frame.
+
+    Static transforms come back with shapes (3,) and (4,), moving ones with
+    (n, 3) and (n, 4).
+    """
+    static = static_transform(frame, to_frame)
+    if static is not None:
+        # copies: the cached transform is shared by every later call
+        return static[0][0].copy(), static[1][0].copy(), None
+    t, r, target = lookup(frame, to_frame)
+    return t, r, target.timestamps

@@ -1,0 +1,339 @@
+"""Velocities between resolved frames: lookups and the three-term transforms.
+
+Velocities are estimated from the looked-up transform by finite differences
+(:mod:`rbm_nb._engine.velocity`): the linear velocity comes out represented
+in the reference frame, the angular velocity in the moving frame, and both
+are then represented in ``represent_in``.
+
+Changing the frames of a velocity uses the three-term formulas:
+
+* angular, new reference R -> R': w_M/R' = w_M/R + w_R/R';
+* angular, new moving frame M -> M': w_M'/R = w_M/R + w_M'/M;
+* linear, new reference: v_M/R' = v_M/R + v_R/R' + w_R/R' x t_M/R;
+* linear, new moving frame: v_M'/R = v_M/R + v_M'/M + w_M/R x t_M'/M.
+
+Every frame argument is a resolved ``ReferenceFrame`` (or None where a
+default applies); the facades resolve names.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._door import kernel_array
+from .._kernels import quaternion as kq
+from .._kernels import resample as kr
+from .._validation import check_mode, check_what
+from . import chain as _chain
+from . import velocity as _velocity
+from .transform import Blocks, track_of, transform
+
+__all__ = [
+    "defaults",
+    "lookup_linear_velocity",
+    "lookup_angular_velocity",
+    "lookup_twist",
+    "transform_angular_velocity",
+    "transform_linear_velocity",
+]
+
+
+def defaults(frame, reference, represent_in):
+    """``reference`` and ``represent_in``, both defaulting to the frame's parent."""
+    if reference is None or represent_in is None:
+        if frame.parent is None:
+            raise ValueError(
+                f"frame {frame.name!r} has no parent; pass the reference frame explicitly"
+            )
+    reference = reference if reference is not None else frame.parent
+    represent_in = represent_in if represent_in is not None else frame.parent
+    return reference, represent_in
+
+
+def _moving_lookup(frame, reference, allow_static):
+    t, r, target = _chain.lookup(frame, reference)
+    if target.track is None:
+        if allow_static:
+            return None
+        raise ValueError(
+            f"the transform between {frame.name!r} and {reference.name!r} is static; "
+            f"a velocity needs timestamps (pass allow_static=True for zeros)"
+        )
+    return t, r, target, _breaks(frame, reference, target)
+
+
+def _breaks(frame, reference, target):
+    """Where consecutive samples straddle a gap longer than a frame's max_gap.
+
+    Returns a boolean array (n - 1,) or None: velocities take no difference
+    across such a pair (the motion may have jumped while nothing was recorded).
+    """
+    track = target.track
+    out = None
+    for f, _ in _chain.chain(frame, reference):
+        if f._track is None or f.discrete or f.max_gap is None or len(track) < 2:
+            continue
+        base = track.base_in(f._track.origin)
+        middle = 0.5 * (base[1:] + base[:-1])
+        gap = _chain.in_long_gap(f._track.base, middle, f.max_gap)
+        out = gap if out is None else out | gap
+    return out
+
+
+def _represent(vectors, track, outof, into, looked_up=None):
+    """Vectors (n, 3) at ``track`` re-represented from ``outof`` in ``into``.
+
+    ``looked_up`` is (frame, reference, r): the rotation r from frame to
+    reference at ``track``, already known; re-representing between those two
+    frames then needs no second lookup (the result is the same).
+    """
+    if outof is into:
+        return vectors, track
+    if looked_up is not None:
+        frame, reference, r = looked_up
+        if outof is frame and into is reference:
+            return _rotate(r, vectors), track
+        if outof is reference and into is frame:
+            return _rotate(kq.qconj(kernel_array(r)), vectors), track
+    out, ts = transform(outof, "vectors", vectors, into, timestamps=track)
+    return out, track_of(track, ts)
+
+
+def _rotate(r, vectors):
+    r = kernel_array(r)
+    return kr.transform_blocks(
+        r, kernel_array(r[:1, :3]), kernel_array(vectors)[:, None, :], False
+    )[:, 0]
+
+
+def _result(values, track, as_track):
+    return values, (track if as_track else (None if track is None else track.values))
+
+
+def _linear_part(frame, reference, represent_in, looked_up, outlier_thresh, cutoff):
+    """Linear velocity of ``frame`` wrt ``reference``, represented in ``represent_in``."""
+    t, r, target, breaks = looked_up
+    linear = _velocity.linear_velocity(
+        t, target.track.seconds(), outlier_thresh, cutoff, breaks
+    )
+    return _represent(
+        linear, target.track, reference, represent_in, (frame, reference, r)
+    )
+
+
+def _angular_part(
+    frame, reference, represent_in, looked_up, mode, outlier_thresh, cutoff
+):
+    """Angular velocity of ``frame`` wrt ``reference``, represented in ``represent_in``."""
+    _, r, target, breaks = looked_up
+    angular = _velocity.angular_velocity(
+        r, target.track.seconds(), mode, outlier_thresh, cutoff, breaks
+    )
+    # the estimate is in the moving frame's axes (2 q^-1 dq/dt)
+    return _represent(angular, target.track, frame, represent_in, (frame, reference, r))
+
+
+def lookup_linear_velocity(
+    frame,
+    reference=None,
+    represent_in=None,
+    outlier_thresh=None,
+    cutoff=None,
+    allow_static=False,
+    as_track=False,
+):
+    """Linear velocity (n, 3) of ``frame`` wrt ``reference`` and its timestamps."""
+    reference, represent_in = defaults(frame, reference, represent_in)
+    looked_up = _moving_lookup(frame, reference, allow_static)
+    if looked_up is None:
+        return np.zeros(3), None
+    linear, track = _linear_part(
+        frame, reference, represent_in, looked_up, outlier_thresh, cutoff
+    )
+    return _result(linear, track, as_track)
+
+
+def lookup_angular_velocity(
+    frame,
+    reference=None,
+    represent_in=None,
+    outlier_thresh=None,
+    cutoff=None,
+    mode="quaternion",
+    allow_static=False,
+    as_track=False,
+):
+    """Angular velocity (n, 3) of ``frame`` wrt ``reference`` and its timestamps."""
+    check_mode(mode)
+    reference, represent_in = defaults(frame, reference, represent_in)
+    looked_up = _moving_lookup(frame, reference, allow_static)
+    if looked_up is None:
+        return np.zeros(3), None
+    angular, track = _angular_part(
+        frame, reference, represent_in, looked_up, mode, outlier_thresh, cutoff
+    )
+    return _result(angular, track, as_track)
+
+
+def lookup_twist(
+    frame,
+    reference=None,
+    represent_in=None,
+    outlier_thresh=None,
+    cutoff=None,
+    mode="quaternion",
+    allow_static=False,
+    as_track=False,
+):
+    """Linear and angular velocity (n, 3) each of ``frame`` and their timestamps."""
+    check_mode(mode)
+    reference, represent_in = defaults(frame, reference, represent_in)
+    looked_up = _moving_lookup(frame, reference, allow_static)
+    if looked_up is None:
+        return np.zeros(3), np.zeros(3), None
+    linear, lin_track = _linear_part(
+        frame, reference, represent_in, looked_up, outlier_thresh, cutoff
+    )
+    # outlier_thresh refers to the position, so the rotation is not filtered
+    angular, ang_track = _angular_part(
+        frame, reference, represent_in, looked_up, mode, None, cutoff
+    )
+    final = _chain.match([], [ang_track, lin_track])
+    angular = _chain.resample_array(angular[:, None, :], ang_track, final, False)[:, 0]
+    linear = _chain.resample_array(linear[:, None, :], lin_track, final, False)[:, 0]
+    if as_track:
+        return linear, angular, final.track
+    return linear, angular, final.timestamps
+
+
+# ---------------------------------------------------------------------------
+# changing the frames of a velocity
+# ---------------------------------------------------------------------------
+
+
+def _velocity_parts(arr_blocks, frame, to_frame, extra):
+    """Represent the input in ``to_frame`` and match it with looked-up terms.
+
+    ``extra`` is a list of (array of shape (3,) or (n, 3), Track or None).
+    Returns the matched (n, k, 3) input, the matched extras as (n|1, 1, 3)
+    arrays, and the target.
+    """
+    steps = _chain.chain(frame, to_frame)
+    target = _chain.match([f for f, _ in steps], [arr_blocks.track])
+    data = _chain.resample_array(arr_blocks.data, arr_blocks.track, target, False)
+    rotated = _chain.apply("vectors", steps, target, data)
+    ext_blocks = [kernel_array(np.reshape(e, (-1, 1, 3))) for e, _ in extra]
+    ext_tracks = [track for _, track in extra]
+    final = _chain.match([], [target.track] + ext_tracks)
+    rotated = _chain.resample_array(rotated, target.track, final, False)
+    ext = [
+        _chain.resample_array(b, track, final, False)
+        for b, track in zip(ext_blocks, ext_tracks, strict=True)
+    ]
+    return rotated, ext, final
+
+
+def transform_angular_velocity(
+    frame,
+    arr,
+    to_frame,
+    what="reference_frame",
+    axis=-1,
+    time_axis=0,
+    timestamps=None,
+    cutoff=None,
+):
+    """Change the ``what`` frame of angular velocities from ``frame`` to ``to_frame``."""
+    check_what(what)
+    if what == "representation_frame":
+        return transform(frame, "vectors", arr, to_frame, axis, time_axis, timestamps)
+    if what == "reference_frame":
+        # w_M/R' = w_M/R + w_R/R'
+        angular, ang_ts = lookup_angular_velocity(
+            frame, to_frame, to_frame, None, cutoff, "quaternion", True, as_track=True
+        )
+    else:
+        # w_M'/R = w_M/R + w_M'/M
+        angular, ang_ts = lookup_angular_velocity(
+            to_frame, frame, to_frame, None, cutoff, "quaternion", True, as_track=True
+        )
+    blocks = Blocks(arr, 3, axis, time_axis, timestamps, "vectors")
+    rotated, (w,), final = _velocity_parts(blocks, frame, to_frame, [(angular, ang_ts)])
+    return blocks.restore(rotated + w, final), final.timestamps
+
+
+def transform_linear_velocity(
+    frame,
+    arr,
+    to_frame,
+    what="reference_frame",
+    moving_frame=None,
+    reference_frame=None,
+    axis=-1,
+    time_axis=0,
+    timestamps=None,
+    outlier_thresh=None,
+    cutoff=None,
+):
+    """Change the ``what`` frame of linear velocities from ``frame`` to ``to_frame``.
+
+    ``moving_frame`` (for ``what="reference_frame"``) and ``reference_frame``
+    (for ``what="moving_frame"``) are resolved frames or None.
+    """
+    check_what(what)
+    if what == "representation_frame":
+        return transform(frame, "vectors", arr, to_frame, axis, time_axis, timestamps)
+    if what == "reference_frame":
+        # v_M/R' = v_M/R + v_R/R' + w_R/R' x t_M/R
+        if moving_frame is None:
+            raise ValueError(
+                "moving_frame must be given to transform the reference frame of a "
+                "linear velocity (its position enters the three-term formula)"
+            )
+        linear, angular, twist_ts = lookup_twist(
+            frame,
+            to_frame,
+            to_frame,
+            outlier_thresh,
+            cutoff,
+            "quaternion",
+            True,
+            as_track=True,
+        )
+        lin_ts = ang_ts = twist_ts
+        translation, _, trans_target = _chain.lookup(moving_frame, frame)
+    else:
+        # v_M'/R = v_M/R + v_M'/M + w_M/R x t_M'/M
+        if reference_frame is None:
+            raise ValueError(
+                "reference_frame must be given to transform the moving frame of a "
+                "linear velocity (its angular velocity enters the three-term formula)"
+            )
+        linear, lin_ts = lookup_linear_velocity(
+            to_frame, frame, to_frame, outlier_thresh, cutoff, True, as_track=True
+        )
+        angular, ang_ts = lookup_angular_velocity(
+            frame,
+            reference_frame,
+            to_frame,
+            None,
+            cutoff,
+            "quaternion",
+            True,
+            as_track=True,
+        )
+        translation, _, trans_target = _chain.lookup(to_frame, frame)
+    # the lever arm, represented in to_frame like everything else
+    trans, trans_ts = transform(
+        frame, "vectors", translation, to_frame, -1, 0, trans_target.track
+    )
+    trans_track = None if trans_ts is None else track_of(trans_target.track, trans_ts)
+    blocks = Blocks(arr, 3, axis, time_axis, timestamps, "vectors")
+    rotated, (v, w, lever), final = _velocity_parts(
+        blocks,
+        frame,
+        to_frame,
+        [(linear, lin_ts), (angular, ang_ts), (trans, trans_track)],
+    )
+    out = rotated + v + np.cross(w, lever)
+    return blocks.restore(out, final), final.timestamps

@@ -1,0 +1,292 @@
+"""Velocities of sampled series: finite differences, outliers, low-pass.
+
+The scheme follows rigid-body-motion: finite differences on (possibly
+uneven) timestamps, optional suppression of outliers found by second-order
+differences (the rejected samples are re-interpolated), and an optional
+7th-order Butterworth low-pass applied forwards and backwards
+(``scipy.signal.filtfilt``) with ``cutoff`` as a fraction of the Nyquist
+frequency. Linear velocity uses numpy's gradient scheme; angular velocity
+uses the derivative of the not-a-knot cubic spline through the quaternions
+("quaternion" mode) or the gradient of the rotation vectors
+("rotation_vector" mode).
+
+:func:`linear_velocity` and :func:`angular_velocity` are the array-level
+entry points used by the velocity lookups and by
+:mod:`rbm_nb.estimators`, which adds axis handling and DataArrays.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .. import _time
+from .._door import kernel_array
+from .._kernels import differences as _dk
+from .._kernels import quaternion as _qk
+from .._kernels import rotations as _rk
+from .._validation import is_scalar
+
+__all__ = [
+    "check_options",
+    "linear_series",
+    "angular_series",
+    "linear_velocity",
+    "angular_velocity",
+]
+
+_MODES = ("quaternion", "rotation_vector")
+_BUTTER_ORDER = 7
+# filtfilt's default padding, 3 * (number of filter coefficients)
+_FILTER_PADLEN = 3 * (_BUTTER_ORDER + 1)
+
+
+# ---------------------------------------------------------------------------
+# argument checks shared by the public and the array-level functions
+# ---------------------------------------------------------------------------
+
+
+def check_options(
+    outlier_thresh: Any, cutoff: Any, n: int, mode: str | None = None
+) -> None:
+    if mode is not None and mode not in _MODES:
+        raise ValueError(
+            f"mode must be 'quaternion' or 'rotation_vector', got {mode!r}"
+        )
+    if outlier_thresh is not None:
+        if not is_scalar(outlier_thresh) or not outlier_thresh >= 0:
+            raise ValueError(
+                f"outlier_thresh must be a non-negative number, got {outlier_thresh!r}"
+            )
+    if cutoff is not None:
+        if not is_scalar(cutoff) or not 0 < cutoff < 1:
+            raise ValueError(
+                f"cutoff must be a fraction of the Nyquist frequency in (0, 1), got {cutoff!r}"
+            )
+        if n <= _FILTER_PADLEN:
+            raise ValueError(
+                f"cutoff: the low-pass filter needs more than {_FILTER_PADLEN} samples, got {n}"
+            )
+
+
+# ---------------------------------------------------------------------------
+# numerics on (n, b, k) arrays: time first, b independent series
+# ---------------------------------------------------------------------------
+
+
+def _reject_outliers(t, values, score, thresh) -> np.ndarray:
+    keep = score <= thresh  # NaN scores are rejected too
+    kept = keep.sum(axis=0)
+    if kept.min() < 2:
+        raise ValueError(
+            f"outlier_thresh={thresh} keeps only {kept.min()} sample(s) of a series; "
+            f"at least 2 are needed to interpolate the others"
+        )
+    # a rejected run at either end has no kept sample on one side to
+    # interpolate from: refuse it rather than return NaN rows
+    lead = ~keep[0]
+    tail = ~keep[-1]
+    if lead.any() or tail.any():
+        where = "first" if lead.any() else "last"
+        kept_rows = np.flatnonzero(keep.any(axis=1))
+        edge = kept_rows[0] if where == "first" else len(keep) - 1 - kept_rows[-1]
+        raise ValueError(
+            f"outlier_thresh={thresh} rejects the {where} {max(int(edge), 1)} "
+            f"sample(s) of a series, which have no kept sample on that side to be "
+            f"interpolated from; raise outlier_thresh or trim the series"
+        )
+    return _dk.interpolate_rejected(t, kernel_array(values), keep)
+
+
+def _lowpass(values: np.ndarray, cutoff: float) -> np.ndarray:
+    """Zero-phase Butterworth low-pass along axis 0 of (n, ...).
+
+    Stretches of NaN (from gaps in the data or from rejected samples at the
+    ends) are left out: every finite stretch is filtered on its own, and those
+    too short for the filter become NaN, instead of the NaN spreading over
+    the whole series.
+    """
+    from scipy.signal import butter, filtfilt
+
+    b, a = butter(_BUTTER_ORDER, cutoff)
+    finite = np.isfinite(values)
+    if finite.all():
+        return filtfilt(b, a, values, axis=0)
+    flat = values.reshape(values.shape[0], -1)
+    out = np.full(flat.shape, np.nan)
+    for col in range(flat.shape[1]):
+        ok = np.isfinite(flat[:, col])
+        edges = np.flatnonzero(np.diff(np.concatenate(([0], ok.view(np.int8), [0]))))
+        for start, stop in zip(edges[::2], edges[1::2], strict=True):
+            if stop - start > _FILTER_PADLEN:
+                out[start:stop, col] = filtfilt(b, a, flat[start:stop, col])
+    return out.reshape(values.shape)
+
+
+def _runs(valid: np.ndarray, breaks: np.ndarray | None = None) -> list[tuple[int, int]]:
+    """(start, stop) of every run of True in ``valid``, also split where
+    ``breaks[k]`` says samples k and k + 1 must not be differenced."""
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], valid.view(np.int8), [0]))))
+    runs = list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
+    if breaks is None or not breaks.any():
+        return runs
+    cuts = np.flatnonzero(breaks) + 1
+    out: list[tuple[int, int]] = []
+    for start, stop in runs:
+        inner = cuts[(cuts > start) & (cuts < stop)].tolist()
+        bounds = [start, *inner, stop]
+        out.extend(zip(bounds[:-1], bounds[1:], strict=True))
+    return out
+
+
+def linear_series(
+    x: np.ndarray,
+    t: np.ndarray,
+    outlier_thresh,
+    cutoff,
+    breaks: np.ndarray | None = None,
+) -> np.ndarray:
+    n = x.shape[0]
+    if n < 2:
+        raise ValueError(
+            f"arr needs at least 2 samples to estimate a velocity, got {n}"
+        )
+    flat = kernel_array(x.reshape(n, -1))
+    if breaks is None or not breaks.any():
+        v = _dk.gradient(flat, t).reshape(x.shape)
+    else:
+        # no difference across a gap: each run between breaks on its own
+        out = np.full(flat.shape, np.nan)
+        for start, stop in _runs(np.ones(n, dtype=bool), breaks):
+            if stop - start >= 2:
+                out[start:stop] = _dk.gradient(
+                    kernel_array(flat[start:stop]), kernel_array(t[start:stop])
+                )
+        v = out.reshape(x.shape)
+    if outlier_thresh is not None:
+        score = _dk.second_difference_score(kernel_array(x))
+        v = _reject_outliers(t, v, score, outlier_thresh)
+    if cutoff is not None:
+        v = _lowpass(v, cutoff)
+    return v
+
+
+def angular_series(
+    q: np.ndarray,
+    t: np.ndarray,
+    mode,
+    outlier_thresh,
+    cutoff,
+    breaks: np.ndarray | None = None,
+) -> np.ndarray:
+    n, nb, _ = q.shape
+    if n < 2:
+        # the spline derivative reads two samples at least (no kernel is
+        # called with less)
+        raise ValueError(
+            f"arr needs at least 2 samples to estimate a velocity, got {n}"
+        )
+    zero = _rk.first_zero_row(kernel_array(q.reshape(-1, 4)))
+    if zero >= 0:
+        raise ValueError(f"arr contains a zero quaternion (row {zero} when flattened)")
+    need_rv = mode == "rotation_vector" or outlier_thresh is not None
+    w = np.empty((n, nb, 3))
+    # rotation vectors, needed by that mode and by the outlier score
+    rv = np.empty((n, nb, 3) if need_rv else (0, nb, 3))
+    for b in range(nb):
+        # q and -q are the same rotation: differentiate a sign-continuous series
+        qb = _qk.unflip(kernel_array(q[:, b, :]))
+        if need_rv:
+            rv[:, b, :] = _rk.rotation_vectors(qb)
+        if mode == "rotation_vector":
+            if n < 2:
+                raise ValueError(
+                    f"arr needs at least 2 samples to estimate a velocity, got {n}"
+                )
+            w[:, b, :] = _dk.gradient(kernel_array(rv[:, b, :]), t)
+            continue
+        missing = _dk.nan_rows(qb)
+        if not missing.any() and (breaks is None or not breaks.any()):
+            w[:, b, :] = _dk.angular_velocity_from_derivative(
+                qb, _dk.spline_derivative(qb, t)
+            )
+            continue
+        valid = ~missing
+        if valid.sum() < 2:
+            raise ValueError(
+                f"arr needs at least 2 samples without NaN to estimate a velocity, "
+                f"got {valid.sum()}"
+            )
+        # missing samples split the series: no derivative is taken across
+        # them (the motion may have jumped while nothing was recorded); runs
+        # of a single sample have no velocity
+        w[:, b, :] = np.nan
+        for start, stop in _runs(valid, breaks):
+            if stop - start < 2:
+                continue
+            qv = kernel_array(qb[start:stop])
+            dq = _dk.spline_derivative(qv, kernel_array(t[start:stop]))
+            w[start:stop, b, :] = _dk.angular_velocity_from_derivative(qv, dq)
+    if outlier_thresh is not None:
+        score = _dk.second_difference_score(rv)
+        w = _reject_outliers(t, w, score, outlier_thresh)
+    if cutoff is not None:
+        w = _lowpass(w, cutoff)
+    return w
+
+
+def linear_velocity(
+    arr, timestamps, outlier_thresh=None, cutoff=None, breaks=None
+) -> np.ndarray:
+    """Linear velocity of positions sampled in time (array level).
+
+    Parameters
+    ----------
+    arr : ndarray, shape (n, 3)
+        Positions, time along axis 0 (float64).
+    timestamps : ndarray, shape (n,)
+        Strictly increasing times in seconds (float64).
+    outlier_thresh, cutoff : float, optional
+        As in :func:`estimate_linear_velocity`.
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+    """
+    x = np.asarray(arr, dtype=np.float64)
+    t = _time.seconds(timestamps, x.shape[0])
+    check_options(outlier_thresh, cutoff, x.shape[0])
+    return linear_series(
+        x.reshape(x.shape[0], 1, -1), t, outlier_thresh, cutoff, breaks
+    ).reshape(x.shape)
+
+
+def angular_velocity(
+    q, timestamps, mode="quaternion", outlier_thresh=None, cutoff=None, breaks=None
+) -> np.ndarray:
+    """Angular velocity of orientations sampled in time (array level).
+
+    Parameters
+    ----------
+    q : ndarray, shape (n, 4)
+        Quaternions (w, x, y, z), time along axis 0 (float64).
+    timestamps : ndarray, shape (n,)
+        Strictly increasing times in seconds (float64).
+    mode, outlier_thresh, cutoff
+        As in :func:`estimate_angular_velocity`.
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        In "quaternion" mode the vector part of ``2 q⁻¹ dq/dt``, i.e. the
+        angular velocity in the rotated (body) frame.
+    """
+    qa = np.asarray(q, dtype=np.float64)
+    if qa.ndim != 2 or qa.shape[1] != 4:
+        raise ValueError(f"q must have shape (n, 4), got {qa.shape}")
+    t = _time.seconds(timestamps, qa.shape[0])
+    check_options(outlier_thresh, cutoff, qa.shape[0], mode)
+    return angular_series(qa[:, None, :], t, mode, outlier_thresh, cutoff, breaks)[
+        :, 0, :
+    ]

@@ -1,0 +1,130 @@
+"""Kernels declare what they compile: one signature each, known in advance.
+
+Every numba function of :mod:`rbm_nb._kernels` is created by one of two
+decorators:
+
+* :func:`kernel` for functions called from Python. It takes the argument
+  types of the one signature the kernel is compiled for (spelled with the
+  aliases below, e.g. ``@kernel(F2, F1)`` for a C-contiguous (n, k) and an
+  (n,) float64 array) and records it in :data:`DECLARED`. The door
+  (:mod:`rbm_nb._door`) hands kernels exactly those types, so a call never
+  compiles another variant; :mod:`rbm_nb._warmup` compiles exactly the
+  declared signatures; and ``tests/test_zz_kernel_signatures.py`` fails if
+  the test suite made numba compile anything else.
+* :func:`helper` for functions only called from other kernels (compiled as
+  part of them, for whatever scalar types they receive).
+
+Nothing is compiled at decoration time (numba compiles on first call, or the
+warm-up compiles the declared signature, both from the on-disk cache when it
+is there).
+"""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, TypeVar
+
+from numba import njit
+
+from .._config import KERNEL, JitOptions
+
+__all__ = [
+    "DECLARED",
+    "HELPERS",
+    "Declared",
+    "kernel",
+    "helper",
+    "F",
+    "I",
+    "B",
+    "F1",
+    "F2",
+    "F3",
+    "I1",
+    "B2",
+]
+
+# numba type strings for the argument types kernels take: C-contiguous,
+# writeable arrays ("::1" in the last dimension) and plain scalars
+F = "float64"
+I = "int64"  # noqa: E741 - the conventional short name next to F and B
+B = "boolean"
+F1 = "float64[::1]"
+F2 = "float64[:, ::1]"
+F3 = "float64[:, :, ::1]"
+I1 = "int64[::1]"
+B2 = "boolean[:, ::1]"
+
+_Func = TypeVar("_Func", bound=Callable[..., Any])
+
+
+@dataclass(frozen=True)
+class Declared:
+    """A kernel and the argument types of the one signature it compiles."""
+
+    dispatcher: Any
+    argtypes: tuple[str, ...]
+
+    @property
+    def name(self) -> str:
+        return f"{self.dispatcher.py_func.__module__}.{self.dispatcher.__name__}"
+
+    @property
+    def signature(self) -> str:
+        """The argument types as numba parses them: ``"(float64[::1], ...)"``."""
+        return "(" + ", ".join(self.argtypes) + ",)"
+
+
+# module name -> kernels, in definition order
+DECLARED: dict[str, list[Declared]] = {}
+# module name -> helpers (compiled only inside kernels)
+HELPERS: dict[str, list[Any]] = {}
+
+
+def kernel(*argtypes: str, options: JitOptions = KERNEL) -> Callable[[_Func], _Func]:
+    """Compile the decorated function with numba, declaring its one signature.
+
+    Parameters
+    ----------
+    *argtypes : str
+        numba type strings of the arguments, one per parameter.
+    options : JitOptions
+        The option set from :mod:`rbm_nb._config`.
+    """
+
+    def decorate(func: _Func) -> _Func:
+        dispatcher = njit(**options.as_kwargs())(func)
+        DECLARED.setdefault(func.__module__, []).append(Declared(dispatcher, argtypes))
+        return dispatcher  # type: ignore[no-any-return]
+
+    return decorate
+
+
+def helper(
+    func: _Func | None = None, *, inline: bool = False, options: JitOptions = KERNEL
+) -> Any:
+    """Compile a function called only from kernels (``@helper`` or ``@helper(...)``).
+
+    ``inline=True`` inlines it into every caller at numba's IR level (the
+    branch-free conversion loops need that to vectorise).
+    """
+
+    def decorate(f: _Func) -> _Func:
+        opts = options.inlined() if inline else options
+        dispatcher = njit(**opts.as_kwargs())(f)
+        HELPERS.setdefault(f.__module__, []).append(dispatcher)
+        return dispatcher  # type: ignore[no-any-return]
+
+    return decorate if func is None else decorate(func)
+
+
+def declared_kernels() -> list[Declared]:
+    """Every declared kernel of every kernel module (importing them all)."""
+    package = __name__.rpartition(".")[0]
+    for info in pkgutil.iter_modules(importlib.import_module(package).__path__):
+        if not info.name.startswith("_"):
+            importlib.import_module(f"{package}.{info.name}")
+    return [k for kernels in DECLARED.values() for k in kernels]

@@ -1,0 +1,142 @@
+"""Where numba keeps rbm_nb's compiled kernels, also when the install is read-only.
+
+The kernels are decorated with ``cache=True``. numba then looks for a folder
+it can write to, in this order: ``NUMBA_CACHE_DIR`` if set, ``__pycache__``
+beside the kernel sources, and its per-user cache folder (``~/.cache/numba``).
+If none is writable -- site-packages and ``HOME`` read-only, as in containers
+and on HPC systems -- the decorator itself raises ``RuntimeError: cannot cache
+function ...: no locator available`` and the first kernel import dies.
+
+:func:`configure` runs before any kernel is decorated (it is called from
+``rbm_nb._kernels``). When numba would find a writable folder it changes
+nothing. Otherwise it points ``NUMBA_CACHE_DIR`` at a private folder in the
+temporary directory (kept between processes, so a second run loads instead of
+compiling), or, when not even that is writable, switches caching off; either
+way with one warning that names the folders and says how to choose one.
+
+Users choose the folder with the environment variable ``NUMBA_CACHE_DIR``
+before importing rbm_nb.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+import tempfile
+import warnings
+from pathlib import Path
+
+KERNELS = Path(__file__).resolve().parent / "_kernels"
+
+_configured = False
+
+
+class NumbaCacheWarning(UserWarning):
+    """numba cannot cache where it normally would; rbm_nb chose another way."""
+
+
+def configure() -> None:
+    """Make sure numba can cache rbm_nb's kernels, or turn caching off.
+
+    Idempotent; the first call decides. Imports numba only when the usual
+    folders are not writable.
+
+    Warns
+    -----
+    NumbaCacheWarning
+        Once, if the cache had to move to the temporary directory or be turned
+        off.
+    """
+    global _configured
+    if _configured:
+        return
+    _configured = True
+    user_dir = os.environ.get("NUMBA_CACHE_DIR", "")
+    if user_dir and _writable(Path(user_dir)):
+        return
+    if _writable(KERNELS / "__pycache__"):
+        return
+    numba_user_dir = _numba_user_cache_dir()
+    if _writable(numba_user_dir):
+        return
+    tried = [str(KERNELS / "__pycache__"), str(numba_user_dir)]
+    if user_dir:
+        tried.insert(0, f"NUMBA_CACHE_DIR={user_dir}")
+    fallback = _private_temp_dir()
+    if fallback is not None:
+        _set_numba_cache_dir(fallback)
+        outcome = f"compiled kernels are cached in {fallback} instead"
+    else:
+        _turn_caching_off()
+        outcome = (
+            "no writable temporary folder either, so kernels are compiled in every "
+            "new process (caching is off)"
+        )
+    warnings.warn(
+        f"rbm_nb: numba cannot write its cache to any of {', '.join(tried)}; "
+        f"{outcome}. Set the environment variable NUMBA_CACHE_DIR to a writable "
+        "folder before importing rbm_nb to choose where.",
+        NumbaCacheWarning,
+        stacklevel=2,
+    )
+
+
+def _writable(folder: Path) -> bool:
+    """Whether ``folder`` exists or can be made, and a file can be written in it.
+
+    The same test numba applies (``makedirs`` and a temporary file); write
+    permission bits alone say nothing about read-only mounts.
+    """
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        tempfile.TemporaryFile(dir=folder).close()
+    except OSError:
+        return False
+    return True
+
+
+def _numba_user_cache_dir() -> Path:
+    """numba's per-user cache folder for rbm_nb's kernels (its own rule)."""
+    from numba.misc.appdirs import AppDirs
+
+    return Path(AppDirs(appname="numba", appauthor=False).user_cache_dir)
+
+
+def _private_temp_dir() -> Path | None:
+    """A folder in the temporary directory only this user can write, or None.
+
+    The name is stable, so later processes find what earlier ones compiled.
+    numba's cache files are pickles, so a folder someone else could have
+    planted or can write to is refused (then a fresh ``mkdtemp`` is used).
+    """
+    uid = os.getuid() if hasattr(os, "getuid") else 0
+    try:
+        # raises (FileNotFoundError) itself when no candidate folder is writable
+        stable = Path(tempfile.gettempdir()) / f"rbm_nb-numba-cache-{uid}"
+        stable.mkdir(mode=0o700, exist_ok=True)
+        info = stable.lstat()
+        private = (
+            stat.S_ISDIR(info.st_mode)
+            and (not hasattr(os, "getuid") or info.st_uid == uid)
+            and not info.st_mode & (stat.S_IWGRP | stat.S_IWOTH)
+        )
+        if private and _writable(stable):
+            return stable
+        return Path(tempfile.mkdtemp(prefix="rbm_nb-numba-cache-"))
+    except OSError:
+        return None
+
+
+def _set_numba_cache_dir(folder: Path) -> None:
+    # numba re-reads the environment when it compiles, so the variable (not
+    # only numba.config.CACHE_DIR) must say it; child processes inherit it.
+    os.environ["NUMBA_CACHE_DIR"] = str(folder)
+    from numba.core import config
+
+    config.reload_config()
+
+
+def _turn_caching_off() -> None:
+    from . import _config
+
+    _config.NJIT_OPTIONS["cache"] = False

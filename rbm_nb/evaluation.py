@@ -1,0 +1,744 @@
+"""Trajectory evaluation: absolute and relative pose error (what evo does), on rbm_nb's frames.
+
+:func:`ape` and :func:`rpe` compare an estimated trajectory with a reference
+one. Either may be
+
+* the name of a registered moving frame (or a :class:`~rbm_nb.ReferenceFrame`),
+  whose poses are looked up wrt ``frame`` (default: its parent);
+* an xarray Dataset with ``position`` (time, cartesian_axis) and
+  ``orientation`` (time, quaternion_axis) variables and a time coordinate,
+  the schema of ``rbm.lookup_pose(..., as_dataset=True)`` and of the
+  example head/eye recordings;
+* a tuple ``(timestamps, positions, wxyz quaternions)`` of shapes (n,),
+  (n, 3), (n, 4).
+
+Timestamps are matched by rbm_nb's own lookups: the estimate is looked up
+(``rbm.lookup_transform(..., time=...)``) at each reference timestamp
+inside its time range, so its poses are interpolated there (translation
+linearly, rotation by squad, as everywhere in rbm_nb). When both share
+their timestamps this is exact and the numbers are evo's; evo instead pairs
+each pose with the *nearest* one within ``max_diff`` (or slerps with its
+``interpolation`` sync), which differs where the sampling differs.
+
+The errors follow evo's definitions (``evo.core.metrics``): APE compares
+``E_i = inv(P_i) Q_i`` (P estimate, Q reference), RPE compares the motions
+``E_ij = inv(inv(Q_i) Q_j) inv(P_i) P_j`` over pairs chosen by frame count,
+path length or rotation angle. The pose relations are
+
+=============================== =============================================
+``"translation"``               ``|p_est - p_ref|`` (APE), ``|t(E)|`` (RPE), m
+``"rotation"``                  ``|R(E) - I|_F`` (unitless)
+``"full"``                      ``|E - I|_F`` (unitless)
+``"angle_deg"``/``"angle_rad"`` rotation angle of ``R(E)``
+``"point_distance"``            APE: as translation; RPE: ``| |dQ| - |dP| |``
+``"point_distance_error_ratio"`` RPE only: the above in % of ``|dQ|``
+=============================== =============================================
+
+(evo's names such as ``"translation part"`` or ``"rotation_angle_deg"`` are
+accepted too.) Alignment is Umeyama's least-squares fit of the estimate's
+positions onto the reference's: rigid (``align=True``), similarity
+(``align=True, correct_scale=True``, evo's sim3), scale only
+(``correct_scale=True`` alone), optionally from the first ``n_to_align``
+matched poses.
+"""
+
+from __future__ import annotations
+
+import numbers
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = [
+    "POSE_RELATIONS",
+    "Trajectory",
+    "TrajectoryError",
+    "ape",
+    "rpe",
+    "umeyama_alignment",
+]
+
+#: Canonical pose relation -> unit of the error.
+POSE_RELATIONS = {
+    "translation": "m",
+    "rotation": "",
+    "full": "",
+    "angle_deg": "deg",
+    "angle_rad": "rad",
+    "point_distance": "m",
+    "point_distance_error_ratio": "%",
+}
+
+# evo's enum values and member names
+_ALIASES = {
+    "translation part": "translation",
+    "translation_part": "translation",
+    "rotation part": "rotation",
+    "rotation_part": "rotation",
+    "full transformation": "full",
+    "full_transformation": "full",
+    "rotation angle in degrees": "angle_deg",
+    "rotation_angle_deg": "angle_deg",
+    "rotation angle in radians": "angle_rad",
+    "rotation_angle_rad": "angle_rad",
+    "point distance": "point_distance",
+    "point distance error ratio": "point_distance_error_ratio",
+}
+
+_DELTA_UNITS = ("frames", "meters", "degrees", "radians")
+
+
+# ---------------------------------------------------------------------------
+# trajectories
+# ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Poses over time: what :func:`ape` and :func:`rpe` compare.
+
+    Attributes
+    ----------
+    timestamps : ndarray, shape (n,)
+        Strictly increasing, numeric (seconds) or datetime64.
+    positions : ndarray, shape (n, 3)
+    orientations : ndarray, shape (n, 4)
+        Unit quaternions ``w, x, y, z``.
+    name : str
+    """
+
+    timestamps: np.ndarray
+    positions: np.ndarray
+    orientations: np.ndarray
+    name: str = "trajectory"
+    # the moving frame the poses come from and the frame they are wrt
+    _frames: tuple = field(default=(), repr=False, compare=False)
+
+    def __len__(self) -> int:
+        return len(self.timestamps)
+
+    def to_dataset(self, frame_name: str | None = None):
+        """The trajectory as an rbm-style Dataset (position, orientation, time)."""
+        from ._xarray import transform_dataset
+
+        return transform_dataset(
+            self.positions, self.orientations, frame_name, self.timestamps, pose=True
+        )
+
+
+def _from_frame(value, name: str, frame) -> Trajectory:
+    from .frames import ReferenceFrame, _resolve
+    from .lookups import lookup_pose
+
+    moving = _resolve(value, name)
+    if moving.timestamps is None:
+        raise ValueError(
+            f"{name}: frame {moving.name!r} is static; a trajectory needs a moving frame"
+        )
+    if frame is None:
+        if moving.parent is None:
+            raise ValueError(f"{name}: frame {moving.name!r} is a root; pass frame=")
+        into = moving.parent
+    else:
+        into = _resolve(frame, "frame")
+    assert isinstance(moving, ReferenceFrame)
+    p, q, t = lookup_pose(moving, into, return_timestamps=True)
+    return Trajectory(
+        np.asarray(t), np.asarray(p), np.asarray(q), moving.name or name, (moving, into)
+    )
+
+
+def _from_arrays(t, p, q, name: str) -> Trajectory:
+    from .frames import ReferenceFrame
+
+    t = np.asarray(getattr(t, "values", t))
+    if t.ndim != 1 or t.dtype.kind not in "iufM":
+        raise ValueError(
+            f"{name}: timestamps must be a 1-d numeric or datetime64 array, "
+            f"got shape {t.shape} and dtype {t.dtype}"
+        )
+    if len(t) < 2:
+        raise ValueError(f"{name}: a trajectory needs at least 2 poses, got {len(t)}")
+    root = ReferenceFrame(f"{name} world")
+    # the frame validates shapes, finiteness, unit norms and increasing times
+    moving = ReferenceFrame(name, parent=root, translation=p, rotation=q, timestamps=t)
+    return Trajectory(
+        np.asarray(moving.timestamps), np.asarray(moving.translation),
+        np.asarray(moving.rotation), name, (moving, root),
+    )  # fmt: skip
+
+
+def _trajectory(value, name: str, frame) -> Trajectory:
+    from .frames import ReferenceFrame
+
+    if isinstance(value, Trajectory):
+        return _from_arrays(value.timestamps, value.positions, value.orientations, name)
+    if isinstance(value, (str, ReferenceFrame)):
+        return _from_frame(value, name, frame)
+    if type(value).__name__ == "Dataset" and type(value).__module__.startswith(
+        "xarray"
+    ):
+        missing = [v for v in ("position", "orientation") if v not in value.data_vars]
+        if missing:
+            raise ValueError(
+                f"{name}: the Dataset has no {' or '.join(missing)} variable "
+                f"(expected position (time, cartesian_axis) and orientation "
+                f"(time, quaternion_axis); has {sorted(value.data_vars)})"
+            )
+        dim = value["position"].dims[0]
+        if dim not in value.coords:
+            raise ValueError(
+                f"{name}: the Dataset has no coordinate for dimension {dim!r}"
+            )
+        return _from_arrays(
+            value[dim].values,
+            value["position"].transpose(dim, ...).values,
+            value["orientation"].transpose(dim, ...).values,
+            name,
+        )
+    if isinstance(value, (tuple, list)) and len(value) == 3:
+        timestamps, positions, quaternions = value
+        return _from_arrays(timestamps, positions, quaternions, name)
+    raise TypeError(
+        f"{name} must be a frame name, a ReferenceFrame, an xarray Dataset with "
+        f"position/orientation or a (timestamps, positions, quaternions) tuple, "
+        f"got {type(value).__name__}"
+    )
+
+
+def _match(ref: Trajectory, est: Trajectory) -> tuple[Trajectory, Trajectory]:
+    """Reference poses inside the estimate's time span, and the estimate there."""
+    from .lookups import lookup_transform
+
+    if (ref.timestamps.dtype.kind == "M") != (est.timestamps.dtype.kind == "M"):
+        raise ValueError(
+            "reference and estimate timestamps must both be datetime64 or both "
+            f"numeric, got {ref.timestamps.dtype} and {est.timestamps.dtype}"
+        )
+    t = ref.timestamps
+    inside = (t >= est.timestamps[0]) & (t <= est.timestamps[-1])
+    if inside.sum() < 2:
+        raise ValueError(
+            f"reference ({t[0]} to {t[-1]}) and estimate ({est.timestamps[0]} to "
+            f"{est.timestamps[-1]}) overlap in {int(inside.sum())} reference "
+            "timestamp(s); at least 2 are needed"
+        )
+    times = t[inside]
+    moving, into = est._frames
+    p, q = lookup_transform(moving, into, time=times)
+    matched_ref = Trajectory(
+        times, ref.positions[inside], ref.orientations[inside], ref.name, ref._frames
+    )
+    return matched_ref, Trajectory(times, p, q, est.name, est._frames)
+
+
+# ---------------------------------------------------------------------------
+# alignment
+# ---------------------------------------------------------------------------
+
+
+def umeyama_alignment(source, target, *, with_scale: bool = False):
+    """Least-squares similarity (or rigid) transform mapping ``source`` onto ``target``.
+
+    Finds ``R, t, s`` minimising ``sum |target_i - (s R source_i + t)|²``
+    (Umeyama 1991), with ``R`` a proper rotation.
+
+    Parameters
+    ----------
+    source, target : array_like, shape (n, 3)
+        Corresponding points, n >= 3 and not all on one line.
+    with_scale : bool, default False
+        Estimate ``s``; otherwise ``s = 1``.
+
+    Returns
+    -------
+    rotation : ndarray, shape (3, 3)
+    translation : ndarray, shape (3,)
+    scale : float
+
+    Raises
+    ------
+    ValueError
+        If the shapes differ or the points are degenerate (collinear), where
+        the rotation is not determined.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from rbm_nb.evaluation import umeyama_alignment
+    >>> x = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    >>> R, t, s = umeyama_alignment(x, 2 * x + [1, 2, 3], with_scale=True)
+    >>> float(round(s, 12)), t.round(12) + 0.0
+    (2.0, array([1., 2., 3.]))
+    """
+    x = np.asarray(source, dtype=float)
+    y = np.asarray(target, dtype=float)
+    if x.ndim != 2 or x.shape[1] != 3 or x.shape != y.shape:
+        raise ValueError(
+            f"source and target must both have shape (n, 3), got {x.shape} and {y.shape}"
+        )
+    n = len(x)
+    mean_x, mean_y = x.mean(axis=0), y.mean(axis=0)
+    xc, yc = x - mean_x, y - mean_y
+    var_x = np.sum(xc * xc) / n
+    # einsum, not BLAS: on a loaded machine OpenBLAS's threads make these
+    # thin (n, 3) products erratic (10-200 ms instead of ~1 ms)
+    cov = np.einsum("ni,nj->ij", yc, xc) / n
+    u, d, vt = np.linalg.svd(cov)
+    # rank < 2: the rotation about the line is free. Relative to the largest
+    # singular value (evo tests d > eps absolutely, which rounding noise of
+    # collinear points passes)
+    if not d[1] > 1e-12 * d[0]:
+        raise ValueError(
+            f"the {n} aligned positions are degenerate (all on one line or point): "
+            "the alignment rotation is not determined"
+        )
+    sign = np.ones(3)
+    if np.linalg.det(u) * np.linalg.det(vt) < 0.0:
+        sign[2] = -1.0  # a reflection would fit better: take the best rotation
+    rotation = (u * sign) @ vt
+    scale = float(np.sum(d * sign) / var_x) if with_scale else 1.0
+    translation = mean_y - scale * rotation @ mean_x
+    return rotation, translation, scale
+
+
+def _apply(traj: Trajectory, rotation, translation, scale) -> Trajectory:
+    from .conversions import quaternion_from_matrix
+    from .quaternions import qmul
+
+    # column by column: numpy's matmul of an (n, 3) stack by a 3 x 3 matrix
+    # goes through BLAS, whose threads make it erratic on a loaded machine
+    pos = traj.positions
+    p = scale * sum(pos[:, [k]] * rotation[:, k] for k in range(3)) + translation
+    q = qmul(quaternion_from_matrix(rotation), traj.orientations)
+    return Trajectory(traj.timestamps, p, np.asarray(q), traj.name, traj._frames)
+
+
+def _align(ref, est, est_full, align, correct_scale, n_to_align):
+    if not (align or correct_scale):
+        if n_to_align is not None:
+            raise ValueError("n_to_align needs align=True or correct_scale=True")
+        return est, est_full, None
+    n = len(ref)
+    if n_to_align is not None:
+        if not isinstance(n_to_align, numbers.Integral) or isinstance(n_to_align, bool):
+            raise ValueError(f"n_to_align must be an integer, got {n_to_align!r}")
+        if not 3 <= n_to_align <= n:
+            raise ValueError(
+                f"n_to_align must lie between 3 and the {n} matched poses, got {n_to_align}"
+            )
+        n = int(n_to_align)
+    rotation, translation, scale = umeyama_alignment(
+        est.positions[:n], ref.positions[:n], with_scale=correct_scale
+    )
+    if not align:  # scale only (evo's correct_only_scale)
+        rotation, translation = np.eye(3), np.zeros(3)
+    alignment = {"rotation": rotation, "translation": translation, "scale": scale}
+    return (
+        _apply(est, rotation, translation, scale),
+        _apply(est_full, rotation, translation, scale),
+        alignment,
+    )
+
+
+# ---------------------------------------------------------------------------
+# errors
+# ---------------------------------------------------------------------------
+
+
+def _relation(pose_relation, metric: str) -> str:
+    rel = _ALIASES.get(pose_relation, pose_relation)
+    if rel not in POSE_RELATIONS or (
+        metric == "APE" and rel == "point_distance_error_ratio"
+    ):
+        valid = [
+            r
+            for r in POSE_RELATIONS
+            if metric == "RPE" or r != "point_distance_error_ratio"
+        ]
+        raise ValueError(f"pose_relation must be one of {valid}, got {pose_relation!r}")
+    return rel
+
+
+def _from_parts(rel: str, trans: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Error values of a relation from the error poses' translations and angles."""
+    if rel == "translation":
+        return np.sqrt(np.einsum("ij,ij->i", trans, trans))
+    if rel == "angle_rad":
+        return angle
+    if rel == "angle_deg":
+        return np.rad2deg(angle)
+    # |R - I|_F² = 2 (3 - trace R) = 8 sin²(angle / 2)
+    rot = 2.0 * np.sqrt(2.0) * np.sin(angle / 2.0)
+    if rel == "rotation":
+        return rot
+    return np.sqrt(rot * rot + np.einsum("ij,ij->i", trans, trans))
+
+
+def _statistics(error: np.ndarray) -> dict[str, float]:
+    sq = error * error
+    return {
+        "rmse": float(np.sqrt(np.mean(sq))),
+        "mean": float(np.mean(error)),
+        "median": float(np.median(error)),
+        "std": float(np.std(error)),
+        "min": float(np.min(error)),
+        "max": float(np.max(error)),
+        "sse": float(np.sum(sq)),
+    }
+
+
+def _contiguous(traj: Trajectory):
+    return (
+        np.ascontiguousarray(traj.positions, dtype=float),
+        np.ascontiguousarray(traj.orientations, dtype=float),
+    )
+
+
+@dataclass
+class TrajectoryError:
+    """The result of :func:`ape` or :func:`rpe`.
+
+    Attributes
+    ----------
+    metric : {"APE", "RPE"}
+    pose_relation : str
+        The canonical name (see :data:`POSE_RELATIONS`).
+    unit : str
+        Unit of the error values ("" for unitless relations).
+    error : xarray.DataArray, dims ("time",)
+        The error per matched pose (APE) or per pose pair, stamped with the
+        pair's second time (RPE).
+    stats : dict of str to float
+        ``rmse, mean, median, std, min, max, sse`` of the error.
+    reference, estimate : Trajectory
+        The matched reference poses and the estimate interpolated at their
+        times (aligned, if alignment was asked for).
+    alignment : dict or None
+        ``rotation`` (3, 3), ``translation`` (3,) and ``scale`` of the
+        alignment applied to the estimate, or None.
+    aligned_estimate : Trajectory
+        The whole estimate (all its samples) with the alignment applied.
+    pairs : ndarray of int, shape (m, 2), or None
+        RPE: the index pairs into the matched trajectories.
+    """
+
+    metric: str
+    pose_relation: str
+    unit: str
+    error: object
+    stats: dict
+    reference: Trajectory
+    estimate: Trajectory
+    alignment: dict | None
+    aligned_estimate: Trajectory
+    pairs: np.ndarray | None = None
+    description: str = ""
+
+    def __repr__(self) -> str:
+        unit = f" ({self.unit})" if self.unit else ""
+        lines = [f"{self.metric} w.r.t. {self.pose_relation}{unit}{self.description}"]
+        lines += [f"  {k:>6}: {v:.6g}" for k, v in self.stats.items()]
+        return "\n".join(lines)
+
+    def plot(self, ax=None):
+        """Plot the error over time with its rmse, mean, median and ±std band.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw into (a new figure otherwise).
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        try:
+            import matplotlib.pyplot as plt
+        except ImportError as err:  # pragma: no cover - depends on the install
+            raise ImportError(
+                "TrajectoryError.plot needs matplotlib: pip install 'rbm_nb[notebook]'"
+            ) from err
+        if ax is None:
+            _, ax = plt.subplots(figsize=(8, 3))
+        time = self.error["time"].values
+        values = self.error.values
+        ax.plot(time, values, color="0.3", lw=1, label=self.metric)
+        s = self.stats
+        ax.axhline(s["rmse"], color="tab:blue", lw=1.5, label="rmse")
+        ax.axhline(s["median"], color="tab:green", lw=1.5, label="median")
+        ax.axhline(s["mean"], color="tab:red", lw=1.5, label="mean")
+        ax.axhspan(s["mean"] - s["std"], s["mean"] + s["std"], color="tab:red",
+                   alpha=0.15, label="std")  # fmt: skip
+        unit = f" ({self.unit})" if self.unit else ""
+        ax.set_ylabel(f"{self.pose_relation}{unit}")
+        ax.set_xlabel("time")
+        ax.set_title(f"{self.metric} w.r.t. {self.pose_relation}")
+        ax.legend(loc="upper left", fontsize="small", ncol=5)
+        return ax
+
+    def register_aligned(self, name: str, parent, *, update: bool = False):
+        """Register the (aligned) estimate as a moving frame, e.g. for a Scene.
+
+        Parameters
+        ----------
+        name : str
+            Name of the new frame.
+        parent : str or ReferenceFrame
+            The frame the reference trajectory is expressed in.
+        update : bool, default False
+            Replace a frame registered under ``name``.
+
+        Returns
+        -------
+        ReferenceFrame
+            The registered frame: all estimate samples, alignment applied.
+        """
+        from .frames import _resolve, register_frame
+
+        traj = self.aligned_estimate
+        register_frame(
+            name, parent=parent, translation=traj.positions,
+            rotation=traj.orientations, timestamps=traj.timestamps, update=update,
+        )  # fmt: skip
+        return _resolve(name, "name")
+
+
+def _result(metric, rel, values, times, ref, est, alignment, est_full, pairs=None,
+            description=""):  # fmt: skip
+    import xarray as xr
+
+    if len(values) == 0:
+        raise ValueError(f"{metric}: no error values (no pose pairs were found)")
+    unit = POSE_RELATIONS[rel]
+    error = xr.DataArray(
+        values, dims=("time",), coords={"time": times}, name=metric.lower(),
+        attrs={"units": unit, "long_name": f"{metric} ({rel})"},
+    )  # fmt: skip
+    return TrajectoryError(
+        metric, rel, unit, error, _statistics(values), ref, est, alignment, est_full,
+        pairs, description,
+    )  # fmt: skip
+
+
+def _inputs(reference, estimate, frame):
+    ref = _trajectory(reference, "reference", frame)
+    est_full = _trajectory(estimate, "estimate", frame)
+    ref, est = _match(ref, est_full)
+    return ref, est, est_full
+
+
+def ape(
+    reference,
+    estimate,
+    *,
+    align: bool = False,
+    correct_scale: bool = False,
+    n_to_align: int | None = None,
+    pose_relation: str = "translation",
+    frame=None,
+) -> TrajectoryError:
+    """Absolute pose error of an estimated trajectory against a reference.
+
+    Parameters
+    ----------
+    reference, estimate : str, ReferenceFrame, xarray.Dataset or tuple
+        Trajectories (see the module notes): a moving frame, a Dataset with
+        ``position``/``orientation`` or ``(timestamps, positions, wxyz)``.
+    align : bool, default False
+        Fit the estimate onto the reference first (Umeyama, rigid).
+    correct_scale : bool, default False
+        Also fit a scale (sim3); alone (``align=False``) only the scale.
+    n_to_align : int, optional
+        Fit only the first ``n_to_align`` matched poses (>= 3).
+    pose_relation : str, default "translation"
+        One of :data:`POSE_RELATIONS` except ``"point_distance_error_ratio"``.
+    frame : str or ReferenceFrame, optional
+        The frame in which to look up frame trajectories (default: each
+        frame's parent).
+
+    Returns
+    -------
+    TrajectoryError
+
+    Raises
+    ------
+    ValueError
+        For an unknown pose relation, trajectories that overlap in fewer
+        than two reference timestamps, degenerate alignment positions or
+        bad trajectory data (the message names the argument).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from rbm_nb.evaluation import ape
+    >>> t = np.arange(5.0)
+    >>> p = np.c_[t, np.sin(t), np.zeros(5)]
+    >>> q = np.tile([1.0, 0, 0, 0], (5, 1))
+    >>> result = ape((t, p, q), (t, p + [0.1, 0, 0], q))
+    >>> round(result.stats["rmse"], 12)
+    0.1
+    >>> round(ape((t, p, q), (t, p + [0.1, 0, 0], q), align=True).stats["max"], 12)
+    0.0
+    """
+    rel = _relation(pose_relation, "APE")
+    ref, est, est_full = _inputs(reference, estimate, frame)
+    est, est_full, alignment = _align(
+        ref, est, est_full, align, correct_scale, n_to_align
+    )
+    if rel in ("translation", "point_distance"):
+        d = est.positions - ref.positions
+        values = np.sqrt(np.einsum("ij,ij->i", d, d))
+    else:
+        from ._kernels.evaluation import absolute_pose_errors
+
+        trans, angle = absolute_pose_errors(*_contiguous(ref), *_contiguous(est))
+        values = _from_parts(rel, trans, angle)
+    return _result("APE", rel, values, ref.timestamps, ref, est, alignment, est_full)
+
+
+def _pairs(traj: Trajectory, delta, delta_unit, rel_delta_tol, all_pairs) -> np.ndarray:
+    from ._kernels import evaluation as k
+
+    n = len(traj)
+    if delta_unit == "frames":
+        if isinstance(delta, bool) or not float(delta).is_integer() or delta < 1:
+            raise ValueError(
+                f"delta must be a positive integer for frames, got {delta!r}"
+            )
+        step = int(delta)
+        if all_pairs:
+            i = np.arange(max(n - step, 0))
+        else:
+            i = np.arange(0, n, step)[:-1] if n > step else np.empty(0, dtype=int)
+        return np.stack([i, i + step], axis=1).astype(np.int64)
+    p, q = _contiguous(traj)
+    if delta_unit == "meters":
+        if all_pairs:
+            return k.all_path_pairs(p, float(delta), float(delta) * rel_delta_tol)
+        return k.path_pairs(p, float(delta))
+    radians = np.deg2rad(delta) if delta_unit == "degrees" else float(delta)
+    if not 0 <= radians <= np.pi:
+        raise ValueError(
+            f"delta must be an angle in [0, 180] degrees, got {delta!r} {delta_unit}"
+        )
+    tol = radians * rel_delta_tol
+    return (
+        k.all_angle_pairs(q, radians, tol) if all_pairs else k.angle_pairs(q, radians)
+    )
+
+
+def rpe(
+    reference,
+    estimate,
+    *,
+    delta=1,
+    delta_unit: str = "frames",
+    pose_relation: str = "translation",
+    all_pairs: bool = False,
+    rel_delta_tol: float = 0.1,
+    pairs_from_reference: bool = False,
+    align: bool = False,
+    correct_scale: bool = False,
+    n_to_align: int | None = None,
+    frame=None,
+) -> TrajectoryError:
+    """Relative pose error: how well the estimate reproduces the motion over ``delta``.
+
+    Parameters
+    ----------
+    reference, estimate : str, ReferenceFrame, xarray.Dataset or tuple
+        Trajectories, as for :func:`ape`.
+    delta : int or float, default 1
+        Distance between the two poses of a pair, in ``delta_unit``.
+    delta_unit : {"frames", "meters", "degrees", "radians"}, default "frames"
+        Frames: pairs ``(i, i + delta)``. Meters/degrees/radians: without
+        ``all_pairs``, consecutive pairs where the path length / rotation
+        accumulated since the pair's first pose reaches ``delta``; with it,
+        for each pose the one whose path length from it is closest to
+        ``delta`` (meters), or every pose whose rotation from it is within
+        the tolerance of ``delta`` (angles: quadratic in the length).
+    pose_relation : str, default "translation"
+        One of :data:`POSE_RELATIONS`.
+    all_pairs : bool, default False
+        Use every start pose instead of consecutive, non-overlapping pairs.
+    rel_delta_tol : float, default 0.1
+        With ``all_pairs`` and a distance/angle unit: accept pairs within
+        ``delta * rel_delta_tol`` of ``delta``.
+    pairs_from_reference : bool, default False
+        Select the pairs on the reference instead of the estimate (evo's
+        default is the estimate).
+    align, correct_scale, n_to_align : optional
+        Alignment as in :func:`ape` (it cancels in the translation relation
+        but not with scale).
+    frame : str or ReferenceFrame, optional
+        As in :func:`ape`.
+
+    Returns
+    -------
+    TrajectoryError
+        ``error`` is stamped with the time of each pair's second pose.
+
+    Raises
+    ------
+    ValueError
+        As :func:`ape`, plus for a bad ``delta``/``delta_unit`` or when no
+        pairs are found.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from rbm_nb.evaluation import rpe
+    >>> t = np.arange(6.0)
+    >>> p = np.c_[t, np.zeros(6), np.zeros(6)]
+    >>> q = np.tile([1.0, 0, 0, 0], (6, 1))
+    >>> drift = p * [1.1, 1, 1]  # the estimate moves 10 % too far
+    >>> rpe((t, p, q), (t, drift, q), delta=2).error.values.round(12)
+    array([0.2, 0.2])
+    """
+    rel = _relation(pose_relation, "RPE")
+    if delta_unit not in _DELTA_UNITS:
+        raise ValueError(
+            f"delta_unit must be one of {list(_DELTA_UNITS)}, got {delta_unit!r}"
+        )
+    if (
+        not isinstance(delta, numbers.Real)
+        or not np.isfinite(float(delta))
+        or delta <= 0
+    ):
+        raise ValueError(f"delta must be a positive number, got {delta!r}")
+    ref, est, est_full = _inputs(reference, estimate, frame)
+    est, est_full, alignment = _align(
+        ref, est, est_full, align, correct_scale, n_to_align
+    )
+    pairs = _pairs(
+        ref if pairs_from_reference else est,
+        delta,
+        delta_unit,
+        rel_delta_tol,
+        all_pairs,
+    )
+    if len(pairs) == 0:
+        raise ValueError(
+            f"delta = {delta} {delta_unit} gives no pose pairs among the {len(ref)} "
+            "matched poses; try a smaller delta"
+        )
+    i, j = pairs[:, 0], pairs[:, 1]
+    if rel in ("point_distance", "point_distance_error_ratio"):
+        d_ref = np.linalg.norm(ref.positions[j] - ref.positions[i], axis=1)
+        d_est = np.linalg.norm(est.positions[j] - est.positions[i], axis=1)
+        values = np.abs(d_ref - d_est)
+        if rel == "point_distance_error_ratio":
+            keep = d_ref != 0
+            pairs, values = pairs[keep], values[keep] / d_ref[keep] * 100
+    else:
+        from ._kernels.evaluation import relative_pose_errors
+
+        trans, angle = relative_pose_errors(*_contiguous(ref), *_contiguous(est), pairs)
+        values = _from_parts(rel, trans, angle)
+    how = "all pairs" if all_pairs else "consecutive pairs"
+    description = f", delta = {delta} {delta_unit}, {how}"
+    return _result(
+        "RPE", rel, values, ref.timestamps[pairs[:, 1]], ref, est, alignment, est_full,
+        pairs, description,
+    )  # fmt: skip

@@ -1,0 +1,352 @@
+"""Lines of sight from eye-tracking frames: directions and gaze angles.
+
+An eye tracker reports, per sample, the orientation of each eye; its line of
+sight is one axis of the eye frame (the z axis for Pupil Core and every
+camera-convention tracker: x right, y down, z forward). Real recordings have
+samples with no data (blinks, lost pupil: NaN rows) and samples whose pupil
+detection is unreliable (low confidence). :func:`directions` turns an eye
+frame into unit line-of-sight vectors in any frame of the tree, with NaN
+wherever the sample must not be drawn or analysed; :func:`angles` turns them
+into azimuth and elevation relative to a frame's forward axis.
+
+Examples
+--------
+>>> import numpy as np, rbm_nb as rbm
+>>> from rbm_nb import gaze
+>>> rbm.clear_registry()
+>>> rbm.register_frame("camera")
+>>> q = rbm.from_euler_angles(pitch=np.deg2rad([0.0, 10.0, 20.0]))
+>>> rbm.register_frame("eye", parent="camera", rotation=q, timestamps=[0.0, 0.1, 0.2])
+>>> sight = gaze.directions("eye", "camera", confidence=[0.9, 0.3, 0.8])
+>>> np.round(gaze.angles(sight, "camera").values, 1)
+array([[ 0.,  0.],
+       [nan, nan],
+       [20.,  0.]])
+>>> rbm.clear_registry()
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["directions", "angles"]
+
+# the eye frame's axis that is the line of sight (camera convention)
+_LINE_OF_SIGHT = np.array([0.0, 0.0, 1.0])
+_AXES = {"x": 0, "y": 1, "z": 2}
+
+
+def directions(eye_frame, into, *, confidence=None, min_confidence=0.6, max_gap=None):
+    """Unit line-of-sight vectors of an eye, represented in another frame.
+
+    The line of sight is the eye frame's z axis (camera convention: x right,
+    y down, z forward, as Pupil Core reports eye orientations). One vector is
+    returned per sample of the eye frame; the eye's measurements are never
+    interpolated, only the frames between the eye's parent and ``into`` are
+    (by the frame core, at the eye's sample times).
+
+    Parameters
+    ----------
+    eye_frame : str or ReferenceFrame
+        A moving frame (or the name of a registered one) whose rotation is
+        the eye's orientation. NaN rows of its rotation are missing samples.
+    into : str or ReferenceFrame
+        The frame to represent the directions in.
+    confidence : array_like, shape (n,), or DataArray with dim ``time``, optional
+        Detection confidence per sample. An array is aligned with the eye
+        frame's timestamps. A DataArray's ``time`` coordinate becomes the time
+        axis of the result: its times that are not samples of the eye frame
+        (e.g. rows dropped with ``dropna``) are missing samples, NaN.
+    min_confidence : float, default 0.6
+        Samples with a confidence below this (or NaN) are set to NaN; 0.6 is
+        Pupil Core's usual threshold. Ignored without ``confidence``.
+    max_gap : float, optional
+        Seconds. Where two consecutive times of the result are more than
+        ``max_gap`` apart (the tracker recorded nothing in between), a NaN row
+        is inserted halfway, so that plots and players show the gap instead
+        of drawing across it. Default: no rows inserted.
+
+    Returns
+    -------
+    xarray.DataArray, dims (time, cartesian_axis), shape (m, 3)
+        Unit vectors, NaN where the sample is missing, below
+        ``min_confidence``, inserted in a gap, or outside the time range of
+        the frames between the eye and ``into``. ``attrs`` has
+        ``representation_frame`` (the name of ``into``), which
+        :func:`angles` and the ``transform_*`` functions read.
+
+    Raises
+    ------
+    ValueError
+        If a frame is not registered, the eye frame is static and no
+        confidence DataArray gives the times, ``confidence`` has the wrong
+        shape, or ``min_confidence``/``max_gap`` is not a finite number
+        (``max_gap`` positive).
+    """
+    from .frames import ReferenceFrame, _resolve
+
+    eye = _resolve(eye_frame, "eye_frame")
+    target = _resolve(into, "into")
+    if eye.parent is None:
+        raise ValueError(
+            f"eye_frame {eye.name!r} is a root frame; it has no orientation to look along"
+        )
+    min_confidence = _finite_number(min_confidence, "min_confidence")
+    if max_gap is not None and _finite_number(max_gap, "max_gap") <= 0:
+        raise ValueError(f"max_gap must be positive (seconds), got {max_gap!r}")
+
+    times, rotation = _eye_samples(eye, confidence)
+    valid = np.isfinite(rotation).all(axis=1)
+    if confidence is not None:
+        valid &= _confidence_values(confidence, times, eye) >= min_confidence
+
+    from .quaternions import rotate_vectors
+
+    out = np.full((len(times), 3), np.nan)
+    if valid.any():
+        q = rotation[valid]
+        q = q / np.linalg.norm(q, axis=1, keepdims=True)
+        sight = rotate_vectors(q, _LINE_OF_SIGHT, one_to_one=False)
+        out[valid] = _represent(sight, times[valid], eye.parent, target)
+    if max_gap is not None:
+        times, out = _insert_gap_rows(times, out, float(max_gap))
+    name = target.name if isinstance(target, ReferenceFrame) else str(into)
+    return _vectors_dataarray(out, times, name)
+
+
+def angles(directions, reference, *, forward="z", up="-y"):
+    """Azimuth and elevation of directions relative to a frame's forward axis.
+
+    Parameters
+    ----------
+    directions : DataArray, dims (time, cartesian_axis), shape (n, 3)
+        Directions as returned by :func:`directions`; its attribute
+        ``representation_frame`` names the frame they are represented in.
+        NaN rows stay NaN.
+    reference : str or ReferenceFrame
+        The frame whose axes the angles are measured in; the directions are
+        first represented in it (moving frames interpolated at their times).
+    forward, up : str, default "z" and "-y"
+        The reference frame's forward and up axes as an axis letter with an
+        optional sign. The defaults are the camera convention (x right, y
+        down, z forward); use ``forward="x", up="z"`` for ROS axes.
+
+    Returns
+    -------
+    xarray.DataArray, dims (time, angle), shape (n, 2)
+        ``azimuth`` (positive to the right, i.e. along forward x up) and
+        ``elevation`` (positive up), in degrees; azimuth is in (-180, 180],
+        elevation in [-90, 90].
+
+    Raises
+    ------
+    ValueError
+        If ``directions`` lacks the dims or frame attribute, ``forward`` and
+        ``up`` are not two different axes, or a frame is not registered.
+    """
+    from .frames import _resolve
+
+    _check_directions(directions)
+    f_axis, f_sign = _signed_axis(forward, "forward")
+    u_axis, u_sign = _signed_axis(up, "up")
+    if f_axis == u_axis:
+        raise ValueError(
+            f"forward ({forward!r}) and up ({up!r}) must be different axes"
+        )
+    ref = _resolve(reference, "reference")
+    source = _resolve(directions.attrs["representation_frame"], "directions' frame")
+    times = directions["time"].values
+    values = np.asarray(directions.transpose("time", "cartesian_axis").values, float)
+    valid = np.isfinite(values).all(axis=1)
+    local = np.full(values.shape, np.nan)
+    if valid.any():
+        local[valid] = _represent(values[valid], times[valid], source, ref)
+    fwd = np.zeros(3)
+    fwd[f_axis] = f_sign
+    upv = np.zeros(3)
+    upv[u_axis] = u_sign
+    right = np.cross(fwd, upv)
+    x, y, z = local @ right, local @ fwd, local @ upv
+    azimuth = np.degrees(np.arctan2(x, y))
+    elevation = np.degrees(np.arctan2(z, np.hypot(x, y)))
+    import xarray as xr
+
+    return xr.DataArray(
+        np.column_stack([azimuth, elevation]),
+        dims=("time", "angle"),
+        coords={"time": times, "angle": ["azimuth", "elevation"]},
+        attrs={"long_name": "Gaze angles", "units": "deg", "reference_frame": ref.name},
+    )
+
+
+# -- helpers ----------------------------------------------------------------
+
+
+def _finite_number(value, name: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.number)):
+        raise ValueError(f"{name} must be a number, got {value!r}")
+    if not np.isfinite(value):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    return float(value)
+
+
+def _is_dataarray(obj) -> bool:
+    return type(obj).__name__ == "DataArray" and hasattr(obj, "dims")
+
+
+def _eye_samples(eye, confidence):
+    """Times of the result and the eye's rotation (n, 4) at them (NaN if missing)."""
+    own = eye.timestamps
+    if _is_dataarray(confidence):
+        if "time" not in confidence.dims or confidence.ndim != 1:
+            raise ValueError(
+                f"confidence must be a 1-d DataArray along 'time', got dims {confidence.dims}"
+            )
+        if "time" not in confidence.coords:
+            raise ValueError(
+                "confidence has a 'time' dimension but no 'time' coordinate"
+            )
+        times = np.asarray(confidence["time"].values)
+    elif own is not None:
+        times = np.asarray(own)
+    else:
+        raise ValueError(
+            f"eye_frame {eye.name!r} is static; pass confidence as a DataArray with "
+            f"a 'time' coordinate to give the sample times"
+        )
+    if own is None:
+        return times, np.broadcast_to(eye.rotation, (len(times), 4)).copy()
+    rotation = np.asarray(eye.rotation, dtype=float)
+    if times is own or (len(times) == len(own) and np.array_equal(times, own)):
+        return times, rotation.copy()
+    index = _match(np.asarray(own), times, eye.name)
+    out = np.full((len(times), 4), np.nan)
+    found = index >= 0
+    out[found] = rotation[index[found]]
+    return times, out
+
+
+def _keys(t) -> np.ndarray:
+    """Sort keys: int64 ns for datetime64 (exact), float64 otherwise."""
+    t = np.asarray(t)
+    if np.issubdtype(t.dtype, np.datetime64):
+        return t.astype("datetime64[ns]").astype(np.int64)
+    if not np.issubdtype(t.dtype, np.number):
+        raise ValueError(f"timestamps must be numeric or datetime64, got {t.dtype}")
+    return t.astype(float)
+
+
+def _match(own, times, name) -> np.ndarray:
+    """Index into ``own`` of each of ``times`` (exact sample), -1 where none."""
+    own, times = np.asarray(own), np.asarray(times)
+    is_datetime = np.issubdtype(own.dtype, np.datetime64)
+    if is_datetime != np.issubdtype(times.dtype, np.datetime64):
+        raise ValueError(
+            f"confidence times ({times.dtype}) and the timestamps of eye_frame "
+            f"{name!r} ({own.dtype}) must both be datetime64 or both numeric"
+        )
+    a, b = _keys(own), _keys(times)
+    if len(a) == 0:
+        return np.full(len(b), -1)
+    # datetime64 keys are exact ns; numeric ones may have been through float
+    tol = 0 if is_datetime else 1e-9 * max(1.0, float(np.max(np.abs(a))))
+    j = np.clip(np.searchsorted(a, b), 0, len(a) - 1)
+    left = np.maximum(j - 1, 0)
+    best = np.where(np.abs(a[left] - b) <= np.abs(a[j] - b), left, j)
+    return np.where(np.abs(a[best] - b) <= tol, best, -1)
+
+
+def _confidence_values(confidence, times, eye) -> np.ndarray:
+    if _is_dataarray(confidence):
+        values = np.asarray(confidence.values, dtype=float)
+    else:
+        try:
+            values = np.asarray(confidence, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError("confidence must be an array of numbers") from None
+        if values.shape != (len(times),):
+            raise ValueError(
+                f"confidence must have shape ({len(times)},) like the timestamps of "
+                f"eye_frame {eye.name!r}, got {values.shape}"
+            )
+    # NaN confidence compares False: such samples are dropped
+    return np.where(np.isnan(values), -np.inf, values)
+
+
+def _represent(vectors, times, outof, into) -> np.ndarray:
+    """Vectors (n, 3) given in ``outof`` at ``times``, represented in ``into``."""
+    if outof is into:
+        return vectors
+    import xarray as xr
+
+    from .transforms import transform_vectors
+
+    arr = xr.DataArray(vectors, dims=("time", "cartesian_axis"), coords={"time": times})
+    moved = transform_vectors(arr, into=into, outof=outof, timestamps="time")
+    out = np.full(vectors.shape, np.nan)
+    # the core keeps only the times covered by every moving frame on the way
+    index = _match(np.asarray(times), moved["time"].values, "eye")
+    found = index >= 0
+    out[index[found]] = moved.transpose("time", "cartesian_axis").values[found]
+    return out
+
+
+def _insert_gap_rows(times, values, max_gap):
+    keys = _keys(times)
+    scale = 1e9 if np.issubdtype(np.asarray(times).dtype, np.datetime64) else 1.0
+    gaps = np.flatnonzero(np.diff(keys) > max_gap * scale)
+    if gaps.size == 0:
+        return times, values
+    t = np.asarray(times)
+    middle = t[gaps] + (t[gaps + 1] - t[gaps]) / 2
+    at = gaps + 1
+    return (
+        np.insert(t, at, middle),
+        np.insert(values, at, np.full((gaps.size, values.shape[1]), np.nan), axis=0),
+    )
+
+
+def _vectors_dataarray(values, times, frame_name):
+    import xarray as xr
+
+    return xr.DataArray(
+        values,
+        dims=("time", "cartesian_axis"),
+        coords={"time": times, "cartesian_axis": np.array(["x", "y", "z"])},
+        attrs={
+            "long_name": "Line of sight",
+            "units": "1",
+            "representation_frame": frame_name,
+        },
+    )
+
+
+def _check_directions(directions) -> None:
+    if not _is_dataarray(directions):
+        raise ValueError(
+            f"directions must be a DataArray from gaze.directions, got "
+            f"{type(directions).__name__}"
+        )
+    if set(directions.dims) != {"time", "cartesian_axis"}:
+        raise ValueError(
+            f"directions must have dims ('time', 'cartesian_axis'), got {directions.dims}"
+        )
+    if directions.sizes["cartesian_axis"] != 3:
+        raise ValueError("directions must have 3 components along 'cartesian_axis'")
+    if "representation_frame" not in directions.attrs:
+        raise ValueError(
+            "directions has no 'representation_frame' attribute naming the frame "
+            "they are given in"
+        )
+
+
+def _signed_axis(spec, name: str):
+    if not isinstance(spec, str):
+        raise ValueError(f"{name} must be an axis like 'z' or '-y', got {spec!r}")
+    sign = -1.0 if spec.startswith("-") else 1.0
+    letter = spec.lstrip("+-")
+    if letter not in _AXES or len(spec) - len(letter) > 1:
+        raise ValueError(
+            f"{name} must be one of x, y, z with an optional sign, got {spec!r}"
+        )
+    return _AXES[letter], sign

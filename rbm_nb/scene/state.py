@@ -1,0 +1,236 @@
+"""What a scene contains, as plain data: no widget, no transport.
+
+:class:`SceneState` holds the meshcat commands that build the scene (objects,
+fixed transforms, properties) by path, the pose tracks of everything that
+moves, and the time base they share. The :class:`~rbm_nb.scene.Scene` facade
+changes it and forwards each change to whatever shows it (the notebook
+widget, an HTML export); tests check it directly.
+
+Paths follow meshcat's tree (``/rbm/root/<name>/pose/geom``); a track's pose
+is the transform of its node relative to its parent node.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import umsgpack
+
+from ..widgets._time import check_kinds
+from . import commands
+from .commands import Message, TransformPacker
+from .tracks import Track
+
+ROOT = "/rbm"
+
+
+def _under(path: str, prefix: str) -> bool:
+    return path == prefix or path.startswith(prefix + "/")
+
+
+class SceneState:
+    """The content of a scene and its poses over time.
+
+    Attributes
+    ----------
+    objects : dict of str to Message
+        ``set_object`` commands by path.
+    statics : dict of str to Message
+        ``set_transform`` commands of nodes that do not move, by path.
+    properties : dict of (str, str) to Message
+        ``set_property`` commands by (path, property).
+    tracks : dict of str to Track
+        Poses over time of the nodes that move, by path.
+    pins : dict of str to float
+        Nodes shown at their own time (float seconds) instead of the scene's
+        (what the publishers do).
+    kind : {"datetime", "float"} or None
+        How the tracks' timestamps were given (None while nothing moves).
+    """
+
+    def __init__(self):
+        self.objects: dict[str, Message] = {}
+        self.statics: dict[str, Message] = {}
+        self.properties: dict[tuple[str, str], Message] = {}
+        self.tracks: dict[str, Track] = {}
+        self.pins: dict[str, float] = {}
+        self.kind: str | None = None
+        self._timeline: tuple | None = None
+
+    # -- changes --------------------------------------------------------------------
+    def set_object(self, path: str, obj) -> Message:
+        message = commands.set_object(path, obj)
+        self.objects[path] = message
+        return message
+
+    def set_static(self, path: str, matrix: np.ndarray) -> Message:
+        message = TransformPacker(path).message(matrix)
+        self.statics[path] = message
+        return message
+
+    def set_property(self, path: str, key: str, value) -> Message:
+        message = commands.set_property(path, key, value)
+        self.properties[(path, key)] = message
+        return message
+
+    def add_track(self, path: str, track: Track, what: str = "scene") -> None:
+        """Make the node at ``path`` follow ``track`` (a moving one)."""
+        if track.static:
+            raise ValueError(f"{what}: the track of {path!r} does not move")
+        check_kinds(self.kind, track.kind, what)
+        self.kind = track.kind
+        self.tracks[path] = track
+        self._timeline = None
+
+    def delete(self, path: str) -> Message:
+        """Forget everything at or below ``path``."""
+        for table in (self.objects, self.statics, self.tracks, self.pins):
+            for key in [k for k in table if _under(k, path)]:
+                del table[key]
+        for key in [k for k in self.properties if _under(k[0], path)]:
+            del self.properties[key]
+        self._timeline = None
+        if not self.tracks:
+            self.kind = None
+        return commands.delete(path)
+
+    # -- what a viewer needs ------------------------------------------------------------
+    def snapshot(self) -> list[Message]:
+        """Commands that build the scene from nothing (its moving poses aside)."""
+        messages = [commands.delete(ROOT)]
+        messages += self.objects.values()
+        messages += self.statics.values()
+        messages += self.properties.values()
+        return messages
+
+    def timeline(self) -> tuple[np.ndarray, np.ndarray | None] | None:
+        """The scene's time axis as float seconds, and as given when shared.
+
+        When every track has the same timestamps these are the axis; else a
+        regular grid from the earliest to the latest sample at the finest
+        mean sampling interval. None when nothing moves.
+        """
+        if self._timeline is not None:
+            return self._timeline
+        tracks = list(self.tracks.values())
+        if not tracks:
+            return None
+        first = tracks[0].seconds
+        if all(t.seconds is first or np.array_equal(t.seconds, first) for t in tracks):
+            self._timeline = (first, tracks[0].original_timestamps)
+            return self._timeline
+        start = min(t.start for t in tracks)
+        end = max(t.end for t in tracks)
+        steps = [
+            (t.end - t.start) / (len(t) - 1)
+            for t in tracks
+            if len(t) > 1 and t.end > t.start
+        ]
+        if not steps or end <= start:
+            seconds = np.unique(np.concatenate([t.seconds for t in tracks]))
+        else:
+            n = int(np.ceil((end - start) / min(steps) - 1e-9)) + 1
+            seconds = np.linspace(start, end, n)
+        self._timeline = (seconds, None)
+        return self._timeline
+
+    @property
+    def origin(self) -> float:
+        """Float seconds of the scene's time 0 (its first sample; 0 while nothing moves)."""
+        timeline = self.timeline()
+        return 0.0 if timeline is None else float(timeline[0][0])
+
+    def pose_at(self, path: str, seconds: float) -> np.ndarray | None:
+        """The (4, 4) transform of the node at ``path`` at ``seconds``.
+
+        Pinned nodes use their own time. None when the node is hidden because
+        its track has not started yet. A node neither static nor moving is at
+        the identity.
+        """
+        track = self.tracks.get(path)
+        if track is None:
+            message = self.statics.get(path)
+            if message is None:
+                return np.eye(4)
+            matrix = umsgpack.unpackb(message.data)["matrix"]
+            return np.asarray(matrix, dtype=float).reshape(4, 4).T
+        index = track.index_at(self.pins.get(path, seconds))
+        return None if index < 0 else track.matrix(index)
+
+    def world_pose(self, path: str, seconds: float) -> np.ndarray | None:
+        """Transform of ``path`` into the scene's base (product along the tree)."""
+        parts = path.strip("/").split("/")
+        matrix = np.eye(4)
+        for i in range(1, len(parts) + 1):
+            node = "/" + "/".join(parts[:i])
+            pose = self.pose_at(node, seconds)
+            if pose is None:
+                return None
+            matrix = matrix @ pose
+        return matrix
+
+    def track_payload(
+        self, max_samples: int | None = None, origin: float | None = None
+    ) -> tuple[list[dict], list[bytes]]:
+        """The tracks as binary buffers for a viewer.
+
+        Times are float64 seconds from ``origin`` (the scene's by default);
+        translations, rotations ``(x, y, z, w)`` (three.js order) and scales
+        are float32. Tracks with equal timestamps share one time buffer.
+
+        Parameters
+        ----------
+        max_samples : int, optional
+            Keep at most this many samples per track (evenly spaced, the last
+            one kept). All samples by default.
+
+        Returns
+        -------
+        meta : list of dict
+            ``{"path", "times", "translation", "rotation", "scale"}`` with
+            buffer indices (``scale`` may be None).
+        buffers : list of bytes
+        """
+        origin = self.origin if origin is None else float(origin)
+        meta: list[dict] = []
+        buffers: list[bytes] = []
+        shared: list[tuple[np.ndarray, int]] = []
+        for path, track in self.tracks.items():
+            index = _decimate(len(track), max_samples)
+            seconds = track.seconds if index is None else track.seconds[index]
+            times = None
+            for known, at in shared:
+                if known is seconds or (
+                    known.shape == seconds.shape and np.array_equal(known, seconds)
+                ):
+                    times = at
+                    break
+            if times is None:
+                times = len(buffers)
+                buffers.append(
+                    np.ascontiguousarray(seconds - origin, dtype="<f8").tobytes()
+                )
+                shared.append((seconds, times))
+
+            def pick(a, index=index):
+                return a if index is None else a[index]
+
+            entry = {"path": path, "times": times, "n": int(len(seconds))}
+            entry["translation"] = len(buffers)
+            buffers.append(pick(track.translation).astype("<f4").tobytes())
+            xyzw = pick(track.rotation)[:, [1, 2, 3, 0]]
+            entry["rotation"] = len(buffers)
+            buffers.append(np.ascontiguousarray(xyzw, dtype="<f4").tobytes())
+            entry["scale"] = None
+            if track.scale is not None:
+                entry["scale"] = len(buffers)
+                buffers.append(pick(track.scale).astype("<f4").tobytes())
+            meta.append(entry)
+        return meta, buffers
+
+
+def _decimate(n: int, max_samples: int | None) -> np.ndarray | None:
+    if max_samples is None or n <= max_samples:
+        return None
+    if max_samples < 2:
+        raise ValueError(f"max_samples must be at least 2, got {max_samples}")
+    return np.unique(np.linspace(0, n - 1, max_samples).round().astype(np.int64))

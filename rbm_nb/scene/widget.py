@@ -1,0 +1,107 @@
+"""The 3D view as an anywidget: meshcat's own viewer, fed over the kernel comm.
+
+The widget's JavaScript is meshcat's viewer bundle (shipped in the meshcat
+package) followed by ``rbm_nb/widgets/static/scene.js``. Content goes as
+custom comm messages whose buffers are meshcat's msgpack commands and the
+float tracks of everything that moves (see :mod:`rbm_nb.scene.state`); the
+browser asks for it with a ``ready`` message when a model is created, so
+nothing is lost before the page listens and a reloaded page gets it again.
+No port is opened: this works wherever Jupyter widgets work.
+"""
+
+from __future__ import annotations
+
+import functools
+import uuid
+from collections.abc import Callable
+
+import anywidget
+import traitlets
+from ipywidgets import widget_serialization
+
+from ..widgets.player import Player, bundle
+from .commands import meshcat_js_path
+
+
+@functools.lru_cache(maxsize=1)
+def scene_esm() -> str:
+    """meshcat's viewer (defining ``globalThis.MeshCat`` once) + rbm_nb's scene module."""
+    meshcat = meshcat_js_path().read_text(encoding="utf-8")
+    # meshcat's bundle is UMD: with no module system in sight it sets
+    # self.MeshCat. Hide any AMD/CommonJS globals a page may have.
+    loader = (
+        "if (!globalThis.MeshCat) {\n"
+        "(function (define, exports, module) {\n"
+        f"{meshcat}\n"
+        "}).call(globalThis, undefined, undefined, undefined);\n"
+        "}\n"
+    )
+    return loader + bundle("scene")
+
+
+class SceneWidget(anywidget.AnyWidget):
+    """The DOM widget of a :class:`~rbm_nb.scene.Scene` (``scene.widget``).
+
+    It composes in ``HBox``/``VBox``/``GridBox`` like any ipywidget.
+
+    Traits
+    ------
+    player : Player or None
+        The player whose time the view shows (in the browser).
+    time : float or None
+        Seconds from the scene's origin shown when no player is linked.
+    selected : str or None
+        Name of the selected frame: set by clicking a frame in 3D, by Python,
+        or by a FrameTree.
+    follow : str or None
+        Name of a frame the camera follows.
+    labels : bool
+        Show frame labels.
+    height : int
+        Height in pixels.
+    """
+
+    _esm = traitlets.Unicode("").tag(sync=True)
+    _uid = traitlets.Unicode("").tag(sync=True)
+    player = traitlets.Instance(Player, allow_none=True).tag(
+        sync=True, **widget_serialization
+    )
+    time = traitlets.Float(None, allow_none=True).tag(sync=True)
+    selected = traitlets.Unicode(None, allow_none=True).tag(sync=True)
+    follow = traitlets.Unicode(None, allow_none=True).tag(sync=True)
+    labels = traitlets.Bool(True).tag(sync=True)
+    height = traitlets.Int(480).tag(sync=True)
+    _origin = traitlets.Float(0.0).tag(sync=True)
+    _camera = traitlets.Dict().tag(sync=True)
+    _frames = traitlets.Dict().tag(sync=True)
+    _labels = traitlets.Dict().tag(sync=True)
+    _legend = traitlets.List().tag(sync=True)
+    _pins = traitlets.Dict().tag(sync=True)
+
+    def __init__(self, snapshot: Callable[[], tuple[dict, list]], **kwargs):
+        super().__init__(_esm=scene_esm(), _uid=uuid.uuid4().hex, **kwargs)
+        self._snapshot = snapshot
+        self.ready = False
+        self.bytes_sent = 0
+        self.on_msg(self._on_message)
+
+    @traitlets.validate("height")
+    def _valid_height(self, proposal):
+        value = int(proposal["value"])
+        if value < 50:
+            raise traitlets.TraitError(
+                f"height must be at least 50 pixels, got {value}"
+            )
+        return value
+
+    def _on_message(self, _widget, content, _buffers) -> None:
+        if isinstance(content, dict) and content.get("type") == "ready":
+            self.ready = True
+            self.push(*self._snapshot())
+
+    def push(self, content: dict, buffers: list) -> None:
+        """Send one content message (only once a browser asked for the scene)."""
+        if not self.ready or self.comm is None:
+            return
+        self.bytes_sent += sum(len(b) for b in buffers)
+        self.send(content, buffers=buffers)

@@ -1,0 +1,670 @@
+"""Table of bad input to the public API and the error each must give.
+
+Every row is one distinct mistake a user can make: the call (a public name
+under ``rbm_nb``, or a small helper below for methods and operators), its
+arguments, the exception type expected and a regular expression the message
+must match (it names the argument, frame or file and what was expected).
+``tests/test_bad_input_table.py`` runs every row against a fixed frame tree
+(see :func:`setup_tree`).
+
+Rows that fail today carry ``xfail``: the issue item that asks for the fix.
+The test marks them ``xfail(strict=True)``, so the fixer sees XPASS and
+deletes the reason here. Rows without ``xfail`` pass today and must keep
+passing.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+
+import rbm_nb as rbm
+
+
+class Case(NamedTuple):
+    id: str
+    call: Any  # a dotted name under rbm_nb, or a callable
+    args: tuple
+    kwargs: dict
+    exc: type
+    match: str
+    xfail: str | None = None
+
+
+# ---------------------------------------------------------------------------
+# the frame tree every row runs against
+# ---------------------------------------------------------------------------
+
+N = 10
+T = np.arange(float(N))  # seconds 0..9
+
+
+def setup_tree() -> None:
+    """world ─┬ static (fixed offset)
+              ├ moving (10 samples, 0..9 s, translating along x and turning about z)
+              ├ one (a single sample at 0 s)
+              └ short (5.01..5.09 s, three samples)
+    other_root (a second tree)
+    """
+    rbm.register_frame("world")
+    rbm.register_frame(
+        "static", parent="world", translation=[1.0, 0, 0], rotation=[1.0, 0, 0, 0]
+    )
+    angle = 0.1 * T
+    rot = np.column_stack(
+        [np.cos(angle / 2), np.zeros(N), np.zeros(N), np.sin(angle / 2)]
+    )
+    trans = np.column_stack([T, np.zeros(N), np.zeros(N)])
+    rbm.register_frame(
+        "moving", parent="world", translation=trans, rotation=rot, timestamps=T
+    )
+    rbm.register_frame(
+        "one",
+        parent="world",
+        translation=np.zeros((1, 3)),
+        rotation=np.array([[1.0, 0, 0, 0]]),
+        timestamps=[0.0],
+    )
+    rbm.register_frame(
+        "short",
+        parent="world",
+        translation=np.zeros((3, 3)),
+        timestamps=[5.01, 5.05, 5.09],
+    )
+    rbm.register_frame("other_root")
+
+
+def resolve(call):
+    if callable(call):
+        return call
+    obj = rbm
+    for part in call.split("."):
+        obj = getattr(obj, part)
+    return obj
+
+
+# ---------------------------------------------------------------------------
+# helpers for calls that are not plain functions
+# ---------------------------------------------------------------------------
+
+
+def frame_method(frame, method, *args, **kwargs):
+    return getattr(rbm.registry[frame], method)(*args, **kwargs)
+
+
+def registry_del(name):
+    del rbm.registry[name]
+
+
+def registry_set(name, value):
+    rbm.registry[name] = value
+
+
+def register_twice(name):
+    frame = rbm.ReferenceFrame(name, parent="world")
+    frame.register()
+    frame.register()
+
+
+def transformer(method, *args, **kwargs):
+    from rbm_nb.ros import Transformer
+
+    tf = Transformer.from_reference_frame("world")
+    return getattr(tf, method)(*args, **kwargs)
+
+
+def new_transformer(**kwargs):
+    from rbm_nb.ros import Transformer
+
+    return Transformer(**kwargs)
+
+
+def transform_method(method, *args, **kwargs):
+    return getattr(rbm.Transform([1.0, 0, 0]), method)(*args, **kwargs)
+
+
+def accessor_qinterp(**coords):
+    import xarray as xr
+
+    da = xr.DataArray(
+        np.tile([1.0, 0, 0, 0], (4, 1)),
+        dims=("time", "quaternion_axis"),
+        coords={"time": np.arange(4.0), "quaternion_axis": list("wxyz")},
+    )
+    return da.rbm.qinterp(**coords)
+
+
+def dataarray_points(**kwargs):
+    """transform_points on a DataArray (time, cartesian_axis)."""
+    import xarray as xr
+
+    coords = kwargs.pop("coords", {"time": np.linspace(0, 9, 19)})
+    da = xr.DataArray(np.zeros((19, 3)), dims=("time", "cartesian_axis"), coords=coords)
+    return rbm.transform_points(da, "world", "moving", **kwargs)
+
+
+def from_dataset(**kwargs):
+    import xarray as xr
+
+    ds = xr.Dataset(
+        {
+            "position": (("time", "cartesian_axis"), np.zeros((4, 3))),
+            "orientation": (
+                ("time", "quaternion_axis"),
+                np.tile([1.0, 0, 0, 0], (4, 1)),
+            ),
+        },
+        coords={"time": np.arange(4.0)},
+    )
+    args = {"translation": "position", "rotation": "orientation", "timestamps": "time"}
+    args.update(kwargs)
+    return rbm.ReferenceFrame.from_dataset(ds, parent="world", name="ds", **args)
+
+
+def rosbag_reader(path, method, *args):
+    from rbm_nb.ros import RosbagReader
+
+    return getattr(RosbagReader(path), method)(*args)
+
+
+def in_temp_folder(func, *args, files=None, **kwargs):
+    """Call ``func(folder, *args)`` in a fresh folder holding ``files`` (name: text)."""
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory() as folder:
+        folder = Path(folder)
+        for name, text in (files or {}).items():
+            (folder / name).write_text(text)
+        return func(folder, *args, **kwargs)
+
+
+def optitrack_in(folder, name, **kwargs):
+    return rbm.io.load_optitrack(folder / name, **kwargs)
+
+
+def netcdf_in(folder, name):
+    return rbm.io.load_netcdf(folder / name)
+
+
+def write_bag_in(folder, name, timestamps, **options):
+    from rbm_nb.ros import RosbagWriter
+
+    n = len(timestamps)
+    with RosbagWriter(folder / name, **options) as writer:
+        writer.write_transform_stamped(
+            timestamps,
+            np.zeros((n, 3)),
+            np.tile([1.0, 0, 0, 0], (n, 1)),
+            "/x",
+            "a",
+            "b",
+        )
+
+
+RF = "ReferenceFrame"
+Q1 = np.array([1.0, 0, 0, 0])
+PTS = np.random.default_rng(7).normal(size=(12, 3))
+NAN3 = np.array([np.nan, 0.0, 0.0])
+INF3 = np.array([np.inf, 1.0, 1.0])
+
+
+def _q_rows(*rows):
+    return np.array(rows, dtype=float)
+
+
+def _turning(n=5):
+    a = 0.1 * np.arange(n)
+    return np.column_stack([np.cos(a / 2), np.zeros(n), np.zeros(n), np.sin(a / 2)])
+
+
+_NORM3 = _turning(5)
+_NORM3[2] *= 3.0  # one far-from-unit row
+_INFQ = _turning(5)
+_INFQ[3, 0] = np.inf
+
+I12_1 = (
+    "issue 12 item 1: one sample is refused at the door (no kernel read out of bounds)"
+)
+I12_3 = "issue 12 item 3: a time dimension without coordinate is refused"
+I12_4 = "issue 12 item 4: one rule for quaternions everywhere (far-from-unit refused)"
+I12_5 = "issue 12 item 5: non-finite input gets a clear error naming the argument"
+I12_12 = (
+    "issue 12 item 12: say that no sample falls in the window, not 'do not overlap'"
+)
+I12_13 = "issue 12 item 13: ICP validates its arguments at the door"
+I11_1Q = (
+    "issue 11 item 1: accessor qinterp raises NotImplementedError like the reference"
+)
+I11_1R = (
+    "issue 11 item 1: the registry supports del / item assignment like the reference"
+)
+I11_1D = (
+    "issue 11 item 1: registering the same frame object twice raises like the reference"
+)
+PROBE = "hardening probe (not in an issue yet): "
+
+# one row per line group reads as a table; keep the formatter out
+# fmt: off
+CASES: list[Case] = [
+    # -- ReferenceFrame construction ----------------------------------------
+    Case("rf-translation-rows", RF, ("f", "world"),
+         {"translation": np.zeros((5, 3)), "timestamps": np.arange(4.0)},
+         ValueError, r"translation must have shape \(4, 3\), got \(5, 3\)"),
+    Case("rf-rotation-rows", RF, ("f", "world"),
+         {"rotation": np.tile(Q1, (3, 1)), "timestamps": np.arange(4.0)},
+         ValueError, r"rotation must have shape \(4, 4\)"),
+    Case("rf-translation-length", RF, ("f", "world"), {"translation": np.zeros(4)},
+         ValueError, r"translation must have shape \(3,\)"),
+    Case("rf-rotation-length", RF, ("f", "world"), {"rotation": np.zeros(3)},
+         ValueError, r"rotation must have shape \(4,\)"),
+    Case("rf-moving-without-timestamps", RF, ("f", "world"),
+         {"translation": np.zeros((4, 3))}, ValueError, "needs timestamps"),
+    Case("rf-timestamps-2d", RF, ("f", "world"),
+         {"translation": np.zeros((4, 3)), "timestamps": np.zeros((4, 1))},
+         ValueError, "one-dimensional"),
+    Case("rf-empty", RF, ("f", "world"),
+         {"translation": np.zeros((0, 3)), "timestamps": np.zeros(0)},
+         ValueError, "must not be empty"),
+    Case("rf-static-translation-nan", RF, ("f", "world"),
+         {"translation": [0.0, np.nan, 0.0]}, ValueError,
+         r"translation\[1\] is not finite"),
+    Case("rf-static-translation-inf", RF, ("f", "world"),
+         {"translation": [0.0, 0.0, -np.inf]}, ValueError,
+         r"translation.*not finite"),
+    Case("rf-static-rotation-inf", RF, ("f", "world"),
+         {"rotation": [np.inf, 0, 0, 0]}, ValueError, r"rotation.*not finite"),
+    Case("rf-moving-translation-inf-row", RF, ("f", "world"),
+         {"translation": np.vstack([np.zeros((3, 3)), INF3]),
+          "timestamps": np.arange(4.0)},
+         ValueError, r"translation\[3\].*not finite"),
+    Case("rf-moving-rotation-inf-row", RF, ("f", "world"),
+         {"rotation": _INFQ, "timestamps": np.arange(5.0)},
+         ValueError, r"rotation\[3\].*not finite"),
+    Case("rf-translation-strings", RF, ("f", "world"),
+         {"translation": ["a", "b", "c"]}, ValueError, "translation must be numeric"),
+    Case("rf-rotation-strings", RF, ("f", "world"),
+         {"rotation": ["a", "b", "c", "d"]}, ValueError, "rotation must be numeric"),
+    Case("rf-timestamps-nan", RF, ("f", "world"),
+         {"translation": np.zeros((4, 3)),
+          "timestamps": np.array([0.0, 1.0, np.nan, 3.0])},
+         ValueError, r"timestamps\[2\] is nan"),
+    Case("rf-timestamps-inf", RF, ("f", "world"),
+         {"translation": np.zeros((4, 3)),
+          "timestamps": np.array([0.0, np.inf, 2.0, 3.0])},
+         ValueError, r"timestamps\[1\] is inf"),
+    Case("rf-timestamps-decreasing", RF, ("f", "world"),
+         {"translation": np.zeros((4, 3)), "timestamps": [0.0, 2.0, 1.0, 3.0]},
+         ValueError, r"strictly increasing.*timestamps\[2\]"),
+    Case("rf-timestamps-duplicate", RF, ("f", "world"),
+         {"translation": np.zeros((4, 3)), "timestamps": [0.0, 1.0, 1.0, 3.0]},
+         ValueError, r"timestamps\[2\] = 1.0 is a duplicate"),
+    Case("rf-timestamps-nat", RF, ("f", "world"),
+         {"translation": np.zeros((4, 3)),
+          "timestamps": np.array(["2020-01-01", "NaT", "2020-01-03", "2020-01-04"],
+                                 dtype="datetime64[ns]")},
+         ValueError, r"timestamps\[1\] is NaT"),
+    Case("rf-timestamps-strings", RF, ("f", "world"),
+         {"translation": np.zeros((4, 3)), "timestamps": np.array(list("abcd"))},
+         ValueError, "numeric or datetime64"),
+    Case("rf-zero-quaternion", RF, ("f", "world"), {"rotation": [0.0, 0, 0, 0]},
+         ValueError, "zero quaternion"),
+    Case("rf-quaternion-norm-1.2", RF, ("f", "world"), {"rotation": [1.2, 0, 0, 0]},
+         ValueError, "norm 1.2; rotations must be unit quaternions"),
+    Case("rf-moving-quaternion-norm-0.5", RF, ("f", "world"),
+         {"rotation": _q_rows([1, 0, 0, 0], [0.5, 0, 0, 0]), "timestamps": [0.0, 1.0]},
+         ValueError, r"rotation\[1\] is of norm 0.5"),
+    Case("rf-parent-unknown", RF, ("f", "wordl"), {}, ValueError,
+         "parent: frame 'wordl'.*did you mean 'world'"),
+    Case("rf-parent-wrong-type", RF, ("f", 3.5), {}, TypeError, "parent"),
+    Case("rf-from-rotation-matrix-not-orthogonal", "ReferenceFrame.from_rotation_matrix",
+         (np.array([[1.0, 0, 0], [0, 2, 0], [0, 0, 1]]), "world"), {}, ValueError,
+         "orthogonal|rotation matrix|mat"),
+    Case("rf-from-rotation-matrix-reflection", "ReferenceFrame.from_rotation_matrix",
+         (np.diag([1.0, 1.0, -1.0]), "world"), {}, ValueError,
+         "determinant|reflection|proper|rotation matrix"),
+    Case("rf-from-rotation-matrix-shape", "ReferenceFrame.from_rotation_matrix",
+         (np.eye(2), "world"), {}, ValueError, r"3, 3|\(3, 3\)|3x3"),
+    Case("rf-from-dataset-missing-variable", from_dataset, (), {"translation": "pos"},
+         ValueError, "'pos'"),
+    Case("rf-from-dataset-missing-time", from_dataset, (), {"timestamps": "t"},
+         ValueError, "'t'"),
+    # -- registry ------------------------------------------------------------
+    Case("register-duplicate-name", "register_frame", ("moving",), {"parent": "world"},
+         ValueError, "'moving' is already registered; pass update=True"),
+    Case("register-without-name", lambda: rbm.ReferenceFrame().register(), (), {},
+         ValueError, "without a name"),
+    Case("register-parent-unknown", "register_frame", ("x",), {"parent": "wordl"},
+         ValueError, "parent: frame 'wordl'"),
+    Case("deregister-unknown", "deregister_frame", ("nope",), {}, ValueError,
+         "'nope' not found"),
+    Case("find-frame-unknown", "find_frame", ("world/nope",), {}, ValueError, "nope"),
+    Case("registry-del-unknown", registry_del, ("nope",), {}, KeyError, "nope"),
+    Case("registry-set-not-a-frame", registry_set, ("x", 3), {}, TypeError,
+         "ReferenceFrame"),
+    Case("register-same-object-twice", register_twice, ("twice",), {}, ValueError,
+         "'twice' is already registered"),
+    # -- lookups -------------------------------------------------------------
+    Case("lookup-unknown-frame", "lookup_transform", ("haed", "world"), {},
+         ValueError, r"'haed' not found in registry"),
+    Case("lookup-unknown-into", "lookup_transform", ("moving", "wrold"), {},
+         ValueError, "'wrold'.*did you mean 'world'"),
+    Case("lookup-frame-wrong-type", "lookup_transform", (3, "world"), {}, TypeError,
+         "ReferenceFrame or the name"),
+    Case("lookup-different-trees", "lookup_transform", ("moving", "other_root"), {},
+         ValueError, "different trees"),
+    Case("lookup-time-string", "lookup_transform", ("moving", "world"),
+         {"time": "soon"}, ValueError, "time"),
+    Case("lookup-time-nan", "lookup_transform", ("moving", "world"),
+         {"time": np.nan}, ValueError, "time"),
+    Case("lookup-pose-unknown-reference", "lookup_pose", ("moving", "wrld"), {},
+         ValueError, "'wrld'"),
+    Case("lookup-twist-mode", "lookup_twist", ("moving", "world"), {"mode": "euler"},
+         ValueError, "mode must be 'quaternion' or 'rotation_vector'"),
+    Case("lookup-twist-cutoff-above-1", "lookup_twist", ("moving", "world"),
+         {"cutoff": 2.0}, ValueError, r"cutoff.*\(0, 1\)"),
+    Case("lookup-twist-cutoff-too-few-samples", "lookup_twist", ("moving", "world"),
+         {"cutoff": 0.5}, ValueError, "cutoff: the low-pass filter needs more than"),
+    Case("lookup-twist-outlier-negative", "lookup_twist", ("moving", "world"),
+         {"outlier_thresh": -1.0}, ValueError, "outlier_thresh must be a non-negative"),
+    Case("lookup-twist-outlier-string", "lookup_twist", ("moving", "world"),
+         {"outlier_thresh": "big"}, ValueError, "outlier_thresh"),
+    Case("lookup-twist-represent-in-unknown", "lookup_twist", ("moving", "world"),
+         {"represent_in": "nope"}, ValueError, "'nope'"),
+    Case("lookup-linear-velocity-one-sample", "lookup_linear_velocity",
+         ("one", "world"), {}, ValueError, "at least 2 samples"),
+    Case("lookup-angular-velocity-one-sample", "lookup_angular_velocity",
+         ("one", "world"), {}, ValueError, "at least 2 samples"),
+    Case("transform-angular-velocity-one-sample-frame", "transform_angular_velocity",
+         (np.zeros((1, 3)), "world", "one"), {"timestamps": [0.0]}, ValueError,
+         "at least 2 samples"),
+    Case("lookup-twist-one-sample", "lookup_twist", ("one", "world"), {}, ValueError,
+         "at least 2 samples"),
+    Case("lookup-no-sample-in-window", "lookup_transform", ("moving", "short"), {},
+         ValueError, r"no sample|no timestamp|none of the \d+ samples|falls? (with)?in"),
+    Case("lookup-velocity-no-sample-in-window", "lookup_linear_velocity",
+         ("moving", "short"), {}, ValueError,
+         r"no sample|no timestamp|none of the \d+ samples|falls? (with)?in"),
+    Case("frame-lookup-transform-unknown", frame_method,
+         ("moving", "lookup_transform", "nope"), {}, ValueError, "'nope'"),
+    # -- transforms ----------------------------------------------------------
+    Case("points-unknown-into", "transform_points", (np.zeros(3), "wrld", "static"),
+         {}, ValueError, "into: frame 'wrld'"),
+    Case("points-unknown-outof", "transform_points", (np.zeros(3), "world", "statc"),
+         {}, ValueError, "outof: frame 'statc'"),
+    Case("points-last-axis-4", "transform_points", (np.zeros((2, 4)), "world", "static"),
+         {}, ValueError, "length 3 along axis -1"),
+    Case("points-axis-out-of-range", "transform_points",
+         (np.zeros((2, 3)), "world", "static"), {"axis": 2}, ValueError,
+         "axis=2 is out of range"),
+    Case("points-axis-not-int", "transform_points",
+         (np.zeros((2, 3)), "world", "static"), {"axis": 1.5}, ValueError, "axis"),
+    Case("points-strings", "transform_points", (np.array(list("abc")), "world", "static"),
+         {}, ValueError, "arr must be numeric"),
+    Case("points-timestamps-decreasing", "transform_points",
+         (np.zeros((4, 3)), "world", "moving"), {"timestamps": [0.0, 1.0, 3.0, 2.0]},
+         ValueError, r"timestamps\[3\] = 2.0 is earlier than timestamps\[2\] = 3.0"),
+    Case("points-timestamps-duplicate", "transform_points",
+         (np.zeros((4, 3)), "world", "moving"), {"timestamps": [0.0, 0.0, 3.0, 4.0]},
+         ValueError, r"timestamps\[1\] = 0.0 is a duplicate"),
+    Case("points-timestamps-length", "transform_points",
+         (np.zeros((4, 3)), "world", "moving"), {"timestamps": [0.0, 1.0, 2.0]},
+         ValueError, "has 3 entries but the data has 4 samples"),
+    Case("points-timestamps-nan", "transform_points",
+         (np.zeros((4, 3)), "world", "moving"),
+         {"timestamps": [np.nan, 1.0, 2.0, 3.0]}, ValueError, r"timestamps\[0\] is nan"),
+    Case("points-no-overlap", "transform_points", (np.zeros((5, 3)), "world", "moving"),
+         {"timestamps": np.arange(20.0, 25.0)}, ValueError,
+         r"do not overlap.*frame 'moving': 0.0 to 9.0"),
+    Case("points-time-axis-out-of-range", "transform_points",
+         (np.zeros((4, 3)), "world", "moving"),
+         {"timestamps": np.arange(4.0), "time_axis": 3}, ValueError, "time_axis"),
+    Case("points-inf", "transform_points", (INF3[None], "world", "static"), {},
+         ValueError, r"arr.*not finite"),
+    Case("vectors-inf", "transform_vectors", (INF3[None], "world", "static"), {},
+         ValueError, r"arr.*not finite"),
+    Case("points-moving-inf", "transform_points", (np.vstack([np.zeros((3, 3)), INF3]),
+         "world", "moving"), {"timestamps": np.arange(4.0)}, ValueError,
+         r"arr.*not finite"),
+    Case("quaternions-norm-2", "transform_quaternions",
+         (_q_rows([1, 0, 0, 0], [2, 0, 0, 0]), "world", "static"), {}, ValueError,
+         r"arr\[1\] is of norm 2"),
+    Case("quaternions-last-axis-3", "transform_quaternions",
+         (np.zeros((2, 3)), "world", "static"), {}, ValueError,
+         "length 4 along axis -1"),
+    Case("quaternions-inf", "transform_quaternions",
+         (_q_rows([np.inf, 0, 0, 0]), "world", "static"), {}, ValueError,
+         r"arr.*not finite"),
+    Case("angular-velocity-what", "transform_angular_velocity",
+         (np.zeros((4, 3)), "world", "moving"),
+         {"what": "nonsense", "timestamps": np.arange(4.0)}, ValueError,
+         "what must be one of"),
+    Case("linear-velocity-what", "transform_linear_velocity",
+         (np.zeros((4, 3)), "world", "moving"),
+         {"what": "nonsense", "timestamps": np.arange(4.0)}, ValueError,
+         "what must be one of"),
+    Case("angular-velocity-inf", "transform_angular_velocity",
+         (INF3[None], "world", "static"), {}, ValueError, r"arr.*not finite"),
+    Case("dataarray-time-without-coordinate", dataarray_points, (),
+         {"coords": {}, "timestamps": "time"}, ValueError,
+         r"time.*(no coordinate|coordinate)"),
+    Case("dataarray-timestamps-unknown-coordinate", dataarray_points, (),
+         {"timestamps": "stamp"}, ValueError, "'stamp'"),
+    Case("dataarray-dim-unknown", dataarray_points, (), {"dim": "xyz"}, ValueError,
+         "'xyz'"),
+    Case("coordinates-into-unknown", "transform_coordinates", (np.ones(3), "bogus"),
+         {"outof": "cartesian"}, ValueError, "'bogus'"),
+    Case("coordinates-outof-unknown", "transform_coordinates", (np.ones(3), "polar"),
+         {"outof": "bogus"}, ValueError, "'bogus'"),
+    Case("coordinates-wrong-length", "transform_coordinates",
+         (np.ones(4), "spherical"), {"outof": "cartesian"}, ValueError,
+         r"length 3|\b3\b"),
+    # -- estimators ----------------------------------------------------------
+    Case("linvel-no-timestamps", "estimate_linear_velocity", (np.zeros((4, 3)),), {},
+         ValueError, "timestamps"),
+    Case("linvel-timestamps-decreasing", "estimate_linear_velocity",
+         (np.zeros((4, 3)),), {"timestamps": [0.0, 2.0, 1.0, 3.0]}, ValueError,
+         "strictly increasing"),
+    Case("linvel-timestamps-length", "estimate_linear_velocity", (np.zeros((4, 3)),),
+         {"timestamps": [0.0, 1.0]}, ValueError, r"one entry per sample \(4\)"),
+    Case("linvel-timestamps-nan", "estimate_linear_velocity", (np.zeros((4, 3)),),
+         {"timestamps": [0.0, 1.0, np.nan, 3.0]}, ValueError, "timestamps must be finite"),
+    Case("linvel-timestamps-strings", "estimate_linear_velocity", (np.zeros((4, 3)),),
+         {"timestamps": np.array(list("abcd"))}, ValueError,
+         "timestamps must be numbers or datetime64"),
+    Case("linvel-cutoff-1.5", "estimate_linear_velocity", (np.zeros((40, 3)),),
+         {"timestamps": np.arange(40.0), "cutoff": 1.5}, ValueError, r"cutoff.*\(0, 1\)"),
+    Case("linvel-cutoff-too-few", "estimate_linear_velocity", (np.zeros((10, 3)),),
+         {"timestamps": np.arange(10.0), "cutoff": 0.5}, ValueError,
+         "cutoff: the low-pass filter needs more than"),
+    Case("linvel-outlier-negative", "estimate_linear_velocity", (np.zeros((4, 3)),),
+         {"timestamps": np.arange(4.0), "outlier_thresh": -1}, ValueError,
+         "outlier_thresh must be a non-negative"),
+    Case("linvel-one-sample", "estimate_linear_velocity", (np.zeros((1, 3)),),
+         {"timestamps": [0.0]}, ValueError, "at least 2 samples"),
+    Case("linvel-dim-with-ndarray", "estimate_linear_velocity", (np.zeros((4, 3)), "x"),
+         {"timestamps": np.arange(4.0)}, ValueError,
+         "dim can only be given when arr is a DataArray"),
+    Case("linvel-inf", "estimate_linear_velocity",
+         (np.vstack([np.zeros((3, 3)), INF3]),), {"timestamps": np.arange(4.0)},
+         ValueError, r"arr.*not finite"),
+    Case("angvel-one-sample", "estimate_angular_velocity", (Q1[None],),
+         {"timestamps": [0.0]}, ValueError, "at least 2 samples"),
+    Case("angvel-one-sample-datetime", "estimate_angular_velocity", (Q1[None],),
+         {"timestamps": np.array(["2020-01-01"], dtype="datetime64[ns]")}, ValueError,
+         "at least 2 samples"),
+    Case("angvel-zero-quaternion", "estimate_angular_velocity",
+         (_q_rows([1, 0, 0, 0], [0, 0, 0, 0], [1, 0, 0, 0]),),
+         {"timestamps": np.arange(3.0)}, ValueError, "zero quaternion"),
+    Case("angvel-norm-3-row", "estimate_angular_velocity", (_NORM3,),
+         {"timestamps": np.arange(5.0)}, ValueError, r"arr\[2\] is of norm 3"),
+    Case("angvel-inf-row", "estimate_angular_velocity", (_INFQ,),
+         {"timestamps": np.arange(5.0)}, ValueError, r"arr\[3\].*not finite"),
+    Case("angvel-axis-length-3", "estimate_angular_velocity", (np.zeros((4, 3)),),
+         {"timestamps": np.arange(4.0)}, ValueError, "length 4 .*along axis"),
+    Case("angvel-mode", "estimate_angular_velocity", (_turning(),),
+         {"timestamps": np.arange(5.0), "mode": "euler"}, ValueError,
+         "mode must be 'quaternion' or 'rotation_vector'"),
+    Case("shortest-arc-nan", "shortest_arc_rotation", (NAN3, [0.0, 1.0, 0.0]), {},
+         ValueError, r"v1.*not finite"),
+    Case("shortest-arc-inf-v2", "shortest_arc_rotation", ([1.0, 0, 0], INF3), {},
+         ValueError, r"v2.*not finite"),
+    Case("shortest-arc-zero", "shortest_arc_rotation", ([0.0, 0, 0], [0.0, 1, 0]), {},
+         ValueError, "v1.*zero"),
+    Case("shortest-arc-length-4", "shortest_arc_rotation",
+         (np.ones(4), np.ones(4)), {}, ValueError, "length 3"),
+    Case("best-fit-rotation-shapes", "best_fit_rotation", (PTS, PTS[:-1]), {},
+         ValueError, r"v1.*v2|shape"),
+    Case("best-fit-rotation-nan", "best_fit_rotation",
+         (np.vstack([PTS, NAN3]), np.vstack([PTS, PTS[:1]])), {}, ValueError,
+         r"v1.*finite"),
+    Case("best-fit-transform-inf", "best_fit_transform",
+         (PTS, np.vstack([PTS[:-1], INF3])), {}, ValueError, r"v2.*finite"),
+    Case("best-fit-transform-length-2", "best_fit_transform",
+         (np.zeros((5, 2)), np.zeros((5, 2))), {}, ValueError, "length 3"),
+    Case("icp-init-nan", "iterative_closest_point", (PTS, PTS),
+         {"init_transform": (NAN3, Q1)}, ValueError, r"init_transform.*not finite"),
+    Case("icp-init-rotation-zero", "iterative_closest_point", (PTS, PTS),
+         {"init_transform": (np.zeros(3), np.zeros(4))}, ValueError,
+         r"init_transform.*zero quaternion"),
+    Case("icp-init-wrong-shape", "iterative_closest_point", (PTS, PTS),
+         {"init_transform": (np.zeros(2), Q1)}, ValueError, "init_transform"),
+    Case("icp-max-iterations-nan", "iterative_closest_point", (PTS, PTS),
+         {"max_iterations": np.nan}, ValueError, "max_iterations"),
+    Case("icp-max-iterations-negative", "iterative_closest_point", (PTS, PTS),
+         {"max_iterations": -3}, ValueError, "max_iterations"),
+    Case("icp-max-iterations-fraction", "iterative_closest_point", (PTS, PTS),
+         {"max_iterations": 2.5}, ValueError, "max_iterations"),
+    Case("icp-tolerance-nan", "iterative_closest_point", (PTS, PTS),
+         {"tolerance": np.nan}, ValueError, "tolerance"),
+    Case("icp-tolerance-negative", "iterative_closest_point", (PTS, PTS),
+         {"tolerance": -1.0}, ValueError, "tolerance"),
+    Case("icp-nan-points", "iterative_closest_point", (np.vstack([PTS, NAN3]), PTS),
+         {}, ValueError, r"v1.*finite"),
+    # -- quaternion utilities -------------------------------------------------
+    Case("euler-roll-nan", "from_euler_angles", (), {"roll": np.nan}, ValueError,
+         r"roll.*not finite"),
+    Case("euler-rpy-inf", "from_euler_angles", ([0.0, np.inf, 0.0],), {}, ValueError,
+         r"rpy.*not finite"),
+    Case("euler-rpy-and-roll", "from_euler_angles", ([0.0, 0, 0],), {"roll": 1.0},
+         ValueError, "rpy.*roll|roll.*rpy"),
+    Case("euler-rpy-length", "from_euler_angles", ([0.0, 0],), {}, ValueError,
+         r"rpy.*length 3|rpy.*3"),
+    Case("euler-order", "from_euler_angles", ([0.0, 0, 0],), {"order": "abc"},
+         ValueError, "order"),
+    Case("qinv-length-3", "qinv", (np.zeros(3),), {}, ValueError, "length 4"),
+    Case("qmul-no-arguments", "qmul", (), {}, ValueError, "at least"),
+    Case("qmul-shapes", "qmul", (np.tile(Q1, (2, 1)), np.tile(Q1, (3, 1))), {},
+         ValueError, r"broadcast|shape"),
+    Case("qmean-zero", "qmean", (_q_rows([1, 0, 0, 0], [0, 0, 0, 0]),), {}, ValueError,
+         "zero quaternion"),
+    Case("qmean-inf", "qmean", (_INFQ,), {}, ValueError, r"q.*not finite"),
+    Case("qinterp-norm-3-row", "qinterp", (_NORM3, np.arange(5.0), [1.5]), {},
+         ValueError, r"q\[2\] is of norm 3"),
+    Case("qinterp-t-in-decreasing", "qinterp",
+         (_turning(3), [0.0, 2.0, 1.0], [0.5]), {}, ValueError, "t_in"),
+    Case("qinterp-t-in-length", "qinterp", (_turning(3), [0.0, 1.0], [0.5]), {},
+         ValueError, "t_in"),
+    Case("qinterp-t-out-nan", "qinterp", (_turning(3), [0.0, 1.0, 2.0], [np.nan]), {},
+         ValueError, "t_out"),
+    Case("qinterp-inf", "qinterp", (_INFQ, np.arange(5.0), [1.5]), {}, ValueError,
+         r"q\[3\].*not finite"),
+    Case("rotate-vectors-v-length", "rotate_vectors", (Q1, np.zeros(4)), {},
+         ValueError, r"v.*length 3"),
+    Case("rotate-vectors-zero-q", "rotate_vectors", (np.zeros(4), np.ones(3)), {},
+         ValueError, "zero quaternion"),
+    Case("rotate-vectors-inf", "rotate_vectors", (Q1, INF3), {}, ValueError,
+         r"v.*not finite"),
+    Case("accessor-qinterp-two-dims", accessor_qinterp, (),
+         {"time": [0.5], "quaternion_axis": ["w"]}, NotImplementedError,
+         "single dimension|one dimension"),
+    Case("accessor-qinterp-2d-time", accessor_qinterp, (),
+         {"time": np.zeros((2, 2))}, NotImplementedError, "one-dimensional"),
+    Case("accessor-qinterp-unknown-dim", accessor_qinterp, (), {"stamp": [0.5]},
+         ValueError, "'stamp'"),
+    # -- coordinate systems ---------------------------------------------------
+    Case("cartesian-to-polar-length-3", "cartesian_to_polar", (np.ones(3),), {},
+         ValueError, "length 2"),
+    Case("polar-to-cartesian-length-3", "polar_to_cartesian", (np.ones(3),), {},
+         ValueError, "length 2"),
+    Case("cartesian-to-spherical-length-2", "cartesian_to_spherical", (np.ones(2),), {},
+         ValueError, "length 3"),
+    Case("spherical-to-cartesian-axis", "spherical_to_cartesian", (np.ones(3),),
+         {"axis": 1}, ValueError, "axis"),
+    Case("cartesian-to-spherical-inf", "cartesian_to_spherical", (INF3,), {},
+         ValueError, r"arr.*not finite"),
+    # -- conversions and Transform --------------------------------------------
+    Case("quaternion-from-matrix-scaled", "quaternion_from_matrix", (2 * np.eye(3),),
+         {}, ValueError, "orthogonal|rotation matri"),
+    Case("quaternion-from-matrix-shape", "quaternion_from_matrix", (np.eye(4),), {},
+         ValueError, r"3, 3"),
+    Case("matrix-from-quaternion-zero", "matrix_from_quaternion", (np.zeros(4),), {},
+         ValueError, "zero quaternion|norm 0"),
+    Case("matrix-from-quaternion-nan", "matrix_from_quaternion",
+         (np.array([np.nan, 0, 0, 0]),), {}, ValueError, "not finite"),
+    Case("quaternion-from-rotation-vector-length", "quaternion_from_rotation_vector",
+         (np.zeros(4),), {}, ValueError, "length 3|3"),
+    Case("quaternion-from-axis-angle-zero-axis", "quaternion_from_axis_angle",
+         (np.zeros(3), 1.0), {}, ValueError, "axis"),
+    Case("quaternion-from-euler-order", "quaternion_from_euler", (np.zeros(3), "xyw"),
+         {}, ValueError, "order"),
+    Case("euler-from-quaternion-order", "euler_from_quaternion", (Q1, "xxz"), {},
+         ValueError, "order"),
+    Case("homogeneous-from-transform-translation", "homogeneous_from_transform",
+         (np.zeros(2), Q1), {}, ValueError, "translation"),
+    Case("transform-from-homogeneous-last-row", "transform_from_homogeneous",
+         (np.ones((4, 4)),), {}, ValueError, "last row|bottom row|homogeneous|0, 0, 0, 1"),
+    Case("Transform-translation-length", "Transform", (np.zeros(2),), {}, ValueError,
+         "translation"),
+    Case("Transform-rotation-zero", "Transform", (np.zeros(3), np.zeros(4)), {},
+         ValueError, "zero quaternion"),
+    Case("Transform-apply-length", transform_method, ("apply", np.zeros(4)), {},
+         ValueError, "length 3"),
+    # -- ros.Transformer (tf2-like buffer) -------------------------------------
+    Case("transformer-cache-time-negative", new_transformer, (), {"cache_time": -1.0},
+         ValueError, "cache_time must be >= 0"),
+    Case("transformer-unknown-target", transformer,
+         ("lookup_transform", "wrld", "static"), {}, ValueError,
+         "target_frame 'wrld' does not exist"),
+    Case("transformer-unknown-source", transformer,
+         ("lookup_transform", "world", "statik"), {}, ValueError,
+         "source_frame 'statik' does not exist"),
+    Case("transformer-quaternion-zero", transformer,
+         ("transform_quaternion", np.zeros(4), "world", "static"), {}, ValueError,
+         "zero quaternion"),
+    Case("transformer-point-length", transformer,
+         ("transform_point", (1.0, 2.0), "world", "static"), {}, ValueError, "p|point"),
+    Case("transformer-set-transform-shapes", transformer,
+         ("set_transform", np.zeros((3, 3)), np.tile(Q1, (2, 1)), "world", "x"),
+         {"time": [0.0, 1.0, 2.0]}, ValueError, r"\(3, 3\) and \(3, 4\)"),
+    Case("transformer-set-transform-time-nan", transformer,
+         ("set_transform", np.zeros(3), Q1, "world", "x"), {"time": np.nan},
+         ValueError, "time must be finite"),
+    # -- files: OptiTrack, netCDF, rosbag writer ----------------------------------
+    Case("optitrack-missing-file", in_temp_folder, (optitrack_in, "nope.csv"), {},
+         FileNotFoundError, "nope.csv"),
+    Case("optitrack-not-an-export", in_temp_folder, (optitrack_in, "x.csv"),
+         {"files": {"x.csv": "hello,world\n1,2\n"}}, rbm.io.FileFormatError,
+         "x.csv is not an OptiTrack CSV export"),
+    Case("optitrack-import-format", in_temp_folder, (optitrack_in, "x.csv"),
+         {"files": {"x.csv": "a"}, "import_format": "excel"}, ValueError,
+         "import_format must be one of"),
+    Case("netcdf-missing-file", in_temp_folder, (netcdf_in, "nope.nc"), {},
+         FileNotFoundError, "nope.nc"),
+    Case("netcdf-not-netcdf", in_temp_folder, (netcdf_in, "y.nc"),
+         {"files": {"y.nc": "not netcdf"}}, rbm.io.FileFormatError,
+         "y.nc is not a readable netCDF file"),
+    Case("rosbag-writer-storage", in_temp_folder, (write_bag_in, "b", [1.0]),
+         {"storage": "zip"}, ValueError, "storage must be one of"),
+    Case("rosbag-writer-storage-for-ros1", in_temp_folder,
+         (write_bag_in, "b.bag", [1.0]), {"storage": "mcap"}, ValueError,
+         "storage is for ROS2 bags"),
+    Case("rosbag-writer-decreasing-stamps", in_temp_folder,
+         (write_bag_in, "w.bag", [2.0, 1.0]), {}, ValueError, "timestamps"),
+    # -- rosbags ---------------------------------------------------------------
+    Case("rosbag-missing-file", rosbag_reader,
+         ("/nonexistent/nope.bag", "get_topics_and_types"), {}, FileNotFoundError,
+         "nope.bag"),
+]
+# fmt: on

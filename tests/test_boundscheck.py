@@ -1,0 +1,53 @@
+"""The kernels under numba's bounds checking (issue 12, item 1).
+
+Kernels are compiled without bounds checks for speed, so a read past the end
+of an array returns whatever is in memory. ``NUMBA_BOUNDSCHECK=1`` compiles
+every kernel with checks (a fresh ``NUMBA_CACHE_DIR``, so no unchecked build
+is reused): the kernel test suite must pass that way, and public calls at the
+smallest sizes must never read out of bounds.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+TESTS = Path(__file__).resolve().parent
+REPO = TESTS.parent
+
+
+@pytest.fixture(scope="module")
+def checked_env(tmp_path_factory):
+    env = dict(os.environ)
+    env.pop("NUMBA_DISABLE_JIT", None)
+    env["NUMBA_BOUNDSCHECK"] = "1"
+    env["NUMBA_CACHE_DIR"] = str(tmp_path_factory.mktemp("numba-boundscheck"))
+    env["PYTHONPATH"] = os.pathsep.join([str(REPO), str(TESTS)])
+    return env
+
+
+@pytest.mark.slow
+def test_kernel_tests_pass_with_boundscheck(checked_env):
+    kernel_tests = sorted(str(p) for p in TESTS.glob("test_kernels_*.py"))
+    assert kernel_tests, "no kernel tests found"
+    done = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+         "-o", "addopts=", *kernel_tests],
+        cwd=REPO, env=checked_env, capture_output=True, text=True, timeout=1800,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout[-4000:] + done.stderr[-2000:]
+    assert " passed" in done.stdout
+
+
+@pytest.mark.slow
+def test_public_calls_at_small_sizes_stay_in_bounds(checked_env):
+    done = subprocess.run(
+        [sys.executable, str(TESTS / "boundscheck_probe.py")],
+        cwd=REPO, env=checked_env, capture_output=True, text=True, timeout=1800,
+    )  # fmt: skip
+    assert "checked" in done.stdout, done.stderr[-3000:]
+    assert done.returncode == 0, done.stdout

@@ -42,7 +42,14 @@ def is_dask(obj: Any) -> bool:
     module = sys.modules.get("dask.array")
     if module is None:
         return False
-    return isinstance(getattr(obj, "data", obj), module.Array)
+    if isinstance(obj, module.Array):
+        return True
+    xarray = sys.modules.get("xarray")
+    return (
+        xarray is not None
+        and isinstance(obj, xarray.DataArray)
+        and isinstance(obj.data, module.Array)
+    )
 
 
 def filter_halo(order: int, cutoff: float, padlen: int) -> int:

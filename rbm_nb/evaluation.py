@@ -49,6 +49,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._door import kernel_array
+
 __all__ = [
     "POSE_RELATIONS",
     "Trajectory",
@@ -389,10 +391,7 @@ def _statistics(error: np.ndarray) -> dict[str, float]:
 
 
 def _contiguous(traj: Trajectory):
-    return (
-        np.ascontiguousarray(traj.positions, dtype=float),
-        np.ascontiguousarray(traj.orientations, dtype=float),
-    )
+    return kernel_array(traj.positions), kernel_array(traj.orientations)
 
 
 @dataclass
@@ -615,14 +614,17 @@ def _pairs(traj: Trajectory, delta, delta_unit, rel_delta_tol, all_pairs) -> np.
     p, q = _contiguous(traj)
     if delta_unit == "meters":
         if all_pairs:
-            return k.all_path_pairs(p, float(delta), float(delta) * rel_delta_tol)
+            return k.all_path_pairs(
+                p, float(delta), float(float(delta) * rel_delta_tol)
+            )
         return k.path_pairs(p, float(delta))
     radians = np.deg2rad(delta) if delta_unit == "degrees" else float(delta)
     if not 0 <= radians <= np.pi:
         raise ValueError(
             f"delta must be an angle in [0, 180] degrees, got {delta!r} {delta_unit}"
         )
-    tol = radians * rel_delta_tol
+    radians = float(radians)
+    tol = float(radians * rel_delta_tol)
     return (
         k.all_angle_pairs(q, radians, tol) if all_pairs else k.angle_pairs(q, radians)
     )
@@ -734,7 +736,9 @@ def rpe(
     else:
         from ._kernels.evaluation import relative_pose_errors
 
-        trans, angle = relative_pose_errors(*_contiguous(ref), *_contiguous(est), pairs)
+        # the kernel takes writeable C-contiguous int64 pairs
+        index = np.require(pairs, np.int64, ["C", "W"])
+        trans, angle = relative_pose_errors(*_contiguous(ref), *_contiguous(est), index)
         values = _from_parts(rel, trans, angle)
     how = "all pairs" if all_pairs else "consecutive pairs"
     description = f", delta = {delta} {delta_unit}, {how}"

@@ -49,7 +49,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._door import kernel_array
+from ._door import float_array, kernel_array
+from ._validation import normalize_quaternions
 
 __all__ = [
     "POSE_RELATIONS",
@@ -128,6 +129,16 @@ class Trajectory:
         )
 
 
+def _unit(q) -> np.ndarray:
+    """Orientations of a frame or lookup as unit quaternions.
+
+    Frames hand back recorded quaternions as given (|q| - 1 up to the unit
+    tolerance, ~1e-4 in recordings); the error kernels rotate with them, so
+    they get the unit quaternions the frame itself computes with.
+    """
+    return normalize_quaternions(float_array(q, "orientations"), "orientations", True)
+
+
 def _from_frame(value, name: str, frame) -> Trajectory:
     from .frames import ReferenceFrame, _resolve
     from .lookups import lookup_pose
@@ -146,7 +157,7 @@ def _from_frame(value, name: str, frame) -> Trajectory:
     assert isinstance(moving, ReferenceFrame)
     p, q, t = lookup_pose(moving, into, return_timestamps=True)
     return Trajectory(
-        np.asarray(t), np.asarray(p), np.asarray(q), moving.name or name, (moving, into)
+        np.asarray(t), np.asarray(p), _unit(q), moving.name or name, (moving, into)
     )
 
 
@@ -166,7 +177,7 @@ def _from_arrays(t, p, q, name: str) -> Trajectory:
     moving = ReferenceFrame(name, parent=root, translation=p, rotation=q, timestamps=t)
     return Trajectory(
         np.asarray(moving.timestamps), np.asarray(moving.translation),
-        np.asarray(moving.rotation), name, (moving, root),
+        _unit(moving.rotation), name, (moving, root),
     )  # fmt: skip
 
 
@@ -231,7 +242,7 @@ def _match(ref: Trajectory, est: Trajectory) -> tuple[Trajectory, Trajectory]:
     matched_ref = Trajectory(
         times, ref.positions[inside], ref.orientations[inside], ref.name, ref._frames
     )
-    return matched_ref, Trajectory(times, p, q, est.name, est._frames)
+    return matched_ref, Trajectory(times, p, _unit(q), est.name, est._frames)
 
 
 # ---------------------------------------------------------------------------

@@ -415,13 +415,16 @@ def test_from_mesh_signs_a_hollow_shell_and_its_cavity():
 
 def test_from_mesh_signs_every_node_like_the_winding_number():
     # the region shortcut against a winding number at every node
+    from rbm_nb._door import kernel_array
     from rbm_nb._kernels.sdf import winding_numbers
 
     mesh = trimesh.creation.torus(major_radius=0.2, minor_radius=0.06)
     grid = GridSDF.from_mesh(mesh, 0.02)
     axes = [grid.origin[a] + np.arange(grid.shape[a]) * 0.02 for a in range(3)]
     nodes = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-    inside = np.abs(winding_numbers(nodes, np.ascontiguousarray(mesh.triangles))) > 0.5
+    # kernels take what the door makes (trimesh's cached arrays are read-only)
+    triangles = kernel_array(mesh.triangles)
+    inside = np.abs(winding_numbers(nodes, triangles)) > 0.5
     signed = grid.data.reshape(-1)
     np.testing.assert_array_equal((signed < 0)[signed != 0], inside[signed != 0])
     assert inside.sum() > 100

@@ -46,11 +46,15 @@ from __future__ import annotations
 
 import numbers
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ._door import float_array, kernel_array
 from ._validation import normalize_quaternions
+
+if TYPE_CHECKING:  # xarray is imported where a DataArray is made
+    import xarray as xr
 
 __all__ = [
     "POSE_RELATIONS",
@@ -336,7 +340,7 @@ def _align(ref, est, est_full, align, correct_scale, n_to_align):
     if n_to_align is not None:
         if not isinstance(n_to_align, numbers.Integral) or isinstance(n_to_align, bool):
             raise ValueError(f"n_to_align must be an integer, got {n_to_align!r}")
-        if not 3 <= n_to_align <= n:
+        if not 3 <= int(n_to_align) <= n:
             raise ValueError(
                 f"n_to_align must lie between 3 and the {n} matched poses, got {n_to_align}"
             )
@@ -401,7 +405,7 @@ def _statistics(error: np.ndarray) -> dict[str, float]:
     }
 
 
-def _contiguous(traj: Trajectory):
+def _contiguous(traj: Trajectory) -> tuple[np.ndarray, np.ndarray]:
     return kernel_array(traj.positions), kernel_array(traj.orientations)
 
 
@@ -436,7 +440,7 @@ class TrajectoryError:
     metric: str
     pose_relation: str
     unit: str
-    error: object
+    error: xr.DataArray
     stats: dict
     reference: Trajectory
     estimate: Trajectory

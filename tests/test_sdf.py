@@ -79,6 +79,24 @@ def test_distances_match_skrobot_on_the_same_grid(use_abs, fill_value):
     )
 
 
+def test_the_grid_keeps_its_own_copy_and_hands_out_read_only_views():
+    data, origin, resolution = random_grid()
+    grid = GridSDF(data, origin, resolution)
+    centre = grid.bounds.mean(axis=0)
+    before = grid.sdf(centre)
+    assert np.isfinite(before)
+    # the caller's arrays stay theirs: writeable, and changing them later
+    # does not change the grid
+    assert data.flags.writeable and origin.flags.writeable
+    data += 1.0
+    origin += 1.0
+    assert grid.sdf(centre) == before
+    for arr in (grid.data, grid.origin):
+        with pytest.raises(ValueError, match="read-only"):
+            arr[...] = 0.0
+    assert grid.sdf(centre) == before
+
+
 def test_out_of_bounds_is_where_skrobot_fills():
     data, origin, res = random_grid(seed=3)
     pts = query_points(data, origin, res, seed=4)

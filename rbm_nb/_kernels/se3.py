@@ -7,6 +7,8 @@ Conventions shared by every kernel here:
   (n, 6) ordered ``(dx, dy, dz, rx, ry, rz)``, quaternions (n, 4) ``w, x, y, z``;
 * where two operands are given, their first dimension is equal or 1 (that
   row is then reused for every output row, nothing is materialised);
+* quaternion exp/log reuse the scalar helpers of
+  :mod:`rbm_nb._kernels.quaternion` (numpy-quaternion's conventions);
 * nothing is validated: :mod:`rbm_nb.se3` checks shapes and values first.
   Kernels that can meet a singularity return, besides their result, the
   index of the first offending row (-1 when there is none) so that the public

@@ -61,7 +61,6 @@ PENDING = {
         "rbm_nb/frames.py",
         "rbm_nb/plot.py",
         "rbm_nb/quaternions.py",
-        "rbm_nb/rigid_transform.py",
         "rbm_nb/ros/reader.py",
         "rbm_nb/ros/transformer.py",
         "rbm_nb/ros/writer.py",

@@ -724,7 +724,16 @@ def test_content_goes_over_the_comm_after_ready(moving, recorded):
     assert content["type"] == "tracks" and [t["path"] for t in content["tracks"]] == [
         "/rbm/root/frame_late/pose"
     ]
-    # tracks with the same timestamps share one time buffer; decimation on request
+    # decimation only on request
+    coarse = Scene("world", max_samples=4)
+    coarse.add_frame("body")
+    coarse.widget.comm.receive({"type": "ready"})
+    [(content, _)] = custom_messages(coarse.widget)
+    assert content["tracks"][0]["n"] == 4
+    coarse.close()
+    with pytest.raises(ValueError, match="max_samples"):
+        Scene("world", max_samples=1)
+    # tracks with the same timestamps share one time buffer
     state = moving.state
     meta, buffers = state.track_payload(max_samples=4)
     assert [m["n"] for m in meta] == [4, 4]

@@ -57,7 +57,8 @@ def explorer_dashboard(source: str = "auto", *, height: int = 460):
     import ipywidgets as widgets
 
     from . import explorer
-    from .widgets import FrameTree, TimeSeries
+    from .widgets.frame_tree import FrameTree
+    from .widgets.timeseries import TimeSeries
 
     head, left_eye, right_eye, note = explorer.load_head_eye(source)
     explorer.register_head_eye_frames(head, left_eye, right_eye)

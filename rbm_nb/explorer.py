@@ -211,29 +211,18 @@ def explorer_scene(
     return scene
 
 
-def explorer_plot(series: dict, player):
+def explorer_plot(series: dict, player, *, max_points: int | None = None):
     """The time-series plot of the dashboard, following ``player``.
 
     None when :class:`~rbm_nb.widgets.TimeSeries` is not a widget that can
     follow a player in the browser (then the export has no plot).
+    ``max_points`` (per panel) keeps each stretch's extremes and gaps only.
     """
     from .widgets import TimeSeries
 
     if not hasattr(TimeSeries, "_esm"):
         return None
-    return TimeSeries(series, player=player)
-
-
-def thin_series(series: dict, max_samples: int | None) -> dict:
-    """Every series cut to at most ``max_samples`` evenly spaced samples (for exports)."""
-    if max_samples is None:
-        return dict(series)
-    out = {}
-    for name, s in series.items():
-        n = s.sizes["time"]
-        stride = max(int(np.ceil(n / max_samples)), 1)
-        out[name] = s.isel(time=slice(None, None, stride))
-    return out
+    return TimeSeries(series, player=player, max_points=max_points)
 
 
 def write_explorer_html(
@@ -273,8 +262,13 @@ def write_explorer_html(
         bar.set_postfix_str(steps[2])
         scene = explorer_scene()
         player = scene.player()
-        series = thin_series(explorer_series(head, left_eye, right_eye), max_frames)
-        plot = explorer_plot(series, player)
+        # each panel: every stretch's extremes and first gap (saccade peaks
+        # and gaps survive), at most ~max_frames samples
+        plot = explorer_plot(
+            explorer_series(head, left_eye, right_eye),
+            player,
+            max_points=None if max_frames is None else max(int(max_frames), 10),
+        )
         bar.update()
         bar.set_postfix_str(steps[3])
         out = scene.to_html(

@@ -1,20 +1,26 @@
-"""The TimeSeries widget in JupyterLab, in Debian's chromium (playwright).
+"""The dashboard widgets (TimeSeries, FrameTree, Scene, Player) in chromium.
 
-The notebook is written by the test: a plot of two panels (one with a run of
-NaN values) linked to a Player. Checked in the page: the panels render, the
-run of NaN is a break in the line, dragging zooms (the axis range changes and
-reaches the kernel), a click seeks the Player (the kernel sees the new time)
-and the cursor follows the Player's time. Screenshots go to test-artifacts/.
+JupyterLab runs a notebook written by the test: a frame tree and a 3D scene
+of a circling body, a Player, and a plot of two panels (one with a run of NaN
+values). Checked in the page: the panels render and the NaN run is a break in
+the line; dragging and the wheel zoom (the range reaches the kernel); a click
+in the plot seeks the Player (the kernel sees the new time) and moves the 3D
+view; the cursor follows the Player, also while it plays with the kernel
+asleep; selecting in the tree selects in the 3D view. Then the same plot in a
+``to_html`` export, offline. Screenshots go to test-artifacts/.
 """
 
 from __future__ import annotations
 
+import re
+
 import nbformat
+import numpy as np
 import pytest
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
-from browser_support import JupyterLab, png_pixels, save  # noqa: E402
+from browser_support import JupyterLab, changed_pixels, png_pixels, save  # noqa: E402
 
 NAN_RUN = (8.0, 10.0)  # seconds with NaN values in the "wave" panel
 
@@ -22,13 +28,32 @@ SETUP = f"""
 import numpy as np
 import ipywidgets as widgets
 import time
-from rbm_nb.widgets import Player, TimeSeries
+import rbm_nb as rbm
+from rbm_nb.scene import Scene
+from rbm_nb.widgets import FrameTree, TimeSeries
 
 t = np.arange(0.0, 20.0, 0.01)
 wave = np.sin(t)
 wave[(t > {NAN_RUN[0]}) & (t < {NAN_RUN[1]})] = np.nan
 circle = np.c_[np.cos(t), np.sin(t)]
-player = Player(t)
+# a body circling the origin once in 20 s, drawn in 3D
+rbm.register_frame("world")
+angle = 2 * np.pi * t / 20
+rbm.register_frame(
+    "body", parent="world", timestamps=t,
+    translation=np.c_[2 * np.cos(angle), 2 * np.sin(angle), 0.5 + 0 * t],
+    rotation=np.c_[np.cos(angle / 2), 0 * t, 0 * t, np.sin(angle / 2)],
+)
+scene = Scene("world")
+scene.add_frame("world", scale=1.0)
+scene.add_frame("body", scale=0.8)
+scene.add_path("body", color="#ff00ff")
+scene.add_mesh("body", "box", size=(0.6, 0.4, 0.3), color="#00e0e0")
+scene.widget.height = 300
+scene.widget.layout.flex = "1 1 60%"
+player = scene.player()
+tree = FrameTree("world", scene=scene, player=player)
+tree.layout.flex = "0 0 38%"
 plot = TimeSeries(
     {{"wave": (t, wave), "circle": (t, circle, ["cos", "sin"])}},
     player=player, title="test plot", panel_height=160,
@@ -41,7 +66,7 @@ jump = widgets.Button(description="jump to 15 s")
 jump.on_click(lambda _: setattr(player, "time", 15.0))
 busy = widgets.Button(description="keep the kernel busy")
 busy.on_click(lambda _: time.sleep(4))
-widgets.VBox([player, plot, kernel_time, kernel_range, jump, busy])
+widgets.VBox([widgets.HBox([tree, scene.widget]), player, plot, kernel_time, kernel_range, jump, busy])
 """
 
 
@@ -148,6 +173,21 @@ def test_panels_render_with_a_break_at_the_nan_run(dashboard):
     assert inside.sum() == 0, "the NaN run should be a break in the line"
     legend = page.locator(".rbm-ts .u-legend").first.inner_text()
     assert "wave" in legend and "time" in legend
+    # hovering shows the values at the mouse in every panel's legend
+    x1, y1, w1, h1 = over_box(page, 1)
+    page.mouse.move(x1 + 0.25 * w1, y1 + h1 / 2)
+    at = chart(page, 1, f"u.posToVal({0.25 * w1}, 'x')")
+    page.wait_for_timeout(200)
+    circle = page.locator(".rbm-ts .u-legend").nth(1).inner_text()
+    per_px = chart(page, 1, "(u.scales.x.max - u.scales.x.min) / u.over.clientWidth")
+    shown = re.search(r"time\s*(-?[\d.]+) s", circle)
+    cos_value = re.search(r"cos\s*(-?[\d.]+)", circle)
+    assert shown and cos_value, circle
+    # the sample nearest the mouse, its time as the readout prints it
+    assert abs(float(shown.group(1)) - at) <= 2 * per_px
+    assert float(cos_value.group(1)) == pytest.approx(
+        np.cos(float(shown.group(1))), abs=1e-3
+    )
     assert page.locator(".rbm-ts .u-legend").nth(1).inner_text().count("sin") == 1
     assert not page.errors
 
@@ -182,6 +222,7 @@ def test_click_seeks_the_player_and_the_cursor_follows_it(dashboard):
     x, y, w, h = over_box(page, 1)
     per_px = chart(page, 1, "(u.scales.x.max - u.scales.x.min) / u.over.clientWidth")
     target = chart(page, 1, f"u.posToVal({0.3 * w}, 'x')")
+    before_click = png_pixels(page.locator(".rbm-scene canvas").first.screenshot())
     page.mouse.click(x + 0.3 * w, y + 0.9 * h)
     # the double click of the zoom test seeked too: wait for this click's time
     page.wait_for_function(
@@ -194,6 +235,10 @@ def test_click_seeks_the_player_and_the_cursor_follows_it(dashboard):
     )
     label = page.locator(".widget-label", has_text="KERNEL-TIME")
     seen = float(label.inner_text().split()[-1])
+    # the 3D view follows the same Player: the click moved the body
+    page.wait_for_timeout(500)
+    after_click = png_pixels(page.locator(".rbm-scene canvas").first.screenshot())
+    assert changed_pixels(before_click, after_click) > 200
     cursor = page.locator(".rbm-ts-cursor").nth(1)
     left = float(cursor.evaluate("el => parseFloat(el.style.left)"))
     assert abs(left + 1 - 0.3 * w) < 1.5
@@ -212,8 +257,41 @@ def test_click_seeks_the_player_and_the_cursor_follows_it(dashboard):
             .evaluate("el => parseFloat(el.style.left)")
         )
         assert abs(left + 1 - expected) < 1.5
-    save("dashboard_seeked.png", page.locator(".rbm-ts").screenshot())
+    save(
+        "dashboard_seeked.png", page.locator(".jp-OutputArea-output").first.screenshot()
+    )
     assert not page.errors
+
+
+def test_dragging_the_red_line_scrubs_without_zooming(dashboard):
+    page = dashboard
+    x, y, w, h = over_box(page, 0)
+    before = chart(page, 0, "[u.scales.x.min, u.scales.x.max]")
+    line = (
+        float(
+            page.locator(".rbm-ts-cursor").first.evaluate(
+                "el => parseFloat(el.style.left)"
+            )
+        )
+        + 1
+    )
+    target = chart(page, 0, f"u.posToVal({0.2 * w}, 'x')")
+    page.mouse.move(x + line, y + h / 2)
+    page.mouse.down()
+    page.mouse.move(x + 0.5 * (line + 0.2 * w), y + h / 2, steps=5)
+    page.mouse.move(x + 0.2 * w, y + h / 2, steps=5)
+    page.mouse.up()
+    per_px = chart(page, 0, "(u.scales.x.max - u.scales.x.min) / u.over.clientWidth")
+    page.wait_for_function(
+        """([target, tol]) => [...document.querySelectorAll('.widget-label')].some((el) => {
+            const m = el.textContent.match(/KERNEL-TIME (\\S+)/);
+            return m && Math.abs(parseFloat(m[1]) - target) <= tol;
+        })""",
+        arg=[target, 2 * per_px + 1e-3],
+        timeout=30000,
+    )
+    assert chart(page, 0, "[u.scales.x.min, u.scales.x.max]") == before
+    assert abs(cursor_left(page) + 1 - 0.2 * w) < 2.5
 
 
 def cursor_left(page, i=0):
@@ -252,4 +330,72 @@ def test_cursor_follows_play_while_the_kernel_is_busy(dashboard):
     # the plot and the Player print the time the same way
     assert readout[len("t = ") :].split(" s")[0].replace(".", "").isdigit()
     assert " s" in player_readout
+    assert not page.errors
+
+
+def test_selecting_in_the_tree_selects_in_the_3d_view(dashboard):
+    page = dashboard
+    page.locator(".rbm-frame-node", has_text="body").first.click()
+    # the scene's view knows the selection: its follow button names the frame
+    page.locator(".rbm-scene .rbm-follow", has_text="body").wait_for(timeout=30000)
+    details = page.locator(".rbm-frame-details")
+    details.locator("text=pose wrt world").wait_for(timeout=30000)
+    text = details.inner_text()
+    assert "rotation yaw" in text and "quaternion (w, x, y, z)" in text
+    save(
+        "dashboard_selected.png",
+        page.locator(".jp-OutputArea-output").first.screenshot(),
+    )
+    assert not page.errors
+
+
+def test_exported_dashboard_plot_works_offline(page, tmp_path):
+    """The plot in a to_html export: drawn, zooms, seeks the Player, follows play."""
+    import numpy as np
+
+    import rbm_nb as rbm
+    from rbm_nb.scene import Scene
+    from rbm_nb.widgets import TimeSeries
+
+    t = np.arange(0.0, 20.0, 0.01)
+    rbm.register_frame("world")
+    rbm.register_frame(
+        "body",
+        parent="world",
+        timestamps=t,
+        translation=np.c_[np.cos(t / 3), np.sin(t / 3), 0 * t],
+    )
+    wave = np.sin(t)
+    wave[(t > NAN_RUN[0]) & (t < NAN_RUN[1])] = np.nan
+    scene = Scene("world")
+    scene.add_frame("body", scale=0.5)
+    player = scene.player()
+    plot = TimeSeries({"wave": (t, wave)}, player=player)
+    out = scene.to_html(tmp_path / "dashboard.html", series=plot, player=player)
+    plot.close()
+    player.close()
+    scene.close()
+    requests = []
+    page.on("request", lambda r: requests.append(r.url))
+    page.goto(out.as_uri())
+    page.wait_for_function(
+        "document.querySelector('.rbm-ts') && document.querySelector('.rbm-ts').rbmCharts",
+        timeout=60000,
+    )
+    page.wait_for_timeout(300)
+    x, y, w, h = over_box(page, 0)
+    page.mouse.click(x + 0.5 * w, y + h / 2)  # seek to the middle
+    page.wait_for_function(
+        "Math.abs(parseFloat(document.querySelector('.rbm-readout').textContent) - 10) < 0.2",
+        timeout=30000,
+    )
+    start = cursor_left(page)
+    page.click(".rbm-play")
+    page.wait_for_timeout(1000)
+    page.click(".rbm-play")
+    assert cursor_left(page) > start
+    save("export_dashboard.png", page.screenshot(full_page=True))
+    assert all(url.startswith(("file:", "data:", "blob:")) for url in requests), (
+        requests
+    )
     assert not page.errors

@@ -238,3 +238,24 @@ def test_datetime_on_float_data_is_an_error(speed):
         plot.set_time(np.datetime64("2020-01-01"))
     with pytest.raises(ValueError, match="finite"):
         plot.set_time(float("nan"))
+
+
+def test_max_points_keeps_peaks_and_gaps():
+    t = np.arange(0.0, 100.0, 0.001)  # 100k samples
+    v = np.sin(t)
+    v[50_000] = 7.0  # a one-sample spike
+    v[70_000:70_010] = np.nan  # a short gap
+    full = TimeSeries({"v": (t, v)})
+    small = TimeSeries({"v": (t, v)}, max_points=1000)
+    x, y = _decoded(small, 0)
+    assert x.size <= 1000 < _decoded(full, 0)[0].size
+    assert np.all(np.diff(x) > 0)
+    assert np.nanmax(y) == 7.0 and np.nanmin(y) == pytest.approx(-1.0, abs=1e-3)
+    # the NaN run still breaks the line, and no value is invented
+    gap = np.flatnonzero(np.isnan(y[:, 0]))
+    assert gap.size >= 1 and 70.0 <= x[gap[0]] < 70.01
+    index = np.round(x * 1000).astype(int)
+    np.testing.assert_array_equal(x, t[index])  # only real samples are sent
+    np.testing.assert_array_equal(y[:, 0], v[index].astype(np.float32))
+    with pytest.raises(ValueError, match="max_points"):
+        TimeSeries({"v": (t, v)}, max_points=3)

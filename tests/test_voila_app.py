@@ -83,7 +83,9 @@ class Voila:
                     break
             except OSError:
                 if time.monotonic() > deadline:
-                    raise RuntimeError(f"Voila did not start:\n{self.log_text()}") from None
+                    raise RuntimeError(
+                        f"Voila did not start:\n{self.log_text()}"
+                    ) from None
                 time.sleep(0.5)
 
     @property
@@ -121,7 +123,10 @@ def test_the_app_needs_its_token(voila):
             return None
 
     opener = urllib.request.build_opener(NoRedirect)
-    for url in (f"http://127.0.0.1:{voila.port}/", f"http://127.0.0.1:{voila.port}/?token=wrong"):
+    for url in (
+        f"http://127.0.0.1:{voila.port}/",
+        f"http://127.0.0.1:{voila.port}/?token=wrong",
+    ):
         with pytest.raises(urllib.error.HTTPError) as err:
             opener.open(url, timeout=60)
         # sent to the login page instead of running the notebook
@@ -137,8 +142,9 @@ def test_the_app_renders_tree_plot_and_3d_view(browser, voila):
     page.on("pageerror", lambda err: errors.append(str(err)))
 
     def only_voila(route):
-        if f"127.0.0.1:{voila.port}" in route.request.url or route.request.url.startswith(
-            ("data:", "blob:")
+        if (
+            f"127.0.0.1:{voila.port}" in route.request.url
+            or route.request.url.startswith(("data:", "blob:"))
         ):
             route.continue_()
         else:
@@ -171,13 +177,23 @@ def test_the_app_renders_tree_plot_and_3d_view(browser, voila):
         page.locator(".rbm-frame-node", has_text="head").first.click()
         details = page.locator(".rbm-frame-details")
         details.locator("text=yaw").first.wait_for(timeout=30000)
-        assert "yaw 90.00\u00b0, pitch 90.00\u00b0, roll 0.00\u00b0" in details.inner_text()
+        assert (
+            "yaw 90.00\u00b0, pitch 90.00\u00b0, roll 0.00\u00b0"
+            in details.inner_text()
+        )
         assert "quaternion (w, x, y, z) = (0.5, -0.5, 0.5, 0.5)" in details.inner_text()
         page.locator(".rbm-frame-node", has_text="head").first.click()  # unselect
         page.locator(".rbm-frame-node", has_text="t265/tracker").first.click()
         details.locator("text=t265/tracker \u2014 moving").wait_for(timeout=30000)
         # the sample's time as everywhere: seconds from the start · absolute date
         assert "(at 0.000 s \u00b7 2020-02-02 00:27:14.300)" in details.inner_text()
+        # the Player's clock runs in the page: play moves the plot's cursor
+        page.click(".rbm-play")
+        page.wait_for_function(
+            "parseFloat(document.querySelector('.rbm-ts-time').textContent.slice(4)) > 1.0",
+            timeout=30000,
+        )
+        page.click(".rbm-play")
         save("voila_app.png", page.screenshot(full_page=True))
         assert not errors, errors
         # Voila's lab template links Font Awesome's CSS from a CDN (its own

@@ -76,7 +76,8 @@ async function render({ model, el }) {
   readout.className = "rbm-ts-time";
   const hint = document.createElement("span");
   hint.className = "rbm-ts-hint";
-  hint.textContent = "drag/wheel: zoom \u00b7 shift+drag: pan \u00b7 double-click: all \u00b7 click: seek";
+  hint.textContent =
+    "drag/wheel: zoom \u00b7 shift+drag: pan \u00b7 double-click: all \u00b7 click or drag the red line: seek";
   head.append(title, readout, hint);
   const body = document.createElement("div");
   root.append(head, body);
@@ -112,6 +113,13 @@ async function render({ model, el }) {
       model.save_changes();
     }
     placeCursors();
+  }
+
+  // within a few pixels of the red line: a drag there scrubs instead of zooming
+  function nearCursor(u, e) {
+    const x = u.valToPos(currentTime(), "x");
+    const rect = u.over.getBoundingClientRect();
+    return Number.isFinite(x) && Math.abs(e.clientX - rect.left - x) <= 5;
   }
 
   function publishRange(u) {
@@ -163,6 +171,7 @@ async function render({ model, el }) {
     ];
     let panStart = null;
     let downAt = null;
+    let scrubbing = false;
     const opts = {
       width: width(),
       height: height + (last ? 40 : 0),
@@ -193,6 +202,23 @@ async function render({ model, el }) {
           mousedown: (u, targ, handler) => (e) => {
             if (e.button !== 0 || e.target !== targ) return;
             downAt = [e.clientX, e.clientY];
+            if (nearCursor(u, e)) {
+              // drag the red line: scrub the player (and every view it drives)
+              scrubbing = true;
+              const move = (ev) => {
+                const rect = u.over.getBoundingClientRect();
+                seek(u.posToVal(Math.min(Math.max(ev.clientX - rect.left, 0), rect.width), "x"));
+              };
+              const up = () => {
+                document.removeEventListener("mousemove", move);
+                document.removeEventListener("mouseup", up);
+                scrubbing = false;
+                downAt = null;
+              };
+              document.addEventListener("mousemove", move);
+              document.addEventListener("mouseup", up);
+              return;
+            }
             if (e.shiftKey) {
               const { min, max } = u.scales.x;
               panStart = { x: e.clientX, min, max, perPx: (max - min) / u.over.clientWidth };
@@ -246,6 +272,9 @@ async function render({ model, el }) {
     const cursor = document.createElement("div");
     cursor.className = "rbm-ts-cursor";
     u.over.appendChild(cursor);
+    u.over.addEventListener("mousemove", (e) => {
+      u.over.style.cursor = scrubbing || nearCursor(u, e) ? "ew-resize" : "";
+    });
     u.over.addEventListener(
       "wheel",
       (e) => {

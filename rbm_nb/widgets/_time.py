@@ -2,7 +2,8 @@
 
 The notebook layer compares times across objects recorded at different rates,
 so everything is reduced to one float64 axis: seconds (since the epoch for
-datetime64 input). ``kind`` remembers how to print a time back to the user.
+datetime64 input). ``kind`` remembers which it was; the readout itself is
+``_timebase.format_time`` (seconds from the start, then the absolute time).
 """
 
 from __future__ import annotations
@@ -101,15 +102,6 @@ def time_as_seconds(t, kind: str | None = None) -> float:
     if not np.isfinite(value):
         raise ValueError(f"time must be finite, got {t}")
     return value
-
-
-def format_time(seconds: float, kind: str) -> str:
-    """Human readable time: ISO date and milliseconds, or seconds."""
-    if kind == DATETIME:
-        # round, not truncate: float seconds since the epoch carry ~1e-7 s error
-        stamp = np.datetime64(int(round(seconds * 1e3)), "ms")
-        return str(stamp).replace("T", " ")
-    return f"{seconds:.3f} s"
 
 
 def seconds_to_datetime64(seconds: np.ndarray) -> np.ndarray:

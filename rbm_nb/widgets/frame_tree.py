@@ -16,6 +16,7 @@ import html
 import sys
 import threading
 import weakref
+from typing import Any
 
 import ipywidgets as widgets
 import numpy as np
@@ -53,7 +54,7 @@ def frame_info(frame) -> dict:
         unless moving with at least two samples) and ``time_kind``.
     """
     kind = frame_kind(frame)
-    info = {
+    info: dict[str, Any] = {
         "kind": kind,
         "samples": 1,
         "start": None,
@@ -159,8 +160,8 @@ class FrameTree(widgets.VBox):
         self._lock = threading.RLock()
         self._lookup_cache: dict = {}
         self._current: Details = None
-        self._player = None
-        self._scene_widget = None
+        self._player: Any = None  # the linked Player
+        self._scene_widget: Any = None  # the linked Scene's widget
         self._message = widgets.HTML(value="")
         self._rows_box = widgets.VBox(
             [], layout=widgets.Layout(overflow="auto", max_height="360px")

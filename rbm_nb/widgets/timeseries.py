@@ -122,6 +122,32 @@ def _with_gaps(x: np.ndarray, y: np.ndarray, gap: float | None):
     return x, y, gap
 
 
+def _envelope(x: np.ndarray, y: np.ndarray, max_points: int | None):
+    """At most about ``max_points`` rows that keep each bucket's extremes and gaps.
+
+    The rows are cut into buckets of equal count; in each, the rows of every
+    component's minimum and maximum are kept (so peaks such as saccades
+    survive), and the first NaN row (so gaps stay gaps). Returns x, y.
+    """
+    n, k = y.shape
+    if max_points is None or n <= max_points:
+        return x, y
+    buckets = max(1, max_points // (2 * k + 1))
+    size = -(-n // buckets)  # ceil
+    padded = np.full((buckets * size, k), np.nan)
+    padded[:n] = y
+    blocks = padded.reshape(buckets, size, k)
+    missing = np.isnan(blocks)
+    lows = np.where(missing, np.inf, blocks).argmin(axis=1)
+    highs = np.where(missing, -np.inf, blocks).argmax(axis=1)
+    # argmax of an all-False column is 0: the first row, harmless to keep
+    first_nan = missing.argmax(axis=1)
+    offsets = (np.arange(buckets) * size)[:, None]
+    keep = np.concatenate([lows, highs, first_nan], axis=1) + offsets
+    keep = np.unique(keep[keep < n])
+    return x[keep], y[keep]
+
+
 class TimeSeries(anywidget.AnyWidget):
     """Stacked time-series panels with zoom, hover values and click-to-seek.
 
@@ -145,6 +171,10 @@ class TimeSeries(anywidget.AnyWidget):
         Pauses in the timestamps longer than this (seconds) are drawn as gaps.
         Default: ``GAP_FACTOR`` times each panel's median sample interval.
         ``numpy.inf`` joins every pause.
+    max_points : int, optional
+        Send at most about this many samples per panel: each stretch of
+        samples is reduced to its minimum and maximum (per component) and its
+        first gap, so peaks and gaps survive. Default: every sample.
 
     Examples
     --------
@@ -192,6 +222,7 @@ class TimeSeries(anywidget.AnyWidget):
         panel_height: int = 150,
         title: str | None = None,
         gap: float | None = None,
+        max_points: int | None = None,
     ):
         if not isinstance(series, Mapping) or not series:
             raise ValueError(
@@ -202,6 +233,15 @@ class TimeSeries(anywidget.AnyWidget):
             raise ValueError(
                 f"TimeSeries: gap must be a positive number of seconds, got {gap}"
             )
+        if max_points is not None and (
+            isinstance(max_points, bool)
+            or int(max_points) != max_points
+            or max_points < 10
+        ):
+            raise ValueError(
+                f"TimeSeries: max_points must be an integer >= 10, got {max_points!r}"
+            )
+        self._max_points = None if max_points is None else int(max_points)
         if int(panel_height) < 40:
             raise ValueError(
                 f"TimeSeries: panel_height must be >= 40 pixels, got {panel_height}"
@@ -235,6 +275,7 @@ class TimeSeries(anywidget.AnyWidget):
         for s in self._series:
             x = self._base.seconds(s.timestamps, f"timestamps of series {s.label!r}")
             x, y, used = _with_gaps(x, s.values, self._gap)
+            x, y = _envelope(x, y, self._max_points)
             self.gaps.append(used)
             panels.append(
                 {

@@ -555,6 +555,7 @@ function initialize({ model }) {
   model.send({ type: "ready" });
   return () => {
     model.off("msg:custom", onMessage);
+    STORES.delete(model.get("_uid")); // the model is gone: drop its content
   };
 }
 

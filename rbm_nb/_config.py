@@ -22,6 +22,12 @@ from dataclasses import dataclass, field
 from typing import Any, Final, Literal
 
 
+# Switched off by :mod:`rbm_nb._numba_cache` when no folder can hold the
+# cache (read-only install, HOME and temporary folder): read when a kernel is
+# decorated, which happens after that check.
+caching_allowed = True
+
+
 @dataclass(frozen=True)
 class JitOptions:
     """Keyword arguments of ``numba.njit`` for one family of kernels."""
@@ -37,7 +43,7 @@ class JitOptions:
     def as_kwargs(self) -> dict[str, Any]:
         """The options as keyword arguments for ``numba.njit``."""
         kwargs: dict[str, Any] = {
-            "cache": self.cache,
+            "cache": self.cache and caching_allowed,
             "nogil": self.nogil,
             "fastmath": set(self.fastmath)
             if isinstance(self.fastmath, frozenset)
@@ -65,10 +71,6 @@ class JitOptions:
 
 KERNEL: Final = JitOptions()
 VECTOR_KERNEL: Final = JitOptions(fastmath=frozenset({"contract"}), error_model="numpy")
-
-# Kernel modules written before the declared kernels (see rbm_nb._kernels)
-# used ``@njit(**NJIT_OPTIONS)``; the same options as a read-only mapping.
-NJIT_OPTIONS: Final[Mapping[str, Any]] = KERNEL.as_kwargs()
 
 # Quaternions whose norm differs from 1 by less than this are normalised
 # silently (recorded data is stored with ~4-7 significant digits); beyond it the

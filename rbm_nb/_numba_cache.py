@@ -20,6 +20,7 @@ before importing rbm_nb.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import stat
 import tempfile
@@ -53,17 +54,21 @@ def configure() -> None:
     _configured = True
     user_dir = os.environ.get("NUMBA_CACHE_DIR", "")
     if user_dir and _writable(Path(user_dir)):
+        drop_stale_kernels(Path(user_dir))
         return
     if _writable(KERNELS / "__pycache__"):
+        drop_stale_kernels(KERNELS / "__pycache__")
         return
     numba_user_dir = _numba_user_cache_dir()
     if _writable(numba_user_dir):
+        drop_stale_kernels(numba_user_dir)
         return
     tried = [str(KERNELS / "__pycache__"), str(numba_user_dir)]
     if user_dir:
         tried.insert(0, f"NUMBA_CACHE_DIR={user_dir}")
     fallback = _private_temp_dir()
     if fallback is not None:
+        drop_stale_kernels(fallback)
         _set_numba_cache_dir(fallback)
         outcome = f"compiled kernels are cached in {fallback} instead"
     else:
@@ -139,4 +144,49 @@ def _set_numba_cache_dir(folder: Path) -> None:
 def _turn_caching_off() -> None:
     from . import _config
 
-    _config.NJIT_OPTIONS["cache"] = False
+    _config.caching_allowed = False
+
+
+def kernels_fingerprint() -> str:
+    """A hash of every kernel module's source.
+
+    numba keys a cached kernel on its own file only, but kernels inline
+    helpers from other modules (``scalar``, ``quaternion``): after an edit of
+    one of those, the cache of an unchanged module would serve stale code.
+    """
+    digest = hashlib.sha256()
+    for path in sorted(KERNELS.glob("*.py")):
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def drop_stale_kernels(root: Path) -> int:
+    """Delete rbm_nb's cached kernels under ``root`` if the sources changed.
+
+    ``root`` is the folder numba caches into (``_kernels/__pycache__`` or a
+    ``NUMBA_CACHE_DIR``); a stamp file there remembers the fingerprint of
+    the sources the cache was made from. Returns the number of files removed.
+    """
+    stamp = root / "rbm_nb-kernels.sha256"
+    fingerprint = kernels_fingerprint()
+    try:
+        if stamp.read_text() == fingerprint:
+            return 0
+    except OSError:
+        pass
+    removed = 0
+    for path in root.rglob("*.nb[ic]"):
+        # under NUMBA_CACHE_DIR numba mirrors the sources' path: keep to ours
+        parts = path.parent.parts
+        if root == KERNELS / "__pycache__" or ("rbm_nb" in parts and "_kernels" in parts):
+            try:
+                path.unlink()
+                removed += 1
+            except OSError:
+                pass
+    try:
+        stamp.write_text(fingerprint)
+    except OSError:
+        pass
+    return removed

@@ -71,10 +71,24 @@ def series(rec, frames):
 
 
 def summary(rec, frames):
+    """Per recording: mean walking speed, gaze elevation and eye-in-world speed.
+
+    The eye's angular velocity in the world (the spline through the eye's
+    quaternions, composed with the head's) is the costly part, as in a real
+    fixation/saccade analysis.
+    """
     s = series(rec, frames)
     elevation = np.degrees(np.arcsin(s.gaze.sel(cartesian_axis="y")))
+    eye_in_world = rbm.lookup_angular_velocity(
+        frames["left_eye"], frames["world"], as_dataarray=True
+    )
+    eye_speed = np.degrees(np.sqrt((eye_in_world**2).sum("cartesian_axis")))
     return xr.Dataset(
-        {"mean_speed": s.head_speed.mean(), "mean_elevation": elevation.mean()}
+        {
+            "mean_speed": s.head_speed.mean(),
+            "mean_elevation": elevation.mean(),
+            "median_eye_speed": eye_speed.median(),
+        }
     )
 
 

@@ -133,11 +133,36 @@ PAIRS = [
 ]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=I9 + "lookups on the real left eye: the reference's NaN rows, equal values",
-)
-def test_real_left_eye_lookups_match_the_reference(recordings):
+def _in_seconds(ds, t0):
+    """The dataset with its time as float seconds from ``t0``.
+
+    The reference interpolates datetime64 times as float epoch nanoseconds,
+    which rounds them to about 256 ns (a deliberate difference, see the
+    README); given seconds from the start it computes with the same times as
+    rbm_nb, which is what a value-by-value comparison needs.
+    """
+    return ds.assign_coords(time=(ds.time.values - t0) / np.timedelta64(1, "s"))
+
+
+def _ill_conditioned(out_times, eye_times, ratio=20.0):
+    """Rows whose squad segment starts or ends at an eye sample whose two
+    intervals differ more than ``ratio`` times.
+
+    The real eye clock has samples a few microseconds apart between ones
+    5 ms apart; squad's control points there scale a rotation by the ratio
+    of the intervals (x800), so the last bits of the times decide the value
+    and two correct implementations may differ by centimetres.
+    """
+    dt = np.diff(eye_times)
+    r = dt[1:] / dt[:-1]
+    ill = np.zeros(len(eye_times), dtype=bool)
+    ill[1:-1] = (r > ratio) | (r < 1 / ratio)
+    seg = np.clip(np.searchsorted(eye_times, out_times, side="right") - 1, 0, len(ill) - 2)
+    # at a sample's own time squad returns the sample: nothing to amplify
+    return (ill[seg] | ill[seg + 1]) & ~np.isin(out_times, eye_times)
+
+
+def test_real_left_eye_lookups_have_the_references_nan_rows(recordings):
     head, left_eye = recordings
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the reference warns about NaN in log()
@@ -155,14 +180,44 @@ def test_real_left_eye_lookups_match_the_reference(recordings):
                 got_nan = np.isnan(got[var].values).any(axis=1)
                 assert exp_nan.any(), where  # the comparison has teeth
                 np.testing.assert_array_equal(got_nan, exp_nan, err_msg=where)
-            p_exp = expected.position.values[~exp_nan]
-            p_got = got.position.values[~exp_nan]
-            scale = np.abs(p_exp).max(axis=1, keepdims=True)
-            assert np.all(np.abs(p_got - p_exp) <= 3e-4 * (1 + scale)), where
-            q_exp = expected.orientation.values[~exp_nan]
-            q_got = got.orientation.values[~exp_nan]
-            sign = np.sign(np.sum(q_exp * q_got, axis=1, keepdims=True))
-            np.testing.assert_allclose(q_got * sign, q_exp, atol=3e-4, err_msg=where)
+
+
+def test_real_left_eye_lookups_match_the_reference(recordings):
+    head, left_eye = recordings
+    t0 = head.time.values[0]
+    head_s, eye_s = _in_seconds(head, t0), _in_seconds(left_eye, t0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the reference warns about NaN in log()
+        _register_head_and_eye(ref, head_s, eye_s)
+        _register_head_and_eye(rbm, head_s, eye_s)
+        for frame, reference in PAIRS:
+            expected = ref.lookup_pose(frame, reference, as_dataset=True)
+            got = rbm.lookup_pose(frame, reference, as_dataset=True)
+            where = f"lookup_pose({frame!r}, {reference!r})"
+            times = expected.time.values
+            np.testing.assert_array_equal(got.time.values, times, err_msg=where)
+            exp_nan = np.isnan(expected.position.values).any(axis=1)
+            np.testing.assert_array_equal(
+                np.isnan(got.position.values).any(axis=1), exp_nan, err_msg=where
+            )
+            ill = _ill_conditioned(times, eye_s.time.values)
+            known = ~exp_nan
+            p_exp = expected.position.values
+            p_got = got.position.values
+            scale = np.abs(p_exp).max(axis=1)
+            # the reference rotates with the file's quaternions as stored
+            # (|q| - 1 up to 8e-5, scaling vectors by up to 1.6e-4); rbm_nb
+            # normalises inside the math
+            p_off = np.abs(p_got - p_exp).max(axis=1) > 3e-4 * (1 + scale)
+            q_exp = expected.orientation.values
+            q_got = got.orientation.values
+            sign = np.where(np.sum(q_exp * q_got, axis=1) < 0, -1.0, 1.0)[:, None]
+            q_off = np.abs(q_got * sign - q_exp).max(axis=1) > 3e-4
+            off = known & (p_off | q_off)
+            # every row that differs is one where squad is ill-conditioned,
+            # and those are rare (29 of 24,430 for world -> left_eye)
+            assert not (off & ~ill).any(), (where, np.flatnonzero(off & ~ill)[:10])
+            assert off.sum() <= 2e-3 * known.sum(), (where, off.sum())
 
 
 def test_transform_points_on_real_eye_times(recordings):
@@ -211,20 +266,40 @@ def test_max_gap_stops_interpolation_across_long_gaps():
     assert np.isfinite(free).all()  # default None: no limit
 
 
-@pytest.mark.xfail(strict=True, reason=I9 + "max_gap keyword of from_dataset")
 def test_max_gap_on_the_real_left_eye(recordings):
+    """Sampled on the head tracker's clock, the eye is not interpolated across
+    its three gaps longer than 0.1 s with max_gap=0.1. (On this recording the
+    samples around each gap are missing too, so without max_gap those rows
+    are NaN as well; test_max_gap_stops_interpolation_across_long_gaps shows
+    the difference.)"""
     head, left_eye = recordings
-    _register_head_and_eye(rbm, head, left_eye, max_gap=0.1)
     t = left_eye.time.values
     dt = np.diff(t) / np.timedelta64(1, "s")
     long_gaps = np.flatnonzero(dt > 0.1)
     assert len(long_gaps) == 3  # the recording's three gaps over 0.1 s
-    out = rbm.lookup_pose("left_eye", "world", as_dataset=True)
-    times = out.time.values
+    head_times = head.time.values
+    points = np.zeros((len(head_times), 3))
+    out = {}
+    for max_gap in (0.1, None):
+        rbm.clear_registry()
+        _register_head_and_eye(rbm, head, left_eye, max_gap=max_gap)
+        out[max_gap], times = rbm.transform_points(
+            points, "left_eye", "head", timestamps=head_times, return_timestamps=True
+        )
     for i in long_gaps:
         inside = (times > t[i]) & (times < t[i + 1])
         assert inside.any()
-        assert np.isnan(out.position.values[inside]).all()
+        assert np.isnan(out[0.1][inside]).all()
+        # without max_gap the eye is interpolated straight across the gap,
+        # unless a sample its squad segment reads (i-1 .. i+2) is missing
+        around = slice(i - 1, i + 3)
+        known = not (
+            np.isnan(left_eye.position.values[around]).any()
+            or np.isnan(left_eye.orientation.values[around]).any()
+        )
+        if known:
+            assert np.isfinite(out[None][inside]).all()
+
 
 
 def test_max_gap_is_a_keyword_of_register_frame_and_from_dataset():

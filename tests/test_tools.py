@@ -45,7 +45,6 @@ PENDING = {
         "tests/test_timeseries.py",
     },
     "mypy": {
-        "rbm_nb/_at_time.py",
         "rbm_nb/_kernels/conversions.py",
         "rbm_nb/_kernels/differences.py",
         "rbm_nb/_kernels/quaternion.py",

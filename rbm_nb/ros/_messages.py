@@ -241,11 +241,9 @@ def check_messages(messages: Messages, where: str, index=None) -> None:
             "nanoseconds (must be below 1e9): the bag is damaged"
         )
     fields = [("position", messages.position), ("orientation", messages.orientation)]
-    if messages.linear_velocity is not None:
-        fields += [
-            ("linear velocity", messages.linear_velocity),
-            ("angular velocity", messages.angular_velocity),
-        ]
+    linear, angular = messages.linear_velocity, messages.angular_velocity
+    if linear is not None and angular is not None:  # both or neither
+        fields += [("linear velocity", linear), ("angular velocity", angular)]
     for name, values in fields:
         finite = np.isfinite(values).all(axis=1)
         bad = np.flatnonzero(~(finite | np.isnan(values).all(axis=1)))
@@ -330,7 +328,7 @@ def split_tf(msgs: list, static: bool) -> dict:
         arr = np.array(values, dtype=object)
         stamps = arr[:, 0].astype(np.int64)
         floats = arr[:, 1:8].astype(np.float64)
-        index = arr[:, 8].astype(np.int64)
+        received = arr[:, 8].astype(np.int64)
         nsec = arr[:, 9].astype(np.int64)
         if static:
             keep = np.array([len(values) - 1])
@@ -342,10 +340,10 @@ def split_tf(msgs: list, static: bool) -> dict:
         pairs[(frame, child)] = (
             TfPair(
                 frame, child, static, stamps[keep], floats[keep, :3], floats[keep, 3:],
-                index[keep],
+                received[keep],
             ),
             nsec,
-            index,
+            received,
         )  # fmt: skip
     return pairs
 

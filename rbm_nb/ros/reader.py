@@ -156,9 +156,10 @@ class RosbagReader:
             "position": messages.position,
             "orientation": messages.orientation,
         }
-        if messages.linear_velocity is not None:
-            out["linear_velocity"] = messages.linear_velocity
-            out["angular_velocity"] = messages.angular_velocity
+        linear, angular = messages.linear_velocity, messages.angular_velocity
+        if linear is not None and angular is not None:  # both or neither
+            out["linear_velocity"] = linear
+            out["angular_velocity"] = angular
         return out
 
     def _read(self, topic: str, progress: bool | None) -> tuple[Messages, str]:
@@ -410,9 +411,10 @@ class RosbagReader:
     def _dataset(self, topic: str, progress: bool | None):
         messages, msgtype = self._read(topic, progress)
         variables = {"position": messages.position, "orientation": messages.orientation}
-        if messages.linear_velocity is not None:
-            variables["linear_velocity"] = messages.linear_velocity
-            variables["angular_velocity"] = messages.angular_velocity
+        linear, angular = messages.linear_velocity, messages.angular_velocity
+        if linear is not None and angular is not None:  # both or neither
+            variables["linear_velocity"] = linear
+            variables["angular_velocity"] = angular
         attrs = {
             "bag": self.bag_file.name,
             "topic": topic,

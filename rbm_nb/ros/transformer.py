@@ -15,7 +15,7 @@ Conventions follow tf2:
   since the Unix epoch), and ``time=0`` means the latest time at which every
   frame on the chain has data;
 * nothing is extrapolated: asking for a time outside a moving frame's data
-  raises :class:`~rbm_nb._at_time.ExtrapolationError`.
+  raises :class:`~rbm_nb.errors.ExtrapolationError`.
 
 Results are tuples of floats, quaternions in ``w, x, y, z`` order, as in the
 reference API. Their signs are the reference's too (q and -q are the same
@@ -40,9 +40,11 @@ import math
 
 import numpy as np
 
-from .._at_time import ExtrapolationError, latest_common_time, transform_at_times
-from .._validation import as_float_array, check_finite, normalize_quaternions
-from ..frames import ReferenceFrame, _resolve
+from .._door import float_array
+from .._engine import at_time as _at_time
+from .._validation import check_finite, normalize_quaternions
+from ..errors import ExtrapolationError
+from ..frames import ReferenceFrame, resolve_frame
 
 __all__ = [
     "ConnectivityError",
@@ -97,7 +99,7 @@ def _time_value(time, name: str = "time") -> float:
 
 
 def _vector(value, size: int, name: str) -> np.ndarray:
-    arr = as_float_array(value, name)
+    arr = float_array(value, name)
     if arr.shape != (size,):
         raise ValueError(f"{name} must have length {size}, got shape {arr.shape}")
     check_finite(arr, name)
@@ -176,7 +178,7 @@ class Transformer:
             Its cache time covers all timestamps of the tree (at least tf2's
             default of 10 s), so nothing is dropped.
         """
-        root = _resolve(reference_frame, "reference_frame").root
+        root = resolve_frame(reference_frame, "reference_frame").root
         nodes = root.descendants
         names = [root.name] + [n.name for n in nodes]
         if any(not isinstance(n, str) or not n for n in names):
@@ -193,8 +195,8 @@ class Transformer:
         ]
         cache_time = DEFAULT_CACHE_TIME
         if spans:
-            spans = np.array(spans)
-            cache_time = max(cache_time, float(spans[:, 1].max() - spans[:, 0].min()))
+            ends = np.array(spans)
+            cache_time = max(cache_time, float(ends[:, 1].max() - ends[:, 0].min()))
         transformer = Transformer(cache_time=cache_time)
         for node in nodes:
             if node.timestamps is None:
@@ -245,13 +247,13 @@ class Transformer:
         reference_frame : ReferenceFrame or str
             A static frame with a parent (or the name of a registered one).
         """
-        frame = self._checked_frame(reference_frame)
+        frame, parent = self._checked_frame(reference_frame)
         if frame.timestamps is not None:
             raise ValueError(
                 f"frame {frame.name!r} is moving (it has timestamps); use set_transforms"
             )
         self._set_edge(
-            frame.name, frame.parent.name, np.array(frame.translation),
+            frame.name, parent.name, np.array(frame.translation),
             np.array(frame.rotation), None, False,
         )  # fmt: skip
 
@@ -267,13 +269,13 @@ class Transformer:
         reference_frame : ReferenceFrame or str
             A moving frame with a parent (or the name of a registered one).
         """
-        frame = self._checked_frame(reference_frame)
+        frame, parent = self._checked_frame(reference_frame)
         if frame.timestamps is None:
             raise ValueError(
                 f"frame {frame.name!r} is static (no timestamps); use set_transform_static"
             )
         self._set_edge(
-            frame.name, frame.parent.name, np.array(frame.translation),
+            frame.name, parent.name, np.array(frame.translation),
             np.array(frame.rotation), _seconds(frame.timestamps), frame.discrete,
         )  # fmt: skip
 
@@ -297,9 +299,9 @@ class Transformer:
         parent = _name(frame_id, "frame_id")
         child = _name(child_frame_id, "child_frame_id")
         if time is None:
-            t = _vector(translation, 3, "translation")
-            r = normalize_quaternions(_vector(rotation, 4, "rotation"), "rotation")
-            self._set_edge(child, parent, t, r, None, False)
+            t0 = _vector(translation, 3, "translation")
+            r0 = normalize_quaternions(_vector(rotation, 4, "rotation"), "rotation")
+            self._set_edge(child, parent, t0, r0, None, False)
             return
         times = _seconds(np.atleast_1d(time))
         if times.ndim != 1 or not np.isfinite(times).all():
@@ -307,7 +309,7 @@ class Transformer:
         n = len(times)
         t = np.asarray(translation, dtype=np.float64).reshape(-1, 3) if n else None
         r = np.asarray(rotation, dtype=np.float64).reshape(-1, 4) if n else None
-        if t is None or t.shape != (n, 3) or r.shape != (n, 4):
+        if t is None or r is None or t.shape != (n, 3) or r.shape != (n, 4):
             raise ValueError(
                 f"translation and rotation must have shapes ({n}, 3) and ({n}, 4) for "
                 f"{n} times, got {np.shape(translation)} and {np.shape(rotation)}"
@@ -323,15 +325,17 @@ class Transformer:
             False,
         )
 
-    def _checked_frame(self, reference_frame) -> ReferenceFrame:
-        frame = _resolve(reference_frame, "reference_frame")
-        if frame.parent is None:
+    def _checked_frame(self, reference_frame) -> tuple[ReferenceFrame, ReferenceFrame]:
+        """The resolved frame and its parent, both with names."""
+        frame = resolve_frame(reference_frame, "reference_frame")
+        parent = frame.parent
+        if parent is None:
             raise ValueError(
                 f"frame {frame.name!r} has no parent: there is no transform to add"
             )
         _name(frame.name, "the frame's name")
-        _name(frame.parent.name, "the parent frame's name")
-        return frame
+        _name(parent.name, "the parent frame's name")
+        return frame, parent
 
     def _set_edge(self, child, parent, t, r, times, discrete) -> None:
         if child == parent:
@@ -417,6 +421,8 @@ class Transformer:
     def _lookup(self, target_frame, source_frame, time):
         target = self._known(target_frame, "target_frame")
         source = self._known(source_frame, "source_frame")
+        # the buffer's frames are named by the (checked) names they were built from
+        target_name, source_name = str(target_frame), str(source_frame)
         if target.root is not source.root:
             raise ConnectivityError(
                 f"no chain of transforms connects {source.name!r} and {target.name!r} "
@@ -424,13 +430,13 @@ class Transformer:
             )
         when = _time_value(time)
         if when == 0.0:
-            latest = latest_common_time(source, target)
+            latest = _at_time.latest_common_time(source, target)
             if latest is None:  # all static: any time will do
                 latest = 0.0
             when = float(latest)
-        t, r = transform_at_times(source, target, when)
+        t, r, _ = _at_time.transform_at_times(source, target, when)
         r = np.asarray(r, dtype=np.float64)
-        if np.dot(r, self._tf2_rotation(source.name, target.name, when)) < 0:
+        if np.dot(r, self._tf2_rotation(source_name, target_name, when)) < 0:
             r = -r
         return t, r
 

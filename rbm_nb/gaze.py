@@ -83,10 +83,10 @@ def directions(eye_frame, into, *, confidence=None, min_confidence=0.6, max_gap=
         shape, or ``min_confidence``/``max_gap`` is not a finite number
         (``max_gap`` positive).
     """
-    from .frames import ReferenceFrame, _resolve
+    from .frames import ReferenceFrame, resolve_frame
 
-    eye = _resolve(eye_frame, "eye_frame")
-    target = _resolve(into, "into")
+    eye = resolve_frame(eye_frame, "eye_frame")
+    target = resolve_frame(into, "into")
     if eye.parent is None:
         raise ValueError(
             f"eye_frame {eye.name!r} is a root frame; it has no orientation to look along"
@@ -144,7 +144,7 @@ def angles(directions, reference, *, forward="z", up="-y"):
         If ``directions`` lacks the dims or frame attribute, ``forward`` and
         ``up`` are not two different axes, or a frame is not registered.
     """
-    from .frames import _resolve
+    from .frames import resolve_frame
 
     _check_directions(directions)
     f_axis, f_sign = _signed_axis(forward, "forward")
@@ -153,8 +153,8 @@ def angles(directions, reference, *, forward="z", up="-y"):
         raise ValueError(
             f"forward ({forward!r}) and up ({up!r}) must be different axes"
         )
-    ref = _resolve(reference, "reference")
-    source = _resolve(directions.attrs["representation_frame"], "directions' frame")
+    ref = resolve_frame(reference, "reference")
+    source = resolve_frame(directions.attrs["representation_frame"], "directions' frame")
     times = directions["time"].values
     values = np.asarray(directions.transpose("time", "cartesian_axis").values, float)
     valid = np.isfinite(values).all(axis=1)

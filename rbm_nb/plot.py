@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 from matplotlib.patches import FancyArrowPatch
-from mpl_toolkits.mplot3d import proj3d
+from mpl_toolkits.mplot3d import Axes3D, proj3d
 
 from ._config import UNIT_QUATERNION_TOLERANCE
 from ._kernels import conversions as _kc
@@ -55,7 +55,10 @@ class Arrow3D(FancyArrowPatch):
         return np.array([v[1] for v in self._verts3d])
 
     def do_3d_projection(self, renderer=None):
-        xs, ys, zs = proj3d.proj_transform(*self._verts3d, self.axes.M)
+        axes = self.axes
+        if not isinstance(axes, Axes3D):
+            raise TypeError(f"an Arrow3D is drawn on 3-D axes, not on {axes!r}")
+        xs, ys, zs = proj3d.proj_transform(*self._verts3d, axes.M)
         self.set_positions((xs[0], ys[0]), (xs[1], ys[1]))
         return float(np.min(zs))
 

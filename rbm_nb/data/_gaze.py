@@ -52,9 +52,9 @@ class Fixation:
     amplitude: float  # rad, cyclopean gaze shift at onset
 
 
-def main_sequence_peak_velocity(amplitude: np.ndarray) -> np.ndarray:
+def main_sequence_peak_velocity(amplitude: float) -> float:
     """Peak angular speed (rad/s) of a saccade of ``amplitude`` rad."""
-    return np.deg2rad(520.0) * (1.0 - np.exp(-amplitude / np.deg2rad(14.0)))
+    return float(np.deg2rad(520.0) * (1.0 - np.exp(-amplitude / np.deg2rad(14.0))))
 
 
 class _HeadLookup:
@@ -64,7 +64,7 @@ class _HeadLookup:
         self.head = head
 
     def index(self, t: float) -> int:
-        return int(min(np.searchsorted(self.head.t, t), self.head.t.size - 1))
+        return min(int(np.searchsorted(self.head.t, t)), self.head.t.size - 1)
 
     def cyclopean_gaze(self, i: int, target: np.ndarray) -> np.ndarray:
         """Unit gaze direction (camera frame) from between the eyes to ``target``."""

@@ -154,7 +154,9 @@ def angles(directions, reference, *, forward="z", up="-y"):
             f"forward ({forward!r}) and up ({up!r}) must be different axes"
         )
     ref = resolve_frame(reference, "reference")
-    source = resolve_frame(directions.attrs["representation_frame"], "directions' frame")
+    source = resolve_frame(
+        directions.attrs["representation_frame"], "directions' frame"
+    )
     times = directions["time"].values
     values = np.asarray(directions.transpose("time", "cartesian_axis").values, float)
     valid = np.isfinite(values).all(axis=1)

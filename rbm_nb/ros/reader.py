@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import difflib
 import os
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
+from types import TracebackType
+from typing import TYPE_CHECKING
 
 from .._atomic import atomic_path
 from .._progress import progress_bar
@@ -24,6 +26,9 @@ from ._messages import (
     ros1_type_name,
     split_tf,
 )
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 # decoding goes at ~1 µs per message on the fast path and ~25 µs per message
 # otherwise: from this many messages on, a load shows a progress bar
@@ -68,7 +73,12 @@ class RosbagReader:
         self._reader = self._open()
         return self
 
-    def __exit__(self, exc_type, exc_val, exc_tb) -> None:
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc_val: BaseException | None,
+        exc_tb: TracebackType | None,
+    ) -> None:
         reader, self._reader = self._reader, None
         if reader is not None:
             reader.close()
@@ -227,7 +237,9 @@ class RosbagReader:
             )
         return name
 
-    def load_tf(self, topics=None, *, progress: bool | None = None) -> dict:
+    def load_tf(
+        self, topics: Sequence[str] | None = None, *, progress: bool | None = None
+    ) -> dict:
         """Every transform of every tf message, split per parent/child pair.
 
         Parameters
@@ -316,7 +328,7 @@ class RosbagReader:
 
     def load_dataset(
         self, topic: str, cache: bool = False, *, progress: bool | None = None
-    ):
+    ) -> xr.Dataset:
         """Load the messages of a topic as an :class:`xarray.Dataset`.
 
         Parameters

@@ -37,8 +37,12 @@ from __future__ import annotations
 
 import difflib
 import math
+import os
+from collections.abc import Sequence
+from typing import TypeAlias
 
 import numpy as np
+import numpy.typing as npt
 
 from .._door import float_array
 from .._engine import at_time as _at_time
@@ -52,6 +56,11 @@ __all__ = [
     "ExtrapolationError",
     "Transformer",
 ]
+
+#: A time argument: float seconds (0 is "the latest"), or a datetime64.
+Time: TypeAlias = "float | np.datetime64"
+#: A result: the components of one vector or quaternion.
+Floats: TypeAlias = tuple[float, ...]
 
 #: tf2's default buffer length in seconds.
 DEFAULT_CACHE_TIME = 10.0
@@ -136,7 +145,7 @@ class Transformer:
     (2.0, 2.0, 3.0)
     """
 
-    def __init__(self, cache_time=None):
+    def __init__(self, cache_time: float | None = None) -> None:
         if cache_time is None:
             cache_time = DEFAULT_CACHE_TIME
         cache_time = _time_value(cache_time, "cache_time")
@@ -154,7 +163,7 @@ class Transformer:
         )
 
     @property
-    def frames(self) -> tuple:
+    def frames(self) -> tuple[str, ...]:
         """Names of all frames the buffer knows, sorted."""
         names = set(self._edges)
         names.update(e.parent for e in self._edges.values())
@@ -163,7 +172,7 @@ class Transformer:
     # -- filling the buffer ------------------------------------------------
 
     @staticmethod
-    def from_reference_frame(reference_frame) -> Transformer:
+    def from_reference_frame(reference_frame: ReferenceFrame | str) -> Transformer:
         """A Transformer holding every transform of a reference frame's tree.
 
         Parameters
@@ -206,7 +215,11 @@ class Transformer:
         return transformer
 
     @staticmethod
-    def from_bag(bag_file, topics=None, cache_time=None) -> Transformer:
+    def from_bag(
+        bag_file: str | os.PathLike,
+        topics: Sequence[str] | None = None,
+        cache_time: float | None = None,
+    ) -> Transformer:
         """A Transformer holding a bag's whole tf tree (``/tf`` and ``/tf_static``).
 
         Parameters
@@ -239,7 +252,7 @@ class Transformer:
         fill_transformer(transformer, tree)
         return transformer
 
-    def set_transform_static(self, reference_frame) -> None:
+    def set_transform_static(self, reference_frame: ReferenceFrame | str) -> None:
         """Add the static transform of a reference frame wrt its parent.
 
         Parameters
@@ -257,7 +270,7 @@ class Transformer:
             np.array(frame.rotation), None, False,
         )  # fmt: skip
 
-    def set_transforms(self, reference_frame) -> None:
+    def set_transforms(self, reference_frame: ReferenceFrame | str) -> None:
         """Add the transforms of a moving reference frame wrt its parent.
 
         Samples are merged with those already buffered for the frame (a new
@@ -279,7 +292,14 @@ class Transformer:
             np.array(frame.rotation), _seconds(frame.timestamps), frame.discrete,
         )  # fmt: skip
 
-    def set_transform(self, translation, rotation, frame_id, child_frame_id, time=None):
+    def set_transform(
+        self,
+        translation: npt.ArrayLike,
+        rotation: npt.ArrayLike,
+        frame_id: str,
+        child_frame_id: str,
+        time: npt.ArrayLike | None = None,
+    ) -> None:
         """Add raw transforms of ``child_frame_id`` wrt ``frame_id``.
 
         The counterpart of tf2's ``set_transform`` for data that does not come
@@ -478,7 +498,9 @@ class Transformer:
 
     # -- queries ------------------------------------------------------------
 
-    def can_transform(self, target_frame, source_frame, time=0.0) -> bool:
+    def can_transform(
+        self, target_frame: str, source_frame: str, time: Time = 0.0
+    ) -> bool:
         """Whether ``lookup_transform`` would succeed.
 
         Parameters
@@ -500,7 +522,9 @@ class Transformer:
             return False
         return True
 
-    def lookup_transform(self, target_frame, source_frame, time=0.0):
+    def lookup_transform(
+        self, target_frame: str, source_frame: str, time: Time = 0.0
+    ) -> tuple[Floats, Floats]:
         """The transform that maps data in ``source_frame`` into ``target_frame``.
 
         Parameters
@@ -536,7 +560,9 @@ class Transformer:
             np.ascontiguousarray(r[None]), np.ascontiguousarray(v[None])
         )[0]
 
-    def transform_point(self, p, target_frame, source_frame, time=0.0):
+    def transform_point(
+        self, p: npt.ArrayLike, target_frame: str, source_frame: str, time: Time = 0.0
+    ) -> Floats:
         """A point given in ``source_frame``, expressed in ``target_frame``.
 
         Returns
@@ -547,7 +573,9 @@ class Transformer:
         t, r = self._lookup(target_frame, source_frame, time)
         return tuple(map(float, self._rotate(r, p) + t))
 
-    def transform_vector(self, v, target_frame, source_frame, time=0.0):
+    def transform_vector(
+        self, v: npt.ArrayLike, target_frame: str, source_frame: str, time: Time = 0.0
+    ) -> Floats:
         """A vector represented in ``source_frame``, represented in ``target_frame``.
 
         Only the rotation applies (a vector has no position).
@@ -560,7 +588,9 @@ class Transformer:
         _, r = self._lookup(target_frame, source_frame, time)
         return tuple(map(float, self._rotate(r, v)))
 
-    def transform_quaternion(self, q, target_frame, source_frame, time=0.0):
+    def transform_quaternion(
+        self, q: npt.ArrayLike, target_frame: str, source_frame: str, time: Time = 0.0
+    ) -> Floats:
         """An orientation wrt ``source_frame``, expressed wrt ``target_frame``.
 
         Returns
@@ -573,7 +603,14 @@ class Transformer:
         _, r = self._lookup(target_frame, source_frame, time)
         return tuple(map(float, _kdl_sign(_qmul(r, q))))
 
-    def transform_pose(self, p, o, target_frame, source_frame, time=0.0):
+    def transform_pose(
+        self,
+        p: npt.ArrayLike,
+        o: npt.ArrayLike,
+        target_frame: str,
+        source_frame: str,
+        time: Time = 0.0,
+    ) -> tuple[Floats, Floats]:
         """A pose (position and orientation) from ``source_frame`` to ``target_frame``.
 
         Parameters

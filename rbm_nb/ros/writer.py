@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from contextlib import AbstractContextManager
 from pathlib import Path
+from types import TracebackType
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from .._atomic import atomic_path
 from .._config import UNIT_QUATERNION_TOLERANCE
@@ -22,6 +25,7 @@ from ._messages import (
 )
 
 if TYPE_CHECKING:
+    import xarray as xr
     from rosbags.rosbag1 import Writer as Ros1Writer
     from rosbags.rosbag2 import Writer as Ros2Writer
     from rosbags.typesys.store import Typestore
@@ -110,7 +114,12 @@ class RosbagWriter:
             path, version=Ros2Writer.VERSION_LATEST, storage_plugin=plugin
         )
 
-    def __exit__(self, exc_type, exc_val, exc_tb) -> None:
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc_val: BaseException | None,
+        exc_tb: TracebackType | None,
+    ) -> None:
         writer, atomic = self._writer, self._atomic
         if writer is None or atomic is None:
             raise RuntimeError(f"{self!r} is not open")
@@ -137,9 +146,9 @@ class RosbagWriter:
 
     def write_transform_stamped(
         self,
-        timestamps,
-        translation,
-        rotation,
+        timestamps: npt.ArrayLike,
+        translation: npt.ArrayLike,
+        rotation: npt.ArrayLike,
         topic: str,
         frame: str,
         child_frame: str,
@@ -211,9 +220,9 @@ class RosbagWriter:
 
     def write_tf(
         self,
-        timestamps,
-        translation,
-        rotation,
+        timestamps: npt.ArrayLike,
+        translation: npt.ArrayLike,
+        rotation: npt.ArrayLike,
         frame: str,
         child_frame: str,
         *,
@@ -257,7 +266,12 @@ class RosbagWriter:
             )  # fmt: skip
             self._check_open().write(connection, stamp, serialize(msg))
 
-    def write_tf_message(self, transforms, *, static: bool = False) -> None:
+    def write_tf_message(
+        self,
+        transforms: Sequence[tuple[Any, str, str, npt.ArrayLike, npt.ArrayLike]],
+        *,
+        static: bool = False,
+    ) -> None:
         """Write one tf message holding several transforms.
 
         Parameters
@@ -282,13 +296,13 @@ class RosbagWriter:
                     f"child_frame, translation, rotation), got {item!r}"
                 )
             stamp, frame, child, t, r = item
-            stamps, t, r = self._checked_rows(
+            one_stamp, one_t, one_r = self._checked_rows(
                 np.asarray([stamp]), np.asarray(t, float).reshape(1, -1),
                 np.asarray(r, float).reshape(1, -1), topic, frame, child,
             )  # fmt: skip
-            rows.append((int(stamps[0]), frame, child, t[0], r[0]))
-        stamps, frames, children, t, r = zip(*rows, strict=True)
-        msg = tf_message(self._store(), stamps, frames, children, t, r)
+            rows.append((int(one_stamp[0]), frame, child, one_t[0], one_r[0]))
+        stamps, frames, children, ts, rs = zip(*rows, strict=True)
+        msg = tf_message(self._store(), stamps, frames, children, ts, rs)
         self._check_open().write(
             self._connection(topic, TF_MESSAGE), max(stamps), self._serializer()(msg)
         )
@@ -300,7 +314,9 @@ class RosbagWriter:
             return lambda msg: bytes(store.serialize_cdr(msg, typename))
         return lambda msg: bytes(store.serialize_ros1(msg, typename))
 
-    def _checked_rows(self, timestamps, translation, rotation, topic, frame, child):
+    def _checked_rows(
+        self, timestamps, translation, rotation, topic, frame, child
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         for name, value in (("frame", frame), ("child_frame", child)):
             if not isinstance(value, str):
                 raise ValueError(
@@ -315,7 +331,7 @@ class RosbagWriter:
 
     def write_transform_stamped_dataset(
         self,
-        ds,
+        ds: xr.Dataset,
         topic: str,
         frame: str,
         child_frame: str,

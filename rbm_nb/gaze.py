@@ -27,7 +27,15 @@ array([[ 0.,  0.],
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+import numpy.typing as npt
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from .frames import FrameLike
 
 __all__ = ["directions", "angles"]
 
@@ -36,7 +44,14 @@ _LINE_OF_SIGHT = np.array([0.0, 0.0, 1.0])
 _AXES = {"x": 0, "y": 1, "z": 2}
 
 
-def directions(eye_frame, into, *, confidence=None, min_confidence=0.6, max_gap=None):
+def directions(
+    eye_frame: FrameLike,
+    into: FrameLike,
+    *,
+    confidence: npt.ArrayLike | xr.DataArray | None = None,
+    min_confidence: float = 0.6,
+    max_gap: float | None = None,
+) -> xr.DataArray:
     """Unit line-of-sight vectors of an eye, represented in another frame.
 
     The line of sight is the eye frame's z axis (camera convention: x right,
@@ -114,7 +129,13 @@ def directions(eye_frame, into, *, confidence=None, min_confidence=0.6, max_gap=
     return _vectors_dataarray(out, times, name)
 
 
-def angles(directions, reference, *, forward="z", up="-y"):
+def angles(
+    directions: xr.DataArray,
+    reference: FrameLike,
+    *,
+    forward: str = "z",
+    up: str = "-y",
+) -> xr.DataArray:
     """Azimuth and elevation of directions relative to a frame's forward axis.
 
     Parameters

@@ -62,9 +62,24 @@ SCENE_READY = """() => { const el = document.querySelector('.rbm-scene');
 
 
 def run_cell(page, index: int) -> None:
+    """Run code cell ``index`` (shift+enter), again while the UI is not ready for it."""
+    from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
     cell = page.locator(".jp-Notebook .jp-CodeCell").nth(index)
-    cell.locator(".jp-InputArea-editor").click()
-    page.keyboard.press("Shift+Enter")
+    for _ in range(10):
+        cell.locator(".jp-InputArea-editor").click()
+        page.keyboard.press("Shift+Enter")
+        try:
+            page.wait_for_function(
+                """(i) => /\\[(\\*|\\d+)\\]/.test(document.querySelectorAll(
+                    '.jp-Notebook .jp-CodeCell')[i].querySelector('.jp-InputPrompt').innerText)""",
+                arg=index,
+                timeout=5000,
+            )
+            return
+        except PlaywrightTimeout:
+            continue
+    raise RuntimeError(f"cell {index} did not start running")
 
 
 def wait_done(page, index: int, timeout: float = 600000) -> None:

@@ -92,6 +92,7 @@ _SUBMODULES = {
     "rigid_transform",
     "ros",
     "scene",
+    "study",
     "se3",
     "evaluation",
     "sdf",

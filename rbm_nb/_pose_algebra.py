@@ -89,7 +89,9 @@ def shortest_arc_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         (1.0, 0.0, 0.0),
         cross / np.where(degenerate, 1.0, sin)[:, None],
     )
-    angles = np.arccos(cos)
+    # atan2 keeps the angle exact near 0 and pi, where arccos of a cosine
+    # that rounds to +-1 loses up to sqrt(eps) (1e-8 rad)
+    angles = np.arctan2(sin, cos)
     opposite = degenerate & (cos <= 0.0)
     if opposite.any():
         perp = np.cross(a[opposite], (1.0, 0.0, 0.0))

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from . import _dask
 from ._door import ArrayInput, float_array
 from ._door import is_dataarray as _is_dataarray
 from ._validation import check_no_inf
@@ -70,6 +71,8 @@ def cartesian_to_polar(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     >>> cartesian_to_polar([0.0, 2.0])
     array([2.        , 1.57079633])
     """
+    if _dask.is_dask(arr):
+        return _dask.elementwise(cartesian_to_polar, getattr(arr, "data", arr), axis, axis=axis)
     arr, axis = _checked(arr, axis, 2, "x, y")
     x, y = np.take(arr, 0, axis=axis), np.take(arr, 1, axis=axis)
     return np.stack((np.hypot(x, y), np.arctan2(y, x)), axis=axis)
@@ -100,6 +103,8 @@ def polar_to_cartesian(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     >>> polar_to_cartesian([2.0, 0.0])
     array([2., 0.])
     """
+    if _dask.is_dask(arr):
+        return _dask.elementwise(polar_to_cartesian, getattr(arr, "data", arr), axis, axis=axis)
     arr, axis = _checked(arr, axis, 2, "r, phi")
     r, phi = np.take(arr, 0, axis=axis), np.take(arr, 1, axis=axis)
     return np.stack((r * np.cos(phi), r * np.sin(phi)), axis=axis)
@@ -132,6 +137,8 @@ def cartesian_to_spherical(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     >>> cartesian_to_spherical([0.0, 0.0, 2.0])
     array([2., 0., 0.])
     """
+    if _dask.is_dask(arr):
+        return _dask.elementwise(cartesian_to_spherical, getattr(arr, "data", arr), axis, axis=axis)
     arr, axis = _checked(arr, axis, 3, "x, y, z")
     x, y, z = (np.take(arr, i, axis=axis) for i in range(3))
     rho = np.hypot(x, y)
@@ -165,6 +172,8 @@ def spherical_to_cartesian(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     >>> spherical_to_cartesian([1.0, np.pi / 2, 0.0]).round(12)
     array([1., 0., 0.])
     """
+    if _dask.is_dask(arr):
+        return _dask.elementwise(spherical_to_cartesian, getattr(arr, "data", arr), axis, axis=axis)
     arr, axis = _checked(arr, axis, 3, "r, theta, phi")
     r, theta, phi = (np.take(arr, i, axis=axis) for i in range(3))
     rho = r * np.sin(theta)
@@ -267,6 +276,17 @@ def transform_coordinates(
     >>> transform_coordinates([1.0, 1.0], "polar", outof="cartesian")
     array([1.41421356, 0.78539816])
     """
+    if _dask.is_dask(arr):
+        if not _is_dataarray(arr):
+            return _dask.elementwise(
+                transform_coordinates, arr, -1 if axis is None else axis,
+                into=into, outof=outof, axis=axis,
+            )  # fmt: skip
+        core = arr.dims[_resolve_dim_axis(arr, dim, axis)]
+        return _dask.elementwise(
+            transform_coordinates, arr, core, into=into, outof=outof, dim=core,
+            replace_dim=replace_dim,
+        )  # fmt: skip
     is_da = _is_dataarray(arr)
     ax = _resolve_dim_axis(arr, dim, axis)
     attrs = dict(arr.attrs) if is_da else None

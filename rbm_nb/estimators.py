@@ -21,11 +21,16 @@ from typing import Any
 
 import numpy as np
 
-from . import _time
+from . import _dask, _time
+from ._dask import GRADIENT_HALO, SPLINE_HALO, filter_halo
 from ._door import ArrayInput, kernel_array
 from ._door import is_dataarray as _is_dataarray
 from ._engine.velocity import (
     angular_series as _angular_series,
+)
+from ._engine.velocity import (
+    _BUTTER_ORDER,
+    _FILTER_PADLEN,
 )
 from ._engine.velocity import (
     check_options as _check_options,
@@ -37,6 +42,7 @@ from ._kernels import conversions as _kc
 from ._kernels import quaternion as _qk
 from ._validation import check_no_inf, check_unit_norms, is_scalar
 from .coordinates import _replace_dim
+from .errors import UnsupportedError
 
 __all__ = [
     "best_fit_rotation",
@@ -135,6 +141,23 @@ def _from_series(series, moved_shape, axis, time_axis, width):
     return np.moveaxis(out, (0, -1), (time_axis, axis))
 
 
+def _lazy_estimate(eager, arr, dim, axis, timestamps, time_axis, halo, **options):
+    """A velocity estimate of dask-backed data, chunk by chunk with a halo (see _dask)."""
+    if options.get("outlier_thresh") is not None:
+        raise UnsupportedError(
+            "outlier_thresh on dask-backed data is not lazy: a rejected sample "
+            "is re-interpolated from kept samples that may lie any distance "
+            "away, beyond what a chunk sees; call .compute() first"
+        )
+    if options.get("cutoff") is not None:
+        _check_options(None, options["cutoff"], _FILTER_PADLEN + 1)
+        halo = max(halo, filter_halo(_BUTTER_ORDER, options["cutoff"], _FILTER_PADLEN))
+    quaternions = options.pop("quaternions", False)
+    return _dask.estimate(
+        eager, arr, dim, axis, timestamps, time_axis, halo, quaternions, **options
+    )
+
+
 def estimate_linear_velocity(
     arr: ArrayInput,
     dim: str | None = None,
@@ -187,6 +210,11 @@ def estimate_linear_velocity(
            [1., 0., 0.],
            [1., 0., 0.]])
     """
+    if _dask.is_dask(arr):
+        return _lazy_estimate(
+            estimate_linear_velocity, arr, dim, axis, timestamps, time_axis,
+            GRADIENT_HALO, outlier_thresh=outlier_thresh, cutoff=cutoff,
+        )  # fmt: skip
     data, axis, time_axis, t = _unpack(arr, dim, axis, timestamps, time_axis)
     _check_options(outlier_thresh, cutoff, data.shape[time_axis])
     series, moved_shape = _to_series(data, axis, time_axis)
@@ -254,6 +282,13 @@ def estimate_angular_velocity(
            [0. , 0. , 0.1],
            [0. , 0. , 0.1]])
     """
+    if _dask.is_dask(arr):
+        halo = SPLINE_HALO if mode == "quaternion" else GRADIENT_HALO
+        return _lazy_estimate(
+            estimate_angular_velocity, arr, dim, axis, timestamps, time_axis,
+            halo, quaternions=True, mode=mode, outlier_thresh=outlier_thresh,
+            cutoff=cutoff,
+        )  # fmt: skip
     data, axis, time_axis, t = _unpack(arr, dim, axis, timestamps, time_axis)
     if data.shape[axis] != 4:
         raise ValueError(

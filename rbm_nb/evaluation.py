@@ -46,8 +46,15 @@ from __future__ import annotations
 
 import numbers
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+from ._door import float_array, kernel_array
+from ._validation import normalize_quaternions
+
+if TYPE_CHECKING:  # xarray is imported where a DataArray is made
+    import xarray as xr
 
 __all__ = [
     "POSE_RELATIONS",
@@ -126,6 +133,16 @@ class Trajectory:
         )
 
 
+def _unit(q) -> np.ndarray:
+    """Orientations of a frame or lookup as unit quaternions.
+
+    Frames hand back recorded quaternions as given (|q| - 1 up to the unit
+    tolerance, ~1e-4 in recordings); the error kernels rotate with them, so
+    they get the unit quaternions the frame itself computes with.
+    """
+    return normalize_quaternions(float_array(q, "orientations"), "orientations", True)
+
+
 def _from_frame(value, name: str, frame) -> Trajectory:
     from .frames import ReferenceFrame, _resolve
     from .lookups import lookup_pose
@@ -144,7 +161,7 @@ def _from_frame(value, name: str, frame) -> Trajectory:
     assert isinstance(moving, ReferenceFrame)
     p, q, t = lookup_pose(moving, into, return_timestamps=True)
     return Trajectory(
-        np.asarray(t), np.asarray(p), np.asarray(q), moving.name or name, (moving, into)
+        np.asarray(t), np.asarray(p), _unit(q), moving.name or name, (moving, into)
     )
 
 
@@ -164,7 +181,7 @@ def _from_arrays(t, p, q, name: str) -> Trajectory:
     moving = ReferenceFrame(name, parent=root, translation=p, rotation=q, timestamps=t)
     return Trajectory(
         np.asarray(moving.timestamps), np.asarray(moving.translation),
-        np.asarray(moving.rotation), name, (moving, root),
+        _unit(moving.rotation), name, (moving, root),
     )  # fmt: skip
 
 
@@ -229,7 +246,7 @@ def _match(ref: Trajectory, est: Trajectory) -> tuple[Trajectory, Trajectory]:
     matched_ref = Trajectory(
         times, ref.positions[inside], ref.orientations[inside], ref.name, ref._frames
     )
-    return matched_ref, Trajectory(times, p, q, est.name, est._frames)
+    return matched_ref, Trajectory(times, p, _unit(q), est.name, est._frames)
 
 
 # ---------------------------------------------------------------------------
@@ -323,7 +340,7 @@ def _align(ref, est, est_full, align, correct_scale, n_to_align):
     if n_to_align is not None:
         if not isinstance(n_to_align, numbers.Integral) or isinstance(n_to_align, bool):
             raise ValueError(f"n_to_align must be an integer, got {n_to_align!r}")
-        if not 3 <= n_to_align <= n:
+        if not 3 <= int(n_to_align) <= n:
             raise ValueError(
                 f"n_to_align must lie between 3 and the {n} matched poses, got {n_to_align}"
             )
@@ -388,11 +405,8 @@ def _statistics(error: np.ndarray) -> dict[str, float]:
     }
 
 
-def _contiguous(traj: Trajectory):
-    return (
-        np.ascontiguousarray(traj.positions, dtype=float),
-        np.ascontiguousarray(traj.orientations, dtype=float),
-    )
+def _contiguous(traj: Trajectory) -> tuple[np.ndarray, np.ndarray]:
+    return kernel_array(traj.positions), kernel_array(traj.orientations)
 
 
 @dataclass
@@ -426,7 +440,7 @@ class TrajectoryError:
     metric: str
     pose_relation: str
     unit: str
-    error: object
+    error: xr.DataArray
     stats: dict
     reference: Trajectory
     estimate: Trajectory
@@ -615,14 +629,17 @@ def _pairs(traj: Trajectory, delta, delta_unit, rel_delta_tol, all_pairs) -> np.
     p, q = _contiguous(traj)
     if delta_unit == "meters":
         if all_pairs:
-            return k.all_path_pairs(p, float(delta), float(delta) * rel_delta_tol)
+            return k.all_path_pairs(
+                p, float(delta), float(float(delta) * rel_delta_tol)
+            )
         return k.path_pairs(p, float(delta))
     radians = np.deg2rad(delta) if delta_unit == "degrees" else float(delta)
     if not 0 <= radians <= np.pi:
         raise ValueError(
             f"delta must be an angle in [0, 180] degrees, got {delta!r} {delta_unit}"
         )
-    tol = radians * rel_delta_tol
+    radians = float(radians)
+    tol = float(radians * rel_delta_tol)
     return (
         k.all_angle_pairs(q, radians, tol) if all_pairs else k.angle_pairs(q, radians)
     )
@@ -734,7 +751,9 @@ def rpe(
     else:
         from ._kernels.evaluation import relative_pose_errors
 
-        trans, angle = relative_pose_errors(*_contiguous(ref), *_contiguous(est), pairs)
+        # the kernel takes writeable C-contiguous int64 pairs
+        index = np.require(pairs, np.int64, ["C", "W"])
+        trans, angle = relative_pose_errors(*_contiguous(ref), *_contiguous(est), index)
         values = _from_parts(rel, trans, angle)
     how = "all pairs" if all_pairs else "consecutive pairs"
     description = f", delta = {delta} {delta_unit}, {how}"

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _time
+from . import _dask, _time
 from ._door import ArrayInput, kernel_array
 from ._door import float_array as _door_float_array
 from ._door import is_dataarray as _is_dataarray
@@ -157,12 +157,38 @@ def qinv(q: ArrayInput, qaxis: int = -1) -> Any:
     >>> qinv([0.0, 0.0, 0.0, 2.0])
     array([ 0. , -0. , -0. , -0.5])
     """
+    if _dask.is_dask(q):
+        core = q.dims[qaxis] if _is_dataarray(q) else qaxis
+        return _dask.elementwise(
+            qinv, q, core, fill=(1.0, 0.0, 0.0, 0.0), qaxis=qaxis
+        )
     template = q if _is_dataarray(q) else None
     qf, was_quaternion = _split(q, qaxis, "q")
     out, zero = _rk.qinv_checked(kernel_array(qf.reshape(-1, 4)))
     if zero >= 0:
         _raise_zero("q", zero, "it has no inverse")
     return _like(template, _join(out.reshape(qf.shape), was_quaternion, qaxis))
+
+
+def _lazy_qmul(q, qaxis: int):
+    """qmul of dask-backed quaternions, chunk by chunk."""
+    if all(_is_dataarray(x) for x in q):
+        core = [x.dims[qaxis] for x in q]
+        out = _dask.blockwise(qmul, q, core, core[0], qaxis=-1)
+        first = q[0]
+        if set(out.dims) == set(first.dims):
+            out = out.transpose(*first.dims)
+        return out
+    if any(_is_dataarray(x) for x in q):
+        raise ValueError(
+            "q: with dask-backed data pass qmul all DataArrays or all arrays, "
+            "not a mix"
+        )
+    import dask.array as dsa
+
+    parts = [dsa.asarray(x) for x in q]
+    parts = [p.rechunk({qaxis % p.ndim: -1}) for p in parts]
+    return dsa.map_blocks(lambda *b: qmul(*b, qaxis=qaxis), *parts, dtype=np.float64)
 
 
 def qmul(*q, qaxis: int = -1) -> Any:
@@ -196,6 +222,8 @@ def qmul(*q, qaxis: int = -1) -> Any:
     """
     if len(q) < 2:
         raise ValueError(f"qmul needs at least 2 quaternion arrays, got {len(q)}")
+    if any(_dask.is_dask(x) for x in q):
+        return _lazy_qmul(q, qaxis)
     kinds = {_is_quaternion_dtype(np.asarray(x)) for x in q}
     if len(kinds) > 1:
         raise ValueError(
@@ -423,6 +451,16 @@ def qinterp(
     >>> qinterp(q, [0.0, 1.0], [0.5]).round(6)
     array([[0.707107, 0.      , 0.      , 0.707107]])
     """
+    if _dask.is_dask(q) and not _is_dataarray(q):
+        import xarray as xr
+
+        ax = _normalize_axis(axis, q.ndim, "axis")
+        qa = _normalize_axis(qaxis, q.ndim, "qaxis")
+        dims = [f"dim_{k}" for k in range(q.ndim)]
+        dims[ax] = "time"
+        wrapped = xr.DataArray(q, {"time": np.asarray(t_in)}, dims)
+        out = _qinterp_dataarray(wrapped, "time", dims[qa], t_out, out_of_range="raise")
+        return out.data
     if _is_dataarray(q):
         dim = q.dims[_normalize_axis(axis, q.ndim, "axis")]
         qdim = q.dims[_normalize_axis(qaxis, q.ndim, "qaxis")]
@@ -468,6 +506,10 @@ def _qinterp_dataarray(
         raise ValueError(
             f"{dim!r} is not a dimension of this DataArray {tuple(da.dims)}"
         )
+    if _dask.is_dask(da) and qdim in da.dims and dim != qdim:
+        if t_in is not None:
+            da = da.assign_coords({dim: np.asarray(getattr(t_in, "values", t_in))})
+        return _dask.qinterp(_qinterp_dataarray, da, dim, qdim, t_out, out_of_range)
     if qdim not in da.dims:
         raise ValueError(
             f"qdim {qdim!r} is not a dimension of this DataArray {tuple(da.dims)}"
@@ -530,6 +572,37 @@ def _qinterp_dataarray(
 # ---------------------------------------------------------------------------
 
 
+def _lazy_rotate_vectors(q, v, axis: int, qaxis: int, one_to_one: bool):
+    """rotate_vectors with dask-backed quaternions or vectors, chunk by chunk."""
+    if not one_to_one:
+        raise UnsupportedError(
+            "one_to_one=False with dask-backed data is not lazy (its result "
+            "has the shape of q times v); call .compute() first"
+        )
+    if not _dask.is_dask(q) and np.ndim(q) == 1:
+        single = _door_float_array(getattr(q, "values", q), "q")
+        core = v.dims[axis] if _is_dataarray(v) else axis
+        return _dask.elementwise(
+            lambda block: rotate_vectors(single, block, axis=axis), v, core
+        )
+    if _is_dataarray(q) and _is_dataarray(v):
+        out = _dask.blockwise(
+            rotate_vectors, [q, v], [q.dims[qaxis], v.dims[axis]], v.dims[axis]
+        )
+        out.attrs = dict(v.attrs)
+        return out.transpose(*v.dims) if set(out.dims) == set(v.dims) else out
+    import dask.array as dsa
+
+    qd = dsa.asarray(getattr(q, "data", q))
+    vd = dsa.asarray(getattr(v, "data", v))
+    qd = qd.rechunk({qaxis % qd.ndim: -1})
+    vd = vd.rechunk({axis % vd.ndim: -1})
+    return dsa.map_blocks(
+        lambda a, b: rotate_vectors(a, b, axis=axis, qaxis=qaxis),
+        qd, vd, dtype=np.float64, chunks=vd.chunks,
+    )  # fmt: skip
+
+
 def rotate_vectors(
     q: ArrayInput,
     v: ArrayInput,
@@ -576,6 +649,8 @@ def rotate_vectors(
     >>> rotate_vectors([0.0, 0.0, 0.0, 2.0], [1.0, 0.0, 0.0]).round(12)
     array([-1.,  0.,  0.])
     """
+    if _dask.is_dask(q) or _dask.is_dask(v):
+        return _lazy_rotate_vectors(q, v, axis, qaxis, one_to_one)
     qa = np.asarray(q)
     va = v.values if _is_dataarray(v) else v
     va = _float_array(va, "v")

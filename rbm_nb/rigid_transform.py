@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._door import kernel_array
 from . import _pose_algebra as _pa
+from ._door import kernel_array
 from ._kernels import quaternion as _kq
 from ._validation import (
     as_float_array,
@@ -63,6 +63,18 @@ def _ratio(ratio, name: str = "ratio") -> np.ndarray:
     return r
 
 
+def _array_text(arr: np.ndarray, prefix: str) -> str:
+    return np.array2string(
+        arr,
+        precision=6,
+        suppress_small=True,
+        separator=", ",
+        threshold=12,
+        edgeitems=2,
+        prefix=prefix,
+    )
+
+
 def _read_only(arr: np.ndarray) -> np.ndarray:
     arr = np.ascontiguousarray(arr)
     arr.flags.writeable = False
@@ -90,9 +102,7 @@ def _mask(mask, name: str) -> np.ndarray:
 
 
 def _rows(arr: np.ndarray, shape: tuple, width: int) -> np.ndarray:
-    return kernel_array(np.broadcast_to(arr, shape + (width,))).reshape(
-        -1, width
-    )
+    return kernel_array(np.broadcast_to(arr, shape + (width,))).reshape(-1, width)
 
 
 class Transform:
@@ -125,6 +135,9 @@ class Transform:
     """
 
     __slots__ = ("_translation", "_rotation")
+    # set once, through object.__setattr__ (the instances are immutable)
+    _translation: np.ndarray
+    _rotation: np.ndarray
     # numpy must not treat a Transform as an array operand: ``tf @ ndarray``
     # and ``ndarray @ tf`` then raise TypeError instead of guessing
     __array_ufunc__ = None
@@ -233,11 +246,8 @@ class Transform:
             yield self[i]
 
     def __repr__(self) -> str:
-        opts = dict(
-            precision=6, suppress_small=True, separator=", ", threshold=12, edgeitems=2
-        )
-        t = np.array2string(self._translation, prefix="    translation=", **opts)
-        r = np.array2string(self._rotation, prefix="    rotation=", **opts)
+        t = _array_text(self._translation, "    translation=")
+        r = _array_text(self._rotation, "    rotation=")
         if not self.shape:
             return f"Transform(translation={t}, rotation={r})"
         return f"Transform(shape={self.shape},\n    translation={t},\n    rotation={r})"
@@ -253,7 +263,9 @@ class Transform:
         )
         return bool(np.all(self._translation == other._translation) and np.all(same_q))
 
-    __hash__ = None  # mutable-free but array-valued: no meaningful hash
+    # mutable-free but array-valued: no meaningful hash (None is how Python
+    # says so; typeshed declares object.__hash__ a method)
+    __hash__ = None  # type: ignore[assignment]
 
     def allclose(self, other: Transform, *, atol: float = 1e-12) -> bool:
         """Whether both describe the same transformation(s) to within ``atol``.
@@ -312,9 +324,7 @@ class Transform:
                 f"{name} of shape {v.shape} do not broadcast against the Transform's "
                 f"batch shape {self.shape}"
             ) from None
-        out = _kq.rotate_vectors(
-            _rows(self._rotation, shape, 4), _rows(v, shape, 3)
-        )
+        out = _kq.rotate_vectors(_rows(self._rotation, shape, 4), _rows(v, shape, 3))
         if shift:
             out += _rows(self._translation, shape, 3)
         return out.reshape(shape + (3,))

@@ -48,6 +48,7 @@ import numbers
 import numpy as np
 
 from . import conversions
+from ._door import kernel_array
 from ._validation import as_float_array
 
 __all__ = [
@@ -110,7 +111,7 @@ def _rows(value, name: str, tail: tuple[int, ...]) -> tuple[np.ndarray, tuple]:
         expected = "(..., " + ", ".join(map(str, tail)) + ")"
         raise ValueError(f"{name} must have shape {expected}, got {arr.shape}")
     lead = arr.shape[: arr.ndim - k]
-    rows = np.ascontiguousarray(arr.reshape((-1,) + tail))
+    rows = kernel_array(arr.reshape((-1,) + tail))
     bad = ~np.isfinite(rows.reshape(rows.shape[0], -1)).all(axis=1)
     if bad.any():
         raise ValueError(f"{name}{_where(lead, int(np.argmax(bad)))} is not finite")
@@ -126,7 +127,7 @@ def _where(lead: tuple, flat: int) -> str:
 
 def _check_rotations(rot: np.ndarray, lead: tuple, name: str) -> None:
     """Raise if a (n, k, k) matrix's 3 x 3 block is not a rotation (``_ROTATION_TOLERANCE``)."""
-    i = _kernels().first_non_rotation(rot, _ROTATION_TOLERANCE)
+    i = _kernels().first_non_rotation(kernel_array(rot), _ROTATION_TOLERANCE)
     if i >= 0:
         r = rot[i, :3, :3]
         dev = np.abs(r.T @ r - np.eye(3)).max()
@@ -147,8 +148,8 @@ def _poses(value, name: str, rotation: bool = True) -> tuple[np.ndarray, tuple]:
     if arr.ndim < 2 or arr.shape[-2:] != (4, 4):
         raise ValueError(f"{name} must have shape (..., 4, 4), got {arr.shape}")
     lead = arr.shape[:-2]
-    rows = np.ascontiguousarray(arr.reshape((-1, 4, 4)))
-    i, code = _kernels().first_bad_pose(rows, _ROTATION_TOLERANCE, rotation)
+    rows = kernel_array(arr.reshape((-1, 4, 4)))
+    i, code = _kernels().first_bad_pose(rows, _ROTATION_TOLERANCE, bool(rotation))
     if code == 1:
         raise ValueError(f"{name}{_where(lead, i)} is not finite")
     if code == 2:
@@ -456,7 +457,7 @@ def rotvelxform(
     arr = as_float_array(Γ, "Γ")
     if arr.shape[-2:] == (3, 3):
         rot, lead = _rows(arr, "Γ", (3, 3))
-        angles = _angles_of_rotations(rot, lead, code)
+        angles = kernel_array(_angles_of_rotations(rot, lead, code))
     else:
         angles, lead = _rows(arr, "Γ", (3,))
     out, bad = _kernels().rotvelxform(angles, code, bool(inverse), float(tol))
@@ -695,7 +696,9 @@ def trinterp(start, end, s, shortest: bool = True) -> np.ndarray:
     a = _rows_for(start_rows, start_lead, lead)
     b = _rows_for(end_rows, end_lead, lead)
     f = _rows_for(np.ascontiguousarray(frac.reshape(-1)), frac.shape, lead)
-    out = _kernels().trinterp(a, b, f, bool(shortest))
+    out = _kernels().trinterp(
+        kernel_array(a), kernel_array(b), kernel_array(f), bool(shortest)
+    )
     if rotation_only:
         return np.ascontiguousarray(out[:, :3, :3]).reshape(lead + (3, 3))
     return out.reshape(lead + (4, 4))
@@ -742,10 +745,8 @@ def qexp(q) -> np.ndarray:
     >>> qexp([0, np.pi / 4, 0, 0]).round(6)
     array([0.707107, 0.707107, 0.      , 0.      ])
     """
-    from ._kernels.quaternion import qexp as kernel
-
     rows, lead = _rows(q, "q", (4,))
-    return kernel(rows).reshape(lead + (4,))
+    return _kernels().qexp(rows).reshape(lead + (4,))
 
 
 def qlog(q) -> np.ndarray:
@@ -776,12 +777,10 @@ def qlog(q) -> np.ndarray:
     >>> qlog([np.cos(0.3), np.sin(0.3), 0, 0]).round(6) + 0.0
     array([0. , 0.3, 0. , 0. ])
     """
-    from ._kernels.quaternion import qlog as kernel
-
     rows, lead = _rows(q, "q", (4,))
     zero = ~rows.any(axis=1)
     if zero.any():
         raise ValueError(
             f"q{_where(lead, int(np.argmax(zero)))} is zero: it has no logarithm"
         )
-    return kernel(rows).reshape(lead + (4,))
+    return _kernels().qlog(rows).reshape(lead + (4,))

@@ -14,11 +14,13 @@ from __future__ import annotations
 import warnings
 from typing import Any
 
+from . import _dask
 from ._door import ArrayInput
 from ._engine import transform as _engine_transform
 from ._engine import twist as _twist
 from ._validation import check_what
 from ._xarray import unpack, wrap
+from .errors import UnsupportedError
 from .frames import FrameLike, resolve_frame
 
 __all__ = [
@@ -44,6 +46,11 @@ def _transform(
     **kwargs,
 ):
     """Unpack, resolve frames (``outof`` may come from ``attrs[attr]``), wrap."""
+    if _dask.is_dask(arr):
+        return _lazy_transform(
+            method, arr, into, outof, dim, axis, timestamps, time_axis, attr,
+            return_timestamps,
+        )  # fmt: skip
     unpacked = unpack(
         arr, dim=dim, axis=axis, time_axis=time_axis, timestamps=timestamps
     )
@@ -81,6 +88,28 @@ def _transform(
     if return_timestamps:
         return out, ts_out
     return out
+
+
+def _lazy_transform(
+    method, arr, into, outof, dim, axis, timestamps, time_axis, attr, return_timestamps
+):
+    """The transform of dask-backed data, one task per time chunk (see _dask)."""
+    if method not in (_points, _vectors, _quaternions):
+        raise UnsupportedError(
+            "velocity transforms of dask-backed arrays are not lazy (each chunk "
+            "would estimate the frames' velocities again); call .compute() on "
+            "the array first"
+        )
+
+    def eager(block, into, outof, dim, axis, timestamps):
+        return _transform(
+            method, block, into, outof, dim, axis, timestamps, None, attr, False
+        )
+
+    return _dask.transform(
+        eager, arr, into, outof, dim, axis, timestamps, time_axis,
+        return_timestamps, resolve_frame, attr, method is _quaternions,
+    )  # fmt: skip
 
 
 def _points(frame, arr, into, **kw):

@@ -113,7 +113,11 @@ class JupyterLab:
         if not proxy:
             (tmp / "config" / "jupyter_server_config.json").write_text(
                 json.dumps(
-                    {"ServerApp": {"jpserver_extensions": {"jupyter_server_proxy": False}}}
+                    {
+                        "ServerApp": {
+                            "jpserver_extensions": {"jupyter_server_proxy": False}
+                        }
+                    }
                 )
             )
         self.log = open(tmp / "jupyter.log", "wb")

@@ -51,7 +51,9 @@ def scene():
 def document_of(path) -> dict:
     text = path.read_text(encoding="utf-8")
     match = re.search(
-        r'<script id="rbm-export-data" type="application/json">(.*?)</script>', text, re.S
+        r'<script id="rbm-export-data" type="application/json">(.*?)</script>',
+        text,
+        re.S,
     )
     return json.loads(match.group(1))
 
@@ -67,7 +69,9 @@ def snapshot_of(document) -> tuple[list, dict, dict]:
     for t in content["tracks"]:
         tracks[t["path"]] = {
             "times": np.frombuffer(buffers[t["times"]], "<f8"),
-            "translation": np.frombuffer(buffers[t["translation"]], "<f4").reshape(-1, 3),
+            "translation": np.frombuffer(buffers[t["translation"]], "<f4").reshape(
+                -1, 3
+            ),
             "rotation": np.frombuffer(buffers[t["rotation"]], "<f4").reshape(-1, 4),
         }
     return commands, tracks, scene_model["state"]
@@ -101,10 +105,15 @@ def test_export_data_decodes_to_the_scene(scene, tmp_path):
     track = tracks[scene["frame_body"].pose_path]
     np.testing.assert_allclose(track["times"], body.seconds, atol=1e-12)
     np.testing.assert_allclose(track["translation"], body.translation, atol=1e-6)
-    np.testing.assert_allclose(track["rotation"], body.rotation[:, [1, 2, 3, 0]], atol=1e-6)
+    np.testing.assert_allclose(
+        track["rotation"], body.rotation[:, [1, 2, 3, 0]], atol=1e-6
+    )
     late = tracks[scene["frame_late"].pose_path]
     assert late["times"][0] == pytest.approx(0.5)  # hidden in the page until then
-    assert state["_frames"] == {"body": scene["frame_body"].pose_path, "late": scene["frame_late"].pose_path}
+    assert state["_frames"] == {
+        "body": scene["frame_body"].pose_path,
+        "late": scene["frame_late"].pose_path,
+    }
     assert [row["text"] for row in state["_legend"]][-1] == "grid 50 cm"
 
 
@@ -141,16 +150,22 @@ def test_series_views_are_included(scene, tmp_path):
 
     class Plot(anywidget.AnyWidget):
         _esm = "export default { render({ el }) { el.textContent = 'plot'; } }"
-        player = traitlets.Instance(Player, allow_none=True).tag(sync=True, **widget_serialization)
+        player = traitlets.Instance(Player, allow_none=True).tag(
+            sync=True, **widget_serialization
+        )
         values = traitlets.Bytes(b"").tag(sync=True)
 
     plot = Plot(values=np.arange(3, dtype="<f8").tobytes())
     player = scene.player()
-    document = document_of(scene.to_html(tmp_path / "d.html", series=plot, player=player))
+    document = document_of(
+        scene.to_html(tmp_path / "d.html", series=plot, player=player)
+    )
     assert document["layout"] == [scene.widget.model_id, plot.model_id, player.model_id]
     spec = document["models"][1]
     assert spec["state"]["player"] == f"IPY_MODEL_{player.model_id}"
-    assert spec["buffers"] == [{"path": ["values"], "data": base64.b64encode(plot.values).decode()}]
+    assert spec["buffers"] == [
+        {"path": ["values"], "data": base64.b64encode(plot.values).decode()}
+    ]
     with pytest.raises(ValueError, match="anywidgets"):
         scene.to_html(tmp_path / "e.html", series=[object()])
 
@@ -206,11 +221,15 @@ def register_head_eye(recording):
 def test_full_head_eye_explorer_exports_under_5_mb(tmp_path):
     from rbm_nb.explorer import write_explorer_html
 
-    out = write_explorer_html(tmp_path / "explorer.html", source="synthetic", progress=False)
+    out = write_explorer_html(
+        tmp_path / "explorer.html", source="synthetic", progress=False
+    )
     size = out.stat().st_size
     assert size <= 5 * 1024 * 1024
     document = document_of(out)
     player = document["models"][-1]["state"]
-    assert player["duration"] == pytest.approx(330, abs=5) and player["t0_ns"] is not None
+    assert (
+        player["duration"] == pytest.approx(330, abs=5) and player["t0_ns"] is not None
+    )
     _, tracks, _ = snapshot_of(document)
     assert max(len(t["times"]) for t in tracks.values()) <= 10000

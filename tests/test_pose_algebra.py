@@ -301,6 +301,16 @@ def test_align_points_the_axis_and_keeps_the_origin(tf, d, ax):
     np.testing.assert_array_equal(out.translation, tf.translation)
 
 
+def test_align_is_exact_next_to_a_half_turn():
+    # current axis and target 1e-8 rad from anti-parallel: the arc angle must
+    # not come from arccos of a cosine that rounds to -1 (hypothesis found it)
+    q = np.array([0.0, 1.0, 0.0, 1e-8]) / np.hypot(1.0, 1e-8)
+    d = np.array([0.0, 4.0, 0.5])
+    out = Transform([0.0, 0.0, 0.0], q).align_axis_to_direction(d, axis=d)
+    u = d / np.linalg.norm(d)
+    np.testing.assert_allclose(out.apply_vectors(u), u, rtol=0, atol=1e-14)
+
+
 # -- bad input -------------------------------------------------------------------------
 
 

@@ -192,7 +192,9 @@ def test_objects_are_laid_out_under_rbm(moving):
     assert frame.name == "frame_body" and moving["frame_body"] is frame
     assert frame.geom_path == "/rbm/root/frame_body/pose/geom"
     objects = {
-        c["path"]: c for c in decode(moving.state.snapshot()) if c["type"] == "set_object"
+        c["path"]: c
+        for c in decode(moving.state.snapshot())
+        if c["type"] == "set_object"
     }
     grid = objects.pop("/rbm/grid")  # sized to the content, see test_grid_legend_labels
     assert grid["object"]["object"]["type"] == "LineSegments"
@@ -295,7 +297,11 @@ def test_handles_update_hide_and_remove(moving):
         frame.update(scale=-1)
     frame.remove()
     frame.remove()
-    assert len(moving) == 0 and [m for m in moving.state.snapshot()[1:] if m.path.startswith("/rbm/root")] == []
+    assert (
+        len(moving) == 0
+        and [m for m in moving.state.snapshot()[1:] if m.path.startswith("/rbm/root")]
+        == []
+    )
     with pytest.raises(RuntimeError, match="removed"):
         frame.update(scale=1.0)
 
@@ -330,7 +336,9 @@ def test_points_static_cloud_and_moving_marker(moving):
     cloud = moving.add_points(
         np.random.default_rng(0).normal(size=(7, 3)), frame="body", size=0.02
     )
-    obj = next(c for c in decode(moving.state.snapshot()) if c["path"] == cloud.geom_path)
+    obj = next(
+        c for c in decode(moving.state.snapshot()) if c["path"] == cloud.geom_path
+    )
     assert obj["object"]["object"]["type"] == "Points"
     ts = np.array([0.0, 1.0])
     marker = moving.add_points([[0, 0, 0], [1, 2, 3]], timestamps=ts, color="#00ff00")
@@ -667,7 +675,12 @@ class RecordingComm(DummyComm):
 
     def receive(self, content):
         for handler in self.handlers:
-            handler({"content": {"data": {"method": "custom", "content": content}}, "buffers": []})
+            handler(
+                {
+                    "content": {"data": {"method": "custom", "content": content}},
+                    "buffers": [],
+                }
+            )
 
 
 @pytest.fixture
@@ -724,7 +737,16 @@ def test_content_goes_over_the_comm_after_ready(moving, recorded):
     assert content["type"] == "tracks" and [t["path"] for t in content["tracks"]] == [
         "/rbm/root/frame_late/pose"
     ]
-    # tracks with the same timestamps share one time buffer; decimation on request
+    # decimation only on request
+    coarse = Scene("world", max_samples=4)
+    coarse.add_frame("body")
+    coarse.widget.comm.receive({"type": "ready"})
+    [(content, _)] = custom_messages(coarse.widget)
+    assert content["tracks"][0]["n"] == 4
+    coarse.close()
+    with pytest.raises(ValueError, match="max_samples"):
+        Scene("world", max_samples=1)
+    # tracks with the same timestamps share one time buffer
     state = moving.state
     meta, buffers = state.track_payload(max_samples=4)
     assert [m["n"] for m in meta] == [4, 4]

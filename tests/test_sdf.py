@@ -79,6 +79,24 @@ def test_distances_match_skrobot_on_the_same_grid(use_abs, fill_value):
     )
 
 
+def test_the_grid_keeps_its_own_copy_and_hands_out_read_only_views():
+    data, origin, resolution = random_grid()
+    grid = GridSDF(data, origin, resolution)
+    centre = grid.bounds.mean(axis=0)
+    before = grid.sdf(centre)
+    assert np.isfinite(before)
+    # the caller's arrays stay theirs: writeable, and changing them later
+    # does not change the grid
+    assert data.flags.writeable and origin.flags.writeable
+    data += 1.0
+    origin += 1.0
+    assert grid.sdf(centre) == before
+    for arr in (grid.data, grid.origin):
+        with pytest.raises(ValueError, match="read-only"):
+            arr[...] = 0.0
+    assert grid.sdf(centre) == before
+
+
 def test_out_of_bounds_is_where_skrobot_fills():
     data, origin, res = random_grid(seed=3)
     pts = query_points(data, origin, res, seed=4)
@@ -415,13 +433,16 @@ def test_from_mesh_signs_a_hollow_shell_and_its_cavity():
 
 def test_from_mesh_signs_every_node_like_the_winding_number():
     # the region shortcut against a winding number at every node
+    from rbm_nb._door import kernel_array
     from rbm_nb._kernels.sdf import winding_numbers
 
     mesh = trimesh.creation.torus(major_radius=0.2, minor_radius=0.06)
     grid = GridSDF.from_mesh(mesh, 0.02)
     axes = [grid.origin[a] + np.arange(grid.shape[a]) * 0.02 for a in range(3)]
     nodes = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-    inside = np.abs(winding_numbers(nodes, np.ascontiguousarray(mesh.triangles))) > 0.5
+    # kernels take what the door makes (trimesh's cached arrays are read-only)
+    triangles = kernel_array(mesh.triangles)
+    inside = np.abs(winding_numbers(nodes, triangles)) > 0.5
     signed = grid.data.reshape(-1)
     np.testing.assert_array_equal((signed < 0)[signed != 0], inside[signed != 0])
     assert inside.sum() > 100

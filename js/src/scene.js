@@ -368,6 +368,7 @@ class View {
     const name = this.model.get("follow");
     const frames = this.model.get("_frames") || {};
     if (!name || !frames[name]) {
+      this.followed = null;
       return;
     }
     const object = this.node(frames[name]);
@@ -379,6 +380,17 @@ class View {
     const world = this.worldPosition(frames[name]);
     const target = parent ? parent.worldToLocal(world) : world;
     const delta = target.clone().sub(viewer.controls.target);
+    if (this.followed !== name) {
+      // starting to follow: come close enough to see the frame, same direction
+      this.followed = name;
+      const size = new this.THREE.Box3().setFromObject(object).getSize(new this.THREE.Vector3());
+      const distance = Math.max(4 * size.length(), 1);
+      const offset = viewer.camera.position.clone().sub(viewer.controls.target);
+      if (offset.length() > distance) {
+        offset.setLength(distance);
+        viewer.camera.position.copy(viewer.controls.target).add(offset);
+      }
+    }
     if (delta.lengthSq() > 0) {
       viewer.controls.target.add(delta);
       viewer.camera.position.add(delta);
@@ -555,6 +567,7 @@ function initialize({ model }) {
   model.send({ type: "ready" });
   return () => {
     model.off("msg:custom", onMessage);
+    STORES.delete(model.get("_uid")); // the model is gone: drop its content
   };
 }
 

@@ -10,12 +10,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from .._config import NJIT_OPTIONS
+from ._jit import F2, F, helper, kernel
+
+# (m, 2) index pairs, C-contiguous
+I2 = "int64[:, ::1]"
 
 
-@njit(inline="always", **NJIT_OPTIONS)
+@helper(inline=True)
 def _relative_angle(q, i, j):
     """Rotation angle of ``conj(q_i) q_j`` in [0, pi]."""
     aw, ax, ay, az = q[i, 0], q[i, 1], q[i, 2], q[i, 3]
@@ -27,7 +29,7 @@ def _relative_angle(q, i, j):
     return 2.0 * math.atan2(math.sqrt(x * x + y * y + z * z), abs(w))
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _segment_lengths(p):
     n = p.shape[0]
     out = np.empty(max(n - 1, 0))
@@ -39,7 +41,7 @@ def _segment_lengths(p):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _consecutive(steps, delta):
     """Pairs of consecutive ids where the accumulated step reaches ``delta``."""
     ids = np.empty(steps.shape[0] + 1, dtype=np.int64)
@@ -59,13 +61,13 @@ def _consecutive(steps, delta):
     return pairs
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F)
 def path_pairs(p, delta):
     """Consecutive pairs whose path length (summed segment by segment) reaches delta."""
     return _consecutive(_segment_lengths(p), delta)
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F)
 def angle_pairs(q, delta):
     """Consecutive pairs whose accumulated rotation angle reaches delta (radians)."""
     n = q.shape[0]
@@ -75,7 +77,7 @@ def angle_pairs(q, delta):
     return _consecutive(steps, delta)
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _first_at_least(d, lo, value):
     """First index k in [lo, len(d)] with d[k] >= value (d non-decreasing)."""
     hi = d.shape[0]
@@ -88,7 +90,7 @@ def _first_at_least(d, lo, value):
     return lo
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F, F)
 def all_path_pairs(p, delta, tol):
     """For each i, the j > i whose path distance from i is closest to delta.
 
@@ -131,7 +133,7 @@ def all_path_pairs(p, delta, tol):
     return pairs[:m].copy()
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F, F)
 def all_angle_pairs(q, delta, tol):
     """Every pair i < j whose relative rotation angle lies in [delta - tol, delta + tol].
 
@@ -158,7 +160,7 @@ def all_angle_pairs(q, delta, tol):
     return pairs
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _rotate_inverse(w, x, y, z, vx, vy, vz):
     """conj(q) v q: v expressed in the frame rotated by q."""
     # t = 2 (u x v) with u = -(x, y, z); v' = v + w t + u x t
@@ -172,7 +174,7 @@ def _rotate_inverse(w, x, y, z, vx, vy, vz):
     )
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F2, F2, F2, I2)
 def relative_pose_errors(p_ref, q_ref, p_est, q_est, pairs):
     """``inv(inv(Q_i) Q_j) inv(P_i) P_j`` for each pair (i, j): Q reference, P estimate.
 
@@ -218,7 +220,7 @@ def relative_pose_errors(p_ref, q_ref, p_est, q_est, pairs):
     return trans, angle
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F2, F2, F2)
 def absolute_pose_errors(p_ref, q_ref, p_est, q_est):
     """``inv(P_i) Q_i`` for each i: error translations (n, 3) and angles (n,)."""
     n = p_ref.shape[0]

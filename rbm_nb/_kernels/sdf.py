@@ -18,16 +18,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from .._config import NJIT_OPTIONS
+from ._jit import F1, F2, F3, F, I, helper, kernel
 
 # an upper bound on the Illinois steps that pin a bracketed zero down (it
 # typically needs 3-6; bisection alone would need ~50 for the same accuracy)
 _REFINEMENTS = 100
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _locate(x, n, resolution):
     """Cell index and fraction of offset ``x`` along an axis of ``n`` nodes; -1 outside."""
     if not (x >= 0.0 and x <= (n - 1) * resolution):
@@ -39,7 +38,7 @@ def _locate(x, n, resolution):
     return i, (x - lo) / ((i + 1) * resolution - lo)
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _sample(data, origin, resolution, px, py, pz, fill_value):
     """Trilinear value and its gradient at one point; (fill, nan, nan, nan) outside."""
     nx, ny, nz = data.shape
@@ -75,7 +74,7 @@ def _sample(data, origin, resolution, px, py, pz, fill_value):
     return value, gx, gy, gz
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F3, F1, F, F, F2)
 def grid_values(data, origin, resolution, fill_value, points):
     """Trilinear distances at (n, 3) points; ``fill_value`` outside the grid."""
     n = points.shape[0]
@@ -88,7 +87,7 @@ def grid_values(data, origin, resolution, fill_value, points):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F3, F1, F, F2)
 def grid_gradients(data, origin, resolution, points):
     """Gradients (n, 3) of the trilinear interpolant; rows of nan outside the grid."""
     n = points.shape[0]
@@ -103,7 +102,7 @@ def grid_gradients(data, origin, resolution, points):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _box_segment(lo, hi, o, u, t_max):
     """Parameter range [t0, t1] of the ray o + t u inside the box, within [0, t_max]."""
     t0 = 0.0
@@ -122,7 +121,7 @@ def _box_segment(lo, hi, o, u, t_max):
     return t0, t1
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _along(data, origin, resolution, lo, hi, o, u, t):
     """Distance at o + t u, the point clamped into the box (t is inside up to rounding)."""
     px = min(max(o[0] + t * u[0], lo[0]), hi[0])
@@ -131,7 +130,7 @@ def _along(data, origin, resolution, lo, hi, o, u, t):
     return _sample(data, origin, resolution, px, py, pz, np.inf)[0]
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _crossing(data, origin, resolution, lo, hi, o, u, a, fa, b, fb, tol):
     """The zero between a (value fa > 0) and b (fb < 0) by the Illinois method.
 
@@ -161,7 +160,7 @@ def _crossing(data, origin, resolution, lo, hi, o, u, a, fa, b, fb, tol):
     return m
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F3, F1, F, F2, F2, F1, F, I)
 def sphere_trace(
     data, origin, resolution, origins, directions, max_distance, tol, max_steps
 ):
@@ -228,7 +227,7 @@ def sphere_trace(
     return t_out, hit
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _triangle_distance2(px, py, pz, tri):
     """Squared distance from a point to a (3, 3) triangle (Ericson's regions)."""
     ax, ay, az = tri[0, 0], tri[0, 1], tri[0, 2]
@@ -279,7 +278,7 @@ def _triangle_distance2(px, py, pz, tri):
 _LEAF_SIZE = 4
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _build_bvh(triangles):
     """A bounding-volume hierarchy over (m, 3, 3) triangles, median splits.
 
@@ -363,7 +362,7 @@ def _build_bvh(triangles):
     return order, box_lo[:n_nodes], box_hi[:n_nodes], first, count, left
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _box_distance2(px, py, pz, box_lo, box_hi, node):
     d2 = 0.0
     for a, v in ((0, px), (1, py), (2, pz)):
@@ -374,7 +373,7 @@ def _box_distance2(px, py, pz, box_lo, box_hi, node):
     return d2
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F3)
 def mesh_distances(points, triangles):
     """Unsigned distances (n,) from points (n, 3) to the nearest of (m, 3, 3) triangles.
 
@@ -421,7 +420,7 @@ def mesh_distances(points, triangles):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, F3)
 def winding_numbers(points, triangles):
     """Generalised winding numbers (n,) of (m, 3, 3) triangles around (n, 3) points.
 

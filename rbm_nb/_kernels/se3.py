@@ -7,6 +7,8 @@ Conventions shared by every kernel here:
   (n, 6) ordered ``(dx, dy, dz, rx, ry, rz)``, quaternions (n, 4) ``w, x, y, z``;
 * where two operands are given, their first dimension is equal or 1 (that
   row is then reused for every output row, nothing is materialised);
+* quaternion exp/log reuse the scalar helpers of
+  :mod:`rbm_nb._kernels.quaternion` (numpy-quaternion's conventions);
 * nothing is validated: :mod:`rbm_nb.se3` checks shapes and values first.
   Kernels that can meet a singularity return, besides their result, the
   index of the first offending row (-1 when there is none) so that the public
@@ -18,9 +20,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from .._config import NJIT_OPTIONS
+from ._jit import F1, F2, F3, B, F, I, helper, kernel
+from .quaternion import _qexp1, _qlog1
 
 # Representation codes for ``rotvelxform`` (see rbm_nb.se3.REPRESENTATIONS).
 RPY_XYZ = 0
@@ -35,7 +37,7 @@ EXP = 4
 _SMALL_ANGLE = 1e-4
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2)
 def skew(v):
     """Skew-symmetric matrices of vectors, (n, 3) -> (n, 3, 3)."""
     n = v.shape[0]
@@ -51,7 +53,7 @@ def skew(v):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F3)
 def vex(s):
     """Vectors of (nearly) skew-symmetric matrices, (n, 3, 3) -> (n, 3).
 
@@ -67,7 +69,7 @@ def vex(s):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F3, F3)
 def tr2delta(t0, t1):
     """Differential motion from ``t0`` to ``t1`` in the ``t0`` frame.
 
@@ -102,7 +104,7 @@ def tr2delta(t0, t1):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2)
 def delta2tr(d):
     """``I + skewa(d)`` for differential motions, (n, 6) -> (n, 4, 4)."""
     n = d.shape[0]
@@ -125,7 +127,7 @@ def delta2tr(d):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F3)
 def tr2adjoint(t):
     """Adjoints ``[[R, skew(p) R], [0, R]]``, (n, 4, 4) -> (n, 6, 6)."""
     n = t.shape[0]
@@ -147,7 +149,7 @@ def tr2adjoint(t):
     return out
 
 
-@njit(inline="always", **NJIT_OPTIONS)
+@helper(inline=True)
 def _set3(out, i, a00, a01, a02, a10, a11, a12, a20, a21, a22):
     out[i, 0, 0] = a00
     out[i, 0, 1] = a01
@@ -160,7 +162,7 @@ def _set3(out, i, a00, a01, a02, a10, a11, a12, a20, a21, a22):
     out[i, 2, 2] = a22
 
 
-@njit(**NJIT_OPTIONS)
+@helper
 def _exp_jacobian(out, i, x, y, z, inverse):
     """``I + a K + b K @ K`` with ``K = skew(v)``: the exp-coordinate rates map.
 
@@ -196,7 +198,7 @@ def _exp_jacobian(out, i, x, y, z, inverse):
     return True
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F2, I, B, F)
 def rotvelxform(angles, representation, inverse, tol):
     """Rates-to-angular-velocity matrices (or their inverses), (n, 3) -> (n, 3, 3).
 
@@ -263,7 +265,7 @@ def rotvelxform(angles, representation, inverse, tol):
     return out, bad
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F3)
 def trnorm(t):
     """Re-orthonormalise the rotation block of (n, k, k) matrices, k = 3 or 4.
 
@@ -301,7 +303,7 @@ def trnorm(t):
     return out, bad
 
 
-@njit(inline="always", **NJIT_OPTIONS)
+@helper(inline=True)
 def _quaternion_of_block(m):
     """Unit quaternion of the rotation block of a 4 x 4 matrix (Shepperd).
 
@@ -342,7 +344,7 @@ def _quaternion_of_block(m):
     return (m[1, 0] - m[0, 1]) * f, (m[0, 2] + m[2, 0]) * f, (m[1, 2] + m[2, 1]) * f, z
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F3, F3, F1, B)
 def trinterp(t0, t1, s, shortest):
     """Slerp the rotations and lerp the translations of pose pairs.
 
@@ -401,36 +403,45 @@ def trinterp(t0, t1, s, shortest):
     return out
 
 
-@njit(**NJIT_OPTIONS)
+@helper(inline=True)
+def _is_rotation(m, i, tol):
+    """Whether the top-left 3 x 3 block of ``m[i]`` is a rotation within ``tol``.
+
+    Every entry of ``RᵀR - I`` within ``tol`` and ``det(R) > 0``; NaN fails.
+    """
+    worst = 0.0
+    for a in range(3):
+        for b in range(a, 3):
+            dot = (
+                m[i, 0, a] * m[i, 0, b]
+                + m[i, 1, a] * m[i, 1, b]
+                + m[i, 2, a] * m[i, 2, b]
+            )
+            dev = abs(dot - (1.0 if a == b else 0.0))
+            # a NaN deviation must count as bad: compare negated
+            if not dev <= worst:
+                worst = dev
+    det = (
+        m[i, 0, 0] * (m[i, 1, 1] * m[i, 2, 2] - m[i, 1, 2] * m[i, 2, 1])
+        - m[i, 0, 1] * (m[i, 1, 0] * m[i, 2, 2] - m[i, 1, 2] * m[i, 2, 0])
+        + m[i, 0, 2] * (m[i, 1, 0] * m[i, 2, 1] - m[i, 1, 1] * m[i, 2, 0])
+    )
+    return worst <= tol and det > 0.0
+
+
+@kernel(F3, F)
 def first_non_rotation(m, tol):
     """First row of (n, k, k) matrices (k >= 3) whose top-left 3 x 3 block is
     not a proper rotation: an entry of ``RᵀR - I`` beyond ``tol`` or
     ``det(R) <= 0``. Returns -1 when every row is one.
     """
     for i in range(m.shape[0]):
-        worst = 0.0
-        for a in range(3):
-            for b in range(a, 3):
-                dot = (
-                    m[i, 0, a] * m[i, 0, b]
-                    + m[i, 1, a] * m[i, 1, b]
-                    + m[i, 2, a] * m[i, 2, b]
-                )
-                dev = abs(dot - (1.0 if a == b else 0.0))
-                # a NaN deviation must count as bad: compare negated
-                if not dev <= worst:
-                    worst = dev
-        det = (
-            m[i, 0, 0] * (m[i, 1, 1] * m[i, 2, 2] - m[i, 1, 2] * m[i, 2, 1])
-            - m[i, 0, 1] * (m[i, 1, 0] * m[i, 2, 2] - m[i, 1, 2] * m[i, 2, 0])
-            + m[i, 0, 2] * (m[i, 1, 0] * m[i, 2, 1] - m[i, 1, 1] * m[i, 2, 0])
-        )
-        if not (worst <= tol and det > 0.0):
+        if not _is_rotation(m, i, tol):
             return i
     return -1
 
 
-@njit(**NJIT_OPTIONS)
+@kernel(F3, F, B)
 def first_bad_pose(m, tol, rotation):
     """First row of (n, 4, 4) matrices that is not a pose, and why.
 
@@ -451,6 +462,36 @@ def first_bad_pose(m, tol, rotation):
             or abs(m[i, 3, 3] - 1.0) > 1e-12
         ):
             return i, 2
-        if rotation and first_non_rotation(m[i : i + 1], tol) >= 0:
+        if rotation and not _is_rotation(m, i, tol):
             return i, 3
     return -1, 0
+
+
+@kernel(F2)
+def qexp(q):
+    """Quaternion exponentials, (n, 4) -> (n, 4) ``w, x, y, z`` (any norm)."""
+    out = np.empty_like(q)
+    for i in range(q.shape[0]):
+        w, x, y, z = _qexp1(q[i, 0], q[i, 1], q[i, 2], q[i, 3])
+        out[i, 0] = w
+        out[i, 1] = x
+        out[i, 2] = y
+        out[i, 3] = z
+    return out
+
+
+@kernel(F2)
+def qlog(q):
+    """Principal quaternion logarithms, (n, 4) -> (n, 4), of non-zero quaternions.
+
+    A negative real quaternion gets the vector part (pi, 0, 0), as in
+    numpy-quaternion.
+    """
+    out = np.empty_like(q)
+    for i in range(q.shape[0]):
+        w, x, y, z = _qlog1(q[i, 0], q[i, 1], q[i, 2], q[i, 3])
+        out[i, 0] = w
+        out[i, 1] = x
+        out[i, 2] = y
+        out[i, 3] = z
+    return out

@@ -47,7 +47,12 @@ def meshcat_js_path() -> Path:
         raise ModuleNotFoundError(
             "the 3D scene needs meshcat: pip install 'rbm_nb[notebook]'"
         )
-    path = Path(list(spec.submodule_search_locations)[0]) / "viewer" / "dist" / "main.min.js"
+    path = (
+        Path(list(spec.submodule_search_locations)[0])
+        / "viewer"
+        / "dist"
+        / "main.min.js"
+    )
     if not path.is_file():
         raise FileNotFoundError(f"meshcat's viewer bundle is missing: {path}")
     return path

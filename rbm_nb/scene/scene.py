@@ -94,6 +94,10 @@ class Scene:
     grid : bool, default True
         Draw a grid in the base's xy plane, sized to the scene; its spacing
         is in the legend.
+    max_samples : int, optional
+        Send at most this many samples per moving object to the browser
+        (evenly spaced). All samples by default: they go once, as float
+        buffers, when the view opens.
 
     Examples
     --------
@@ -107,7 +111,14 @@ class Scene:
     >>> scene.close()
     """
 
-    def __init__(self, base="world", *, name: str | None = None, grid: bool = True):
+    def __init__(
+        self,
+        base="world",
+        *,
+        name: str | None = None,
+        grid: bool = True,
+        max_samples: int | None = None,
+    ):
         self.base = _resolve(base, "Scene: base")
         if name is None:
             name = f"scene-{next(_counter)}-{uuid.uuid4().hex[:6]}"
@@ -115,6 +126,15 @@ class Scene:
             raise ValueError(
                 f"Scene: name must be letters, digits, '-' or '_', got {name!r}"
             )
+        if max_samples is not None and (
+            isinstance(max_samples, bool)
+            or not isinstance(max_samples, (int, np.integer))
+            or max_samples < 2
+        ):
+            raise ValueError(
+                f"Scene: max_samples must be an integer >= 2 or None, got {max_samples!r}"
+            )
+        self.max_samples = None if max_samples is None else int(max_samples)
         self.name = name
         self.state = SceneState()
         self._lock = threading.RLock()
@@ -528,7 +548,7 @@ class Scene:
                 if self._camera is None:
                     self._camera = self._fitted_camera()
                     self._camera_is_auto = True
-                widget = SceneWidget(self._snapshot_message)
+                widget = SceneWidget(lambda: self._snapshot_message(self.max_samples))
                 self._widget = widget
                 for name in (
                     "_origin",
@@ -992,11 +1012,11 @@ class Scene:
         origin = self.state.origin
         if self._widget._origin != origin:  # the time base moved: resend everything
             self._widget._origin = origin
-            self._widget.push(*self._snapshot_message())
+            self._widget.push(*self._snapshot_message(self.max_samples))
             return
         sub = SceneState()
         sub.tracks = {p: self.state.tracks[p] for p in paths}
-        meta, buffers = sub.track_payload(origin=origin)
+        meta, buffers = sub.track_payload(max_samples=self.max_samples, origin=origin)
         self._widget.push(
             {"type": "tracks", "tracks": meta, "remove": list(removed)}, buffers
         )

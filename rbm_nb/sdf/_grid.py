@@ -7,6 +7,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._door import kernel_array
 from .._validation import as_float_array, check_finite, check_last_axis
 from ..rigid_transform import Transform
 from . import _mesh
@@ -18,6 +19,12 @@ def _kernels():
     from .._kernels import sdf
 
     return sdf
+
+
+def _read_only(arr: np.ndarray) -> np.ndarray:
+    view = arr.view()
+    view.flags.writeable = False
+    return view
 
 
 def _points(value, name: str) -> np.ndarray:
@@ -149,10 +156,11 @@ class GridSDF:
                     "frame must be a ReferenceFrame, the name of a registered frame "
                     f"or None, got {type(frame).__name__}"
                 )
-        self._data = np.ascontiguousarray(np.abs(data) if use_abs else data)
-        self._data.flags.writeable = False
+        # private copies the kernels read (they take writeable arrays); the
+        # properties hand out read-only views, so the grid cannot change
+        # behind its back, through the caller's array or through them
+        self._data = kernel_array(np.abs(data)) if use_abs else data.copy(order="C")
         self._origin = origin.copy()
-        self._origin.flags.writeable = False
         self._resolution = resolution
         self._frame = frame
         self._fill_value = fill_value
@@ -163,12 +171,12 @@ class GridSDF:
     @property
     def data(self) -> np.ndarray:
         """The node values, shape (nx, ny, nz), read-only."""
-        return self._data
+        return _read_only(self._data)
 
     @property
     def origin(self) -> np.ndarray:
-        """Position of node (0, 0, 0) in the grid's frame, shape (3,)."""
-        return self._origin
+        """Position of node (0, 0, 0) in the grid's frame, shape (3,), read-only."""
+        return _read_only(self._origin)
 
     @property
     def resolution(self) -> float:
@@ -289,7 +297,7 @@ class GridSDF:
         pose = self._pose(frame, timestamps, p.shape[:-1], what)
         if pose is not None:
             p = pose.apply(p)
-        return np.ascontiguousarray(p.reshape(-1, 3)), p.shape[:-1], pose
+        return kernel_array(p.reshape(-1, 3)), p.shape[:-1], pose
 
     # -- queries -----------------------------------------------------------------
 
@@ -478,9 +486,9 @@ class GridSDF:
             self._data,
             self._origin,
             self._resolution,
-            np.ascontiguousarray(o_grid.reshape(-1, 3)),
-            np.ascontiguousarray(u_grid.reshape(-1, 3)),
-            np.ascontiguousarray(reach.reshape(-1), dtype=np.float64),
+            kernel_array(o_grid.reshape(-1, 3)),
+            kernel_array(u_grid.reshape(-1, 3)),
+            kernel_array(reach.reshape(-1)),
             float(tolerance),
             int(max_steps),
         )
@@ -489,9 +497,7 @@ class GridSDF:
         points = o + t[..., None] * u
         normals = np.full(lead + (3,), np.nan)
         if hit.any():
-            at = np.ascontiguousarray(
-                (o_grid + t[..., None] * u_grid)[hit].reshape(-1, 3)
-            )
+            at = kernel_array((o_grid + t[..., None] * u_grid)[hit].reshape(-1, 3))
             g = k.grid_gradients(self._data, self._origin, self._resolution, at)
             with np.errstate(invalid="ignore", divide="ignore"):
                 g = g / np.linalg.norm(g, axis=1, keepdims=True)

@@ -11,6 +11,7 @@ import tempfile
 
 import numpy as np
 
+from .._door import kernel_array
 from .._validation import as_float_array, check_finite, check_last_axis
 
 # more nodes than this is almost certainly a resolution given in the wrong unit
@@ -73,8 +74,11 @@ def sample_mesh(mesh, resolution, padding, use_abs: bool):
             f"(> {MAX_GRID_NODES}); use a coarser resolution"
         )
     axes = [lower[a] + np.arange(counts[a]) * resolution for a in range(3)]
-    nodes = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-    triangles = np.ascontiguousarray(tm.triangles, dtype=np.float64)
+    nodes = kernel_array(
+        np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    )
+    # trimesh hands out its cached arrays read-only: the door copies them
+    triangles = kernel_array(tm.triangles)
     distance = _kernels().mesh_distances(nodes, triangles)
     # nodes on the surface come out at ~1e-17 with a sign that is pure
     # rounding (and the level set would zigzag through them): make them 0
@@ -146,9 +150,7 @@ def _inside(nodes, distance, shape, resolution, triangles) -> np.ndarray:
     first = first[regions > 0]
     near = np.flatnonzero(labels == 0)
     queries = np.concatenate([near, first])
-    winding = _kernels().winding_numbers(
-        np.ascontiguousarray(nodes[queries]), triangles
-    )
+    winding = _kernels().winding_numbers(kernel_array(nodes[queries]), triangles)
     # |w| copes with meshes whose faces all point inwards
     inside_query = np.abs(winding) > 0.5
     region_inside = np.zeros(count + 1, dtype=bool)

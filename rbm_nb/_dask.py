@@ -1,0 +1,470 @@
+"""Lazy evaluation of rbm_nb's array functions on dask-backed data.
+
+A public function that receives a dask-backed DataArray (or a dask array)
+hands it here instead of converting it to NumPy. The work is cut along time
+into one task per chunk; each task runs the ordinary eager function on its
+chunk, read with enough neighbouring samples (the *halo*) that its result
+equals the eager result on the whole array:
+
+- transforms look the frames up at each sample's own time, so a chunk needs
+  no neighbours (halo 0);
+- finite differences need the next samples, the not-a-knot spline through
+  quaternions about 30 (its influence decays by 2 - sqrt(3) per sample), and
+  the Butterworth low-pass as many as its slowest pole needs to decay to
+  1e-16;
+- quaternion series whose velocity is estimated are made sign-continuous
+  once, lazily, before they are cut (the eager estimators make them
+  sign-continuous from the first sample on, which a chunk cannot see).
+
+Frames stay in memory. Nothing is computed until the caller computes the
+result; dask is imported only when dask-backed data arrives.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+# samples of not-a-knot spline influence kept on each side: 0.268**32 < 1e-18
+SPLINE_HALO = 32
+# samples beyond a chunk that a finite difference (np.gradient scheme) reads
+GRADIENT_HALO = 2
+# samples of squad neighbours (q[i-1] .. q[i+2]) plus one for safety
+SQUAD_HALO = 3
+
+
+def is_dask(obj: Any) -> bool:
+    """Whether ``obj`` is a dask array or a DataArray backed by one."""
+    module = sys.modules.get("dask.array")
+    if module is None:
+        return False
+    if isinstance(obj, module.Array):
+        return True
+    xarray = sys.modules.get("xarray")
+    return (
+        xarray is not None
+        and isinstance(obj, xarray.DataArray)
+        and isinstance(obj.data, module.Array)
+    )
+
+
+def filter_halo(order: int, cutoff: float, padlen: int) -> int:
+    """Samples after which a forward-backward Butterworth response is below 1e-16."""
+    from scipy.signal import butter
+
+    _, poles, _ = butter(order, cutoff, output="zpk")
+    radius = float(np.max(np.abs(poles)))
+    return padlen + int(math.ceil(math.log(1e-16) / math.log(radius)))
+
+
+# ---------------------------------------------------------------------------
+# the engine: one task per time chunk
+# ---------------------------------------------------------------------------
+
+
+def over_time(
+    func: Callable,
+    arr,
+    time_dim: str,
+    *,
+    halo: int = 0,
+    start: int = 0,
+    stop: int | None = None,
+    fill: Any = 0.0,
+    global_seconds: bool = False,
+):
+    """Apply an eager DataArray function lazily, one time chunk at a time.
+
+    Parameters
+    ----------
+    func : callable
+        ``func(block) -> DataArray`` on a NumPy-backed DataArray; it must
+        return the block's samples along ``time_dim`` (same count, same order).
+    arr : xarray.DataArray
+        Dask-backed input.
+    time_dim : str
+        The dimension cut into chunks (its own chunks are kept).
+    halo : int
+        Samples read beyond each chunk edge and dropped from its result.
+    start, stop : int
+        Only samples ``start:stop`` along ``time_dim`` are processed.
+    fill : float or {dim: sequence}
+        Values of the stand-in data used to learn the result's layout without
+        computing anything (e.g. the identity quaternion along the quaternion
+        dimension).
+    global_seconds : bool
+        Hand each block a datetime64 time coordinate as float seconds from
+        the first sample of the whole array, computed as the eager functions
+        compute them, so that time differences -- and what is divided by
+        them -- are the same to the bit as in one eager call (for functions
+        that need no other timestamps, e.g. the velocity estimators).
+
+    Returns
+    -------
+    xarray.DataArray
+        Dask-backed, chunked along ``time_dim`` like ``arr``.
+    """
+    import dask
+    import dask.array as dsa
+    import xarray as xr
+
+    n = arr.sizes[time_dim]
+    stop = n if stop is None else stop
+    arr = arr.chunk({d: -1 for d in arr.dims if d != time_dim})
+    t_axis = arr.dims.index(time_dim)
+    layout = func(_stand_in(arr, time_dim, start, stop, fill))
+    out_axis = layout.dims.index(time_dim)
+
+    source = arr
+    if global_seconds and arr[time_dim].dtype.kind == "M":
+        source = arr.assign_coords({time_dim: _seconds_from_first(arr[time_dim].values)})
+    blocks = []
+    run = dask.delayed(_run_block, pure=True)
+    for lo, hi in _chunk_bounds(arr.chunks[t_axis], start, stop):
+        read_lo, read_hi = max(0, lo - halo), min(n, hi + halo)
+        piece = source.isel({time_dim: slice(read_lo, read_hi)})
+        task = run(
+            func,
+            piece.data,
+            {k: v.variable for k, v in piece.coords.items()},
+            piece.dims,
+            piece.name,
+            piece.attrs,
+            time_dim,
+            layout.dims,
+            lo - read_lo,
+            hi - read_lo,
+        )
+        shape = list(layout.shape)
+        shape[out_axis] = hi - lo
+        blocks.append(dsa.from_delayed(task, tuple(shape), dtype=layout.dtype))
+    data = dsa.concatenate(blocks, axis=out_axis)
+
+    kept = arr.isel({time_dim: slice(start, stop)})
+    coords = {
+        k: v.variable for k, v in kept.coords.items() if time_dim in v.dims
+    }
+    coords.update(
+        {k: v.variable for k, v in layout.coords.items() if time_dim not in v.dims}
+    )
+    return xr.DataArray(data, coords, layout.dims, layout.name, layout.attrs)
+
+
+def _seconds_from_first(times: np.ndarray) -> np.ndarray:
+    """datetime64 times as float seconds from the first, as rbm_nb._time does."""
+    from ._time import seconds
+
+    return seconds(times, len(times), "time")
+
+
+def _chunk_bounds(chunks: Sequence[int], start: int, stop: int) -> list[tuple[int, int]]:
+    bounds, edge = [], 0
+    for size in chunks:
+        lo, hi = max(edge, start), min(edge + size, stop)
+        if lo < hi:
+            bounds.append((lo, hi))
+        edge += size
+    return bounds
+
+
+def _stand_in(arr, time_dim: str, start: int, stop: int, fill):
+    """A small NumPy DataArray shaped like ``arr`` (real coordinates, fill data)."""
+    import xarray as xr
+
+    rows = min(stop - start, 64)
+    part = arr.isel({time_dim: slice(start, start + rows)})
+    if isinstance(fill, dict):
+        ((dim, values),) = fill.items()
+        data = _filled(part.shape, values, part.dims.index(dim))
+    else:
+        data = _filled(part.shape, fill, 0)
+    coords = {k: v.variable.compute() for k, v in part.coords.items()}
+    return xr.DataArray(data, coords, part.dims, part.name, part.attrs)
+
+
+def _run_block(func, data, coords, dims, name, attrs, time_dim, out_dims, lo, hi):
+    import xarray as xr
+
+    block = xr.DataArray(np.asarray(data), coords, dims, name, attrs)
+    out = func(block).transpose(*out_dims)
+    return np.asarray(out.isel({time_dim: slice(lo, hi)}).data)
+
+
+# ---------------------------------------------------------------------------
+# what the public functions call
+# ---------------------------------------------------------------------------
+
+
+def as_dataarray(arr, time_axis: int | None, timestamps):
+    """A plain dask array as a DataArray with a ``time`` coordinate."""
+    import xarray as xr
+
+    time_axis = 0 if time_axis is None else time_axis % arr.ndim
+    dims = [f"dim_{k}" for k in range(arr.ndim)]
+    dims[time_axis] = "time"
+    coords = {}
+    if timestamps is not None:
+        coords["time"] = np.asarray(timestamps)
+    return xr.DataArray(arr, coords, dims)
+
+
+def sign_continuous(q, time_dim: str, qdim: str):
+    """Quaternions negated where needed so that successive ones have dot >= 0.
+
+    The lazy counterpart of the kernels' sign correction, computed once over
+    the whole series (a cumulative parity of sign changes), so that chunks
+    cut from it need no correction of their own.
+    """
+    import dask.array as dsa
+    import xarray as xr
+
+    dots = (q * q.shift({time_dim: 1})).sum(qdim, skipna=False)
+    flips = xr.where(dots < 0, 1, 0)
+    parity = xr.DataArray(
+        dsa.cumsum(flips.data, axis=flips.dims.index(time_dim)) % 2,
+        flips.coords,
+        flips.dims,
+    )
+    return q * (1 - 2 * parity)
+
+
+def frame_time_range(outof, into):
+    """First and last time at which every continuous moving frame of the chain is defined."""
+    up, down = _path(outof), _path(into)
+    while up and down and up[-1] is down[-1]:
+        up.pop()
+        down.pop()
+    firsts, lasts = [], []
+    for frame in up + down:
+        ts = frame.timestamps
+        if ts is not None and not frame.discrete:
+            firsts.append(ts[0])
+            lasts.append(ts[-1])
+    if not firsts:
+        return None
+    return max(firsts), min(lasts)
+
+
+def _path(frame) -> list:
+    path = []
+    while frame is not None:
+        path.append(frame)
+        frame = frame.parent
+    return path
+
+
+def transform(eager: Callable, arr, into, outof, dim, axis, timestamps, time_axis,
+              return_timestamps: bool, resolve: Callable, attr: str, quaternions: bool):
+    """A transform of dask-backed data: the frames looked up at each chunk's times."""
+    plain = not hasattr(arr, "dims")
+    if plain:
+        if timestamps is None:
+            raise ValueError(
+                "a dask array needs timestamps= to be transformed lazily "
+                "(without them the result would follow the frames' own times)"
+            )
+        arr = as_dataarray(arr, time_axis, timestamps)
+        spatial = arr.dims[-1 if axis is None else axis % arr.ndim]
+        time_dim, dim, axis = "time", spatial, None
+    else:
+        time_dim = timestamps if isinstance(timestamps, str) else arr.dims[0 if time_axis is None else time_axis]
+        if time_dim not in arr.coords:
+            raise ValueError(
+                f"the dask-backed DataArray needs a coordinate for its time "
+                f"dimension {time_dim!r} to be transformed lazily"
+            )
+    source = outof if outof is not None else arr.attrs.get(attr)
+    span = None if source is None else frame_time_range(resolve(source, "outof"), resolve(into, "into"))
+    times = arr[time_dim].values
+    start, stop = 0, len(times)
+    if span is not None:
+        start = int(np.searchsorted(times, span[0], side="left"))
+        stop = int(np.searchsorted(times, span[1], side="right"))
+        if stop <= start:
+            raise ValueError(
+                f"the array's times ({times[0]} to {times[-1]}) and the frames' "
+                f"({span[0]} to {span[1]}) do not overlap"
+            )
+
+    def block(b):
+        return eager(b, into, outof=outof, dim=dim, axis=axis, timestamps=time_dim)
+
+    comp_dim = dim if dim is not None else arr.dims[-1 if axis is None else axis]
+    fill = {comp_dim: (1.0, 0.0, 0.0, 0.0) if quaternions else 0.0}
+    out = over_time(block, arr, time_dim, start=start, stop=stop, fill=fill)
+    if plain:
+        data = out.data
+        return (data, times[start:stop]) if return_timestamps else data
+    return out
+
+
+def estimate(eager: Callable, arr, dim, axis, timestamps, time_axis, halo: int,
+             quaternions: bool = False, **options):
+    """A velocity estimate of dask-backed data, chunk by chunk with a halo."""
+    plain = not hasattr(arr, "dims")
+    if plain:
+        if timestamps is None:
+            raise ValueError("timestamps must be given for a dask array")
+        arr = as_dataarray(arr, time_axis, timestamps)
+        dim = arr.dims[-1 if axis is None else axis % arr.ndim]
+        time_dim, axis = "time", None
+    else:
+        time_dim = timestamps if isinstance(timestamps, str) else arr.dims[0 if time_axis is None else time_axis]
+    comp_dim = dim if dim is not None else arr.dims[-1 if axis is None else axis]
+    if quaternions:
+        arr = sign_continuous(arr, time_dim, comp_dim)
+
+    def block(b):
+        return eager(b, dim=dim, axis=axis, timestamps=time_dim, **options)
+
+    fill = {comp_dim: (1.0, 0.0, 0.0, 0.0) if quaternions else 0.0}
+    out = over_time(block, arr, time_dim, halo=halo, fill=fill, global_seconds=True)
+    return out.data if plain else out
+
+
+def elementwise(eager: Callable, arr, core_dim: str | int, fill: Any = 0.0, **kwargs):
+    """A function acting on each sample alone (coordinate systems, one-array
+    quaternion functions), lazily per chunk.
+
+    ``core_dim`` (a dimension name, or an axis of a plain dask array) holds
+    the components and is put in one chunk; other chunks stay as they are.
+    """
+    if hasattr(arr, "dims"):
+        others = [d for d in arr.dims if d != core_dim]
+        if not others:
+            raise ValueError(
+                f"a dask-backed DataArray with only the dimension {core_dim!r} "
+                f"has nothing to process in chunks; call .compute() first"
+            )
+        chunked = max(others, key=lambda d: len(arr.chunksizes.get(d, (1,))))
+        return over_time(
+            lambda block: eager(block, **kwargs), arr, chunked, fill={core_dim: fill}
+        )
+    axis = core_dim % arr.ndim
+    data = arr.rechunk({axis: -1})
+    stand_in = _filled(
+        tuple(s if k == axis else 1 for k, s in enumerate(data.shape)), fill, axis
+    )
+    layout = np.asarray(eager(stand_in, **kwargs))
+    if layout.ndim != data.ndim:
+        raise ValueError(
+            "this function changes the number of dimensions; it cannot be "
+            "applied lazily per chunk"
+        )
+    chunks = tuple(
+        (layout.shape[k],) if k == axis else c for k, c in enumerate(data.chunks)
+    )
+    return data.map_blocks(
+        lambda block: np.asarray(eager(block, **kwargs)),
+        dtype=layout.dtype,
+        chunks=chunks,
+    )
+
+
+def blockwise(eager: Callable, arrays: Sequence[Any], core_dims: Sequence[str],
+              out_core_dim: str, **kwargs):
+    """A function of several aligned DataArrays that acts on each sample alone.
+
+    ``eager(*blocks, **kwargs)`` receives NumPy arrays whose last axis is the
+    corresponding ``core_dims`` entry and returns one with ``out_core_dim`` last.
+    """
+    import xarray as xr
+
+    return xr.apply_ufunc(
+        lambda *blocks: np.asarray(eager(*blocks, **kwargs)),
+        *arrays,
+        input_core_dims=[[d] for d in core_dims],
+        output_core_dims=[[out_core_dim]],
+        dask="parallelized",
+        output_dtypes=[np.float64],
+        dask_gufunc_kwargs={"allow_rechunk": True},
+        keep_attrs=True,
+    )
+
+
+def _filled(shape: tuple[int, ...], fill: Any, axis: int) -> np.ndarray:
+    data = np.empty(shape)
+    values = np.asarray(fill, dtype=float)
+    if values.ndim:
+        view = [1] * len(shape)
+        view[axis] = values.size
+        data[...] = values.reshape(view)
+    else:
+        data[...] = values
+    return data
+
+
+def qinterp(eager: Callable, da, dim: str, qdim: str, t_out, out_of_range: str):
+    """Squad of dask-backed quaternions at new times, one output chunk per task.
+
+    ``eager(da, dim, qdim, t_out, out_of_range=...)`` is the in-memory
+    interpolation. Each output chunk reads the input samples around its
+    times plus the squad neighbours. No sign correction is needed across
+    chunks: the eager version gives each value the sign of the stored sample
+    its segment starts from, which a chunk has.
+    """
+    import dask
+    import dask.array as dsa
+    import xarray as xr
+
+    if dim not in da.coords:
+        raise ValueError(f"dimension {dim!r} has no coordinate to interpolate from")
+    t_in = da[dim].values
+    t_new = np.asarray(getattr(t_out, "values", t_out))
+    if t_new.ndim != 1:
+        raise NotImplementedError(
+            "lazy qinterp of dask-backed data takes a one-dimensional new "
+            f"coordinate, got shape {t_new.shape}"
+        )
+    if out_of_range == "raise" and t_new.size and (
+        t_new.min() < t_in[0] or t_new.max() > t_in[-1]
+    ):
+        raise ValueError(
+            f"the new times ({t_new.min()} to {t_new.max()}) leave the sampled "
+            f"range of {dim!r} ({t_in[0]} to {t_in[-1]})"
+        )
+    others = [d for d in da.dims if d not in (dim, qdim)]
+    # the layout and coordinates of the result, from one series of identity
+    # quaternions (in memory, so nothing of the user's data is computed)
+    stand_in = da.isel({d: slice(0, 1) for d in others})
+    stand_in = xr.DataArray(
+        _filled(stand_in.shape, (1.0, 0.0, 0.0, 0.0), stand_in.dims.index(qdim)),
+        {k: v.variable.compute() for k, v in stand_in.coords.items()},
+        stand_in.dims, da.name, da.attrs,
+    )
+    layout = eager(stand_in, dim, qdim, t_out, out_of_range=out_of_range)
+
+    q = da.chunk({d: -1 for d in da.dims if d != dim})
+    size = max(q.chunksizes[dim])
+    axis = layout.dims.index(dim)
+    run = dask.delayed(_run_qinterp, pure=True)
+    blocks = []
+    for j0 in range(0, t_new.size, size):
+        part = t_new[j0 : j0 + size]
+        lo = int(np.searchsorted(t_in, part.min(), side="right")) - 1 - SQUAD_HALO
+        hi = int(np.searchsorted(t_in, part.max(), side="left")) + 1 + SQUAD_HALO
+        piece = q.isel({dim: slice(max(lo, 0), min(hi, len(t_in)))})
+        task = run(
+            eager, piece.data, {k: v.variable for k, v in piece.coords.items()},
+            piece.dims, da.name, da.attrs, dim, qdim, part, out_of_range, layout.dims,
+        )
+        shape = [da.sizes.get(d, 0) for d in layout.dims]
+        shape[axis] = part.size
+        shape[layout.dims.index(qdim)] = 4
+        blocks.append(dsa.from_delayed(task, tuple(shape), dtype=np.float64))
+    data = dsa.concatenate(blocks, axis=axis)
+    coords = {k: v.variable for k, v in layout.coords.items() if not set(v.dims) & set(others)}
+    coords.update({k: v.variable for k, v in da.coords.items() if set(v.dims) <= set(others) and v.dims})
+    return xr.DataArray(data, coords, layout.dims, layout.name, layout.attrs)
+
+
+def _run_qinterp(eager, data, coords, dims, name, attrs, dim, qdim, part, out_of_range, out_dims):
+    import xarray as xr
+
+    block = xr.DataArray(np.asarray(data), coords, dims, name, attrs)
+    out = eager(block, dim, qdim, part, out_of_range=out_of_range)
+    return np.asarray(out.transpose(*out_dims).data)

@@ -1,0 +1,214 @@
+"""dask-backed inputs stay lazy through the array functions and equal the eager results."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+dask = pytest.importorskip("dask")
+import dask.array as dsa  # noqa: E402
+from dask.callbacks import Callback  # noqa: E402
+
+import rbm_nb as rbm  # noqa: E402
+from rbm_nb.data import synthetic_head_eye  # noqa: E402
+
+CHUNK = 700
+
+
+class ComputeCounter(Callback):
+    """Counts the graphs dask executes (each compute/persist/.values is one)."""
+
+    def __init__(self):
+        super().__init__()
+        self.count = 0
+
+    def _start(self, dsk):
+        self.count += 1
+
+
+@pytest.fixture(scope="module")
+def recording():
+    return synthetic_head_eye(duration=20.0, seed=3)
+
+
+@pytest.fixture
+def tree(recording):
+    rbm.register_frame("world")
+    rbm.ReferenceFrame.from_dataset(
+        recording.head, "position", "orientation", "time", parent="world", name="head"
+    ).register()
+
+
+def _eye(recording, var):
+    return recording.left_eye[var].dropna("time")
+
+
+def _cases(recording):
+    pos = _eye(recording, "position")
+    q = _eye(recording, "orientation")
+    head_times = recording.head.time.values[50:2000]
+    return {
+        "transform_points": (
+            pos,
+            lambda a: rbm.transform_points(
+                a, outof="head", into="world", dim="cartesian_axis", timestamps="time"
+            ),
+        ),
+        "transform_vectors": (
+            pos,
+            lambda a: rbm.transform_vectors(a, outof="head", into="world", dim="cartesian_axis"),
+        ),
+        "transform_quaternions": (
+            q,
+            lambda a: rbm.transform_quaternions(
+                a, outof="head", into="world", dim="quaternion_axis"
+            ),
+        ),
+        "estimate_linear_velocity": (
+            pos,
+            lambda a: rbm.estimate_linear_velocity(a, dim="cartesian_axis"),
+        ),
+        "estimate_linear_velocity_cutoff": (
+            pos,
+            lambda a: rbm.estimate_linear_velocity(a, dim="cartesian_axis", cutoff=0.1),
+        ),
+        "estimate_angular_velocity": (
+            q,
+            lambda a: rbm.estimate_angular_velocity(a, dim="quaternion_axis"),
+        ),
+        "estimate_angular_velocity_rotvec": (
+            q,
+            lambda a: rbm.estimate_angular_velocity(
+                a, dim="quaternion_axis", mode="rotation_vector"
+            ),
+        ),
+        "qinterp_accessor": (q, lambda a: a.rbm.qinterp(time=head_times)),
+        "qinv": (q, lambda a: rbm.qinv(a, qaxis=1)),
+        "qmul": (q, lambda a: rbm.qmul(a, rbm.qinv(a, qaxis=1), qaxis=1)),
+        "rotate_vectors_single_q": (
+            pos,
+            lambda a: rbm.rotate_vectors(np.array([0.5, 0.5, 0.5, 0.5]), a),
+        ),
+        "transform_coordinates": (
+            pos,
+            lambda a: rbm.transform_coordinates(
+                a, "spherical", outof="cartesian", dim="cartesian_axis"
+            ),
+        ),
+    }
+
+
+CASES = list(_cases(synthetic_head_eye(duration=16.0, seed=0)))
+
+
+@pytest.mark.parametrize("name", CASES)
+def test_dataarray_results_are_lazy_and_equal(name, recording, tree):
+    data, func = _cases(recording)[name]
+    eager = func(data)
+    lazy_in = data.chunk(time=CHUNK)
+    counter = ComputeCounter()
+    with counter:
+        lazy = func(lazy_in)
+    assert counter.count == 0, f"{name} computed {counter.count} graph(s) before being asked"
+    assert isinstance(lazy.data, dsa.Array), f"{name} returned {type(lazy.data)}"
+    assert lazy.dims == eager.dims
+    assert list(lazy.coords) == list(eager.coords)
+    assert lazy.attrs == eager.attrs
+    if lazy.sizes["time"] == lazy_in.sizes["time"]:
+        assert lazy.chunks[lazy.dims.index("time")] == lazy_in.chunks[lazy_in.dims.index("time")]
+    with counter:
+        result = lazy.compute()
+    assert counter.count == 1
+    np.testing.assert_array_equal(result["time"].values, eager["time"].values)
+    if name.endswith("_cutoff"):
+        # a 7th-order Butterworth in transfer-function form (as filtfilt runs
+        # it) carries ~1e-10 of rounding noise that depends on where the pass
+        # starts: chunks read from other starts than one eager call
+        np.testing.assert_allclose(result.values, eager.values, rtol=1e-8, atol=1e-10)
+    else:
+        np.testing.assert_allclose(result.values, eager.values, rtol=1e-11, atol=1e-12)
+
+
+def test_plain_dask_arrays(recording, tree):
+    pos = _eye(recording, "position")
+    ts = pos.time.values
+    eager, eager_ts = rbm.transform_points(
+        pos.values, outof="head", into="world", timestamps=ts, return_timestamps=True
+    )
+    lazy, lazy_ts = rbm.transform_points(
+        dsa.from_array(pos.values, chunks=(CHUNK, 3)),
+        outof="head",
+        into="world",
+        timestamps=ts,
+        return_timestamps=True,
+    )
+    assert isinstance(lazy, dsa.Array)
+    np.testing.assert_array_equal(lazy_ts, eager_ts)
+    np.testing.assert_allclose(lazy.compute(), eager, rtol=1e-12, atol=1e-14)
+
+    q_da = _eye(recording, "orientation")
+    q, ts = q_da.values, q_da.time.values
+    lq = dsa.from_array(q, chunks=(CHUNK, 4))
+    np.testing.assert_array_equal(rbm.qinv(lq).compute(), rbm.qinv(q))
+    np.testing.assert_allclose(
+        rbm.estimate_angular_velocity(lq, timestamps=ts).compute(),
+        rbm.estimate_angular_velocity(q, timestamps=ts),
+        rtol=1e-11,
+        atol=1e-12,
+    )
+    np.testing.assert_array_equal(
+        rbm.cartesian_to_spherical(dsa.from_array(pos.values, chunks=(CHUNK, 3))).compute(),
+        rbm.cartesian_to_spherical(pos.values),
+    )
+    t_out = ts[10:-10:3]
+    np.testing.assert_allclose(
+        rbm.qinterp(lq, ts, t_out).compute(), rbm.qinterp(q, ts, t_out), rtol=1e-12, atol=1e-14
+    )
+
+
+def test_transform_crops_to_the_frames_range(recording, tree):
+    """Samples outside a frame's time range are dropped, as eagerly; chunk sizes stay known."""
+    part = recording.head.isel(time=slice(500, 2500))
+    rbm.ReferenceFrame.from_dataset(
+        part, "position", "orientation", "time", parent="world", name="head_part"
+    ).register()
+    pos = _eye(recording, "position")
+    eager = rbm.transform_points(pos, outof="head_part", into="world", dim="cartesian_axis")
+    lazy = rbm.transform_points(
+        pos.chunk(time=CHUNK), outof="head_part", into="world", dim="cartesian_axis"
+    )
+    assert 0 < eager.sizes["time"] < pos.sizes["time"]
+    assert lazy.sizes["time"] == eager.sizes["time"]
+    assert not np.isnan(sum(lazy.chunks[0]))
+    np.testing.assert_allclose(lazy.values, eager.values, rtol=1e-12, atol=1e-14)
+
+
+def test_sign_flips_across_chunks(recording, tree):
+    """Chunks that start on a negated quaternion give the eager result all the same."""
+    q = _eye(recording, "orientation")
+    # relative to the first sample: angles well below pi, where rotation
+    # vectors are well conditioned
+    relative = rbm.qmul(rbm.qinv(q.values[0]), q.values)
+    signs = np.where(np.arange(q.sizes["time"]) % 3 == 0, -1.0, 1.0)[:, None]
+    flipped = q.copy(data=relative * signs)
+    lazy = rbm.estimate_angular_velocity(
+        flipped.chunk(time=CHUNK), dim="quaternion_axis", mode="rotation_vector"
+    )
+    eager = rbm.estimate_angular_velocity(flipped, dim="quaternion_axis", mode="rotation_vector")
+    # a chunk's times count from its own first sample: differences of a few
+    # ulps of the times, magnified by 1/dt, are all that may differ
+    np.testing.assert_allclose(lazy.values, eager.values, rtol=1e-11, atol=1e-11)
+
+
+def test_outlier_rejection_is_refused_lazily(recording):
+    pos = _eye(recording, "position").chunk(time=CHUNK)
+    with pytest.raises(NotImplementedError, match="outlier_thresh"):
+        rbm.estimate_linear_velocity(pos, dim="cartesian_axis", outlier_thresh=1e-3)
+
+
+def test_velocity_transforms_say_they_are_not_lazy(recording, tree):
+    v = _eye(recording, "position").chunk(time=CHUNK)
+    with pytest.raises(NotImplementedError, match="compute"):
+        rbm.transform_linear_velocity(
+            v, outof="head", into="world", what="representation_frame", dim="cartesian_axis"
+        )

@@ -1,0 +1,286 @@
+"""Studies of many recordings: threads, a real dask.distributed LocalCluster, windows."""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+import time
+
+import numpy as np
+import pytest
+import xarray as xr
+
+pytest.importorskip("dask")
+
+import rbm_nb as rbm  # noqa: E402
+from rbm_nb.explorer import SCENE_CAM_ROTATION, SCENE_CAM_TRANSLATION  # noqa: E402
+from rbm_nb.data import synthetic_head_eye  # noqa: E402
+from rbm_nb.study import open_study  # noqa: E402
+
+N_RECORDINGS = 8
+
+
+def build_frames(rec):
+    """Head and scene-camera-fixed eye frames, as objects (tasks share the registry)."""
+    world = rbm.ReferenceFrame("world")
+    head = rbm.ReferenceFrame.from_dataset(
+        rec["head"], "position", "orientation", "time", parent=world, name="head"
+    )
+    camera = rbm.ReferenceFrame(
+        "scene_cam", head, translation=SCENE_CAM_TRANSLATION, rotation=SCENE_CAM_ROTATION
+    )
+    eye = rbm.ReferenceFrame.from_dataset(
+        rec["left_eye"].dropna("time"),
+        "position",
+        "orientation",
+        "time",
+        parent=camera,
+        name="left_eye",
+    )
+    return {"world": world, "head": head, "left_eye": eye}
+
+
+def head_and_gaze(rec, frames):
+    """Head speed and the left eye's line of sight in the world, over time."""
+    v = rbm.lookup_linear_velocity(frames["head"], frames["world"], as_dataarray=True)
+    sight = xr.DataArray(
+        np.tile([0.0, 0.0, 1.0], (frames["left_eye"].timestamps.size, 1)),
+        {"time": frames["left_eye"].timestamps, "cartesian_axis": list("xyz")},
+        ("time", "cartesian_axis"),
+    )
+    gaze = rbm.transform_vectors(
+        sight, outof=frames["left_eye"], into=frames["world"], dim="cartesian_axis"
+    )
+    speed = np.sqrt((v**2).sum("cartesian_axis"))
+    return xr.Dataset({"head_speed": speed, "gaze": gaze.rename(time="eye_time")})
+
+
+def summary(rec, frames):
+    """Whole-recording numbers: mean head speed and mean gaze elevation."""
+    series = head_and_gaze(rec, frames)
+    elevation = np.degrees(np.arcsin(series.gaze.sel(cartesian_axis="y")))
+    return xr.Dataset(
+        {
+            "mean_speed": series.head_speed.mean(),
+            "mean_elevation": elevation.mean(),
+        }
+    )
+
+
+def sequential(recordings, analysis):
+    """The loop a user would write without rbm_nb.study."""
+    out = {}
+    for name, streams in recordings.items():
+        rec = rbm.study.Recording(name, streams)
+        out[name] = analysis(rec, build_frames(rec))
+    return out
+
+
+@pytest.fixture(scope="module")
+def recordings():
+    return {
+        f"subject{k:02d}": synthetic_head_eye(duration=18.0, seed=k)._asdict()
+        for k in range(N_RECORDINGS)
+    }
+
+
+@pytest.fixture(scope="module")
+def study_folder(recordings, tmp_path_factory):
+    folder = tmp_path_factory.mktemp("study")
+    for name, streams in recordings.items():
+        (folder / name).mkdir()
+        for stream, ds in streams.items():
+            ds.to_netcdf(folder / name / f"{stream}.nc")
+    return folder
+
+
+@pytest.fixture(scope="module")
+def expected(recordings):
+    return sequential(recordings, summary)
+
+
+def assert_summaries_equal(result, expected):
+    assert list(result.recording.values) == sorted(expected)
+    for name, want in expected.items():
+        got = result.sel(recording=name)
+        for var in want.data_vars:
+            np.testing.assert_allclose(got[var].values, want[var].values, rtol=1e-12)
+
+
+def test_threads_give_the_sequential_numbers(study_folder, expected):
+    study = open_study(study_folder)
+    assert study.names == sorted(expected)
+    result = study.map(summary, frames=build_frames, progress=False)
+    assert result.sizes["recording"] == N_RECORDINGS
+    assert_summaries_equal(result, expected)
+
+
+def test_in_memory_recordings_and_stream_selection(recordings, expected):
+    study = open_study(recordings, streams=["head", "left_eye"])
+    assert set(study.open("subject00").streams) == {"head", "left_eye"}
+    result = study.map(summary, frames=build_frames, progress=False)
+    assert_summaries_equal(result, expected)
+
+
+def test_windows_equal_the_whole_recording(recordings):
+    first = {k: recordings[k] for k in list(recordings)[:2]}
+    study = open_study(first)
+    whole = study.map(head_and_gaze, frames=build_frames, combine=False, progress=False)
+    windowed = study.map(
+        lambda rec, fr: head_and_gaze(rec, fr)[["head_speed"]],
+        frames=build_frames,
+        window=4.0,
+        margin=0.5,
+        combine=False,
+        progress=False,
+    )
+    for name in first:
+        a, b = whole[name].head_speed, windowed[name].head_speed
+        np.testing.assert_array_equal(a.time.values, b.time.values)
+        # each window counts time from its own first sample: rounding only
+        np.testing.assert_allclose(b.values, a.values, rtol=1e-9, atol=1e-12)
+
+
+def test_to_netcdf_writes_one_file_per_recording(study_folder, expected, tmp_path):
+    study = open_study(study_folder)
+    paths = study.to_netcdf(summary, tmp_path / "out", frames=build_frames, progress=False)
+    assert [p.name for p in paths] == [f"{n}.nc" for n in sorted(expected)]
+    for path in paths:
+        with xr.open_dataset(path) as ds:
+            want = expected[path.stem]
+            np.testing.assert_allclose(ds.mean_speed.values, want.mean_speed.values, rtol=1e-12)
+    assert not [p for p in (tmp_path / "out").iterdir() if p.name.startswith(".")]
+
+
+def test_bad_input_is_named(study_folder, tmp_path):
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        open_study(tmp_path / "nowhere")
+    with pytest.raises(ValueError, match="lacks stream"):
+        open_study(study_folder, streams=["head", "nose"])
+    with pytest.raises(TypeError, match="analysis must be callable"):
+        open_study(study_folder).map("mean", progress=False)
+    with pytest.raises(KeyError, match="no recording named"):
+        open_study(study_folder).open("subject99")
+    with pytest.raises(ValueError, match="window must be a positive"):
+        open_study(study_folder).map(summary, frames=build_frames, window=0.0)
+    with pytest.raises(ValueError, match="no 'time' dimension"):
+        open_study(study_folder).map(summary, frames=build_frames, window=5.0, progress=False)
+    (tmp_path / "mixed" / "rec").mkdir(parents=True)
+    (tmp_path / "mixed" / "a.nc").write_bytes(b"")
+    with pytest.raises(ValueError, match="mixes recording files"):
+        open_study(tmp_path / "mixed")
+
+
+# ---------------------------------------------------------------------------
+# a real dask.distributed cluster
+# ---------------------------------------------------------------------------
+
+
+@pytest.fixture
+def cluster():
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(
+        n_workers=2,
+        threads_per_worker=1,
+        processes=True,
+        host="127.0.0.1",
+        dashboard_address=None,
+        silence_logs=50,
+    ) as cl, distributed.Client(cl) as client:
+        yield client
+
+
+@pytest.mark.slow
+def test_local_cluster_gives_the_sequential_numbers(cluster, study_folder, expected):
+    study = open_study(study_folder)
+    result = study.map(summary, frames=build_frames, progress=False)
+    assert_summaries_equal(result, expected)
+    # both workers took part
+    assert len(cluster.run(os.getpid)) == 2
+
+
+@pytest.mark.slow
+def test_a_killed_worker_is_recovered(cluster, study_folder, expected):
+    study = open_study(study_folder)
+    outcome = {}
+
+    def run():
+        outcome["result"] = study.map(
+            lambda rec, fr: (time.sleep(0.5), summary(rec, fr))[1],
+            frames=build_frames,
+            progress=False,
+        )
+
+    runner = threading.Thread(target=run)
+    runner.start()
+    deadline = time.monotonic() + 60
+    while not any(cluster.processing().values()):
+        assert time.monotonic() < deadline, "no task started within 60 s"
+        time.sleep(0.05)
+    victim = next(
+        pid
+        for address, pid in cluster.run(os.getpid).items()
+        if cluster.processing()[address]
+    )
+    os.kill(victim, signal.SIGKILL)
+    runner.join(timeout=240)
+    assert not runner.is_alive(), "the study did not finish after a worker was killed"
+    assert victim not in cluster.run(os.getpid).values()
+    assert_summaries_equal(outcome["result"], expected)
+
+
+def _peak_traced_mb(client, study, **options) -> float:
+    """Peak memory (MB) allocated by a worker's tasks while the study runs.
+
+    tracemalloc in each worker process counts what Python and NumPy allocate
+    (the data read, frames, intermediates and results), which, unlike the
+    process RSS, does not depend on what the allocator keeps from earlier.
+    """
+    import tracemalloc
+
+    # warm up on a short recording: imports and compiled kernels are not
+    # what is measured
+    warm = open_study({"warm": synthetic_head_eye(duration=16.0, seed=1)._asdict()})
+    warm.map(head_and_gaze, frames=build_frames, combine=False, progress=False)
+    client.run(tracemalloc.start)
+    try:
+        study.map(
+            lambda rec, fr: head_and_gaze(rec, fr)[["head_speed"]],
+            frames=build_frames,
+            combine=False,
+            progress=False,
+            **options,
+        )
+        peaks = client.run(lambda: tracemalloc.get_traced_memory()[1])
+    finally:
+        client.run(tracemalloc.stop)
+    return max(peaks.values()) / 1e6
+
+
+@pytest.mark.slow
+def test_windowed_memory_follows_the_window_not_the_recording(tmp_path):
+    """A 10-minute recording: with 20 s windows a worker holds a window, not the recording."""
+    distributed = pytest.importorskip("distributed")
+    rec = synthetic_head_eye(duration=600.0, seed=11)._asdict()
+    data_mb = sum(ds.nbytes for ds in rec.values()) / 1e6
+    (tmp_path / "long").mkdir()
+    for stream, ds in rec.items():
+        ds.to_netcdf(tmp_path / "long" / f"{stream}.nc")
+    study = open_study(tmp_path)
+    increases = {}
+    for label, options in (("whole", {}), ("windowed", {"window": 20.0})):
+        with distributed.LocalCluster(
+            n_workers=1,
+            threads_per_worker=1,
+            processes=True,
+            host="127.0.0.1",
+            dashboard_address=None,
+            silence_logs=50,
+        ) as cl, distributed.Client(cl) as client:
+            increases[label] = _peak_traced_mb(client, study, **options)
+    print(f"data {data_mb:.0f} MB, peak allocated per worker (MB) {increases}")
+    # the whole recording is in memory at once; a 20 s window is 1/30 of it,
+    # plus the time coordinate of each file (read whole to find the window)
+    assert increases["whole"] > data_mb
+    assert increases["windowed"] < min(data_mb, increases["whole"] / 3)

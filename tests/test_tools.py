@@ -32,7 +32,6 @@ PENDING: dict[str, set[str]] = {
         "rbm_nb/explorer.py",
         "rbm_nb/frames.py",
         "rbm_nb/quaternions.py",
-        "rbm_nb/rigid_transform.py",
         "rbm_nb/scene/handles.py",
         "rbm_nb/scene/publishers.py",
         "rbm_nb/scene/scene.py",

@@ -172,11 +172,6 @@ def test_no_import_cycle_touches_the_core():
     assert touching == []
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="rbm_nb.scene.scene <-> rbm_nb.scene.export import each other inside "
-    "functions; the scene belongs to the notebook-layer work (issue 13 item 4)",
-)
 def test_the_package_has_no_import_cycle():
     assert cycles(import_edges()) == []
 

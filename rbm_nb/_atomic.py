@@ -38,6 +38,7 @@ import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 #: seconds after which a scratch folder whose owner cannot be told apart from
 #: a live process (or with the older name without pid) counts as abandoned
@@ -184,7 +185,7 @@ def _exchange(a: Path, b: Path) -> bool:
     raise OSError(code, os.strerror(code), str(b))
 
 
-_RENAMEAT2 = []  # cache: [function or None]
+_RENAMEAT2: list[Any] = []  # cache: [function or None]
 
 
 def _renameat2():
@@ -288,7 +289,7 @@ def clean_stale_scratch(folder: str | os.PathLike) -> list[Path]:
         The scratch folders removed.
     """
     folder = Path(folder)
-    removed = []
+    removed: list[Path] = []
     try:
         entries = list(os.scandir(folder))
     except OSError:
@@ -324,7 +325,7 @@ def scratch_prefix(name: str) -> str:
     return f".{name}.{os.getpid()}-{host_tag()}_"
 
 
-_HOST_TAG = []  # cache: [tag]
+_HOST_TAG: list[str] = []  # cache: [tag]
 
 
 def host_tag() -> str:
@@ -439,7 +440,7 @@ def _renamed(
     text = message.replace(str(new), str(target))
     text = text.replace(str(scratch), str(target.parent))
     try:
-        new = type(err)(text)
+        renamed = type(err)(text)
     except Exception:
         return err
-    return new
+    return renamed

@@ -31,6 +31,10 @@ KERNELS = Path(__file__).resolve().parent / "_kernels"
 
 _configured = False
 
+#: False once :func:`configure` found no writable folder; read by
+#: :meth:`rbm_nb._config.JitOptions.as_kwargs` when kernels are decorated
+caching = True
+
 
 class NumbaCacheWarning(UserWarning):
     """numba cannot cache where it normally would; rbm_nb chose another way."""
@@ -142,9 +146,9 @@ def _set_numba_cache_dir(folder: Path) -> None:
 
 
 def _turn_caching_off() -> None:
-    from . import _config
-
-    _config.caching_allowed = False
+    # read by every option set of rbm_nb._config when a kernel is decorated
+    global caching
+    caching = False
 
 
 def kernels_fingerprint() -> str:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
+from typing import Any
 
 
 class _NoBar:
@@ -45,7 +46,7 @@ def _tqdm(required: bool):
 
 def make_bar(
     total: int | None, desc: str, *, progress: bool | None, threshold: int = 0
-):
+) -> Any:
     """A tqdm.auto bar (notebook widget or text), or a silent stand-in.
 
     Parameters
@@ -66,7 +67,7 @@ def make_bar(
     return tqdm(total=total, desc=desc, leave=False)
 
 
-def download_bar(desc: str):
+def download_bar(desc: str) -> Any:
     """A byte-counting bar for pooch's downloaders, or False without tqdm."""
     tqdm = _tqdm(required=False)
     if tqdm is None:

@@ -136,7 +136,7 @@ def check_finite(arr: np.ndarray, name: str, row_axis: bool = True) -> None:
         raise ValueError(f"{name}{_index(where)} is not finite")
 
 
-def check_what(what) -> str:
+def check_what(what: Any) -> str:
     if what not in WHAT_MODES:
         raise ValueError(
             f"what must be one of {', '.join(repr(m) for m in WHAT_MODES)}, got {what!r}"
@@ -144,7 +144,7 @@ def check_what(what) -> str:
     return what
 
 
-def check_mode(mode) -> str:
+def check_mode(mode: Any) -> str:
     if mode not in ("quaternion", "rotation_vector"):
         raise ValueError(
             f"mode must be 'quaternion' or 'rotation_vector', got {mode!r}"

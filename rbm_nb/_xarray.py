@@ -6,10 +6,16 @@ numpy callers never pay for it.
 
 from __future__ import annotations
 
+from collections.abc import Hashable
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 
 # the unpacking half lives in the door; these names stay importable from here
 from ._door import Unpacked, is_dataarray, unpack
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = [
     "Unpacked",
@@ -24,7 +30,7 @@ __all__ = [
 ]
 
 
-def dataset_variable(ds, name, argument: str):
+def dataset_variable(ds: xr.Dataset, name: Hashable, argument: str) -> Any:
     """``ds[name].data``, with an error naming the argument if it is missing."""
     if name not in ds.variables:
         raise ValueError(
@@ -34,7 +40,7 @@ def dataset_variable(ds, name, argument: str):
     return ds[name].data
 
 
-def dataarray_coordinate(da, name):
+def dataarray_coordinate(da: xr.DataArray, name: Hashable) -> Any:
     if name not in da.coords:
         raise ValueError(
             f"timestamps={name!r} is not a coordinate of the DataArray "
@@ -43,7 +49,9 @@ def dataarray_coordinate(da, name):
     return da[name].data
 
 
-def wrap(unpacked: Unpacked, data, ts_out, attrs):
+def wrap(
+    unpacked: Unpacked, data: np.ndarray, ts_out: Any, attrs: dict | None
+) -> xr.DataArray:
     """A DataArray like the input, holding ``data`` at timestamps ``ts_out``.
 
     If the transformation changed the timestamps, coordinates along the time
@@ -80,7 +88,13 @@ def wrap(unpacked: Unpacked, data, ts_out, attrs):
     return xr.DataArray(data, coords, source.dims, source.name, attrs)
 
 
-def transform_dataset(translation, rotation, frame_name, timestamps, pose=False):
+def transform_dataset(
+    translation: np.ndarray,
+    rotation: np.ndarray,
+    frame_name: str | None,
+    timestamps: Any,
+    pose: bool = False,
+) -> xr.Dataset:
     """A Dataset with translation/rotation (or position/orientation)."""
     import xarray as xr
 
@@ -131,7 +145,14 @@ def _velocity_attrs(kind, moving, reference, represent_in):
     }
 
 
-def twist_dataset(linear, angular, moving, reference, represent_in, timestamps):
+def twist_dataset(
+    linear: np.ndarray,
+    angular: np.ndarray,
+    moving: str | None,
+    reference: str | None,
+    represent_in: str | None,
+    timestamps: Any,
+) -> xr.Dataset:
     """A Dataset with angular_velocity and linear_velocity over time."""
     import xarray as xr
 
@@ -149,7 +170,14 @@ def twist_dataset(linear, angular, moving, reference, represent_in, timestamps):
     return ds
 
 
-def velocity_dataarray(velocity, kind, moving, reference, represent_in, timestamps):
+def velocity_dataarray(
+    velocity: np.ndarray,
+    kind: str,
+    moving: str | None,
+    reference: str | None,
+    represent_in: str | None,
+    timestamps: Any,
+) -> xr.DataArray:
     """A (time, cartesian_axis) DataArray of linear or angular velocity."""
     import xarray as xr
 

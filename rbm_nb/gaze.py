@@ -27,7 +27,15 @@ array([[ 0.,  0.],
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+import numpy.typing as npt
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from .frames import FrameLike
 
 __all__ = ["directions", "angles"]
 
@@ -36,7 +44,14 @@ _LINE_OF_SIGHT = np.array([0.0, 0.0, 1.0])
 _AXES = {"x": 0, "y": 1, "z": 2}
 
 
-def directions(eye_frame, into, *, confidence=None, min_confidence=0.6, max_gap=None):
+def directions(
+    eye_frame: FrameLike,
+    into: FrameLike,
+    *,
+    confidence: npt.ArrayLike | xr.DataArray | None = None,
+    min_confidence: float = 0.6,
+    max_gap: float | None = None,
+) -> xr.DataArray:
     """Unit line-of-sight vectors of an eye, represented in another frame.
 
     The line of sight is the eye frame's z axis (camera convention: x right,
@@ -83,10 +98,10 @@ def directions(eye_frame, into, *, confidence=None, min_confidence=0.6, max_gap=
         shape, or ``min_confidence``/``max_gap`` is not a finite number
         (``max_gap`` positive).
     """
-    from .frames import ReferenceFrame, _resolve
+    from .frames import ReferenceFrame, resolve_frame
 
-    eye = _resolve(eye_frame, "eye_frame")
-    target = _resolve(into, "into")
+    eye = resolve_frame(eye_frame, "eye_frame")
+    target = resolve_frame(into, "into")
     if eye.parent is None:
         raise ValueError(
             f"eye_frame {eye.name!r} is a root frame; it has no orientation to look along"
@@ -114,7 +129,13 @@ def directions(eye_frame, into, *, confidence=None, min_confidence=0.6, max_gap=
     return _vectors_dataarray(out, times, name)
 
 
-def angles(directions, reference, *, forward="z", up="-y"):
+def angles(
+    directions: xr.DataArray,
+    reference: FrameLike,
+    *,
+    forward: str = "z",
+    up: str = "-y",
+) -> xr.DataArray:
     """Azimuth and elevation of directions relative to a frame's forward axis.
 
     Parameters
@@ -144,7 +165,7 @@ def angles(directions, reference, *, forward="z", up="-y"):
         If ``directions`` lacks the dims or frame attribute, ``forward`` and
         ``up`` are not two different axes, or a frame is not registered.
     """
-    from .frames import _resolve
+    from .frames import resolve_frame
 
     _check_directions(directions)
     f_axis, f_sign = _signed_axis(forward, "forward")
@@ -153,8 +174,10 @@ def angles(directions, reference, *, forward="z", up="-y"):
         raise ValueError(
             f"forward ({forward!r}) and up ({up!r}) must be different axes"
         )
-    ref = _resolve(reference, "reference")
-    source = _resolve(directions.attrs["representation_frame"], "directions' frame")
+    ref = resolve_frame(reference, "reference")
+    source = resolve_frame(
+        directions.attrs["representation_frame"], "directions' frame"
+    )
     times = directions["time"].values
     values = np.asarray(directions.transpose("time", "cartesian_axis").values, float)
     valid = np.isfinite(values).all(axis=1)

@@ -8,14 +8,23 @@ over time.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
+import numpy.typing as npt
 from matplotlib.patches import FancyArrowPatch
-from mpl_toolkits.mplot3d import proj3d
+from mpl_toolkits.mplot3d import Axes3D, proj3d
 
 from ._config import UNIT_QUATERNION_TOLERANCE
 from ._kernels import conversions as _kc
 from .frames import resolve_frame
 from .lookups import lookup_pose, lookup_transform
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+    from .frames import FrameLike
 
 __all__ = [
     "Arrow3D",
@@ -36,7 +45,14 @@ class Arrow3D(FancyArrowPatch):
         Coordinates of the tail and the head.
     """
 
-    def __init__(self, xs, ys, zs, *args, **kwargs):
+    def __init__(
+        self,
+        xs: npt.ArrayLike,
+        ys: npt.ArrayLike,
+        zs: npt.ArrayLike,
+        *args: Any,
+        **kwargs: Any,
+    ) -> None:
         super().__init__((0.0, 0.0), (0.0, 0.0), *args, **kwargs)
         self._verts3d = (
             np.asarray(xs, float),
@@ -54,8 +70,11 @@ class Arrow3D(FancyArrowPatch):
         """Head point, shape (3,)."""
         return np.array([v[1] for v in self._verts3d])
 
-    def do_3d_projection(self, renderer=None):
-        xs, ys, zs = proj3d.proj_transform(*self._verts3d, self.axes.M)
+    def do_3d_projection(self, renderer: Any = None) -> float:
+        axes = self.axes
+        if not isinstance(axes, Axes3D):
+            raise TypeError(f"an Arrow3D is drawn on 3-D axes, not on {axes!r}")
+        xs, ys, zs = proj3d.proj_transform(*self._verts3d, axes.M)
         self.set_positions((xs[0], ys[0]), (xs[1], ys[1]))
         return float(np.min(zs))
 
@@ -130,7 +149,13 @@ def _rotation_matrices(q: np.ndarray) -> np.ndarray:
     return matrices
 
 
-def reference_frame(frame, world_frame=None, ax=None, figsize=(6, 6), arrow_len=1.0):
+def reference_frame(
+    frame: FrameLike,
+    world_frame: FrameLike | None = None,
+    ax: Axes3D | None = None,
+    figsize: tuple[float, float] = (6, 6),
+    arrow_len: float = 1.0,
+) -> list[Arrow3D]:
     """Plot a static reference frame as three arrows (x red, y green, z blue).
 
     Parameters
@@ -197,7 +222,13 @@ def reference_frame(frame, world_frame=None, ax=None, figsize=(6, 6), arrow_len=
     return arrows
 
 
-def points(arr, ax=None, figsize=(6, 6), fmt="", **kwargs):
+def points(
+    arr: npt.ArrayLike,
+    ax: Axes3D | None = None,
+    figsize: tuple[float, float] = (6, 6),
+    fmt: str = "",
+    **kwargs: Any,
+) -> list[Any]:
     """Plot 3-D points.
 
     Parameters
@@ -222,7 +253,13 @@ def points(arr, ax=None, figsize=(6, 6), fmt="", **kwargs):
     return lines
 
 
-def vectors(arr, base=None, ax=None, figsize=(6, 6), **kwargs):
+def vectors(
+    arr: npt.ArrayLike,
+    base: npt.ArrayLike | None = None,
+    ax: Axes3D | None = None,
+    figsize: tuple[float, float] = (6, 6),
+    **kwargs: Any,
+) -> Any:
     """Plot 3-D vectors as arrows.
 
     Parameters
@@ -260,7 +297,13 @@ def vectors(arr, base=None, ax=None, figsize=(6, 6), **kwargs):
     return lines
 
 
-def quaternions(arr, base=None, ax=None, figsize=(6, 6), **kwargs):
+def quaternions(
+    arr: npt.ArrayLike,
+    base: npt.ArrayLike | None = None,
+    ax: Axes3D | None = None,
+    figsize: tuple[float, float] = (6, 6),
+    **kwargs: Any,
+) -> list[Any]:
     """Plot orientations as small triads (x red, y green, z blue, length 0.5).
 
     Parameters
@@ -299,7 +342,13 @@ def _roll_pitch_yaw(q: np.ndarray) -> np.ndarray:
     return np.degrees(np.unwrap(np.column_stack([roll, pitch, yaw]), axis=0))
 
 
-def trajectory(frame, reference=None, axes=None, figsize=(8, 6), **kwargs):
+def trajectory(
+    frame: FrameLike,
+    reference: FrameLike | None = None,
+    axes: Sequence[Axes] | None = None,
+    figsize: tuple[float, float] = (8, 6),
+    **kwargs: Any,
+) -> list[Axes]:
     """Plot the position and orientation of a frame over time.
 
     Parameters

@@ -294,7 +294,9 @@ def test_dataarray_argument_errors(moving):
 def test_rotation_matrix_checks(world):
     with pytest.raises(ValueError, match=r"shape \(3, 3\)"):
         rbm.ReferenceFrame.from_rotation_matrix(np.eye(4), world)
-    with pytest.raises(ValueError, match=r"mat: .*not a rotation matrix.*reflection.*tol"):
+    with pytest.raises(
+        ValueError, match=r"mat: .*not a rotation matrix.*reflection.*tol"
+    ):
         rbm.ReferenceFrame.from_rotation_matrix(np.diag([1.0, 1.0, -1.0]), world)
     with pytest.raises(ValueError, match=r"mat: .*not a rotation matrix"):
         rbm.ReferenceFrame.from_rotation_matrix(2 * np.eye(3), world)

@@ -21,9 +21,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from rbm_nb._kernels import differences as dk
 from rbm_nb._engine.velocity import angular_velocity as _angular_velocity
 from rbm_nb._engine.velocity import linear_velocity as _linear_velocity
+from rbm_nb._kernels import differences as dk
 from rbm_nb.estimators import (
     best_fit_rotation,
     best_fit_transform,

@@ -6,8 +6,7 @@ import pytest
 
 import rbm_nb as rbm
 from rbm_nb._frame_paths import frame_path
-from rbm_nb.frames import find_frame, frames_between
-from rbm_nb.frames import ReferenceFrame
+from rbm_nb.frames import ReferenceFrame, find_frame, frames_between
 
 
 @pytest.fixture

@@ -172,8 +172,6 @@ def _norm_calls(q):
     }
 
 
-
-
 @pytest.mark.parametrize(
     "name",
     [

@@ -30,7 +30,6 @@ CORE = (
     "rbm_nb.conversions",
     "rbm_nb.rigid_transform",
     "rbm_nb.errors",
-    "rbm_nb._at_time",
     "rbm_nb._frame_paths",
     "rbm_nb._time",
     "rbm_nb._door",

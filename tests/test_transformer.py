@@ -7,8 +7,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import rbm_nb as rbm
-from rbm_nb._at_time import transform_at_times
 from rbm_nb.frames import ReferenceFrame
+from rbm_nb.lookups import lookup_at
 from rbm_nb.ros.transformer import (
     DEFAULT_CACHE_TIME,
     ConnectivityError,
@@ -86,7 +86,7 @@ def test_lookup_matches_core_at_time(tree, target, source, time):
     t, r = tf.lookup_transform(target, source, time)
     assert isinstance(t, tuple) and len(t) == 3 and isinstance(t[0], float)
     assert isinstance(r, tuple) and len(r) == 4 and isinstance(r[0], float)
-    ct, cr = transform_at_times(frame(tree, source), frame(tree, target), time)
+    ct, cr = lookup_at(frame(tree, source), frame(tree, target), time)
     np.testing.assert_allclose(t, ct, atol=1e-12)
     assert same_rotation(r, cr, 1e-12)
 

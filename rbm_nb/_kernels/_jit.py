@@ -98,7 +98,7 @@ def kernel(*argtypes: str, options: JitOptions = KERNEL) -> Callable[[_Func], _F
     def decorate(func: _Func) -> _Func:
         dispatcher = njit(**options.as_kwargs())(func)
         DECLARED.setdefault(func.__module__, []).append(Declared(dispatcher, argtypes))
-        return dispatcher  # type: ignore[no-any-return]
+        return dispatcher
 
     return decorate
 
@@ -116,7 +116,7 @@ def helper(
         opts = options.inlined() if inline else options
         dispatcher = njit(**opts.as_kwargs())(f)
         HELPERS.setdefault(f.__module__, []).append(dispatcher)
-        return dispatcher  # type: ignore[no-any-return]
+        return dispatcher
 
     return decorate if func is None else decorate(func)
 

@@ -63,7 +63,9 @@ def _camera_times(
     return t[(rng.random(n) >= _DROPPED_FRAMES) & (t >= first) & (t <= last)]
 
 
-def eye_clock(rng, first: float, last: float, camera_rate: float) -> EyeClock:
+def eye_clock(
+    rng: np.random.Generator, first: float, last: float, camera_rate: float
+) -> EyeClock:
     """Rows of both eye cameras from ``first`` to ``last`` (s), merged when close."""
     left = _camera_times(rng, first, last, camera_rate, 0.0)
     right = _camera_times(rng, first, last, camera_rate, 0.5)
@@ -86,7 +88,7 @@ def eye_clock(rng, first: float, last: float, camera_rate: float) -> EyeClock:
     return EyeClock(t_rows, has_left, has_right)
 
 
-def draw_dropouts(rng, first: float, last: float) -> np.ndarray:
+def draw_dropouts(rng: np.random.Generator, first: float, last: float) -> np.ndarray:
     """(start, duration) rows of stretches with no eye data; at least one."""
     n = max(1, int(round((last - first) / _DROPOUT_INTERVAL)))
     durations = np.clip(rng.lognormal(np.log(0.2), 0.8, n), 0.11, 1.2)
@@ -101,7 +103,9 @@ def remove_dropouts(clock: EyeClock, dropouts: np.ndarray) -> EyeClock:
     return EyeClock(clock.t[keep], clock.left[keep], clock.right[keep])
 
 
-def mapper_confidence(rng, t: np.ndarray, closed: np.ndarray) -> np.ndarray:
+def mapper_confidence(
+    rng: np.random.Generator, t: np.ndarray, closed: np.ndarray
+) -> np.ndarray:
     """Binocular mapper confidence per row, in [0, 1].
 
     ``closed`` (n,) in [0, 1] is how far the lids are closed (blinks).
@@ -116,7 +120,9 @@ def mapper_confidence(rng, t: np.ndarray, closed: np.ndarray) -> np.ndarray:
     return np.clip(confidence * (1.0 - closed), 0.0, 1.0)
 
 
-def missing_rows(rng, clock: EyeClock, eye: str, closed: np.ndarray) -> tuple:
+def missing_rows(
+    rng: np.random.Generator, clock: EyeClock, eye: str, closed: np.ndarray
+) -> tuple:
     """Rows with no orientation, and rows with no position either, for ``eye``."""
     own = clock.left if eye == "left_eye" else clock.right
     n = clock.t.size
@@ -127,7 +133,9 @@ def missing_rows(rng, clock: EyeClock, eye: str, closed: np.ndarray) -> tuple:
     return no_position | lost, no_position
 
 
-def eyeball_centres(rng, t: np.ndarray, centre: np.ndarray) -> np.ndarray:
+def eyeball_centres(
+    rng: np.random.Generator, t: np.ndarray, centre: np.ndarray
+) -> np.ndarray:
     """Eyeball centre (n, 3) in m: slow drift of the eye model plus fitting noise."""
     drift = np.stack(
         [
@@ -140,7 +148,9 @@ def eyeball_centres(rng, t: np.ndarray, centre: np.ndarray) -> np.ndarray:
     return centre + drift + noise
 
 
-def tracking_error(rng, confidence: np.ndarray, base: float) -> np.ndarray:
+def tracking_error(
+    rng: np.random.Generator, confidence: np.ndarray, base: float
+) -> np.ndarray:
     """Angular error (rad, shape (n,)) of each row's gaze given its confidence.
 
     High-confidence rows are off by ~``base`` (tracker noise); below 0.6 the

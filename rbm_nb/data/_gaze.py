@@ -52,9 +52,9 @@ class Fixation:
     amplitude: float  # rad, cyclopean gaze shift at onset
 
 
-def main_sequence_peak_velocity(amplitude: np.ndarray) -> np.ndarray:
+def main_sequence_peak_velocity(amplitude: float) -> float:
     """Peak angular speed (rad/s) of a saccade of ``amplitude`` rad."""
-    return np.deg2rad(520.0) * (1.0 - np.exp(-amplitude / np.deg2rad(14.0)))
+    return float(np.deg2rad(520.0) * (1.0 - np.exp(-amplitude / np.deg2rad(14.0))))
 
 
 class _HeadLookup:
@@ -64,7 +64,7 @@ class _HeadLookup:
         self.head = head
 
     def index(self, t: float) -> int:
-        return int(min(np.searchsorted(self.head.t, t), self.head.t.size - 1))
+        return min(int(np.searchsorted(self.head.t, t)), self.head.t.size - 1)
 
     def cyclopean_gaze(self, i: int, target: np.ndarray) -> np.ndarray:
         """Unit gaze direction (camera frame) from between the eyes to ``target``."""
@@ -115,7 +115,9 @@ def _angle(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.arccos(np.clip(np.dot(a, b), -1.0, 1.0)))
 
 
-def _draw_target(rng, look: _HeadLookup, checks: list) -> np.ndarray:
+def _draw_target(
+    rng: np.random.Generator, look: _HeadLookup, checks: list
+) -> np.ndarray:
     """A random point to look at: on the path ahead or around, ahead of the head.
 
     ``checks`` lists (head-grid index, largest eye eccentricity there); the
@@ -141,7 +143,9 @@ def _draw_target(rng, look: _HeadLookup, checks: list) -> np.ndarray:
     return look.forward_point(i, 20.0, 0.0, 0.0)
 
 
-def _saccade(rng, look: _HeadLookup, onset: float, previous, target) -> Fixation:
+def _saccade(
+    rng: np.random.Generator, look: _HeadLookup, onset: float, previous, target
+) -> Fixation:
     i = look.index(onset)
     amplitude = _angle(look.cyclopean_gaze(i, previous), look.cyclopean_gaze(i, target))
     peak = main_sequence_peak_velocity(amplitude) * rng.uniform(0.9, 1.1)
@@ -150,7 +154,9 @@ def _saccade(rng, look: _HeadLookup, onset: float, previous, target) -> Fixation
     return Fixation(onset, target, duration, amplitude)
 
 
-def plan_fixations(rng, head: HeadMotion, start: float, end: float) -> tuple:
+def plan_fixations(
+    rng: np.random.Generator, head: HeadMotion, start: float, end: float
+) -> tuple:
     """Fixations from ``start`` to ``end`` (s), with gaze shifts leading head scans."""
     look = _HeadLookup(head)
     forced = []  # (time, kind, scan)
@@ -220,7 +226,12 @@ def _slerp_directions(a: np.ndarray, b: np.ndarray, u: np.ndarray) -> np.ndarray
 
 
 def eye_orientation(
-    rng, head: HeadMotion, index: np.ndarray, eye: str, fixations: tuple, error
+    rng: np.random.Generator,
+    head: HeadMotion,
+    index: np.ndarray,
+    eye: str,
+    fixations: tuple,
+    error: np.ndarray,
 ) -> np.ndarray:
     """Eye-in-camera quaternions (n, 4) at the head-grid samples ``index``.
 
@@ -244,7 +255,9 @@ def eye_orientation(
     return quat / np.linalg.norm(quat, axis=1, keepdims=True)
 
 
-def _tilt(rng, directions: np.ndarray, angle: np.ndarray) -> np.ndarray:
+def _tilt(
+    rng: np.random.Generator, directions: np.ndarray, angle: np.ndarray
+) -> np.ndarray:
     """Unit directions turned by ``angle`` (rad) towards random perpendiculars."""
     side = np.cross(directions, rng.normal(size=directions.shape))
     side /= np.linalg.norm(side, axis=1, keepdims=True)
@@ -254,7 +267,7 @@ def _tilt(rng, directions: np.ndarray, angle: np.ndarray) -> np.ndarray:
     return out / np.linalg.norm(out, axis=1, keepdims=True)
 
 
-def draw_blinks(rng, start: float, end: float) -> np.ndarray:
+def draw_blinks(rng: np.random.Generator, start: float, end: float) -> np.ndarray:
     """(onset, duration) rows: ~15 blinks a minute of 80-400 ms."""
     blinks = []
     t = start + rng.exponential(4.0)

@@ -9,9 +9,14 @@ analyse a real recording, never from the generator's internals.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from .._kernels.quaternion import qconj, qmul, rotate_vectors
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 SACCADE_THRESHOLD = np.deg2rad(100.0)  # gaze-in-world speed above this is a saccade
 FIXATION_THRESHOLD = np.deg2rad(20.0)  # ... and below this, gaze is holding still
@@ -23,19 +28,19 @@ def _seconds(time, origin) -> np.ndarray:
     return (np.asarray(time) - origin).astype("timedelta64[ns]").astype(np.int64) * 1e-9
 
 
-def walking_mask(head, threshold: float = 0.5) -> np.ndarray:
+def walking_mask(head: xr.Dataset, threshold: float = 0.5) -> np.ndarray:
     """Samples where the head moves faster than ``threshold`` m/s horizontally."""
     v = head.linear_velocity.values
     return np.hypot(v[:, 0], v[:, 2]) > threshold
 
 
-def mean_walking_speed(head) -> float:
+def mean_walking_speed(head: xr.Dataset) -> float:
     """Mean horizontal speed (m/s) while walking."""
     v = head.linear_velocity.values[walking_mask(head)]
     return float(np.hypot(v[:, 0], v[:, 2]).mean())
 
 
-def head_frame_velocity(head) -> np.ndarray:
+def head_frame_velocity(head: xr.Dataset) -> np.ndarray:
     """Mean head velocity (m/s) represented in the head frame, through rbm's frames."""
     import rbm_nb as rbm
 
@@ -49,7 +54,7 @@ def head_frame_velocity(head) -> np.ndarray:
     return np.asarray(v).mean(axis=0)
 
 
-def bob(head) -> tuple[float, float]:
+def bob(head: xr.Dataset) -> tuple[float, float]:
     """Dominant frequency (Hz) and RMS amplitude (m) of vertical head motion while walking."""
     walking = walking_mask(head)
     idx = np.flatnonzero(walking)
@@ -70,13 +75,13 @@ def _interp_rows(t: np.ndarray, t_in: np.ndarray, values: np.ndarray) -> np.ndar
     )
 
 
-def usable_eye_rows(eye, min_confidence: float = 0.6) -> np.ndarray:
+def usable_eye_rows(eye: xr.Dataset, min_confidence: float = 0.6) -> np.ndarray:
     """Rows with an orientation and a confidence of at least ``min_confidence``."""
     finite = np.isfinite(eye.orientation.values).all(axis=1)
     return finite & (eye.confidence.values >= min_confidence)
 
 
-def _gaze(eye, head):
+def _gaze(eye: xr.Dataset, head: xr.Dataset):
     """Eye times (s), gaze in the head frame and in world, head orientation there.
 
     Only usable rows (:func:`usable_eye_rows`) are kept: missing and
@@ -106,7 +111,7 @@ def _angular_rate(t: np.ndarray, d: np.ndarray) -> np.ndarray:
     return np.cross(d, np.gradient(d, t, axis=0))
 
 
-def saccades(eye, head) -> dict:
+def saccades(eye: xr.Dataset, head: xr.Dataset) -> dict:
     """Saccades found as gaze-in-world speed above 100 deg/s: count, rate, peaks."""
     t, _, in_world, _ = _gaze(eye, head)
     speed = np.linalg.norm(_angular_rate(t, in_world), axis=1)
@@ -142,7 +147,7 @@ def saccades(eye, head) -> dict:
     }
 
 
-def vor_gain(eye, head) -> float:
+def vor_gain(eye: xr.Dataset, head: xr.Dataset) -> float:
     """Eye-in-head against head rotation during fixations while the head turns.
 
     Only the head rotation about axes perpendicular to the gaze can be
@@ -164,13 +169,13 @@ def vor_gain(eye, head) -> float:
     return float(-np.sum(a * b) / np.sum(b * b))
 
 
-def blink_fraction(eye, threshold: float = 0.1) -> float:
+def blink_fraction(eye: xr.Dataset, threshold: float = 0.1) -> float:
     """Fraction of samples with (nearly) closed lids: no data and confidence below ``threshold``."""
     missing = ~np.isfinite(eye.position.values).all(axis=1)
     return float(np.mean(missing & (eye.confidence.values < threshold)))
 
 
-def tracker_quality(eye) -> dict:
+def tracker_quality(eye: xr.Dataset) -> dict:
     """Rates of the tracker's flaws: NaN rows, low confidence, dropouts."""
     missing = ~np.isfinite(eye.orientation.values).all(axis=1)
     confidence = eye.confidence.values
@@ -187,7 +192,7 @@ def tracker_quality(eye) -> dict:
     }
 
 
-def estimator_consistency(head) -> tuple[float, float]:
+def estimator_consistency(head: xr.Dataset) -> tuple[float, float]:
     """RMS difference between the stored velocities and rbm's estimates from the poses.
 
     The angular estimate (head frame) is rotated into world, where the

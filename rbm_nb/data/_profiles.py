@@ -47,7 +47,9 @@ class RandomSines:
     phases: np.ndarray
 
     @classmethod
-    def draw(cls, rng: np.random.Generator, amplitude: float, band: tuple, n: int = 3):
+    def draw(
+        cls, rng: np.random.Generator, amplitude: float, band: tuple, n: int = 3
+    ) -> RandomSines:
         """``n`` components with frequencies in ``band`` (Hz), total RMS ~ amplitude."""
         frequencies = rng.uniform(band[0], band[1], n)
         amplitudes = amplitude * np.sqrt(2.0 / n) * rng.uniform(0.7, 1.3, n)

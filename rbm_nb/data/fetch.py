@@ -53,12 +53,12 @@ class ExampleDataStore(Mapping):
 
     def __init__(
         self,
-        registry=None,
+        registry: Mapping[str, tuple[str, str]] | None = None,
         *,
         base_url: str = BASE_URL,
-        data_dir=None,
-        timeout=DEFAULT_TIMEOUT,
-    ):
+        data_dir: str | os.PathLike | None = None,
+        timeout: float | tuple[float, float] = DEFAULT_TIMEOUT,
+    ) -> None:
         registry = dict(REGISTRY if registry is None else registry)
         for name, entry in registry.items():
             if not (

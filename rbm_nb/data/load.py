@@ -6,10 +6,16 @@ import functools
 import os
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from ..io._files import load_netcdf
 from .fetch import ExampleDataStore, ExampleDataUnavailable, cache_dir, example_data
 from .synthetic import synthetic_head_eye
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from .synthetic import HeadEyeRecording
 
 SOURCES = ("auto", "remote", "synthetic")
 DATASETS = ("head", "left_eye", "right_eye")
@@ -34,7 +40,7 @@ def load_example(
     *,
     store: ExampleDataStore | None = None,
     seed: int = 0,
-):
+) -> xr.Dataset | Path:
     """Load an example recording.
 
     Parameters
@@ -101,12 +107,12 @@ def _synthetic(name: str, store: ExampleDataStore, seed: int):
 
 
 @functools.lru_cache(maxsize=2)
-def _synthetic_recording(seed: int):
+def _synthetic_recording(seed: int) -> HeadEyeRecording:
     return synthetic_head_eye(seed=seed)
 
 
 def write_synthetic_rosbag(
-    path: str | os.PathLike, duration: float = 330.0, seed: int = 0, **kwargs
+    path: str | os.PathLike, duration: float = 330.0, seed: int = 0, **kwargs: Any
 ) -> Path:
     """Write the synthetic recording as a bag with the real example bag's topics.
 

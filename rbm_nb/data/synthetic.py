@@ -135,7 +135,8 @@ def synthetic_head_eye(
         )
     if int(laps) != laps or laps < 1:
         raise ValueError(f"laps must be a positive integer, got {laps!r}")
-    start = np.datetime64(start, "ns")
+    # np.array, unlike np.datetime64, types a str-or-datetime64 argument
+    origin = np.array(start, dtype="datetime64[ns]")[()]
     rng = np.random.default_rng(seed)
 
     head_ns = _grid_ns(0.0, duration, head_rate, rng, jitter=0.0)
@@ -168,13 +169,13 @@ def synthetic_head_eye(
     }
     i_head = np.searchsorted(grid_ns, head_ns)
     head_ds = _head_dataset(
-        start + head_ns.astype("timedelta64[ns]"), head, i_head, rng, attrs
+        origin + head_ns.astype("timedelta64[ns]"), head, i_head, rng, attrs
     )
     index = np.searchsorted(grid_ns, eye_ns)
     t_eye = grid_ns[index] * 1e-9
     closed = lid_closure(t_eye, blinks)
     confidence = mapper_confidence(rng, t_eye, closed)
-    eye_time = start + eye_ns.astype("timedelta64[ns]")
+    eye_time = origin + eye_ns.astype("timedelta64[ns]")
     missing = {eye: missing_rows(rng, clock, eye, closed) for eye in EYE_CENTERS}
     # the binocular mapper reports 0 when it lost either pupil
     for no_orientation, no_position in missing.values():

@@ -4,6 +4,10 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 
 class FileFormatError(ValueError):
@@ -13,7 +17,7 @@ class FileFormatError(ValueError):
     """
 
 
-def load_netcdf(path: str | os.PathLike, *, hint: str = ""):
+def load_netcdf(path: str | os.PathLike, *, hint: str = "") -> xr.Dataset:
     """Load a netCDF file into memory as an :class:`xarray.Dataset`.
 
     Raises

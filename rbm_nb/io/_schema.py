@@ -6,7 +6,13 @@ Dims ``time`` (datetime64[ns]), ``cartesian_axis`` (x, y, z) and
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+import numpy.typing as npt
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 STANDARD_ATTRS = {
     "position": {"long_name": "Position", "units": "m"},
@@ -17,8 +23,11 @@ STANDARD_ATTRS = {
 
 
 def motion_dataset(
-    time, variables: dict, attrs: dict | None = None, variable_attrs: dict | None = None
-):
+    time: npt.ArrayLike,
+    variables: dict,
+    attrs: dict | None = None,
+    variable_attrs: dict | None = None,
+) -> xr.Dataset:
     """An :class:`xarray.Dataset` of time series in the shared layout.
 
     Parameters

@@ -10,9 +10,15 @@ both directions byte for byte against ``rosbags``' own serializers.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
+
+if TYPE_CHECKING:
+    from rosbags.typesys.store import Typestore
 
 TRANSFORM_STAMPED = "geometry_msgs/TransformStamped"
 TF_MESSAGE = "tf2_msgs/TFMessage"
@@ -75,7 +81,15 @@ class Messages:
         )
 
     @classmethod
-    def from_rows(cls, sec, nsec, pose, twist=None, frame_id="", child_frame_id=""):
+    def from_rows(
+        cls,
+        sec: npt.ArrayLike,
+        nsec: npt.ArrayLike,
+        pose: np.ndarray,
+        twist: np.ndarray | None = None,
+        frame_id: str = "",
+        child_frame_id: str = "",
+    ) -> Messages:
         """From rows of [x, y, z, qx, qy, qz, qw] (n, 7) and [vx, vy, vz, wx, wy, wz] (n, 6)."""
         return cls(
             sec=np.asarray(sec, np.int64),
@@ -217,7 +231,9 @@ def _twist(twist) -> tuple:
     return (lin.x, lin.y, lin.z, ang.x, ang.y, ang.z)
 
 
-def check_messages(messages: Messages, where: str, index=None) -> None:
+def check_messages(
+    messages: Messages, where: str, index: np.ndarray | None = None
+) -> None:
     """Raise FileFormatError unless the decoded values are what a bag can hold.
 
     Each pose field (position, orientation, each twist part) of a message is
@@ -241,11 +257,9 @@ def check_messages(messages: Messages, where: str, index=None) -> None:
             "nanoseconds (must be below 1e9): the bag is damaged"
         )
     fields = [("position", messages.position), ("orientation", messages.orientation)]
-    if messages.linear_velocity is not None:
-        fields += [
-            ("linear velocity", messages.linear_velocity),
-            ("angular velocity", messages.angular_velocity),
-        ]
+    linear, angular = messages.linear_velocity, messages.angular_velocity
+    if linear is not None and angular is not None:  # both or neither
+        fields += [("linear velocity", linear), ("angular velocity", angular)]
     for name, values in fields:
         finite = np.isfinite(values).all(axis=1)
         bad = np.flatnonzero(~(finite | np.isnan(values).all(axis=1)))
@@ -269,7 +283,7 @@ def check_messages(messages: Messages, where: str, index=None) -> None:
         )
 
 
-def register_tf_message(typestore) -> None:
+def register_tf_message(typestore: Typestore) -> None:
     """Teach a rosbags typestore ``tf2_msgs/msg/TFMessage`` (ROS1 stores lack it)."""
     if "tf2_msgs/msg/TFMessage" not in typestore.types:
         from rosbags.typesys import get_types_from_msg
@@ -330,7 +344,7 @@ def split_tf(msgs: list, static: bool) -> dict:
         arr = np.array(values, dtype=object)
         stamps = arr[:, 0].astype(np.int64)
         floats = arr[:, 1:8].astype(np.float64)
-        index = arr[:, 8].astype(np.int64)
+        received = arr[:, 8].astype(np.int64)
         nsec = arr[:, 9].astype(np.int64)
         if static:
             keep = np.array([len(values) - 1])
@@ -342,10 +356,10 @@ def split_tf(msgs: list, static: bool) -> dict:
         pairs[(frame, child)] = (
             TfPair(
                 frame, child, static, stamps[keep], floats[keep, :3], floats[keep, 3:],
-                index[keep],
+                received[keep],
             ),
             nsec,
-            index,
+            received,
         )  # fmt: skip
     return pairs
 
@@ -371,9 +385,17 @@ def check_tf(pair: TfPair, nsec: np.ndarray, index: np.ndarray, where: str) -> N
     )
 
 
-def tf_message(typestore, stamps_ns, frames, children, translation, rotation):
+def tf_message(
+    typestore: Typestore,
+    stamps_ns: Sequence[int],
+    frames: Sequence[str],
+    children: Sequence[str],
+    translation: Sequence[np.ndarray] | np.ndarray,
+    rotation: Sequence[np.ndarray] | np.ndarray,
+) -> Any:
     """A ``tf2_msgs/msg/TFMessage`` object holding one transform per row."""
-    types = typestore.types
+    # the generated message classes (rosbags types them as a protocol)
+    types: dict[str, Any] = typestore.types
     Time = types["builtin_interfaces/msg/Time"]
     Header = types["std_msgs/msg/Header"]
     Vector3 = types["geometry_msgs/msg/Vector3"]

@@ -2,8 +2,21 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
 
-def play_publisher(publisher, step=1, speed=1.0, skip=None, timestamps=None):
+import numpy.typing as npt
+
+if TYPE_CHECKING:
+    from ..widgets.player import Player
+
+
+def play_publisher(
+    publisher: Any,
+    step: int = 1,
+    speed: float = 1.0,
+    skip: int | None = None,
+    timestamps: npt.ArrayLike | None = None,
+) -> Player:
     """Interactive widget for playing back messages from a publisher.
 
     Parameters

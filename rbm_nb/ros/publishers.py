@@ -10,7 +10,13 @@ visualisation cells of the ROS guide run unchanged. Display the scene with
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from ..scene.publishers import FramePublisher, PathPublisher
+
+if TYPE_CHECKING:
+    from ..frames import FrameLike
+    from ..scene.scene import Scene
 
 
 class ReferenceFrameTransformBroadcaster(FramePublisher):
@@ -36,16 +42,16 @@ class ReferenceFrameTransformBroadcaster(FramePublisher):
 
     def __init__(
         self,
-        frame,
-        base=None,
-        publish_pose=False,
-        publish_twist=False,
-        subscribe=False,
-        twist_cutoff=None,
-        twist_outlier_thresh=None,
+        frame: FrameLike,
+        base: FrameLike | None = None,
+        publish_pose: bool = False,
+        publish_twist: bool = False,
+        subscribe: bool | str = False,
+        twist_cutoff: float | None = None,
+        twist_outlier_thresh: float | None = None,
         *,
-        scene=None,
-    ):
+        scene: Scene | None = None,
+    ) -> None:
         super().__init__(
             frame, base, scene=scene, pose_arrow=publish_pose, subscribe=subscribe
         )
@@ -79,17 +85,17 @@ class ReferenceFrameMarkerPublisher(PathPublisher):
 
     def __init__(
         self,
-        frame,
-        base=None,
-        topic=None,
-        max_points=1000,
-        publish_interval=0.0,
-        scale=0.1,
-        color="#ffffff",
-        verbose=False,
+        frame: FrameLike,
+        base: FrameLike | None = None,
+        topic: str | None = None,
+        max_points: int = 1000,
+        publish_interval: float = 0.0,
+        scale: float = 0.1,
+        color: str = "#ffffff",
+        verbose: bool = False,
         *,
-        scene=None,
-    ):
+        scene: Scene | None = None,
+    ) -> None:
         super().__init__(
             frame,
             base,
@@ -123,7 +129,7 @@ class NodeHandle:
         return f"<NodeHandle {self.name!r} (no ROS master needed)>"
 
 
-def init_node(name, start_master=False):
+def init_node(name: str, start_master: bool = False) -> NodeHandle:
     """Register a client node; kept so that the ROS guide's cells run.
 
     Nothing is started: the publishers of :mod:`rbm_nb.ros` draw into a meshcat

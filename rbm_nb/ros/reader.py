@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import difflib
 import os
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
+from types import TracebackType
+from typing import TYPE_CHECKING
 
 from .._atomic import atomic_path
 from .._progress import progress_bar
@@ -24,6 +26,9 @@ from ._messages import (
     ros1_type_name,
     split_tf,
 )
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 # decoding goes at ~1 µs per message on the fast path and ~25 µs per message
 # otherwise: from this many messages on, a load shows a progress bar
@@ -68,7 +73,12 @@ class RosbagReader:
         self._reader = self._open()
         return self
 
-    def __exit__(self, exc_type, exc_val, exc_tb) -> None:
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc_val: BaseException | None,
+        exc_tb: TracebackType | None,
+    ) -> None:
         reader, self._reader = self._reader, None
         if reader is not None:
             reader.close()
@@ -156,9 +166,10 @@ class RosbagReader:
             "position": messages.position,
             "orientation": messages.orientation,
         }
-        if messages.linear_velocity is not None:
-            out["linear_velocity"] = messages.linear_velocity
-            out["angular_velocity"] = messages.angular_velocity
+        linear, angular = messages.linear_velocity, messages.angular_velocity
+        if linear is not None and angular is not None:  # both or neither
+            out["linear_velocity"] = linear
+            out["angular_velocity"] = angular
         return out
 
     def _read(self, topic: str, progress: bool | None) -> tuple[Messages, str]:
@@ -226,7 +237,9 @@ class RosbagReader:
             )
         return name
 
-    def load_tf(self, topics=None, *, progress: bool | None = None) -> dict:
+    def load_tf(
+        self, topics: Sequence[str] | None = None, *, progress: bool | None = None
+    ) -> dict:
         """Every transform of every tf message, split per parent/child pair.
 
         Parameters
@@ -315,7 +328,7 @@ class RosbagReader:
 
     def load_dataset(
         self, topic: str, cache: bool = False, *, progress: bool | None = None
-    ):
+    ) -> xr.Dataset:
         """Load the messages of a topic as an :class:`xarray.Dataset`.
 
         Parameters
@@ -410,9 +423,10 @@ class RosbagReader:
     def _dataset(self, topic: str, progress: bool | None):
         messages, msgtype = self._read(topic, progress)
         variables = {"position": messages.position, "orientation": messages.orientation}
-        if messages.linear_velocity is not None:
-            variables["linear_velocity"] = messages.linear_velocity
-            variables["angular_velocity"] = messages.angular_velocity
+        linear, angular = messages.linear_velocity, messages.angular_velocity
+        if linear is not None and angular is not None:  # both or neither
+            variables["linear_velocity"] = linear
+            variables["angular_velocity"] = angular
         attrs = {
             "bag": self.bag_file.name,
             "topic": topic,

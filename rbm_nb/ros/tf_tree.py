@@ -10,13 +10,20 @@ others as moving frames with datetime64 timestamps);
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from .transformer import Transformer
 
 __all__ = ["load_tf_tree", "register_frames_from_bag"]
 
 
-def load_tf_tree(bag_file: str | os.PathLike, topics=None) -> dict:
+def load_tf_tree(
+    bag_file: str | os.PathLike, topics: Sequence[str] | None = None
+) -> dict:
     """The tf pairs of a bag, checked to form trees, parents before children.
 
     Parameters
@@ -70,8 +77,11 @@ def load_tf_tree(bag_file: str | os.PathLike, topics=None) -> dict:
 
 
 def register_frames_from_bag(
-    bag_file: str | os.PathLike, topics=None, *, update: bool = False
-) -> list:
+    bag_file: str | os.PathLike,
+    topics: Sequence[str] | None = None,
+    *,
+    update: bool = False,
+) -> list[str]:
     """Register every frame of a bag's tf tree in the frame registry.
 
     Roots (frames that are only parents, e.g. ``map`` or ``odom``) are
@@ -132,7 +142,7 @@ def register_frames_from_bag(
     return names
 
 
-def fill_transformer(transformer, tree: dict) -> None:
+def fill_transformer(transformer: Transformer, tree: dict) -> None:
     """Add every pair of ``tree`` (from :func:`load_tf_tree`) to a Transformer."""
     for child, pair in tree.items():
         if pair.static:

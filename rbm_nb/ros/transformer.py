@@ -15,7 +15,7 @@ Conventions follow tf2:
   since the Unix epoch), and ``time=0`` means the latest time at which every
   frame on the chain has data;
 * nothing is extrapolated: asking for a time outside a moving frame's data
-  raises :class:`~rbm_nb._at_time.ExtrapolationError`.
+  raises :class:`~rbm_nb.errors.ExtrapolationError`.
 
 Results are tuples of floats, quaternions in ``w, x, y, z`` order, as in the
 reference API. Their signs are the reference's too (q and -q are the same
@@ -37,12 +37,18 @@ from __future__ import annotations
 
 import difflib
 import math
+import os
+from collections.abc import Sequence
+from typing import TypeAlias
 
 import numpy as np
+import numpy.typing as npt
 
-from .._at_time import ExtrapolationError, latest_common_time, transform_at_times
-from .._validation import as_float_array, check_finite, normalize_quaternions
-from ..frames import ReferenceFrame, _resolve
+from .._door import float_array
+from .._engine import at_time as _at_time
+from .._validation import check_finite, normalize_quaternions
+from ..errors import ExtrapolationError
+from ..frames import ReferenceFrame, resolve_frame
 
 __all__ = [
     "ConnectivityError",
@@ -50,6 +56,11 @@ __all__ = [
     "ExtrapolationError",
     "Transformer",
 ]
+
+#: A time argument: float seconds (0 is "the latest"), or a datetime64.
+Time: TypeAlias = "float | np.datetime64"
+#: A result: the components of one vector or quaternion.
+Floats: TypeAlias = tuple[float, ...]
 
 #: tf2's default buffer length in seconds.
 DEFAULT_CACHE_TIME = 10.0
@@ -97,7 +108,7 @@ def _time_value(time, name: str = "time") -> float:
 
 
 def _vector(value, size: int, name: str) -> np.ndarray:
-    arr = as_float_array(value, name)
+    arr = float_array(value, name)
     if arr.shape != (size,):
         raise ValueError(f"{name} must have length {size}, got shape {arr.shape}")
     check_finite(arr, name)
@@ -134,7 +145,7 @@ class Transformer:
     (2.0, 2.0, 3.0)
     """
 
-    def __init__(self, cache_time=None):
+    def __init__(self, cache_time: float | None = None) -> None:
         if cache_time is None:
             cache_time = DEFAULT_CACHE_TIME
         cache_time = _time_value(cache_time, "cache_time")
@@ -152,7 +163,7 @@ class Transformer:
         )
 
     @property
-    def frames(self) -> tuple:
+    def frames(self) -> tuple[str, ...]:
         """Names of all frames the buffer knows, sorted."""
         names = set(self._edges)
         names.update(e.parent for e in self._edges.values())
@@ -161,7 +172,7 @@ class Transformer:
     # -- filling the buffer ------------------------------------------------
 
     @staticmethod
-    def from_reference_frame(reference_frame) -> Transformer:
+    def from_reference_frame(reference_frame: ReferenceFrame | str) -> Transformer:
         """A Transformer holding every transform of a reference frame's tree.
 
         Parameters
@@ -176,7 +187,7 @@ class Transformer:
             Its cache time covers all timestamps of the tree (at least tf2's
             default of 10 s), so nothing is dropped.
         """
-        root = _resolve(reference_frame, "reference_frame").root
+        root = resolve_frame(reference_frame, "reference_frame").root
         nodes = root.descendants
         names = [root.name] + [n.name for n in nodes]
         if any(not isinstance(n, str) or not n for n in names):
@@ -193,8 +204,8 @@ class Transformer:
         ]
         cache_time = DEFAULT_CACHE_TIME
         if spans:
-            spans = np.array(spans)
-            cache_time = max(cache_time, float(spans[:, 1].max() - spans[:, 0].min()))
+            ends = np.array(spans)
+            cache_time = max(cache_time, float(ends[:, 1].max() - ends[:, 0].min()))
         transformer = Transformer(cache_time=cache_time)
         for node in nodes:
             if node.timestamps is None:
@@ -204,7 +215,11 @@ class Transformer:
         return transformer
 
     @staticmethod
-    def from_bag(bag_file, topics=None, cache_time=None) -> Transformer:
+    def from_bag(
+        bag_file: str | os.PathLike,
+        topics: Sequence[str] | None = None,
+        cache_time: float | None = None,
+    ) -> Transformer:
         """A Transformer holding a bag's whole tf tree (``/tf`` and ``/tf_static``).
 
         Parameters
@@ -237,7 +252,7 @@ class Transformer:
         fill_transformer(transformer, tree)
         return transformer
 
-    def set_transform_static(self, reference_frame) -> None:
+    def set_transform_static(self, reference_frame: ReferenceFrame | str) -> None:
         """Add the static transform of a reference frame wrt its parent.
 
         Parameters
@@ -245,17 +260,17 @@ class Transformer:
         reference_frame : ReferenceFrame or str
             A static frame with a parent (or the name of a registered one).
         """
-        frame = self._checked_frame(reference_frame)
+        frame, parent = self._checked_frame(reference_frame)
         if frame.timestamps is not None:
             raise ValueError(
                 f"frame {frame.name!r} is moving (it has timestamps); use set_transforms"
             )
         self._set_edge(
-            frame.name, frame.parent.name, np.array(frame.translation),
+            frame.name, parent.name, np.array(frame.translation),
             np.array(frame.rotation), None, False,
         )  # fmt: skip
 
-    def set_transforms(self, reference_frame) -> None:
+    def set_transforms(self, reference_frame: ReferenceFrame | str) -> None:
         """Add the transforms of a moving reference frame wrt its parent.
 
         Samples are merged with those already buffered for the frame (a new
@@ -267,17 +282,24 @@ class Transformer:
         reference_frame : ReferenceFrame or str
             A moving frame with a parent (or the name of a registered one).
         """
-        frame = self._checked_frame(reference_frame)
+        frame, parent = self._checked_frame(reference_frame)
         if frame.timestamps is None:
             raise ValueError(
                 f"frame {frame.name!r} is static (no timestamps); use set_transform_static"
             )
         self._set_edge(
-            frame.name, frame.parent.name, np.array(frame.translation),
+            frame.name, parent.name, np.array(frame.translation),
             np.array(frame.rotation), _seconds(frame.timestamps), frame.discrete,
         )  # fmt: skip
 
-    def set_transform(self, translation, rotation, frame_id, child_frame_id, time=None):
+    def set_transform(
+        self,
+        translation: npt.ArrayLike,
+        rotation: npt.ArrayLike,
+        frame_id: str,
+        child_frame_id: str,
+        time: npt.ArrayLike | None = None,
+    ) -> None:
         """Add raw transforms of ``child_frame_id`` wrt ``frame_id``.
 
         The counterpart of tf2's ``set_transform`` for data that does not come
@@ -297,9 +319,9 @@ class Transformer:
         parent = _name(frame_id, "frame_id")
         child = _name(child_frame_id, "child_frame_id")
         if time is None:
-            t = _vector(translation, 3, "translation")
-            r = normalize_quaternions(_vector(rotation, 4, "rotation"), "rotation")
-            self._set_edge(child, parent, t, r, None, False)
+            t0 = _vector(translation, 3, "translation")
+            r0 = normalize_quaternions(_vector(rotation, 4, "rotation"), "rotation")
+            self._set_edge(child, parent, t0, r0, None, False)
             return
         times = _seconds(np.atleast_1d(time))
         if times.ndim != 1 or not np.isfinite(times).all():
@@ -307,7 +329,7 @@ class Transformer:
         n = len(times)
         t = np.asarray(translation, dtype=np.float64).reshape(-1, 3) if n else None
         r = np.asarray(rotation, dtype=np.float64).reshape(-1, 4) if n else None
-        if t is None or t.shape != (n, 3) or r.shape != (n, 4):
+        if t is None or r is None or t.shape != (n, 3) or r.shape != (n, 4):
             raise ValueError(
                 f"translation and rotation must have shapes ({n}, 3) and ({n}, 4) for "
                 f"{n} times, got {np.shape(translation)} and {np.shape(rotation)}"
@@ -323,15 +345,17 @@ class Transformer:
             False,
         )
 
-    def _checked_frame(self, reference_frame) -> ReferenceFrame:
-        frame = _resolve(reference_frame, "reference_frame")
-        if frame.parent is None:
+    def _checked_frame(self, reference_frame) -> tuple[ReferenceFrame, ReferenceFrame]:
+        """The resolved frame and its parent, both with names."""
+        frame = resolve_frame(reference_frame, "reference_frame")
+        parent = frame.parent
+        if parent is None:
             raise ValueError(
                 f"frame {frame.name!r} has no parent: there is no transform to add"
             )
         _name(frame.name, "the frame's name")
-        _name(frame.parent.name, "the parent frame's name")
-        return frame
+        _name(parent.name, "the parent frame's name")
+        return frame, parent
 
     def _set_edge(self, child, parent, t, r, times, discrete) -> None:
         if child == parent:
@@ -417,6 +441,8 @@ class Transformer:
     def _lookup(self, target_frame, source_frame, time):
         target = self._known(target_frame, "target_frame")
         source = self._known(source_frame, "source_frame")
+        # the buffer's frames are named by the (checked) names they were built from
+        target_name, source_name = str(target_frame), str(source_frame)
         if target.root is not source.root:
             raise ConnectivityError(
                 f"no chain of transforms connects {source.name!r} and {target.name!r} "
@@ -424,13 +450,13 @@ class Transformer:
             )
         when = _time_value(time)
         if when == 0.0:
-            latest = latest_common_time(source, target)
+            latest = _at_time.latest_common_time(source, target)
             if latest is None:  # all static: any time will do
                 latest = 0.0
             when = float(latest)
-        t, r = transform_at_times(source, target, when)
+        t, r, _ = _at_time.transform_at_times(source, target, when)
         r = np.asarray(r, dtype=np.float64)
-        if np.dot(r, self._tf2_rotation(source.name, target.name, when)) < 0:
+        if np.dot(r, self._tf2_rotation(source_name, target_name, when)) < 0:
             r = -r
         return t, r
 
@@ -472,7 +498,9 @@ class Transformer:
 
     # -- queries ------------------------------------------------------------
 
-    def can_transform(self, target_frame, source_frame, time=0.0) -> bool:
+    def can_transform(
+        self, target_frame: str, source_frame: str, time: Time = 0.0
+    ) -> bool:
         """Whether ``lookup_transform`` would succeed.
 
         Parameters
@@ -494,7 +522,9 @@ class Transformer:
             return False
         return True
 
-    def lookup_transform(self, target_frame, source_frame, time=0.0):
+    def lookup_transform(
+        self, target_frame: str, source_frame: str, time: Time = 0.0
+    ) -> tuple[Floats, Floats]:
         """The transform that maps data in ``source_frame`` into ``target_frame``.
 
         Parameters
@@ -530,7 +560,9 @@ class Transformer:
             np.ascontiguousarray(r[None]), np.ascontiguousarray(v[None])
         )[0]
 
-    def transform_point(self, p, target_frame, source_frame, time=0.0):
+    def transform_point(
+        self, p: npt.ArrayLike, target_frame: str, source_frame: str, time: Time = 0.0
+    ) -> Floats:
         """A point given in ``source_frame``, expressed in ``target_frame``.
 
         Returns
@@ -541,7 +573,9 @@ class Transformer:
         t, r = self._lookup(target_frame, source_frame, time)
         return tuple(map(float, self._rotate(r, p) + t))
 
-    def transform_vector(self, v, target_frame, source_frame, time=0.0):
+    def transform_vector(
+        self, v: npt.ArrayLike, target_frame: str, source_frame: str, time: Time = 0.0
+    ) -> Floats:
         """A vector represented in ``source_frame``, represented in ``target_frame``.
 
         Only the rotation applies (a vector has no position).
@@ -554,7 +588,9 @@ class Transformer:
         _, r = self._lookup(target_frame, source_frame, time)
         return tuple(map(float, self._rotate(r, v)))
 
-    def transform_quaternion(self, q, target_frame, source_frame, time=0.0):
+    def transform_quaternion(
+        self, q: npt.ArrayLike, target_frame: str, source_frame: str, time: Time = 0.0
+    ) -> Floats:
         """An orientation wrt ``source_frame``, expressed wrt ``target_frame``.
 
         Returns
@@ -567,7 +603,14 @@ class Transformer:
         _, r = self._lookup(target_frame, source_frame, time)
         return tuple(map(float, _kdl_sign(_qmul(r, q))))
 
-    def transform_pose(self, p, o, target_frame, source_frame, time=0.0):
+    def transform_pose(
+        self,
+        p: npt.ArrayLike,
+        o: npt.ArrayLike,
+        target_frame: str,
+        source_frame: str,
+        time: Time = 0.0,
+    ) -> tuple[Floats, Floats]:
         """A pose (position and orientation) from ``source_frame`` to ``target_frame``.
 
         Parameters

@@ -3,9 +3,14 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
+from contextlib import AbstractContextManager
 from pathlib import Path
+from types import TracebackType
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from .._atomic import atomic_path
 from .._config import UNIT_QUATERNION_TOLERANCE
@@ -18,6 +23,12 @@ from ._messages import (
     rosbags_type_name,
     tf_message,
 )
+
+if TYPE_CHECKING:
+    import xarray as xr
+    from rosbags.rosbag1 import Writer as Ros1Writer
+    from rosbags.rosbag2 import Writer as Ros2Writer
+    from rosbags.typesys.store import Typestore
 
 STORAGES = ("sqlite3", "mcap")
 _MAX_SEC = {False: 2**32, True: 2**31}  # ROS1 stamps are uint32 s, ROS2 int32 s
@@ -61,10 +72,10 @@ class RosbagWriter:
         if storage is not None and storage not in STORAGES:
             raise ValueError(f"storage must be one of {STORAGES}, got {storage!r}")
         self.storage = (storage or "sqlite3") if self.ros2 else None
-        self._atomic = None
-        self._writer = None
-        self._typestore = None
-        self._connections: dict = {}
+        self._atomic: AbstractContextManager[Path] | None = None
+        self._writer: Ros1Writer | Ros2Writer | None = None
+        self._typestore: Typestore | None = None
+        self._connections: dict[tuple[str, str], Any] = {}
 
     def __repr__(self) -> str:
         state = "open" if self._writer is not None else "closed"
@@ -79,29 +90,39 @@ class RosbagWriter:
             Stores.ROS2_HUMBLE if self.ros2 else Stores.ROS1_NOETIC
         )
         register_tf_message(self._typestore)
-        self._atomic = atomic_path(self.bag_file)
-        tmp = self._atomic.__enter__()
+        self._atomic = atomic = atomic_path(self.bag_file)
+        tmp = atomic.__enter__()
         try:
-            self._writer = self._make_writer(tmp)
-            self._writer.open()
+            self._writer = writer = self._make_writer(tmp)
+            writer.open()
         except BaseException as err:
             self._writer = None
-            self._atomic.__exit__(type(err), err, err.__traceback__)
+            atomic.__exit__(type(err), err, err.__traceback__)
             raise
         return self
 
-    def _make_writer(self, path: Path):
+    def _make_writer(self, path: Path) -> Ros1Writer | Ros2Writer:
         if not self.ros2:
-            from rosbags.rosbag1 import Writer
+            from rosbags.rosbag1 import Writer as Ros1Writer
 
-            return Writer(path)
-        from rosbags.rosbag2 import StoragePlugin, Writer
+            return Ros1Writer(path)
+        from rosbags.rosbag2 import StoragePlugin
+        from rosbags.rosbag2 import Writer as Ros2Writer
 
         plugin = StoragePlugin.MCAP if self.storage == "mcap" else StoragePlugin.SQLITE3
-        return Writer(path, version=Writer.VERSION_LATEST, storage_plugin=plugin)
+        return Ros2Writer(
+            path, version=Ros2Writer.VERSION_LATEST, storage_plugin=plugin
+        )
 
-    def __exit__(self, exc_type, exc_val, exc_tb) -> None:
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc_val: BaseException | None,
+        exc_tb: TracebackType | None,
+    ) -> None:
         writer, atomic = self._writer, self._atomic
+        if writer is None or atomic is None:
+            raise RuntimeError(f"{self!r} is not open")
         self._writer = self._atomic = None
         self._connections = {}
         try:
@@ -118,16 +139,16 @@ class RosbagWriter:
     def _connection(self, topic: str, msgtype: str):
         key = (topic, msgtype)
         if key not in self._connections:
-            self._connections[key] = self._writer.add_connection(
-                topic, rosbags_type_name(msgtype), typestore=self._typestore
+            self._connections[key] = self._check_open().add_connection(
+                topic, rosbags_type_name(msgtype), typestore=self._store()
             )
         return self._connections[key]
 
     def write_transform_stamped(
         self,
-        timestamps,
-        translation,
-        rotation,
+        timestamps: npt.ArrayLike,
+        translation: npt.ArrayLike,
+        rotation: npt.ArrayLike,
         topic: str,
         frame: str,
         child_frame: str,
@@ -177,22 +198,31 @@ class RosbagWriter:
             stamps, translation, rotation, frame, child_frame, self.ros2
         )
         connection = self._connection(topic, TRANSFORM_STAMPED)
-        write = self._writer.write
+        write = self._check_open().write
         for stamp, row in zip(stamps.tolist(), rows, strict=True):
             write(connection, stamp, row.tobytes())
 
-    def _check_open(self) -> None:
+    def _check_open(self) -> Ros1Writer | Ros2Writer:
+        """The open bag writer; a RuntimeError outside the ``with`` block."""
         if self._writer is None:
             raise RuntimeError(
                 "RosbagWriter writes inside a with block: "
                 f"with RosbagWriter({str(self.bag_file)!r}) as writer: ..."
             )
+        return self._writer
+
+    def _store(self) -> Typestore:
+        # set in __enter__ before the writer, so an open writer implies it
+        if self._typestore is None:
+            self._check_open()
+            raise RuntimeError(f"{self!r} has no type store")
+        return self._typestore
 
     def write_tf(
         self,
-        timestamps,
-        translation,
-        rotation,
+        timestamps: npt.ArrayLike,
+        translation: npt.ArrayLike,
+        rotation: npt.ArrayLike,
         frame: str,
         child_frame: str,
         *,
@@ -231,12 +261,17 @@ class RosbagWriter:
         serialize = self._serializer()
         for i, stamp in enumerate(stamps.tolist()):
             msg = tf_message(
-                self._typestore, [stamp], [frame], [child_frame],
+                self._store(), [stamp], [frame], [child_frame],
                 translation[i : i + 1], rotation[i : i + 1],
             )  # fmt: skip
-            self._writer.write(connection, stamp, serialize(msg))
+            self._check_open().write(connection, stamp, serialize(msg))
 
-    def write_tf_message(self, transforms, *, static: bool = False) -> None:
+    def write_tf_message(
+        self,
+        transforms: Sequence[tuple[Any, str, str, npt.ArrayLike, npt.ArrayLike]],
+        *,
+        static: bool = False,
+    ) -> None:
         """Write one tf message holding several transforms.
 
         Parameters
@@ -261,25 +296,27 @@ class RosbagWriter:
                     f"child_frame, translation, rotation), got {item!r}"
                 )
             stamp, frame, child, t, r = item
-            stamps, t, r = self._checked_rows(
+            one_stamp, one_t, one_r = self._checked_rows(
                 np.asarray([stamp]), np.asarray(t, float).reshape(1, -1),
                 np.asarray(r, float).reshape(1, -1), topic, frame, child,
             )  # fmt: skip
-            rows.append((int(stamps[0]), frame, child, t[0], r[0]))
-        stamps, frames, children, t, r = zip(*rows, strict=True)
-        msg = tf_message(self._typestore, stamps, frames, children, t, r)
-        self._writer.write(
+            rows.append((int(one_stamp[0]), frame, child, one_t[0], one_r[0]))
+        stamps, frames, children, ts, rs = zip(*rows, strict=True)
+        msg = tf_message(self._store(), stamps, frames, children, ts, rs)
+        self._check_open().write(
             self._connection(topic, TF_MESSAGE), max(stamps), self._serializer()(msg)
         )
 
     def _serializer(self):
-        store = self._typestore
+        store = self._store()
         typename = "tf2_msgs/msg/TFMessage"
         if self.ros2:
             return lambda msg: bytes(store.serialize_cdr(msg, typename))
         return lambda msg: bytes(store.serialize_ros1(msg, typename))
 
-    def _checked_rows(self, timestamps, translation, rotation, topic, frame, child):
+    def _checked_rows(
+        self, timestamps, translation, rotation, topic, frame, child
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         for name, value in (("frame", frame), ("child_frame", child)):
             if not isinstance(value, str):
                 raise ValueError(
@@ -294,7 +331,7 @@ class RosbagWriter:
 
     def write_transform_stamped_dataset(
         self,
-        ds,
+        ds: xr.Dataset,
         topic: str,
         frame: str,
         child_frame: str,

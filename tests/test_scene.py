@@ -160,8 +160,21 @@ def test_track_validates_shapes():
         Track(np.zeros((2, 3)), np.zeros((2, 4)), np.arange(3.0))
     with pytest.raises(ValueError, match="static pose"):
         Track(np.zeros((2, 3)), np.zeros(4))
-    with pytest.raises(ValueError, match="finite"):
+    with pytest.raises(ValueError, match="static pose must not be NaN"):
         Track(np.array([np.nan, 0, 0]), np.array([1.0, 0, 0, 0]))
+    with pytest.raises(ValueError, match="infinite"):
+        Track(np.array([[np.inf, 0, 0]]), np.array([[1.0, 0, 0, 0]]), [0.0])
+
+
+def test_missing_samples_hide_the_object():
+    """A NaN row (no data at that sample, e.g. a blink) hides the node there."""
+    t = np.array([[0.0, 0, 0], [1.0, 0, 0], [np.nan, 0, 0], [3.0, 0, 0]])
+    r = np.tile([1.0, 0, 0, 0], (4, 1))
+    r[1] = np.nan
+    track = Track(t, r, np.arange(4.0))
+    assert [track.missing(i) for i in range(4)] == [False, True, True, False]
+    assert np.isnan(track.translation[1]).all() and np.isnan(track.rotation[2]).all()
+    np.testing.assert_array_equal(track.positions(), [[0.0, 0, 0], [3.0, 0, 0]])
 
 
 @pytest.mark.parametrize(

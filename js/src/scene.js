@@ -325,9 +325,13 @@ class View {
         continue;
       }
       track.hint = i;
-      object.visible = true;
       const p = track.translation;
       const q = track.rotation;
+      if (Number.isNaN(p[3 * i]) || Number.isNaN(q[4 * i])) {
+        object.visible = false; // a missing sample: nothing to show there
+        continue;
+      }
+      object.visible = true;
       object.position.set(p[3 * i], p[3 * i + 1], p[3 * i + 2]);
       object.quaternion.set(q[4 * i], q[4 * i + 1], q[4 * i + 2], q[4 * i + 3]);
       if (track.scale) {

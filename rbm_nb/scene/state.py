@@ -143,7 +143,7 @@ class SceneState:
         """The (4, 4) transform of the node at ``path`` at ``seconds``.
 
         Pinned nodes use their own time. None when the node is hidden because
-        its track has not started yet. A node neither static nor moving is at
+        its track has not started yet or its sample there is missing. A node neither static nor moving is at
         the identity.
         """
         track = self.tracks.get(path)
@@ -154,7 +154,9 @@ class SceneState:
             matrix = umsgpack.unpackb(message.data)["matrix"]
             return np.asarray(matrix, dtype=float).reshape(4, 4).T
         index = track.index_at(self.pins.get(path, seconds))
-        return None if index < 0 else track.matrix(index)
+        if index < 0 or track.missing(index):
+            return None
+        return track.matrix(index)
 
     def world_pose(self, path: str, seconds: float) -> np.ndarray | None:
         """Transform of ``path`` into the scene's base (product along the tree)."""

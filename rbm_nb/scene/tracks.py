@@ -60,8 +60,18 @@ class Track:
                     f"{name}: {n} timestamps need translation ({n}, 3) and rotation ({n}, 4), "
                     f"got {t.shape} and {r.shape}"
                 )
-        if not (np.isfinite(t).all() and np.isfinite(r).all()):
-            raise ValueError(f"{name}: translation and rotation must be finite")
+        if np.isinf(t).any() or np.isinf(r).any():
+            raise ValueError(f"{name}: translation and rotation must not be infinite")
+        if self.seconds is None:
+            if np.isnan(t).any() or np.isnan(r).any():
+                raise ValueError(f"{name}: a static pose must not be NaN")
+        else:
+            # a missing sample (NaN anywhere in its row) hides the object there
+            missing = np.isnan(t).any(axis=1) | np.isnan(r).any(axis=1)
+            if missing.any():
+                t, r = t.copy(), r.copy()
+                t[missing] = np.nan
+                r[missing] = np.nan
         self.translation = np.ascontiguousarray(t)
         self.rotation = np.ascontiguousarray(r)
         if scale is not None:
@@ -121,8 +131,13 @@ class Track:
         return m
 
     def positions(self) -> np.ndarray:
-        """All translations as (n, 3)."""
-        return self.translation.reshape(-1, 3)
+        """The translations of the samples that are not missing, as (n, 3)."""
+        points = self.translation.reshape(-1, 3)
+        return points[~np.isnan(points).any(axis=1)]
+
+    def missing(self, index: int) -> bool:
+        """Whether sample ``index`` has no data (the object is hidden then)."""
+        return bool(np.isnan(self.translation.reshape(-1, 3)[index]).any())
 
     def check_kind(self, kind: str | None, what: str) -> None:
         check_kinds(kind, self.kind, what)

@@ -42,7 +42,10 @@ def build_frames(rec):
         rec["head"], "position", "orientation", "time", parent=world, name="head"
     )
     camera = rbm.ReferenceFrame(
-        "scene_cam", head, translation=SCENE_CAM_TRANSLATION, rotation=SCENE_CAM_ROTATION
+        "scene_cam",
+        head,
+        translation=SCENE_CAM_TRANSLATION,
+        rotation=SCENE_CAM_ROTATION,
     )
     eye = rbm.ReferenceFrame.from_dataset(
         rec["left_eye"].dropna("time"), "position", "orientation", "time",
@@ -93,8 +96,10 @@ def summary(rec, frames):
 
 
 def windowed_speed(rec, frames):
-    return series(rec, frames)[["head_speed"]].mean("time").expand_dims(
-        time=[rec["head"].time.values[0]]
+    return (
+        series(rec, frames)[["head_speed"]]
+        .mean("time")
+        .expand_dims(time=[rec["head"].time.values[0]])
     )
 
 
@@ -158,7 +163,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--recordings", type=int, default=8)
     parser.add_argument("--minutes", type=float, default=10.0)
-    parser.add_argument("--folder", type=Path, default=None, help="reuse recordings here")
+    parser.add_argument(
+        "--folder", type=Path, default=None, help="reuse recordings here"
+    )
     args = parser.parse_args()
 
     folder = args.folder or Path(tempfile.mkdtemp(prefix="rbm_nb_study_"))

@@ -121,7 +121,9 @@ def over_time(
 
     source = arr
     if global_seconds and arr[time_dim].dtype.kind == "M":
-        source = arr.assign_coords({time_dim: _seconds_from_first(arr[time_dim].values)})
+        source = arr.assign_coords(
+            {time_dim: _seconds_from_first(arr[time_dim].values)}
+        )
     blocks = []
     run = dask.delayed(_run_block, pure=True)
     for lo, hi in _chunk_bounds(arr.chunks[t_axis], start, stop):
@@ -145,9 +147,7 @@ def over_time(
     data = dsa.concatenate(blocks, axis=out_axis)
 
     kept = arr.isel({time_dim: slice(start, stop)})
-    coords = {
-        k: v.variable for k, v in kept.coords.items() if time_dim in v.dims
-    }
+    coords = {k: v.variable for k, v in kept.coords.items() if time_dim in v.dims}
     coords.update(
         {k: v.variable for k, v in layout.coords.items() if time_dim not in v.dims}
     )
@@ -161,7 +161,9 @@ def _seconds_from_first(times: np.ndarray) -> np.ndarray:
     return seconds(times, len(times), "time")
 
 
-def _chunk_bounds(chunks: Sequence[int], start: int, stop: int) -> list[tuple[int, int]]:
+def _chunk_bounds(
+    chunks: Sequence[int], start: int, stop: int
+) -> list[tuple[int, int]]:
     bounds, edge = [], 0
     for size in chunks:
         lo, hi = max(edge, start), min(edge + size, stop)
@@ -257,8 +259,20 @@ def _path(frame) -> list:
     return path
 
 
-def transform(eager: Callable, arr, into, outof, dim, axis, timestamps, time_axis,
-              return_timestamps: bool, resolve: Callable, attr: str, quaternions: bool):
+def transform(
+    eager: Callable,
+    arr,
+    into,
+    outof,
+    dim,
+    axis,
+    timestamps,
+    time_axis,
+    return_timestamps: bool,
+    resolve: Callable,
+    attr: str,
+    quaternions: bool,
+):
     """A transform of dask-backed data: the frames looked up at each chunk's times."""
     plain = not hasattr(arr, "dims")
     if plain:
@@ -271,14 +285,22 @@ def transform(eager: Callable, arr, into, outof, dim, axis, timestamps, time_axi
         spatial = arr.dims[-1 if axis is None else axis % arr.ndim]
         time_dim, dim, axis = "time", spatial, None
     else:
-        time_dim = timestamps if isinstance(timestamps, str) else arr.dims[0 if time_axis is None else time_axis]
+        time_dim = (
+            timestamps
+            if isinstance(timestamps, str)
+            else arr.dims[0 if time_axis is None else time_axis]
+        )
         if time_dim not in arr.coords:
             raise ValueError(
                 f"the dask-backed DataArray needs a coordinate for its time "
                 f"dimension {time_dim!r} to be transformed lazily"
             )
     source = outof if outof is not None else arr.attrs.get(attr)
-    span = None if source is None else frame_time_range(resolve(source, "outof"), resolve(into, "into"))
+    span = (
+        None
+        if source is None
+        else frame_time_range(resolve(source, "outof"), resolve(into, "into"))
+    )
     times = arr[time_dim].values
     start, stop = 0, len(times)
     if span is not None:
@@ -302,8 +324,17 @@ def transform(eager: Callable, arr, into, outof, dim, axis, timestamps, time_axi
     return out
 
 
-def estimate(eager: Callable, arr, dim, axis, timestamps, time_axis, halo: int,
-             quaternions: bool = False, **options):
+def estimate(
+    eager: Callable,
+    arr,
+    dim,
+    axis,
+    timestamps,
+    time_axis,
+    halo: int,
+    quaternions: bool = False,
+    **options,
+):
     """A velocity estimate of dask-backed data, chunk by chunk with a halo."""
     plain = not hasattr(arr, "dims")
     if plain:
@@ -313,7 +344,11 @@ def estimate(eager: Callable, arr, dim, axis, timestamps, time_axis, halo: int,
         dim = arr.dims[-1 if axis is None else axis % arr.ndim]
         time_dim, axis = "time", None
     else:
-        time_dim = timestamps if isinstance(timestamps, str) else arr.dims[0 if time_axis is None else time_axis]
+        time_dim = (
+            timestamps
+            if isinstance(timestamps, str)
+            else arr.dims[0 if time_axis is None else time_axis]
+        )
     comp_dim = dim if dim is not None else arr.dims[-1 if axis is None else axis]
     if quaternions:
         arr = sign_continuous(arr, time_dim, comp_dim)
@@ -365,8 +400,13 @@ def elementwise(eager: Callable, arr, core_dim: str | int, fill: Any = 0.0, **kw
     )
 
 
-def blockwise(eager: Callable, arrays: Sequence[Any], core_dims: Sequence[str],
-              out_core_dim: str, **kwargs):
+def blockwise(
+    eager: Callable,
+    arrays: Sequence[Any],
+    core_dims: Sequence[str],
+    out_core_dim: str,
+    **kwargs,
+):
     """A function of several aligned DataArrays that acts on each sample alone.
 
     ``eager(*blocks, **kwargs)`` receives NumPy arrays whose last axis is the
@@ -420,8 +460,10 @@ def qinterp(eager: Callable, da, dim: str, qdim: str, t_out, out_of_range: str):
             "lazy qinterp of dask-backed data takes a one-dimensional new "
             f"coordinate, got shape {t_new.shape}"
         )
-    if out_of_range == "raise" and t_new.size and (
-        t_new.min() < t_in[0] or t_new.max() > t_in[-1]
+    if (
+        out_of_range == "raise"
+        and t_new.size
+        and (t_new.min() < t_in[0] or t_new.max() > t_in[-1])
     ):
         raise ValueError(
             f"the new times ({t_new.min()} to {t_new.max()}) leave the sampled "
@@ -434,7 +476,9 @@ def qinterp(eager: Callable, da, dim: str, qdim: str, t_out, out_of_range: str):
     stand_in = xr.DataArray(
         _filled(stand_in.shape, (1.0, 0.0, 0.0, 0.0), stand_in.dims.index(qdim)),
         {k: v.variable.compute() for k, v in stand_in.coords.items()},
-        stand_in.dims, da.name, da.attrs,
+        stand_in.dims,
+        da.name,
+        da.attrs,
     )
     layout = eager(stand_in, dim, qdim, t_out, out_of_range=out_of_range)
 
@@ -449,20 +493,39 @@ def qinterp(eager: Callable, da, dim: str, qdim: str, t_out, out_of_range: str):
         hi = int(np.searchsorted(t_in, part.max(), side="left")) + 1 + SQUAD_HALO
         piece = q.isel({dim: slice(max(lo, 0), min(hi, len(t_in)))})
         task = run(
-            eager, piece.data, {k: v.variable for k, v in piece.coords.items()},
-            piece.dims, da.name, da.attrs, dim, qdim, part, out_of_range, layout.dims,
+            eager,
+            piece.data,
+            {k: v.variable for k, v in piece.coords.items()},
+            piece.dims,
+            da.name,
+            da.attrs,
+            dim,
+            qdim,
+            part,
+            out_of_range,
+            layout.dims,
         )
         shape = [da.sizes.get(d, 0) for d in layout.dims]
         shape[axis] = part.size
         shape[layout.dims.index(qdim)] = 4
         blocks.append(dsa.from_delayed(task, tuple(shape), dtype=np.float64))
     data = dsa.concatenate(blocks, axis=axis)
-    coords = {k: v.variable for k, v in layout.coords.items() if not set(v.dims) & set(others)}
-    coords.update({k: v.variable for k, v in da.coords.items() if set(v.dims) <= set(others) and v.dims})
+    coords = {
+        k: v.variable for k, v in layout.coords.items() if not set(v.dims) & set(others)
+    }
+    coords.update(
+        {
+            k: v.variable
+            for k, v in da.coords.items()
+            if set(v.dims) <= set(others) and v.dims
+        }
+    )
     return xr.DataArray(data, coords, layout.dims, layout.name, layout.attrs)
 
 
-def _run_qinterp(eager, data, coords, dims, name, attrs, dim, qdim, part, out_of_range, out_dims):
+def _run_qinterp(
+    eager, data, coords, dims, name, attrs, dim, qdim, part, out_of_range, out_dims
+):
     import xarray as xr
 
     block = xr.DataArray(np.asarray(data), coords, dims, name, attrs)

@@ -183,7 +183,9 @@ def drop_stale_kernels(root: Path) -> int:
     for path in root.rglob("*.nb[ic]"):
         # under NUMBA_CACHE_DIR numba mirrors the sources' path: keep to ours
         parts = path.parent.parts
-        if root == KERNELS / "__pycache__" or ("rbm_nb" in parts and "_kernels" in parts):
+        if root == KERNELS / "__pycache__" or (
+            "rbm_nb" in parts and "_kernels" in parts
+        ):
             try:
                 path.unlink()
                 removed += 1

@@ -72,7 +72,9 @@ def cartesian_to_polar(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     array([2.        , 1.57079633])
     """
     if _dask.is_dask(arr):
-        return _dask.elementwise(cartesian_to_polar, getattr(arr, "data", arr), axis, axis=axis)
+        return _dask.elementwise(
+            cartesian_to_polar, getattr(arr, "data", arr), axis, axis=axis
+        )
     arr, axis = _checked(arr, axis, 2, "x, y")
     x, y = np.take(arr, 0, axis=axis), np.take(arr, 1, axis=axis)
     return np.stack((np.hypot(x, y), np.arctan2(y, x)), axis=axis)
@@ -104,7 +106,9 @@ def polar_to_cartesian(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     array([2., 0.])
     """
     if _dask.is_dask(arr):
-        return _dask.elementwise(polar_to_cartesian, getattr(arr, "data", arr), axis, axis=axis)
+        return _dask.elementwise(
+            polar_to_cartesian, getattr(arr, "data", arr), axis, axis=axis
+        )
     arr, axis = _checked(arr, axis, 2, "r, phi")
     r, phi = np.take(arr, 0, axis=axis), np.take(arr, 1, axis=axis)
     return np.stack((r * np.cos(phi), r * np.sin(phi)), axis=axis)
@@ -138,7 +142,9 @@ def cartesian_to_spherical(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     array([2., 0., 0.])
     """
     if _dask.is_dask(arr):
-        return _dask.elementwise(cartesian_to_spherical, getattr(arr, "data", arr), axis, axis=axis)
+        return _dask.elementwise(
+            cartesian_to_spherical, getattr(arr, "data", arr), axis, axis=axis
+        )
     arr, axis = _checked(arr, axis, 3, "x, y, z")
     x, y, z = (np.take(arr, i, axis=axis) for i in range(3))
     rho = np.hypot(x, y)
@@ -173,7 +179,9 @@ def spherical_to_cartesian(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     array([1., 0., 0.])
     """
     if _dask.is_dask(arr):
-        return _dask.elementwise(spherical_to_cartesian, getattr(arr, "data", arr), axis, axis=axis)
+        return _dask.elementwise(
+            spherical_to_cartesian, getattr(arr, "data", arr), axis, axis=axis
+        )
     arr, axis = _checked(arr, axis, 3, "r, theta, phi")
     r, theta, phi = (np.take(arr, i, axis=axis) for i in range(3))
     rho = r * np.sin(theta)

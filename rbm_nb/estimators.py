@@ -26,11 +26,11 @@ from ._dask import GRADIENT_HALO, SPLINE_HALO, filter_halo
 from ._door import ArrayInput, kernel_array
 from ._door import is_dataarray as _is_dataarray
 from ._engine.velocity import (
-    angular_series as _angular_series,
-)
-from ._engine.velocity import (
     _BUTTER_ORDER,
     _FILTER_PADLEN,
+)
+from ._engine.velocity import (
+    angular_series as _angular_series,
 )
 from ._engine.velocity import (
     check_options as _check_options,

@@ -159,9 +159,7 @@ def qinv(q: ArrayInput, qaxis: int = -1) -> Any:
     """
     if _dask.is_dask(q):
         core = q.dims[qaxis] if _is_dataarray(q) else qaxis
-        return _dask.elementwise(
-            qinv, q, core, fill=(1.0, 0.0, 0.0, 0.0), qaxis=qaxis
-        )
+        return _dask.elementwise(qinv, q, core, fill=(1.0, 0.0, 0.0, 0.0), qaxis=qaxis)
     template = q if _is_dataarray(q) else None
     qf, was_quaternion = _split(q, qaxis, "q")
     out, zero = _rk.qinv_checked(kernel_array(qf.reshape(-1, 4)))
@@ -181,8 +179,7 @@ def _lazy_qmul(q, qaxis: int):
         return out
     if any(_is_dataarray(x) for x in q):
         raise ValueError(
-            "q: with dask-backed data pass qmul all DataArrays or all arrays, "
-            "not a mix"
+            "q: with dask-backed data pass qmul all DataArrays or all arrays, not a mix"
         )
     import dask.array as dsa
 

@@ -56,7 +56,9 @@ def _cases(recording):
         ),
         "transform_vectors": (
             pos,
-            lambda a: rbm.transform_vectors(a, outof="head", into="world", dim="cartesian_axis"),
+            lambda a: rbm.transform_vectors(
+                a, outof="head", into="world", dim="cartesian_axis"
+            ),
         ),
         "transform_quaternions": (
             q,
@@ -109,13 +111,18 @@ def test_dataarray_results_are_lazy_and_equal(name, recording, tree):
     counter = ComputeCounter()
     with counter:
         lazy = func(lazy_in)
-    assert counter.count == 0, f"{name} computed {counter.count} graph(s) before being asked"
+    assert counter.count == 0, (
+        f"{name} computed {counter.count} graph(s) before being asked"
+    )
     assert isinstance(lazy.data, dsa.Array), f"{name} returned {type(lazy.data)}"
     assert lazy.dims == eager.dims
     assert list(lazy.coords) == list(eager.coords)
     assert lazy.attrs == eager.attrs
     if lazy.sizes["time"] == lazy_in.sizes["time"]:
-        assert lazy.chunks[lazy.dims.index("time")] == lazy_in.chunks[lazy_in.dims.index("time")]
+        assert (
+            lazy.chunks[lazy.dims.index("time")]
+            == lazy_in.chunks[lazy_in.dims.index("time")]
+        )
     with counter:
         result = lazy.compute()
     assert counter.count == 1
@@ -157,12 +164,17 @@ def test_plain_dask_arrays(recording, tree):
         atol=1e-12,
     )
     np.testing.assert_array_equal(
-        rbm.cartesian_to_spherical(dsa.from_array(pos.values, chunks=(CHUNK, 3))).compute(),
+        rbm.cartesian_to_spherical(
+            dsa.from_array(pos.values, chunks=(CHUNK, 3))
+        ).compute(),
         rbm.cartesian_to_spherical(pos.values),
     )
     t_out = ts[10:-10:3]
     np.testing.assert_allclose(
-        rbm.qinterp(lq, ts, t_out).compute(), rbm.qinterp(q, ts, t_out), rtol=1e-12, atol=1e-14
+        rbm.qinterp(lq, ts, t_out).compute(),
+        rbm.qinterp(q, ts, t_out),
+        rtol=1e-12,
+        atol=1e-14,
     )
 
 
@@ -173,7 +185,9 @@ def test_transform_crops_to_the_frames_range(recording, tree):
         part, "position", "orientation", "time", parent="world", name="head_part"
     ).register()
     pos = _eye(recording, "position")
-    eager = rbm.transform_points(pos, outof="head_part", into="world", dim="cartesian_axis")
+    eager = rbm.transform_points(
+        pos, outof="head_part", into="world", dim="cartesian_axis"
+    )
     lazy = rbm.transform_points(
         pos.chunk(time=CHUNK), outof="head_part", into="world", dim="cartesian_axis"
     )
@@ -194,7 +208,9 @@ def test_sign_flips_across_chunks(recording, tree):
     lazy = rbm.estimate_angular_velocity(
         flipped.chunk(time=CHUNK), dim="quaternion_axis", mode="rotation_vector"
     )
-    eager = rbm.estimate_angular_velocity(flipped, dim="quaternion_axis", mode="rotation_vector")
+    eager = rbm.estimate_angular_velocity(
+        flipped, dim="quaternion_axis", mode="rotation_vector"
+    )
     # a chunk's times count from its own first sample: differences of a few
     # ulps of the times, magnified by 1/dt, are all that may differ
     np.testing.assert_allclose(lazy.values, eager.values, rtol=1e-11, atol=1e-11)
@@ -210,5 +226,9 @@ def test_velocity_transforms_say_they_are_not_lazy(recording, tree):
     v = _eye(recording, "position").chunk(time=CHUNK)
     with pytest.raises(NotImplementedError, match="compute"):
         rbm.transform_linear_velocity(
-            v, outof="head", into="world", what="representation_frame", dim="cartesian_axis"
+            v,
+            outof="head",
+            into="world",
+            what="representation_frame",
+            dim="cartesian_axis",
         )

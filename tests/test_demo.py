@@ -175,7 +175,9 @@ def test_demo_html_export_plays_offline_in_chromium(page, tmp_path):
     assert (first.std(axis=(0, 1)) > 5).any()  # something is drawn
     assert changed_pixels(first, later) > 100  # and it moved
     assert page.inner_text(".rbm-readout").startswith("200.000 s")
-    assert [u for u in requests if not u.startswith(("file://", "blob:", "data:"))] == []
+    assert [
+        u for u in requests if not u.startswith(("file://", "blob:", "data:"))
+    ] == []
     assert page.errors == []
 
 

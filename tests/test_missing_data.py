@@ -157,7 +157,9 @@ def _ill_conditioned(out_times, eye_times, ratio=20.0):
     r = dt[1:] / dt[:-1]
     ill = np.zeros(len(eye_times), dtype=bool)
     ill[1:-1] = (r > ratio) | (r < 1 / ratio)
-    seg = np.clip(np.searchsorted(eye_times, out_times, side="right") - 1, 0, len(ill) - 2)
+    seg = np.clip(
+        np.searchsorted(eye_times, out_times, side="right") - 1, 0, len(ill) - 2
+    )
     # at a sample's own time squad returns the sample: nothing to amplify
     return (ill[seg] | ill[seg + 1]) & ~np.isin(out_times, eye_times)
 
@@ -299,7 +301,6 @@ def test_max_gap_on_the_real_left_eye(recordings):
         )
         if known:
             assert np.isfinite(out[None][inside]).all()
-
 
 
 def test_max_gap_is_a_keyword_of_register_frame_and_from_dataset():

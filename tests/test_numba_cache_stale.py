@@ -17,8 +17,12 @@ def _touch(path):
 
 def test_stale_kernels_are_dropped_and_only_ours(tmp_path):
     ours = [
-        _touch(tmp_path / "work" / "rbm_nb" / "_kernels" / "quaternion.qmul-10.py311.nbi"),
-        _touch(tmp_path / "work" / "rbm_nb" / "_kernels" / "quaternion.qmul-10.py311.1.nbc"),
+        _touch(
+            tmp_path / "work" / "rbm_nb" / "_kernels" / "quaternion.qmul-10.py311.nbi"
+        ),
+        _touch(
+            tmp_path / "work" / "rbm_nb" / "_kernels" / "quaternion.qmul-10.py311.1.nbc"
+        ),
     ]
     theirs = _touch(tmp_path / "other" / "pkg" / "_kernels" / "k.f-1.py311.nbi")
 

@@ -14,8 +14,8 @@ import xarray as xr
 pytest.importorskip("dask")
 
 import rbm_nb as rbm  # noqa: E402
-from rbm_nb.explorer import SCENE_CAM_ROTATION, SCENE_CAM_TRANSLATION  # noqa: E402
 from rbm_nb.data import synthetic_head_eye  # noqa: E402
+from rbm_nb.explorer import SCENE_CAM_ROTATION, SCENE_CAM_TRANSLATION  # noqa: E402
 from rbm_nb.study import open_study  # noqa: E402
 
 N_RECORDINGS = 8
@@ -28,7 +28,10 @@ def build_frames(rec):
         rec["head"], "position", "orientation", "time", parent=world, name="head"
     )
     camera = rbm.ReferenceFrame(
-        "scene_cam", head, translation=SCENE_CAM_TRANSLATION, rotation=SCENE_CAM_ROTATION
+        "scene_cam",
+        head,
+        translation=SCENE_CAM_TRANSLATION,
+        rotation=SCENE_CAM_ROTATION,
     )
     eye = rbm.ReferenceFrame.from_dataset(
         rec["left_eye"].dropna("time"),
@@ -144,12 +147,16 @@ def test_windows_equal_the_whole_recording(recordings):
 
 def test_to_netcdf_writes_one_file_per_recording(study_folder, expected, tmp_path):
     study = open_study(study_folder)
-    paths = study.to_netcdf(summary, tmp_path / "out", frames=build_frames, progress=False)
+    paths = study.to_netcdf(
+        summary, tmp_path / "out", frames=build_frames, progress=False
+    )
     assert [p.name for p in paths] == [f"{n}.nc" for n in sorted(expected)]
     for path in paths:
         with xr.open_dataset(path) as ds:
             want = expected[path.stem]
-            np.testing.assert_allclose(ds.mean_speed.values, want.mean_speed.values, rtol=1e-12)
+            np.testing.assert_allclose(
+                ds.mean_speed.values, want.mean_speed.values, rtol=1e-12
+            )
     assert not [p for p in (tmp_path / "out").iterdir() if p.name.startswith(".")]
 
 
@@ -165,7 +172,9 @@ def test_bad_input_is_named(study_folder, tmp_path):
     with pytest.raises(ValueError, match="window must be a positive"):
         open_study(study_folder).map(summary, frames=build_frames, window=0.0)
     with pytest.raises(ValueError, match="no 'time' dimension"):
-        open_study(study_folder).map(summary, frames=build_frames, window=5.0, progress=False)
+        open_study(study_folder).map(
+            summary, frames=build_frames, window=5.0, progress=False
+        )
     (tmp_path / "mixed" / "rec").mkdir(parents=True)
     (tmp_path / "mixed" / "a.nc").write_bytes(b"")
     with pytest.raises(ValueError, match="mixes recording files"):
@@ -180,14 +189,17 @@ def test_bad_input_is_named(study_folder, tmp_path):
 @pytest.fixture
 def cluster():
     distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(
-        n_workers=2,
-        threads_per_worker=1,
-        processes=True,
-        host="127.0.0.1",
-        dashboard_address=None,
-        silence_logs=50,
-    ) as cl, distributed.Client(cl) as client:
+    with (
+        distributed.LocalCluster(
+            n_workers=2,
+            threads_per_worker=1,
+            processes=True,
+            host="127.0.0.1",
+            dashboard_address=None,
+            silence_logs=50,
+        ) as cl,
+        distributed.Client(cl) as client,
+    ):
         yield client
 
 
@@ -270,14 +282,17 @@ def test_windowed_memory_follows_the_window_not_the_recording(tmp_path):
     study = open_study(tmp_path)
     increases = {}
     for label, options in (("whole", {}), ("windowed", {"window": 20.0})):
-        with distributed.LocalCluster(
-            n_workers=1,
-            threads_per_worker=1,
-            processes=True,
-            host="127.0.0.1",
-            dashboard_address=None,
-            silence_logs=50,
-        ) as cl, distributed.Client(cl) as client:
+        with (
+            distributed.LocalCluster(
+                n_workers=1,
+                threads_per_worker=1,
+                processes=True,
+                host="127.0.0.1",
+                dashboard_address=None,
+                silence_logs=50,
+            ) as cl,
+            distributed.Client(cl) as client,
+        ):
             increases[label] = _peak_traced_mb(client, study, **options)
     print(f"data {data_mb:.0f} MB, peak allocated per worker (MB) {increases}")
     # the whole recording is in memory at once; a 20 s window is 1/30 of it,

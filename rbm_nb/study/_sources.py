@@ -94,7 +94,9 @@ class RecordingSource:
     paths: Mapping[str, Path] = field(default_factory=dict)
     datasets: Mapping[str, xr.Dataset] = field(default_factory=dict)
 
-    def open(self, chunks: Any = None, start: Any = None, stop: Any = None) -> Recording:
+    def open(
+        self, chunks: Any = None, start: Any = None, stop: Any = None
+    ) -> Recording:
         """Load the streams, restricted to ``start <= time <= stop`` if given.
 
         Files are read into memory (only the selected span) and closed; with
@@ -118,7 +120,9 @@ class RecordingSource:
         firsts, lasts = [], []
         for stream, path in self.paths.items():
             if path.suffix == ".bag" or path.is_dir():
-                first, last = Recording(self.name, _load_path(stream, path, slice(None))).time_range()
+                first, last = Recording(
+                    self.name, _load_path(stream, path, slice(None))
+                ).time_range()
             else:
                 with _NETCDF_LOCK, xr.open_dataset(path) as ds:
                     if "time" not in ds.coords or ds.sizes.get("time", 0) == 0:
@@ -152,7 +156,9 @@ def _load_path(stream: str, path: Path, span: slice) -> dict[str, xr.Dataset]:
         return {stream: ds.sel(time=span).load()}
 
 
-def find_sources(source: Any, streams: Iterable[str] | None = None) -> list[RecordingSource]:
+def find_sources(
+    source: Any, streams: Iterable[str] | None = None
+) -> list[RecordingSource]:
     """The recordings a user pointed at, sorted by name.
 
     ``source`` is one of
@@ -192,7 +198,9 @@ def _from_folder(folder: Path) -> list[RecordingSource]:
     if not folder.is_dir():
         raise FileNotFoundError(f"source folder {folder} does not exist")
     files = sorted(p for p in folder.iterdir() if p.suffix in STREAM_SUFFIXES)
-    subfolders = sorted(p for p in folder.iterdir() if p.is_dir() and not p.name.startswith("."))
+    subfolders = sorted(
+        p for p in folder.iterdir() if p.is_dir() and not p.name.startswith(".")
+    )
     if files and subfolders:
         raise ValueError(
             f"{folder} mixes recording files ({files[0].name}, ...) and "
@@ -202,7 +210,9 @@ def _from_folder(folder: Path) -> list[RecordingSource]:
         return [RecordingSource(p.stem, paths={p.stem: p}) for p in files]
     sources = []
     for sub in subfolders:
-        paths = {p.stem: p for p in sorted(sub.iterdir()) if p.suffix in STREAM_SUFFIXES}
+        paths = {
+            p.stem: p for p in sorted(sub.iterdir()) if p.suffix in STREAM_SUFFIXES
+        }
         if paths:
             sources.append(RecordingSource(sub.name, paths=paths))
     return sources
@@ -211,7 +221,9 @@ def _from_folder(folder: Path) -> list[RecordingSource]:
 def _in_memory(name: str, value: Any) -> RecordingSource:
     if isinstance(value, xr.Dataset):
         return RecordingSource(name, datasets={"data": value})
-    if isinstance(value, Mapping) and all(isinstance(v, xr.Dataset) for v in value.values()):
+    if isinstance(value, Mapping) and all(
+        isinstance(v, xr.Dataset) for v in value.values()
+    ):
         return RecordingSource(name, datasets=dict(value))
     raise TypeError(
         f"recording {name!r} must be a Dataset or a mapping of stream names to "

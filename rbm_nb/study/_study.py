@@ -90,7 +90,9 @@ class Study:
         try:
             source = self._sources[name]
         except KeyError:
-            raise KeyError(f"no recording named {name!r}; the study has {self.names}") from None
+            raise KeyError(
+                f"no recording named {name!r}; the study has {self.names}"
+            ) from None
         return source.open(self.chunks)
 
     def delayed(
@@ -120,7 +122,9 @@ class Study:
         for name, source in self._sources.items():
             source_key = dask.delayed(source, pure=True)
             if window is None:
-                results[name] = run(source_key, self.chunks, analysis_key, frames_key, None)
+                results[name] = run(
+                    source_key, self.chunks, analysis_key, frames_key, None
+                )
                 continue
             span = source.time_range()
             pieces = [
@@ -204,7 +208,9 @@ class Study:
         folder.mkdir(parents=True, exist_ok=True)
         results = self.delayed(analysis, frames=frames, window=window, margin=margin)
         write = dask.delayed(_write_netcdf)
-        tasks = [write(result, folder / f"{name}.nc") for name, result in results.items()]
+        tasks = [
+            write(result, folder / f"{name}.nc") for name, result in results.items()
+        ]
         return list(_compute(tasks, progress))
 
 

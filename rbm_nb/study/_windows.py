@@ -37,7 +37,9 @@ class Window:
                 f"for analyses that summarise a whole recording"
             )
         time = result["time"].values
-        keep = (time >= self.start) & ((time <= self.stop) if self.last else (time < self.stop))
+        keep = (time >= self.start) & (
+            (time <= self.stop) if self.last else (time < self.stop)
+        )
         return result.isel(time=np.flatnonzero(keep))
 
 
@@ -65,7 +67,9 @@ def split(start: Any, stop: Any, length: float, margin: float) -> list[Window]:
     if not (isinstance(length, (int, float)) and math.isfinite(length) and length > 0):
         raise ValueError(f"window must be a positive number of seconds, got {length!r}")
     if not (isinstance(margin, (int, float)) and math.isfinite(margin) and margin >= 0):
-        raise ValueError(f"margin must be a non-negative number of seconds, got {margin!r}")
+        raise ValueError(
+            f"margin must be a non-negative number of seconds, got {margin!r}"
+        )
     start, stop = _as_scalar(start), _as_scalar(stop)
     step = _seconds_as(start, length)
     pad = _seconds_as(start, margin)

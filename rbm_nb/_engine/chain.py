@@ -254,10 +254,12 @@ def resample_frame(frame, target: Target):
         # the stored values, with their signs (the reference returns them)
         t, r = frame._t[same], frame._rotation_public[same]
         gaps = _unusable(frame)
-        if gaps is not None and gaps[same].any():
-            t, r = t.copy(), r.copy()
-            t[gaps[same]] = np.nan
-            r[gaps[same]] = np.nan
+        if gaps is not None:
+            t_gaps, r_gaps = gaps[0][same], gaps[1][same]
+            if t_gaps.any() or r_gaps.any():
+                t, r = t.copy(), r.copy()
+                t[t_gaps] = np.nan
+                r[r_gaps] = np.nan
         return t, r
     if frame.discrete:
         # float seconds on one origin keep the order of the exact keys
@@ -281,24 +283,32 @@ def resample_frame(frame, target: Target):
 
 
 def _unusable(frame):
-    """Samples whose interpolation reads a missing one, or None if none is missing.
+    """Rows of translation and of rotation whose interpolation reads a missing
+    sample, as two boolean arrays, or None if nothing is missing.
 
-    At a sample's own time the interpolation is the sample itself, but its
-    SQUAD segment reads samples i-1 .. i+2 (and a missing neighbour makes the
-    whole segment unknown). Marking those rows keeps lookups at the frame's
-    own timestamps consistent with lookups between them, and with
-    rigid-body-motion. Cached on the frame (its data never changes).
+    At a sample's own time the interpolation is the sample itself, but the
+    rotation's SQUAD segment reads samples i-1 .. i+2 and the translation's
+    linear segment samples i-1 and i; a missing rotation also makes the
+    translation unknown (the reference interpolates the two together when a
+    rotation is missing, and not when only a translation is). Marking those
+    rows keeps lookups at the frame's own timestamps consistent with lookups
+    between them, and with rigid-body-motion. Cached on the frame (its data
+    never changes).
     """
     cached = frame.__dict__.get("_unusable_rows", False)
     if cached is not False:
         return cached
-    missing = np.isnan(frame._t).any(axis=1) | np.isnan(frame._r).any(axis=1)
+    missing_t = np.isnan(frame._t).any(axis=1)
+    missing_r = np.isnan(frame._r).any(axis=1)
     out = None
-    if missing.any():
-        out = missing.copy()
-        out[:-1] |= missing[1:]  # i + 1
-        out[:-2] |= missing[2:]  # i + 2
-        out[1:] |= missing[:-1]  # i - 1
+    if missing_t.any() or missing_r.any():
+        r_rows = missing_r.copy()
+        r_rows[:-1] |= missing_r[1:]  # i + 1
+        r_rows[:-2] |= missing_r[2:]  # i + 2
+        r_rows[1:] |= missing_r[:-1]  # i - 1
+        t_rows = missing_t | r_rows
+        t_rows[1:] |= missing_t[:-1]  # i - 1
+        out = (t_rows, r_rows)
     frame._unusable_rows = out
     return out
 

@@ -829,6 +829,21 @@ def test_selection_follow_and_focus(moving):
     assert distance == pytest.approx(5.0)  # ten triads
 
 
+def test_focus_refuses_a_frame_whose_samples_are_missing(moving):
+    """Missing at the time shown and at its last sample: a clear error, no TypeError."""
+    frame = moving.add_frame("body", scale=0.5)
+    t = np.c_[np.arange(11.0), np.zeros(11), np.ones(11)]
+    t[5:] = np.nan  # a blink from 0.5 s to the end
+    r = np.tile([1.0, 0.0, 0.0, 0.0], (11, 1))
+    moving.state.add_track(frame.pose_path, Track(t, r, np.arange(11) * 0.1))
+    moving.set_time(0.2)
+    moving.focus("body")  # shown now: aimed at it
+    np.testing.assert_allclose(moving._camera["target"], [2.0, 0.0, 1.0])
+    moving.set_time(0.7)
+    with pytest.raises(ValueError, match="'body' has no pose at the time shown"):
+        moving.focus("body")
+
+
 def test_no_socket_is_opened(moving):
     import psutil
 

@@ -859,3 +859,37 @@ def test_no_socket_is_opened(moving):
     moving.show()
     moving.player().play()
     assert listening() == before
+
+
+def test_explorer_gaze_rays_are_hidden_where_the_eye_was_not_seen():
+    """Blinks, lost pupils and samples below confidence 0.6 draw no gaze ray."""
+    from rbm_nb.data import synthetic_head_eye
+    from rbm_nb.explorer import explorer_scene, register_head_eye_frames
+
+    recording = synthetic_head_eye(duration=20.0, seed=2)
+    register_head_eye_frames(*recording)
+    scene = explorer_scene()
+    eye = recording.left_eye
+    [ray] = [
+        h
+        for h in scene.handles.values()
+        if getattr(h, "frame", None) is not None and h.frame.name == "pupil/left_eye"
+    ]
+    track = scene.state.tracks[ray.pose_path]
+    times = eye.time.values
+    unseen = np.isnan(eye.orientation.values).any(axis=1) | (
+        eye.confidence.values < 0.6
+    )
+    assert unseen.any() and not unseen.all()
+    # the ray is sampled on the eye's clock: every unseen sample is hidden
+    # there (and its squad neighbours may be too), and some seen ones are not
+    hidden = np.array([track.missing(i) for i in range(len(track))])
+    position = {t: k for k, t in enumerate(track.original_timestamps)}
+    checked = 0
+    for t in times[unseen]:
+        k = position.get(t)
+        if k is not None:
+            assert hidden[k], t
+            checked += 1
+    assert checked > 0.9 * unseen.sum()
+    assert not hidden.all()

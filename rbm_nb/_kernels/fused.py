@@ -1,0 +1,494 @@
+"""Fused chain kernels: one pass over the output rows, nothing else allocated.
+
+A chain of frames between two frames is, once its static runs are composed,
+``S0 M1 S1 M2 S2 ...``: static transforms ``S`` and up to :data:`SLOTS`
+moving frames ``M`` (each possibly inverted). For every output row the
+kernels here find each moving frame's segment by walking forward from the
+previous row's segment (a merge walk over sorted target times; unsorted
+times restart the walk, which then is a galloping binary search), evaluate
+the frame there (squad for rotations and linear for translations of
+continuous frames, the held event of discrete frames), compose the whole
+chain in registers and write only the result: the transform itself
+(:func:`lookup_chain`) or the point/vector/quaternion it carries
+(:func:`transform_chain`).
+
+The arithmetic is that of the unfused engine (``chain.resample_frame``,
+``resample.chain_step``, ``quaternion.squad_evaluate``), so results agree
+with it to rounding.
+
+Inputs (unchecked, like every kernel)
+-------------------------------------
+plan : int64 (3 * steps,)
+    Per step ``(kind, index, inverse)``: kind :data:`STATIC` (index into
+    ``statics``), :data:`SQUAD` (continuous frame: linear translation,
+    squad rotation), :data:`CONSTANT` (a continuous frame of one sample),
+    :data:`HELD` (discrete frame); index is the slot (0..SLOTS-1) of a
+    moving frame. ``inverse`` is 1 for a step traversed against its
+    direction (static steps are composed forward beforehand: 0).
+statics : float64 (s, 7)
+    Static transforms as ``tx, ty, tz, w, x, y, z``.
+offsets : float64 (SLOTS,)
+    Added to the target times to put them on each slot's time origin.
+slot k : ``times_k`` (n,), ``t_k`` (n, 3), ``r_k`` (n, 4), ``c_k`` (n, 20)
+    A moving frame's sample times, translations, rotations (free of sign
+    flips) and its squad table (:func:`squad_table`; any (1, 20) array for
+    a frame that is not interpolated by squad). Unused slots get any
+    arrays of these types.
+
+Missing samples
+---------------
+A NaN row in a frame's data makes NaN exactly the output rows whose
+evaluation needs it: squad in segment i needs samples i-1 .. i+2, linear
+interpolation samples i and i+1, a held event itself; a target time equal
+to a sample time needs only that sample. Nothing else produces NaN.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._jit import F1, F2, F3, I1, B, I, helper, kernel
+from .quaternion import (
+    _geodesic1,
+    _is_unit,
+    _qexp1,
+    _qinv1,
+    _qlog1,
+    _qmul1,
+    _qslerp1,
+    _qslerp_unit1,
+    _rotate1,
+    _sincos,
+)
+
+__all__ = [
+    "SLOTS",
+    "STATIC",
+    "SQUAD",
+    "CONSTANT",
+    "HELD",
+    "TABLE_COLUMNS",
+    "squad_table",
+    "squad_table_fill",
+    "lookup_chain",
+    "transform_chain",
+]
+
+SLOTS = 3
+STATIC = 0
+SQUAD = 1
+CONSTANT = 2
+HELD = 3
+
+# squad table columns: a (0:4), b (4:8), the great circles r[i] -> r[i+1]
+# (8:13: θ, u) and a[i] -> b[i] (13:18), the non-unit flag (18) and whether
+# the row has been computed (19: 1.0 yes, 0.0 not yet)
+TABLE_COLUMNS = 20
+_DONE = 19
+
+
+# ---------------------------------------------------------------------------
+# the squad table, one segment at a time
+# ---------------------------------------------------------------------------
+
+
+@helper(inline=True)
+def _log_step(r, i):
+    """log(r[i]⁻¹ r[i+1]), as :func:`quaternion.squad_coefficients` forms it."""
+    iw, ix, iy, iz = _qinv1(r[i, 0], r[i, 1], r[i, 2], r[i, 3])
+    nw, nx, ny, nz = _qmul1(
+        iw, ix, iy, iz, r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3]
+    )
+    return _qlog1(nw, nx, ny, nz)
+
+
+@helper(inline=True)
+def _table_row(r, t, c, i):
+    """Fill row i of the squad table of (r, t) (n >= 2) into ``c``.
+
+    Equal to row i of ``squad_coefficients`` (a, b) and ``squad_segments``
+    (operation for operation), computed from samples i-1 .. i+2 only.
+    """
+    n = r.shape[0]
+    # a[i]
+    if i == 0 or i == n - 1:
+        aw, ax, ay, az = r[i, 0], r[i, 1], r[i, 2], r[i, 3]
+    else:
+        pw, px, py, pz = _log_step(r, i - 1)
+        lw, lx, ly, lz = _log_step(r, i)
+        ratio = (t[i + 1] - t[i]) / (t[i] - t[i - 1])
+        ew, ex, ey, ez = _qexp1(
+            (-lw + pw * ratio) * 0.25,
+            (-lx + px * ratio) * 0.25,
+            (-ly + py * ratio) * 0.25,
+            (-lz + pz * ratio) * 0.25,
+        )
+        aw, ax, ay, az = _qmul1(r[i, 0], r[i, 1], r[i, 2], r[i, 3], ew, ex, ey, ez)
+    # b[i], and the sample the segment ends at
+    if i < n - 2:
+        lw, lx, ly, lz = _log_step(r, i)
+        nw, nx, ny, nz = _log_step(r, i + 1)
+        ratio = (t[i + 1] - t[i]) / (t[i + 2] - t[i + 1])
+        ew, ex, ey, ez = _qexp1(
+            (nw * ratio - lw) * -0.25,
+            (nx * ratio - lx) * -0.25,
+            (ny * ratio - ly) * -0.25,
+            (nz * ratio - lz) * -0.25,
+        )
+        bw, bx, by, bz = _qmul1(
+            r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3], ew, ex, ey, ez
+        )
+    elif i == n - 2:
+        bw, bx, by, bz = r[n - 1, 0], r[n - 1, 1], r[n - 1, 2], r[n - 1, 3]
+    else:
+        # the virtual sample past the end: r[n-1] r[n-2]⁻¹ r[n-1]
+        iw, ix, iy, iz = _qinv1(r[n - 2, 0], r[n - 2, 1], r[n - 2, 2], r[n - 2, 3])
+        w, x, y, z = _qmul1(
+            r[n - 1, 0], r[n - 1, 1], r[n - 1, 2], r[n - 1, 3], iw, ix, iy, iz
+        )
+        bw, bx, by, bz = _qmul1(
+            w, x, y, z, r[n - 1, 0], r[n - 1, 1], r[n - 1, 2], r[n - 1, 3]
+        )
+    if i < n - 1:
+        ew, ex, ey, ez = r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3]
+    else:
+        ew, ex, ey, ez = bw, bx, by, bz
+    c[i, 0] = aw
+    c[i, 1] = ax
+    c[i, 2] = ay
+    c[i, 3] = az
+    c[i, 4] = bw
+    c[i, 5] = bx
+    c[i, 6] = by
+    c[i, 7] = bz
+    unit = (
+        _is_unit(r[i, 0], r[i, 1], r[i, 2], r[i, 3])
+        and _is_unit(ew, ex, ey, ez)
+        and _is_unit(aw, ax, ay, az)
+        and _is_unit(bw, bx, by, bz)
+    )
+    if unit:
+        g = _geodesic1(r[i, 0], r[i, 1], r[i, 2], r[i, 3], ew, ex, ey, ez)
+        c[i, 8] = g[0]
+        c[i, 9] = g[1]
+        c[i, 10] = g[2]
+        c[i, 11] = g[3]
+        c[i, 12] = g[4]
+        g = _geodesic1(aw, ax, ay, az, bw, bx, by, bz)
+        c[i, 13] = g[0]
+        c[i, 14] = g[1]
+        c[i, 15] = g[2]
+        c[i, 16] = g[3]
+        c[i, 17] = g[4]
+        c[i, 18] = 0.0
+    else:
+        for k in range(8, 18):
+            c[i, k] = 0.0
+        c[i, 18] = 1.0
+    c[i, _DONE] = 1.0
+
+
+@kernel(F2, F1)
+def squad_table(r, t):
+    """The whole squad table of rotations r (n >= 2) at strictly increasing t.
+
+    Returns
+    -------
+    ndarray, shape (n, 20)
+        See the module docstring; every row computed.
+    """
+    n = r.shape[0]
+    c = np.empty((n, TABLE_COLUMNS))
+    for i in range(n):
+        _table_row(r, t, c, i)
+    return c
+
+
+@kernel(F2, F1, F2)
+def squad_table_fill(r, t, c):
+    """Compute the rows of table ``c`` not computed yet (column 19 == 0)."""
+    for i in range(r.shape[0]):
+        if c[i, _DONE] == 0.0:
+            _table_row(r, t, c, i)
+
+
+# ---------------------------------------------------------------------------
+# one frame at one time
+# ---------------------------------------------------------------------------
+
+
+@helper(inline=True)
+def _walk(times, cur, t):
+    """Index i with times[i] <= t < times[i+1] (-1 before, n-1 at/after the end).
+
+    Gallops forward from the previous answer ``cur``; a time earlier than
+    ``times[cur]`` restarts from the beginning (the same answers as
+    ``quaternion.search_right``).
+    """
+    n = times.shape[0]
+    i = cur
+    if i >= 0 and t < times[i]:
+        i = -1
+    lo = i
+    step = 1
+    hi = i + 1
+    while hi < n and times[hi] <= t:
+        lo = hi
+        hi = i + 1 + step
+        step *= 2
+    if hi > n:
+        hi = n
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if times[mid] <= t:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+@helper(inline=True)
+def _squad_at(times, r, c, i, t):
+    """Rotation of a continuous frame at time t in segment i (from _walk).
+
+    Row i of the table ``c`` must be computed.
+    """
+    n = times.shape[0]
+    if i < 0:
+        i = n - 1  # numpy-quaternion indexes with -1 before the start
+    if i < n - 1:
+        dt = times[i + 1] - times[i]
+    else:
+        dt = (times[n - 1] + (times[n - 1] - times[n - 2])) - times[n - 1]
+    tau = (t - times[i]) / dt
+    if c[i, 18] == 0.0:
+        s, co = _sincos(tau * c[i, 8])
+        s1w = co * r[i, 0] + s * c[i, 9]
+        s1x = co * r[i, 1] + s * c[i, 10]
+        s1y = co * r[i, 2] + s * c[i, 11]
+        s1z = co * r[i, 3] + s * c[i, 12]
+        s, co = _sincos(tau * c[i, 13])
+        s2w = co * c[i, 0] + s * c[i, 14]
+        s2x = co * c[i, 1] + s * c[i, 15]
+        s2y = co * c[i, 2] + s * c[i, 16]
+        s2z = co * c[i, 3] + s * c[i, 17]
+    else:
+        if i < n - 1:
+            nw, nx, ny, nz = r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3]
+        else:
+            nw, nx, ny, nz = c[n - 1, 4], c[n - 1, 5], c[n - 1, 6], c[n - 1, 7]
+        s1w, s1x, s1y, s1z = _qslerp1(
+            r[i, 0], r[i, 1], r[i, 2], r[i, 3], nw, nx, ny, nz, tau
+        )
+        s2w, s2x, s2y, s2z = _qslerp1(
+            c[i, 0], c[i, 1], c[i, 2], c[i, 3], c[i, 4], c[i, 5], c[i, 6], c[i, 7],
+            tau,
+        )  # fmt: skip
+    return _qslerp_unit1(
+        s1w, s1x, s1y, s1z, s2w, s2x, s2y, s2z, 2.0 * tau * (1.0 - tau)
+    )
+
+
+@helper(inline=True)
+def _frame_at(kind, times, tr, r, c, cur, t, rotation_only):
+    """(segment, tx, ty, tz, w, x, y, z) of one moving frame at time t.
+
+    ``cur`` is the segment of the previous row (-1 at the start). The
+    translation is zero when ``rotation_only``.
+    """
+    n = times.shape[0]
+    tx = ty = tz = 0.0
+    if kind == CONSTANT:
+        if not rotation_only:
+            tx, ty, tz = tr[0, 0], tr[0, 1], tr[0, 2]
+        return cur, tx, ty, tz, r[0, 0], r[0, 1], r[0, 2], r[0, 3]
+    i = _walk(times, cur, t)
+    if kind == HELD:
+        k = i if i >= 0 else 0
+        if not rotation_only:
+            tx, ty, tz = tr[k, 0], tr[k, 1], tr[k, 2]
+        return i, tx, ty, tz, r[k, 0], r[k, 1], r[k, 2], r[k, 3]
+    if i >= 0 and t == times[i]:
+        # a sample time: the sample itself (and only it is needed)
+        if not rotation_only:
+            tx, ty, tz = tr[i, 0], tr[i, 1], tr[i, 2]
+        return i, tx, ty, tz, r[i, 0], r[i, 1], r[i, 2], r[i, 3]
+    if not rotation_only:
+        k = i if i >= 0 else 0
+        if k > n - 2:
+            k = n - 2
+        w = (t - times[k]) / (times[k + 1] - times[k])
+        tx = tr[k, 0] + w * (tr[k + 1, 0] - tr[k, 0])
+        ty = tr[k, 1] + w * (tr[k + 1, 1] - tr[k, 1])
+        tz = tr[k, 2] + w * (tr[k + 1, 2] - tr[k, 2])
+    qw, qx, qy, qz = _squad_at(times, r, c, i, t)
+    return i, tx, ty, tz, qw, qx, qy, qz
+
+
+@helper(inline=True)
+def _compose(ax, ay, az, aw, bx, by, bz, tx, ty, tz, qw, qx, qy, qz, inverse):
+    """Accumulated (a: t, then r = aw bx by bz) followed by (t, q), as chain_step.
+
+    Argument order: accumulated translation (ax, ay, az), accumulated
+    rotation (aw, bx, by, bz), the step's translation and rotation.
+    """
+    if inverse:
+        x, y, z = _rotate1(qw, -qx, -qy, -qz, ax - tx, ay - ty, az - tz)
+        k = 1.0 / (qw * qw + qx * qx + qy * qy + qz * qz)
+        qw, qx, qy, qz = qw * k, -qx * k, -qy * k, -qz * k
+    else:
+        x, y, z = _rotate1(qw, qx, qy, qz, ax, ay, az)
+        x += tx
+        y += ty
+        z += tz
+    w, rx, ry, rz = _qmul1(qw, qx, qy, qz, aw, bx, by, bz)
+    return x, y, z, w, rx, ry, rz
+
+
+@helper(inline=True)
+def _chain_at(
+    plan, statics, offsets,
+    times0, t0, r0, c0, times1, t1, r1, c1, times2, t2, r2, c2,
+    cur0, cur1, cur2, t, rotation_only,
+):  # fmt: skip
+    """The composed chain at target time t: (tx, ty, tz, w, x, y, z, cur0..2)."""
+    ax = ay = az = 0.0
+    aw, bx, by, bz = 1.0, 0.0, 0.0, 0.0
+    for s in range(plan.shape[0] // 3):
+        kind = plan[3 * s]
+        index = plan[3 * s + 1]
+        inverse = plan[3 * s + 2] != 0
+        if kind == STATIC:
+            tx, ty, tz = statics[index, 0], statics[index, 1], statics[index, 2]
+            qw, qx, qy, qz = (
+                statics[index, 3],
+                statics[index, 4],
+                statics[index, 5],
+                statics[index, 6],
+            )
+        elif index == 0:
+            cur0, tx, ty, tz, qw, qx, qy, qz = _frame_at(
+                kind, times0, t0, r0, c0, cur0, t + offsets[0], rotation_only
+            )
+        elif index == 1:
+            cur1, tx, ty, tz, qw, qx, qy, qz = _frame_at(
+                kind, times1, t1, r1, c1, cur1, t + offsets[1], rotation_only
+            )
+        else:
+            cur2, tx, ty, tz, qw, qx, qy, qz = _frame_at(
+                kind, times2, t2, r2, c2, cur2, t + offsets[2], rotation_only
+            )
+        if rotation_only:
+            tx = ty = tz = 0.0
+        ax, ay, az, aw, bx, by, bz = _compose(
+            ax, ay, az, aw, bx, by, bz, tx, ty, tz, qw, qx, qy, qz, inverse
+        )
+    return ax, ay, az, aw, bx, by, bz, cur0, cur1, cur2
+
+
+_SLOT_TYPES = (F1, F2, F2, F2) * SLOTS
+
+
+@kernel(I1, F2, F1, *_SLOT_TYPES, F1, B)
+def lookup_chain(
+    plan, statics, offsets,
+    times0, t0, r0, c0, times1, t1, r1, c1, times2, t2, r2, c2,
+    target, rotation_only,
+):  # fmt: skip
+    """The chain's transform at every target time, in one pass.
+
+    Parameters
+    ----------
+    plan, statics, offsets, times0 .. c2 : see the module docstring
+    target : ndarray, shape (m,)
+        Target times (slot k reads ``target + offsets[k]``).
+    rotation_only : bool
+        Skip the translations (then ``t`` is returned with shape (0, 3)).
+
+    Returns
+    -------
+    t : ndarray, shape (m, 3) or (0, 3)
+    r : ndarray, shape (m, 4)
+    """
+    m = target.shape[0]
+    t_out = np.empty((0 if rotation_only else m, 3))
+    r_out = np.empty((m, 4))
+    cur0 = cur1 = cur2 = -1
+    for j in range(m):
+        x, y, z, w, qx, qy, qz, cur0, cur1, cur2 = _chain_at(
+            plan, statics, offsets,
+            times0, t0, r0, c0, times1, t1, r1, c1, times2, t2, r2, c2,
+            cur0, cur1, cur2, target[j], rotation_only,
+        )  # fmt: skip
+        if not rotation_only:
+            t_out[j, 0] = x
+            t_out[j, 1] = y
+            t_out[j, 2] = z
+        r_out[j, 0] = w
+        r_out[j, 1] = qx
+        r_out[j, 2] = qy
+        r_out[j, 3] = qz
+    return t_out, r_out
+
+
+@kernel(I1, F2, F1, *_SLOT_TYPES, F1, F3, I)
+def transform_chain(
+    plan, statics, offsets,
+    times0, t0, r0, c0, times1, t1, r1, c1, times2, t2, r2, c2,
+    target, data, mode,
+):  # fmt: skip
+    """Carry data through the chain at every target time, in one pass.
+
+    Parameters
+    ----------
+    plan, statics, offsets, times0 .. c2 : see the module docstring
+    target : ndarray, shape (m,)
+    data : ndarray, shape (m, k, c) or (1, k, c)
+        Points or vectors (c == 3) or quaternions (c == 4); a first
+        dimension of 1 is reused for every row.
+    mode : int
+        0 points (rotate and translate), 1 vectors (rotate; translations
+        are never evaluated), 2 quaternions (left-multiplied by the
+        rotation).
+
+    Returns
+    -------
+    ndarray, shape (m, k, c)
+    """
+    m = target.shape[0]
+    k = data.shape[1]
+    nc = data.shape[2]
+    s_d = 1 if data.shape[0] > 1 else 0
+    out = np.empty((m, k, nc))
+    rotation_only = mode != 0
+    cur0 = cur1 = cur2 = -1
+    for j in range(m):
+        x, y, z, w, qx, qy, qz, cur0, cur1, cur2 = _chain_at(
+            plan, statics, offsets,
+            times0, t0, r0, c0, times1, t1, r1, c1, times2, t2, r2, c2,
+            cur0, cur1, cur2, target[j], rotation_only,
+        )  # fmt: skip
+        b = j * s_d
+        if mode == 2:
+            for e in range(k):
+                ow, ox, oy, oz = _qmul1(
+                    w, qx, qy, qz, data[b, e, 0], data[b, e, 1], data[b, e, 2],
+                    data[b, e, 3],
+                )  # fmt: skip
+                out[j, e, 0] = ow
+                out[j, e, 1] = ox
+                out[j, e, 2] = oy
+                out[j, e, 3] = oz
+        else:
+            for e in range(k):
+                px, py, pz = _rotate1(
+                    w, qx, qy, qz, data[b, e, 0], data[b, e, 1], data[b, e, 2]
+                )
+                if mode == 0:
+                    px += x
+                    py += y
+                    pz += z
+                out[j, e, 0] = px
+                out[j, e, 1] = py
+                out[j, e, 2] = pz
+    return out

@@ -35,8 +35,11 @@ as_float_array = float_array
 
 
 def is_scalar(value: Any) -> bool:
-    """``np.isscalar`` as a plain bool (no type narrowing of ``value``)."""
-    return bool(np.isscalar(value))
+    """Whether ``value`` is one real number (not a bool, string or array)."""
+    return (
+        isinstance(value, int | float | np.integer | np.floating)
+        and not isinstance(value, bool | np.bool_)
+    )
 
 
 def check_last_axis(arr: np.ndarray, size: int, name: str) -> None:

@@ -18,6 +18,7 @@ from . import _time
 from ._door import ArrayInput, kernel_array
 from ._door import float_array as _door_float_array
 from ._door import is_dataarray as _is_dataarray
+from ._engine.chain import stored_signs
 from ._kernels import quaternion as _qk
 from ._kernels import rotations as _rk
 from ._validation import check_finite, check_no_inf, check_unit_norms
@@ -352,8 +353,11 @@ def _squad_series(
     m = t_out.shape[0]
     out = np.empty((m, series.shape[1], 4))
     for b in range(series.shape[1]):
-        q_b = _qk.unflip(kernel_array(series[:, b, :]))
-        out[:, b, :] = _qk.squad(q_b, t_in, t_out)
+        stored = kernel_array(series[:, b, :])
+        q_b = _qk.unflip(stored)
+        rot = _qk.squad(q_b, t_in, t_out)
+        stored_signs(rot, q_b, stored, t_in, t_out)
+        out[:, b, :] = rot
     return out
 
 

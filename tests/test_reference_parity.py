@@ -397,11 +397,6 @@ def _zigzag(n=86):
     return t, x
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: outlier_thresh that leaves samples without kept "
-    "neighbours raises one clear error (no NaN rows) in lookup_twist and the estimator",
-)
 def test_outlier_rejection_never_returns_nan_rows():
     t, x = _zigzag()
     rbm.register_frame("world")
@@ -414,10 +409,6 @@ def test_outlier_rejection_never_returns_nan_rows():
         rbm.lookup_linear_velocity("b", "world", outlier_thresh=0.5)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: a rejected first sample is not returned as a NaN row",
-)
 def test_rejected_first_sample_is_not_a_silent_nan():
     t = np.arange(86) * 0.01
     x = np.zeros((86, 3))
@@ -488,20 +479,12 @@ def _assert_exact_sign(got, expected, what):
     )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: SQUAD signs follow the stored samples, as the reference",
-)
 def test_qinterp_sign_on_a_series_that_flips_sign():
     t, q = _alternating()
     t_out = np.arange(0.0, 7.0, 0.3)
     _assert_exact_sign(rbm.qinterp(q, t, t_out), ref.qinterp(q, t, t_out), "qinterp")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: lookups return the stored quaternions' signs, as the reference",
-)
 def test_lookup_signs_on_a_series_that_flips_sign():
     t, q = _alternating()
     t_out = np.arange(0.0, 7.0, 0.3)
@@ -543,10 +526,6 @@ def tf2_slerp(q1, q2, f):
     return (np.sin((1 - f) * theta) * q1 + np.sin(f * theta) * q2) / np.sin(theta)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: ros.Transformer interpolates with tf2's slerp signs",
-)
 def test_transformer_interpolation_sign_is_tf2_slerp():
     t, q = _alternating(6)
     rbm.register_frame("world")

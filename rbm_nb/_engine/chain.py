@@ -243,7 +243,7 @@ def resample_frame(frame, target: Target):
     """A frame's translation (n|1, 3) and rotation (n|1, 4) at the target times."""
     track = frame._track
     if track is None:
-        return frame._t, frame._r
+        return frame._t, frame._rotation_public
     tt = target.track
     if tt is None:
         raise ValueError(
@@ -251,20 +251,42 @@ def resample_frame(frame, target: Target):
         )
     same = _same_times(track, tt)
     if same is not None:
-        return frame._t[same], frame._r[same]
+        # the stored values, with their signs (the reference returns them)
+        return frame._t[same], frame._rotation_public[same]
     if frame.discrete:
         # float seconds on one origin keep the order of the exact keys
         t_out = tt.base_in(track.origin)
         return (
             kr.hold_last(track.base, frame._t, t_out),
-            kr.hold_last(track.base, frame._r, t_out),
+            kr.hold_last(track.base, frame._rotation_public, t_out),
         )
     t_out = tt.base_in(track.origin)
     if len(track) < 2:
-        return frame._t, frame._r
+        return frame._t, frame._rotation_public
     a_coef, b_coef, seg = frame._squad_coefficients()
     rot = kq.squad_evaluate(frame._r, track.base, a_coef, b_coef, seg, t_out)
+    stored_signs(rot, frame._r, frame._rotation_public, track.base, t_out)
     return kr.interp_linear(track.base, frame._t, t_out), rot
+
+
+def stored_signs(out, unflipped, stored, t_in, t_out) -> None:
+    """Give interpolated quaternions the sign of the stored sample they start from.
+
+    Interpolation runs on the sign-continuous series (``unflip``); the value
+    between samples i and i+1 is then negated wherever the stored sample i
+    has the other sign, which is what SQUAD on the stored samples gives (and
+    what rigid-body-motion returns). ``out`` (m, 4) is changed in place.
+    """
+    n = len(t_in)
+    if n < 2:
+        return
+    with np.errstate(invalid="ignore"):
+        flipped = np.einsum("ij,ij->i", unflipped, stored) < 0.0
+    if not flipped.any():
+        return
+    seg = np.searchsorted(t_in, t_out, side="right") - 1
+    np.clip(seg, 0, n - 2, out=seg)
+    out[flipped[seg]] *= -1.0
 
 
 def compose(steps, target: Target):
@@ -328,7 +350,10 @@ def resample_array(data: np.ndarray, track, target: Target, quaternions: bool):
             if n < 2:
                 out[:, j, :] = column[0]
             else:
-                out[:, j, :] = kq.squad(kq.unflip(column), track.base, t_out)
+                unflipped = kq.unflip(column)
+                rot = kq.squad(unflipped, track.base, t_out)
+                stored_signs(rot, unflipped, column, track.base, t_out)
+                out[:, j, :] = rot
         else:
             out[:, j, :] = kr.interp_linear(track.base, column, t_out)
     return out

@@ -83,6 +83,19 @@ def _reject_outliers(t, values, score, thresh) -> np.ndarray:
             f"outlier_thresh={thresh} keeps only {kept.min()} sample(s) of a series; "
             f"at least 2 are needed to interpolate the others"
         )
+    # a rejected run at either end has no kept sample on one side to
+    # interpolate from: refuse it rather than return NaN rows
+    lead = ~keep[0]
+    tail = ~keep[-1]
+    if lead.any() or tail.any():
+        where = "first" if lead.any() else "last"
+        kept_rows = np.flatnonzero(keep.any(axis=1))
+        edge = kept_rows[0] if where == "first" else len(keep) - 1 - kept_rows[-1]
+        raise ValueError(
+            f"outlier_thresh={thresh} rejects the {where} {max(int(edge), 1)} "
+            f"sample(s) of a series, which have no kept sample on that side to be "
+            f"interpolated from; raise outlier_thresh or trim the series"
+        )
     return _dk.interpolate_rejected(t, kernel_array(values), keep)
 
 

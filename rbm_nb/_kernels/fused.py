@@ -29,11 +29,15 @@ statics : float64 (s, 7)
     Static transforms as ``tx, ty, tz, w, x, y, z``.
 offsets : float64 (SLOTS,)
     Added to the target times to put them on each slot's time origin.
-slot k : ``times_k`` (n,), ``t_k`` (n, 3), ``r_k`` (n, 4), ``c_k`` (n, 20)
-    A moving frame's sample times, translations, rotations (free of sign
-    flips) and its squad table (:func:`squad_table`; any (1, 20) array for
-    a frame that is not interpolated by squad). Unused slots get any
-    arrays of these types.
+slot k : ``times_k`` (n,), ``t_k`` (n, 3), ``r_k`` (n, 4), ``p_k`` (n, 4), ``c_k`` (n, 20)
+    A moving frame's sample times, translations, rotations free of sign
+    flips (``unflip``), rotations as stored (with their signs) and its
+    squad table (:func:`squad_table`; any (1, 20) array for a frame that is
+    not interpolated by squad). Unused slots get any arrays of these types.
+
+Signs: squad runs on the sign-continuous rotations; an interpolated value
+takes the sign of the stored sample its segment starts from, a sample time
+or a held event returns the stored sample (as ``chain.stored_signs``).
 
 Missing samples
 ---------------
@@ -47,7 +51,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import F1, F2, F3, I1, B, I, helper, kernel
+from ._jit import F1, F2, F3, I1, B, I, helper, kernel  # noqa: E741
 from .quaternion import (
     _geodesic1,
     _is_unit,
@@ -69,7 +73,6 @@ __all__ = [
     "HELD",
     "TABLE_COLUMNS",
     "squad_table",
-    "squad_table_fill",
     "lookup_chain",
     "transform_chain",
 ]
@@ -92,7 +95,7 @@ _DONE = 19
 # ---------------------------------------------------------------------------
 
 
-@helper(inline=True)
+@helper
 def _log_step(r, i):
     """log(r[i]⁻¹ r[i+1]), as :func:`quaternion.squad_coefficients` forms it."""
     iw, ix, iy, iz = _qinv1(r[i, 0], r[i, 1], r[i, 2], r[i, 3])
@@ -102,7 +105,7 @@ def _log_step(r, i):
     return _qlog1(nw, nx, ny, nz)
 
 
-@helper(inline=True)
+@helper
 def _table_row(r, t, c, i):
     """Fill row i of the squad table of (r, t) (n >= 2) into ``c``.
 
@@ -204,133 +207,25 @@ def squad_table(r, t):
     return c
 
 
-@kernel(F2, F1, F2)
-def squad_table_fill(r, t, c):
-    """Compute the rows of table ``c`` not computed yet (column 19 == 0)."""
-    for i in range(r.shape[0]):
-        if c[i, _DONE] == 0.0:
-            _table_row(r, t, c, i)
-
-
 # ---------------------------------------------------------------------------
-# one frame at one time
+# the chain over a block of rows
 # ---------------------------------------------------------------------------
 
-
-@helper(inline=True)
-def _walk(times, cur, t):
-    """Index i with times[i] <= t < times[i+1] (-1 before, n-1 at/after the end).
-
-    Gallops forward from the previous answer ``cur``; a time earlier than
-    ``times[cur]`` restarts from the beginning (the same answers as
-    ``quaternion.search_right``).
-    """
-    n = times.shape[0]
-    i = cur
-    if i >= 0 and t < times[i]:
-        i = -1
-    lo = i
-    step = 1
-    hi = i + 1
-    while hi < n and times[hi] <= t:
-        lo = hi
-        hi = i + 1 + step
-        step *= 2
-    if hi > n:
-        hi = n
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if times[mid] <= t:
-            lo = mid
-        else:
-            hi = mid
-    return lo
+# Rows are evaluated in blocks: for each block, each step of the chain is
+# applied to all its rows before the next step. The block's accumulated
+# transforms stay in a small scratch array (in L1 cache), and a step's
+# arrays are picked once per block, not once per row: numba counts
+# references whenever an array is assigned or handed to a function, and
+# per-row reference counting costs more than the arithmetic.
+BLOCK = 128
 
 
-@helper(inline=True)
-def _squad_at(times, r, c, i, t):
-    """Rotation of a continuous frame at time t in segment i (from _walk).
-
-    Row i of the table ``c`` must be computed.
-    """
-    n = times.shape[0]
-    if i < 0:
-        i = n - 1  # numpy-quaternion indexes with -1 before the start
-    if i < n - 1:
-        dt = times[i + 1] - times[i]
-    else:
-        dt = (times[n - 1] + (times[n - 1] - times[n - 2])) - times[n - 1]
-    tau = (t - times[i]) / dt
-    if c[i, 18] == 0.0:
-        s, co = _sincos(tau * c[i, 8])
-        s1w = co * r[i, 0] + s * c[i, 9]
-        s1x = co * r[i, 1] + s * c[i, 10]
-        s1y = co * r[i, 2] + s * c[i, 11]
-        s1z = co * r[i, 3] + s * c[i, 12]
-        s, co = _sincos(tau * c[i, 13])
-        s2w = co * c[i, 0] + s * c[i, 14]
-        s2x = co * c[i, 1] + s * c[i, 15]
-        s2y = co * c[i, 2] + s * c[i, 16]
-        s2z = co * c[i, 3] + s * c[i, 17]
-    else:
-        if i < n - 1:
-            nw, nx, ny, nz = r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3]
-        else:
-            nw, nx, ny, nz = c[n - 1, 4], c[n - 1, 5], c[n - 1, 6], c[n - 1, 7]
-        s1w, s1x, s1y, s1z = _qslerp1(
-            r[i, 0], r[i, 1], r[i, 2], r[i, 3], nw, nx, ny, nz, tau
-        )
-        s2w, s2x, s2y, s2z = _qslerp1(
-            c[i, 0], c[i, 1], c[i, 2], c[i, 3], c[i, 4], c[i, 5], c[i, 6], c[i, 7],
-            tau,
-        )  # fmt: skip
-    return _qslerp_unit1(
-        s1w, s1x, s1y, s1z, s2w, s2x, s2y, s2z, 2.0 * tau * (1.0 - tau)
-    )
-
-
-@helper(inline=True)
-def _frame_at(kind, times, tr, r, c, cur, t, rotation_only):
-    """(segment, tx, ty, tz, w, x, y, z) of one moving frame at time t.
-
-    ``cur`` is the segment of the previous row (-1 at the start). The
-    translation is zero when ``rotation_only``.
-    """
-    n = times.shape[0]
-    tx = ty = tz = 0.0
-    if kind == CONSTANT:
-        if not rotation_only:
-            tx, ty, tz = tr[0, 0], tr[0, 1], tr[0, 2]
-        return cur, tx, ty, tz, r[0, 0], r[0, 1], r[0, 2], r[0, 3]
-    i = _walk(times, cur, t)
-    if kind == HELD:
-        k = i if i >= 0 else 0
-        if not rotation_only:
-            tx, ty, tz = tr[k, 0], tr[k, 1], tr[k, 2]
-        return i, tx, ty, tz, r[k, 0], r[k, 1], r[k, 2], r[k, 3]
-    if i >= 0 and t == times[i]:
-        # a sample time: the sample itself (and only it is needed)
-        if not rotation_only:
-            tx, ty, tz = tr[i, 0], tr[i, 1], tr[i, 2]
-        return i, tx, ty, tz, r[i, 0], r[i, 1], r[i, 2], r[i, 3]
-    if not rotation_only:
-        k = i if i >= 0 else 0
-        if k > n - 2:
-            k = n - 2
-        w = (t - times[k]) / (times[k + 1] - times[k])
-        tx = tr[k, 0] + w * (tr[k + 1, 0] - tr[k, 0])
-        ty = tr[k, 1] + w * (tr[k + 1, 1] - tr[k, 1])
-        tz = tr[k, 2] + w * (tr[k + 1, 2] - tr[k, 2])
-    qw, qx, qy, qz = _squad_at(times, r, c, i, t)
-    return i, tx, ty, tz, qw, qx, qy, qz
-
-
-@helper(inline=True)
+@helper
 def _compose(ax, ay, az, aw, bx, by, bz, tx, ty, tz, qw, qx, qy, qz, inverse):
-    """Accumulated (a: t, then r = aw bx by bz) followed by (t, q), as chain_step.
+    """Accumulated transform followed by (t, q), as ``resample.chain_step``.
 
-    Argument order: accumulated translation (ax, ay, az), accumulated
-    rotation (aw, bx, by, bz), the step's translation and rotation.
+    Arguments: the accumulated translation (ax, ay, az) and rotation
+    (aw, bx, by, bz), then the step's translation and rotation.
     """
     if inverse:
         x, y, z = _rotate1(qw, -qx, -qy, -qz, ax - tx, ay - ty, az - tz)
@@ -345,54 +240,195 @@ def _compose(ax, ay, az, aw, bx, by, bz, tx, ty, tz, qw, qx, qy, qz, inverse):
     return x, y, z, w, rx, ry, rz
 
 
-@helper(inline=True)
-def _chain_at(
+@helper
+def _chain_block(
     plan, statics, offsets,
-    times0, t0, r0, c0, times1, t1, r1, c1, times2, t2, r2, c2,
-    cur0, cur1, cur2, t, rotation_only,
+    times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
+    target, j0, j1, acc, cur, rotation_only,
 ):  # fmt: skip
-    """The composed chain at target time t: (tx, ty, tz, w, x, y, z, cur0..2)."""
-    ax = ay = az = 0.0
-    aw, bx, by, bz = 1.0, 0.0, 0.0, 0.0
+    """The chain at target[j0:j1], into acc[:j1-j0] as (tx, ty, tz, w, x, y, z).
+
+    ``cur`` (SLOTS,) holds each slot's segment of the previous row and is
+    updated. Returns the number of squad table rows computed.
+    """
+    computed = 0
+    nb = j1 - j0
+    for b in range(nb):
+        acc[b, 0] = 0.0
+        acc[b, 1] = 0.0
+        acc[b, 2] = 0.0
+        acc[b, 3] = 1.0
+        acc[b, 4] = 0.0
+        acc[b, 5] = 0.0
+        acc[b, 6] = 0.0
     for s in range(plan.shape[0] // 3):
         kind = plan[3 * s]
-        index = plan[3 * s + 1]
+        slot = plan[3 * s + 1]
         inverse = plan[3 * s + 2] != 0
         if kind == STATIC:
-            tx, ty, tz = statics[index, 0], statics[index, 1], statics[index, 2]
+            tx, ty, tz = statics[slot, 0], statics[slot, 1], statics[slot, 2]
             qw, qx, qy, qz = (
-                statics[index, 3],
-                statics[index, 4],
-                statics[index, 5],
-                statics[index, 6],
+                statics[slot, 3],
+                statics[slot, 4],
+                statics[slot, 5],
+                statics[slot, 6],
             )
-        elif index == 0:
-            cur0, tx, ty, tz, qw, qx, qy, qz = _frame_at(
-                kind, times0, t0, r0, c0, cur0, t + offsets[0], rotation_only
-            )
-        elif index == 1:
-            cur1, tx, ty, tz, qw, qx, qy, qz = _frame_at(
-                kind, times1, t1, r1, c1, cur1, t + offsets[1], rotation_only
-            )
+            if rotation_only:
+                tx = ty = tz = 0.0
+            for b in range(nb):
+                x, y, z, w, rx, ry, rz = _compose(
+                    acc[b, 0], acc[b, 1], acc[b, 2],
+                    acc[b, 3], acc[b, 4], acc[b, 5], acc[b, 6],
+                    tx, ty, tz, qw, qx, qy, qz, inverse,
+                )  # fmt: skip
+                acc[b, 0] = x
+                acc[b, 1] = y
+                acc[b, 2] = z
+                acc[b, 3] = w
+                acc[b, 4] = rx
+                acc[b, 5] = ry
+                acc[b, 6] = rz
+            continue
+        # the slot's arrays, picked once per block
+        if slot == 0:
+            times, tr, r, rp, c = times0, t0, r0, p0, c0
+        elif slot == 1:
+            times, tr, r, rp, c = times1, t1, r1, p1, c1
         else:
-            cur2, tx, ty, tz, qw, qx, qy, qz = _frame_at(
-                kind, times2, t2, r2, c2, cur2, t + offsets[2], rotation_only
-            )
-        if rotation_only:
+            times, tr, r, rp, c = times2, t2, r2, p2, c2
+        off = offsets[slot]
+        n = times.shape[0]
+        i = cur[slot]
+        for b in range(nb):
+            t = target[j0 + b] + off
             tx = ty = tz = 0.0
-        ax, ay, az, aw, bx, by, bz = _compose(
-            ax, ay, az, aw, bx, by, bz, tx, ty, tz, qw, qx, qy, qz, inverse
-        )
-    return ax, ay, az, aw, bx, by, bz, cur0, cur1, cur2
+            if kind == CONSTANT:
+                if not rotation_only:
+                    tx, ty, tz = tr[0, 0], tr[0, 1], tr[0, 2]
+                qw, qx, qy, qz = rp[0, 0], rp[0, 1], rp[0, 2], rp[0, 3]
+            else:
+                # merge walk: gallop forward from the previous row's segment
+                # (an earlier time restarts from the beginning): i with
+                # times[i] <= t < times[i+1], -1 before, n-1 at/after the end
+                if i >= 0 and t < times[i]:
+                    i = -1
+                lo = i
+                step = 1
+                hi = i + 1
+                while hi < n and times[hi] <= t:
+                    lo = hi
+                    hi = i + 1 + step
+                    step *= 2
+                if hi > n:
+                    hi = n
+                while hi - lo > 1:
+                    mid = (lo + hi) // 2
+                    if times[mid] <= t:
+                        lo = mid
+                    else:
+                        hi = mid
+                i = lo
+                k = i if i >= 0 else 0
+                if kind == HELD:
+                    if not rotation_only:
+                        tx, ty, tz = tr[k, 0], tr[k, 1], tr[k, 2]
+                    qw, qx, qy, qz = rp[k, 0], rp[k, 1], rp[k, 2], rp[k, 3]
+                elif i >= 0 and t == times[i]:
+                    # a sample time: the stored sample (and only it is needed)
+                    if not rotation_only:
+                        tx, ty, tz = tr[i, 0], tr[i, 1], tr[i, 2]
+                    qw, qx, qy, qz = rp[i, 0], rp[i, 1], rp[i, 2], rp[i, 3]
+                else:
+                    if k > n - 2:
+                        k = n - 2
+                    if not rotation_only:
+                        w = (t - times[k]) / (times[k + 1] - times[k])
+                        tx = tr[k, 0] + w * (tr[k + 1, 0] - tr[k, 0])
+                        ty = tr[k, 1] + w * (tr[k + 1, 1] - tr[k, 1])
+                        tz = tr[k, 2] + w * (tr[k + 1, 2] - tr[k, 2])
+                    # squad in segment g (numpy-quaternion uses the last
+                    # segment before the start, indexing with -1)
+                    g = i if i >= 0 else n - 1
+                    if c[g, _DONE] == 0.0:
+                        _table_row(r, times, c, g)  # first use of the segment
+                        computed += 1
+                    if g < n - 1:
+                        dt = times[g + 1] - times[g]
+                    else:
+                        dt = (times[n - 1] + (times[n - 1] - times[n - 2])) - times[
+                            n - 1
+                        ]
+                    tau = (t - times[g]) / dt
+                    if c[g, 18] == 0.0:
+                        sn, cs = _sincos(tau * c[g, 8])
+                        s1w = cs * r[g, 0] + sn * c[g, 9]
+                        s1x = cs * r[g, 1] + sn * c[g, 10]
+                        s1y = cs * r[g, 2] + sn * c[g, 11]
+                        s1z = cs * r[g, 3] + sn * c[g, 12]
+                        sn, cs = _sincos(tau * c[g, 13])
+                        s2w = cs * c[g, 0] + sn * c[g, 14]
+                        s2x = cs * c[g, 1] + sn * c[g, 15]
+                        s2y = cs * c[g, 2] + sn * c[g, 16]
+                        s2z = cs * c[g, 3] + sn * c[g, 17]
+                    else:
+                        if g < n - 1:
+                            nw, nx, ny, nz = (
+                                r[g + 1, 0],
+                                r[g + 1, 1],
+                                r[g + 1, 2],
+                                r[g + 1, 3],
+                            )
+                        else:
+                            nw, nx, ny, nz = (
+                                c[n - 1, 4],
+                                c[n - 1, 5],
+                                c[n - 1, 6],
+                                c[n - 1, 7],
+                            )
+                        s1w, s1x, s1y, s1z = _qslerp1(
+                            r[g, 0], r[g, 1], r[g, 2], r[g, 3], nw, nx, ny, nz, tau
+                        )
+                        s2w, s2x, s2y, s2z = _qslerp1(
+                            c[g, 0], c[g, 1], c[g, 2], c[g, 3],
+                            c[g, 4], c[g, 5], c[g, 6], c[g, 7],
+                            tau,
+                        )  # fmt: skip
+                    qw, qx, qy, qz = _qslerp_unit1(
+                        s1w, s1x, s1y, s1z, s2w, s2x, s2y, s2z,
+                        2.0 * tau * (1.0 - tau),
+                    )  # fmt: skip
+                    # the sign of the stored sample the segment starts from
+                    d = (
+                        r[k, 0] * rp[k, 0]
+                        + r[k, 1] * rp[k, 1]
+                        + r[k, 2] * rp[k, 2]
+                        + r[k, 3] * rp[k, 3]
+                    )
+                    if d < 0.0:
+                        qw, qx, qy, qz = -qw, -qx, -qy, -qz
+            x, y, z, w, rx, ry, rz = _compose(
+                acc[b, 0], acc[b, 1], acc[b, 2],
+                acc[b, 3], acc[b, 4], acc[b, 5], acc[b, 6],
+                tx, ty, tz, qw, qx, qy, qz, inverse,
+            )  # fmt: skip
+            acc[b, 0] = x
+            acc[b, 1] = y
+            acc[b, 2] = z
+            acc[b, 3] = w
+            acc[b, 4] = rx
+            acc[b, 5] = ry
+            acc[b, 6] = rz
+        cur[slot] = i
+    return computed
 
 
-_SLOT_TYPES = (F1, F2, F2, F2) * SLOTS
+_SLOT_TYPES = (F1, F2, F2, F2, F2) * SLOTS
 
 
 @kernel(I1, F2, F1, *_SLOT_TYPES, F1, B)
 def lookup_chain(
     plan, statics, offsets,
-    times0, t0, r0, c0, times1, t1, r1, c1, times2, t2, r2, c2,
+    times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
     target, rotation_only,
 ):  # fmt: skip
     """The chain's transform at every target time, in one pass.
@@ -409,32 +445,39 @@ def lookup_chain(
     -------
     t : ndarray, shape (m, 3) or (0, 3)
     r : ndarray, shape (m, 4)
+    computed : int
+        Rows of the squad tables computed by this call.
     """
     m = target.shape[0]
     t_out = np.empty((0 if rotation_only else m, 3))
     r_out = np.empty((m, 4))
-    cur0 = cur1 = cur2 = -1
-    for j in range(m):
-        x, y, z, w, qx, qy, qz, cur0, cur1, cur2 = _chain_at(
+    acc = np.empty((BLOCK, 7))
+    cur = np.full(SLOTS, -1, dtype=np.int64)
+    computed = 0
+    for j0 in range(0, m, BLOCK):
+        j1 = min(j0 + BLOCK, m)
+        computed += _chain_block(
             plan, statics, offsets,
-            times0, t0, r0, c0, times1, t1, r1, c1, times2, t2, r2, c2,
-            cur0, cur1, cur2, target[j], rotation_only,
+            times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
+            target, j0, j1, acc, cur, rotation_only,
         )  # fmt: skip
-        if not rotation_only:
-            t_out[j, 0] = x
-            t_out[j, 1] = y
-            t_out[j, 2] = z
-        r_out[j, 0] = w
-        r_out[j, 1] = qx
-        r_out[j, 2] = qy
-        r_out[j, 3] = qz
-    return t_out, r_out
+        for b in range(j1 - j0):
+            j = j0 + b
+            if not rotation_only:
+                t_out[j, 0] = acc[b, 0]
+                t_out[j, 1] = acc[b, 1]
+                t_out[j, 2] = acc[b, 2]
+            r_out[j, 0] = acc[b, 3]
+            r_out[j, 1] = acc[b, 4]
+            r_out[j, 2] = acc[b, 5]
+            r_out[j, 3] = acc[b, 6]
+    return t_out, r_out, computed
 
 
 @kernel(I1, F2, F1, *_SLOT_TYPES, F1, F3, I)
 def transform_chain(
     plan, statics, offsets,
-    times0, t0, r0, c0, times1, t1, r1, c1, times2, t2, r2, c2,
+    times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
     target, data, mode,
 ):  # fmt: skip
     """Carry data through the chain at every target time, in one pass.
@@ -449,11 +492,13 @@ def transform_chain(
     mode : int
         0 points (rotate and translate), 1 vectors (rotate; translations
         are never evaluated), 2 quaternions (left-multiplied by the
-        rotation).
+        rotation; translations never evaluated).
 
     Returns
     -------
-    ndarray, shape (m, k, c)
+    out : ndarray, shape (m, k, c)
+    computed : int
+        Rows of the squad tables computed by this call.
     """
     m = target.shape[0]
     k = data.shape[1]
@@ -461,34 +506,40 @@ def transform_chain(
     s_d = 1 if data.shape[0] > 1 else 0
     out = np.empty((m, k, nc))
     rotation_only = mode != 0
-    cur0 = cur1 = cur2 = -1
-    for j in range(m):
-        x, y, z, w, qx, qy, qz, cur0, cur1, cur2 = _chain_at(
+    acc = np.empty((BLOCK, 7))
+    cur = np.full(SLOTS, -1, dtype=np.int64)
+    computed = 0
+    for j0 in range(0, m, BLOCK):
+        j1 = min(j0 + BLOCK, m)
+        computed += _chain_block(
             plan, statics, offsets,
-            times0, t0, r0, c0, times1, t1, r1, c1, times2, t2, r2, c2,
-            cur0, cur1, cur2, target[j], rotation_only,
+            times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
+            target, j0, j1, acc, cur, rotation_only,
         )  # fmt: skip
-        b = j * s_d
-        if mode == 2:
-            for e in range(k):
-                ow, ox, oy, oz = _qmul1(
-                    w, qx, qy, qz, data[b, e, 0], data[b, e, 1], data[b, e, 2],
-                    data[b, e, 3],
-                )  # fmt: skip
-                out[j, e, 0] = ow
-                out[j, e, 1] = ox
-                out[j, e, 2] = oy
-                out[j, e, 3] = oz
-        else:
-            for e in range(k):
-                px, py, pz = _rotate1(
-                    w, qx, qy, qz, data[b, e, 0], data[b, e, 1], data[b, e, 2]
-                )
-                if mode == 0:
-                    px += x
-                    py += y
-                    pz += z
-                out[j, e, 0] = px
-                out[j, e, 1] = py
-                out[j, e, 2] = pz
-    return out
+        for b in range(j1 - j0):
+            j = j0 + b
+            row = j * s_d
+            w, qx, qy, qz = acc[b, 3], acc[b, 4], acc[b, 5], acc[b, 6]
+            if mode == 2:
+                for e in range(k):
+                    ow, ox, oy, oz = _qmul1(
+                        w, qx, qy, qz, data[row, e, 0], data[row, e, 1],
+                        data[row, e, 2], data[row, e, 3],
+                    )  # fmt: skip
+                    out[j, e, 0] = ow
+                    out[j, e, 1] = ox
+                    out[j, e, 2] = oy
+                    out[j, e, 3] = oz
+            else:
+                for e in range(k):
+                    px, py, pz = _rotate1(
+                        w, qx, qy, qz, data[row, e, 0], data[row, e, 1], data[row, e, 2]
+                    )
+                    if mode == 0:
+                        px += acc[b, 0]
+                        py += acc[b, 1]
+                        pz += acc[b, 2]
+                    out[j, e, 0] = px
+                    out[j, e, 1] = py
+                    out[j, e, 2] = pz
+    return out, computed

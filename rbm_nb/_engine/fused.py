@@ -74,8 +74,8 @@ class Plan:
     def slots(self) -> tuple:
         """The 3 x 5 slot arrays for the kernels."""
         out: list[Any] = []
-        for frame, kind, table in zip(
-            self.frames, self.kinds, self.tables, strict=True
+        for frame, table in zip(
+            self.frames, self.tables, strict=True
         ):
             c = table.rows if table is not None else _EMPTY_TABLE
             out += (frame._track.base, frame._t, frame._r, frame._rotation_public, c)

@@ -41,10 +41,12 @@ or a held event returns the stored sample (as ``chain.stored_signs``).
 
 Missing samples
 ---------------
-A NaN row in a frame's data makes NaN exactly the output rows whose
-evaluation needs it: squad in segment i needs samples i-1 .. i+2, linear
-interpolation samples i and i+1, a held event itself; a target time equal
-to a sample time needs only that sample. Nothing else produces NaN.
+A NaN row in a frame's data (a missing sample) makes NaN exactly the output
+rows whose evaluation needs it, as a whole (translation and rotation): a
+continuous frame in segment i needs samples i-1 .. i+2 (squad's control
+points; the linear translation needs i and i+1 of them), a discrete frame
+its held event; a target time equal to a sample time needs only that
+sample. Nothing else produces NaN.
 """
 
 from __future__ import annotations

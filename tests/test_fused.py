@@ -1,0 +1,358 @@
+"""Fused chain kernels (rbm_nb._kernels.fused) against the unfused engine.
+
+The engine path (``_engine.chain``: resample every frame, compose step by
+step, then apply) is the reference: the fused kernels must give the same
+transforms, points, vectors and quaternions to 1e-12 on random trees
+(static, moving, inverted and discrete frames; float and datetime64 times;
+different rates) and on the real head/eye recording. Missing samples (NaN
+rows) are checked against the rule of the module docstring.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import rbm_nb as rbm
+from rbm_nb import _time
+from rbm_nb import frames as _frames
+from rbm_nb._engine import chain as _chain
+from rbm_nb._engine import fused as _fused
+from rbm_nb._kernels import fused as kf
+from rbm_nb._kernels import quaternion as kq
+
+TOL = 1e-12
+
+
+def _rotations(rng, n, step):
+    q = np.cumsum(rng.normal(scale=step, size=(n, 4)), axis=0) + [1.0, 0, 0, 0]
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    # some stored signs flipped: interpolation must follow the stored signs
+    flip = rng.random(n) < 0.2
+    q[flip] *= -1.0
+    return q
+
+
+def _times(rng, n, rate, start, kind):
+    t = start + np.arange(n) / rate + rng.uniform(0, 0.2 / rate, n)
+    if kind == "float":
+        return t
+    ns = np.round(t * 1e9).astype(np.int64) + 1_580_603_234_300_365_210
+    return ns.astype("datetime64[ns]")
+
+
+def _random_tree(rng, kind):
+    """world -> a (moving) -> b (static) -> c (moving, inverse); d (discrete); e."""
+    rbm.register_frame("world")
+    na, nc, nd = rng.integers(40, 90), rng.integers(60, 140), rng.integers(5, 12)
+    rbm.register_frame(
+        "a",
+        parent="world",
+        translation=rng.normal(size=(na, 3)),
+        rotation=_rotations(rng, na, 0.05),
+        timestamps=_times(rng, na, 20.0, 0.0, kind),
+    )
+    rbm.register_frame(
+        "b",
+        parent="a",
+        translation=rng.normal(size=3),
+        rotation=_rotations(rng, 1, 1.0)[0],
+    )
+    rbm.register_frame(
+        "c",
+        parent="b",
+        translation=rng.normal(size=(nc, 3)),
+        rotation=_rotations(rng, nc, 0.08),
+        timestamps=_times(rng, nc, 31.3, 0.13, kind),
+        inverse=True,
+    )
+    rbm.register_frame(
+        "d",
+        parent="world",
+        translation=rng.normal(size=(nd, 3)),
+        rotation=_rotations(rng, nd, 0.5),
+        timestamps=_times(rng, nd, 3.0, 0.05, kind),
+        discrete=True,
+    )
+    rbm.register_frame(
+        "e", parent="d", translation=rng.normal(size=3), rotation=(0.0, 0.0, 1.0, 0.0)
+    )
+
+
+PAIRS = [
+    ("c", "world"),
+    ("world", "c"),
+    ("a", "world"),
+    ("c", "a"),
+    ("b", "world"),
+    ("c", "e"),
+    ("e", "c"),
+    ("d", "world"),
+    ("e", "world"),
+    ("a", "e"),
+]
+
+
+def _resolved(outof, into):
+    a, b = _frames.resolve_frame(outof), _frames.resolve_frame(into)
+    steps = _chain.chain(a, b)
+    target = _chain.match([f for f, _ in steps])
+    return a, b, steps, target
+
+
+def _close(x, y):
+    assert x.shape == y.shape
+    scale = max(1.0, float(np.max(np.abs(y))))
+    np.testing.assert_allclose(x, y, rtol=0, atol=TOL * scale)
+
+
+@pytest.mark.parametrize("kind", ["float", "datetime64"])
+@pytest.mark.parametrize("seed", range(4))
+def test_lookup_equals_the_engine_on_random_trees(kind, seed):
+    rng = np.random.default_rng(seed)
+    _random_tree(rng, kind)
+    for outof, into in PAIRS:
+        a, b, steps, target = _resolved(outof, into)
+        plan = _fused.plan(steps)
+        assert plan is not None, (outof, into)
+        t_ref, r_ref, _ = _chain.lookup(a, b)
+        t, r = _fused.lookup(plan, target)
+        _close(t, t_ref)
+        _close(r, r_ref)
+        t0, r_only = _fused.lookup(plan, target, rotation_only=True)
+        assert t0.shape == (0, 3)
+        _close(r_only, r_ref)
+
+
+@pytest.mark.parametrize("kind", ["float", "datetime64"])
+@pytest.mark.parametrize("seed", range(3))
+def test_transforms_equal_the_engine_on_random_trees(kind, seed):
+    rng = np.random.default_rng(100 + seed)
+    _random_tree(rng, kind)
+    for outof, into in PAIRS:
+        _, _, steps, target = _resolved(outof, into)
+        plan = _fused.plan(steps)
+        m = len(target)
+        for what, size in (("points", 3), ("vectors", 3), ("quaternions", 4)):
+            for rows in (m, 1):
+                data = rng.normal(size=(rows, 2, size))
+                if size == 4:
+                    data /= np.linalg.norm(data, axis=-1, keepdims=True)
+                ref = _chain.apply(what, steps, target, data)
+                _close(_fused.transform(plan, target, data, what), ref)
+
+
+def test_timestamped_arrays_match_like_the_engine():
+    """The public transform with timestamps on another clock than the chain's."""
+    rng = np.random.default_rng(7)
+    _random_tree(rng, "datetime64")
+    c = _frames.resolve_frame("c")
+    ts = c.timestamps[3:-3] + np.timedelta64(1234567, "ns")
+    points = rng.normal(size=(len(ts), 3))
+    a, b = c, _frames.resolve_frame("world")
+    steps = _chain.chain(b, a)
+    from rbm_nb._engine.transform import Blocks
+
+    blocks = Blocks(points, 3, -1, 0, ts, "points")
+    target = _chain.match([f for f, _ in steps], [blocks.track])
+    data = _chain.resample_array(blocks.data, blocks.track, target, False)
+    ref = _chain.apply("points", steps, target, data)
+    _close(_fused.transform(_fused.plan(steps), target, data, "points"), ref)
+
+
+def test_unsorted_target_times_give_the_same_rows():
+    rng = np.random.default_rng(3)
+    _random_tree(rng, "float")
+    _, _, steps, target = _resolved("c", "e")
+    plan = _fused.plan(steps)
+    t, r = _fused.lookup(plan, target)
+    order = rng.permutation(len(target))
+    shuffled = _chain.Target(target.track.slice(0, len(target)))
+    shuffled.track.base = np.ascontiguousarray(target.track.base[order])
+    t2, r2 = _fused.lookup(plan, shuffled)
+    np.testing.assert_array_equal(t2, t[order])
+    np.testing.assert_array_equal(r2, r[order])
+
+
+def test_squad_table_equals_the_engine_coefficients():
+    rng = np.random.default_rng(5)
+    for n in (2, 3, 4, 50):
+        r = kq.unflip(_rotations(rng, n, 0.3))
+        t = np.cumsum(rng.uniform(0.5, 1.5, n))
+        a, b = kq.squad_coefficients(r, t)
+        seg = kq.squad_segments(r, a, b)
+        table = kf.squad_table(r, t)
+        np.testing.assert_array_equal(table[:, 0:4], a)
+        np.testing.assert_array_equal(table[:, 4:8], b)
+        np.testing.assert_array_equal(table[:, 8:19], seg[:, 0:11])
+        assert (table[:, 19] == 1.0).all()
+
+
+def test_squad_rows_are_computed_only_for_the_segments_used():
+    rng = np.random.default_rng(11)
+    n = 200
+    ts = np.arange(n) * 0.01
+    rbm.register_frame("world")
+    rbm.register_frame(
+        "m",
+        parent="world",
+        translation=rng.normal(size=(n, 3)),
+        rotation=_rotations(rng, n, 0.05),
+        timestamps=ts,
+    )
+    m = _frames.resolve_frame("m")
+    steps = _chain.chain(m, _frames.resolve_frame("world"))
+    plan = _fused.plan(steps)
+    table = plan.tables[0]
+    assert not table.rows.any()  # nothing computed by registering
+    times = np.array([0.0205, 0.0213, 0.5551, 1.0])  # segments 2, 2, 55; a sample
+    target = _chain.Target(_time.as_track(times))
+    _fused.lookup(plan, target)
+    assert np.flatnonzero(table.rows[:, 19]).tolist() == [2, 55]
+    full = kf.squad_table(m._r, m._track.base)
+    np.testing.assert_array_equal(table.rows[[2, 55]], full[[2, 55]])
+    assert not table.complete
+    _fused.lookup(plan, _chain.Target(m._track.slice(0, n)))  # sample times only
+    assert np.flatnonzero(table.rows[:, 19]).tolist() == [2, 55]
+
+
+# ---------------------------------------------------------------------------
+# missing samples
+# ---------------------------------------------------------------------------
+
+
+def _one_slot(times, t, r, kind):
+    plan = np.array([kind, 0, 0], dtype=np.int64)
+    statics = np.zeros((1, 7))
+    r_u = kq.unflip(r)
+    table = np.zeros((len(times), kf.TABLE_COLUMNS))
+    empty = (np.zeros(1), np.zeros((1, 3)), np.zeros((1, 4)), np.zeros((1, 4)))
+    empty = empty + (np.ones((1, kf.TABLE_COLUMNS)),)
+    return plan, statics, (times, t, r_u, r, table) + empty + empty
+
+
+def _expected_nan_rows(times, bad, target, window):
+    """Rows whose evaluation needs a bad sample: (lo, hi) window around i."""
+    n = len(times)
+    i = np.searchsorted(times, target, side="right") - 1
+    hit = times[np.clip(i, 0, n - 1)] == target
+    lo_off, hi_off = window
+    out = np.zeros(len(target), dtype=bool)
+    for j, (seg, exact) in enumerate(zip(i, hit, strict=True)):
+        if exact:
+            out[j] = bad[seg]
+        else:
+            lo, hi = max(seg + lo_off, 0), min(seg + hi_off, n - 1)
+            out[j] = bad[lo : hi + 1].any()
+    return out
+
+
+@pytest.mark.parametrize("kind", [kf.SQUAD, kf.HELD])
+def test_nan_rows_reach_exactly_the_rows_that_need_them(kind):
+    rng = np.random.default_rng(2)
+    n = 60
+    times = np.arange(n) * 0.1
+    t = rng.normal(size=(n, 3))
+    r = _rotations(rng, n, 0.05)
+    bad = np.zeros(n, dtype=bool)
+    bad[[0, 17, 18, 40, n - 1]] = True
+    t[bad] = np.nan
+    r[bad] = np.nan
+    plan, statics, slots = _one_slot(times, t, r, kind)
+    # midpoints, quarter points and the sample times themselves
+    target = np.sort(np.concatenate([times, times[:-1] + 0.05, times[:-1] + 0.025]))
+    t_out, r_out, _ = kf.lookup_chain(
+        plan, statics, np.zeros(kf.SLOTS), *slots, target, False
+    )
+    if kind == kf.SQUAD:
+        want = _expected_nan_rows(times, bad, target, (-1, 2))
+    else:
+        want = bad[np.searchsorted(times, target, side="right") - 1]
+    assert want.any() and (~want).any()
+    # a missing transform is missing as a whole: translation and rotation
+    np.testing.assert_array_equal(np.isnan(r_out).any(axis=1), want)
+    np.testing.assert_array_equal(np.isnan(r_out).all(axis=1), want)
+    np.testing.assert_array_equal(np.isnan(t_out).all(axis=1), want)
+    np.testing.assert_array_equal(np.isnan(t_out).any(axis=1), want)
+
+
+def test_nan_rows_of_the_real_eye_recording(shared_data):
+    """The eye tracker's missing samples, evaluated at the head's times."""
+    xr = pytest.importorskip("xarray")
+    eye = xr.open_dataset(shared_data / "rbm-data" / "left_eye.nc")
+    head = xr.open_dataset(shared_data / "rbm-data" / "head.nc")
+    ns = eye.time.values.astype("datetime64[ns]").view(np.int64)
+    times = (ns - ns[0]) / 1e9
+    r = np.ascontiguousarray(eye.orientation.values, dtype=np.float64)
+    bad = np.isnan(r).any(axis=1)
+    r[bad] = np.nan
+    ok = ~bad
+    r[ok] /= np.linalg.norm(r[ok], axis=1, keepdims=True)
+    t = np.zeros((len(times), 3))
+    t[bad] = np.nan
+    hn = head.time.values.astype("datetime64[ns]").view(np.int64)
+    target = (hn - ns[0]) / 1e9
+    target = np.ascontiguousarray(target[(target >= times[0]) & (target <= times[-1])])
+    plan, statics, slots = _one_slot(times, t, r, kf.SQUAD)
+    _, r_out, _ = kf.lookup_chain(
+        plan, statics, np.zeros(kf.SLOTS), *slots, target, False
+    )
+    want = _expected_nan_rows(times, bad, target, (-1, 2))
+    assert want.sum() > 1000 and (~want).sum() > 1000
+    np.testing.assert_array_equal(np.isnan(r_out).any(axis=1), want)
+
+
+# ---------------------------------------------------------------------------
+# the real head/eye recording
+# ---------------------------------------------------------------------------
+
+
+def _register_recording(shared_data):
+    xr = pytest.importorskip("xarray")
+    head = xr.open_dataset(shared_data / "rbm-data" / "head.nc")
+    eye = xr.open_dataset(shared_data / "rbm-data" / "left_eye.nc")
+    keep = ~np.isnan(eye.orientation.values).any(axis=1)
+    rbm.register_frame("world")
+    rbm.register_frame(
+        "t265/world", parent="world", rotation=(np.sqrt(0.5), np.sqrt(0.5), 0, 0)
+    )
+    rbm.register_frame(
+        "head",
+        parent="t265/world",
+        translation=head.position.values,
+        rotation=head.orientation.values,
+        timestamps=head.time.values,
+    )
+    rbm.register_frame(
+        "scene_cam",
+        parent="head",
+        translation=(0.0, -0.05, 0.02),
+        rotation=np.array((0.99, 0.1, 0.0, 0.0)) / np.linalg.norm((0.99, 0.1, 0, 0)),
+    )
+    rbm.register_frame(
+        "left_eye",
+        parent="scene_cam",
+        rotation=eye.orientation.values[keep],
+        timestamps=eye.time.values[keep],
+    )
+
+
+def test_real_recording_lookups_and_transforms(shared_data):
+    _register_recording(shared_data)
+    rng = np.random.default_rng(0)
+    for outof, into in [
+        ("left_eye", "world"),
+        ("world", "left_eye"),
+        ("head", "world"),
+        ("left_eye", "head"),
+    ]:
+        a, b, steps, target = _resolved(outof, into)
+        plan = _fused.plan(steps)
+        t_ref, r_ref, _ = _chain.lookup(a, b)
+        t, r = _fused.lookup(plan, target)
+        _close(t, t_ref)
+        _close(r, r_ref)
+        data = rng.normal(size=(len(target), 1, 3))
+        for what in ("points", "vectors"):
+            ref = _chain.apply(what, steps, target, data)
+            _close(_fused.transform(plan, target, data, what), ref)

@@ -22,6 +22,7 @@ __all__ = [
     "normalize_quaternions",
     "check_finite",
     "check_no_inf",
+    "check_missing_rows",
     "check_unit_norms",
     "check_what",
     "check_mode",
@@ -117,6 +118,23 @@ def check_unit_norms(q: np.ndarray, name: str) -> None:
         raise ValueError(
             f"{name}{_index(bad)} is {kind}; rotations must be unit quaternions "
             f"(norm within {UNIT_QUATERNION_TOLERANCE} of 1)"
+        )
+
+
+def check_missing_rows(arr: np.ndarray, name: str) -> None:
+    """Rows of (n, k) data are finite or entirely NaN (a missing sample).
+
+    A partly NaN row or an infinity is a mistake, not missing data: raise
+    naming the first such row.
+    """
+    nan = np.isnan(arr)
+    partial = nan.any(axis=-1) & ~nan.all(axis=-1)
+    bad = partial | np.isinf(arr).any(axis=-1)
+    if bad.any():
+        row = np.argwhere(bad)[0]
+        raise ValueError(
+            f"{name}{_index(row)} is not finite (a missing sample is a row of NaN "
+            f"only)"
         )
 
 

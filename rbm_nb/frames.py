@@ -27,7 +27,13 @@ from ._engine import chain as _chain
 from ._engine import transform as _transform
 from ._engine import twist as _twist
 from ._kernels import quaternion as kq
-from ._validation import as_float_array, check_finite, normalize_quaternions
+from ._validation import (
+    as_float_array,
+    check_finite,
+    check_missing_rows,
+    is_scalar,
+    normalize_quaternions,
+)
 from ._xarray import dataarray_coordinate, dataset_variable
 from .conversions import quaternion_from_matrix
 
@@ -220,10 +226,12 @@ def register_frame(
     inverse: bool = False,
     discrete: bool = False,
     update: bool = False,
+    max_gap: float | None = None,
 ) -> None:
     """Create a reference frame and register it under ``name``.
 
-    Parameters are those of :class:`ReferenceFrame`, plus
+    Parameters are those of :class:`ReferenceFrame` (including ``max_gap``,
+    the longest gap in seconds interpolated across), plus
 
     update : bool, default False
         Replace a frame already registered under this name (its children
@@ -237,6 +245,7 @@ def register_frame(
         timestamps=timestamps,
         inverse=inverse,
         discrete=discrete,
+        max_gap=max_gap,
     )
     try:
         _register(frame, update=update)
@@ -358,11 +367,13 @@ class ReferenceFrame:
         parent the frame is the root of a new tree.
     translation : array_like, shape (3,) or (n, 3), optional
         Position of this frame's origin in the parent frame (zeros if
-        omitted). Shape (n, 3) with ``timestamps``.
+        omitted). Shape (n, 3) with ``timestamps``; NaN rows of a moving
+        frame mean "no data at that sample" (blinks, lost tracking).
     rotation : array_like, shape (4,) or (n, 4), optional
         Orientation of this frame wrt the parent as unit quaternions w, x, y,
         z (identity if omitted). Norms within ``UNIT_QUATERNION_TOLERANCE``
-        of 1 are normalised.
+        of 1 are accepted (and normalised inside the math); NaN rows of a
+        moving frame are missing samples.
     timestamps : array_like, shape (n,), optional
         Strictly increasing numeric or datetime64 times of a moving frame.
     inverse : bool, default False
@@ -370,6 +381,10 @@ class ReferenceFrame:
     discrete : bool, default False
         The timestamps are events: each transform holds until the next one
         instead of being interpolated.
+    max_gap : float, optional
+        The longest gap between two samples (in seconds) that lookups
+        interpolate across; times inside a longer gap get NaN. Default None:
+        no limit.
 
     Raises
     ------
@@ -388,6 +403,7 @@ class ReferenceFrame:
         timestamps: Any = None,
         inverse: bool = False,
         discrete: bool = False,
+        max_gap: float | None = None,
     ) -> None:
         if name is not None and not isinstance(name, str):
             raise ValueError(f"name must be a string, got {type(name).__name__}")
@@ -420,6 +436,14 @@ class ReferenceFrame:
                 f"frame {name!r}: discrete=True needs timestamps (the times of the events)"
             )
         self.discrete = bool(discrete)
+        if max_gap is not None:
+            if not is_scalar(max_gap) or not max_gap > 0 or not np.isfinite(max_gap):
+                raise ValueError(
+                    f"frame {name!r}: max_gap must be a positive number of seconds "
+                    f"or None, got {max_gap!r}"
+                )
+            max_gap = float(max_gap)
+        self.max_gap = max_gap
         if parent is not None:
             self.parent = parent
 
@@ -440,24 +464,40 @@ class ReferenceFrame:
             t = as_float_array(translation, f"{label}translation")
             if t.shape != t_shape:
                 raise ValueError(_shape_message(label, "translation", t.shape, t_shape))
-            check_finite(t, f"{label}translation")
+            if self._track is None:
+                check_finite(t, f"{label}translation")
+            else:  # NaN rows: missing samples; anything else: mistakes
+                check_missing_rows(t, f"{label}translation")
         if rotation is None:
             r: np.ndarray = np.zeros(r_shape)
             r[..., 0] = 1.0
+            stored = r
         else:
-            r = as_float_array(rotation, f"{label}rotation")
-            if r.shape != r_shape:
-                raise ValueError(_shape_message(label, "rotation", r.shape, r_shape))
-            r = normalize_quaternions(r, f"{label}rotation")
+            stored = as_float_array(rotation, f"{label}rotation")
+            if stored.shape != r_shape:
+                raise ValueError(
+                    _shape_message(label, "rotation", stored.shape, r_shape)
+                )
+            if self._track is not None:
+                check_missing_rows(stored, f"{label}rotation")
+            r = normalize_quaternions(
+                stored, f"{label}rotation", allow_nan=self._track is not None
+            )
         # private copies: the caller's arrays may change later
         t = np.array(t.reshape(-1, 3), dtype=np.float64, order="C")
         r = np.array(r.reshape(-1, 4), dtype=np.float64, order="C")
         if inverse:
             r = kq.qconj(r)  # unit quaternions: the conjugate is the inverse
             t = -kq.rotate_vectors(r, t)
+            stored = r
         self._t = t
-        self._rotation_public = r
-        # interpolation needs consecutive samples on the same hemisphere
+        # the user's values as given (recordings store ~4 digits, so |q| - 1
+        # reaches 1e-4): returned by the rotation property and by lookups at
+        # the frame's own timestamps; the math below uses unit quaternions
+        self._rotation_public = np.array(
+            stored.reshape(-1, 4), dtype=np.float64, order="C"
+        )
+        # interpolation needs unit quaternions on the same hemisphere
         self._r = kq.unflip(r) if self._track is not None and len(r) > 1 else r
 
     # -- data -------------------------------------------------------------
@@ -633,6 +673,7 @@ class ReferenceFrame:
         name: str | None = None,
         inverse: bool = False,
         discrete: bool = False,
+        max_gap: float | None = None,
     ) -> ReferenceFrame:
         """A moving frame from variables of an xarray Dataset.
 
@@ -647,6 +688,9 @@ class ReferenceFrame:
         name : str, optional
         inverse, discrete : bool, default False
             As for :class:`ReferenceFrame`.
+        max_gap : float, optional
+            The longest gap (seconds) interpolated across, as for
+            :class:`ReferenceFrame`; NaN rows (missing samples) are accepted.
         """
         return cls(
             name,
@@ -656,6 +700,7 @@ class ReferenceFrame:
             timestamps=dataset_variable(ds, timestamps, "timestamps"),
             inverse=inverse,
             discrete=discrete,
+            max_gap=max_gap,
         )
 
     @classmethod
@@ -667,6 +712,7 @@ class ReferenceFrame:
         name: str | None = None,
         inverse: bool = False,
         discrete: bool = False,
+        max_gap: float | None = None,
     ) -> ReferenceFrame:
         """A moving frame (no rotation) from a translation DataArray, shape (n, 3).
 
@@ -679,6 +725,7 @@ class ReferenceFrame:
             timestamps=dataarray_coordinate(da, timestamps),
             inverse=inverse,
             discrete=discrete,
+            max_gap=max_gap,
         )
 
     @classmethod
@@ -690,6 +737,7 @@ class ReferenceFrame:
         name: str | None = None,
         inverse: bool = False,
         discrete: bool = False,
+        max_gap: float | None = None,
     ) -> ReferenceFrame:
         """A moving frame (no translation) from a rotation DataArray, shape (n, 4).
 
@@ -702,6 +750,7 @@ class ReferenceFrame:
             timestamps=dataarray_coordinate(da, timestamps),
             inverse=inverse,
             discrete=discrete,
+            max_gap=max_gap,
         )
 
     @classmethod

@@ -62,11 +62,15 @@ def test_static_frame_arrays_are_stored_read_only():
     assert world.translation is None and world.rotation is None
 
 
-def test_rotation_within_tolerance_is_normalised():
+def test_rotation_within_tolerance_is_kept_and_normalised_inside():
+    """Issue 11 item 1: the user's values come back; the math uses unit ones."""
     world = rbm.ReferenceFrame("world")
     q = np.array([1.004, 0.0, 0.0, 0.0])
     f = rbm.ReferenceFrame("f", parent=world, rotation=q)
-    np.testing.assert_allclose(f.rotation, [1, 0, 0, 0], atol=1e-15)
+    np.testing.assert_array_equal(f.rotation, q)
+    np.testing.assert_allclose(
+        rbm.transform_vectors([[0.0, 3.0, 4.0]], world, f), [[0.0, 3.0, 4.0]]
+    )
 
 
 def test_moving_frame_keeps_timestamps_exactly():

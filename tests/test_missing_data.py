@@ -61,7 +61,6 @@ def _linear_frame(n=40, rate=10.0, missing=()):
 # -- accepted at the door ------------------------------------------------------
 
 
-@pytest.mark.xfail(strict=True, reason=I9 + "NaN rows accepted by ReferenceFrame")
 @pytest.mark.parametrize("which", ["translation", "rotation", "both"])
 def test_reference_frame_accepts_nan_rows(which):
     t, translation, rotation = _linear_frame()
@@ -76,7 +75,6 @@ def test_reference_frame_accepts_nan_rows(which):
     assert np.isnan(frame.translation).sum() == np.isnan(translation).sum()
 
 
-@pytest.mark.xfail(strict=True, reason=I9 + "NaN rows accepted by register_frame")
 def test_register_frame_accepts_nan_rows():
     t, translation, rotation = _linear_frame(missing=[3, 4, 30])
     rbm.register_frame("world")
@@ -86,7 +84,6 @@ def test_register_frame_accepts_nan_rows():
     assert "f" in rbm.registry
 
 
-@pytest.mark.xfail(strict=True, reason=I9 + "NaN rows accepted by from_dataset")
 def test_from_dataset_accepts_the_real_left_eye(recordings):
     head, left_eye = recordings
     assert np.isnan(left_eye.orientation.values).any()  # the file has NaN rows
@@ -168,10 +165,6 @@ def test_real_left_eye_lookups_match_the_reference(recordings):
             np.testing.assert_allclose(q_got * sign, q_exp, atol=3e-4, err_msg=where)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=I9 + "a transform of eye data returns NaN where the eye has none",
-)
 def test_transform_points_on_real_eye_times(recordings):
     head, left_eye = recordings
     _register_head_and_eye(rbm, head, left_eye)
@@ -198,7 +191,6 @@ def _gap_frame():
     return t, translation
 
 
-@pytest.mark.xfail(strict=True, reason=I9 + "max_gap keyword of ReferenceFrame")
 def test_max_gap_stops_interpolation_across_long_gaps():
     t, translation = _gap_frame()
     rbm.register_frame("world")
@@ -235,9 +227,6 @@ def test_max_gap_on_the_real_left_eye(recordings):
         assert np.isnan(out.position.values[inside]).all()
 
 
-@pytest.mark.xfail(
-    strict=True, reason=I9 + "max_gap keyword (default None) on all three entry points"
-)
 def test_max_gap_is_a_keyword_of_register_frame_and_from_dataset():
     import inspect
 
@@ -284,7 +273,6 @@ def _assert_true_velocity_or_nan(linear, angular):
     np.testing.assert_allclose(angular[finite, :2], 0.0, atol=1e-6)
 
 
-@pytest.mark.xfail(strict=True, reason=I9 + "no finite difference across NaN rows")
 def test_velocities_do_not_difference_across_missing_rows():
     t, translation, rotation = _linear_frame(n=60, missing=range(28, 32))
     translation, rotation = _jump_after(t, translation, rotation, 32)

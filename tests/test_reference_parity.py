@@ -302,11 +302,6 @@ def head(shared_data):
     return xr.load_dataset(shared_data / "rbm-data" / "head.nc")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: stored quaternions come back exactly (normalise "
-    "only inside the math)",
-)
 def test_real_head_values_round_trip(head):
     # the file stores quaternions to 1e-4, so |q| - 1 reaches ~8e-5
     norms = np.linalg.norm(head.orientation.values, axis=1)

@@ -252,7 +252,13 @@ def resample_frame(frame, target: Target):
     same = _same_times(track, tt)
     if same is not None:
         # the stored values, with their signs (the reference returns them)
-        return frame._t[same], frame._rotation_public[same]
+        t, r = frame._t[same], frame._rotation_public[same]
+        gaps = _unusable(frame)
+        if gaps is not None and gaps[same].any():
+            t, r = t.copy(), r.copy()
+            t[gaps[same]] = np.nan
+            r[gaps[same]] = np.nan
+        return t, r
     if frame.discrete:
         # float seconds on one origin keep the order of the exact keys
         t_out = tt.base_in(track.origin)
@@ -266,7 +272,48 @@ def resample_frame(frame, target: Target):
     a_coef, b_coef, seg = frame._squad_coefficients()
     rot = kq.squad_evaluate(frame._r, track.base, a_coef, b_coef, seg, t_out)
     stored_signs(rot, frame._r, frame._rotation_public, track.base, t_out)
-    return kr.interp_linear(track.base, frame._t, t_out), rot
+    trans = kr.interp_linear(track.base, frame._t, t_out)
+    if frame.max_gap is not None:
+        in_gap = _in_long_gap(track.base, t_out, frame.max_gap)
+        trans[in_gap] = np.nan
+        rot[in_gap] = np.nan
+    return trans, rot
+
+
+def _unusable(frame):
+    """Samples whose interpolation reads a missing one, or None if none is missing.
+
+    At a sample's own time the interpolation is the sample itself, but its
+    SQUAD segment reads samples i-1 .. i+2 (and a missing neighbour makes the
+    whole segment unknown). Marking those rows keeps lookups at the frame's
+    own timestamps consistent with lookups between them, and with
+    rigid-body-motion. Cached on the frame (its data never changes).
+    """
+    cached = frame.__dict__.get("_unusable_rows", False)
+    if cached is not False:
+        return cached
+    missing = np.isnan(frame._t).any(axis=1) | np.isnan(frame._r).any(axis=1)
+    out = None
+    if missing.any():
+        out = missing.copy()
+        out[:-1] |= missing[1:]  # i + 1
+        out[:-2] |= missing[2:]  # i + 2
+        out[1:] |= missing[:-1]  # i - 1
+    frame._unusable_rows = out
+    return out
+
+
+def _in_long_gap(t_in, t_out, max_gap: float) -> np.ndarray:
+    """Which ``t_out`` fall strictly inside a gap of ``t_in`` longer than max_gap.
+
+    Times equal to a sample are never inside a gap.
+    """
+    right = np.searchsorted(t_in, t_out, side="left")
+    inside = (right > 0) & (right < len(t_in))
+    idx = np.clip(right, 1, len(t_in) - 1)
+    gap = t_in[idx] - t_in[idx - 1]
+    exact = t_in[np.clip(right, 0, len(t_in) - 1)] == t_out
+    return inside & (gap > max_gap) & ~exact
 
 
 def stored_signs(out, unflipped, stored, t_in, t_out) -> None:

@@ -124,6 +124,12 @@ def _lowpass(values: np.ndarray, cutoff: float) -> np.ndarray:
     return out.reshape(values.shape)
 
 
+def _runs(valid: np.ndarray) -> list[tuple[int, int]]:
+    """(start, stop) of every run of True in a boolean array."""
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], valid.view(np.int8), [0]))))
+    return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
+
+
 def linear_series(x: np.ndarray, t: np.ndarray, outlier_thresh, cutoff) -> np.ndarray:
     n = x.shape[0]
     if n < 2:
@@ -180,10 +186,16 @@ def angular_series(
                 f"arr needs at least 2 samples without NaN to estimate a velocity, "
                 f"got {valid.sum()}"
             )
-        qv = kernel_array(qb[valid])
-        dq = _dk.spline_derivative(qv, kernel_array(t[valid]))
+        # missing samples split the series: no derivative is taken across
+        # them (the motion may have jumped while nothing was recorded); runs
+        # of a single sample have no velocity
         w[:, b, :] = np.nan
-        w[valid, b, :] = _dk.angular_velocity_from_derivative(qv, dq)
+        for start, stop in _runs(valid):
+            if stop - start < 2:
+                continue
+            qv = kernel_array(qb[start:stop])
+            dq = _dk.spline_derivative(qv, kernel_array(t[start:stop]))
+            w[start:stop, b, :] = _dk.angular_velocity_from_derivative(qv, dq)
     if outlier_thresh is not None:
         score = _dk.second_difference_score(rv)
         w = _reject_outliers(t, w, score, outlier_thresh)

@@ -22,6 +22,8 @@ from rbm_nb._kernels import fused as kf
 from rbm_nb._kernels import quaternion as kq
 
 TOL = 1e-12
+NO_GAPS = np.full(kf.SLOTS, np.inf)
+OWN = np.zeros(kf.SLOTS, dtype=np.int64)
 
 
 def _rotations(rng, n, step):
@@ -41,15 +43,31 @@ def _times(rng, n, rate, start, kind):
     return ns.astype("datetime64[ns]")
 
 
-def _random_tree(rng, kind):
-    """world -> a (moving) -> b (static) -> c (moving, inverse); d (discrete); e."""
+def _missing(rng, arr, count):
+    """A copy of arr with ``count`` NaN rows (missing samples)."""
+    arr = arr.copy()
+    arr[rng.choice(len(arr), count, replace=False)] = np.nan
+    return arr
+
+
+def _random_tree(rng, kind, missing=False):
+    """world -> a (moving) -> b (static) -> c (moving, inverse); d (discrete); e.
+
+    With ``missing``, a and c have NaN rows (translations and rotations
+    apart) and c a ``max_gap``.
+    """
     rbm.register_frame("world")
     na, nc, nd = rng.integers(40, 90), rng.integers(60, 140), rng.integers(5, 12)
+    t_a, r_a = rng.normal(size=(na, 3)), _rotations(rng, na, 0.05)
+    t_c, r_c = rng.normal(size=(nc, 3)), _rotations(rng, nc, 0.08)
+    if missing:
+        t_a, r_a = _missing(rng, t_a, 3), _missing(rng, r_a, 4)
+        t_c, r_c = _missing(rng, t_c, 4), _missing(rng, r_c, 3)
     rbm.register_frame(
         "a",
         parent="world",
-        translation=rng.normal(size=(na, 3)),
-        rotation=_rotations(rng, na, 0.05),
+        translation=t_a,
+        rotation=r_a,
         timestamps=_times(rng, na, 20.0, 0.0, kind),
     )
     rbm.register_frame(
@@ -58,13 +76,20 @@ def _random_tree(rng, kind):
         translation=rng.normal(size=3),
         rotation=_rotations(rng, 1, 1.0)[0],
     )
+    ts_c = _times(rng, nc, 31.3, 0.13, kind)
+    if missing:  # a few long gaps
+        step = np.zeros(nc, dtype=ts_c.dtype if kind == "float" else np.int64)
+        step[rng.choice(np.arange(1, nc), 3, replace=False)] = 1
+        gap = np.cumsum(step) * (0.1 if kind == "float" else 100_000_000)
+        ts_c = ts_c + (gap if kind == "float" else gap.astype("timedelta64[ns]"))
     rbm.register_frame(
         "c",
         parent="b",
-        translation=rng.normal(size=(nc, 3)),
-        rotation=_rotations(rng, nc, 0.08),
-        timestamps=_times(rng, nc, 31.3, 0.13, kind),
-        inverse=True,
+        translation=t_c,
+        rotation=r_c,
+        timestamps=ts_c,
+        inverse=not missing,
+        max_gap=0.06 if missing else None,
     )
     rbm.register_frame(
         "d",
@@ -101,16 +126,20 @@ def _resolved(outof, into):
 
 
 def _close(x, y):
+    """Equal to TOL (relative to the largest value); NaN exactly where y has NaN."""
     assert x.shape == y.shape
-    scale = max(1.0, float(np.max(np.abs(y))))
+    np.testing.assert_array_equal(np.isnan(x), np.isnan(y))
+    scale = max(1.0, float(np.nanmax(np.abs(y))))
     np.testing.assert_allclose(x, y, rtol=0, atol=TOL * scale)
 
 
+@pytest.mark.parametrize("missing", [False, True])
 @pytest.mark.parametrize("kind", ["float", "datetime64"])
 @pytest.mark.parametrize("seed", range(4))
-def test_lookup_equals_the_engine_on_random_trees(kind, seed):
+def test_lookup_equals_the_engine_on_random_trees(kind, seed, missing):
     rng = np.random.default_rng(seed)
-    _random_tree(rng, kind)
+    _random_tree(rng, kind, missing)
+    nan_rows = 0
     for outof, into in PAIRS:
         a, b, steps, target = _resolved(outof, into)
         plan = _fused.plan(steps)
@@ -119,16 +148,19 @@ def test_lookup_equals_the_engine_on_random_trees(kind, seed):
         t, r = _fused.lookup(plan, target)
         _close(t, t_ref)
         _close(r, r_ref)
+        nan_rows += int(np.isnan(r).any(axis=1).sum())
+    assert (nan_rows > 0) == missing
         t0, r_only = _fused.lookup(plan, target, rotation_only=True)
         assert t0.shape == (0, 3)
         _close(r_only, r_ref)
 
 
+@pytest.mark.parametrize("missing", [False, True])
 @pytest.mark.parametrize("kind", ["float", "datetime64"])
 @pytest.mark.parametrize("seed", range(3))
-def test_transforms_equal_the_engine_on_random_trees(kind, seed):
+def test_transforms_equal_the_engine_on_random_trees(kind, seed, missing):
     rng = np.random.default_rng(100 + seed)
-    _random_tree(rng, kind)
+    _random_tree(rng, kind, missing)
     for outof, into in PAIRS:
         _, _, steps, target = _resolved(outof, into)
         plan = _fused.plan(steps)
@@ -208,12 +240,13 @@ def test_squad_rows_are_computed_only_for_the_segments_used():
     times = np.array([0.0205, 0.0213, 0.5551, 1.0])  # segments 2, 2, 55; a sample
     target = _chain.Target(_time.as_track(times))
     _fused.lookup(plan, target)
-    assert np.flatnonzero(table.rows[:, 19]).tolist() == [2, 55]
+    # (a time equal to a sample is evaluated by squad, at the start of its segment)
+    assert np.flatnonzero(table.rows[:, 19]).tolist() == [2, 55, 100]
     full = kf.squad_table(m._r, m._track.base)
-    np.testing.assert_array_equal(table.rows[[2, 55]], full[[2, 55]])
+    np.testing.assert_array_equal(table.rows[[2, 55, 100]], full[[2, 55, 100]])
     assert not table.complete
-    _fused.lookup(plan, _chain.Target(m._track.slice(0, n)))  # sample times only
-    assert np.flatnonzero(table.rows[:, 19]).tolist() == [2, 55]
+    _fused.lookup(plan, _chain.Target(m._track.slice(0, n)))  # its own times
+    assert np.flatnonzero(table.rows[:, 19]).tolist() == [2, 55, 100]
 
 
 # ---------------------------------------------------------------------------
@@ -231,24 +264,29 @@ def _one_slot(times, t, r, kind):
     return plan, statics, (times, t, r_u, r, table) + empty + empty
 
 
-def _expected_nan_rows(times, bad, target, window):
-    """Rows whose evaluation needs a bad sample: (lo, hi) window around i."""
+def _expected_nan_rows(times, bad, target, window, at_samples):
+    """Rows whose evaluation needs a bad sample.
+
+    Between samples i and i+1: samples i + lo .. i + hi (``window``); at a
+    sample's time: i + lo .. i + hi of ``at_samples``.
+    """
     n = len(times)
     i = np.searchsorted(times, target, side="right") - 1
     hit = times[np.clip(i, 0, n - 1)] == target
-    lo_off, hi_off = window
     out = np.zeros(len(target), dtype=bool)
     for j, (seg, exact) in enumerate(zip(i, hit, strict=True)):
-        if exact:
-            out[j] = bad[seg]
-        else:
-            lo, hi = max(seg + lo_off, 0), min(seg + hi_off, n - 1)
-            out[j] = bad[lo : hi + 1].any()
+        lo_off, hi_off = at_samples if exact else window
+        lo, hi = max(seg + lo_off, 0), min(seg + hi_off, n - 1)
+        out[j] = bad[lo : hi + 1].any()
     return out
 
 
+@pytest.mark.parametrize("own", [0, 1])
 @pytest.mark.parametrize("kind", [kf.SQUAD, kf.HELD])
-def test_nan_rows_reach_exactly_the_rows_that_need_them(kind):
+def test_nan_rows_reach_exactly_the_rows_that_need_them(kind, own):
+    """The engine's rules: at a frame's own times a sample whose squad segment
+    reads a missing one is missing as a whole; elsewhere the rotation needs
+    samples i-1 .. i+2 and the translation i, i+1 (or the sample hit)."""
     rng = np.random.default_rng(2)
     n = 60
     times = np.arange(n) * 0.1
@@ -261,19 +299,26 @@ def test_nan_rows_reach_exactly_the_rows_that_need_them(kind):
     plan, statics, slots = _one_slot(times, t, r, kind)
     # midpoints, quarter points and the sample times themselves
     target = np.sort(np.concatenate([times, times[:-1] + 0.05, times[:-1] + 0.025]))
+    own_slots = np.array([own, 0, 0], dtype=np.int64)
     t_out, r_out, _ = kf.lookup_chain(
-        plan, statics, np.zeros(kf.SLOTS), *slots, target, False
+        plan, statics, np.zeros(kf.SLOTS), NO_GAPS, own_slots, *slots, target, False
     )
     if kind == kf.SQUAD:
-        want = _expected_nan_rows(times, bad, target, (-1, 2))
+        want_r = _expected_nan_rows(times, bad, target, (-1, 2), (-1, 2))
+        want_t = _expected_nan_rows(
+            times, bad, target, (0, 1), (-1, 2) if own else (0, 0)
+        )
     else:
-        want = bad[np.searchsorted(times, target, side="right") - 1]
-    assert want.any() and (~want).any()
-    # a missing transform is missing as a whole: translation and rotation
-    np.testing.assert_array_equal(np.isnan(r_out).any(axis=1), want)
-    np.testing.assert_array_equal(np.isnan(r_out).all(axis=1), want)
-    np.testing.assert_array_equal(np.isnan(t_out).all(axis=1), want)
-    np.testing.assert_array_equal(np.isnan(t_out).any(axis=1), want)
+        want_r = want_t = bad[np.searchsorted(times, target, side="right") - 1]
+    assert (
+        want_r.any()
+        and (~want_r).any()
+        and (want_r != want_t).any() == (kind == kf.SQUAD)
+    )
+    np.testing.assert_array_equal(np.isnan(r_out).any(axis=1), want_r)
+    np.testing.assert_array_equal(np.isnan(r_out).all(axis=1), want_r)
+    np.testing.assert_array_equal(np.isnan(t_out).all(axis=1), want_t)
+    np.testing.assert_array_equal(np.isnan(t_out).any(axis=1), want_t)
 
 
 def test_nan_rows_of_the_real_eye_recording(shared_data):
@@ -295,9 +340,9 @@ def test_nan_rows_of_the_real_eye_recording(shared_data):
     target = np.ascontiguousarray(target[(target >= times[0]) & (target <= times[-1])])
     plan, statics, slots = _one_slot(times, t, r, kf.SQUAD)
     _, r_out, _ = kf.lookup_chain(
-        plan, statics, np.zeros(kf.SLOTS), *slots, target, False
+        plan, statics, np.zeros(kf.SLOTS), NO_GAPS, OWN, *slots, target, False
     )
-    want = _expected_nan_rows(times, bad, target, (-1, 2))
+    want = _expected_nan_rows(times, bad, target, (-1, 2), (-1, 2))
     assert want.sum() > 1000 and (~want).sum() > 1000
     np.testing.assert_array_equal(np.isnan(r_out).any(axis=1), want)
 

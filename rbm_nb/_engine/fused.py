@@ -74,9 +74,7 @@ class Plan:
     def slots(self) -> tuple:
         """The 3 x 5 slot arrays for the kernels."""
         out: list[Any] = []
-        for frame, table in zip(
-            self.frames, self.tables, strict=True
-        ):
+        for frame, table in zip(self.frames, self.tables, strict=True):
             c = table.rows if table is not None else _EMPTY_TABLE
             out += (frame._track.base, frame._t, frame._r, frame._rotation_public, c)
         for _ in range(kf.SLOTS - len(self.frames)):
@@ -92,6 +90,22 @@ class Plan:
             if tt.kind != "numeric" and origin != tt.origin:
                 off[k] = (tt.origin - origin) / _NS_PER_S
         return off
+
+    def gaps(self) -> np.ndarray:
+        """Per slot, the frame's ``max_gap`` (inf: none)."""
+        out = np.full(kf.SLOTS, np.inf)
+        for k, frame in enumerate(self.frames):
+            if getattr(frame, "max_gap", None) is not None:
+                out[k] = frame.max_gap
+        return out
+
+    def own(self, target) -> np.ndarray:
+        """Per slot, 1 if the target times are a run of the frame's own."""
+        out = np.zeros(kf.SLOTS, dtype=np.int64)
+        for k, frame in enumerate(self.frames):
+            if _chain._same_times(frame._track, target.track) is not None:
+                out[k] = 1
+        return out
 
     def incomplete(self) -> list[_Table]:
         return [t for t in self.tables if t is not None and not t.complete]
@@ -172,7 +186,14 @@ def lookup(p: Plan, target, rotation_only: bool = False):
 
     def call():
         return kf.lookup_chain(
-            p.code, p.statics, p.offsets(target), *p.slots(), base, rotation_only
+            p.code,
+            p.statics,
+            p.offsets(target),
+            p.gaps(),
+            p.own(target),
+            *p.slots(),
+            base,
+            rotation_only,
         )
 
     t, r, _ = _run(p, call)
@@ -186,7 +207,15 @@ def transform(p: Plan, target, data: np.ndarray, kind: str) -> np.ndarray:
 
     def call():
         return kf.transform_chain(
-            p.code, p.statics, p.offsets(target), *p.slots(), base, data, mode
+            p.code,
+            p.statics,
+            p.offsets(target),
+            p.gaps(),
+            p.own(target),
+            *p.slots(),
+            base,
+            data,
+            mode,
         )
 
     out, _ = _run(p, call)

@@ -29,6 +29,15 @@ statics : float64 (s, 7)
     Static transforms as ``tx, ty, tz, w, x, y, z``.
 offsets : float64 (SLOTS,)
     Added to the target times to put them on each slot's time origin.
+own : int64 (SLOTS,)
+    1 where the target times are a run of the slot's own sample times
+    (then every row is a sample: its stored value, or NaN if its squad
+    segment reads a missing sample), else 0 (a target time that happens to
+    equal a sample time is evaluated like any other: the stored
+    translation, squad's unit rotation).
+gaps : float64 (SLOTS,)
+    Each slot's ``max_gap`` (inf: none): target times strictly inside a
+    longer gap between two samples get NaN.
 slot k : ``times_k`` (n,), ``t_k`` (n, 3), ``r_k`` (n, 4), ``p_k`` (n, 4), ``c_k`` (n, 20)
     A moving frame's sample times, translations, rotations free of sign
     flips (``unflip``), rotations as stored (with their signs) and its
@@ -41,15 +50,18 @@ or a held event returns the stored sample (as ``chain.stored_signs``).
 
 Missing samples
 ---------------
-A NaN row in a frame's data (a missing sample) makes NaN exactly the output
-rows whose evaluation needs it, as a whole (translation and rotation): a
-continuous frame in segment i needs samples i-1 .. i+2 (squad's control
-points; the linear translation needs i and i+1 of them), a discrete frame
-its held event; a target time equal to a sample time needs only that
-sample. Nothing else produces NaN.
+NaN rows in a frame's translations or rotations are missing samples. They
+make NaN exactly the output rows whose evaluation needs them, with the
+engine's rules: between samples i and i+1 of a continuous frame the
+rotation (squad) needs samples i-1 .. i+2 and the translation (linear) i
+and i+1; at a sample's own time the whole row is NaN if any of samples
+i-1 .. i+2 is missing (its squad segment reads them); a discrete frame
+needs its held event. Nothing else produces NaN.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -244,7 +256,7 @@ def _compose(ax, ay, az, aw, bx, by, bz, tx, ty, tz, qw, qx, qy, qz, inverse):
 
 @helper
 def _chain_block(
-    plan, statics, offsets,
+    plan, statics, offsets, gaps, own,
     times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
     target, j0, j1, acc, cur, rotation_only,
 ):  # fmt: skip
@@ -278,6 +290,15 @@ def _chain_block(
             if rotation_only:
                 tx = ty = tz = 0.0
             for b in range(nb):
+                if s == 0 and not inverse:
+                    acc[b, 0] = tx
+                    acc[b, 1] = ty
+                    acc[b, 2] = tz
+                    acc[b, 3] = qw
+                    acc[b, 4] = qx
+                    acc[b, 5] = qy
+                    acc[b, 6] = qz
+                    continue
                 x, y, z, w, rx, ry, rz = _compose(
                     acc[b, 0], acc[b, 1], acc[b, 2],
                     acc[b, 3], acc[b, 4], acc[b, 5], acc[b, 6],
@@ -335,15 +356,36 @@ def _chain_block(
                     if not rotation_only:
                         tx, ty, tz = tr[k, 0], tr[k, 1], tr[k, 2]
                     qw, qx, qy, qz = rp[k, 0], rp[k, 1], rp[k, 2], rp[k, 3]
-                elif i >= 0 and t == times[i]:
-                    # a sample time: the stored sample (and only it is needed)
-                    if not rotation_only:
-                        tx, ty, tz = tr[i, 0], tr[i, 1], tr[i, 2]
-                    qw, qx, qy, qz = rp[i, 0], rp[i, 1], rp[i, 2], rp[i, 3]
+                elif own[slot] != 0 and i >= 0 and t == times[i]:
+                    # the frame's own times: the stored sample, unless its squad
+                    # segment reads a missing sample (i-1 .. i+2), as
+                    # between samples
+                    missing = False
+                    for q in range(max(i - 1, 0), min(i + 3, n)):
+                        if math.isnan(
+                            tr[q, 0] + tr[q, 1] + tr[q, 2]
+                            + rp[q, 0] + rp[q, 1] + rp[q, 2] + rp[q, 3]
+                        ):  # fmt: skip
+                            missing = True
+                    if missing:
+                        tx = ty = tz = qw = qx = qy = qz = math.nan
+                    else:
+                        if not rotation_only:
+                            tx, ty, tz = tr[i, 0], tr[i, 1], tr[i, 2]
+                        qw, qx, qy, qz = rp[i, 0], rp[i, 1], rp[i, 2], rp[i, 3]
+                elif (
+                    0 <= i < n - 1
+                    and t != times[i]
+                    and times[i + 1] - times[i] > gaps[slot]
+                ):
+                    # inside a gap longer than the frame's max_gap
+                    tx = ty = tz = qw = qx = qy = qz = math.nan
                 else:
                     if k > n - 2:
                         k = n - 2
-                    if not rotation_only:
+                    if not rotation_only and i >= 0 and t == times[i]:
+                        tx, ty, tz = tr[i, 0], tr[i, 1], tr[i, 2]
+                    elif not rotation_only:
                         w = (t - times[k]) / (times[k + 1] - times[k])
                         tx = tr[k, 0] + w * (tr[k + 1, 0] - tr[k, 0])
                         ty = tr[k, 1] + w * (tr[k + 1, 1] - tr[k, 1])
@@ -408,6 +450,16 @@ def _chain_block(
                     )
                     if d < 0.0:
                         qw, qx, qy, qz = -qw, -qx, -qy, -qz
+            if s == 0 and not inverse:
+                # the first step as it is (``chain.compose`` does the same)
+                acc[b, 0] = tx
+                acc[b, 1] = ty
+                acc[b, 2] = tz
+                acc[b, 3] = qw
+                acc[b, 4] = qx
+                acc[b, 5] = qy
+                acc[b, 6] = qz
+                continue
             x, y, z, w, rx, ry, rz = _compose(
                 acc[b, 0], acc[b, 1], acc[b, 2],
                 acc[b, 3], acc[b, 4], acc[b, 5], acc[b, 6],
@@ -427,9 +479,9 @@ def _chain_block(
 _SLOT_TYPES = (F1, F2, F2, F2, F2) * SLOTS
 
 
-@kernel(I1, F2, F1, *_SLOT_TYPES, F1, B)
+@kernel(I1, F2, F1, F1, I1, *_SLOT_TYPES, F1, B)
 def lookup_chain(
-    plan, statics, offsets,
+    plan, statics, offsets, gaps, own,
     times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
     target, rotation_only,
 ):  # fmt: skip
@@ -437,7 +489,7 @@ def lookup_chain(
 
     Parameters
     ----------
-    plan, statics, offsets, times0 .. c2 : see the module docstring
+    plan, statics, offsets, gaps, own, times0 .. c2 : see the module docstring
     target : ndarray, shape (m,)
         Target times (slot k reads ``target + offsets[k]``).
     rotation_only : bool
@@ -459,7 +511,7 @@ def lookup_chain(
     for j0 in range(0, m, BLOCK):
         j1 = min(j0 + BLOCK, m)
         computed += _chain_block(
-            plan, statics, offsets,
+            plan, statics, offsets, gaps, own,
             times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
             target, j0, j1, acc, cur, rotation_only,
         )  # fmt: skip
@@ -476,9 +528,9 @@ def lookup_chain(
     return t_out, r_out, computed
 
 
-@kernel(I1, F2, F1, *_SLOT_TYPES, F1, F3, I)
+@kernel(I1, F2, F1, F1, I1, *_SLOT_TYPES, F1, F3, I)
 def transform_chain(
-    plan, statics, offsets,
+    plan, statics, offsets, gaps, own,
     times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
     target, data, mode,
 ):  # fmt: skip
@@ -486,7 +538,7 @@ def transform_chain(
 
     Parameters
     ----------
-    plan, statics, offsets, times0 .. c2 : see the module docstring
+    plan, statics, offsets, gaps, own, times0 .. c2 : see the module docstring
     target : ndarray, shape (m,)
     data : ndarray, shape (m, k, c) or (1, k, c)
         Points or vectors (c == 3) or quaternions (c == 4); a first
@@ -514,7 +566,7 @@ def transform_chain(
     for j0 in range(0, m, BLOCK):
         j1 = min(j0 + BLOCK, m)
         computed += _chain_block(
-            plan, statics, offsets,
+            plan, statics, offsets, gaps, own,
             times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
             target, j0, j1, acc, cur, rotation_only,
         )  # fmt: skip

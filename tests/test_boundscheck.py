@@ -44,11 +44,6 @@ def test_kernel_tests_pass_with_boundscheck(checked_env):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 12 item 1: one-sample angular velocities read out of bounds "
-    "(estimate_angular_velocity, lookup_angular_velocity, transform_angular_velocity)",
-)
 def test_public_calls_at_small_sizes_stay_in_bounds(checked_env):
     done = subprocess.run(
         [sys.executable, str(TESTS / "boundscheck_probe.py")],

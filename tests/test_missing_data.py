@@ -284,7 +284,6 @@ def test_velocities_do_not_difference_across_missing_rows():
     _assert_true_velocity_or_nan(linear, angular)
 
 
-@pytest.mark.xfail(strict=True, reason=I9 + "no finite difference across a max_gap gap")
 def test_velocities_do_not_difference_across_a_long_gap():
     t, translation, rotation = _linear_frame(n=60)
     keep = (t < 2.5) | (t > 3.5)  # a 1.1 s hole in the samples

@@ -274,7 +274,7 @@ def resample_frame(frame, target: Target):
     stored_signs(rot, frame._r, frame._rotation_public, track.base, t_out)
     trans = kr.interp_linear(track.base, frame._t, t_out)
     if frame.max_gap is not None:
-        in_gap = _in_long_gap(track.base, t_out, frame.max_gap)
+        in_gap = in_long_gap(track.base, t_out, frame.max_gap)
         trans[in_gap] = np.nan
         rot[in_gap] = np.nan
     return trans, rot
@@ -303,7 +303,7 @@ def _unusable(frame):
     return out
 
 
-def _in_long_gap(t_in, t_out, max_gap: float) -> np.ndarray:
+def in_long_gap(t_in, t_out, max_gap: float) -> np.ndarray:
     """Which ``t_out`` fall strictly inside a gap of ``t_in`` longer than max_gap.
 
     Times equal to a sample are never inside a gap.

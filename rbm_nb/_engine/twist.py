@@ -59,7 +59,25 @@ def _moving_lookup(frame, reference, allow_static):
             f"the transform between {frame.name!r} and {reference.name!r} is static; "
             f"a velocity needs timestamps (pass allow_static=True for zeros)"
         )
-    return t, r, target
+    return t, r, target, _breaks(frame, reference, target)
+
+
+def _breaks(frame, reference, target):
+    """Where consecutive samples straddle a gap longer than a frame's max_gap.
+
+    Returns a boolean array (n - 1,) or None: velocities take no difference
+    across such a pair (the motion may have jumped while nothing was recorded).
+    """
+    track = target.track
+    out = None
+    for f, _ in _chain.chain(frame, reference):
+        if f._track is None or f.discrete or f.max_gap is None or len(track) < 2:
+            continue
+        base = track.base_in(f._track.origin)
+        middle = 0.5 * (base[1:] + base[:-1])
+        gap = _chain.in_long_gap(f._track.base, middle, f.max_gap)
+        out = gap if out is None else out | gap
+    return out
 
 
 def _represent(vectors, track, outof, into, looked_up=None):
@@ -94,9 +112,9 @@ def _result(values, track, as_track):
 
 def _linear_part(frame, reference, represent_in, looked_up, outlier_thresh, cutoff):
     """Linear velocity of ``frame`` wrt ``reference``, represented in ``represent_in``."""
-    t, r, target = looked_up
+    t, r, target, breaks = looked_up
     linear = _velocity.linear_velocity(
-        t, target.track.seconds(), outlier_thresh, cutoff
+        t, target.track.seconds(), outlier_thresh, cutoff, breaks
     )
     return _represent(
         linear, target.track, reference, represent_in, (frame, reference, r)
@@ -107,9 +125,9 @@ def _angular_part(
     frame, reference, represent_in, looked_up, mode, outlier_thresh, cutoff
 ):
     """Angular velocity of ``frame`` wrt ``reference``, represented in ``represent_in``."""
-    _, r, target = looked_up
+    _, r, target, breaks = looked_up
     angular = _velocity.angular_velocity(
-        r, target.track.seconds(), mode, outlier_thresh, cutoff
+        r, target.track.seconds(), mode, outlier_thresh, cutoff, breaks
     )
     # the estimate is in the moving frame's axes (2 q^-1 dq/dt)
     return _represent(angular, target.track, frame, represent_in, (frame, reference, r))

@@ -124,19 +124,46 @@ def _lowpass(values: np.ndarray, cutoff: float) -> np.ndarray:
     return out.reshape(values.shape)
 
 
-def _runs(valid: np.ndarray) -> list[tuple[int, int]]:
-    """(start, stop) of every run of True in a boolean array."""
+def _runs(valid: np.ndarray, breaks: np.ndarray | None = None) -> list[tuple[int, int]]:
+    """(start, stop) of every run of True in ``valid``, also split where
+    ``breaks[k]`` says samples k and k + 1 must not be differenced."""
     edges = np.flatnonzero(np.diff(np.concatenate(([0], valid.view(np.int8), [0]))))
-    return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
+    runs = list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
+    if breaks is None or not breaks.any():
+        return runs
+    cuts = np.flatnonzero(breaks) + 1
+    out: list[tuple[int, int]] = []
+    for start, stop in runs:
+        inner = cuts[(cuts > start) & (cuts < stop)].tolist()
+        bounds = [start, *inner, stop]
+        out.extend(zip(bounds[:-1], bounds[1:], strict=True))
+    return out
 
 
-def linear_series(x: np.ndarray, t: np.ndarray, outlier_thresh, cutoff) -> np.ndarray:
+def linear_series(
+    x: np.ndarray,
+    t: np.ndarray,
+    outlier_thresh,
+    cutoff,
+    breaks: np.ndarray | None = None,
+) -> np.ndarray:
     n = x.shape[0]
     if n < 2:
         raise ValueError(
             f"arr needs at least 2 samples to estimate a velocity, got {n}"
         )
-    v = _dk.gradient(kernel_array(x.reshape(n, -1)), t).reshape(x.shape)
+    flat = kernel_array(x.reshape(n, -1))
+    if breaks is None or not breaks.any():
+        v = _dk.gradient(flat, t).reshape(x.shape)
+    else:
+        # no difference across a gap: each run between breaks on its own
+        out = np.full(flat.shape, np.nan)
+        for start, stop in _runs(np.ones(n, dtype=bool), breaks):
+            if stop - start >= 2:
+                out[start:stop] = _dk.gradient(
+                    kernel_array(flat[start:stop]), kernel_array(t[start:stop])
+                )
+        v = out.reshape(x.shape)
     if outlier_thresh is not None:
         score = _dk.second_difference_score(kernel_array(x))
         v = _reject_outliers(t, v, score, outlier_thresh)
@@ -146,7 +173,12 @@ def linear_series(x: np.ndarray, t: np.ndarray, outlier_thresh, cutoff) -> np.nd
 
 
 def angular_series(
-    q: np.ndarray, t: np.ndarray, mode, outlier_thresh, cutoff
+    q: np.ndarray,
+    t: np.ndarray,
+    mode,
+    outlier_thresh,
+    cutoff,
+    breaks: np.ndarray | None = None,
 ) -> np.ndarray:
     n, nb, _ = q.shape
     if n < 2:
@@ -175,7 +207,7 @@ def angular_series(
             w[:, b, :] = _dk.gradient(kernel_array(rv[:, b, :]), t)
             continue
         missing = _dk.nan_rows(qb)
-        if not missing.any():
+        if not missing.any() and (breaks is None or not breaks.any()):
             w[:, b, :] = _dk.angular_velocity_from_derivative(
                 qb, _dk.spline_derivative(qb, t)
             )
@@ -190,7 +222,7 @@ def angular_series(
         # them (the motion may have jumped while nothing was recorded); runs
         # of a single sample have no velocity
         w[:, b, :] = np.nan
-        for start, stop in _runs(valid):
+        for start, stop in _runs(valid, breaks):
             if stop - start < 2:
                 continue
             qv = kernel_array(qb[start:stop])
@@ -204,7 +236,9 @@ def angular_series(
     return w
 
 
-def linear_velocity(arr, timestamps, outlier_thresh=None, cutoff=None) -> np.ndarray:
+def linear_velocity(
+    arr, timestamps, outlier_thresh=None, cutoff=None, breaks=None
+) -> np.ndarray:
     """Linear velocity of positions sampled in time (array level).
 
     Parameters
@@ -224,12 +258,12 @@ def linear_velocity(arr, timestamps, outlier_thresh=None, cutoff=None) -> np.nda
     t = _time.seconds(timestamps, x.shape[0])
     check_options(outlier_thresh, cutoff, x.shape[0])
     return linear_series(
-        x.reshape(x.shape[0], 1, -1), t, outlier_thresh, cutoff
+        x.reshape(x.shape[0], 1, -1), t, outlier_thresh, cutoff, breaks
     ).reshape(x.shape)
 
 
 def angular_velocity(
-    q, timestamps, mode="quaternion", outlier_thresh=None, cutoff=None
+    q, timestamps, mode="quaternion", outlier_thresh=None, cutoff=None, breaks=None
 ) -> np.ndarray:
     """Angular velocity of orientations sampled in time (array level).
 
@@ -253,4 +287,6 @@ def angular_velocity(
         raise ValueError(f"q must have shape (n, 4), got {qa.shape}")
     t = _time.seconds(timestamps, qa.shape[0])
     check_options(outlier_thresh, cutoff, qa.shape[0], mode)
-    return angular_series(qa[:, None, :], t, mode, outlier_thresh, cutoff)[:, 0, :]
+    return angular_series(qa[:, None, :], t, mode, outlier_thresh, cutoff, breaks)[
+        :, 0, :
+    ]

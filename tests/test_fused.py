@@ -20,6 +20,7 @@ from rbm_nb._engine import chain as _chain
 from rbm_nb._engine import fused as _fused
 from rbm_nb._kernels import fused as kf
 from rbm_nb._kernels import quaternion as kq
+from rbm_nb._kernels import resample as kr
 
 TOL = 1e-12
 NO_GAPS = np.full(kf.SLOTS, np.inf)
@@ -125,6 +126,36 @@ def _resolved(outof, into):
     return a, b, steps, target
 
 
+def _unfused_lookup(steps, target):
+    """The engine's step-by-step path: resample each frame, then compose."""
+    t, r = _chain.compose(steps, target)
+    n = len(target)
+    if t.shape[0] != n:
+        t, r = np.repeat(t, n, axis=0), np.repeat(r, n, axis=0)
+    return t, r
+
+
+def _unfused_apply(kind, steps, target, data):
+    """The engine's unfused transform: held events or composed, then applied."""
+    data = np.ascontiguousarray(data)
+    discrete = _chain.held(steps, target)
+    if discrete is not None:
+        t, r, idx = discrete
+        if kind == "quaternions":
+            return kr.qmul_blocks_held(r, idx, data)
+        return kr.transform_blocks_held(r, t, idx, data, kind == "points")
+    t, r = _chain.compose(steps, target)
+    if kind == "quaternions":
+        return kr.qmul_blocks(r, data)
+    return kr.transform_blocks(r, t, data, kind == "points")
+
+
+def _plan(steps, target):
+    plan, own = _chain.fused_plan(steps, target)
+    assert plan is not None
+    return plan, own
+
+
 def _close(x, y):
     """Equal to TOL (relative to the largest value); NaN exactly where y has NaN."""
     assert x.shape == y.shape
@@ -141,15 +172,14 @@ def test_lookup_equals_the_engine_on_random_trees(kind, seed, missing):
     _random_tree(rng, kind, missing)
     nan_rows = 0
     for outof, into in PAIRS:
-        a, b, steps, target = _resolved(outof, into)
-        plan = _fused.plan(steps)
-        assert plan is not None, (outof, into)
-        t_ref, r_ref, _ = _chain.lookup(a, b)
-        t, r = _fused.lookup(plan, target)
+        _, _, steps, target = _resolved(outof, into)
+        plan, own = _plan(steps, target)
+        t_ref, r_ref = _unfused_lookup(steps, target)
+        t, r = _fused.lookup(plan, target, own)
         _close(t, t_ref)
         _close(r, r_ref)
         nan_rows += int(np.isnan(r).any(axis=1).sum())
-        t0, r_only = _fused.lookup(plan, target, rotation_only=True)
+        t0, r_only = _fused.lookup(plan, target, own, rotation_only=True)
         assert t0.shape == (0, 3)
         _close(r_only, r_ref)
     assert (nan_rows > 0) == missing
@@ -163,15 +193,16 @@ def test_transforms_equal_the_engine_on_random_trees(kind, seed, missing):
     _random_tree(rng, kind, missing)
     for outof, into in PAIRS:
         _, _, steps, target = _resolved(outof, into)
-        plan = _fused.plan(steps)
+        plan, own = _plan(steps, target)
         m = len(target)
         for what, size in (("points", 3), ("vectors", 3), ("quaternions", 4)):
             for rows in (m, 1):
                 data = rng.normal(size=(rows, 2, size))
                 if size == 4:
                     data /= np.linalg.norm(data, axis=-1, keepdims=True)
-                ref = _chain.apply(what, steps, target, data)
-                _close(_fused.transform(plan, target, data, what), ref)
+                ref = _unfused_apply(what, steps, target, data)
+                _close(_fused.transform(plan, target, own, data, what), ref)
+                _close(_chain.apply(what, steps, target, data), ref)
 
 
 def test_timestamped_arrays_match_like_the_engine():
@@ -188,20 +219,21 @@ def test_timestamped_arrays_match_like_the_engine():
     blocks = Blocks(points, 3, -1, 0, ts, "points")
     target = _chain.match([f for f, _ in steps], [blocks.track])
     data = _chain.resample_array(blocks.data, blocks.track, target, False)
-    ref = _chain.apply("points", steps, target, data)
-    _close(_fused.transform(_fused.plan(steps), target, data, "points"), ref)
+    ref = _unfused_apply("points", steps, target, data)
+    plan, own = _plan(steps, target)
+    _close(_fused.transform(plan, target, own, data, "points"), ref)
 
 
 def test_unsorted_target_times_give_the_same_rows():
     rng = np.random.default_rng(3)
     _random_tree(rng, "float")
     _, _, steps, target = _resolved("c", "e")
-    plan = _fused.plan(steps)
-    t, r = _fused.lookup(plan, target)
+    plan, own = _plan(steps, target)
+    t, r = _fused.lookup(plan, target, own)
     order = rng.permutation(len(target))
     shuffled = _chain.Target(target.track.slice(0, len(target)))
     shuffled.track.base = np.ascontiguousarray(target.track.base[order])
-    t2, r2 = _fused.lookup(plan, shuffled)
+    t2, r2 = _fused.lookup(plan, shuffled, [False] * len(own))
     np.testing.assert_array_equal(t2, t[order])
     np.testing.assert_array_equal(r2, r[order])
 
@@ -234,18 +266,18 @@ def test_squad_rows_are_computed_only_for_the_segments_used():
     )
     m = _frames.resolve_frame("m")
     steps = _chain.chain(m, _frames.resolve_frame("world"))
-    plan = _fused.plan(steps)
+    plan, _ = _plan(steps, _chain.Target(m._track))
     table = plan.tables[0]
     assert not table.rows.any()  # nothing computed by registering
     times = np.array([0.0205, 0.0213, 0.5551, 1.0])  # segments 2, 2, 55; a sample
     target = _chain.Target(_time.as_track(times))
-    _fused.lookup(plan, target)
+    _fused.lookup(plan, target, [False])
     # (a time equal to a sample is evaluated by squad, at the start of its segment)
     assert np.flatnonzero(table.rows[:, 19]).tolist() == [2, 55, 100]
     full = kf.squad_table(m._r, m._track.base)
     np.testing.assert_array_equal(table.rows[[2, 55, 100]], full[[2, 55, 100]])
     assert not table.complete
-    _fused.lookup(plan, _chain.Target(m._track.slice(0, n)))  # its own times
+    _fused.lookup(plan, _chain.Target(m._track.slice(0, n)), [True])  # own times
     assert np.flatnonzero(table.rows[:, 19]).tolist() == [2, 55, 100]
 
 
@@ -392,12 +424,15 @@ def test_real_recording_lookups_and_transforms(shared_data):
         ("left_eye", "head"),
     ]:
         a, b, steps, target = _resolved(outof, into)
-        plan = _fused.plan(steps)
-        t_ref, r_ref, _ = _chain.lookup(a, b)
-        t, r = _fused.lookup(plan, target)
+        plan, own = _plan(steps, target)
+        t_ref, r_ref = _unfused_lookup(steps, target)
+        t, r = _fused.lookup(plan, target, own)
         _close(t, t_ref)
         _close(r, r_ref)
+        t_pub, r_pub, _ = _chain.lookup(a, b)  # the engine's path is the fused one
+        _close(t_pub, t_ref)
+        _close(r_pub, r_ref)
         data = rng.normal(size=(len(target), 1, 3))
         for what in ("points", "vectors"):
-            ref = _chain.apply(what, steps, target, data)
-            _close(_fused.transform(plan, target, data, what), ref)
+            ref = _unfused_apply(what, steps, target, data)
+            _close(_fused.transform(plan, target, own, data, what), ref)

@@ -1,8 +1,10 @@
 """Chains evaluated by the fused kernels (:mod:`rbm_nb._kernels.fused`).
 
 A chain of steps (frame, inverse) becomes a *plan*: its runs of static
-steps composed once into single transforms, and its moving frames (at most
-:data:`~rbm_nb._kernels.fused.SLOTS`) in slots. The fused kernels then
+steps composed once into single transforms (by the ``compose`` function the
+caller hands in, :func:`rbm_nb._engine.chain.compose`, which imports this
+module), and its moving frames (at most :data:`~rbm_nb._kernels.fused.SLOTS`)
+in slots. The fused kernels then
 evaluate and compose the whole chain per output row, allocating nothing
 but their result. Chains with more moving frames return None from
 :func:`plan` and take the unfused path of :mod:`rbm_nb._engine.chain`.
@@ -23,7 +25,6 @@ from typing import Any
 import numpy as np
 
 from .._kernels import fused as kf
-from . import chain as _chain
 
 __all__ = ["Plan", "plan", "lookup", "transform"]
 
@@ -99,14 +100,6 @@ class Plan:
                 out[k] = frame.max_gap
         return out
 
-    def own(self, target) -> np.ndarray:
-        """Per slot, 1 if the target times are a run of the frame's own."""
-        out = np.zeros(kf.SLOTS, dtype=np.int64)
-        for k, frame in enumerate(self.frames):
-            if _chain._same_times(frame._track, target.track) is not None:
-                out[k] = 1
-        return out
-
     def incomplete(self) -> list[_Table]:
         return [t for t in self.tables if t is not None and not t.complete]
 
@@ -117,20 +110,23 @@ _PLANS: dict[int, Plan | None] = {}
 _MAX_PLANS = 4096
 
 
-def plan(steps) -> Plan | None:
-    """The plan of a chain, or None if it has no moving frame or too many."""
+def plan(steps, compose) -> Plan | None:
+    """The plan of a chain, or None if it has no moving frame or too many.
+
+    ``compose(run)`` composes a run of static steps into (t (1, 3), r (1, 4)).
+    """
     key = id(steps)
     cached = _PLANS.get(key, False)
     if cached is not False and (cached is None or cached.steps is steps):
         return cached  # type: ignore[return-value]
     if len(_PLANS) >= _MAX_PLANS:
         _PLANS.clear()
-    built = _build(steps)
+    built = _build(steps, compose)
     _PLANS[key] = built
     return built
 
 
-def _build(steps) -> Plan | None:
+def _build(steps, compose) -> Plan | None:
     moving = [f for f, _ in steps if f._track is not None]
     if not moving or len(moving) > kf.SLOTS:
         return None
@@ -143,7 +139,7 @@ def _build(steps) -> Plan | None:
 
     def flush() -> None:
         if run:
-            t, r = _chain.compose(run, _chain.Target(None))
+            t, r = compose(run)
             statics.append(np.concatenate([t[0], r[0]]))
             code.extend((kf.STATIC, len(statics) - 1, 0))
             run.clear()
@@ -180,8 +176,18 @@ def _run(p: Plan, call):
     return result
 
 
-def lookup(p: Plan, target, rotation_only: bool = False):
-    """(t (m, 3) or (0, 3), r (m, 4)) of a planned chain at the target times."""
+def _own(own) -> np.ndarray:
+    out = np.zeros(kf.SLOTS, dtype=np.int64)
+    out[: len(own)] = own
+    return out
+
+
+def lookup(p: Plan, target, own, rotation_only: bool = False):
+    """(t (m, 3) or (0, 3), r (m, 4)) of a planned chain at the target times.
+
+    ``own[k]`` is true if the target times are a run of slot k's frame's own
+    sample times (``chain._same_times``).
+    """
     base = target.track.base
 
     def call():
@@ -190,7 +196,7 @@ def lookup(p: Plan, target, rotation_only: bool = False):
             p.statics,
             p.offsets(target),
             p.gaps(),
-            p.own(target),
+            _own(own),
             *p.slots(),
             base,
             rotation_only,
@@ -200,8 +206,11 @@ def lookup(p: Plan, target, rotation_only: bool = False):
     return t, r
 
 
-def transform(p: Plan, target, data: np.ndarray, kind: str) -> np.ndarray:
-    """Points, vectors or quaternions (m|1, k, c) carried through a planned chain."""
+def transform(p: Plan, target, own, data: np.ndarray, kind: str) -> np.ndarray:
+    """Points, vectors or quaternions (m|1, k, c) carried through a planned chain.
+
+    ``own`` as for :func:`lookup`.
+    """
     mode = {"points": 0, "vectors": 1, "quaternions": 2}[kind]
     base = target.track.base
 
@@ -211,7 +220,7 @@ def transform(p: Plan, target, data: np.ndarray, kind: str) -> np.ndarray:
             p.statics,
             p.offsets(target),
             p.gaps(),
-            p.own(target),
+            _own(own),
             *p.slots(),
             base,
             data,

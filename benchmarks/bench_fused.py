@@ -151,11 +151,13 @@ def fused_direct(outof, into, kind=None, data=None, timestamps=None):
     steps = C.chain(a, b)
     if kind is None:
         target = C.match([f for f, _ in steps])
-        return FU.lookup(FU.plan(steps), target)
+        plan, own = C.fused_plan(steps, target)
+        return FU.lookup(plan, target, own)
     blocks = Blocks(data, SIZES[kind], -1, 0, timestamps, kind)
     target = C.match([f for f, _ in steps], [blocks.track])
     matched = C.resample_array(blocks.data, blocks.track, target, kind == "quaternions")
-    return FU.transform(FU.plan(steps), target, matched, kind)
+    plan, own = C.fused_plan(steps, target)
+    return FU.transform(plan, target, own, matched, kind)
 
 
 def table(reference: bool) -> None:

@@ -253,8 +253,9 @@ def test_squad_table_equals_the_engine_coefficients():
 
 
 def test_squad_rows_are_computed_only_for_the_segments_used():
+    """Rows come in runs from the first segment used (each log computed once)."""
     rng = np.random.default_rng(11)
-    n = 200
+    n = 1000
     ts = np.arange(n) * 0.01
     rbm.register_frame("world")
     rbm.register_frame(
@@ -269,16 +270,23 @@ def test_squad_rows_are_computed_only_for_the_segments_used():
     plan, _ = _plan(steps, _chain.Target(m._track))
     table = plan.tables[0]
     assert not table.rows.any()  # nothing computed by registering
-    times = np.array([0.0205, 0.0213, 0.5551, 1.0])  # segments 2, 2, 55; a sample
-    target = _chain.Target(_time.as_track(times))
-    _fused.lookup(plan, target, [False])
-    # (a time equal to a sample is evaluated by squad, at the start of its segment)
-    assert np.flatnonzero(table.rows[:, 19]).tolist() == [2, 55, 100]
+
+    def computed():
+        return set(np.flatnonzero(table.rows[:, 19]).tolist())
+
+    _fused.lookup(plan, _chain.Target(m._track), [True])  # its own times
+    assert computed() == set()
+    times = np.array([0.0205, 0.0213, 5.5551])  # segments 2, 2, 555
+    _fused.lookup(plan, _chain.Target(_time.as_track(times)), [False])
+    run = set(range(2, 2 + kf.RUN)) | set(range(555, 555 + kf.RUN))
+    assert computed() == run
+    # a run stops before rows already there
+    _fused.lookup(plan, _chain.Target(_time.as_track(np.array([5.0]))), [False])
+    assert computed() == run | set(range(500, 555))
     full = kf.squad_table(m._r, m._track.base)
-    np.testing.assert_array_equal(table.rows[[2, 55, 100]], full[[2, 55, 100]])
+    rows = sorted(computed())
+    np.testing.assert_array_equal(table.rows[rows], full[rows])
     assert not table.complete
-    _fused.lookup(plan, _chain.Target(m._track.slice(0, n)), [True])  # own times
-    assert np.flatnonzero(table.rows[:, 19]).tolist() == [2, 55, 100]
 
 
 # ---------------------------------------------------------------------------

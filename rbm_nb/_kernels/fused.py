@@ -109,9 +109,19 @@ _DONE = 19
 # ---------------------------------------------------------------------------
 
 
+# A missing row is computed together with the missing rows after it (up to
+# RUN of them), so that each log(r[i]⁻¹ r[i+1]) is computed once rather
+# than for each of the three rows that use it; sorted lookups need those
+# rows next anyway.
+RUN = 256
+
+
 @helper
 def _log_step(r, i):
     """log(r[i]⁻¹ r[i+1]), as :func:`quaternion.squad_coefficients` forms it."""
+    n = r.shape[0]
+    if i < 0 or i > n - 2:
+        return 0.0, 0.0, 0.0, 0.0  # not used by any row
     iw, ix, iy, iz = _qinv1(r[i, 0], r[i, 1], r[i, 2], r[i, 3])
     nw, nx, ny, nz = _qmul1(
         iw, ix, iy, iz, r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3]
@@ -120,19 +130,18 @@ def _log_step(r, i):
 
 
 @helper
-def _table_row(r, t, c, i):
+def _table_row(r, t, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz):
     """Fill row i of the squad table of (r, t) (n >= 2) into ``c``.
 
     Equal to row i of ``squad_coefficients`` (a, b) and ``squad_segments``
-    (operation for operation), computed from samples i-1 .. i+2 only.
+    (operation for operation), from samples i-1 .. i+2 and the logs
+    p = L[i-1], l = L[i], n = L[i+1] (``_log_step``).
     """
     n = r.shape[0]
     # a[i]
     if i == 0 or i == n - 1:
         aw, ax, ay, az = r[i, 0], r[i, 1], r[i, 2], r[i, 3]
     else:
-        pw, px, py, pz = _log_step(r, i - 1)
-        lw, lx, ly, lz = _log_step(r, i)
         ratio = (t[i + 1] - t[i]) / (t[i] - t[i - 1])
         ew, ex, ey, ez = _qexp1(
             (-lw + pw * ratio) * 0.25,
@@ -143,8 +152,6 @@ def _table_row(r, t, c, i):
         aw, ax, ay, az = _qmul1(r[i, 0], r[i, 1], r[i, 2], r[i, 3], ew, ex, ey, ez)
     # b[i], and the sample the segment ends at
     if i < n - 2:
-        lw, lx, ly, lz = _log_step(r, i)
-        nw, nx, ny, nz = _log_step(r, i + 1)
         ratio = (t[i + 1] - t[i]) / (t[i + 2] - t[i + 1])
         ew, ex, ey, ez = _qexp1(
             (nw * ratio - lw) * -0.25,
@@ -205,6 +212,31 @@ def _table_row(r, t, c, i):
     c[i, _DONE] = 1.0
 
 
+@helper
+def _fill_run(r, t, c, g, count):
+    """Compute row g of the table and the missing rows after it (``count`` at most).
+
+    Stops before the first row already computed; each log is computed
+    once. Returns the number of rows computed.
+    """
+    n = r.shape[0]
+    end = min(g + count, n)
+    pw, px, py, pz = _log_step(r, g - 1)
+    lw, lx, ly, lz = _log_step(r, g)
+    done = 0
+    for i in range(g, end):
+        if i > g and c[i, _DONE] != 0.0:
+            break
+        nw, nx, ny, nz = _log_step(r, i + 1)
+        _table_row(
+            r, t, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz
+        )  # fmt: skip
+        done += 1
+        pw, px, py, pz = lw, lx, ly, lz
+        lw, lx, ly, lz = nw, nx, ny, nz
+    return done
+
+
 @kernel(F2, F1)
 def squad_table(r, t):
     """The whole squad table of rotations r (n >= 2) at strictly increasing t.
@@ -215,9 +247,8 @@ def squad_table(r, t):
         See the module docstring; every row computed.
     """
     n = r.shape[0]
-    c = np.empty((n, TABLE_COLUMNS))
-    for i in range(n):
-        _table_row(r, t, c, i)
+    c = np.zeros((n, TABLE_COLUMNS))
+    _fill_run(r, t, c, 0, n)
     return c
 
 
@@ -393,9 +424,8 @@ def _chain_block(
                     # squad in segment g (numpy-quaternion uses the last
                     # segment before the start, indexing with -1)
                     g = i if i >= 0 else n - 1
-                    if c[g, _DONE] == 0.0:
-                        _table_row(r, times, c, g)  # first use of the segment
-                        computed += 1
+                    if c[g, _DONE] == 0.0:  # first use of the segment
+                        computed += _fill_run(r, times, c, g, RUN)
                     if g < n - 1:
                         dt = times[g + 1] - times[g]
                     else:

@@ -19,10 +19,18 @@ import rbm_nb as rbm
 def _setup() -> None:
     rbm.clear_registry()
     rbm.register_frame("world")
-    rbm.register_frame("head", parent="world", translation=(0.1, 0.2, 1.7),
-                       rotation=(np.cos(0.2), 0.0, 0.0, np.sin(0.2)))
-    rbm.register_frame("eye", parent="head", translation=(0.03, 0.0, 0.05),
-                       rotation=(np.cos(0.1), np.sin(0.1), 0.0, 0.0))
+    rbm.register_frame(
+        "head",
+        parent="world",
+        translation=(0.1, 0.2, 1.7),
+        rotation=(np.cos(0.2), 0.0, 0.0, np.sin(0.2)),
+    )
+    rbm.register_frame(
+        "eye",
+        parent="head",
+        translation=(0.03, 0.0, 0.05),
+        rotation=(np.cos(0.1), np.sin(0.1), 0.0, 0.0),
+    )
 
 
 def _best(stmt, number: int = 2000) -> float:
@@ -36,14 +44,16 @@ def main() -> None:
     point = np.array([0.0, 0.0, 1.0])
     points = np.random.default_rng(0).normal(size=(100, 3))
     cases = {
-        "transform_points, 1 point, static chain (eye -> world)":
-            lambda: rbm.transform_points(point, "world", "eye"),
-        "transform_points, 100 points, static chain":
-            lambda: rbm.transform_points(points, "world", "eye"),
-        "transform_vectors, 1 vector, static chain":
-            lambda: rbm.transform_vectors(point, "world", "eye"),
-        "lookup_transform, static chain":
-            lambda: rbm.lookup_transform("eye", "world"),
+        "transform_points, 1 point, static chain (eye -> world)": lambda: (
+            rbm.transform_points(point, "world", "eye")
+        ),
+        "transform_points, 100 points, static chain": lambda: rbm.transform_points(
+            points, "world", "eye"
+        ),
+        "transform_vectors, 1 vector, static chain": lambda: rbm.transform_vectors(
+            point, "world", "eye"
+        ),
+        "lookup_transform, static chain": lambda: rbm.lookup_transform("eye", "world"),
     }
     for name, fn in cases.items():
         print(f"{_best(fn) * 1e6:8.1f} µs  {name}")

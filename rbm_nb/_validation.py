@@ -37,9 +37,8 @@ as_float_array = float_array
 
 def is_scalar(value: Any) -> bool:
     """Whether ``value`` is one real number (not a bool, string or array)."""
-    return (
-        isinstance(value, int | float | np.integer | np.floating)
-        and not isinstance(value, bool | np.bool_)
+    return isinstance(value, int | float | np.integer | np.floating) and not isinstance(
+        value, bool | np.bool_
     )
 
 
@@ -124,8 +123,7 @@ def check_missing_rows(arr: np.ndarray, name: str) -> None:
     if bad.any():
         row = np.argwhere(bad)[0]
         raise ValueError(
-            f"{name}{_index(row)} is not finite (a missing sample is a row of NaN "
-            f"only)"
+            f"{name}{_index(row)} is not finite (a missing sample is a row of NaN only)"
         )
 
 

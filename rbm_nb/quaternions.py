@@ -21,7 +21,12 @@ from ._door import is_dataarray as _is_dataarray
 from ._engine.chain import stored_signs
 from ._kernels import quaternion as _qk
 from ._kernels import rotations as _rk
-from ._validation import check_finite, check_no_inf, check_unit_norms
+from ._validation import (
+    check_finite,
+    check_missing_rows,
+    check_no_inf,
+    check_unit_norms,
+)
 from .errors import UnsupportedError
 
 __all__ = ["from_euler_angles", "qinterp", "qinv", "qmean", "qmul", "rotate_vectors"]
@@ -707,7 +712,9 @@ def from_euler_angles(
                 f"rpy must have length 3 (roll, pitch, yaw) along axis={axis}, got shape {arr.shape}"
             )
         arr = np.moveaxis(arr, ax, -1)
-        check_finite(arr, "rpy")
+        # a row of NaN only is a missing sample (an untracked frame) and
+        # stays NaN; a partly NaN row or an infinity is a mistake
+        check_missing_rows(arr, "rpy")
         angles = {"r": arr[..., 0], "p": arr[..., 1], "y": arr[..., 2]}
     else:
         for key, value, name in (

@@ -175,10 +175,6 @@ def test_from_rotation_matrix_sign_follows_the_convention(mat):
     np.testing.assert_allclose(matrix(got), mat, atol=1e-12)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 11 item 1: README 'What differs' documents the sign convention",
-)
 def test_readme_documents_the_sign_convention():
     text = (REPO / "README.md").read_text()
     start = text.index("What differs")

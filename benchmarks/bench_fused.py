@@ -79,11 +79,12 @@ def real_workload():
     folder = os.environ.get("RBM_NB_DATA_DIR")
     if not folder or not (Path(folder) / "head.nc").exists():
         return None
-    import rbm_nb as rbm
+    from rbm_nb.data import load_example
 
-    head = rbm.load_example("head", source="remote")
-    eye = rbm.load_example("left_eye", source="remote")
-    # the eye tracker's missing samples (NaN rows) are dropped: frames refuse NaN
+    head = load_example("head", source="remote")
+    eye = load_example("left_eye", source="remote")
+    # the eye tracker's missing samples (NaN rows) are dropped, so that both
+    # packages time the same interpolation work
     keep = ~np.isnan(eye.orientation.values).any(axis=1)
     head_ts = head.time.values
     eye_ts = eye.time.values[keep]

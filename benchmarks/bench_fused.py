@@ -362,7 +362,7 @@ def scaling(sizes) -> None:
         args = (s1, s0, head._track.base, head._t, head._r, a, b, seg, e_t, e_r,
                 target.track.base, off)  # fmt: skip
         t_f, r_f = floor(*args)
-        t_p, r_p, _ = rbm.lookup_transform("left_eye", "world")
+        t_p, r_p = rbm.lookup_transform("left_eye", "world")[:2]
         assert np.abs(t_f - t_p).max() < 1e-9 and np.abs(r_f - r_p).max() < 1e-9
         reps = 5 if n <= 1_000_000 else 3
         m = len(target)

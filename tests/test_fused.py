@@ -246,10 +246,37 @@ def test_squad_table_equals_the_engine_coefficients():
         a, b = kq.squad_coefficients(r, t)
         seg = kq.squad_segments(r, a, b)
         table = kf.squad_table(r, t)
-        np.testing.assert_array_equal(table[:, 0:4], a)
-        np.testing.assert_array_equal(table[:, 4:8], b)
-        np.testing.assert_array_equal(table[:, 8:19], seg[:, 0:11])
+        # exp/log by short series for small arcs: within a few ulp of 1
+        tol = 4 * np.finfo(float).eps
+        np.testing.assert_allclose(table[:, 0:4], a, rtol=0, atol=tol)
+        np.testing.assert_allclose(table[:, 4:8], b, rtol=0, atol=tol)
+        np.testing.assert_allclose(table[:, 8:18], seg[:, 0:10], rtol=0, atol=tol)
+        np.testing.assert_array_equal(table[:, 18], seg[:, 10])
         assert (table[:, 19] == 1.0).all()
+
+
+def test_series_exp_and_log_are_within_4_ulp_of_libm():
+    """The table's exp/log (short series below the thresholds) against libm's."""
+    rng = np.random.default_rng(8)
+    n = 5_000
+    scale = 10.0 ** rng.uniform(-12, np.log10(0.0999), n)
+    v = rng.normal(size=(n, 3))
+    v *= (scale / np.linalg.norm(v, axis=1))[:, None]
+    w = rng.normal(scale=1e-3, size=n)
+    for i in range(n):
+        got = np.array(kf._qexp_table(w[i], *v[i]))
+        want = np.array(kq._qexp1(w[i], *v[i]))
+        np.testing.assert_array_max_ulp(got, want, maxulp=4)
+    # logs of near-unit quaternions, arcs up to the series' limit
+    ratio = 10.0 ** rng.uniform(-12, np.log10(0.0499), n)
+    w = 1.0 + rng.normal(scale=1e-3, size=n)
+    v = rng.normal(size=(n, 3))
+    v *= (ratio * w / np.linalg.norm(v, axis=1))[:, None]
+    for i in range(n):
+        got = np.array(kf._qlog_table(w[i], *v[i]))
+        want = np.array(kq._qlog1(w[i], *v[i]))
+        assert got[0] == want[0]
+        np.testing.assert_array_max_ulp(got[1:], want[1:], maxulp=4)
 
 
 def test_squad_rows_are_computed_only_for_the_segments_used():

@@ -67,6 +67,7 @@ import numpy as np
 
 from ._jit import F1, F2, F3, I1, B, I, helper, kernel  # noqa: E741
 from .quaternion import (
+    _EPS,
     _geodesic1,
     _is_unit,
     _qexp1,
@@ -78,6 +79,7 @@ from .quaternion import (
     _rotate1,
     _sincos,
 )
+from .scalar import SERIES_ANGLE, SERIES_RATIO, atan_over_x, cos_series, sinc_series
 
 __all__ = [
     "SLOTS",
@@ -109,6 +111,41 @@ _DONE = 19
 # ---------------------------------------------------------------------------
 
 
+@helper(inline=True)
+def _qexp_table(w, x, y, z):
+    """exp of a quaternion as ``quaternion._qexp1``, with short series for small arcs.
+
+    Below ``SERIES_ANGLE`` the truncated series of cos(v) and sin(v)/v are
+    exact to under one rounding error (and need neither libm's sin/cos nor
+    a division); elsewhere the libm route. Within 4 ulp of ``_qexp1``
+    (tests/test_fused.py).
+    """
+    v2 = x * x + y * y + z * z
+    if v2 < SERIES_ANGLE * SERIES_ANGLE and v2 > _EPS * _EPS:
+        e = math.exp(w)
+        c = cos_series(v2)
+        k = e * sinc_series(v2)
+        return e * c, k * x, k * y, k * z
+    return _qexp1(w, x, y, z)
+
+
+@helper(inline=True)
+def _qlog_table(w, x, y, z):
+    """log of a quaternion as ``quaternion._qlog1``, with a short series for small arcs.
+
+    For w > 0 and |v| < SERIES_RATIO w, atan2(|v|, w) / |v| is
+    atan_over_x((|v|/w)²) / w: no sqrt, no atan2. Within 4 ulp of
+    ``_qlog1`` (tests/test_fused.py).
+    """
+    b2 = x * x + y * y + z * z
+    if w > 0.0 and b2 < (SERIES_RATIO * w) ** 2 and b2 > (_EPS * w) ** 2:
+        inv_w = 1.0 / w
+        f = atan_over_x(b2 * inv_w * inv_w) * inv_w
+        b = math.sqrt(b2)  # the real part exactly as _qlog1 forms it
+        return math.log(w * w + b * b) / 2.0, f * x, f * y, f * z
+    return _qlog1(w, x, y, z)
+
+
 # A missing row is computed together with the missing rows after it (up to
 # RUN of them), so that each log(r[i]⁻¹ r[i+1]) is computed once rather
 # than for each of the three rows that use it; sorted lookups need those
@@ -116,7 +153,7 @@ _DONE = 19
 RUN = 256
 
 
-@helper
+@helper(inline=True)
 def _log_step(r, i):
     """log(r[i]⁻¹ r[i+1]), as :func:`quaternion.squad_coefficients` forms it."""
     n = r.shape[0]
@@ -126,10 +163,10 @@ def _log_step(r, i):
     nw, nx, ny, nz = _qmul1(
         iw, ix, iy, iz, r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3]
     )
-    return _qlog1(nw, nx, ny, nz)
+    return _qlog_table(nw, nx, ny, nz)
 
 
-@helper
+@helper(inline=True)
 def _table_row(r, t, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz):
     """Fill row i of the squad table of (r, t) (n >= 2) into ``c``.
 
@@ -143,7 +180,7 @@ def _table_row(r, t, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz):
         aw, ax, ay, az = r[i, 0], r[i, 1], r[i, 2], r[i, 3]
     else:
         ratio = (t[i + 1] - t[i]) / (t[i] - t[i - 1])
-        ew, ex, ey, ez = _qexp1(
+        ew, ex, ey, ez = _qexp_table(
             (-lw + pw * ratio) * 0.25,
             (-lx + px * ratio) * 0.25,
             (-ly + py * ratio) * 0.25,
@@ -153,7 +190,7 @@ def _table_row(r, t, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz):
     # b[i], and the sample the segment ends at
     if i < n - 2:
         ratio = (t[i + 1] - t[i]) / (t[i + 2] - t[i + 1])
-        ew, ex, ey, ez = _qexp1(
+        ew, ex, ey, ez = _qexp_table(
             (nw * ratio - lw) * -0.25,
             (nx * ratio - lx) * -0.25,
             (ny * ratio - ly) * -0.25,

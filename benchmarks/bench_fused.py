@@ -354,7 +354,7 @@ def scaling(sizes) -> None:
         s0 = np.concatenate([s0[0][0], s0[1][0]])
         s1 = np.concatenate([s1[0][0], s1[1][0]])
         a, b, seg = head._squad_coefficients()
-        target = C.match([head, eye])
+        target = C.match([eye, head])
         lo = int(np.searchsorted(eye._track.key, target.track.key[0]))
         e_t = eye._t[lo : lo + len(target)]
         e_r = eye._rotation_public[lo : lo + len(target)]

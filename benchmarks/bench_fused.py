@@ -90,7 +90,10 @@ def real_workload():
     eye_ts = eye.time.values[keep]
     frames = [
         ("world", {}),
-        ("t265/world", {"parent": "world", "rotation": (np.sqrt(0.5), np.sqrt(0.5), 0, 0)}),
+        (
+            "t265/world",
+            {"parent": "world", "rotation": (np.sqrt(0.5), np.sqrt(0.5), 0, 0)},
+        ),
         (
             "head",
             {
@@ -205,7 +208,9 @@ def table(reference: bool) -> None:
         ("rotate_vectors 1M", lambda m: m.rotate_vectors(q1m, v1m), None),
     ]  # fmt: skip
     print(f"{name}; best of {REPEATS}")
-    print(f"{'operation':<46} {'rbm_nb':>9} {'fused':>9} {'rbm 0.9.3':>10} {'x ref':>7} {'x ref fused':>11}")
+    print(
+        f"{'operation':<46} {'rbm_nb':>9} {'fused':>9} {'rbm 0.9.3':>10} {'x ref':>7} {'x ref fused':>11}"
+    )
     for label, call, fused in ops:
         t_nb = best(lambda call=call: call(rbm))
         t_fu = best(fused) if fused is not None else None
@@ -345,7 +350,9 @@ def scaling(sizes) -> None:
 
     floor = floor_kernel()
     print("\n== scaling: lookup_transform left_eye->world, ns per output row")
-    print(f"{'samples':>9} {'rbm_nb':>9} {'fused':>9} {'floor':>9} {'rbm/floor':>10} {'fused/floor':>12}")
+    print(
+        f"{'samples':>9} {'rbm_nb':>9} {'fused':>9} {'floor':>9} {'rbm/floor':>10} {'fused/floor':>12}"
+    )
     for n in sizes:
         register(rbm, scaling_frames(n))
         head, eye = F.resolve_frame("head"), F.resolve_frame("left_eye")
@@ -408,7 +415,9 @@ def memory() -> None:
     ]  # fmt: skip
     for label, fn in cases:
         peak, out = peak_memory(fn)
-        print(f"{label:<46} peak {peak / 1e6:7.1f} MB  output {out / 1e6:6.1f} MB  {peak / out:5.2f}x")
+        print(
+            f"{label:<46} peak {peak / 1e6:7.1f} MB  output {out / 1e6:6.1f} MB  {peak / out:5.2f}x"
+        )
 
 
 # ---------------------------------------------------------------------------
@@ -437,8 +446,12 @@ def registration() -> None:
     )
     rbm.clear_registry()
     rbm.register_frame("world")
-    rbm.register_frame("head", parent="world", translation=(0.1, 0.2, 1.7),
-                       rotation=(np.cos(0.2), 0.0, 0.0, np.sin(0.2)))
+    rbm.register_frame(
+        "head",
+        parent="world",
+        translation=(0.1, 0.2, 1.7),
+        rotation=(np.cos(0.2), 0.0, 0.0, np.sin(0.2)),
+    )
     rbm.register_frame("eye", parent="head", translation=(0.03, 0.0, 0.05),
                        rotation=(np.cos(0.1), np.sin(0.1), 0.0, 0.0))  # fmt: skip
     point = np.array([0.0, 0.0, 1.0])
@@ -464,9 +477,15 @@ def registration() -> None:
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--big", action="store_true", help="scaling up to 1e7 samples")
-    parser.add_argument("--no-reference", action="store_true", help="skip rigid-body-motion")
-    parser.add_argument("--regime", choices=REGIMES, help="(internal) one table, this process")
-    parser.add_argument("--only", choices=["table", "scaling", "memory", "registration"])
+    parser.add_argument(
+        "--no-reference", action="store_true", help="skip rigid-body-motion"
+    )
+    parser.add_argument(
+        "--regime", choices=REGIMES, help="(internal) one table, this process"
+    )
+    parser.add_argument(
+        "--only", choices=["table", "scaling", "memory", "registration"]
+    )
     args = parser.parse_args()
     if args.regime:
         table(not args.no_reference)

@@ -69,6 +69,7 @@ _MAX_CACHED = 4096
 def invalidate() -> None:
     """Forget every cached chain (the frame trees changed)."""
     _CHAINS.clear()
+    _fused.forget()
 
 
 def _cached(outof, into) -> tuple[Any, Any, list, Any]:

@@ -26,7 +26,7 @@ import numpy as np
 
 from .._kernels import fused as kf
 
-__all__ = ["Plan", "plan", "lookup", "transform"]
+__all__ = ["Plan", "forget", "plan", "lookup", "transform"]
 
 _NS_PER_S = 1e9
 _EMPTY_TIMES = np.zeros(1)
@@ -105,9 +105,15 @@ class Plan:
 
 
 # plans per chain, keyed by the identity of the chain's step list (the
-# chain cache hands out the same list until the trees change)
-_PLANS: dict[int, Plan | None] = {}
+# chain cache hands out the same list until the trees change); each entry
+# keeps its list alive, so an id is never reused while it is cached
+_PLANS: dict[int, tuple[Any, Plan | None]] = {}
 _MAX_PLANS = 4096
+
+
+def forget() -> None:
+    """Drop every cached plan (the frame trees changed; old frames may go)."""
+    _PLANS.clear()
 
 
 def plan(steps, compose) -> Plan | None:
@@ -116,13 +122,13 @@ def plan(steps, compose) -> Plan | None:
     ``compose(run)`` composes a run of static steps into (t (1, 3), r (1, 4)).
     """
     key = id(steps)
-    cached = _PLANS.get(key, False)
-    if cached is not False and (cached is None or cached.steps is steps):
-        return cached  # type: ignore[return-value]
+    cached = _PLANS.get(key)
+    if cached is not None and cached[0] is steps:
+        return cached[1]
     if len(_PLANS) >= _MAX_PLANS:
         _PLANS.clear()
     built = _build(steps, compose)
-    _PLANS[key] = built
+    _PLANS[key] = (steps, built)
     return built
 
 

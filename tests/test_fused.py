@@ -471,3 +471,33 @@ def test_real_recording_lookups_and_transforms(shared_data):
         for what in ("points", "vectors"):
             ref = _unfused_apply(what, steps, target, data)
             _close(_fused.transform(plan, target, own, data, what), ref)
+
+
+def test_threads_filling_one_table_get_the_same_results():
+    """Concurrent first lookups (kernels release the GIL) share a table safely."""
+    import threading
+
+    rng = np.random.default_rng(21)
+    _random_tree(rng, "float")
+    _, _, steps, target = _resolved("c", "world")
+    t_ref, r_ref = _unfused_lookup(steps, target)
+    c, a = _frames.resolve_frame("c"), _frames.resolve_frame("a")
+    plan = _fused.plan(steps, _chain._compose_static)
+    table = plan.tables[plan.frames.index(a)]  # a is interpolated at c's times
+    assert table is not None and not table.rows.any()
+    start = threading.Barrier(4)
+    results = []
+
+    def run():
+        start.wait()
+        results.append(_chain.lookup(c, _frames.resolve_frame("world"))[:2])
+
+    threads = [threading.Thread(target=run) for _ in range(4)]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    assert len(results) == 4 and table.rows[:, 19].any()
+    for t, r in results:
+        _close(t, t_ref)
+        _close(r, r_ref)

@@ -68,7 +68,7 @@ import numpy as np
 from ._jit import F1, F2, F3, I1, B, I, helper, kernel  # noqa: E741
 from .quaternion import (
     _EPS,
-    _geodesic1,
+    _SQRT2,
     _is_unit,
     _qexp1,
     _qinv1,
@@ -79,7 +79,14 @@ from .quaternion import (
     _rotate1,
     _sincos,
 )
-from .scalar import SERIES_ANGLE, SERIES_RATIO, atan_over_x, cos_series, sinc_series
+from .scalar import (
+    SERIES_ANGLE,
+    SERIES_RATIO,
+    atan2,
+    atan_over_x,
+    cos_series,
+    sinc_series,
+)
 
 __all__ = [
     "SLOTS",
@@ -144,6 +151,30 @@ def _qlog_table(w, x, y, z):
         b = math.sqrt(b2)  # the real part exactly as _qlog1 forms it
         return math.log(w * w + b * b) / 2.0, f * x, f * y, f * z
     return _qlog1(w, x, y, z)
+
+
+@helper(inline=True)
+def _geodesic_table(aw, ax, ay, az, bw, bx, by, bz):
+    """``quaternion._geodesic1`` with a short series for the angle of small arcs.
+
+    For d = a·b > 0 and |o| < SERIES_RATIO d, θ = atan(|o|/d) is
+    x atan_over_x(x²) with x = |o|/d (no atan2). Within 4 ulp of 1.
+    """
+    dw, dx, dy, dz = aw - bw, ax - bx, ay - by, az - bz
+    if dw * dw + dx * dx + dy * dy + dz * dz > _SQRT2 * _SQRT2:
+        bw, bx, by, bz = -bw, -bx, -by, -bz
+    d = aw * bw + ax * bx + ay * by + az * bz
+    ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
+    so = math.sqrt(ow * ow + ox * ox + oy * oy + oz * oz)
+    if so == 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0
+    k = 1.0 / so
+    if d > 0.0 and so < SERIES_RATIO * d:
+        x = so / d
+        theta = x * atan_over_x(x * x)
+    else:
+        theta = atan2(so, d)
+    return theta, ow * k, ox * k, oy * k, oz * k
 
 
 # A missing row is computed together with the missing rows after it (up to
@@ -229,13 +260,13 @@ def _table_row(r, t, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz):
         and _is_unit(bw, bx, by, bz)
     )
     if unit:
-        g = _geodesic1(r[i, 0], r[i, 1], r[i, 2], r[i, 3], ew, ex, ey, ez)
+        g = _geodesic_table(r[i, 0], r[i, 1], r[i, 2], r[i, 3], ew, ex, ey, ez)
         c[i, 8] = g[0]
         c[i, 9] = g[1]
         c[i, 10] = g[2]
         c[i, 11] = g[3]
         c[i, 12] = g[4]
-        g = _geodesic1(aw, ax, ay, az, bw, bx, by, bz)
+        g = _geodesic_table(aw, ax, ay, az, bw, bx, by, bz)
         c[i, 13] = g[0]
         c[i, 14] = g[1]
         c[i, 15] = g[2]

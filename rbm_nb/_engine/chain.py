@@ -33,6 +33,7 @@ from .. import _time
 from .._door import kernel_array
 from .._kernels import quaternion as kq
 from .._kernels import resample as kr
+from . import fused as _fused
 
 _IDENTITY_T = np.zeros((1, 3))
 _IDENTITY_R = np.array([[1.0, 0.0, 0.0, 0.0]])
@@ -68,6 +69,7 @@ _MAX_CACHED = 4096
 def invalidate() -> None:
     """Forget every cached chain (the frame trees changed)."""
     _CHAINS.clear()
+    _fused.forget()
 
 
 def _cached(outof, into) -> tuple[Any, Any, list, Any]:
@@ -416,11 +418,34 @@ def resample_array(data: np.ndarray, track, target: Target, quaternions: bool):
     return out
 
 
+def _compose_static(run):
+    return compose(run, Target(None))
+
+
+def fused_plan(steps, target: Target):
+    """The fused plan of a moving chain and its ``own`` flags, or (None, None).
+
+    Chains with moving frames (up to ``_kernels.fused.SLOTS`` of them) are
+    evaluated in one pass by :mod:`rbm_nb._engine.fused`, with the rules of
+    :func:`resample_frame` and :func:`compose`.
+    """
+    if target.track is None:
+        return None, None
+    plan = _fused.plan(steps, _compose_static)
+    if plan is None:
+        return None, None
+    own = [_same_times(f._track, target.track) is not None for f in plan.frames]
+    return plan, own
+
+
 def apply(kind: str, steps, target: Target, data: np.ndarray) -> np.ndarray:
     """Apply a chain's transform to (n|1, k, c) data at the target times.
 
     ``kind`` is "points", "vectors" or "quaternions".
     """
+    plan, own = fused_plan(steps, target)
+    if plan is not None:
+        return _fused.transform(plan, target, own, data, kind)
     discrete = held(steps, target)
     if discrete is not None:
         t, r, idx = discrete
@@ -437,6 +462,12 @@ def lookup(frame, to_frame):
     """Translation (n|1, 3), rotation (n|1, 4) and Target from frame to to_frame."""
     steps = chain(frame, to_frame)
     target = match([f for f, _ in steps])
+    plan, own = fused_plan(steps, target)
+    if plan is not None and not all(own):
+        # something to interpolate; at their own times frames are slices,
+        # which the step-by-step path composes without evaluating anything
+        t, r = _fused.lookup(plan, target, own)
+        return t, r, target
     t, r = compose(steps, target)
     n = len(target)
     if target.track is not None and t.shape[0] != n:

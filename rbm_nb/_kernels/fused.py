@@ -54,8 +54,9 @@ NaN rows in a frame's translations or rotations are missing samples. They
 make NaN exactly the output rows whose evaluation needs them, with the
 engine's rules: between samples i and i+1 of a continuous frame the
 rotation (squad) needs samples i-1 .. i+2 and the translation (linear) i
-and i+1; at a sample's own time the whole row is NaN if any of samples
-i-1 .. i+2 is missing (its squad segment reads them); a discrete frame
+and i+1; at a sample's own time the rotation is NaN if any rotation of
+samples i-1 .. i+2 is missing (its squad segment reads them), and the
+translation if that rotation is, or the translation of sample i-1 or i; a discrete frame
 needs its held event. Nothing else produces NaN.
 """
 
@@ -456,22 +457,27 @@ def _chain_block(
                         tx, ty, tz = tr[k, 0], tr[k, 1], tr[k, 2]
                     qw, qx, qy, qz = rp[k, 0], rp[k, 1], rp[k, 2], rp[k, 3]
                 elif own[slot] != 0 and i >= 0 and t == times[i]:
-                    # the frame's own times: the stored sample, unless its squad
-                    # segment reads a missing sample (i-1 .. i+2), as
-                    # between samples
-                    missing = False
+                    # the frame's own times: the stored sample, unless its
+                    # interpolation reads a missing one, as between samples:
+                    # the rotation's squad segment reads i-1 .. i+2, the
+                    # translation's linear one i-1 and i, and a missing
+                    # rotation spoils the translation too (as the reference)
+                    missing_r = False
                     for q in range(max(i - 1, 0), min(i + 3, n)):
-                        if math.isnan(
-                            tr[q, 0] + tr[q, 1] + tr[q, 2]
-                            + rp[q, 0] + rp[q, 1] + rp[q, 2] + rp[q, 3]
-                        ):  # fmt: skip
-                            missing = True
-                    if missing:
-                        tx = ty = tz = qw = qx = qy = qz = math.nan
+                        if math.isnan(rp[q, 0] + rp[q, 1] + rp[q, 2] + rp[q, 3]):
+                            missing_r = True
+                    missing_t = missing_r
+                    for q in range(max(i - 1, 0), i + 1):
+                        if math.isnan(tr[q, 0] + tr[q, 1] + tr[q, 2]):
+                            missing_t = True
+                    if missing_r:
+                        qw = qx = qy = qz = math.nan
                     else:
-                        if not rotation_only:
-                            tx, ty, tz = tr[i, 0], tr[i, 1], tr[i, 2]
                         qw, qx, qy, qz = rp[i, 0], rp[i, 1], rp[i, 2], rp[i, 3]
+                    if missing_t:
+                        tx = ty = tz = math.nan
+                    elif not rotation_only:
+                        tx, ty, tz = tr[i, 0], tr[i, 1], tr[i, 2]
                 elif (
                     0 <= i < n - 1
                     and t != times[i]

@@ -25,14 +25,14 @@ The errors follow evo's definitions (``evo.core.metrics``): APE compares
 ``E_ij = inv(inv(Q_i) Q_j) inv(P_i) P_j`` over pairs chosen by frame count,
 path length or rotation angle. The pose relations are
 
-=============================== =============================================
-``"translation"``               ``|p_est - p_ref|`` (APE), ``|t(E)|`` (RPE), m
-``"rotation"``                  ``|R(E) - I|_F`` (unitless)
-``"full"``                      ``|E - I|_F`` (unitless)
-``"angle_deg"``/``"angle_rad"`` rotation angle of ``R(E)``
-``"point_distance"``            APE: as translation; RPE: ``| |dQ| - |dP| |``
+================================ =============================================
+``"translation"``                ``|p_est - p_ref|`` (APE), ``|t(E)|`` (RPE), m
+``"rotation"``                   ``|R(E) - I|_F`` (unitless)
+``"full"``                       ``|E - I|_F`` (unitless)
+``"angle_deg"``/``"angle_rad"``  rotation angle of ``R(E)``
+``"point_distance"``             APE: as translation; RPE: ``| |dQ| - |dP| |``
 ``"point_distance_error_ratio"`` RPE only: the above in % of ``|dQ|``
-=============================== =============================================
+================================ =============================================
 
 (evo's names such as ``"translation part"`` or ``"rotation_angle_deg"`` are
 accepted too.) Alignment is Umeyama's least-squares fit of the estimate's

@@ -650,7 +650,8 @@ def trinterp(start, end, s, shortest: bool = True) -> np.ndarray:
 
     Returns
     -------
-    ndarray, shape (*broadcast, 4, 4) or (*broadcast, 3, 3)
+    ndarray, shape (..., 4, 4) or (..., 3, 3)
+        The broadcast shape of the inputs and ``s``.
 
     Raises
     ------

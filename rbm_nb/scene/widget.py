@@ -44,8 +44,8 @@ class SceneWidget(anywidget.AnyWidget):
 
     It composes in ``HBox``/``VBox``/``GridBox`` like any ipywidget.
 
-    Traits
-    ------
+    Attributes
+    ----------
     player : Player or None
         The player whose time the view shows (in the browser).
     time : float or None

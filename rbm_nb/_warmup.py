@@ -63,8 +63,14 @@ def kernel_stats() -> KernelStats:
 
 
 def _compile(kernel: Declared) -> None:
-    # loads the signature from the cache when it is there, else compiles it
-    kernel.dispatcher.compile(kernel.signature)
+    # Loads the signature from the cache when it is there, else compiles it.
+    # numba keys its cache on the signature as compile() receives it: a call
+    # passes a tuple of types, so the declared string is parsed into one (a
+    # string would be cached under another key that no call ever finds).
+    from numba.core.sigutils import normalize_signature
+
+    args, _ = normalize_signature(kernel.signature)
+    kernel.dispatcher.compile(tuple(args))
 
 
 def warm_up(verbose: bool = False) -> KernelStats:

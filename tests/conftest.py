@@ -79,6 +79,30 @@ def shared_data() -> Path:
     return SHARED_DATA
 
 
+@pytest.fixture
+def recording_comm(monkeypatch):
+    """Widgets open a ``RecordingComm`` (widget_support.py) instead of a kernel's.
+
+    Yields the comms in the order they were opened; closes every widget after.
+    A test module whose tests all build widgets says
+    ``pytestmark = pytest.mark.usefixtures("recording_comm")``.
+    """
+    comm = pytest.importorskip("comm")
+    import ipywidgets
+    from widget_support import RecordingComm
+
+    comms = []
+
+    def create_comm(**kwargs):
+        comms.append(RecordingComm(**kwargs))
+        return comms[-1]
+
+    monkeypatch.setattr(comm, "create_comm", create_comm)
+    yield comms
+    # closing also removes the listeners widgets keep on the frame registry
+    ipywidgets.Widget.close_all()
+
+
 @pytest.fixture(scope="module")
 def browser():
     """Debian's chromium driven by playwright (never a downloaded browser)."""

@@ -107,6 +107,41 @@ __getattr__, __dir__ = lazy_attributes(__name__, _EXPORTS, _SUBMODULES)
 
 
 if TYPE_CHECKING:  # pragma: no cover - static analysers see the real names
+    from . import (  # noqa: F401
+        accessors,
+        conversions,
+        coordinates,
+        data,
+        estimators,
+        evaluation,
+        explorer,
+        frames,
+        gaze,
+        io,
+        lookups,
+        plot,
+        quaternions,
+        rigid_transform,
+        ros,
+        scene,
+        sdf,
+        se3,
+        study,
+        transforms,
+        widgets,
+    )
+    from .conversions import (  # noqa: F401
+        axis_angle_from_quaternion,
+        euler_from_quaternion,
+        homogeneous_from_transform,
+        matrix_from_quaternion,
+        quaternion_from_axis_angle,
+        quaternion_from_euler,
+        quaternion_from_matrix,
+        quaternion_from_rotation_vector,
+        rotation_vector_from_quaternion,
+        transform_from_homogeneous,
+    )
     from .coordinates import (  # noqa: F401
         cartesian_to_polar,
         cartesian_to_spherical,
@@ -114,6 +149,7 @@ if TYPE_CHECKING:  # pragma: no cover - static analysers see the real names
         spherical_to_cartesian,
         transform_coordinates,
     )
+    from .data import example_data  # noqa: F401
     from .estimators import (  # noqa: F401
         best_fit_rotation,
         best_fit_transform,
@@ -146,6 +182,7 @@ if TYPE_CHECKING:  # pragma: no cover - static analysers see the real names
         qmul,
         rotate_vectors,
     )
+    from .rigid_transform import Transform  # noqa: F401
     from .transforms import (  # noqa: F401
         transform_angular_velocity,
         transform_linear_velocity,

@@ -13,6 +13,7 @@ import numpy as np
 
 from ._config import UNIT_QUATERNION_TOLERANCE
 from ._door import float_array, kernel_array, resolve_axis
+from ._kernels import rows as _rows
 
 __all__ = [
     "as_float_array",
@@ -63,6 +64,13 @@ def normalize_quaternions(
     -------
     ndarray, shape like ``q``, C-contiguous float64
     """
+    if q.ndim == 2 and q.shape[1] == 4:
+        # one pass when every row is fine; the checks below name a bad one
+        out, first_bad = _rows.unit_rows(
+            kernel_array(q), UNIT_QUATERNION_TOLERANCE, allow_nan
+        )
+        if first_bad < 0:
+            return out
     inf = np.isinf(q).any(axis=-1)
     if inf.any():
         bad = np.argwhere(inf)[0]
@@ -117,6 +125,8 @@ def check_missing_rows(arr: np.ndarray, name: str) -> None:
     A partly NaN row or an infinity is a mistake, not missing data: raise
     naming the first such row.
     """
+    if arr.ndim == 2 and _rows.first_bad_row(kernel_array(arr)) < 0:
+        return  # one pass when every row is fine; below: which one is not
     nan = np.isnan(arr)
     partial = nan.any(axis=-1) & ~nan.all(axis=-1)
     bad = partial | np.isinf(arr).any(axis=-1)

@@ -28,6 +28,10 @@ R_PUPIL_ROS = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]])
 SCENE_CAM_TRANSLATION = (24.5e-3, -29e-3, 0.0)
 SCENE_CAM_ROTATION = (-0.00125, -1.0, 6.3463e-05, 3.977e-06)
 EYES = ("left_eye", "right_eye")
+# Pupil Core's usual threshold: below it the pupil detection is not trusted
+MIN_CONFIDENCE = 0.6
+# the eye tracker's gaps longer than this are not bridged by interpolation
+MAX_EYE_GAP = 0.1
 GAZE_COLORS = {"left_eye": "#ffd700", "right_eye": "#00bfff"}
 
 
@@ -65,8 +69,30 @@ def is_synthetic(ds) -> bool:
     return "synthetic" in str(ds.attrs.get("source", ""))
 
 
+def _confident(eye, min_confidence: float | None):
+    """The eye's pose with samples below ``min_confidence`` marked missing (NaN)."""
+    if min_confidence is None or "confidence" not in eye:
+        return eye
+    low = (eye.confidence < min_confidence).values
+    if not low.any():
+        return eye
+    masked = eye.copy()
+    for var in ("position", "orientation"):
+        values = masked[var].values.copy()
+        values[low] = np.nan
+        masked[var] = (masked[var].dims, values, masked[var].attrs)
+    return masked
+
+
 def register_head_eye_frames(
-    head, left_eye, right_eye, *, world: str = "world", ros_eyes: bool = False
+    head,
+    left_eye,
+    right_eye,
+    *,
+    world: str = "world",
+    ros_eyes: bool = False,
+    min_confidence: float | None = MIN_CONFIDENCE,
+    max_gap: float | None = MAX_EYE_GAP,
 ):
     """Register the explorer's frame tree (see the module docstring).
 
@@ -74,6 +100,12 @@ def register_head_eye_frames(
     the same names are replaced, so the cell can be run again. With
     ``ros_eyes`` each eye also gets a frame in ROS axes below it
     (``left_eye``, ``right_eye``: x along the line of sight), as in guide 1.6.
+
+    The eye frames keep the recording's missing samples (blinks, lost
+    pupils) as missing, and samples below ``min_confidence`` become missing
+    too; with ``max_gap`` (seconds) nothing is interpolated across longer
+    gaps. So a gaze ray is drawn only where the eye tracker saw the pupil.
+    ``min_confidence=None`` keeps every sample that has data.
     """
     from . import frames
     from .frames import ReferenceFrame
@@ -103,12 +135,13 @@ def register_head_eye_frames(
     )
     for name, eye in zip(EYES, (left_eye, right_eye), strict=True):
         ReferenceFrame.from_dataset(
-            eye.dropna("time"),
+            _confident(eye, min_confidence),
             "position",
             "orientation",
             "time",
             parent="pupil/scene_cam",
             name=f"pupil/{name}",
+            max_gap=max_gap,
         ).register(update=True)
         if ros_eyes:
             ReferenceFrame.from_rotation_matrix(

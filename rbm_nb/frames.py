@@ -525,6 +525,8 @@ class ReferenceFrame:
     def _squad_coefficients(self):
         # frames are immutable, so the spline coefficients can be kept
         if self._coefficients is None:
+            if self._track is None:
+                raise ValueError(f"frame {self.name!r} is static: it has no spline")
             a_coef, b_coef = kq.squad_coefficients(self._r, self._track.base)
             seg = kq.squad_segments(self._r, a_coef, b_coef)
             self._coefficients = (a_coef, b_coef, seg)

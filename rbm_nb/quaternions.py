@@ -815,7 +815,7 @@ def from_euler_angles(
         rotor[:, _ELEMENTARY_AXIS[key]] = np.sin(half)
         result = rotor if result is None else _qk.qmul(result, rotor)
     assert result is not None  # at least one angle is given (checked above)
-    result = result.reshape(shape + (4,))
+    quats = result.reshape(shape + (4,))
     if return_quaternion:
-        return _join(result, True, -1)
-    return np.moveaxis(result, -1, _normalize_axis(axis, result.ndim, "axis"))
+        return _join(quats, True, -1)
+    return np.moveaxis(quats, -1, _normalize_axis(axis, quats.ndim, "axis"))

@@ -81,7 +81,7 @@ def _transform(
         timestamps=unpacked.timestamps,
         **kwargs,
     )
-    if unpacked.source is not None:
+    if attrs is not None:  # a DataArray came in: one goes out
         attrs[attr] = into.name
         attrs["representation_frame"] = into.name
         return wrap(unpacked, out, ts_out, attrs)

@@ -33,6 +33,7 @@ from .. import _time
 from .._door import kernel_array
 from .._kernels import quaternion as kq
 from .._kernels import resample as kr
+from . import fused as _fused
 
 _IDENTITY_T = np.zeros((1, 3))
 _IDENTITY_R = np.array([[1.0, 0.0, 0.0, 0.0]])
@@ -68,6 +69,7 @@ _MAX_CACHED = 4096
 def invalidate() -> None:
     """Forget every cached chain (the frame trees changed)."""
     _CHAINS.clear()
+    _fused.forget()
 
 
 def _cached(outof, into) -> tuple[Any, Any, list, Any]:
@@ -254,10 +256,12 @@ def resample_frame(frame, target: Target):
         # the stored values, with their signs (the reference returns them)
         t, r = frame._t[same], frame._rotation_public[same]
         gaps = _unusable(frame)
-        if gaps is not None and gaps[same].any():
-            t, r = t.copy(), r.copy()
-            t[gaps[same]] = np.nan
-            r[gaps[same]] = np.nan
+        if gaps is not None:
+            t_gaps, r_gaps = gaps[0][same], gaps[1][same]
+            if t_gaps.any() or r_gaps.any():
+                t, r = t.copy(), r.copy()
+                t[t_gaps] = np.nan
+                r[r_gaps] = np.nan
         return t, r
     if frame.discrete:
         # float seconds on one origin keep the order of the exact keys
@@ -281,24 +285,32 @@ def resample_frame(frame, target: Target):
 
 
 def _unusable(frame):
-    """Samples whose interpolation reads a missing one, or None if none is missing.
+    """Rows of translation and of rotation whose interpolation reads a missing
+    sample, as two boolean arrays, or None if nothing is missing.
 
-    At a sample's own time the interpolation is the sample itself, but its
-    SQUAD segment reads samples i-1 .. i+2 (and a missing neighbour makes the
-    whole segment unknown). Marking those rows keeps lookups at the frame's
-    own timestamps consistent with lookups between them, and with
-    rigid-body-motion. Cached on the frame (its data never changes).
+    At a sample's own time the interpolation is the sample itself, but the
+    rotation's SQUAD segment reads samples i-1 .. i+2 and the translation's
+    linear segment samples i-1 and i; a missing rotation also makes the
+    translation unknown (the reference interpolates the two together when a
+    rotation is missing, and not when only a translation is). Marking those
+    rows keeps lookups at the frame's own timestamps consistent with lookups
+    between them, and with rigid-body-motion. Cached on the frame (its data
+    never changes).
     """
     cached = frame.__dict__.get("_unusable_rows", False)
     if cached is not False:
         return cached
-    missing = np.isnan(frame._t).any(axis=1) | np.isnan(frame._r).any(axis=1)
+    missing_t = np.isnan(frame._t).any(axis=1)
+    missing_r = np.isnan(frame._r).any(axis=1)
     out = None
-    if missing.any():
-        out = missing.copy()
-        out[:-1] |= missing[1:]  # i + 1
-        out[:-2] |= missing[2:]  # i + 2
-        out[1:] |= missing[:-1]  # i - 1
+    if missing_t.any() or missing_r.any():
+        r_rows = missing_r.copy()
+        r_rows[:-1] |= missing_r[1:]  # i + 1
+        r_rows[:-2] |= missing_r[2:]  # i + 2
+        r_rows[1:] |= missing_r[:-1]  # i - 1
+        t_rows = missing_t | r_rows
+        t_rows[1:] |= missing_t[:-1]  # i - 1
+        out = (t_rows, r_rows)
     frame._unusable_rows = out
     return out
 
@@ -406,11 +418,34 @@ def resample_array(data: np.ndarray, track, target: Target, quaternions: bool):
     return out
 
 
+def _compose_static(run):
+    return compose(run, Target(None))
+
+
+def fused_plan(steps, target: Target):
+    """The fused plan of a moving chain and its ``own`` flags, or (None, None).
+
+    Chains with moving frames (up to ``_kernels.fused.SLOTS`` of them) are
+    evaluated in one pass by :mod:`rbm_nb._engine.fused`, with the rules of
+    :func:`resample_frame` and :func:`compose`.
+    """
+    if target.track is None:
+        return None, None
+    plan = _fused.plan(steps, _compose_static)
+    if plan is None:
+        return None, None
+    own = [_same_times(f._track, target.track) is not None for f in plan.frames]
+    return plan, own
+
+
 def apply(kind: str, steps, target: Target, data: np.ndarray) -> np.ndarray:
     """Apply a chain's transform to (n|1, k, c) data at the target times.
 
     ``kind`` is "points", "vectors" or "quaternions".
     """
+    plan, own = fused_plan(steps, target)
+    if plan is not None:
+        return _fused.transform(plan, target, own, data, kind)
     discrete = held(steps, target)
     if discrete is not None:
         t, r, idx = discrete
@@ -427,6 +462,12 @@ def lookup(frame, to_frame):
     """Translation (n|1, 3), rotation (n|1, 4) and Target from frame to to_frame."""
     steps = chain(frame, to_frame)
     target = match([f for f, _ in steps])
+    plan, own = fused_plan(steps, target)
+    if plan is not None and not all(own):
+        # something to interpolate; at their own times frames are slices,
+        # which the step-by-step path composes without evaluating anything
+        t, r = _fused.lookup(plan, target, own)
+        return t, r, target
     t, r = compose(steps, target)
     n = len(target)
     if target.track is not None and t.shape[0] != n:

@@ -9,6 +9,8 @@ offline. The generator and loaders are imported on first use, so that
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from .._lazy import lazy_attributes
 from .fetch import ExampleDataStore, ExampleDataUnavailable, example_data
 
@@ -23,3 +25,7 @@ __all__ = ["ExampleDataStore", "ExampleDataUnavailable", "example_data", *_LAZY]
 
 
 __getattr__, __dir__ = lazy_attributes(__name__, _LAZY)
+
+if TYPE_CHECKING:  # pragma: no cover - static analysers see the real names
+    from .load import load_example, write_synthetic_rosbag  # noqa: F401
+    from .synthetic import HeadEyeRecording, synthetic_head_eye  # noqa: F401

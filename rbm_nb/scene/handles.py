@@ -324,12 +324,11 @@ def _mesh_geometry(mesh, size):
         if not (np.isfinite(s).all() and (s > 0).all()):
             raise ValueError(f"add_mesh: size must be positive, got {size!r}")
         if kind == "box":
-            s = np.broadcast_to(s, (3,)) if s.size in (1, 3) else None
-            if s is None:
+            if s.size not in (1, 3):
                 raise ValueError(
                     f"add_mesh: a box needs size=(x, y, z) or one number, got {size!r}"
                 )
-            return g.Box([float(v) for v in s])
+            return g.Box([float(v) for v in np.broadcast_to(s, (3,))])
         if kind == "sphere":
             if s.size != 1:
                 raise ValueError(f"add_mesh: a sphere needs size=radius, got {size!r}")

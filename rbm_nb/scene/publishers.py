@@ -97,12 +97,12 @@ class FramePublisher:
                 track.rotation,
                 None,
             )
-            self._seconds = None
+            self._seconds: np.ndarray | None = None
         else:
             self.translation = self._track.translation
             self.rotation = self._track.rotation
             self.timestamps = self._track.original_timestamps
-            self._seconds = self._track.seconds
+            self._seconds = self._track.sample_times()
         self.timestamps_kind = None if self._track is None else self._track.kind
         self.idx = 0
         self.stopped = True
@@ -187,32 +187,28 @@ class FramePublisher:
             return None
         self._stop = threading.Event()
         self.stopped = False
+        seconds = self._track.sample_times()
         if block:
-            self._loop(self._stop)
+            self._loop(self._stop, seconds)
             return None
         self._thread = threading.Thread(
             target=self._loop,
-            args=(self._stop,),
+            args=(self._stop, seconds),
             daemon=True,
             name=f"rbm_nb-{type(self).__name__}",
         )
         self._thread.start()
         return self._thread
 
-    def _loop(self, stop: threading.Event) -> None:
+    def _loop(self, stop: threading.Event, seconds: np.ndarray) -> None:
         try:
             if self.subscribe_to is not None:
                 stop.wait()
                 return
             while not stop.is_set():
                 self.publish()
-                n = len(self._seconds)
-                nxt = (self.idx + 1) % n
-                dt = (
-                    float(self._seconds[nxt] - self._seconds[self.idx])
-                    if nxt > 0
-                    else 0.0
-                )
+                nxt = (self.idx + 1) % len(seconds)
+                dt = float(seconds[nxt] - seconds[self.idx]) if nxt > 0 else 0.0
                 self.idx = nxt
                 stop.wait(max(dt, 0.0))
         finally:

@@ -22,6 +22,8 @@ import math
 import re
 import threading
 import uuid
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -44,6 +46,9 @@ from .handles import (
 )
 from .state import ROOT, SceneState
 from .tracks import Track
+
+if TYPE_CHECKING:  # the widget module needs the notebook extras at import
+    from .widget import SceneWidget
 
 _counter = itertools.count(1)
 GRID_PATH = f"{ROOT}/grid"
@@ -138,7 +143,7 @@ class Scene:
         self.name = name
         self.state = SceneState()
         self._lock = threading.RLock()
-        self._widget = None
+        self._widget: SceneWidget | None = None
         self._player = None
         self._closed = False
         self._grid = bool(grid)
@@ -636,8 +641,13 @@ class Scene:
             )
         t = self.time if self.time is not None else self.state.origin
         pose = self.state.world_pose(paths[name], t)
-        if pose is None:
+        if pose is None:  # not started yet or missing now: where it is last
             pose = self.state.world_pose(paths[name], math.inf)
+        if pose is None:
+            raise ValueError(
+                f"Scene.focus: frame {name!r} has no pose at the time shown ({t:g} s) "
+                "nor at its last sample: its samples there are missing"
+            )
         target = pose[:3, 3]
         if distance is None:
             handle = next(
@@ -1006,7 +1016,7 @@ class Scene:
         if messages and self._widget is not None:
             self._widget.push({"type": "commands"}, [m.data for m in messages])
 
-    def _emit_tracks(self, paths: list[str], removed: list[str] = ()) -> None:
+    def _emit_tracks(self, paths: list[str], removed: Sequence[str] = ()) -> None:
         if self._widget is None or not self._widget.ready:
             return
         origin = self.state.origin
@@ -1060,8 +1070,7 @@ class Scene:
         return np.vstack(chunks)
 
     def _static_offset(self, path: str) -> np.ndarray:
-        pose = self.state.pose_at(path, 0.0)
-        return pose[:3, 3].reshape(1, 3)
+        return self.state.static_pose(path)[:3, 3].reshape(1, 3)
 
     def _track(self, path: str) -> Track | None:
         return self.state.tracks.get(path)
@@ -1074,7 +1083,7 @@ class Scene:
             track = self.state.tracks.get(handle.pose_path)
             if track is None:
                 return None
-            seconds = float(track.seconds[index])
+            seconds = float(track.sample_times()[index])
             self.state.pins[handle.pose_path] = seconds
             self._sync_widget("_pins")
             return seconds

@@ -54,7 +54,7 @@ class SceneState:
         self.tracks: dict[str, Track] = {}
         self.pins: dict[str, float] = {}
         self.kind: str | None = None
-        self._timeline: tuple | None = None
+        self._timeline: tuple[np.ndarray, np.ndarray | None] | None = None
 
     # -- changes --------------------------------------------------------------------
     def set_object(self, path: str, obj) -> Message:
@@ -86,8 +86,8 @@ class SceneState:
         for table in (self.objects, self.statics, self.tracks, self.pins):
             for key in [k for k in table if _under(k, path)]:
                 del table[key]
-        for key in [k for k in self.properties if _under(k[0], path)]:
-            del self.properties[key]
+        for prop in [k for k in self.properties if _under(k[0], path)]:
+            del self.properties[prop]
         self._timeline = None
         if not self.tracks:
             self.kind = None
@@ -114,19 +114,20 @@ class SceneState:
         tracks = list(self.tracks.values())
         if not tracks:
             return None
-        first = tracks[0].seconds
-        if all(t.seconds is first or np.array_equal(t.seconds, first) for t in tracks):
+        times = [t.sample_times() for t in tracks]  # add_track keeps moving ones only
+        first = times[0]
+        if all(s is first or np.array_equal(s, first) for s in times):
             self._timeline = (first, tracks[0].original_timestamps)
             return self._timeline
-        start = min(t.start for t in tracks)
-        end = max(t.end for t in tracks)
+        start = min(float(s[0]) for s in times)
+        end = max(float(s[-1]) for s in times)
         steps = [
-            (t.end - t.start) / (len(t) - 1)
-            for t in tracks
-            if len(t) > 1 and t.end > t.start
+            float(s[-1] - s[0]) / (len(s) - 1)
+            for s in times
+            if len(s) > 1 and s[-1] > s[0]
         ]
         if not steps or end <= start:
-            seconds = np.unique(np.concatenate([t.seconds for t in tracks]))
+            seconds = np.unique(np.concatenate(times))
         else:
             n = int(np.ceil((end - start) / min(steps) - 1e-9)) + 1
             seconds = np.linspace(start, end, n)
@@ -148,15 +149,22 @@ class SceneState:
         """
         track = self.tracks.get(path)
         if track is None:
-            message = self.statics.get(path)
-            if message is None:
-                return np.eye(4)
-            matrix = umsgpack.unpackb(message.data)["matrix"]
-            return np.asarray(matrix, dtype=float).reshape(4, 4).T
+            return self.static_pose(path)
         index = track.index_at(self.pins.get(path, seconds))
         if index < 0 or track.missing(index):
             return None
         return track.matrix(index)
+
+    def static_pose(self, path: str) -> np.ndarray:
+        """The (4, 4) transform of the node at ``path``, which does not move.
+
+        A node without a fixed transform is at the identity.
+        """
+        message = self.statics.get(path)
+        if message is None:
+            return np.eye(4)
+        matrix = umsgpack.unpackb(message.data)["matrix"]
+        return np.asarray(matrix, dtype=float).reshape(4, 4).T
 
     def world_pose(self, path: str, seconds: float) -> np.ndarray | None:
         """Transform of ``path`` into the scene's base (product along the tree)."""
@@ -198,7 +206,8 @@ class SceneState:
         shared: list[tuple[np.ndarray, int]] = []
         for path, track in self.tracks.items():
             index = _decimate(len(track), max_samples)
-            seconds = track.seconds if index is None else track.seconds[index]
+            all_seconds = track.sample_times()
+            seconds = all_seconds if index is None else all_seconds[index]
             times = None
             for known, at in shared:
                 if known is seconds or (

@@ -36,6 +36,10 @@ class Track:
         self, translation, rotation, timestamps=None, scale=None, name: str = "track"
     ):
         self.name = name
+        # float seconds and the timestamps as given; None for a static pose
+        self.seconds: np.ndarray | None
+        self.original_timestamps: np.ndarray | None
+        self.kind: str | None
         t = np.asarray(translation, dtype=np.float64)
         r = np.asarray(rotation, dtype=np.float64)
         if timestamps is None:
@@ -78,7 +82,7 @@ class Track:
             scale = np.ascontiguousarray(scale, dtype=np.float64)
             if self.seconds is None or scale.shape != (len(self.seconds),):
                 raise ValueError(f"{name}: scale must have one value per timestamp")
-        self.scale = scale
+        self.scale: np.ndarray | None = scale
 
     @classmethod
     def lookup(cls, frame, base, name: str | None = None) -> Track:
@@ -99,6 +103,12 @@ class Track:
     @property
     def static(self) -> bool:
         return self.seconds is None
+
+    def sample_times(self) -> np.ndarray:
+        """Float seconds of the samples, shape (n,), of a track that moves."""
+        if self.seconds is None:
+            raise ValueError(f"{self.name}: a static pose has no sample times")
+        return self.seconds
 
     def __len__(self) -> int:
         return 1 if self.seconds is None else len(self.seconds)

@@ -75,7 +75,7 @@ class SceneWidget(anywidget.AnyWidget):
     _camera = traitlets.Dict().tag(sync=True)
     _frames = traitlets.Dict().tag(sync=True)
     _labels = traitlets.Dict().tag(sync=True)
-    _legend = traitlets.List().tag(sync=True)
+    _legend: traitlets.List[dict] = traitlets.List().tag(sync=True)
     _pins = traitlets.Dict().tag(sync=True)
 
     def __init__(self, snapshot: Callable[[], tuple[dict, list]], **kwargs):

@@ -6,6 +6,8 @@ widget class is first used.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from .._lazy import lazy_attributes
 
 _EXPORTS = {
@@ -18,3 +20,8 @@ __all__ = sorted(_EXPORTS)
 
 
 __getattr__, __dir__ = lazy_attributes(__name__, _EXPORTS)
+
+if TYPE_CHECKING:  # pragma: no cover - static analysers see the real names
+    from .frame_tree import FrameTree  # noqa: F401
+    from .player import Player  # noqa: F401
+    from .timeseries import TimeSeries  # noqa: F401

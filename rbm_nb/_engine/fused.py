@@ -1,0 +1,237 @@
+"""Chains evaluated by the fused kernels (:mod:`rbm_nb._kernels.fused`).
+
+A chain of steps (frame, inverse) becomes a *plan*: its runs of static
+steps composed once into single transforms (by the ``compose`` function the
+caller hands in, :func:`rbm_nb._engine.chain.compose`, which imports this
+module), and its moving frames (at most :data:`~rbm_nb._kernels.fused.SLOTS`)
+in slots. The fused kernels then
+evaluate and compose the whole chain per output row, allocating nothing
+but their result. Chains with more moving frames return None from
+:func:`plan` and take the unfused path of :mod:`rbm_nb._engine.chain`.
+
+Squad tables are per frame, created empty (zeroed pages cost nothing until
+touched) and filled by the kernels one segment at a time, as segments are
+first used: registering a frame computes no coefficients, and a lookup
+computes only those of the segments it needs. While a table is incomplete,
+calls that may fill it hold one lock, so that two threads never write the
+same row; complete tables are only read, without the lock.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+import numpy as np
+
+from .._kernels import fused as kf
+
+__all__ = ["Plan", "forget", "plan", "lookup", "transform"]
+
+_NS_PER_S = 1e9
+_EMPTY_TIMES = np.zeros(1)
+_EMPTY_T = np.zeros((1, 3))
+_EMPTY_R = np.array([[1.0, 0.0, 0.0, 0.0]])
+_EMPTY_TABLE = np.ones((1, kf.TABLE_COLUMNS))
+_EMPTY_SLOT = (_EMPTY_TIMES, _EMPTY_T, _EMPTY_R, _EMPTY_R, _EMPTY_TABLE)
+_TABLE_LOCK = threading.Lock()
+
+
+class _Table:
+    """A frame's squad table and whether every row of it is computed."""
+
+    __slots__ = ("rows", "complete")
+
+    def __init__(self, n: int) -> None:
+        self.rows = np.zeros((n, kf.TABLE_COLUMNS))
+        self.complete = False
+
+    def update(self) -> None:
+        self.complete = bool(self.rows[:, kf.TABLE_COLUMNS - 1].all())
+
+
+def _table(frame) -> _Table:
+    table = frame.__dict__.get("_fused_table")
+    if table is None:
+        # frames never change their data, so the table lives as long as the frame
+        table = _Table(len(frame._track))
+        frame._fused_table = table
+    return table
+
+
+class Plan:
+    """A chain prepared for the fused kernels."""
+
+    __slots__ = ("steps", "code", "statics", "frames", "kinds", "tables")
+
+    def __init__(self, steps, code, statics, frames, kinds, tables) -> None:
+        self.steps = steps  # the chain's step list (identity keys the cache)
+        self.code = code
+        self.statics = statics
+        self.frames = frames
+        self.kinds = kinds
+        self.tables = tables
+
+    def slots(self) -> tuple:
+        """The 3 x 5 slot arrays for the kernels."""
+        out: list[Any] = []
+        for frame, table in zip(self.frames, self.tables, strict=True):
+            c = table.rows if table is not None else _EMPTY_TABLE
+            out += (frame._track.base, frame._t, frame._r, frame._rotation_public, c)
+        for _ in range(kf.SLOTS - len(self.frames)):
+            out += _EMPTY_SLOT
+        return tuple(out)
+
+    def offsets(self, target) -> np.ndarray:
+        """Per slot, what to add to the target's base times (``Track.base_in``)."""
+        tt = target.track
+        off = np.zeros(kf.SLOTS)
+        for k, frame in enumerate(self.frames):
+            origin = frame._track.origin
+            if tt.kind != "numeric" and origin != tt.origin:
+                off[k] = (tt.origin - origin) / _NS_PER_S
+        return off
+
+    def gaps(self) -> np.ndarray:
+        """Per slot, the frame's ``max_gap`` (inf: none)."""
+        out = np.full(kf.SLOTS, np.inf)
+        for k, frame in enumerate(self.frames):
+            if getattr(frame, "max_gap", None) is not None:
+                out[k] = frame.max_gap
+        return out
+
+    def incomplete(self) -> list[_Table]:
+        return [t for t in self.tables if t is not None and not t.complete]
+
+
+# plans per chain, keyed by the identity of the chain's step list (the
+# chain cache hands out the same list until the trees change); each entry
+# keeps its list alive, so an id is never reused while it is cached
+_PLANS: dict[int, tuple[Any, Plan | None]] = {}
+_MAX_PLANS = 4096
+
+
+def forget() -> None:
+    """Drop every cached plan (the frame trees changed; old frames may go)."""
+    _PLANS.clear()
+
+
+def plan(steps, compose) -> Plan | None:
+    """The plan of a chain, or None if it has no moving frame or too many.
+
+    ``compose(run)`` composes a run of static steps into (t (1, 3), r (1, 4)).
+    """
+    key = id(steps)
+    cached = _PLANS.get(key)
+    if cached is not None and cached[0] is steps:
+        return cached[1]
+    if len(_PLANS) >= _MAX_PLANS:
+        _PLANS.clear()
+    built = _build(steps, compose)
+    _PLANS[key] = (steps, built)
+    return built
+
+
+def _build(steps, compose) -> Plan | None:
+    moving = [f for f, _ in steps if f._track is not None]
+    if not moving or len(moving) > kf.SLOTS:
+        return None
+    code: list[int] = []
+    statics: list[np.ndarray] = []
+    frames: list[Any] = []
+    kinds: list[int] = []
+    tables: list[_Table | None] = []
+    run: list[Any] = []
+
+    def flush() -> None:
+        if run:
+            t, r = compose(run)
+            statics.append(np.concatenate([t[0], r[0]]))
+            code.extend((kf.STATIC, len(statics) - 1, 0))
+            run.clear()
+
+    for frame, inverse in steps:
+        if frame._track is None:
+            run.append((frame, inverse))
+            continue
+        flush()
+        if frame.discrete:
+            kind, table = kf.HELD, None
+        elif len(frame._track) < 2:
+            kind, table = kf.CONSTANT, None
+        else:
+            kind, table = kf.SQUAD, _table(frame)
+        code.extend((kind, len(frames), 1 if inverse else 0))
+        frames.append(frame)
+        kinds.append(kind)
+        tables.append(table)
+    flush()
+    stat = np.array(statics) if statics else np.zeros((1, 7))
+    return Plan(steps, np.array(code, dtype=np.int64), stat, frames, kinds, tables)
+
+
+def _run(p: Plan, call):
+    incomplete = p.incomplete()
+    if not incomplete:
+        return call()
+    with _TABLE_LOCK:
+        result = call()
+        if result[-1]:
+            for table in incomplete:
+                table.update()
+    return result
+
+
+def _own(own) -> np.ndarray:
+    out = np.zeros(kf.SLOTS, dtype=np.int64)
+    out[: len(own)] = own
+    return out
+
+
+def lookup(p: Plan, target, own, rotation_only: bool = False):
+    """(t (m, 3) or (0, 3), r (m, 4)) of a planned chain at the target times.
+
+    ``own[k]`` is true if the target times are a run of slot k's frame's own
+    sample times (``chain._same_times``).
+    """
+    base = target.track.base
+
+    def call():
+        return kf.lookup_chain(
+            p.code,
+            p.statics,
+            p.offsets(target),
+            p.gaps(),
+            _own(own),
+            *p.slots(),
+            base,
+            rotation_only,
+        )
+
+    t, r, _ = _run(p, call)
+    return t, r
+
+
+def transform(p: Plan, target, own, data: np.ndarray, kind: str) -> np.ndarray:
+    """Points, vectors or quaternions (m|1, k, c) carried through a planned chain.
+
+    ``own`` as for :func:`lookup`.
+    """
+    mode = {"points": 0, "vectors": 1, "quaternions": 2}[kind]
+    base = target.track.base
+
+    def call():
+        return kf.transform_chain(
+            p.code,
+            p.statics,
+            p.offsets(target),
+            p.gaps(),
+            _own(own),
+            *p.slots(),
+            base,
+            data,
+            mode,
+        )
+
+    out, _ = _run(p, call)
+    return out

@@ -1,0 +1,697 @@
+"""Fused chain kernels: one pass over the output rows, nothing else allocated.
+
+A chain of frames between two frames is, once its static runs are composed,
+``S0 M1 S1 M2 S2 ...``: static transforms ``S`` and up to :data:`SLOTS`
+moving frames ``M`` (each possibly inverted). For every output row the
+kernels here find each moving frame's segment by walking forward from the
+previous row's segment (a merge walk over sorted target times; unsorted
+times restart the walk, which then is a galloping binary search), evaluate
+the frame there (squad for rotations and linear for translations of
+continuous frames, the held event of discrete frames), compose the whole
+chain in registers and write only the result: the transform itself
+(:func:`lookup_chain`) or the point/vector/quaternion it carries
+(:func:`transform_chain`).
+
+The arithmetic is that of the unfused engine (``chain.resample_frame``,
+``resample.chain_step``, ``quaternion.squad_evaluate``), so results agree
+with it to rounding.
+
+Inputs (unchecked, like every kernel)
+-------------------------------------
+plan : int64 (3 * steps,)
+    Per step ``(kind, index, inverse)``: kind :data:`STATIC` (index into
+    ``statics``), :data:`SQUAD` (continuous frame: linear translation,
+    squad rotation), :data:`CONSTANT` (a continuous frame of one sample),
+    :data:`HELD` (discrete frame); index is the slot (0..SLOTS-1) of a
+    moving frame. ``inverse`` is 1 for a step traversed against its
+    direction (static steps are composed forward beforehand: 0).
+statics : float64 (s, 7)
+    Static transforms as ``tx, ty, tz, w, x, y, z``.
+offsets : float64 (SLOTS,)
+    Added to the target times to put them on each slot's time origin.
+own : int64 (SLOTS,)
+    1 where the target times are a run of the slot's own sample times
+    (then every row is a sample: its stored value, or NaN if its squad
+    segment reads a missing sample), else 0 (a target time that happens to
+    equal a sample time is evaluated like any other: the stored
+    translation, squad's unit rotation).
+gaps : float64 (SLOTS,)
+    Each slot's ``max_gap`` (inf: none): target times strictly inside a
+    longer gap between two samples get NaN.
+slot k : ``times_k`` (n,), ``t_k`` (n, 3), ``r_k`` (n, 4), ``p_k`` (n, 4), ``c_k`` (n, 20)
+    A moving frame's sample times, translations, rotations free of sign
+    flips (``unflip``), rotations as stored (with their signs) and its
+    squad table (:func:`squad_table`; any (1, 20) array for a frame that is
+    not interpolated by squad). Unused slots get any arrays of these types.
+
+Signs: squad runs on the sign-continuous rotations; an interpolated value
+takes the sign of the stored sample its segment starts from, a sample time
+or a held event returns the stored sample (as ``chain.stored_signs``).
+
+Missing samples
+---------------
+NaN rows in a frame's translations or rotations are missing samples. They
+make NaN exactly the output rows whose evaluation needs them, with the
+engine's rules: between samples i and i+1 of a continuous frame the
+rotation (squad) needs samples i-1 .. i+2 and the translation (linear) i
+and i+1; at a sample's own time the whole row is NaN if any of samples
+i-1 .. i+2 is missing (its squad segment reads them); a discrete frame
+needs its held event. Nothing else produces NaN.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._jit import F1, F2, F3, I1, B, I, helper, kernel  # noqa: E741
+from .quaternion import (
+    _EPS,
+    _SQRT2,
+    _is_unit,
+    _qexp1,
+    _qinv1,
+    _qlog1,
+    _qmul1,
+    _qslerp1,
+    _qslerp_unit1,
+    _rotate1,
+    _sincos,
+)
+from .scalar import (
+    SERIES_ANGLE,
+    SERIES_RATIO,
+    atan2,
+    atan_over_x,
+    cos_series,
+    sinc_series,
+)
+
+__all__ = [
+    "SLOTS",
+    "STATIC",
+    "SQUAD",
+    "CONSTANT",
+    "HELD",
+    "TABLE_COLUMNS",
+    "squad_table",
+    "lookup_chain",
+    "transform_chain",
+]
+
+SLOTS = 3
+STATIC = 0
+SQUAD = 1
+CONSTANT = 2
+HELD = 3
+
+# squad table columns: a (0:4), b (4:8), the great circles r[i] -> r[i+1]
+# (8:13: θ, u) and a[i] -> b[i] (13:18), the non-unit flag (18) and whether
+# the row has been computed (19: 1.0 yes, 0.0 not yet)
+TABLE_COLUMNS = 20
+_DONE = 19
+
+
+# ---------------------------------------------------------------------------
+# the squad table, one segment at a time
+# ---------------------------------------------------------------------------
+
+
+@helper(inline=True)
+def _qexp_table(w, x, y, z):
+    """exp of a quaternion as ``quaternion._qexp1``, with short series for small arcs.
+
+    Below ``SERIES_ANGLE`` the truncated series of cos(v) and sin(v)/v are
+    exact to under one rounding error (and need neither libm's sin/cos nor
+    a division); elsewhere the libm route. Within 4 ulp of ``_qexp1``
+    (tests/test_fused.py).
+    """
+    v2 = x * x + y * y + z * z
+    if v2 < SERIES_ANGLE * SERIES_ANGLE and v2 > _EPS * _EPS:
+        e = math.exp(w)
+        c = cos_series(v2)
+        k = e * sinc_series(v2)
+        return e * c, k * x, k * y, k * z
+    return _qexp1(w, x, y, z)
+
+
+@helper(inline=True)
+def _qlog_table(w, x, y, z):
+    """log of a quaternion as ``quaternion._qlog1``, with a short series for small arcs.
+
+    For w > 0 and |v| < SERIES_RATIO w, atan2(|v|, w) / |v| is
+    atan_over_x((|v|/w)²) / w: no sqrt, no atan2. Within 4 ulp of
+    ``_qlog1`` (tests/test_fused.py).
+    """
+    b2 = x * x + y * y + z * z
+    if w > 0.0 and b2 < (SERIES_RATIO * w) ** 2 and b2 > (_EPS * w) ** 2:
+        inv_w = 1.0 / w
+        f = atan_over_x(b2 * inv_w * inv_w) * inv_w
+        b = math.sqrt(b2)  # the real part exactly as _qlog1 forms it
+        return math.log(w * w + b * b) / 2.0, f * x, f * y, f * z
+    return _qlog1(w, x, y, z)
+
+
+@helper(inline=True)
+def _geodesic_table(aw, ax, ay, az, bw, bx, by, bz):
+    """``quaternion._geodesic1`` with a short series for the angle of small arcs.
+
+    For d = a·b > 0 and |o| < SERIES_RATIO d, θ = atan(|o|/d) is
+    x atan_over_x(x²) with x = |o|/d (no atan2). Within 4 ulp of 1.
+    """
+    dw, dx, dy, dz = aw - bw, ax - bx, ay - by, az - bz
+    if dw * dw + dx * dx + dy * dy + dz * dz > _SQRT2 * _SQRT2:
+        bw, bx, by, bz = -bw, -bx, -by, -bz
+    d = aw * bw + ax * bx + ay * by + az * bz
+    ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
+    so = math.sqrt(ow * ow + ox * ox + oy * oy + oz * oz)
+    if so == 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0
+    k = 1.0 / so
+    if d > 0.0 and so < SERIES_RATIO * d:
+        x = so / d
+        theta = x * atan_over_x(x * x)
+    else:
+        theta = atan2(so, d)
+    return theta, ow * k, ox * k, oy * k, oz * k
+
+
+# A missing row is computed together with the missing rows after it (up to
+# RUN of them), so that each log(r[i]⁻¹ r[i+1]) is computed once rather
+# than for each of the three rows that use it; sorted lookups need those
+# rows next anyway.
+RUN = 256
+
+
+@helper(inline=True)
+def _log_step(r, i):
+    """log(r[i]⁻¹ r[i+1]), as :func:`quaternion.squad_coefficients` forms it."""
+    n = r.shape[0]
+    if i < 0 or i > n - 2:
+        return 0.0, 0.0, 0.0, 0.0  # not used by any row
+    iw, ix, iy, iz = _qinv1(r[i, 0], r[i, 1], r[i, 2], r[i, 3])
+    nw, nx, ny, nz = _qmul1(
+        iw, ix, iy, iz, r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3]
+    )
+    return _qlog_table(nw, nx, ny, nz)
+
+
+@helper(inline=True)
+def _table_row(r, t, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz):
+    """Fill row i of the squad table of (r, t) (n >= 2) into ``c``.
+
+    Equal to row i of ``squad_coefficients`` (a, b) and ``squad_segments``
+    (operation for operation), from samples i-1 .. i+2 and the logs
+    p = L[i-1], l = L[i], n = L[i+1] (``_log_step``).
+    """
+    n = r.shape[0]
+    # a[i]
+    if i == 0 or i == n - 1:
+        aw, ax, ay, az = r[i, 0], r[i, 1], r[i, 2], r[i, 3]
+    else:
+        ratio = (t[i + 1] - t[i]) / (t[i] - t[i - 1])
+        ew, ex, ey, ez = _qexp_table(
+            (-lw + pw * ratio) * 0.25,
+            (-lx + px * ratio) * 0.25,
+            (-ly + py * ratio) * 0.25,
+            (-lz + pz * ratio) * 0.25,
+        )
+        aw, ax, ay, az = _qmul1(r[i, 0], r[i, 1], r[i, 2], r[i, 3], ew, ex, ey, ez)
+    # b[i], and the sample the segment ends at
+    if i < n - 2:
+        ratio = (t[i + 1] - t[i]) / (t[i + 2] - t[i + 1])
+        ew, ex, ey, ez = _qexp_table(
+            (nw * ratio - lw) * -0.25,
+            (nx * ratio - lx) * -0.25,
+            (ny * ratio - ly) * -0.25,
+            (nz * ratio - lz) * -0.25,
+        )
+        bw, bx, by, bz = _qmul1(
+            r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3], ew, ex, ey, ez
+        )
+    elif i == n - 2:
+        bw, bx, by, bz = r[n - 1, 0], r[n - 1, 1], r[n - 1, 2], r[n - 1, 3]
+    else:
+        # the virtual sample past the end: r[n-1] r[n-2]⁻¹ r[n-1]
+        iw, ix, iy, iz = _qinv1(r[n - 2, 0], r[n - 2, 1], r[n - 2, 2], r[n - 2, 3])
+        w, x, y, z = _qmul1(
+            r[n - 1, 0], r[n - 1, 1], r[n - 1, 2], r[n - 1, 3], iw, ix, iy, iz
+        )
+        bw, bx, by, bz = _qmul1(
+            w, x, y, z, r[n - 1, 0], r[n - 1, 1], r[n - 1, 2], r[n - 1, 3]
+        )
+    if i < n - 1:
+        ew, ex, ey, ez = r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3]
+    else:
+        ew, ex, ey, ez = bw, bx, by, bz
+    c[i, 0] = aw
+    c[i, 1] = ax
+    c[i, 2] = ay
+    c[i, 3] = az
+    c[i, 4] = bw
+    c[i, 5] = bx
+    c[i, 6] = by
+    c[i, 7] = bz
+    unit = (
+        _is_unit(r[i, 0], r[i, 1], r[i, 2], r[i, 3])
+        and _is_unit(ew, ex, ey, ez)
+        and _is_unit(aw, ax, ay, az)
+        and _is_unit(bw, bx, by, bz)
+    )
+    if unit:
+        g = _geodesic_table(r[i, 0], r[i, 1], r[i, 2], r[i, 3], ew, ex, ey, ez)
+        c[i, 8] = g[0]
+        c[i, 9] = g[1]
+        c[i, 10] = g[2]
+        c[i, 11] = g[3]
+        c[i, 12] = g[4]
+        g = _geodesic_table(aw, ax, ay, az, bw, bx, by, bz)
+        c[i, 13] = g[0]
+        c[i, 14] = g[1]
+        c[i, 15] = g[2]
+        c[i, 16] = g[3]
+        c[i, 17] = g[4]
+        c[i, 18] = 0.0
+    else:
+        for k in range(8, 18):
+            c[i, k] = 0.0
+        c[i, 18] = 1.0
+    c[i, _DONE] = 1.0
+
+
+@helper
+def _fill_run(r, t, c, g, count):
+    """Compute row g of the table and the missing rows after it (``count`` at most).
+
+    Stops before the first row already computed; each log is computed
+    once. Returns the number of rows computed.
+    """
+    n = r.shape[0]
+    end = min(g + count, n)
+    pw, px, py, pz = _log_step(r, g - 1)
+    lw, lx, ly, lz = _log_step(r, g)
+    done = 0
+    for i in range(g, end):
+        if i > g and c[i, _DONE] != 0.0:
+            break
+        nw, nx, ny, nz = _log_step(r, i + 1)
+        _table_row(
+            r, t, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz
+        )  # fmt: skip
+        done += 1
+        pw, px, py, pz = lw, lx, ly, lz
+        lw, lx, ly, lz = nw, nx, ny, nz
+    return done
+
+
+@kernel(F2, F1)
+def squad_table(r, t):
+    """The whole squad table of rotations r (n >= 2) at strictly increasing t.
+
+    Returns
+    -------
+    ndarray, shape (n, 20)
+        See the module docstring; every row computed.
+    """
+    n = r.shape[0]
+    c = np.zeros((n, TABLE_COLUMNS))
+    _fill_run(r, t, c, 0, n)
+    return c
+
+
+# ---------------------------------------------------------------------------
+# the chain over a block of rows
+# ---------------------------------------------------------------------------
+
+# Rows are evaluated in blocks: for each block, each step of the chain is
+# applied to all its rows before the next step. The block's accumulated
+# transforms stay in a small scratch array (in L1 cache), and a step's
+# arrays are picked once per block, not once per row: numba counts
+# references whenever an array is assigned or handed to a function, and
+# per-row reference counting costs more than the arithmetic.
+BLOCK = 128
+
+
+@helper
+def _compose(ax, ay, az, aw, bx, by, bz, tx, ty, tz, qw, qx, qy, qz, inverse):
+    """Accumulated transform followed by (t, q), as ``resample.chain_step``.
+
+    Arguments: the accumulated translation (ax, ay, az) and rotation
+    (aw, bx, by, bz), then the step's translation and rotation.
+    """
+    if inverse:
+        x, y, z = _rotate1(qw, -qx, -qy, -qz, ax - tx, ay - ty, az - tz)
+        k = 1.0 / (qw * qw + qx * qx + qy * qy + qz * qz)
+        qw, qx, qy, qz = qw * k, -qx * k, -qy * k, -qz * k
+    else:
+        x, y, z = _rotate1(qw, qx, qy, qz, ax, ay, az)
+        x += tx
+        y += ty
+        z += tz
+    w, rx, ry, rz = _qmul1(qw, qx, qy, qz, aw, bx, by, bz)
+    return x, y, z, w, rx, ry, rz
+
+
+@helper
+def _chain_block(
+    plan, statics, offsets, gaps, own,
+    times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
+    target, j0, j1, acc, cur, rotation_only,
+):  # fmt: skip
+    """The chain at target[j0:j1], into acc[:j1-j0] as (tx, ty, tz, w, x, y, z).
+
+    ``cur`` (SLOTS,) holds each slot's segment of the previous row and is
+    updated. Returns the number of squad table rows computed.
+    """
+    computed = 0
+    nb = j1 - j0
+    for b in range(nb):
+        acc[b, 0] = 0.0
+        acc[b, 1] = 0.0
+        acc[b, 2] = 0.0
+        acc[b, 3] = 1.0
+        acc[b, 4] = 0.0
+        acc[b, 5] = 0.0
+        acc[b, 6] = 0.0
+    for s in range(plan.shape[0] // 3):
+        kind = plan[3 * s]
+        slot = plan[3 * s + 1]
+        inverse = plan[3 * s + 2] != 0
+        if kind == STATIC:
+            tx, ty, tz = statics[slot, 0], statics[slot, 1], statics[slot, 2]
+            qw, qx, qy, qz = (
+                statics[slot, 3],
+                statics[slot, 4],
+                statics[slot, 5],
+                statics[slot, 6],
+            )
+            if rotation_only:
+                tx = ty = tz = 0.0
+            for b in range(nb):
+                if s == 0 and not inverse:
+                    acc[b, 0] = tx
+                    acc[b, 1] = ty
+                    acc[b, 2] = tz
+                    acc[b, 3] = qw
+                    acc[b, 4] = qx
+                    acc[b, 5] = qy
+                    acc[b, 6] = qz
+                    continue
+                x, y, z, w, rx, ry, rz = _compose(
+                    acc[b, 0], acc[b, 1], acc[b, 2],
+                    acc[b, 3], acc[b, 4], acc[b, 5], acc[b, 6],
+                    tx, ty, tz, qw, qx, qy, qz, inverse,
+                )  # fmt: skip
+                acc[b, 0] = x
+                acc[b, 1] = y
+                acc[b, 2] = z
+                acc[b, 3] = w
+                acc[b, 4] = rx
+                acc[b, 5] = ry
+                acc[b, 6] = rz
+            continue
+        # the slot's arrays, picked once per block
+        if slot == 0:
+            times, tr, r, rp, c = times0, t0, r0, p0, c0
+        elif slot == 1:
+            times, tr, r, rp, c = times1, t1, r1, p1, c1
+        else:
+            times, tr, r, rp, c = times2, t2, r2, p2, c2
+        off = offsets[slot]
+        n = times.shape[0]
+        i = cur[slot]
+        for b in range(nb):
+            t = target[j0 + b] + off
+            tx = ty = tz = 0.0
+            if kind == CONSTANT:
+                if not rotation_only:
+                    tx, ty, tz = tr[0, 0], tr[0, 1], tr[0, 2]
+                qw, qx, qy, qz = rp[0, 0], rp[0, 1], rp[0, 2], rp[0, 3]
+            else:
+                # merge walk: gallop forward from the previous row's segment
+                # (an earlier time restarts from the beginning): i with
+                # times[i] <= t < times[i+1], -1 before, n-1 at/after the end
+                if i >= 0 and t < times[i]:
+                    i = -1
+                lo = i
+                step = 1
+                hi = i + 1
+                while hi < n and times[hi] <= t:
+                    lo = hi
+                    hi = i + 1 + step
+                    step *= 2
+                if hi > n:
+                    hi = n
+                while hi - lo > 1:
+                    mid = (lo + hi) // 2
+                    if times[mid] <= t:
+                        lo = mid
+                    else:
+                        hi = mid
+                i = lo
+                k = i if i >= 0 else 0
+                if kind == HELD:
+                    if not rotation_only:
+                        tx, ty, tz = tr[k, 0], tr[k, 1], tr[k, 2]
+                    qw, qx, qy, qz = rp[k, 0], rp[k, 1], rp[k, 2], rp[k, 3]
+                elif own[slot] != 0 and i >= 0 and t == times[i]:
+                    # the frame's own times: the stored sample, unless its squad
+                    # segment reads a missing sample (i-1 .. i+2), as
+                    # between samples
+                    missing = False
+                    for q in range(max(i - 1, 0), min(i + 3, n)):
+                        if math.isnan(
+                            tr[q, 0] + tr[q, 1] + tr[q, 2]
+                            + rp[q, 0] + rp[q, 1] + rp[q, 2] + rp[q, 3]
+                        ):  # fmt: skip
+                            missing = True
+                    if missing:
+                        tx = ty = tz = qw = qx = qy = qz = math.nan
+                    else:
+                        if not rotation_only:
+                            tx, ty, tz = tr[i, 0], tr[i, 1], tr[i, 2]
+                        qw, qx, qy, qz = rp[i, 0], rp[i, 1], rp[i, 2], rp[i, 3]
+                elif (
+                    0 <= i < n - 1
+                    and t != times[i]
+                    and times[i + 1] - times[i] > gaps[slot]
+                ):
+                    # inside a gap longer than the frame's max_gap
+                    tx = ty = tz = qw = qx = qy = qz = math.nan
+                else:
+                    if k > n - 2:
+                        k = n - 2
+                    if not rotation_only and i >= 0 and t == times[i]:
+                        tx, ty, tz = tr[i, 0], tr[i, 1], tr[i, 2]
+                    elif not rotation_only:
+                        w = (t - times[k]) / (times[k + 1] - times[k])
+                        tx = tr[k, 0] + w * (tr[k + 1, 0] - tr[k, 0])
+                        ty = tr[k, 1] + w * (tr[k + 1, 1] - tr[k, 1])
+                        tz = tr[k, 2] + w * (tr[k + 1, 2] - tr[k, 2])
+                    # squad in segment g (numpy-quaternion uses the last
+                    # segment before the start, indexing with -1)
+                    g = i if i >= 0 else n - 1
+                    if c[g, _DONE] == 0.0:  # first use of the segment
+                        computed += _fill_run(r, times, c, g, RUN)
+                    if g < n - 1:
+                        dt = times[g + 1] - times[g]
+                    else:
+                        dt = (times[n - 1] + (times[n - 1] - times[n - 2])) - times[
+                            n - 1
+                        ]
+                    tau = (t - times[g]) / dt
+                    if c[g, 18] == 0.0:
+                        sn, cs = _sincos(tau * c[g, 8])
+                        s1w = cs * r[g, 0] + sn * c[g, 9]
+                        s1x = cs * r[g, 1] + sn * c[g, 10]
+                        s1y = cs * r[g, 2] + sn * c[g, 11]
+                        s1z = cs * r[g, 3] + sn * c[g, 12]
+                        sn, cs = _sincos(tau * c[g, 13])
+                        s2w = cs * c[g, 0] + sn * c[g, 14]
+                        s2x = cs * c[g, 1] + sn * c[g, 15]
+                        s2y = cs * c[g, 2] + sn * c[g, 16]
+                        s2z = cs * c[g, 3] + sn * c[g, 17]
+                    else:
+                        if g < n - 1:
+                            nw, nx, ny, nz = (
+                                r[g + 1, 0],
+                                r[g + 1, 1],
+                                r[g + 1, 2],
+                                r[g + 1, 3],
+                            )
+                        else:
+                            nw, nx, ny, nz = (
+                                c[n - 1, 4],
+                                c[n - 1, 5],
+                                c[n - 1, 6],
+                                c[n - 1, 7],
+                            )
+                        s1w, s1x, s1y, s1z = _qslerp1(
+                            r[g, 0], r[g, 1], r[g, 2], r[g, 3], nw, nx, ny, nz, tau
+                        )
+                        s2w, s2x, s2y, s2z = _qslerp1(
+                            c[g, 0], c[g, 1], c[g, 2], c[g, 3],
+                            c[g, 4], c[g, 5], c[g, 6], c[g, 7],
+                            tau,
+                        )  # fmt: skip
+                    qw, qx, qy, qz = _qslerp_unit1(
+                        s1w, s1x, s1y, s1z, s2w, s2x, s2y, s2z,
+                        2.0 * tau * (1.0 - tau),
+                    )  # fmt: skip
+                    # the sign of the stored sample the segment starts from
+                    d = (
+                        r[k, 0] * rp[k, 0]
+                        + r[k, 1] * rp[k, 1]
+                        + r[k, 2] * rp[k, 2]
+                        + r[k, 3] * rp[k, 3]
+                    )
+                    if d < 0.0:
+                        qw, qx, qy, qz = -qw, -qx, -qy, -qz
+            if s == 0 and not inverse:
+                # the first step as it is (``chain.compose`` does the same)
+                acc[b, 0] = tx
+                acc[b, 1] = ty
+                acc[b, 2] = tz
+                acc[b, 3] = qw
+                acc[b, 4] = qx
+                acc[b, 5] = qy
+                acc[b, 6] = qz
+                continue
+            x, y, z, w, rx, ry, rz = _compose(
+                acc[b, 0], acc[b, 1], acc[b, 2],
+                acc[b, 3], acc[b, 4], acc[b, 5], acc[b, 6],
+                tx, ty, tz, qw, qx, qy, qz, inverse,
+            )  # fmt: skip
+            acc[b, 0] = x
+            acc[b, 1] = y
+            acc[b, 2] = z
+            acc[b, 3] = w
+            acc[b, 4] = rx
+            acc[b, 5] = ry
+            acc[b, 6] = rz
+        cur[slot] = i
+    return computed
+
+
+_SLOT_TYPES = (F1, F2, F2, F2, F2) * SLOTS
+
+
+@kernel(I1, F2, F1, F1, I1, *_SLOT_TYPES, F1, B)
+def lookup_chain(
+    plan, statics, offsets, gaps, own,
+    times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
+    target, rotation_only,
+):  # fmt: skip
+    """The chain's transform at every target time, in one pass.
+
+    Parameters
+    ----------
+    plan, statics, offsets, gaps, own, times0 .. c2 : see the module docstring
+    target : ndarray, shape (m,)
+        Target times (slot k reads ``target + offsets[k]``).
+    rotation_only : bool
+        Skip the translations (then ``t`` is returned with shape (0, 3)).
+
+    Returns
+    -------
+    t : ndarray, shape (m, 3) or (0, 3)
+    r : ndarray, shape (m, 4)
+    computed : int
+        Rows of the squad tables computed by this call.
+    """
+    m = target.shape[0]
+    t_out = np.empty((0 if rotation_only else m, 3))
+    r_out = np.empty((m, 4))
+    acc = np.empty((BLOCK, 7))
+    cur = np.full(SLOTS, -1, dtype=np.int64)
+    computed = 0
+    for j0 in range(0, m, BLOCK):
+        j1 = min(j0 + BLOCK, m)
+        computed += _chain_block(
+            plan, statics, offsets, gaps, own,
+            times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
+            target, j0, j1, acc, cur, rotation_only,
+        )  # fmt: skip
+        for b in range(j1 - j0):
+            j = j0 + b
+            if not rotation_only:
+                t_out[j, 0] = acc[b, 0]
+                t_out[j, 1] = acc[b, 1]
+                t_out[j, 2] = acc[b, 2]
+            r_out[j, 0] = acc[b, 3]
+            r_out[j, 1] = acc[b, 4]
+            r_out[j, 2] = acc[b, 5]
+            r_out[j, 3] = acc[b, 6]
+    return t_out, r_out, computed
+
+
+@kernel(I1, F2, F1, F1, I1, *_SLOT_TYPES, F1, F3, I)
+def transform_chain(
+    plan, statics, offsets, gaps, own,
+    times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
+    target, data, mode,
+):  # fmt: skip
+    """Carry data through the chain at every target time, in one pass.
+
+    Parameters
+    ----------
+    plan, statics, offsets, gaps, own, times0 .. c2 : see the module docstring
+    target : ndarray, shape (m,)
+    data : ndarray, shape (m, k, c) or (1, k, c)
+        Points or vectors (c == 3) or quaternions (c == 4); a first
+        dimension of 1 is reused for every row.
+    mode : int
+        0 points (rotate and translate), 1 vectors (rotate; translations
+        are never evaluated), 2 quaternions (left-multiplied by the
+        rotation; translations never evaluated).
+
+    Returns
+    -------
+    out : ndarray, shape (m, k, c)
+    computed : int
+        Rows of the squad tables computed by this call.
+    """
+    m = target.shape[0]
+    k = data.shape[1]
+    nc = data.shape[2]
+    s_d = 1 if data.shape[0] > 1 else 0
+    out = np.empty((m, k, nc))
+    rotation_only = mode != 0
+    acc = np.empty((BLOCK, 7))
+    cur = np.full(SLOTS, -1, dtype=np.int64)
+    computed = 0
+    for j0 in range(0, m, BLOCK):
+        j1 = min(j0 + BLOCK, m)
+        computed += _chain_block(
+            plan, statics, offsets, gaps, own,
+            times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
+            target, j0, j1, acc, cur, rotation_only,
+        )  # fmt: skip
+        for b in range(j1 - j0):
+            j = j0 + b
+            row = j * s_d
+            w, qx, qy, qz = acc[b, 3], acc[b, 4], acc[b, 5], acc[b, 6]
+            if mode == 2:
+                for e in range(k):
+                    ow, ox, oy, oz = _qmul1(
+                        w, qx, qy, qz, data[row, e, 0], data[row, e, 1],
+                        data[row, e, 2], data[row, e, 3],
+                    )  # fmt: skip
+                    out[j, e, 0] = ow
+                    out[j, e, 1] = ox
+                    out[j, e, 2] = oy
+                    out[j, e, 3] = oz
+            else:
+                for e in range(k):
+                    px, py, pz = _rotate1(
+                        w, qx, qy, qz, data[row, e, 0], data[row, e, 1], data[row, e, 2]
+                    )
+                    if mode == 0:
+                        px += acc[b, 0]
+                        py += acc[b, 1]
+                        pz += acc[b, 2]
+                    out[j, e, 0] = px
+                    out[j, e, 1] = py
+                    out[j, e, 2] = pz
+    return out, computed

@@ -1,6 +1,6 @@
 """Sphinx configuration of the rbm_nb documentation site.
 
-Build: ``python -m sphinx -W -b html docs docs/_build/html`` (``tests/test_docs.py``
+Build: ``python -m sphinx -W -b html docs docs/_build/html`` (``tests/project/test_docs.py``
 does this with warnings as errors). The notebooks of ``notebooks/`` are copied
 in and executed by myst-nb once; their outputs are cached by jupyter-cache in
 ``docs/_build/.jupyter_cache`` and reused until a notebook changes.

@@ -4,7 +4,7 @@ Every row is one distinct mistake a user can make: the call (a public name
 under ``rbm_nb``, or a small helper below for methods and operators), its
 arguments, the exception type expected and a regular expression the message
 must match (it names the argument, frame or file and what was expected).
-``tests/test_bad_input_table.py`` runs every row against a fixed frame tree
+``tests/core/test_bad_input_table.py`` runs every row against a fixed frame tree
 (see :func:`setup_tree`).
 
 Rows that fail today carry ``xfail``: the issue item that asks for the fix.

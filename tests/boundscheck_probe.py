@@ -1,6 +1,6 @@
 """Public calls at the smallest sizes, run under NUMBA_BOUNDSCHECK=1.
 
-Run as a script by ``tests/test_kernels_boundscheck.py``: every call either
+Run as a script by ``tests/project/test_boundscheck.py``: every call either
 returns or raises a clear error at the door; an ``IndexError`` means a kernel
 read outside an array (numba's boundscheck turns such reads into IndexError;
 without it they return whatever lies in memory). Prints one line per such

@@ -1,5 +1,21 @@
 """Shared fixtures of the tests (the registry is cleared by ../conftest.py).
 
+Layout: the tests live in one folder per layer of rbm_nb --
+``core/`` (frames, lookups, transforms, kernels, estimators, quaternions,
+parity with the reference, bad input, module graph), ``data/`` (example and
+synthetic recordings, rosbag, OptiTrack, transformer, atomic writes,
+studies), ``notebook/`` (scene, widgets, exports, browser and Voila tests,
+the teaching notebooks) and ``project/`` (packaging, Binder, docs, tools,
+numba cache, boundscheck). The helper modules (``naive*.py``,
+``recordings.py``, ``widget_support.py``, ``browser_support.py``, ...) stay
+here and are imported by module name: this folder is put on ``sys.path``
+below, and ``REPO`` (``from conftest import REPO``) is the repository root
+whatever the depth of the test file. There is no ``conftest.py`` in the
+layer folders (a second one would shadow this module for ``from conftest
+import ...``). ``test_zz_kernel_signatures.py`` stays here: pytest collects
+a folder's entries in name order, so it comes after the layer folders and
+checks what the whole session compiled.
+
 Fast local selection (no browser, nothing over a few seconds):
 ``python -m pytest -m "not slow and not browser"``.
 """
@@ -15,7 +31,12 @@ from pathlib import Path
 
 import pytest
 
-REPO = Path(__file__).resolve().parents[1]
+TESTS = Path(__file__).resolve().parent
+REPO = TESTS.parent
+# the helper modules are imported by name from every layer folder (pytest's
+# default import mode adds this folder too; other modes do not)
+if str(TESTS) not in sys.path:
+    sys.path.insert(0, str(TESTS))
 # The real recordings live beside the clone; RBM_NB_SHARED points elsewhere
 # (an unpacked sdist, a worktree).
 SHARED = Path(os.environ.get("RBM_NB_SHARED", REPO.parent / "shared"))
@@ -77,6 +98,30 @@ def shared_data() -> Path:
             "(or RBM_NB_SHARED naming a folder with data/)"
         )
     return SHARED_DATA
+
+
+@pytest.fixture
+def recording_comm(monkeypatch):
+    """Widgets open a ``RecordingComm`` (widget_support.py) instead of a kernel's.
+
+    Yields the comms in the order they were opened; closes every widget after.
+    A test module whose tests all build widgets says
+    ``pytestmark = pytest.mark.usefixtures("recording_comm")``.
+    """
+    comm = pytest.importorskip("comm")
+    import ipywidgets
+    from widget_support import RecordingComm
+
+    comms = []
+
+    def create_comm(**kwargs):
+        comms.append(RecordingComm(**kwargs))
+        return comms[-1]
+
+    monkeypatch.setattr(comm, "create_comm", create_comm)
+    yield comms
+    # closing also removes the listeners widgets keep on the frame registry
+    ipywidgets.Widget.close_all()
 
 
 @pytest.fixture(scope="module")

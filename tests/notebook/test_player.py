@@ -8,10 +8,7 @@ The browser clock itself runs in test_browser.py; js/src/lib/clock.js mirrors
 from __future__ import annotations
 
 import threading
-import uuid
 
-import comm
-import ipywidgets
 import numpy as np
 import pytest
 import traitlets
@@ -20,53 +17,7 @@ import rbm_nb as rbm
 from rbm_nb.widgets import Player
 from rbm_nb.widgets.playback import Playback
 
-
-class RecordingComm:
-    """Stands in for a kernel comm: widgets work and we see what they send."""
-
-    kernel = "Truthy"
-
-    def __init__(self, *args, **kwargs):
-        self.comm_id = uuid.uuid4().hex
-        self.messages = []
-        self.handlers = []
-
-    def open(self, *args, **kwargs):
-        pass
-
-    def on_msg(self, callback):
-        self.handlers.append(callback)
-
-    def send(self, data=None, *args, **kwargs):
-        self.messages.append(data)
-
-    def close(self, *args, **kwargs):
-        pass
-
-    def receive_state(self, state):
-        """What the browser sends when it updates traits."""
-        msg = {
-            "content": {
-                "data": {"method": "update", "state": state, "buffer_paths": []}
-            },
-            "buffers": [],
-        }
-        for handler in self.handlers:
-            handler(msg)
-
-
-@pytest.fixture(autouse=True)
-def recording_comm(monkeypatch):
-    comms = []
-
-    def create_comm(**kwargs):
-        c = RecordingComm()
-        comms.append(c)
-        return c
-
-    monkeypatch.setattr(comm, "create_comm", create_comm)
-    yield comms
-    ipywidgets.Widget.close_all()
+pytestmark = pytest.mark.usefixtures("recording_comm")
 
 
 class SetTimeLinked:

@@ -8,9 +8,7 @@ browser side is covered in ``test_browser.py``.
 from __future__ import annotations
 
 import threading
-import uuid
 
-import comm
 import ipywidgets
 import numpy as np
 import pytest
@@ -27,32 +25,7 @@ from rbm_nb.scene.commands import (
 )
 from rbm_nb.scene.tracks import Track
 
-
-class DummyComm:
-    kernel = "Truthy"
-
-    def __init__(self, *args, **kwargs):
-        self.comm_id = uuid.uuid4().hex  # unique, like a kernel's comms
-        pass
-
-    def open(self, *args, **kwargs):
-        pass
-
-    def on_msg(self, *args, **kwargs):
-        pass
-
-    def send(self, *args, **kwargs):
-        pass
-
-    def close(self, *args, **kwargs):
-        pass
-
-
-@pytest.fixture(autouse=True)
-def no_kernel_comm(monkeypatch):
-    monkeypatch.setattr(comm, "create_comm", lambda **kwargs: DummyComm())
-    yield
-    ipywidgets.Widget.close_all()
+pytestmark = pytest.mark.usefixtures("recording_comm")
 
 
 @pytest.fixture
@@ -672,33 +645,6 @@ def test_guide_1_6_visualisation_cells_run_without_ros():
 
 
 # -- the widget and its transport ---------------------------------------------------
-class RecordingComm(DummyComm):
-    """Keeps what the kernel would send to the browser."""
-
-    def __init__(self, *args, **kwargs):
-        super().__init__()
-        self.sent = []
-        self.handlers = []
-
-    def on_msg(self, callback):
-        self.handlers.append(callback)
-
-    def send(self, data=None, metadata=None, buffers=None):
-        self.sent.append((data, [bytes(b) for b in buffers or []]))
-
-    def receive(self, content):
-        for handler in self.handlers:
-            handler(
-                {
-                    "content": {"data": {"method": "custom", "content": content}},
-                    "buffers": [],
-                }
-            )
-
-
-@pytest.fixture
-def recorded(monkeypatch):
-    monkeypatch.setattr(comm, "create_comm", lambda **kwargs: RecordingComm())
 
 
 def custom_messages(widget):
@@ -721,7 +667,7 @@ def test_scene_is_a_dom_widget_for_layouts(moving):
     assert meshcat_js_path().read_text()[:2000] in moving.widget._esm
 
 
-def test_content_goes_over_the_comm_after_ready(moving, recorded):
+def test_content_goes_over_the_comm_after_ready(moving):
     frame = moving.add_frame("body")
     widget = moving.widget
     assert custom_messages(widget) == []  # nothing before the browser listens
@@ -766,7 +712,7 @@ def test_content_goes_over_the_comm_after_ready(moving, recorded):
     assert len(buffers) == 2 + 2 * 2
 
 
-def test_playback_moves_no_kernel_data(moving, recorded):
+def test_playback_moves_no_kernel_data(moving):
     """Setting the time from Python is one small trait update, not pose data."""
     moving.add_frame("body")
     widget = moving.widget

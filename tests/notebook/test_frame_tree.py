@@ -2,10 +2,6 @@
 
 from __future__ import annotations
 
-import uuid
-
-import comm
-import ipywidgets
 import numpy as np
 import pytest
 import traitlets
@@ -26,33 +22,7 @@ from rbm_nb.widgets.frame_details import (
 )
 from rbm_nb.widgets.frame_tree import frame_info
 
-
-class RecordingComm:
-    kernel = "Truthy"
-
-    def __init__(self, *args, **kwargs):
-        self.comm_id = uuid.uuid4().hex  # unique, like a kernel's comms
-        self.messages = []
-
-    def open(self, *args, **kwargs):
-        pass
-
-    def on_msg(self, *args, **kwargs):
-        pass
-
-    def send(self, data=None, *args, **kwargs):
-        self.messages.append(data)
-
-    def close(self, *args, **kwargs):
-        pass
-
-
-@pytest.fixture(autouse=True)
-def recording_comm(monkeypatch):
-    monkeypatch.setattr(comm, "create_comm", lambda **kwargs: RecordingComm())
-    yield
-    # closing the trees also removes their registry listeners
-    ipywidgets.Widget.close_all()
+pytestmark = pytest.mark.usefixtures("recording_comm")
 
 
 @pytest.fixture

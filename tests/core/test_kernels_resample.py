@@ -10,6 +10,7 @@ from pathlib import Path
 import naive
 import numpy as np
 import pytest
+from conftest import REPO
 
 from rbm_nb._kernels import quaternion as kq
 from rbm_nb._kernels import resample as kr
@@ -203,6 +204,6 @@ def test_kernels_run_as_plain_python():
             str(tests / "test_kernels_quaternion.py"), str(tests / "test_kernels_resample.py"),
             "-k", "naive_twin or squad or search_right",
         ],
-        cwd=tests.parent, env=env, capture_output=True, text=True, timeout=600,
+        cwd=REPO, env=env, capture_output=True, text=True, timeout=600,
     )  # fmt: skip
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]

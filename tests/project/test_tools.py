@@ -1,7 +1,7 @@
 """ruff, ruff format and mypy, run by the test suite.
 
 Why tests and not steps of ``.ci/run``: ``.ci/run`` must stay textually the
-README's test command (tests/test_repo.py), which is what a newcomer types, so
+README's test command (tests/project/test_repo.py), which is what a newcomer types, so
 the tools run wherever the tests run -- in CI, locally, in an unpacked sdist.
 They use the configuration in pyproject.toml.
 

@@ -1,7 +1,7 @@
 """Scene.to_html: one self-contained file, bounded size, atomic writes.
 
 The file is checked here by content (the embedded data decodes back to the
-scene's tracks); tests/test_browser.py opens it in chromium.
+scene's tracks); tests/notebook/test_browser.py opens it in chromium.
 """
 
 from __future__ import annotations

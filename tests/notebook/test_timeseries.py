@@ -6,9 +6,6 @@ The browser side (zoom, hover, click-to-seek, the cursor) is tested in
 
 from __future__ import annotations
 
-import uuid
-
-import comm
 import ipywidgets
 import numpy as np
 import pytest
@@ -18,33 +15,7 @@ import xarray as xr
 from rbm_nb.widgets import Player, TimeSeries
 from rbm_nb.widgets._timebase import TimeBase
 
-
-class RecordingComm:
-    kernel = "Truthy"
-
-    def __init__(self, *args, **kwargs):
-        self.comm_id = uuid.uuid4().hex
-        self.messages = []  # (data, buffers)
-        self.opened = (kwargs.get("data"), kwargs.get("buffers"))
-
-    def open(self, *args, **kwargs):
-        pass
-
-    def on_msg(self, *args, **kwargs):
-        pass
-
-    def send(self, data=None, metadata=None, buffers=None):
-        self.messages.append((data, buffers))
-
-    def close(self, *args, **kwargs):
-        pass
-
-
-@pytest.fixture(autouse=True)
-def recording_comm(monkeypatch):
-    monkeypatch.setattr(comm, "create_comm", lambda **kwargs: RecordingComm(**kwargs))
-    yield
-    ipywidgets.Widget.close_all()
+pytestmark = pytest.mark.usefixtures("recording_comm")
 
 
 START = np.datetime64("2020-02-02T00:27:14.000000001", "ns")
@@ -84,9 +55,9 @@ def test_samples_go_once_as_binary_buffers(speed):
     ]
     assert plot.t0_ns is None
     # moving the cursor sends a float, not the samples again
-    plot.comm.messages.clear()
+    plot.comm.sent.clear()
     plot.set_time(3.0)
-    assert plot.comm.messages == [
+    assert plot.comm.sent == [
         ({"method": "update", "state": {"time": 3.0}, "buffer_paths": []}, [])
     ]
 

@@ -5,14 +5,14 @@ from __future__ import annotations
 import json
 import shutil
 import subprocess
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import REPO
 
 from rbm_nb.widgets._timebase import TimeBase, format_time
 
-JS = Path(__file__).resolve().parents[1] / "js" / "src" / "timeline.js"
+JS = REPO / "js" / "src" / "timeline.js"
 T0 = int(np.datetime64("2020-02-02T00:27:14.123456789", "ns").astype(np.int64))
 
 CASES = [

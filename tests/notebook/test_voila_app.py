@@ -27,8 +27,7 @@ from rbm_nb import app
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
 from browser_support import free_port, png_pixels, save  # noqa: E402
-
-REPO = Path(__file__).resolve().parents[1]
+from conftest import REPO  # noqa: E402
 
 
 def test_app_notebook_in_the_repo_is_the_generated_one():

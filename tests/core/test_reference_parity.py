@@ -22,17 +22,15 @@ Quaternion signs follow these rules:
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 import numpy as np
 import pytest
 import xarray as xr
+from conftest import REPO
 
 import rbm_nb as rbm
 
 ref = pytest.importorskip("rigid_body_motion")
-
-REPO = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(autouse=True)

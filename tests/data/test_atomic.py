@@ -24,11 +24,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import REPO
 
 from rbm_nb import _atomic
 from rbm_nb._atomic import atomic_path, clean_stale_scratch
-
-REPO = Path(__file__).resolve().parents[1]
 
 
 def _env():

@@ -39,10 +39,10 @@ import psutil
 import pytest
 import tomllib
 import websocket
+from conftest import REPO
 from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 
-REPO = Path(__file__).resolve().parents[1]
 BINDER = REPO / "binder"
 NOTEBOOK = "notebooks/06_head_eye_explorer.ipynb"
 ARTIFACT = REPO / "test-artifacts" / "binder_timing.json"

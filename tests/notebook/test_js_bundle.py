@@ -9,11 +9,10 @@ from __future__ import annotations
 
 import shutil
 import subprocess
-from pathlib import Path
 
 import pytest
+from conftest import REPO
 
-REPO = Path(__file__).resolve().parents[1]
 JS = REPO / "js"
 STATIC = REPO / "rbm_nb" / "widgets" / "static"
 

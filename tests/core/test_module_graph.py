@@ -15,8 +15,9 @@ import functools
 from pathlib import Path
 
 import pytest
+from conftest import REPO
 
-PACKAGE = Path(__file__).resolve().parent.parent / "rbm_nb"
+PACKAGE = REPO / "rbm_nb"
 
 # The frame core: intra-package imports here are all at module level (imports
 # inside functions are left for optional third-party dependencies).

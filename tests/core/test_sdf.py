@@ -526,23 +526,8 @@ def test_add_to_scene_hands_the_level_set_to_add_mesh():
         GridSDF(data, origin, res).add_to_scene(scene)
 
 
-def test_add_to_scene_with_the_real_scene(monkeypatch):
-    comm = pytest.importorskip("comm")
+def test_add_to_scene_with_the_real_scene(recording_comm):
     pytest.importorskip("meshcat")
-
-    class DummyComm:
-        kernel = "Truthy"
-        comm_id = "sdf-test"
-
-        def __init__(self, *a, **k):
-            pass
-
-        def open(self, *a, **k):
-            pass
-
-        on_msg = send = close = open
-
-    monkeypatch.setattr(comm, "create_comm", lambda **kwargs: DummyComm())
     from rbm_nb.scene import Scene
 
     moving_object()

@@ -72,7 +72,7 @@ class Plan:
         self.kinds = kinds
         self.tables = tables
 
-    def slots(self) -> tuple:
+    def slots(self) -> tuple[np.ndarray, ...]:
         """The 3 x 5 slot arrays for the kernels."""
         out: list[Any] = []
         for frame, table in zip(self.frames, self.tables, strict=True):
@@ -197,16 +197,9 @@ def lookup(p: Plan, target, own, rotation_only: bool = False):
     base = target.track.base
 
     def call():
-        return kf.lookup_chain(
-            p.code,
-            p.statics,
-            p.offsets(target),
-            p.gaps(),
-            _own(own),
-            *p.slots(),
-            base,
-            rotation_only,
-        )
+        # one tuple: the kernel takes the 3 x 5 slot arrays as separate arguments
+        args = (p.code, p.statics, p.offsets(target), p.gaps(), _own(own))
+        return kf.lookup_chain(*args, *p.slots(), *(base, rotation_only))
 
     t, r, _ = _run(p, call)
     return t, r
@@ -221,17 +214,8 @@ def transform(p: Plan, target, own, data: np.ndarray, kind: str) -> np.ndarray:
     base = target.track.base
 
     def call():
-        return kf.transform_chain(
-            p.code,
-            p.statics,
-            p.offsets(target),
-            p.gaps(),
-            _own(own),
-            *p.slots(),
-            base,
-            data,
-            mode,
-        )
+        args = (p.code, p.statics, p.offsets(target), p.gaps(), _own(own))
+        return kf.transform_chain(*args, *p.slots(), *(base, data, mode))
 
     out, _ = _run(p, call)
     return out

@@ -126,7 +126,7 @@ def _qexp_table(w, x, y, z):
     Below ``SERIES_ANGLE`` the truncated series of cos(v) and sin(v)/v are
     exact to under one rounding error (and need neither libm's sin/cos nor
     a division); elsewhere the libm route. Within 4 ulp of ``_qexp1``
-    (tests/test_fused.py).
+    (tests/core/test_fused.py).
     """
     v2 = x * x + y * y + z * z
     if v2 < SERIES_ANGLE * SERIES_ANGLE and v2 > _EPS * _EPS:
@@ -143,7 +143,7 @@ def _qlog_table(w, x, y, z):
 
     For w > 0 and |v| < SERIES_RATIO w, atan2(|v|, w) / |v| is
     atan_over_x((|v|/w)²) / w: no sqrt, no atan2. Within 4 ulp of
-    ``_qlog1`` (tests/test_fused.py).
+    ``_qlog1`` (tests/core/test_fused.py).
     """
     b2 = x * x + y * y + z * z
     if w > 0.0 and b2 < (SERIES_RATIO * w) ** 2 and b2 > (_EPS * w) ** 2:

@@ -67,7 +67,7 @@ TAN_PI_8 = math.sqrt(2.0) - 1.0
 # atan(u) = u * P(u²) for |u| <= tan(pi/8): the Taylor series of
 # atan(√s)/√s, economised with Chebyshev polynomials to degree 11 on
 # s in [0, 0.1716]; truncation error below 1.3e-18 (the derivation is
-# re-run in tests/test_conversions.py).
+# re-run in tests/core/test_conversions.py).
 ATAN_P = (
     1.0,
     -0.33333333333333126,

@@ -9,7 +9,7 @@ time where the data has one (datetime64 timestamps)::
 A :class:`TimeBase` is that start: ``t0_ns`` (absolute nanoseconds since the
 epoch, for datetime64 data) or ``t0_s`` (the first float timestamp, for data
 in plain seconds). The browser side formats with the same rules in
-``formatTime`` of ``js/src/timeline.js``; ``tests/test_timebase.py`` checks both against each
+``formatTime`` of ``js/src/timeline.js``; ``tests/notebook/test_timebase.py`` checks both against each
 other.
 """
 

@@ -198,8 +198,12 @@ def lookup(p: Plan, target, own, rotation_only: bool = False):
 
     def call():
         # one tuple: the kernel takes the 3 x 5 slot arrays as separate arguments
-        args = (p.code, p.statics, p.offsets(target), p.gaps(), _own(own))
-        return kf.lookup_chain(*args, *p.slots(), *(base, rotation_only))
+        args: tuple[Any, ...] = (
+            (p.code, p.statics, p.offsets(target), p.gaps(), _own(own))
+            + p.slots()
+            + (base, rotation_only)
+        )
+        return kf.lookup_chain(*args)
 
     t, r, _ = _run(p, call)
     return t, r
@@ -214,8 +218,12 @@ def transform(p: Plan, target, own, data: np.ndarray, kind: str) -> np.ndarray:
     base = target.track.base
 
     def call():
-        args = (p.code, p.statics, p.offsets(target), p.gaps(), _own(own))
-        return kf.transform_chain(*args, *p.slots(), *(base, data, mode))
+        args: tuple[Any, ...] = (
+            (p.code, p.statics, p.offsets(target), p.gaps(), _own(own))
+            + p.slots()
+            + (base, data, mode)
+        )
+        return kf.transform_chain(*args)
 
     out, _ = _run(p, call)
     return out

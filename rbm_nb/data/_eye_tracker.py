@@ -1,7 +1,7 @@
 """What a head-mounted eye tracker adds to eye movements: its clock and its failures.
 
 Modelled on the real example recording (Pupil Core, binocular 3d gaze mapper),
-whose rates the synthetic one reproduces (measured in ``tests/test_synthetic``):
+whose rates the synthetic one reproduces (measured in ``tests/data/test_synthetic.py``):
 
 * one clock for both eyes: the two eye cameras run at ~200 Hz each, about
   half a period apart, with jitter and dropped frames; frames of the two

@@ -17,7 +17,7 @@ Kernels are compiled with one of two option sets, both typed:
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Final, Literal
 
@@ -69,30 +69,6 @@ class JitOptions:
 KERNEL: Final = JitOptions()
 VECTOR_KERNEL: Final = JitOptions(fastmath=frozenset({"contract"}), error_model="numpy")
 
-
-class _DecorationTimeOptions(Mapping[str, Any]):
-    """A JitOptions' keyword arguments, read when ``njit(**options)`` runs.
-
-    Not a dict made at import: rbm_nb._numba_cache may switch caching off
-    after this module was imported and before the kernels are decorated.
-    """
-
-    def __init__(self, options: JitOptions):
-        self._options = options
-
-    def __getitem__(self, key: str) -> Any:
-        return self._options.as_kwargs()[key]
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._options.as_kwargs())
-
-    def __len__(self) -> int:
-        return len(self._options.as_kwargs())
-
-
-# Kernel modules written before the declared kernels (see rbm_nb._kernels)
-# used ``@njit(**NJIT_OPTIONS)``; the same options as a read-only mapping.
-NJIT_OPTIONS: Final[Mapping[str, Any]] = _DecorationTimeOptions(KERNEL)
 
 # Quaternions whose norm differs from 1 by less than this are normalised
 # silently (recorded data is stored with ~4-7 significant digits); beyond it the

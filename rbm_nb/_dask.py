@@ -22,12 +22,13 @@ result; dask is imported only when dask-backed data arrives.
 
 from __future__ import annotations
 
-import math
 import sys
 from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
+
+from ._engine.chain import chain
 
 # samples of not-a-knot spline influence kept on each side: 0.268**32 < 1e-18
 SPLINE_HALO = 32
@@ -50,15 +51,6 @@ def is_dask(obj: Any) -> bool:
         and isinstance(obj, xarray.DataArray)
         and isinstance(obj.data, module.Array)
     )
-
-
-def filter_halo(order: int, cutoff: float, padlen: int) -> int:
-    """Samples after which a forward-backward Butterworth response is below 1e-16."""
-    from scipy.signal import butter
-
-    _, poles, _ = butter(order, cutoff, output="zpk")
-    radius = float(np.max(np.abs(poles)))
-    return padlen + int(math.ceil(math.log(1e-16) / math.log(radius)))
 
 
 # ---------------------------------------------------------------------------
@@ -236,12 +228,8 @@ def sign_continuous(q, time_dim: str, qdim: str):
 
 def frame_time_range(outof, into):
     """First and last time at which every continuous moving frame of the chain is defined."""
-    up, down = _path(outof), _path(into)
-    while up and down and up[-1] is down[-1]:
-        up.pop()
-        down.pop()
     firsts, lasts = [], []
-    for frame in up + down:
+    for frame, _ in chain(outof, into):
         ts = frame.timestamps
         if ts is not None and not frame.discrete:
             firsts.append(ts[0])
@@ -249,14 +237,6 @@ def frame_time_range(outof, into):
     if not firsts:
         return None
     return max(firsts), min(lasts)
-
-
-def _path(frame) -> list:
-    path = []
-    while frame is not None:
-        path.append(frame)
-        frame = frame.parent
-    return path
 
 
 def transform(

@@ -12,11 +12,10 @@ from typing import Any
 import numpy as np
 
 from ._config import UNIT_QUATERNION_TOLERANCE
-from ._door import float_array, kernel_array, resolve_axis
+from ._door import kernel_array, resolve_axis
 from ._kernels import rows as _rows
 
 __all__ = [
-    "as_float_array",
     "resolve_axis",
     "is_scalar",
     "check_last_axis",
@@ -30,10 +29,6 @@ __all__ = [
 ]
 
 WHAT_MODES = ("reference_frame", "moving_frame", "representation_frame")
-
-
-# the door's conversions under the names the core used before it existed
-as_float_array = float_array
 
 
 def is_scalar(value: Any) -> bool:

@@ -44,9 +44,8 @@ from itertools import product
 import numpy as np
 
 from ._config import UNIT_QUATERNION_TOLERANCE
-from ._door import kernel_array
+from ._door import float_array, kernel_array
 from ._kernels import conversions as _kc
-from ._validation import as_float_array
 
 __all__ = [
     "EULER_ORDERS",
@@ -80,7 +79,7 @@ MATRIX_TOLERANCE = 1e-6
 
 def _as_array(value, name: str, tail: tuple[int, ...]) -> np.ndarray:
     """``value`` as float64 whose last axes have the shape ``tail``."""
-    arr = as_float_array(value, name)
+    arr = float_array(value, name)
     k = len(tail)
     if arr.ndim < k or arr.shape[arr.ndim - k :] != tail:
         expected = "(..., " + ", ".join(map(str, tail)) + ")" if tail else "(...)"

@@ -17,18 +17,15 @@ conversion and DataArray support around them.
 
 from __future__ import annotations
 
+import sys
 from typing import Any
 
 import numpy as np
 
 from . import _dask, _time
-from ._dask import GRADIENT_HALO, SPLINE_HALO, filter_halo
+from ._dask import GRADIENT_HALO, SPLINE_HALO
 from ._door import ArrayInput, kernel_array
 from ._door import is_dataarray as _is_dataarray
-from ._engine.velocity import (
-    _BUTTER_ORDER,
-    _FILTER_PADLEN,
-)
 from ._engine.velocity import (
     angular_series as _angular_series,
 )
@@ -37,6 +34,9 @@ from ._engine.velocity import (
 )
 from ._engine.velocity import (
     linear_series as _linear_series,
+)
+from ._engine.velocity import (
+    lowpass_reach as _lowpass_reach,
 )
 from ._kernels import conversions as _kc
 from ._kernels import quaternion as _qk
@@ -150,8 +150,10 @@ def _lazy_estimate(eager, arr, dim, axis, timestamps, time_axis, halo, **options
             "away, beyond what a chunk sees; call .compute() first"
         )
     if options.get("cutoff") is not None:
-        _check_options(None, options["cutoff"], _FILTER_PADLEN + 1)
-        halo = max(halo, filter_halo(_BUTTER_ORDER, options["cutoff"], _FILTER_PADLEN))
+        # the value of cutoff, before it sets the halo; the series' length is
+        # checked by each chunk's eager call, which reads the whole halo
+        _check_options(None, options["cutoff"], sys.maxsize)
+        halo = max(halo, _lowpass_reach(options["cutoff"]))
     quaternions = options.pop("quaternions", False)
     return _dask.estimate(
         eager, arr, dim, axis, timestamps, time_axis, halo, quaternions, **options

@@ -144,10 +144,10 @@ def _unit(q) -> np.ndarray:
 
 
 def _from_frame(value, name: str, frame) -> Trajectory:
-    from .frames import ReferenceFrame, _resolve
+    from .frames import ReferenceFrame, resolve_frame
     from .lookups import lookup_pose
 
-    moving = _resolve(value, name)
+    moving = resolve_frame(value, name)
     if moving.timestamps is None:
         raise ValueError(
             f"{name}: frame {moving.name!r} is static; a trajectory needs a moving frame"
@@ -157,7 +157,7 @@ def _from_frame(value, name: str, frame) -> Trajectory:
             raise ValueError(f"{name}: frame {moving.name!r} is a root; pass frame=")
         into = moving.parent
     else:
-        into = _resolve(frame, "frame")
+        into = resolve_frame(frame, "frame")
     assert isinstance(moving, ReferenceFrame)
     p, q, t = lookup_pose(moving, into, return_timestamps=True)
     return Trajectory(
@@ -508,14 +508,14 @@ class TrajectoryError:
         ReferenceFrame
             The registered frame: all estimate samples, alignment applied.
         """
-        from .frames import _resolve, register_frame
+        from .frames import register_frame, resolve_frame
 
         traj = self.aligned_estimate
         register_frame(
             name, parent=parent, translation=traj.positions,
             rotation=traj.orientations, timestamps=traj.timestamps, update=update,
         )  # fmt: skip
-        return _resolve(name, "name")
+        return resolve_frame(name, "name")
 
 
 def _result(metric, rel, values, times, ref, est, alignment, est_full, pairs=None,

@@ -22,13 +22,12 @@ from typing import Any, TypeAlias
 import numpy as np
 
 from . import _frame_paths, _time
-from ._door import ArrayInput
+from ._door import ArrayInput, float_array
 from ._engine import chain as _chain
 from ._engine import transform as _transform
 from ._engine import twist as _twist
 from ._kernels import quaternion as kq
 from ._validation import (
-    as_float_array,
     check_finite,
     check_missing_rows,
     is_scalar,
@@ -461,7 +460,7 @@ class ReferenceFrame:
         if translation is None:
             t: np.ndarray = np.zeros(t_shape)
         else:
-            t = as_float_array(translation, f"{label}translation")
+            t = float_array(translation, f"{label}translation")
             if t.shape != t_shape:
                 raise ValueError(_shape_message(label, "translation", t.shape, t_shape))
             if self._track is None:
@@ -473,7 +472,7 @@ class ReferenceFrame:
             r[..., 0] = 1.0
             stored = r
         else:
-            stored = as_float_array(rotation, f"{label}rotation")
+            stored = float_array(rotation, f"{label}rotation")
             if stored.shape != r_shape:
                 raise ValueError(
                     _shape_message(label, "rotation", stored.shape, r_shape)
@@ -764,7 +763,7 @@ class ReferenceFrame:
         inverse: bool = False,
     ) -> ReferenceFrame:
         """A static frame rotated by a (3, 3) rotation matrix wrt its parent."""
-        mat = as_float_array(mat, "mat")
+        mat = float_array(mat, "mat")
         if mat.shape != (3, 3):
             raise ValueError(f"mat must have shape (3, 3), got {mat.shape}")
         try:  # orthonormal and det +1, to a tolerance the message names
@@ -991,10 +990,6 @@ class ReferenceFrame:
             cutoff,
         )
         return (out, ts) if return_timestamps else out
-
-
-# the name other modules imported before resolve_frame was public
-_resolve = resolve_frame
 
 
 def _optional(frame: Any, argument: str) -> ReferenceFrame | None:

@@ -17,10 +17,9 @@ from __future__ import annotations
 import numpy as np
 
 from . import _pose_algebra as _pa
-from ._door import kernel_array
+from ._door import float_array, kernel_array
 from ._kernels import quaternion as _kq
 from ._validation import (
-    as_float_array,
     check_finite,
     check_last_axis,
     normalize_quaternions,
@@ -38,7 +37,7 @@ _AXES = "xyz"
 
 
 def _as_float(value, name: str, tail: int) -> np.ndarray:
-    arr = as_float_array(value, name)
+    arr = float_array(value, name)
     check_last_axis(arr, tail, name)
     return arr
 

@@ -48,8 +48,7 @@ import numbers
 import numpy as np
 
 from . import conversions
-from ._door import kernel_array
-from ._validation import as_float_array
+from ._door import float_array, kernel_array
 
 __all__ = [
     "REPRESENTATIONS",
@@ -105,7 +104,7 @@ def _kernels():
 
 def _rows(value, name: str, tail: tuple[int, ...]) -> tuple[np.ndarray, tuple]:
     """``value`` as C-contiguous float64 rows ``(n, *tail)`` plus its leading shape."""
-    arr = as_float_array(value, name)
+    arr = float_array(value, name)
     k = len(tail)
     if arr.ndim < k or arr.shape[arr.ndim - k :] != tail:
         expected = "(..., " + ", ".join(map(str, tail)) + ")"
@@ -144,7 +143,7 @@ def _poses(value, name: str, rotation: bool = True) -> tuple[np.ndarray, tuple]:
     ``rotation=False`` skips the SO(3) test (for first-order poses such as
     the output of ``delta2tr``).
     """
-    arr = as_float_array(value, name)
+    arr = float_array(value, name)
     if arr.ndim < 2 or arr.shape[-2:] != (4, 4):
         raise ValueError(f"{name} must have shape (..., 4, 4), got {arr.shape}")
     lead = arr.shape[:-2]
@@ -340,7 +339,7 @@ def tr2adjoint(T) -> np.ndarray:
            [ 0.,  0., -1.],
            [ 0.,  1.,  0.]])
     """
-    arr = as_float_array(T, "T")
+    arr = float_array(T, "T")
     if arr.shape[-2:] == (3, 3):
         rows, lead = _rows(arr, "T", (3, 3))
         _check_rotations(rows, lead, "T")
@@ -454,7 +453,7 @@ def rotvelxform(
     code = _representation(representation)
     if not (isinstance(tol, numbers.Real) and tol >= 0):
         raise ValueError(f"tol must be a non-negative number, got {tol!r}")
-    arr = as_float_array(Γ, "Γ")
+    arr = float_array(Γ, "Γ")
     if arr.shape[-2:] == (3, 3):
         rot, lead = _rows(arr, "Γ", (3, 3))
         angles = kernel_array(_angles_of_rotations(rot, lead, code))
@@ -599,7 +598,7 @@ def trnorm(T) -> np.ndarray:
     >>> bool(np.allclose(R1.T @ R1, np.eye(3)))
     True
     """
-    arr = as_float_array(T, "T")
+    arr = float_array(T, "T")
     tail = (3, 3) if arr.shape[-2:] == (3, 3) else (4, 4)
     rows, lead = _rows(arr, "T", tail)
     out, bad = _kernels().trnorm(rows)
@@ -615,7 +614,7 @@ def _fractions(s) -> np.ndarray:
     """``s`` as an array of fractions; an integer > 1 is a number of steps."""
     if isinstance(s, numbers.Integral) and not isinstance(s, bool) and int(s) > 1:
         return np.linspace(0.0, 1.0, int(s))
-    arr = as_float_array(s, "s")
+    arr = float_array(s, "s")
     if not np.isfinite(arr).all() or (arr < 0).any() or (arr > 1).any():
         flat = arr.reshape(-1)
         i = int(np.argmax(~np.isfinite(flat) | (flat < 0) | (flat > 1)))
@@ -672,7 +671,7 @@ def trinterp(start, end, s, shortest: bool = True) -> np.ndarray:
            [2. , 2.5, 3. ],
            [4. , 5. , 6. ]])
     """
-    end_arr = as_float_array(end, "end")
+    end_arr = float_array(end, "end")
     rotation_only = end_arr.shape[-2:] == (3, 3)
     if rotation_only:
         end_arr = _embed(end_arr)
@@ -680,7 +679,7 @@ def trinterp(start, end, s, shortest: bool = True) -> np.ndarray:
     if start is None:
         start_rows, start_lead = np.eye(4)[None], ()
     else:
-        start_arr = as_float_array(start, "start")
+        start_arr = float_array(start, "start")
         if (start_arr.shape[-2:] == (3, 3)) != rotation_only:
             raise ValueError(
                 f"start and end must both be rotations (3, 3) or both poses "

@@ -224,26 +224,6 @@ _NORM3[2] *= 3.0  # one far-from-unit row
 _INFQ = _turning(5)
 _INFQ[3, 0] = np.inf
 
-I12_1 = (
-    "issue 12 item 1: one sample is refused at the door (no kernel read out of bounds)"
-)
-I12_3 = "issue 12 item 3: a time dimension without coordinate is refused"
-I12_4 = "issue 12 item 4: one rule for quaternions everywhere (far-from-unit refused)"
-I12_5 = "issue 12 item 5: non-finite input gets a clear error naming the argument"
-I12_12 = (
-    "issue 12 item 12: say that no sample falls in the window, not 'do not overlap'"
-)
-I12_13 = "issue 12 item 13: ICP validates its arguments at the door"
-I11_1Q = (
-    "issue 11 item 1: accessor qinterp raises NotImplementedError like the reference"
-)
-I11_1R = (
-    "issue 11 item 1: the registry supports del / item assignment like the reference"
-)
-I11_1D = (
-    "issue 11 item 1: registering the same frame object twice raises like the reference"
-)
-PROBE = "hardening probe (not in an issue yet): "
 
 # one row per line group reads as a table; keep the formatter out
 # fmt: off

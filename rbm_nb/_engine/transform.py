@@ -10,10 +10,9 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _time
-from .._door import kernel_array
+from .._door import float_array, kernel_array
 from .._kernels import resample as kr
 from .._validation import (
-    as_float_array,
     check_no_inf,
     normalize_quaternions,
     resolve_axis,
@@ -31,7 +30,7 @@ class Blocks:
     __slots__ = ("data", "track", "moved_shape", "axis", "time_axis", "ndim")
 
     def __init__(self, arr, size: int, axis, time_axis, timestamps, kind: str):
-        arr = as_float_array(arr, "arr")
+        arr = float_array(arr, "arr")
         if arr.ndim == 0:
             raise ValueError(f"arr must have an axis of length {size}, got a scalar")
         self.ndim = arr.ndim

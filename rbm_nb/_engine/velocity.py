@@ -17,6 +17,7 @@ entry points used by the velocity lookups and by
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -45,6 +46,19 @@ _FILTER_PADLEN = 3 * (_BUTTER_ORDER + 1)
 # ---------------------------------------------------------------------------
 # argument checks shared by the public and the array-level functions
 # ---------------------------------------------------------------------------
+
+
+def lowpass_reach(cutoff: float) -> int:
+    """Samples beyond which the forward-backward low-pass's response is below 1e-16.
+
+    What a chunk of a longer series must read on each side (besides the
+    padding) for its filtered values to equal those of the whole series.
+    """
+    from scipy.signal import butter
+
+    _, poles, _ = butter(_BUTTER_ORDER, cutoff, output="zpk")
+    radius = float(np.max(np.abs(poles)))
+    return _FILTER_PADLEN + int(math.ceil(math.log(1e-16) / math.log(radius)))
 
 
 def check_options(

@@ -59,7 +59,7 @@ AXIS_COLORS = ["#ff0000", "#00ff00", "#0000ff"]
 def _resolve(frame, argument: str):
     from .. import frames
 
-    return frames._resolve(frame, argument)
+    return frames.resolve_frame(frame, argument)
 
 
 def _slug(text: str) -> str:

@@ -7,8 +7,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._door import kernel_array
-from .._validation import as_float_array, check_finite, check_last_axis
+from .._door import float_array, kernel_array
+from .._validation import check_finite, check_last_axis
 from ..rigid_transform import Transform
 from . import _mesh
 
@@ -28,7 +28,7 @@ def _read_only(arr: np.ndarray) -> np.ndarray:
 
 
 def _points(value, name: str) -> np.ndarray:
-    arr = as_float_array(value, name)
+    arr = float_array(value, name)
     check_last_axis(arr, 3, name)
     check_finite(arr, name)
     return arr
@@ -119,14 +119,14 @@ class GridSDF:
         fill_value=np.inf,
         use_abs: bool = False,
     ):
-        data = as_float_array(sdf_data, "sdf_data")
+        data = float_array(sdf_data, "sdf_data")
         if data.ndim != 3 or min(data.shape) < 2:
             raise ValueError(
                 "sdf_data must have shape (nx, ny, nz) with every dimension at "
                 f"least 2, got shape {data.shape}"
             )
         check_finite(data, "sdf_data")
-        origin = as_float_array(origin, "origin")
+        origin = float_array(origin, "origin")
         if origin.shape != (3,):
             raise ValueError(f"origin must have shape (3,), got shape {origin.shape}")
         check_finite(origin, "origin")
@@ -233,16 +233,16 @@ class GridSDF:
                     "points are in the grid's own frame, which needs no lookup)"
                 )
             return None
-        from ..frames import _resolve
+        from ..frames import resolve_frame
 
-        query = _resolve(frame, f"{what}: frame")
+        query = resolve_frame(frame, f"{what}: frame")
         if self._frame is None:
             raise ValueError(
                 f"{what}: this GridSDF is not attached to a frame, so points in "
                 f"frame {query.name!r} cannot be placed in it; give frame= when "
                 "building the GridSDF or query with frame=None"
             )
-        grid = _resolve(self._frame, "the GridSDF's frame")
+        grid = resolve_frame(self._frame, "the GridSDF's frame")
         if query is grid:
             return None
         from ..transforms import transform_points, transform_quaternions
@@ -458,7 +458,7 @@ class GridSDF:
         u = u / norm[..., None]
         o = np.broadcast_to(o, lead + (3,))
         u = np.broadcast_to(u, lead + (3,))
-        reach = as_float_array(max_distance, "max_distance")
+        reach = float_array(max_distance, "max_distance")
         if np.isnan(reach).any() or not np.all(reach > 0.0):
             raise ValueError(
                 f"max_distance must be positive (inf allowed), got {max_distance!r}"

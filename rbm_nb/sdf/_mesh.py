@@ -11,8 +11,8 @@ import tempfile
 
 import numpy as np
 
-from .._door import kernel_array
-from .._validation import as_float_array, check_finite, check_last_axis
+from .._door import float_array, kernel_array
+from .._validation import check_finite, check_last_axis
 
 # more nodes than this is almost certainly a resolution given in the wrong unit
 MAX_GRID_NODES = 50_000_000
@@ -203,7 +203,7 @@ def _load_mesh(mesh):
 
 
 def _finite_rows(value, name: str) -> np.ndarray:
-    arr = as_float_array(value, name)
+    arr = float_array(value, name)
     check_last_axis(arr, 3, name)
     check_finite(arr, name)
     return arr

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
 dask = pytest.importorskip("dask")
 import dask.array as dsa  # noqa: E402
 from dask.callbacks import Callback  # noqa: E402
+from recordings import REAL_DIR, real_recording  # noqa: E402
 
 import rbm_nb as rbm  # noqa: E402
 from rbm_nb.data import synthetic_head_eye  # noqa: E402
@@ -26,9 +29,23 @@ class ComputeCounter(Callback):
         self.count += 1
 
 
-@pytest.fixture(scope="module")
-def recording():
-    return synthetic_head_eye(duration=20.0, seed=3)
+@pytest.fixture(scope="module", params=["synthetic", "real"])
+def recording(request):
+    """20 s of the synthetic recording, or the first 60 s of the real one
+    (its irregular eye clock, NaN rows and gaps included)."""
+    if request.param == "synthetic":
+        return synthetic_head_eye(duration=20.0, seed=3)
+    real = real_recording()
+    if real is None:
+        pytest.fail(f"{REAL_DIR} is missing: CI has ../shared beside the clone")
+    head, left_eye, right_eye = real
+    start = head.time.values[0]
+    first = slice(start, start + np.timedelta64(60, "s"))
+    return SimpleNamespace(
+        head=head.sel(time=first),
+        left_eye=left_eye.sel(time=first),
+        right_eye=right_eye.sel(time=first),
+    )
 
 
 @pytest.fixture

@@ -27,6 +27,7 @@ import rbm_nb as rbm
 pytestmark = [pytest.mark.browser, pytest.mark.slow, pytest.mark.timeout(300)]
 
 from browser_support import (  # noqa: E402
+    ARTIFACTS,
     MEASURE_JS,
     REPO,
     JupyterLab,
@@ -461,3 +462,62 @@ def test_plot_click_seeks_and_moves_the_3d_view(page, tmp_path):
     assert shown == pytest.approx(target, abs=0.05)
     save("export_plot_seek.png", page.screenshot(full_page=True))
     assert page.errors == []
+
+
+def _seek_export(page, seconds: float) -> None:
+    page.evaluate(
+        """(t) => { const s = document.querySelector('.rbm-slider');
+                    s.value = String(t); s.dispatchEvent(new Event('input', {bubbles: true})); }""",
+        seconds,
+    )
+    page.wait_for_timeout(300)
+
+
+def test_export_hides_the_gaze_ray_where_the_real_eye_was_not_seen(
+    browser, tmp_path, monkeypatch
+):
+    """The explorer export on the real recording: no left-eye ray inside the eye
+    tracker's longest gap (1.06 s), a ray where the pupil was seen confidently."""
+    import xarray as xr
+    from conftest import SHARED
+
+    from rbm_nb.explorer import write_explorer_html
+
+    folder = SHARED / "data" / "rbm-data"
+    monkeypatch.setenv("RBM_NB_DATA_DIR", str(folder))
+    path = write_explorer_html(
+        tmp_path / "explorer.html", source="remote", progress=False
+    )
+    eye = xr.load_dataset(folder / "left_eye.nc")
+    start = xr.load_dataset(folder / "head.nc").time.values[0]
+    seconds = (eye.time.values - start) / np.timedelta64(1, "s")
+    gap = int(np.argmax(np.diff(seconds)))
+    assert seconds[gap + 1] - seconds[gap] > 1.0
+    seen = ~np.isnan(eye.orientation.values).any(axis=1) & (
+        eye.confidence.values >= 0.6
+    )
+    run = np.convolve(seen.astype(int), np.ones(200, int), "valid")
+    well_seen = float(seconds[int(np.argmax(run == 200)) + 100])
+
+    page = browser.new_page(viewport={"width": 1400, "height": 1000})
+    try:
+        page.goto(path.as_uri())
+        page.wait_for_function(
+            """() => { const el = document.querySelector('.rbm-scene');
+                       return el && el.rbmView && el.rbmView.store.tracks.size > 0; }""",
+            timeout=120000,
+        )
+        paths = page.evaluate(
+            "() => [...document.querySelector('.rbm-scene').rbmView.store.tracks.keys()]"
+        )
+        [left] = [p for p in paths if "left_eye" in p]
+        visible = "(p) => document.querySelector('.rbm-scene').rbmView.node(p).visible"
+        _seek_export(page, (seconds[gap] + seconds[gap + 1]) / 2)
+        assert page.evaluate(visible, left) is False
+        ARTIFACTS.mkdir(exist_ok=True)
+        page.screenshot(path=str(ARTIFACTS / "export_real_gap_no_ray.png"))
+        _seek_export(page, well_seen)
+        assert page.evaluate(visible, left) is True
+        page.screenshot(path=str(ARTIFACTS / "export_real_ray_seen.png"))
+    finally:
+        page.close()

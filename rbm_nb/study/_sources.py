@@ -81,8 +81,9 @@ class Recording:
 
 
 # netCDF4's HDF5 library is not thread-safe, and xarray locks only its reads,
-# not the opening of files: every file access of a study goes through this
-# lock (tasks on the threaded scheduler share one process).
+# not the opening of files: every file access of a study -- opening, reading,
+# writing results -- goes through this lock (tasks on the threaded scheduler
+# share one process).
 _NETCDF_LOCK = threading.RLock()
 
 

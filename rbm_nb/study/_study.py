@@ -9,7 +9,7 @@ from typing import Any
 import xarray as xr
 
 from . import _windows
-from ._sources import Recording, RecordingSource, find_sources
+from ._sources import _NETCDF_LOCK, Recording, RecordingSource, find_sources
 
 Analysis = Callable[..., Any]
 FrameBuilder = Callable[[Recording], Mapping[str, Any]]
@@ -272,7 +272,9 @@ def _concat_recordings(results: Mapping[str, Any]):
 def _write_netcdf(result, path: Path) -> Path:
     from .._atomic import atomic_path
 
-    with atomic_path(path) as tmp:
+    # writing goes through HDF5 too: under the lock that keeps the tasks on
+    # threads from reaching it at once (see _sources)
+    with _NETCDF_LOCK, atomic_path(path) as tmp:
         result.to_netcdf(tmp)
     return path
 

@@ -13,6 +13,10 @@ Kernels are compiled with one of two option sets, both typed:
   ``fastmath={"contract"}`` (fused multiply-add only, measured harmless: the
   results stay within one ulp of the libm versions). Used by the branch-free
   conversion loops.
+* :data:`PARALLEL_KERNEL`: :data:`KERNEL` with ``parallel=True``, for the
+  ``prange`` twins of kernels over many rows. They are only ever launched
+  through :func:`rbm_nb._parallel.launch`, which picks the serial twin for
+  short inputs and whenever a parallel launch would be unsafe.
 """
 
 from __future__ import annotations
@@ -34,6 +38,7 @@ class JitOptions:
     error_model: Literal["python", "numpy"] = "python"
     boundscheck: bool | None = None  # None: numba's default (NUMBA_BOUNDSCHECK)
     inline: Literal["never", "always"] = "never"
+    parallel: bool = False
     extra: Mapping[str, Any] = field(default_factory=dict)
 
     def as_kwargs(self) -> dict[str, Any]:
@@ -48,6 +53,8 @@ class JitOptions:
             "error_model": self.error_model,
             "inline": self.inline,
         }
+        if self.parallel:
+            kwargs["parallel"] = True
         if self.boundscheck is not None:
             kwargs["boundscheck"] = self.boundscheck
         kwargs.update(self.extra)
@@ -62,12 +69,14 @@ class JitOptions:
             self.error_model,
             self.boundscheck,
             "always",
+            self.parallel,
             self.extra,
         )
 
 
 KERNEL: Final = JitOptions()
 VECTOR_KERNEL: Final = JitOptions(fastmath=frozenset({"contract"}), error_model="numpy")
+PARALLEL_KERNEL: Final = JitOptions(parallel=True)
 
 
 # Quaternions whose norm differs from 1 by less than this are normalised

@@ -1,0 +1,120 @@
+"""When a kernel may run on several cores, and how many.
+
+Kernels that loop over many independent rows have a ``prange`` twin compiled
+with :data:`rbm_nb._config.PARALLEL_KERNEL`. :func:`launch` chooses between
+the serial kernel and its twin for each call. The twin is used only when all
+of these hold:
+
+* the call has at least :data:`MIN_ROWS` rows: below that, waking numba's
+  thread pool costs more than the second core saves (the threshold is
+  measured by ``benchmarks/bench_parallel.py``);
+* more than one thread is allowed (:func:`threads`);
+* no other thread of this process is running a parallel kernel. numba's
+  ``workqueue`` threading layer -- the only one a plain ``pip install`` is
+  sure to have, as OpenMP needs the system's libgomp and TBB the ``tbb``
+  wheel -- aborts the process when two threads launch parallel kernels at
+  once. So parallel launches take one lock without waiting, and a thread
+  that finds it taken runs the serial kernel instead. That is also what
+  dask's threaded scheduler wants: its threads already keep the cores busy,
+  and the serial kernels release the GIL (``nogil=True``);
+* the process is not a fork of one that has launched parallel kernels:
+  GNU OpenMP's thread pool does not survive ``fork`` and the child would
+  hang.
+
+The number of threads is ``RBM_NB_NUM_THREADS`` when set, else numba's own
+setting (``NUMBA_NUM_THREADS``, by default the number of cores). Choosing
+numba's threading layer is left to the user (``NUMBA_THREADING_LAYER``):
+every layer is safe under the rules above.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from collections.abc import Callable
+from typing import Any, Final, TypeVar
+
+__all__ = ["MIN_ROWS", "ENV_THREADS", "threads", "launch"]
+
+#: Rows from which a parallel twin is used (benchmarks/bench_parallel.py).
+MIN_ROWS: Final = 50_000
+
+#: Environment variable capping the threads of rbm_nb's parallel kernels.
+ENV_THREADS: Final = "RBM_NB_NUM_THREADS"
+
+_LOCK = threading.Lock()
+# pid of the process that first launched a parallel kernel (None: none yet)
+_launched_in: int | None = None
+
+_Result = TypeVar("_Result")
+
+
+def threads() -> int:
+    """How many threads a parallel kernel may use (1: run serially).
+
+    ``RBM_NB_NUM_THREADS`` when set (at most numba's ``NUMBA_NUM_THREADS``),
+    else numba's setting.
+
+    Raises
+    ------
+    ValueError
+        If ``RBM_NB_NUM_THREADS`` is not a positive integer.
+    """
+    import numba
+
+    available = int(numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]
+    raw = os.environ.get(ENV_THREADS, "").strip()
+    if not raw:
+        return available
+    try:
+        wanted = int(raw)
+    except ValueError:
+        wanted = 0
+    if wanted < 1:
+        raise ValueError(
+            f"{ENV_THREADS} must be a positive integer (the number of threads "
+            f"for rbm_nb's parallel kernels), got {raw!r}"
+        )
+    return min(wanted, available)
+
+
+def launch(
+    serial: Callable[..., _Result],
+    parallel: Callable[..., _Result],
+    rows: int,
+    *args: Any,
+) -> _Result:
+    """``parallel(*args)`` when it is worth it and safe, else ``serial(*args)``.
+
+    Parameters
+    ----------
+    serial, parallel : callable
+        A kernel and its ``prange`` twin, taking the same arguments and
+        returning the same results.
+    rows : int
+        Rows the call processes (compared with :data:`MIN_ROWS`).
+    *args
+        The kernel's arguments.
+    """
+    global _launched_in
+    if rows < MIN_ROWS:
+        return serial(*args)
+    n = threads()
+    pid = os.getpid()
+    if n < 2 or (_launched_in is not None and _launched_in != pid):
+        return serial(*args)
+    if not _LOCK.acquire(blocking=False):
+        return serial(*args)
+    try:
+        import numba
+
+        _launched_in = pid
+        # numba's thread count is per calling thread: set it for this call only
+        previous = numba.get_num_threads()
+        numba.set_num_threads(n)
+        try:
+            return parallel(*args)
+        finally:
+            numba.set_num_threads(previous)
+    finally:
+        _LOCK.release()

@@ -1,0 +1,100 @@
+"""rbm_nb._parallel: which twin a call runs, and with how many threads."""
+
+from __future__ import annotations
+
+import os
+import threading
+
+import numba
+import pytest
+
+from rbm_nb import _parallel
+
+
+def _twins():
+    ran: list[tuple[str, int]] = []
+
+    def serial(x):
+        ran.append(("serial", 1))
+        return x
+
+    def parallel(x):
+        ran.append(("parallel", numba.get_num_threads()))
+        return x
+
+    return ran, serial, parallel
+
+
+@pytest.fixture(autouse=True)
+def _two_threads_allowed(monkeypatch):
+    monkeypatch.delenv(_parallel.ENV_THREADS, raising=False)
+    monkeypatch.setattr(numba.config, "NUMBA_NUM_THREADS", max(2, os.cpu_count() or 2))
+    monkeypatch.setattr(_parallel, "_launched_in", None)
+
+
+def test_short_calls_run_serially():
+    ran, serial, parallel = _twins()
+    assert _parallel.launch(serial, parallel, _parallel.MIN_ROWS - 1, 7) == 7
+    assert ran == [("serial", 1)]
+
+
+def test_long_calls_run_in_parallel_and_restore_the_thread_count(monkeypatch):
+    monkeypatch.setenv(_parallel.ENV_THREADS, "2")
+    before = numba.get_num_threads()
+    ran, serial, parallel = _twins()
+    assert _parallel.launch(serial, parallel, _parallel.MIN_ROWS, 7) == 7
+    assert ran == [("parallel", 2)]
+    assert numba.get_num_threads() == before
+
+
+def test_one_thread_means_serial(monkeypatch):
+    monkeypatch.setenv(_parallel.ENV_THREADS, "1")
+    ran, serial, parallel = _twins()
+    _parallel.launch(serial, parallel, 10 * _parallel.MIN_ROWS, 0)
+    assert ran == [("serial", 1)]
+
+
+def test_the_environment_cannot_ask_for_more_than_numba_has(monkeypatch):
+    monkeypatch.setenv(_parallel.ENV_THREADS, "10000")
+    assert _parallel.threads() == numba.config.NUMBA_NUM_THREADS
+
+
+@pytest.mark.parametrize("raw", ["0", "-2", "two", "1.5"])
+def test_a_bad_thread_count_names_the_variable(monkeypatch, raw):
+    monkeypatch.setenv(_parallel.ENV_THREADS, raw)
+    with pytest.raises(ValueError, match=_parallel.ENV_THREADS):
+        _parallel.threads()
+
+
+def test_a_second_thread_runs_serially_while_a_parallel_kernel_runs():
+    inside = threading.Event()
+    release = threading.Event()
+    ran: list[str] = []
+
+    def slow_parallel(x):
+        inside.set()
+        release.wait(10)
+        ran.append("parallel")
+        return x
+
+    def serial(x):
+        ran.append("serial")
+        return x
+
+    first = threading.Thread(
+        target=_parallel.launch, args=(serial, slow_parallel, _parallel.MIN_ROWS, 1)
+    )
+    first.start()
+    assert inside.wait(10)
+    # the lock is taken: this thread must not launch a second parallel kernel
+    _parallel.launch(serial, slow_parallel, _parallel.MIN_ROWS, 2)
+    release.set()
+    first.join(10)
+    assert ran == ["serial", "parallel"]
+
+
+def test_a_forked_child_of_a_launching_process_runs_serially(monkeypatch):
+    monkeypatch.setattr(_parallel, "_launched_in", os.getpid() + 1)
+    ran, serial, parallel = _twins()
+    _parallel.launch(serial, parallel, _parallel.MIN_ROWS, 0)
+    assert ran == [("serial", 1)]

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _dask, _time
+from . import _dask, _parallel, _time
 from ._door import ArrayInput, kernel_array
 from ._door import float_array as _door_float_array
 from ._door import is_dataarray as _is_dataarray
@@ -600,6 +600,30 @@ def _lazy_rotate_vectors(q, v, axis: int, qaxis: int, one_to_one: bool):
     )  # fmt: skip
 
 
+def _rotate_rows(
+    q_rows: np.ndarray, v_rows: np.ndarray, q_given: Any, v_given: Any
+) -> np.ndarray:
+    """q v q⁻¹ for kernel rows (n|1, 4) x (n|1, 3), on both cores when long.
+
+    Rejects zero quaternions and infinities (named in ``q_given``/``v_given``,
+    the arrays as the caller passed them) after the one pass that finds them.
+    """
+    rows = max(q_rows.shape[0], v_rows.shape[0])
+    out, zeros, infs = _parallel.launch(
+        _rk.rotate_vectors_counted,
+        _rk.rotate_vectors_counted_parallel,
+        rows,
+        q_rows,
+        kernel_array(v_rows),
+    )
+    if infs:
+        check_no_inf(np.asarray(v_given), "v", row_axis=False)
+        check_no_inf(np.asarray(q_given, dtype=np.float64), "q")
+    if zeros:
+        _raise_zero("q", _rk.first_zero_row(q_rows), "it does not describe a rotation")
+    return out
+
+
 def rotate_vectors(
     q: ArrayInput,
     v: ArrayInput,
@@ -651,6 +675,22 @@ def rotate_vectors(
     qa = np.asarray(q)
     va = v.values if _is_dataarray(v) else v
     va = _float_array(va, "v")
+    template = v if _is_dataarray(v) else None
+    # Common case first: (n, 4) x (n, 3) contiguous float64, no copies at all
+    # and one pass (infinities and zero quaternions are counted by the kernel).
+    if (
+        one_to_one
+        and qa.ndim == 2
+        and va.ndim == 2
+        and qa.dtype == np.float64
+        and qa.shape[1] == 4
+        and va.shape[1] == 3
+        and (axis == -1 or axis == 1)
+        and (qaxis == -1 or qaxis == 1)
+        and qa.flags.c_contiguous
+        and (qa.shape[0] == va.shape[0] or qa.shape[0] == 1 or va.shape[0] == 1)
+    ):
+        return _like(template, _rotate_rows(kernel_array(qa), va, qa, va))
     check_no_inf(va, "v", row_axis=False)
     if va.ndim == 0:
         raise ValueError("v must have an axis of length 3 (x, y, z), got a scalar")
@@ -659,24 +699,6 @@ def rotate_vectors(
         raise ValueError(
             f"v must have length 3 (x, y, z) along axis={axis}, got shape {va.shape}"
         )
-
-    # Common case first: (n, 4) x (n, 3) contiguous float64, no copies at all.
-    if (
-        one_to_one
-        and qa.ndim == 2
-        and va.ndim == 2
-        and vax == 1
-        and qa.dtype == np.float64
-        and qa.shape[1] == 4
-        and _normalize_axis(qaxis, 2, "qaxis") == 1
-        and qa.flags.c_contiguous
-        and va.flags.c_contiguous
-        and (qa.shape[0] == va.shape[0] or qa.shape[0] == 1 or va.shape[0] == 1)
-    ):
-        out, zero = _rk.rotate_vectors_checked(kernel_array(qa), kernel_array(va))
-        if zero >= 0:
-            _raise_zero("q", zero, "it does not describe a rotation")
-        return _like(v if _is_dataarray(v) else None, out)
 
     qf, _ = _split(qa, qaxis, "q")
     q_shape = qf.shape[:-1]
@@ -690,20 +712,16 @@ def rotate_vectors(
                 f"use one_to_one=False to rotate every vector by every quaternion"
             )
         shape = _broadcast(q_shape, v_shape, "q and v")
-        out, zero = _rk.rotate_vectors_checked(_rows(qf, shape, 4), _rows(vm, shape, 3))
-        if zero >= 0:
-            _raise_zero("q", zero, "it does not describe a rotation")
+        out = _rotate_rows(_rows(qf, shape, 4), _rows(vm, shape, 3), qf, vm)
         out = np.moveaxis(out.reshape(shape + (3,)), -1, vax)
-        return _like(v if _is_dataarray(v) else None, out)
+        return _like(template, out)
 
     q_rows = kernel_array(qf.reshape(-1, 4))
     v_rows = kernel_array(vm.reshape(-1, 3))
     if not q_shape:
-        out, zero = _rk.rotate_vectors_checked(q_rows, v_rows)
-        if zero >= 0:
-            _raise_zero("q", zero, "it does not describe a rotation")
+        out = _rotate_rows(q_rows, v_rows, qf, vm)
         out = np.moveaxis(out.reshape(v_shape + (3,)), -1, vax)
-        return _like(v if _is_dataarray(v) else None, out)
+        return _like(template, out)
     zero = _rk.first_zero_row(q_rows)
     if zero >= 0:
         _raise_zero("q", zero, "it does not describe a rotation")

@@ -13,10 +13,17 @@ equal or one of them is 1.
 
 from __future__ import annotations
 
-import numpy as np
+import dataclasses
 
-from ._jit import F2, kernel
+import numpy as np
+from numba import get_num_threads, prange
+
+from .._config import VECTOR_KERNEL
+from ._jit import F2, helper, kernel
 from .quaternion import _qinv1, _qlog1, _rotate1
+
+# The prange twins of the branch-free loops (launched by rbm_nb._parallel).
+_PARALLEL_VECTOR = dataclasses.replace(VECTOR_KERNEL, parallel=True)
 
 
 @kernel(F2, F2)
@@ -55,6 +62,106 @@ def rotate_vectors_checked(q, v):
         out[i, 1] = ry
         out[i, 2] = rz
     return out, zero_idx
+
+
+@helper(inline=True, options=VECTOR_KERNEL)
+def _rotate_inline(w, x, y, z, vx, vy, vz):
+    """:func:`~rbm_nb._kernels.quaternion._rotate1` inlined into vector loops
+    (the same operations; a zero q gives NaN instead of raising)."""
+    n2 = w * w + x * x + y * y + z * z
+    d = x * vx + y * vy + z * vz
+    cx = y * vz - z * vy
+    cy = z * vx - x * vz
+    cz = x * vy - y * vx
+    s = w * w - (x * x + y * y + z * z)
+    k = 1.0 / n2
+    d2 = 2.0 * d
+    w2 = 2.0 * w
+    return (
+        (s * vx + d2 * x + w2 * cx) * k,
+        (s * vy + d2 * y + w2 * cy) * k,
+        (s * vz + d2 * z + w2 * cz) * k,
+    )
+
+
+@helper(inline=True, options=VECTOR_KERNEL)
+def _rotate_rows(q, v, out, lo, hi):
+    """Rotate rows lo..hi-1 into ``out``; count zero quaternions and infinities.
+
+    Branch-free, so that LLVM vectorises the loop: a zero quaternion gives
+    NaN through 0 * (1 / 0) (``error_model="numpy"``) and is counted, not
+    tested. Infinities are counted in ``v`` and in ``q`` (through |q|²).
+    ``q`` or ``v`` may hold a single row that every output row reuses.
+    """
+    zeros = 0
+    infs = 0
+    if q.shape[0] == 1 and v.shape[0] != 1:
+        w, x, y, z = q[0, 0], q[0, 1], q[0, 2], q[0, 3]
+        n2 = w * w + x * x + y * y + z * z
+        zeros += hi > lo and n2 == 0.0
+        infs += hi > lo and abs(n2) == np.inf
+        for i in range(lo, hi):
+            vx, vy, vz = v[i, 0], v[i, 1], v[i, 2]
+            infs += (abs(vx) == np.inf) + (abs(vy) == np.inf) + (abs(vz) == np.inf)
+            rx, ry, rz = _rotate_inline(w, x, y, z, vx, vy, vz)
+            out[i, 0] = rx
+            out[i, 1] = ry
+            out[i, 2] = rz
+        return zeros, infs
+    sv = 1 if v.shape[0] > 1 else 0
+    for i in range(lo, hi):
+        w, x, y, z = q[i, 0], q[i, 1], q[i, 2], q[i, 3]
+        vx, vy, vz = v[i * sv, 0], v[i * sv, 1], v[i * sv, 2]
+        n2 = w * w + x * x + y * y + z * z
+        zeros += n2 == 0.0
+        infs += (abs(n2) == np.inf) + (abs(vx) == np.inf) + (abs(vy) == np.inf)
+        infs += abs(vz) == np.inf
+        rx, ry, rz = _rotate_inline(w, x, y, z, vx, vy, vz)
+        out[i, 0] = rx
+        out[i, 1] = ry
+        out[i, 2] = rz
+    return zeros, infs
+
+
+@kernel(F2, F2, options=VECTOR_KERNEL)
+def rotate_vectors_counted(q, v):
+    """q v q⁻¹ row by row, with counts of zero quaternions and infinities.
+
+    Parameters
+    ----------
+    q : ndarray, shape (n, 4) or (1, 4)
+    v : ndarray, shape (n, 3) or (1, 3)
+
+    Returns
+    -------
+    out : ndarray, shape (n, 3)
+        NaN in rows rotated by a zero quaternion.
+    zeros : int
+        How many rows of ``q`` used are zero (the caller finds the first).
+    infs : int
+        How many infinities ``v`` and ``q`` hold (idem).
+    """
+    n = 0 if q.shape[0] == 0 or v.shape[0] == 0 else max(q.shape[0], v.shape[0])
+    out = np.empty((n, 3))
+    zeros, infs = _rotate_rows(q, v, out, 0, n)
+    return out, zeros, infs
+
+
+@kernel(F2, F2, options=_PARALLEL_VECTOR)
+def rotate_vectors_counted_parallel(q, v):
+    """:func:`rotate_vectors_counted` with blocks of rows on numba's threads."""
+    n = 0 if q.shape[0] == 0 or v.shape[0] == 0 else max(q.shape[0], v.shape[0])
+    out = np.empty((n, 3))
+    # one block per thread: each is a plain loop that LLVM vectorises
+    blocks = get_num_threads()
+    size = (n + blocks - 1) // blocks
+    zeros = 0
+    infs = 0
+    for b in prange(blocks):
+        z, f = _rotate_rows(q, v, out, min(b * size, n), min((b + 1) * size, n))
+        zeros += z
+        infs += f
+    return out, zeros, infs
 
 
 @kernel(F2)

@@ -15,12 +15,13 @@ from typing import Any
 import numpy as np
 
 from . import _dask, _parallel, _time
+from ._config import UNIT_QUATERNION_TOLERANCE
 from ._door import ArrayInput, kernel_array
 from ._door import float_array as _door_float_array
 from ._door import is_dataarray as _is_dataarray
-from ._engine.chain import stored_signs
 from ._kernels import quaternion as _qk
 from ._kernels import rotations as _rk
+from ._kernels import squad_walk as _sw
 from ._validation import (
     check_finite,
     check_missing_rows,
@@ -376,19 +377,70 @@ def _check_times(t_in: np.ndarray, t_out: np.ndarray, n: int) -> None:
         )
 
 
+def _squad_rows(q: np.ndarray, t_in: np.ndarray, t_out: np.ndarray) -> np.ndarray:
+    """Squad of one stored series (n, 4) at ``t_out`` -> (m, 4), in one pass
+    (sign continuity and the stored signs included), on both cores when long."""
+    return _parallel.launch(
+        _sw.squad_walk, _sw.squad_walk_parallel, t_out.shape[0], q, t_in, t_out
+    )
+
+
 def _squad_series(
     series: np.ndarray, t_in: np.ndarray, t_out: np.ndarray
 ) -> np.ndarray:
     """Squad of (n, b, 4) independent series sampled at ``t_in`` -> (m, b, 4)."""
+    if series.shape[1] == 1:
+        return _squad_rows(kernel_array(series[:, 0, :]), t_in, t_out)[:, None, :]
     m = t_out.shape[0]
     out = np.empty((m, series.shape[1], 4))
     for b in range(series.shape[1]):
-        stored = kernel_array(series[:, b, :])
-        q_b = _qk.unflip(stored)
-        rot = _qk.squad(q_b, t_in, t_out)
-        stored_signs(rot, q_b, stored, t_in, t_out)
-        out[:, b, :] = rot
+        out[:, b, :] = _squad_rows(kernel_array(series[:, b, :]), t_in, t_out)
     return out
+
+
+def _fast_times(t_in: Any, t_out: Any) -> tuple[np.ndarray, np.ndarray] | None:
+    """Both time arrays as seconds on ``t_in[0]`` when they are plain 1-D
+    float64 or datetime64[ns] arrays (one pass each), else None."""
+    if type(t_in) is not np.ndarray or type(t_out) is not np.ndarray:
+        return None
+    if t_in.ndim != 1 or t_out.ndim != 1 or t_in.dtype != t_out.dtype:
+        return None
+    if t_in.dtype == np.float64:
+        return kernel_array(t_in), kernel_array(t_out)
+    if t_in.dtype == np.dtype("datetime64[ns]") and t_in.size:
+        keys_in = np.ascontiguousarray(t_in).view(np.int64)
+        keys_out = np.ascontiguousarray(t_out).view(np.int64)
+        origin = int(keys_in[0])
+        if origin == np.iinfo(np.int64).min:  # NaT: the general path says so
+            return None
+        return _sw.seconds_since(keys_in, origin), _sw.seconds_since(keys_out, origin)
+    return None
+
+
+def _qinterp_fast(q: Any, t_in: Any, t_out: Any, axis: Any, qaxis: Any):
+    """qinterp of a C-contiguous float64 (n, 4) array with 1-D times along
+    axis 0, checked in one pass per array; None if it is not that case or
+    the input is bad (the general path then names what is wrong)."""
+    if not (
+        type(q) is np.ndarray
+        and type(axis) is int
+        and type(qaxis) is int
+        and axis in (0, -2)
+        and qaxis in (-1, 1)
+        and q.dtype == np.float64
+        and q.ndim == 2
+        and q.shape[1] == 4
+        and q.flags.c_contiguous
+    ):
+        return None
+    times = _fast_times(t_in, t_out)
+    if times is None or times[0].shape[0] != q.shape[0]:
+        return None
+    q = kernel_array(q)
+    tol = UNIT_QUATERNION_TOLERANCE
+    if _sw.squad_input_fault(q, times[0], times[1], tol) != 0:
+        return None
+    return _squad_rows(q, times[0], times[1])
 
 
 def _squad_along(
@@ -462,6 +514,9 @@ def qinterp(
         dim = q.dims[_normalize_axis(axis, q.ndim, "axis")]
         qdim = q.dims[_normalize_axis(qaxis, q.ndim, "qaxis")]
         return _qinterp_dataarray(q, dim, qdim, t_out, t_in=t_in, out_of_range="raise")
+    fast = _qinterp_fast(q, t_in, t_out, axis, qaxis)
+    if fast is not None:
+        return fast
     arr = np.asarray(q)
     qf, was_quaternion = _split(arr, qaxis, "q")
     ax = _normalize_axis(axis, arr.ndim, "axis")

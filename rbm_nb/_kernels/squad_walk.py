@@ -1,0 +1,643 @@
+"""Squad interpolation of a stored rotation series in one pass: numba, unchecked.
+
+:func:`squad_walk` gives what ``unflip`` → ``squad`` → ``stored_signs`` give
+together (``rbm_nb.quaternions.qinterp`` on one series), without their
+temporaries: no sign-corrected copy of the input, no coefficient tables over
+every sample. The output times are walked in order; each squad segment that
+an output time falls in is set up once, from the four samples around it,
+when the walk reaches it, and serves every output time inside it.
+
+Non-unit samples (recordings store quaternions with 4-7 digits) follow
+numpy-quaternion's arithmetic, which treats them as a unit rotation times a
+positive scale. Both parts separate exactly: the log of ``r[i]⁻¹ r[i+1]``
+is ``ln(|r[i+1]| / |r[i]|)`` plus the log of the unit rotation, squad's
+control points are unit control points times ``exp`` of a scalar, and
+``slerp(a, b, τ) = |a|^(1-τ) |b|^τ slerp(â, b̂, τ)``. So the walk
+interpolates unit quaternions along great circles (short series for the
+small arcs of densely sampled data, no exp/log of quaternions) and
+multiplies by one scalar per output row. Where a slerp would decide its
+"shorter way round" differently for the scaled values within rounding, or
+an output time lies outside its segment (extrapolation), or the scales are
+far from 1, that row takes the exact route of
+:func:`rbm_nb._kernels.quaternion.squad_evaluate` instead.
+
+Quaternions are float64 (n, 4) arrays in ``w, x, y, z`` order.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import get_num_threads, prange
+
+from .._config import PARALLEL_KERNEL
+from ._jit import F1, F2, I1, F, I, helper, kernel
+from .quaternion import (
+    _qexp1,
+    _qinv1,
+    _qlog1,
+    _qmul1,
+    _qslerp1,
+    _qslerp_unit1,
+    _sincos,
+)
+from .scalar import SERIES_ANGLE, SERIES_RATIO, atan_over_x, cos_series, sinc_series
+
+__all__ = [
+    "squad_walk",
+    "squad_walk_parallel",
+    "unflip_signs",
+    "seconds_since",
+    "squad_input_fault",
+]
+
+_PARALLEL = PARALLEL_KERNEL
+
+# Scales |q| whose log is beyond this take the exact route (the bounds used
+# to decide a slerp's direction assume scales near 1).
+_LOG_SCALE_LIMIT = 0.05
+# Margin around a slerp's direction decision within which the exact route
+# decides instead (the scaled decision is right to ~1e-15).
+_DECISION_MARGIN = 1e-9
+# Below this, exp and log1p are evaluated by their Taylor series.
+_SMALL = 1e-3
+
+# a segment's record (see _setup)
+_N_REC = 29
+# output rows per block, and the most segments a block sets up at once
+_BLOCK = 128
+_SPAN = 2 * _BLOCK
+
+
+@kernel(F2)
+def unflip_signs(q):
+    """The signs ``unflip`` gives each row of ``q`` (n, 4): +1.0 or -1.0.
+
+    ``unflip(q)[i] == unflip_signs(q)[i] * q[i]``; rows with NaN keep +1
+    and are bridged (the next row is compared with the last valid one).
+    """
+    n = q.shape[0]
+    out = np.empty(n)
+    pw = px = py = pz = 0.0
+    have = False
+    for i in range(n):
+        w, x, y, z = q[i, 0], q[i, 1], q[i, 2], q[i, 3]
+        sign = 1.0
+        if have and (pw * w + px * x + py * y + pz * z) < 0.0:
+            sign = -1.0
+        out[i] = sign
+        if not math.isnan(w + x + y + z):
+            pw, px, py, pz = sign * w, sign * x, sign * y, sign * z
+            have = True
+    return out
+
+
+@helper(inline=True)
+def _exp_small(x):
+    """exp(x), by its series near 0 (the scales of near-unit quaternions)."""
+    if abs(x) < _SMALL:
+        return 1.0 + x * (
+            1.0
+            + x
+            * 0.5
+            * (1.0 + x / 3.0 * (1.0 + x * 0.25 * (1.0 + x * 0.2 * (1.0 + x / 6.0))))
+        )
+    return math.exp(x)
+
+
+@helper(inline=True)
+def _sample(q, sign, k):
+    """Row k of the sign-continuous series as (unit w, x, y, z, ln |q|, nan)."""
+    s = sign[k]
+    w, x, y, z = s * q[k, 0], s * q[k, 1], s * q[k, 2], s * q[k, 3]
+    n2 = w * w + x * x + y * y + z * z
+    nan = math.isnan(n2)
+    e = n2 - 1.0
+    if abs(e) < _SMALL:
+        # ln |q| = log1p(e) / 2
+        lam = (
+            0.5
+            * e
+            * (1.0 - e * (0.5 - e * (1.0 / 3.0 - e * (0.25 - e * (0.2 - e / 6.0)))))
+        )
+    else:
+        lam = 0.5 * math.log(n2)
+    if n2 == 1.0:
+        return w, x, y, z, 0.0, nan
+    inv = 1.0 / math.sqrt(n2)
+    return w * inv, x * inv, y * inv, z * inv, lam, nan
+
+
+@helper(inline=True)
+def _log_vec(aw, ax, ay, az, bw, bx, by, bz):
+    """Vector part of log(a⁻¹ b) for unit a and b (its scalar part is 0)."""
+    pw, px, py, pz = _qmul1(aw, -ax, -ay, -az, bw, bx, by, bz)
+    b2 = px * px + py * py + pz * pz
+    if pw > 0.0 and b2 < (SERIES_RATIO * pw) ** 2:
+        f = atan_over_x(b2 / (pw * pw)) / pw
+        return f * px, f * py, f * pz
+    b = math.sqrt(b2)
+    if b <= 1e-14 * abs(pw):
+        if pw < 0.0:
+            return math.pi, 0.0, 0.0  # numpy-quaternion's choice (_qlog1)
+        return 0.0, 0.0, 0.0
+    f = math.atan2(b, pw) / b
+    return f * px, f * py, f * pz
+
+
+@helper(inline=True)
+def _exp_vec(ux, uy, uz):
+    """exp of the pure quaternion (0, u): (cos|u|, sin|u| u/|u|)."""
+    u2 = ux * ux + uy * uy + uz * uz
+    if u2 < SERIES_ANGLE * SERIES_ANGLE:
+        c = cos_series(u2)
+        s = sinc_series(u2)
+    else:
+        un = math.sqrt(u2)
+        c = math.cos(un)
+        s = math.sin(un) / un
+    return c, s * ux, s * uy, s * uz
+
+
+@helper(inline=True)
+def _great_circle(rec, r, o, aw, ax, ay, az, bw, bx, by, bz):
+    """Store the arc from unit a to unit b at rec[r, o:o+11].
+
+    rec[r, o:o+4] = a, rec[r, o+4:o+8] = b - (a·b) a, rec[r, o+8] = θ²,
+    rec[r, o+9] = θ, rec[r, o+10] = θ / |b - (a·b) a| (so that
+    slerp(a, b, τ) = cos(τθ) a + sin(τθ)/(τθ) τ rec[r, o+10] (b - (a·b) a)).
+    """
+    d = aw * bw + ax * bx + ay * by + az * bz
+    ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
+    o2 = ow * ow + ox * ox + oy * oy + oz * oz
+    rec[r, o] = aw
+    rec[r, o + 1] = ax
+    rec[r, o + 2] = ay
+    rec[r, o + 3] = az
+    rec[r, o + 4] = ow
+    rec[r, o + 5] = ox
+    rec[r, o + 6] = oy
+    rec[r, o + 7] = oz
+    if d > 0.0 and o2 < (SERIES_RATIO * d) ** 2:
+        # x = tan θ = |o| / d is small: θ / |o| = atan(x) / x / d
+        p = atan_over_x(o2 / (d * d))
+        g = p / d
+        theta2 = o2 * g * g
+        rec[r, o + 8] = theta2
+        rec[r, o + 9] = math.sqrt(theta2)
+        rec[r, o + 10] = g
+        return
+    so = math.sqrt(o2)
+    theta = math.atan2(so, d)
+    rec[r, o + 8] = theta * theta
+    rec[r, o + 9] = theta
+    rec[r, o + 10] = theta / so if so > 0.0 else 0.0
+
+
+@helper(inline=True)
+def _along(rec, r, o, tau):
+    """The point at τ of the arc stored at rec[r, o:o+11] (unit)."""
+    y2 = tau * tau * rec[r, o + 8]
+    if y2 < SERIES_ANGLE * SERIES_ANGLE:
+        c = cos_series(y2)
+        k = sinc_series(y2) * tau * rec[r, o + 10]
+    else:
+        y = tau * rec[r, o + 9]
+        s, c = _sincos(y)
+        k = s * rec[r, o + 10] / rec[r, o + 9]
+    return (
+        c * rec[r, o] + k * rec[r, o + 4],
+        c * rec[r, o + 1] + k * rec[r, o + 5],
+        c * rec[r, o + 2] + k * rec[r, o + 6],
+        c * rec[r, o + 3] + k * rec[r, o + 7],
+    )
+
+
+@helper(inline=True)
+def _flip_bound(la, lb):
+    """A bound on |δ|, where |a - b|² > 2 ⇔ â·b̂ < δ for |a| = e^la, |b| = e^lb.
+
+    δ = cosh(la - lb) - exp(-(la + lb)) = (la + lb) + O(la² + lb²), so
+    |δ| <= 2 (|la| + |lb|) while |la|, |lb| <= _LOG_SCALE_LIMIT.
+    """
+    return 2.0 * (abs(la) + abs(lb))
+
+
+@helper(inline=True)
+def _decide(d, bound):
+    """+1 no flip, -1 flip, 0 too close to call (|δ| <= bound, see _flip_bound)."""
+    if d > bound + _DECISION_MARGIN:
+        return 1.0
+    if d < -bound - _DECISION_MARGIN:
+        return -1.0
+    return 0.0
+
+
+@helper(inline=True)
+def _fill(q, sign, k0, k1, smp, logs):
+    """Samples k0..k1 (unit parts, ln of their scales, NaN flag) into
+    ``smp[k - k0]``, and the logs between neighbours into ``logs[k - k0]``.
+
+    The iterations are independent, so the processor overlaps them.
+    """
+    for k in range(k0, k1 + 1):
+        w, x, y, z, lam, bad = _sample(q, sign, k)
+        smp[k - k0, 0] = w
+        smp[k - k0, 1] = x
+        smp[k - k0, 2] = y
+        smp[k - k0, 3] = z
+        smp[k - k0, 4] = lam
+        smp[k - k0, 5] = 1.0 if bad else 0.0
+    for k in range(k0, k1):
+        a = k - k0
+        v = _log_vec(
+            smp[a, 0], smp[a, 1], smp[a, 2], smp[a, 3],
+            smp[a + 1, 0], smp[a + 1, 1], smp[a + 1, 2], smp[a + 1, 3],
+        )  # fmt: skip
+        logs[a, 0] = v[0]
+        logs[a, 1] = v[1]
+        logs[a, 2] = v[2]
+
+
+@helper(inline=True)
+def _setup(smp, logs, k0, t_in, n, i, rec, r):
+    """Set up segment i (0 <= i <= n-1) of the squad spline in ``rec[r]``.
+
+    ``smp`` and ``logs`` hold samples and logs from k0 on (:func:`_fill`),
+    at least i-1..i+2 (within 0..n-1). rec[r, 0:11]: the arc r[i] ->
+    r[i+1]; rec[r, 11:22]: the arc A[i] -> B[i] (unit parts; the last
+    segment continues to the virtual sample r[n-1] r[n-2]⁻¹ r[n-1]);
+    rec[r, 22:26]: ln of the scales of r[i], r[i+1], A[i], B[i];
+    rec[r, 26]: the bound of the outer slerp's direction decision;
+    rec[r, 28]: 1 if the fast route applies, 0 for the exact route, -1 if
+    the segment touches a missing sample (NaN).
+    """
+    nan = 0.0
+    for k in range(max(i - 1, 0), min(i + 2, n - 1) + 1):
+        nan += smp[k - k0, 5]
+    if nan > 0.0:
+        rec[r, 28] = -1.0
+        return
+    c = i - k0  # row of sample i
+    rw, rx, ry, rz, lr = smp[c, 0], smp[c, 1], smp[c, 2], smp[c, 3], smp[c, 4]
+    if i < n - 1:
+        nw, nx, ny, nz = smp[c + 1, 0], smp[c + 1, 1], smp[c + 1, 2], smp[c + 1, 3]
+        ln_ = smp[c + 1, 4]
+    else:
+        # r[n-1] r[n-2]⁻¹ r[n-1], of scale |r[n-1]|² / |r[n-2]|
+        pw, px, py, pz = _qmul1(
+            rw,
+            rx,
+            ry,
+            rz,
+            smp[c - 1, 0],
+            -smp[c - 1, 1],
+            -smp[c - 1, 2],
+            -smp[c - 1, 3],
+        )
+        nw, nx, ny, nz = _qmul1(pw, px, py, pz, rw, rx, ry, rz)
+        ln_ = 2.0 * lr - smp[c - 1, 4]
+    # A[i] = r[i] exp((-L[i] + L[i-1] (t[i+1]-t[i]) / (t[i]-t[i-1])) / 4)
+    if 1 <= i <= n - 2:
+        ratio = (t_in[i + 1] - t_in[i]) / (t_in[i] - t_in[i - 1])
+        ew, ex, ey, ez = _exp_vec(
+            (-logs[c, 0] + logs[c - 1, 0] * ratio) * 0.25,
+            (-logs[c, 1] + logs[c - 1, 1] * ratio) * 0.25,
+            (-logs[c, 2] + logs[c - 1, 2] * ratio) * 0.25,
+        )
+        aw, ax, ay, az = _qmul1(rw, rx, ry, rz, ew, ex, ey, ez)
+        la = lr + (-(ln_ - lr) + (lr - smp[c - 1, 4]) * ratio) * 0.25
+    else:
+        aw, ax, ay, az, la = rw, rx, ry, rz, lr
+    # B[i] = r[i+1] exp((L[i+1] (t[i+1]-t[i]) / (t[i+2]-t[i+1]) - L[i]) / -4)
+    if i <= n - 3:
+        ratio = (t_in[i + 1] - t_in[i]) / (t_in[i + 2] - t_in[i + 1])
+        ew, ex, ey, ez = _exp_vec(
+            (logs[c + 1, 0] * ratio - logs[c, 0]) * -0.25,
+            (logs[c + 1, 1] * ratio - logs[c, 1]) * -0.25,
+            (logs[c + 1, 2] * ratio - logs[c, 2]) * -0.25,
+        )
+        bw, bx, by, bz = _qmul1(nw, nx, ny, nz, ew, ex, ey, ez)
+        lb = ln_ + ((smp[c + 2, 4] - ln_) * ratio - (ln_ - lr)) * -0.25
+    else:
+        bw, bx, by, bz, lb = nw, nx, ny, nz, ln_
+    ok = 1.0
+    if max(max(abs(lr), abs(ln_)), max(abs(la), abs(lb))) > _LOG_SCALE_LIMIT:
+        ok = 0.0
+    # the inner slerps' "shorter way round", decided as for the scaled values
+    f1 = _decide(rw * nw + rx * nx + ry * ny + rz * nz, _flip_bound(lr, ln_))
+    f2 = _decide(aw * bw + ax * bx + ay * by + az * bz, _flip_bound(la, lb))
+    if f1 == 0.0 or f2 == 0.0:
+        ok = 0.0
+    _great_circle(rec, r, 0, rw, rx, ry, rz, f1 * nw, f1 * nx, f1 * ny, f1 * nz)
+    _great_circle(rec, r, 11, aw, ax, ay, az, f2 * bw, f2 * bx, f2 * by, f2 * bz)
+    rec[r, 22] = lr
+    rec[r, 23] = ln_
+    rec[r, 24] = la
+    rec[r, 25] = lb
+    # the outer slerp's scales lie between e^lr and e^ln_, and between e^la
+    # and e^lb
+    rec[r, 26] = _flip_bound(max(abs(lr), abs(ln_)), max(abs(la), abs(lb)))
+    rec[r, 27] = 0.0
+    rec[r, 28] = ok
+
+
+@helper(inline=True)
+def _prepare(q, sign, t_in, s0, s1, smp, logs, rec):
+    """Segments s0..s1 into rec[0..s1-s0], each loop over independent items."""
+    n = q.shape[0]
+    k0 = max(s0 - 1, 0)
+    _fill(q, sign, k0, min(s1 + 2, n - 1), smp, logs)
+    for i in range(s0, s1 + 1):
+        _setup(smp, logs, k0, t_in, n, i, rec, i - s0)
+
+
+@helper
+def _exact_row(q, sign, t_in, i, tau):
+    """Segment i at τ by the arithmetic of ``squad_coefficients`` and the
+    general branch of ``squad_evaluate``, on the sign-continuous samples."""
+    n = q.shape[0]
+    lo = max(i - 1, 0)
+    hi = min(i + 2, n - 1)
+    r = np.empty((4, 4))
+    for k in range(lo, hi + 1):
+        for j in range(4):
+            r[k - lo, j] = sign[k] * q[k, j]
+    logs = np.zeros((3, 4))
+    for k in range(lo, hi):
+        iw, ix, iy, iz = _qinv1(r[k - lo, 0], r[k - lo, 1], r[k - lo, 2], r[k - lo, 3])
+        nw, nx, ny, nz = _qmul1(
+            iw,
+            ix,
+            iy,
+            iz,
+            r[k + 1 - lo, 0],
+            r[k + 1 - lo, 1],
+            r[k + 1 - lo, 2],
+            r[k + 1 - lo, 3],
+        )
+        lw, lx, ly, lz = _qlog1(nw, nx, ny, nz)
+        logs[k - lo, 0] = lw
+        logs[k - lo, 1] = lx
+        logs[k - lo, 2] = ly
+        logs[k - lo, 3] = lz
+    c = i - lo
+    rw, rx, ry, rz = r[c, 0], r[c, 1], r[c, 2], r[c, 3]
+    if i < n - 1:
+        nw, nx, ny, nz = r[c + 1, 0], r[c + 1, 1], r[c + 1, 2], r[c + 1, 3]
+    else:
+        iw, ix, iy, iz = _qinv1(r[c - 1, 0], r[c - 1, 1], r[c - 1, 2], r[c - 1, 3])
+        pw, px, py, pz = _qmul1(rw, rx, ry, rz, iw, ix, iy, iz)
+        nw, nx, ny, nz = _qmul1(pw, px, py, pz, rw, rx, ry, rz)
+    if 1 <= i <= n - 2:
+        ratio = (t_in[i + 1] - t_in[i]) / (t_in[i] - t_in[i - 1])
+        ew, ex, ey, ez = _qexp1(
+            (-logs[c, 0] + logs[c - 1, 0] * ratio) * 0.25,
+            (-logs[c, 1] + logs[c - 1, 1] * ratio) * 0.25,
+            (-logs[c, 2] + logs[c - 1, 2] * ratio) * 0.25,
+            (-logs[c, 3] + logs[c - 1, 3] * ratio) * 0.25,
+        )
+        aw, ax, ay, az = _qmul1(rw, rx, ry, rz, ew, ex, ey, ez)
+    else:
+        aw, ax, ay, az = rw, rx, ry, rz
+    if i <= n - 3:
+        ratio = (t_in[i + 1] - t_in[i]) / (t_in[i + 2] - t_in[i + 1])
+        ew, ex, ey, ez = _qexp1(
+            (logs[c + 1, 0] * ratio - logs[c, 0]) * -0.25,
+            (logs[c + 1, 1] * ratio - logs[c, 1]) * -0.25,
+            (logs[c + 1, 2] * ratio - logs[c, 2]) * -0.25,
+            (logs[c + 1, 3] * ratio - logs[c, 3]) * -0.25,
+        )
+        bw, bx, by, bz = _qmul1(nw, nx, ny, nz, ew, ex, ey, ez)
+    else:
+        bw, bx, by, bz = nw, nx, ny, nz
+    s1 = _qslerp1(rw, rx, ry, rz, nw, nx, ny, nz, tau)
+    s2 = _qslerp1(aw, ax, ay, az, bw, bx, by, bz, tau)
+    return _qslerp_unit1(
+        s1[0], s1[1], s1[2], s1[3], s2[0], s2[1], s2[2], s2[3], 2.0 * tau * (1.0 - tau)
+    )
+
+
+@helper(inline=True)
+def _outer(aw, ax, ay, az, bw, bx, by, bz, tau):
+    """slerp of unit a towards unit b (no direction flip), as _qslerp_unit1."""
+    d = aw * bw + ax * bx + ay * by + az * bz
+    ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
+    o2 = ow * ow + ox * ox + oy * oy + oz * oz
+    if d > 0.0 and o2 < (SERIES_RATIO * d) ** 2:
+        inv_d = 1.0 / d
+        x2 = o2 * inv_d * inv_d
+        p = atan_over_x(x2)
+        y2 = tau * tau * x2 * p * p
+        if y2 < SERIES_ANGLE * SERIES_ANGLE:
+            c = cos_series(y2)
+            k = sinc_series(y2) * tau * p * inv_d
+            return c * aw + k * ow, c * ax + k * ox, c * ay + k * oy, c * az + k * oz
+    so = math.sqrt(o2)
+    if so == 0.0:
+        return aw, ax, ay, az
+    s, c = _sincos(tau * math.atan2(so, d))
+    k = s / so
+    return c * aw + k * ow, c * ax + k * ox, c * ay + k * oy, c * az + k * oz
+
+
+@helper(inline=True)
+def _walk(q, sign, t_in, t_out, out, first, last):
+    """Rows first..last-1 of :func:`squad_walk` (n >= 2), block by block."""
+    n = q.shape[0]
+    # scratch for one block of output rows: the segments it falls in (at
+    # most _SPAN of them when dense), their samples and logs
+    found = np.empty(_BLOCK, dtype=np.int64)
+    smp = np.empty((_SPAN + 3, 6))
+    logs = np.empty((_SPAN + 3, 3))
+    rec = np.empty((_SPAN, _N_REC))
+    dt_last = t_in[n - 1] - t_in[n - 2]
+    i = -1
+    for start in range(first, last, _BLOCK):
+        stop = min(start + _BLOCK, last)
+        ordered = True
+        for j in range(start, stop):
+            t = t_out[j]
+            # i: the last sample at or before t (-1 before the first),
+            # galloping forward from the previous row's (sorted t_out) or
+            # by bisection when t went back
+            if i >= 0 and t < t_in[i]:
+                i = -1
+                ordered = False
+            step = 1
+            lo = i
+            hi = i + 1
+            while hi < n and t_in[hi] <= t:
+                lo = hi
+                hi = i + 1 + step
+                step *= 2
+            if hi > n:
+                hi = n
+            while hi - lo > 1:
+                mid = (lo + hi) // 2
+                if t_in[mid] <= t:
+                    lo = mid
+                else:
+                    hi = mid
+            i = lo
+            found[j - start] = i
+        s0 = found[0]
+        s1 = found[stop - start - 1]
+        # dense: set up every segment from the first to the last at once
+        dense = ordered and s0 >= 0 and s1 - s0 < _SPAN
+        if dense:
+            _prepare(q, sign, t_in, s0, s1, smp, logs, rec)
+        loaded = -2
+        for j in range(start, stop):
+            i_j = found[j - start]
+            seg = i_j if i_j >= 0 else n - 1  # numpy-quaternion indexes with -1
+            if dense:
+                r = seg - s0
+            else:
+                if seg != loaded:
+                    _prepare(q, sign, t_in, seg, seg, smp, logs, rec)
+                    loaded = seg
+                r = 0
+            s = sign[min(max(i_j, 0), n - 2)]
+            if seg < n - 1:
+                dt = t_in[seg + 1] - t_in[seg]
+            else:
+                dt = (t_in[n - 1] + dt_last) - t_in[n - 1]
+            t = t_out[j]
+            tau = (t - t_in[seg]) / dt
+            state = rec[r, 28]
+            if state < 0.0:
+                out[j, 0] = out[j, 1] = out[j, 2] = out[j, 3] = np.nan
+                continue
+            h = 2.0 * tau * (1.0 - tau)
+            if state > 0.0 and 0.0 <= tau <= 1.0:
+                aw, ax, ay, az = _along(rec, r, 0, tau)
+                bw, bx, by, bz = _along(rec, r, 11, tau)
+                d = aw * bw + ax * bx + ay * by + az * bz
+                flip = _decide(d, rec[r, 26])
+                if flip != 0.0:
+                    w, x, y, z = _outer(
+                        aw, ax, ay, az, flip * bw, flip * bx, flip * by, flip * bz, h
+                    )
+                    u = 1.0 - tau
+                    scale = _exp_small(
+                        (1.0 - h) * (u * rec[r, 22] + tau * rec[r, 23])
+                        + h * (u * rec[r, 24] + tau * rec[r, 25])
+                    )
+                    k = s * scale
+                    out[j, 0] = k * w
+                    out[j, 1] = k * x
+                    out[j, 2] = k * y
+                    out[j, 3] = k * z
+                    continue
+            w, x, y, z = _exact_row(q, sign, t_in, seg, tau)
+            out[j, 0] = s * w
+            out[j, 1] = s * x
+            out[j, 2] = s * y
+            out[j, 3] = s * z
+
+
+@kernel(F2, F1, F1)
+def squad_walk(q, t_in, t_out):
+    """Squad of the stored series ``q`` at ``t_out``, with the stored signs.
+
+    Equal (to rounding) to ``unflip``, ``squad`` on the result and the sign
+    of the stored sample each output time starts from
+    (:func:`rbm_nb._engine.chain.stored_signs`), including the edge
+    behaviour of ``squad``; fastest for sorted ``t_out`` (each segment is
+    set up once), correct for any order.
+
+    Parameters
+    ----------
+    q : ndarray, shape (n, 4)
+        Stored samples, non-zero (NaN rows are missing samples).
+    t_in : ndarray, shape (n,)
+        Strictly increasing sample times.
+    t_out : ndarray, shape (m,)
+        Times on the same origin as ``t_in``.
+
+    Returns
+    -------
+    ndarray, shape (m, 4)
+        NaN where the spline touches a missing sample.
+    """
+    n = q.shape[0]
+    m = t_out.shape[0]
+    out = np.empty((m, 4))
+    if n < 2 or m == 0:
+        for j in range(m):
+            for k in range(4):
+                out[j, k] = q[0, k]
+        return out
+    sign = unflip_signs(q)
+    _walk(q, sign, t_in, t_out, out, 0, m)
+    return out
+
+
+@kernel(F2, F1, F1, options=_PARALLEL)
+def squad_walk_parallel(q, t_in, t_out):
+    """:func:`squad_walk` with chunks of output rows on numba's threads."""
+    n = q.shape[0]
+    m = t_out.shape[0]
+    out = np.empty((m, 4))
+    if n < 2 or m == 0:
+        for j in range(m):
+            for k in range(4):
+                out[j, k] = q[0, k]
+        return out
+    sign = unflip_signs(q)
+    # whole blocks per chunk, a few chunks per thread (for balance)
+    chunks = 4 * get_num_threads()
+    size = ((m + chunks - 1) // chunks + _BLOCK - 1) // _BLOCK * _BLOCK
+    for c in prange(chunks):
+        _walk(q, sign, t_in, t_out, out, min(c * size, m), min((c + 1) * size, m))
+    return out
+
+
+@kernel(I1, I)
+def seconds_since(keys, origin):
+    """int64 nanosecond keys as float64 seconds since ``origin`` (NaT -> NaN).
+
+    The arithmetic of :func:`rbm_nb._time.seconds_pair`, in one pass.
+    """
+    n = keys.shape[0]
+    out = np.empty(n)
+    nat = np.iinfo(np.int64).min
+    for i in range(n):
+        k = keys[i]
+        out[i] = np.nan if k == nat else (k - origin) / 1e9
+    return out
+
+
+@kernel(F2, F1, F1, F)
+def squad_input_fault(q, t_in, t_out, tol):
+    """0 if :func:`squad_walk` may run on these inputs as qinterp takes them.
+
+    Otherwise what is wrong first: 1 ``q`` (an infinity, or a norm farther
+    than ``tol`` from 1; NaN rows pass), 2 ``t_in`` (empty, not finite or
+    not strictly increasing; its length must be checked by the caller), 3
+    ``t_out`` (not finite, or outside [t_in[0], t_in[-1]]). One pass over
+    each array; the caller's own checks then name the culprit.
+    """
+    n = q.shape[0]
+    for i in range(n):
+        w, x, y, z = q[i, 0], q[i, 1], q[i, 2], q[i, 3]
+        if math.isinf(w) or math.isinf(x) or math.isinf(y) or math.isinf(z):
+            return 1
+        if abs(math.sqrt(w * w + x * x + y * y + z * z) - 1.0) > tol:
+            return 1
+    if n == 0:
+        return 2
+    for i in range(n):
+        if not math.isfinite(t_in[i]):
+            return 2
+        if i > 0 and not t_in[i] > t_in[i - 1]:
+            return 2
+    lo = t_in[0]
+    hi = t_in[n - 1]
+    for j in range(t_out.shape[0]):
+        t = t_out[j]
+        if not (lo <= t <= hi):
+            return 3
+    return 0

@@ -16,7 +16,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from numba import get_num_threads, prange
+from numba import prange
 
 from .._config import VECTOR_KERNEL
 from ._jit import F2, helper, kernel
@@ -24,6 +24,8 @@ from .quaternion import _qinv1, _qlog1, _rotate1
 
 # The prange twins of the branch-free loops (launched by rbm_nb._parallel).
 _PARALLEL_VECTOR = dataclasses.replace(VECTOR_KERNEL, parallel=True)
+# blocks of rows a parallel twin splits its rows into
+_BLOCKS = 64
 
 
 @kernel(F2, F2)
@@ -152,8 +154,10 @@ def rotate_vectors_counted_parallel(q, v):
     """:func:`rotate_vectors_counted` with blocks of rows on numba's threads."""
     n = 0 if q.shape[0] == 0 or v.shape[0] == 0 else max(q.shape[0], v.shape[0])
     out = np.empty((n, 3))
-    # one block per thread: each is a plain loop that LLVM vectorises
-    blocks = get_num_threads()
+    # plain loops that LLVM vectorises, more of them than threads (numba's
+    # thread count is not read here: that would keep the kernel out of the
+    # on-disk cache)
+    blocks = _BLOCKS
     size = (n + blocks - 1) // blocks
     zeros = 0
     infs = 0

@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import get_num_threads, prange
+from numba import prange
 
 from .._config import PARALLEL_KERNEL
 from ._jit import F1, F2, I1, F, I, helper, kernel
@@ -68,6 +68,8 @@ _N_REC = 29
 # output rows per block, and the most segments a block sets up at once
 _BLOCK = 128
 _SPAN = 2 * _BLOCK
+# chunks of output rows the parallel twin hands to numba's threads
+_CHUNKS = 64
 
 
 @kernel(F2)
@@ -587,8 +589,9 @@ def squad_walk_parallel(q, t_in, t_out):
                 out[j, k] = q[0, k]
         return out
     sign = unflip_signs(q)
-    # whole blocks per chunk, a few chunks per thread (for balance)
-    chunks = 4 * get_num_threads()
+    # whole blocks per chunk, many more chunks than threads (numba's thread
+    # count is not read here: that would keep the kernel out of the cache)
+    chunks = _CHUNKS
     size = ((m + chunks - 1) // chunks + _BLOCK - 1) // _BLOCK * _BLOCK
     for c in prange(chunks):
         _walk(q, sign, t_in, t_out, out, min(c * size, m), min((c + 1) * size, m))

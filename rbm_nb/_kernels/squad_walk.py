@@ -109,10 +109,8 @@ def _exp_small(x):
 
 
 @helper(inline=True)
-def _sample(q, sign, k):
-    """Row k of the sign-continuous series as (unit w, x, y, z, ln |q|, nan)."""
-    s = sign[k]
-    w, x, y, z = s * q[k, 0], s * q[k, 1], s * q[k, 2], s * q[k, 3]
+def _unit(w, x, y, z):
+    """(unit w, x, y, z, ln |q|, NaN?) of a quaternion."""
     n2 = w * w + x * x + y * y + z * z
     nan = math.isnan(n2)
     e = n2 - 1.0
@@ -163,57 +161,36 @@ def _exp_vec(ux, uy, uz):
 
 
 @helper(inline=True)
-def _great_circle(rec, r, o, aw, ax, ay, az, bw, bx, by, bz):
-    """Store the arc from unit a to unit b at rec[r, o:o+11].
+def _great_circle(aw, ax, ay, az, bw, bx, by, bz):
+    """The arc from unit a to unit b as (o, θ², θ, g).
 
-    rec[r, o:o+4] = a, rec[r, o+4:o+8] = b - (a·b) a, rec[r, o+8] = θ²,
-    rec[r, o+9] = θ, rec[r, o+10] = θ / |b - (a·b) a| (so that
-    slerp(a, b, τ) = cos(τθ) a + sin(τθ)/(τθ) τ rec[r, o+10] (b - (a·b) a)).
+    o = b - (a·b) a and g = θ / |o|, so that
+    slerp(a, b, τ) = cos(τθ) a + sin(τθ)/(τθ) τ g o (:func:`_along`).
     """
     d = aw * bw + ax * bx + ay * by + az * bz
     ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
     o2 = ow * ow + ox * ox + oy * oy + oz * oz
-    rec[r, o] = aw
-    rec[r, o + 1] = ax
-    rec[r, o + 2] = ay
-    rec[r, o + 3] = az
-    rec[r, o + 4] = ow
-    rec[r, o + 5] = ox
-    rec[r, o + 6] = oy
-    rec[r, o + 7] = oz
     if d > 0.0 and o2 < (SERIES_RATIO * d) ** 2:
         # x = tan θ = |o| / d is small: θ / |o| = atan(x) / x / d
-        p = atan_over_x(o2 / (d * d))
-        g = p / d
+        g = atan_over_x(o2 / (d * d)) / d
         theta2 = o2 * g * g
-        rec[r, o + 8] = theta2
-        rec[r, o + 9] = math.sqrt(theta2)
-        rec[r, o + 10] = g
-        return
+        return ow, ox, oy, oz, theta2, math.sqrt(theta2), g
     so = math.sqrt(o2)
     theta = math.atan2(so, d)
-    rec[r, o + 8] = theta * theta
-    rec[r, o + 9] = theta
-    rec[r, o + 10] = theta / so if so > 0.0 else 0.0
+    return ow, ox, oy, oz, theta * theta, theta, theta / so if so > 0.0 else 0.0
 
 
 @helper(inline=True)
-def _along(rec, r, o, tau):
-    """The point at τ of the arc stored at rec[r, o:o+11] (unit)."""
-    y2 = tau * tau * rec[r, o + 8]
+def _along(aw, ax, ay, az, ow, ox, oy, oz, theta2, theta, g, tau):
+    """The point at τ of the arc (a, o, θ², θ, g) of :func:`_great_circle`."""
+    y2 = tau * tau * theta2
     if y2 < SERIES_ANGLE * SERIES_ANGLE:
         c = cos_series(y2)
-        k = sinc_series(y2) * tau * rec[r, o + 10]
+        k = sinc_series(y2) * tau * g
     else:
-        y = tau * rec[r, o + 9]
-        s, c = _sincos(y)
-        k = s * rec[r, o + 10] / rec[r, o + 9]
-    return (
-        c * rec[r, o] + k * rec[r, o + 4],
-        c * rec[r, o + 1] + k * rec[r, o + 5],
-        c * rec[r, o + 2] + k * rec[r, o + 6],
-        c * rec[r, o + 3] + k * rec[r, o + 7],
-    )
+        s, c = _sincos(tau * theta)
+        k = s * g / theta
+    return c * aw + k * ow, c * ax + k * ox, c * ay + k * oy, c * az + k * oz
 
 
 @helper(inline=True)
@@ -237,22 +214,45 @@ def _decide(d, bound):
 
 
 @helper(inline=True)
-def _fill(q, sign, k0, k1, smp, logs):
-    """Samples k0..k1 (unit parts, ln of their scales, NaN flag) into
-    ``smp[k - k0]``, and the logs between neighbours into ``logs[k - k0]``.
+def _control_point(bw, bx, by, bz, ux, uy, uz):
+    """base exp((0, u)): a squad control point from its sample (unit parts)."""
+    ew, ex, ey, ez = _exp_vec(ux, uy, uz)
+    return _qmul1(bw, bx, by, bz, ew, ex, ey, ez)
 
-    The iterations are independent, so the processor overlaps them.
+
+@helper(inline=True)
+def _prepare(q, sign, t_in, s0, s1, smp, logs, ctl, rec, r0):
+    """Set up segments s0..s1 of the squad spline in rec[r0..r0+s1-s0].
+
+    rec[r, 0:11]: the arc r[i] -> r[i+1] (r[i], then o, θ², θ, g of
+    :func:`_great_circle`); rec[r, 11:22]: the arc A[i] -> B[i] (unit
+    parts; the last segment continues to the virtual sample
+    r[n-1] r[n-2]⁻¹ r[n-1]); rec[r, 22:26]: ln of the scales of r[i],
+    r[i+1], A[i], B[i]; rec[r, 26]: the bound of the outer slerp's
+    direction decision; rec[r, 28]: 1 if the fast route applies, 0 for the
+    exact route, -1 if the segment touches a missing sample (NaN).
+
+    Each stage is a loop over independent items with a short body, so that
+    the processor overlaps their long dependency chains; no helper in the
+    loops takes an array (each would cost atomic reference counting per
+    call). Scratch: ``smp`` (samples: unit parts, ln scale, NaN), ``logs``
+    (log r[k]⁻¹ r[k+1], vector part), ``ctl`` (end sample and control
+    points: r[i+1], A[i], B[i], their ln scales, NaN count).
     """
+    n = q.shape[0]
+    k0 = max(s0 - 1, 0)
+    k1 = min(s1 + 2, n - 1)
     for k in range(k0, k1 + 1):
-        w, x, y, z, lam, bad = _sample(q, sign, k)
-        smp[k - k0, 0] = w
-        smp[k - k0, 1] = x
-        smp[k - k0, 2] = y
-        smp[k - k0, 3] = z
-        smp[k - k0, 4] = lam
-        smp[k - k0, 5] = 1.0 if bad else 0.0
-    for k in range(k0, k1):
+        s = sign[k]
+        w, x, y, z, lam, bad = _unit(s * q[k, 0], s * q[k, 1], s * q[k, 2], s * q[k, 3])
         a = k - k0
+        smp[a, 0] = w
+        smp[a, 1] = x
+        smp[a, 2] = y
+        smp[a, 3] = z
+        smp[a, 4] = lam
+        smp[a, 5] = 1.0 if bad else 0.0
+    for a in range(k1 - k0):
         v = _log_vec(
             smp[a, 0], smp[a, 1], smp[a, 2], smp[a, 3],
             smp[a + 1, 0], smp[a + 1, 1], smp[a + 1, 2], smp[a + 1, 3],
@@ -260,99 +260,113 @@ def _fill(q, sign, k0, k1, smp, logs):
         logs[a, 0] = v[0]
         logs[a, 1] = v[1]
         logs[a, 2] = v[2]
-
-
-@helper(inline=True)
-def _setup(smp, logs, k0, t_in, n, i, rec, r):
-    """Set up segment i (0 <= i <= n-1) of the squad spline in ``rec[r]``.
-
-    ``smp`` and ``logs`` hold samples and logs from k0 on (:func:`_fill`),
-    at least i-1..i+2 (within 0..n-1). rec[r, 0:11]: the arc r[i] ->
-    r[i+1]; rec[r, 11:22]: the arc A[i] -> B[i] (unit parts; the last
-    segment continues to the virtual sample r[n-1] r[n-2]⁻¹ r[n-1]);
-    rec[r, 22:26]: ln of the scales of r[i], r[i+1], A[i], B[i];
-    rec[r, 26]: the bound of the outer slerp's direction decision;
-    rec[r, 28]: 1 if the fast route applies, 0 for the exact route, -1 if
-    the segment touches a missing sample (NaN).
-    """
-    nan = 0.0
-    for k in range(max(i - 1, 0), min(i + 2, n - 1) + 1):
-        nan += smp[k - k0, 5]
-    if nan > 0.0:
-        rec[r, 28] = -1.0
-        return
-    c = i - k0  # row of sample i
-    rw, rx, ry, rz, lr = smp[c, 0], smp[c, 1], smp[c, 2], smp[c, 3], smp[c, 4]
-    if i < n - 1:
-        nw, nx, ny, nz = smp[c + 1, 0], smp[c + 1, 1], smp[c + 1, 2], smp[c + 1, 3]
-        ln_ = smp[c + 1, 4]
-    else:
-        # r[n-1] r[n-2]⁻¹ r[n-1], of scale |r[n-1]|² / |r[n-2]|
-        pw, px, py, pz = _qmul1(
-            rw,
-            rx,
-            ry,
-            rz,
-            smp[c - 1, 0],
-            -smp[c - 1, 1],
-            -smp[c - 1, 2],
-            -smp[c - 1, 3],
-        )
-        nw, nx, ny, nz = _qmul1(pw, px, py, pz, rw, rx, ry, rz)
-        ln_ = 2.0 * lr - smp[c - 1, 4]
-    # A[i] = r[i] exp((-L[i] + L[i-1] (t[i+1]-t[i]) / (t[i]-t[i-1])) / 4)
-    if 1 <= i <= n - 2:
-        ratio = (t_in[i + 1] - t_in[i]) / (t_in[i] - t_in[i - 1])
-        ew, ex, ey, ez = _exp_vec(
-            (-logs[c, 0] + logs[c - 1, 0] * ratio) * 0.25,
-            (-logs[c, 1] + logs[c - 1, 1] * ratio) * 0.25,
-            (-logs[c, 2] + logs[c - 1, 2] * ratio) * 0.25,
-        )
-        aw, ax, ay, az = _qmul1(rw, rx, ry, rz, ew, ex, ey, ez)
-        la = lr + (-(ln_ - lr) + (lr - smp[c - 1, 4]) * ratio) * 0.25
-    else:
-        aw, ax, ay, az, la = rw, rx, ry, rz, lr
-    # B[i] = r[i+1] exp((L[i+1] (t[i+1]-t[i]) / (t[i+2]-t[i+1]) - L[i]) / -4)
-    if i <= n - 3:
-        ratio = (t_in[i + 1] - t_in[i]) / (t_in[i + 2] - t_in[i + 1])
-        ew, ex, ey, ez = _exp_vec(
-            (logs[c + 1, 0] * ratio - logs[c, 0]) * -0.25,
-            (logs[c + 1, 1] * ratio - logs[c, 1]) * -0.25,
-            (logs[c + 1, 2] * ratio - logs[c, 2]) * -0.25,
-        )
-        bw, bx, by, bz = _qmul1(nw, nx, ny, nz, ew, ex, ey, ez)
-        lb = ln_ + ((smp[c + 2, 4] - ln_) * ratio - (ln_ - lr)) * -0.25
-    else:
-        bw, bx, by, bz, lb = nw, nx, ny, nz, ln_
-    ok = 1.0
-    if max(max(abs(lr), abs(ln_)), max(abs(la), abs(lb))) > _LOG_SCALE_LIMIT:
-        ok = 0.0
-    # the inner slerps' "shorter way round", decided as for the scaled values
-    f1 = _decide(rw * nw + rx * nx + ry * ny + rz * nz, _flip_bound(lr, ln_))
-    f2 = _decide(aw * bw + ax * bx + ay * by + az * bz, _flip_bound(la, lb))
-    if f1 == 0.0 or f2 == 0.0:
-        ok = 0.0
-    _great_circle(rec, r, 0, rw, rx, ry, rz, f1 * nw, f1 * nx, f1 * ny, f1 * nz)
-    _great_circle(rec, r, 11, aw, ax, ay, az, f2 * bw, f2 * bx, f2 * by, f2 * bz)
-    rec[r, 22] = lr
-    rec[r, 23] = ln_
-    rec[r, 24] = la
-    rec[r, 25] = lb
-    # the outer slerp's scales lie between e^lr and e^ln_, and between e^la
-    # and e^lb
-    rec[r, 26] = _flip_bound(max(abs(lr), abs(ln_)), max(abs(la), abs(lb)))
-    rec[r, 27] = 0.0
-    rec[r, 28] = ok
-
-
-@helper(inline=True)
-def _prepare(q, sign, t_in, s0, s1, smp, logs, rec):
-    """Segments s0..s1 into rec[0..s1-s0], each loop over independent items."""
-    n = q.shape[0]
-    k0 = max(s0 - 1, 0)
-    _fill(q, sign, k0, min(s1 + 2, n - 1), smp, logs)
     for i in range(s0, s1 + 1):
-        _setup(smp, logs, k0, t_in, n, i, rec, i - s0)
+        r = r0 + i - s0
+        c = i - k0  # row of sample i
+        nan = 0.0
+        for k in range(max(i - 1, 0), min(i + 2, n - 1) + 1):
+            nan += smp[k - k0, 5]
+        ctl[r, 15] = nan
+        if nan > 0.0:
+            continue
+        lr = smp[c, 4]
+        if i < n - 1:
+            nw, nx, ny, nz = smp[c + 1, 0], smp[c + 1, 1], smp[c + 1, 2], smp[c + 1, 3]
+            ln_ = smp[c + 1, 4]
+        else:
+            # r[n-1] r[n-2]⁻¹ r[n-1], of scale |r[n-1]|² / |r[n-2]|
+            pw, px, py, pz = _qmul1(
+                smp[c, 0], smp[c, 1], smp[c, 2], smp[c, 3],
+                smp[c - 1, 0], -smp[c - 1, 1], -smp[c - 1, 2], -smp[c - 1, 3],
+            )  # fmt: skip
+            nw, nx, ny, nz = _qmul1(
+                pw, px, py, pz, smp[c, 0], smp[c, 1], smp[c, 2], smp[c, 3]
+            )
+            ln_ = 2.0 * lr - smp[c - 1, 4]
+        ctl[r, 0] = nw
+        ctl[r, 1] = nx
+        ctl[r, 2] = ny
+        ctl[r, 3] = nz
+        ctl[r, 12] = ln_
+        # A[i] = r[i] exp((-L[i] + L[i-1] (t[i+1]-t[i]) / (t[i]-t[i-1])) / 4)
+        if 1 <= i <= n - 2:
+            ratio = (t_in[i + 1] - t_in[i]) / (t_in[i] - t_in[i - 1])
+            aw, ax, ay, az = _control_point(
+                smp[c, 0], smp[c, 1], smp[c, 2], smp[c, 3],
+                (-logs[c, 0] + logs[c - 1, 0] * ratio) * 0.25,
+                (-logs[c, 1] + logs[c - 1, 1] * ratio) * 0.25,
+                (-logs[c, 2] + logs[c - 1, 2] * ratio) * 0.25,
+            )  # fmt: skip
+            la = lr + (-(ln_ - lr) + (lr - smp[c - 1, 4]) * ratio) * 0.25
+        else:
+            aw, ax, ay, az, la = smp[c, 0], smp[c, 1], smp[c, 2], smp[c, 3], lr
+        ctl[r, 4] = aw
+        ctl[r, 5] = ax
+        ctl[r, 6] = ay
+        ctl[r, 7] = az
+        ctl[r, 13] = la
+        # B[i] = r[i+1] exp((L[i+1] (t[i+1]-t[i]) / (t[i+2]-t[i+1]) - L[i]) / -4)
+        if i <= n - 3:
+            ratio = (t_in[i + 1] - t_in[i]) / (t_in[i + 2] - t_in[i + 1])
+            bw, bx, by, bz = _control_point(
+                nw, nx, ny, nz,
+                (logs[c + 1, 0] * ratio - logs[c, 0]) * -0.25,
+                (logs[c + 1, 1] * ratio - logs[c, 1]) * -0.25,
+                (logs[c + 1, 2] * ratio - logs[c, 2]) * -0.25,
+            )  # fmt: skip
+            lb = ln_ + ((smp[c + 2, 4] - ln_) * ratio - (ln_ - lr)) * -0.25
+        else:
+            bw, bx, by, bz, lb = nw, nx, ny, nz, ln_
+        ctl[r, 8] = bw
+        ctl[r, 9] = bx
+        ctl[r, 10] = by
+        ctl[r, 11] = bz
+        ctl[r, 14] = lb
+    for i in range(s0, s1 + 1):
+        r = r0 + i - s0
+        if ctl[r, 15] > 0.0:
+            rec[r, 28] = -1.0
+            continue
+        c = i - k0
+        rw, rx, ry, rz, lr = smp[c, 0], smp[c, 1], smp[c, 2], smp[c, 3], smp[c, 4]
+        nw, nx, ny, nz, ln_ = ctl[r, 0], ctl[r, 1], ctl[r, 2], ctl[r, 3], ctl[r, 12]
+        # the "shorter way round", decided as for the scaled values
+        f = _decide(rw * nw + rx * nx + ry * ny + rz * nz, _flip_bound(lr, ln_))
+        arc = _great_circle(rw, rx, ry, rz, f * nw, f * nx, f * ny, f * nz)
+        rec[r, 0] = rw
+        rec[r, 1] = rx
+        rec[r, 2] = ry
+        rec[r, 3] = rz
+        for k in range(7):
+            rec[r, 4 + k] = arc[k]
+        rec[r, 22] = lr
+        rec[r, 23] = ln_
+        rec[r, 28] = (
+            0.0 if f == 0.0 or max(abs(lr), abs(ln_)) > _LOG_SCALE_LIMIT else 1.0
+        )
+    for i in range(s0, s1 + 1):
+        r = r0 + i - s0
+        if rec[r, 28] < 0.0:
+            continue
+        aw, ax, ay, az, la = ctl[r, 4], ctl[r, 5], ctl[r, 6], ctl[r, 7], ctl[r, 13]
+        bw, bx, by, bz, lb = ctl[r, 8], ctl[r, 9], ctl[r, 10], ctl[r, 11], ctl[r, 14]
+        f = _decide(aw * bw + ax * bx + ay * by + az * bz, _flip_bound(la, lb))
+        arc = _great_circle(aw, ax, ay, az, f * bw, f * bx, f * by, f * bz)
+        rec[r, 11] = aw
+        rec[r, 12] = ax
+        rec[r, 13] = ay
+        rec[r, 14] = az
+        for k in range(7):
+            rec[r, 15 + k] = arc[k]
+        rec[r, 24] = la
+        rec[r, 25] = lb
+        # the outer slerp's scales lie between e^lr and e^ln_, and between
+        # e^la and e^lb
+        rec[r, 26] = _flip_bound(
+            max(abs(rec[r, 22]), abs(rec[r, 23])), max(abs(la), abs(lb))
+        )
+        if f == 0.0 or max(abs(la), abs(lb)) > _LOG_SCALE_LIMIT:
+            rec[r, 28] = 0.0
 
 
 @helper
@@ -448,12 +462,17 @@ def _outer(aw, ax, ay, az, bw, bx, by, bz, tau):
 def _walk(q, sign, t_in, t_out, out, first, last):
     """Rows first..last-1 of :func:`squad_walk` (n >= 2), block by block."""
     n = q.shape[0]
-    # scratch for one block of output rows: the segments it falls in (at
-    # most _SPAN of them when dense), their samples and logs
+    # scratch for one block of output rows: each row's sample index and
+    # segment record, the segments' samples, logs, control points and
+    # records (at most _SPAN segments when set up at once), the rows' two
+    # inner slerps
     found = np.empty(_BLOCK, dtype=np.int64)
+    slot = np.empty(_BLOCK, dtype=np.int64)
     smp = np.empty((_SPAN + 3, 6))
     logs = np.empty((_SPAN + 3, 3))
+    ctl = np.empty((_SPAN, 16))
     rec = np.empty((_SPAN, _N_REC))
+    inner = np.empty((_BLOCK, 9))
     dt_last = t_in[n - 1] - t_in[n - 2]
     i = -1
     for start in range(first, last, _BLOCK):
@@ -486,39 +505,72 @@ def _walk(q, sign, t_in, t_out, out, first, last):
             found[j - start] = i
         s0 = found[0]
         s1 = found[stop - start - 1]
-        # dense: set up every segment from the first to the last at once
-        dense = ordered and s0 >= 0 and s1 - s0 < _SPAN
-        if dense:
-            _prepare(q, sign, t_in, s0, s1, smp, logs, rec)
-        loaded = -2
-        for j in range(start, stop):
-            i_j = found[j - start]
-            seg = i_j if i_j >= 0 else n - 1  # numpy-quaternion indexes with -1
-            if dense:
-                r = seg - s0
-            else:
+        if ordered and s0 >= 0 and s1 - s0 < _SPAN:
+            # dense: every segment from the first to the last at once
+            _prepare(q, sign, t_in, s0, s1, smp, logs, ctl, rec, 0)
+            for j in range(start, stop):
+                slot[j - start] = found[j - start] - s0
+        else:
+            # sparse or unordered: each new segment in the next free record
+            loaded = -2
+            free = 0
+            for j in range(start, stop):
+                i_j = found[j - start]
+                seg = i_j if i_j >= 0 else n - 1  # numpy-quaternion indexes with -1
                 if seg != loaded:
-                    _prepare(q, sign, t_in, seg, seg, smp, logs, rec)
+                    _prepare(q, sign, t_in, seg, seg, smp, logs, ctl, rec, free)
                     loaded = seg
-                r = 0
-            s = sign[min(max(i_j, 0), n - 2)]
+                    free += 1
+                slot[j - start] = free - 1
+        # first stage: the two inner slerps of each row
+        for j in range(start, stop):
+            jj = j - start
+            i_j = found[jj]
+            seg = i_j if i_j >= 0 else n - 1
+            r = slot[jj]
             if seg < n - 1:
                 dt = t_in[seg + 1] - t_in[seg]
             else:
                 dt = (t_in[n - 1] + dt_last) - t_in[n - 1]
-            t = t_out[j]
-            tau = (t - t_in[seg]) / dt
+            tau = (t_out[j] - t_in[seg]) / dt
+            inner[jj, 8] = tau
+            if rec[r, 28] > 0.0 and 0.0 <= tau <= 1.0:
+                aw, ax, ay, az = _along(
+                    rec[r, 0], rec[r, 1], rec[r, 2], rec[r, 3],
+                    rec[r, 4], rec[r, 5], rec[r, 6], rec[r, 7],
+                    rec[r, 8], rec[r, 9], rec[r, 10], tau,
+                )  # fmt: skip
+                bw, bx, by, bz = _along(
+                    rec[r, 11], rec[r, 12], rec[r, 13], rec[r, 14],
+                    rec[r, 15], rec[r, 16], rec[r, 17], rec[r, 18],
+                    rec[r, 19], rec[r, 20], rec[r, 21], tau,
+                )  # fmt: skip
+                inner[jj, 0] = aw
+                inner[jj, 1] = ax
+                inner[jj, 2] = ay
+                inner[jj, 3] = az
+                inner[jj, 4] = bw
+                inner[jj, 5] = bx
+                inner[jj, 6] = by
+                inner[jj, 7] = bz
+        # second stage: the outer slerp, the scale and the stored sign
+        for j in range(start, stop):
+            jj = j - start
+            i_j = found[jj]
+            seg = i_j if i_j >= 0 else n - 1
+            r = slot[jj]
+            s = sign[min(max(i_j, 0), n - 2)]
+            tau = inner[jj, 8]
             state = rec[r, 28]
             if state < 0.0:
                 out[j, 0] = out[j, 1] = out[j, 2] = out[j, 3] = np.nan
                 continue
-            h = 2.0 * tau * (1.0 - tau)
             if state > 0.0 and 0.0 <= tau <= 1.0:
-                aw, ax, ay, az = _along(rec, r, 0, tau)
-                bw, bx, by, bz = _along(rec, r, 11, tau)
-                d = aw * bw + ax * bx + ay * by + az * bz
-                flip = _decide(d, rec[r, 26])
+                aw, ax, ay, az = inner[jj, 0], inner[jj, 1], inner[jj, 2], inner[jj, 3]
+                bw, bx, by, bz = inner[jj, 4], inner[jj, 5], inner[jj, 6], inner[jj, 7]
+                flip = _decide(aw * bw + ax * bx + ay * by + az * bz, rec[r, 26])
                 if flip != 0.0:
+                    h = 2.0 * tau * (1.0 - tau)
                     w, x, y, z = _outer(
                         aw, ax, ay, az, flip * bw, flip * bx, flip * by, flip * bz, h
                     )

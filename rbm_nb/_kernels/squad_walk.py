@@ -296,9 +296,14 @@ def _prepare(q, sign, t_in, s0, s1, smp, logs, ctl, rec, r0):
     for i in range(s0, s1 + 1):
         r = r0 + i - s0
         c = i - k0  # row of sample i
-        nan = 0.0
-        for k in range(max(i - 1, 0), min(i + 2, n - 1) + 1):
-            nan += smp[k - k0, 5]
+        # samples i-1..i+2 (those that exist) all present?
+        nan = smp[c, 5]
+        if i >= 1:
+            nan += smp[c - 1, 5]
+        if i + 1 <= n - 1:
+            nan += smp[c + 1, 5]
+        if i + 2 <= n - 1:
+            nan += smp[c + 2, 5]
         ctl[r, 15] = nan
         if nan > 0.0:
             continue
@@ -709,23 +714,34 @@ def squad_input_fault(q, t_in, t_out, tol):
     each array; the caller's own checks then name the culprit.
     """
     n = q.shape[0]
+    # squared norms well inside the tolerance need no square root; only
+    # rows near its edges (or beyond) are checked as the caller checks them
+    inner_lo = (1.0 - tol) ** 2 * (1.0 + 1e-9)
+    inner_hi = (1.0 + tol) ** 2 * (1.0 - 1e-9)
+    suspect = 0
     for i in range(n):
         w, x, y, z = q[i, 0], q[i, 1], q[i, 2], q[i, 3]
-        if math.isinf(w) or math.isinf(x) or math.isinf(y) or math.isinf(z):
-            return 1
-        if abs(math.sqrt(w * w + x * x + y * y + z * z) - 1.0) > tol:
-            return 1
+        n2 = w * w + x * x + y * y + z * z
+        inf = (abs(w) == np.inf) | (abs(x) == np.inf) | (abs(y) == np.inf)
+        suspect += inf | (abs(z) == np.inf) | (n2 < inner_lo) | (n2 > inner_hi)
+    if suspect:
+        for i in range(n):
+            w, x, y, z = q[i, 0], q[i, 1], q[i, 2], q[i, 3]
+            if math.isinf(w) or math.isinf(x) or math.isinf(y) or math.isinf(z):
+                return 1
+            if abs(math.sqrt(w * w + x * x + y * y + z * z) - 1.0) > tol:
+                return 1
     if n == 0:
         return 2
+    bad = 0
     for i in range(n):
-        if not math.isfinite(t_in[i]):
-            return 2
-        if i > 0 and not t_in[i] > t_in[i - 1]:
-            return 2
+        bad += not math.isfinite(t_in[i])
+    for i in range(1, n):
+        bad += not t_in[i] > t_in[i - 1]
+    if bad:
+        return 2
     lo = t_in[0]
     hi = t_in[n - 1]
     for j in range(t_out.shape[0]):
-        t = t_out[j]
-        if not (lo <= t <= hi):
-            return 3
-    return 0
+        bad += not (lo <= t_out[j] <= hi)
+    return 3 if bad else 0

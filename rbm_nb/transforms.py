@@ -72,6 +72,10 @@ def _transform(
                 stacklevel=3,
             )
     into = resolve_frame(into, "into")
+    if method in (_points, _vectors, _quaternions):
+        # the result's timestamps are a copy as long as its time axis: only
+        # made when they are returned or wrapped
+        kwargs["timestamps_out"] = return_timestamps or attrs is not None
     out, ts_out = method(
         outof,
         unpacked.data,

@@ -98,7 +98,16 @@ class Blocks:
         return out
 
 
-def transform(frame, kind: str, arr, to_frame, axis=-1, time_axis=0, timestamps=None):
+def transform(
+    frame,
+    kind: str,
+    arr,
+    to_frame,
+    axis=-1,
+    time_axis=0,
+    timestamps=None,
+    timestamps_out: bool = True,
+):
     """Transform ``arr`` (points, vectors or quaternions) out of ``frame``.
 
     Parameters
@@ -109,12 +118,16 @@ def transform(frame, kind: str, arr, to_frame, axis=-1, time_axis=0, timestamps=
     arr : array_like, shape (..., 3 or 4, ...)
     axis, time_axis : int
     timestamps : array_like, Track or None
+    timestamps_out : bool, default True
+        Whether the caller wants the result's timestamps (a copy as long as
+        the result's time axis: False saves it).
 
     Returns
     -------
     out : ndarray
     ts : ndarray or None
-        The timestamps of ``out`` (None if neither array nor chain has any).
+        The timestamps of ``out`` (None if neither array nor chain has any,
+        or if not ``timestamps_out``).
     """
     if timestamps is None and kind != "quaternions":
         fast = _static_rows(frame, kind, arr, to_frame, axis)
@@ -127,7 +140,7 @@ def transform(frame, kind: str, arr, to_frame, axis=-1, time_axis=0, timestamps=
         blocks.data, blocks.track, target, kind == "quaternions"
     )
     out = _chain.apply(kind, steps, target, data)
-    return blocks.restore(out, target), target.timestamps
+    return blocks.restore(out, target), target.timestamps if timestamps_out else None
 
 
 def _static_rows(frame, kind, arr, to_frame, axis):

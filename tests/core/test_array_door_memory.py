@@ -1,0 +1,74 @@
+"""Temporaries on the way from the public array functions to their kernels.
+
+tracemalloc sees numpy's allocations, so these are counts of bytes, not
+timings: the door must not copy or convert what the kernel can take as it is.
+"""
+
+from __future__ import annotations
+
+import tracemalloc
+
+import numpy as np
+import pytest
+
+import rbm_nb as rbm
+
+
+def peak_over_output(fn):
+    """Peak traced bytes of one call over the bytes of its array result(s)."""
+    fn()
+    tracemalloc.start()
+    try:
+        tracemalloc.reset_peak()
+        before = tracemalloc.get_traced_memory()[0]
+        result = fn()
+        peak = tracemalloc.get_traced_memory()[1] - before
+    finally:
+        tracemalloc.stop()
+    arrays = result if isinstance(result, tuple) else (result,)
+    return peak / sum(a.nbytes for a in arrays if isinstance(a, np.ndarray))
+
+
+@pytest.fixture
+def moving_tree():
+    rng = np.random.default_rng(0)
+    n = 20_000
+    start = np.datetime64("2021-01-01T00:00:00", "ns")
+    ts = start + (np.arange(n) * 5_000_000).astype("timedelta64[ns]")
+    q = rng.normal(size=(n, 4)) * 0.01 + [1.0, 0.0, 0.0, 0.0]
+    rbm.clear_registry()
+    rbm.register_frame("world")
+    rbm.register_frame(
+        "body",
+        parent="world",
+        translation=rng.normal(size=(n, 3)),
+        rotation=q / np.linalg.norm(q, axis=1)[:, None],
+        timestamps=ts,
+    )
+    rbm.register_frame("cam", parent="body", translation=(0.0, 0.1, 0.0))
+    yield ts
+    rbm.clear_registry()
+
+
+def test_transform_points_makes_no_timestamps_nobody_asked_for(moving_tree):
+    ts = moving_tree
+    points = np.random.default_rng(1).normal(size=(len(ts) - 7, 3))
+    at = ts[3:-4]
+    ratio = peak_over_output(
+        lambda: rbm.transform_points(points, "world", "cam", timestamps=at)
+    )
+    assert ratio <= 1.5
+    out, ts_out = rbm.transform_points(
+        points, "world", "cam", timestamps=at, return_timestamps=True
+    )
+    np.testing.assert_array_equal(ts_out, at)
+    np.testing.assert_array_equal(
+        out, rbm.transform_points(points, "world", "cam", timestamps=at)
+    )
+
+
+def test_rotate_vectors_allocates_its_output_only():
+    rng = np.random.default_rng(2)
+    q = rng.normal(size=(200_000, 4))
+    v = rng.normal(size=(200_000, 3))
+    assert peak_over_output(lambda: rbm.rotate_vectors(q, v)) <= 1.05

@@ -161,12 +161,40 @@ def qinv(q: ArrayInput, qaxis: int = -1) -> Any:
     if _dask.is_dask(q):
         core = q.dims[qaxis] if _is_dataarray(q) else qaxis
         return _dask.elementwise(qinv, q, core, fill=(1.0, 0.0, 0.0, 0.0), qaxis=qaxis)
+    if _is_plain_rows(q, qaxis):
+        # (n, 4) float64: one pass, no copies (infinities and zeros counted)
+        return _qinv_rows(q, q)
     template = q if _is_dataarray(q) else None
     qf, was_quaternion = _split(q, qaxis, "q")
-    out, zero = _rk.qinv_checked(kernel_array(qf.reshape(-1, 4)))
-    if zero >= 0:
-        _raise_zero("q", zero, "it has no inverse")
+    out = _qinv_rows(kernel_array(qf.reshape(-1, 4)), qf)
     return _like(template, _join(out.reshape(qf.shape), was_quaternion, qaxis))
+
+
+def _is_plain_rows(q: Any, qaxis: Any) -> bool:
+    """Whether ``q`` is a C-contiguous float64 ndarray of shape (n, 4) with
+    the components along ``qaxis`` (the kernels take it as it is)."""
+    return (
+        type(q) is np.ndarray
+        and type(qaxis) is int
+        and qaxis in (-1, 1)
+        and q.dtype == np.float64
+        and q.ndim == 2
+        and q.shape[1] == 4
+        and q.flags.c_contiguous
+    )
+
+
+def _qinv_rows(rows: np.ndarray, given: Any) -> np.ndarray:
+    """Inverses of kernel rows (n, 4), on both cores when long; rejects
+    infinities and zero quaternions (named in ``given``, as passed)."""
+    out, zeros, infs = _parallel.launch(
+        _rk.qinv_counted, _rk.qinv_counted_parallel, rows.shape[0], kernel_array(rows)
+    )
+    if infs:
+        check_no_inf(np.asarray(given), "q")
+    if zeros:
+        _raise_zero("q", _rk.first_zero_row(kernel_array(rows)), "it has no inverse")
+    return out
 
 
 def _lazy_qmul(q, qaxis: int):
@@ -222,6 +250,17 @@ def qmul(*q, qaxis: int = -1) -> Any:
         raise ValueError(f"qmul needs at least 2 quaternion arrays, got {len(q)}")
     if any(_dask.is_dask(x) for x in q):
         return _lazy_qmul(q, qaxis)
+    if (
+        len(q) == 2
+        and _is_plain_rows(q[0], qaxis)
+        and _is_plain_rows(q[1], qaxis)
+        and (q[0].shape[0] == q[1].shape[0] or 1 in (q[0].shape[0], q[1].shape[0]))
+    ):
+        # (n|1, 4) x (n|1, 4) float64: one pass, no copies
+        out, infs = _qmul_rows(kernel_array(q[0]), kernel_array(q[1]))
+        if not infs:
+            return out
+        # the general path below names the infinity
     kinds = {_is_quaternion_dtype(np.asarray(x)) for x in q}
     if len(kinds) > 1:
         raise ValueError(
@@ -234,13 +273,20 @@ def qmul(*q, qaxis: int = -1) -> Any:
         if 0 in shape:  # the kernel reuses a single row for any length, even 0
             result = np.empty(shape + (4,))
             continue
-        out = _qk.qmul(_rows(result, shape, 4), _rows(nxt, shape, 4))
+        out, _ = _qmul_rows(_rows(result, shape, 4), _rows(nxt, shape, 4))
         result = out.reshape(shape + (4,))
     out = _join(result, kinds.pop(), qaxis)
     for x in q:
         if _is_dataarray(x) and x.shape == out.shape:
             return x.copy(data=out)
     return out
+
+
+def _qmul_rows(p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, int]:
+    """p * q for kernel rows (n|1, 4), on both cores when long, and how many
+    infinities the operands hold."""
+    rows = max(p.shape[0], q.shape[0])
+    return _parallel.launch(_rk.qmul_counted, _rk.qmul_counted_parallel, rows, p, q)
 
 
 def _resolve_reduce_axes(axis: Any, ndim: int) -> tuple[int, ...]:

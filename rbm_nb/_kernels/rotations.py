@@ -239,3 +239,98 @@ def rotation_vectors(q):
         out[i, 1] = 2.0 * y
         out[i, 2] = 2.0 * z
     return out
+
+
+@helper(inline=True, options=VECTOR_KERNEL)
+def _qmul_rows(p, q, out, lo, hi):
+    """p * q for rows lo..hi-1 into ``out`` (either operand may be one row);
+    the number of infinities in the operands' rows used. Branch-free."""
+    sp = 1 if p.shape[0] > 1 else 0
+    sq = 1 if q.shape[0] > 1 else 0
+    infs = 0
+    for i in range(lo, hi):
+        a = i * sp
+        b = i * sq
+        aw, ax, ay, az = p[a, 0], p[a, 1], p[a, 2], p[a, 3]
+        bw, bx, by, bz = q[b, 0], q[b, 1], q[b, 2], q[b, 3]
+        infs += (abs(aw) == np.inf) + (abs(ax) == np.inf) + (abs(ay) == np.inf)
+        infs += (abs(az) == np.inf) + (abs(bw) == np.inf) + (abs(bx) == np.inf)
+        infs += (abs(by) == np.inf) + (abs(bz) == np.inf)
+        out[i, 0] = aw * bw - ax * bx - ay * by - az * bz
+        out[i, 1] = aw * bx + ax * bw + ay * bz - az * by
+        out[i, 2] = aw * by - ax * bz + ay * bw + az * bx
+        out[i, 3] = aw * bz + ax * by - ay * bx + az * bw
+    return infs
+
+
+@kernel(F2, F2, options=VECTOR_KERNEL)
+def qmul_counted(p, q):
+    """Hamilton product p * q row by row ((n|1, 4) x (n|1, 4) -> (n, 4)),
+    and how many infinities the operands hold (the caller names one)."""
+    n = 0 if p.shape[0] == 0 or q.shape[0] == 0 else max(p.shape[0], q.shape[0])
+    out = np.empty((n, 4))
+    infs = _qmul_rows(p, q, out, 0, n)
+    return out, infs
+
+
+@kernel(F2, F2, options=_PARALLEL_VECTOR)
+def qmul_counted_parallel(p, q):
+    """:func:`qmul_counted` with blocks of rows on numba's threads."""
+    n = 0 if p.shape[0] == 0 or q.shape[0] == 0 else max(p.shape[0], q.shape[0])
+    out = np.empty((n, 4))
+    size = (n + _BLOCKS - 1) // _BLOCKS
+    infs = 0
+    for b in prange(_BLOCKS):
+        infs += _qmul_rows(p, q, out, min(b * size, n), min((b + 1) * size, n))
+    return out, infs
+
+
+@helper(inline=True, options=VECTOR_KERNEL)
+def _qinv_rows(q, out, lo, hi):
+    """conj(q) / |q|² for rows lo..hi-1 into ``out``; counts of zero rows and
+    of infinities. Branch-free: a zero row gives NaN through 0 * (1 / 0)."""
+    zeros = 0
+    infs = 0
+    for i in range(lo, hi):
+        w, x, y, z = q[i, 0], q[i, 1], q[i, 2], q[i, 3]
+        n2 = w * w + x * x + y * y + z * z
+        zeros += n2 == 0.0
+        infs += (abs(w) == np.inf) + (abs(x) == np.inf) + (abs(y) == np.inf)
+        infs += abs(z) == np.inf
+        k = 1.0 / n2  # one division per row, not four (within an ulp)
+        out[i, 0] = w * k
+        out[i, 1] = -x * k
+        out[i, 2] = -y * k
+        out[i, 3] = -z * k
+    return zeros, infs
+
+
+@kernel(F2, options=VECTOR_KERNEL)
+def qinv_counted(q):
+    """Inverses of (n, 4) quaternions, with counts of zero rows and infinities.
+
+    Returns
+    -------
+    out : ndarray, shape (n, 4)
+        NaN in zero rows.
+    zeros, infs : int
+    """
+    n = q.shape[0]
+    out = np.empty((n, 4))
+    zeros, infs = _qinv_rows(q, out, 0, n)
+    return out, zeros, infs
+
+
+@kernel(F2, options=_PARALLEL_VECTOR)
+def qinv_counted_parallel(q):
+    """:func:`qinv_counted` with blocks of rows on numba's threads."""
+    n = q.shape[0]
+    out = np.empty((n, 4))
+    size = (n + _BLOCKS - 1) // _BLOCKS
+    zeros = 0
+    infs = 0
+    for b in prange(_BLOCKS):
+        z, f = _qinv_rows(q, out, min(b * size, n), min((b + 1) * size, n))
+        zeros += z
+        infs += f
+    return out, zeros, infs

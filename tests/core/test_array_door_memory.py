@@ -72,3 +72,48 @@ def test_rotate_vectors_allocates_its_output_only():
     q = rng.normal(size=(200_000, 4))
     v = rng.normal(size=(200_000, 3))
     assert peak_over_output(lambda: rbm.rotate_vectors(q, v)) <= 1.05
+
+
+def test_qmul_and_qinv_allocate_their_output_only():
+    rng = np.random.default_rng(3)
+    p = rng.normal(size=(200_000, 4))
+    q = rng.normal(size=(200_000, 4))
+    assert peak_over_output(lambda: rbm.qmul(p, q)) <= 1.05
+    assert peak_over_output(lambda: rbm.qinv(p)) <= 1.05
+
+
+def test_one_pass_kernels_equal_the_row_helpers():
+    """The branch-free qmul/qinv/rotate loops (fused multiply-add, one
+    division per row) against the kernels they replace on the public path."""
+    from rbm_nb._kernels import quaternion as kq
+    from rbm_nb._kernels import rotations as rk
+
+    rng = np.random.default_rng(4)
+    p = rng.normal(size=(1000, 4))
+    q = rng.normal(size=(1000, 4))
+    v = rng.normal(size=(1000, 3))
+    for single in (slice(None), slice(0, 1)):
+        out, infs = rk.qmul_counted(p[single].copy(), q)
+        np.testing.assert_allclose(
+            out, kq.qmul(p[single].copy(), q), rtol=0, atol=1e-14
+        )
+        assert infs == 0
+        out, zeros, infs = rk.rotate_vectors_counted(p[single].copy(), v)
+        want, _ = rk.rotate_vectors_checked(p[single].copy(), v)
+        np.testing.assert_allclose(out, want, rtol=0, atol=1e-13)
+        assert zeros == infs == 0
+    out, zeros, infs = rk.qinv_counted(p)
+    np.testing.assert_allclose(out, rk.qinv_checked(p)[0], rtol=1e-15, atol=0)
+    p[[3, 7]] = 0.0
+    q[5, 2] = -np.inf
+    assert rk.qinv_counted(p)[1:] == (2, 0)
+    assert rk.qmul_counted(p, q)[1] == 1
+    assert rk.rotate_vectors_counted(p, v)[1] == 2
+    for serial, parallel, args in (
+        (rk.qmul_counted, rk.qmul_counted_parallel, (p, q)),
+        (rk.qinv_counted, rk.qinv_counted_parallel, (p,)),
+        (rk.rotate_vectors_counted, rk.rotate_vectors_counted_parallel, (p, v)),
+    ):
+        a, b = serial(*args), parallel(*args)
+        np.testing.assert_array_equal(a[0], b[0])
+        assert a[1:] == b[1:]

@@ -187,13 +187,15 @@ def _is_plain_rows(q: Any, qaxis: Any) -> bool:
 def _qinv_rows(rows: np.ndarray, given: Any) -> np.ndarray:
     """Inverses of kernel rows (n, 4), on both cores when long; rejects
     infinities and zero quaternions (named in ``given``, as passed)."""
-    out, zeros, infs = _parallel.launch(
-        _rk.qinv_counted, _rk.qinv_counted_parallel, rows.shape[0], kernel_array(rows)
+    rows = kernel_array(rows)
+    out = np.empty(rows.shape)  # numpy's allocation: huge pages when large
+    zeros, infs = _parallel.launch(
+        _rk.qinv_into, _rk.qinv_into_parallel, rows.shape[0], rows, out
     )
     if infs:
         check_no_inf(np.asarray(given), "q")
     if zeros:
-        _raise_zero("q", _rk.first_zero_row(kernel_array(rows)), "it has no inverse")
+        _raise_zero("q", _rk.first_zero_row(rows), "it has no inverse")
     return out
 
 
@@ -285,8 +287,10 @@ def qmul(*q, qaxis: int = -1) -> Any:
 def _qmul_rows(p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, int]:
     """p * q for kernel rows (n|1, 4), on both cores when long, and how many
     infinities the operands hold."""
-    rows = max(p.shape[0], q.shape[0])
-    return _parallel.launch(_rk.qmul_counted, _rk.qmul_counted_parallel, rows, p, q)
+    rows = 0 if 0 in (p.shape[0], q.shape[0]) else max(p.shape[0], q.shape[0])
+    out = np.empty((rows, 4))  # numpy's allocation: huge pages when large
+    infs = _parallel.launch(_rk.qmul_into, _rk.qmul_into_parallel, rows, p, q, out)
+    return out, infs
 
 
 def _resolve_reduce_axes(axis: Any, ndim: int) -> tuple[int, ...]:
@@ -709,13 +713,20 @@ def _rotate_rows(
     Rejects zero quaternions and infinities (named in ``q_given``/``v_given``,
     the arrays as the caller passed them) after the one pass that finds them.
     """
-    rows = max(q_rows.shape[0], v_rows.shape[0])
-    out, zeros, infs = _parallel.launch(
-        _rk.rotate_vectors_counted,
-        _rk.rotate_vectors_counted_parallel,
+    v_rows = kernel_array(v_rows)
+    rows = (
+        0
+        if 0 in (q_rows.shape[0], v_rows.shape[0])
+        else max(q_rows.shape[0], v_rows.shape[0])
+    )
+    out = np.empty((rows, 3))  # numpy's allocation: huge pages when large
+    zeros, infs = _parallel.launch(
+        _rk.rotate_vectors_into,
+        _rk.rotate_vectors_into_parallel,
         rows,
         q_rows,
-        kernel_array(v_rows),
+        v_rows,
+        out,
     )
     if infs:
         check_no_inf(np.asarray(v_given), "v", row_axis=False)

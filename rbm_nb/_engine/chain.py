@@ -33,6 +33,7 @@ from .. import _time
 from .._door import kernel_array
 from .._kernels import quaternion as kq
 from .._kernels import resample as kr
+from .._kernels import squad_walk as ksw
 from . import fused as _fused
 
 _IDENTITY_T = np.zeros((1, 3))
@@ -409,10 +410,8 @@ def resample_array(data: np.ndarray, track, target: Target, quaternions: bool):
             if n < 2:
                 out[:, j, :] = column[0]
             else:
-                unflipped = kq.unflip(column)
-                rot = kq.squad(unflipped, track.base, t_out)
-                stored_signs(rot, unflipped, column, track.base, t_out)
-                out[:, j, :] = rot
+                # unflip, squad and stored_signs in one pass
+                out[:, j, :] = ksw.squad_walk(column, track.base, t_out)
         else:
             out[:, j, :] = kr.interp_linear(track.base, column, t_out)
     return out

@@ -125,47 +125,47 @@ def _rotate_rows(q, v, out, lo, hi):
     return zeros, infs
 
 
-@kernel(F2, F2, options=VECTOR_KERNEL)
-def rotate_vectors_counted(q, v):
-    """q v q⁻¹ row by row, with counts of zero quaternions and infinities.
+@kernel(F2, F2, F2, options=VECTOR_KERNEL)
+def rotate_vectors_into(q, v, out):
+    """q v q⁻¹ row by row into ``out``, counting zero quaternions and infinities.
+
+    ``out`` comes from the caller (numpy allocates large arrays on huge
+    pages: a fresh output then costs a few page faults instead of one per
+    4 kB, which on first touch is most of the time of a memory-bound loop).
 
     Parameters
     ----------
     q : ndarray, shape (n, 4) or (1, 4)
     v : ndarray, shape (n, 3) or (1, 3)
+    out : ndarray, shape (n, 3)
+        n = max of the two (0 if either is empty); NaN in rows rotated by a
+        zero quaternion.
 
     Returns
     -------
-    out : ndarray, shape (n, 3)
-        NaN in rows rotated by a zero quaternion.
     zeros : int
         How many rows of ``q`` used are zero (the caller finds the first).
     infs : int
         How many infinities ``v`` and ``q`` hold (idem).
     """
-    n = 0 if q.shape[0] == 0 or v.shape[0] == 0 else max(q.shape[0], v.shape[0])
-    out = np.empty((n, 3))
-    zeros, infs = _rotate_rows(q, v, out, 0, n)
-    return out, zeros, infs
+    return _rotate_rows(q, v, out, 0, out.shape[0])
 
 
-@kernel(F2, F2, options=_PARALLEL_VECTOR)
-def rotate_vectors_counted_parallel(q, v):
-    """:func:`rotate_vectors_counted` with blocks of rows on numba's threads."""
-    n = 0 if q.shape[0] == 0 or v.shape[0] == 0 else max(q.shape[0], v.shape[0])
-    out = np.empty((n, 3))
+@kernel(F2, F2, F2, options=_PARALLEL_VECTOR)
+def rotate_vectors_into_parallel(q, v, out):
+    """:func:`rotate_vectors_into` with blocks of rows on numba's threads."""
+    n = out.shape[0]
     # plain loops that LLVM vectorises, more of them than threads (numba's
     # thread count is not read here: that would keep the kernel out of the
     # on-disk cache)
-    blocks = _BLOCKS
-    size = (n + blocks - 1) // blocks
+    size = (n + _BLOCKS - 1) // _BLOCKS
     zeros = 0
     infs = 0
-    for b in prange(blocks):
+    for b in prange(_BLOCKS):
         z, f = _rotate_rows(q, v, out, min(b * size, n), min((b + 1) * size, n))
         zeros += z
         infs += f
-    return out, zeros, infs
+    return zeros, infs
 
 
 @kernel(F2)
@@ -263,26 +263,23 @@ def _qmul_rows(p, q, out, lo, hi):
     return infs
 
 
-@kernel(F2, F2, options=VECTOR_KERNEL)
-def qmul_counted(p, q):
-    """Hamilton product p * q row by row ((n|1, 4) x (n|1, 4) -> (n, 4)),
-    and how many infinities the operands hold (the caller names one)."""
-    n = 0 if p.shape[0] == 0 or q.shape[0] == 0 else max(p.shape[0], q.shape[0])
-    out = np.empty((n, 4))
-    infs = _qmul_rows(p, q, out, 0, n)
-    return out, infs
+@kernel(F2, F2, F2, options=VECTOR_KERNEL)
+def qmul_into(p, q, out):
+    """Hamilton product p * q row by row ((n|1, 4) x (n|1, 4)) into ``out``
+    (n, 4) (allocated by the caller, see :func:`rotate_vectors_into`); how
+    many infinities the operands hold (the caller names one)."""
+    return _qmul_rows(p, q, out, 0, out.shape[0])
 
 
-@kernel(F2, F2, options=_PARALLEL_VECTOR)
-def qmul_counted_parallel(p, q):
-    """:func:`qmul_counted` with blocks of rows on numba's threads."""
-    n = 0 if p.shape[0] == 0 or q.shape[0] == 0 else max(p.shape[0], q.shape[0])
-    out = np.empty((n, 4))
+@kernel(F2, F2, F2, options=_PARALLEL_VECTOR)
+def qmul_into_parallel(p, q, out):
+    """:func:`qmul_into` with blocks of rows on numba's threads."""
+    n = out.shape[0]
     size = (n + _BLOCKS - 1) // _BLOCKS
     infs = 0
     for b in prange(_BLOCKS):
         infs += _qmul_rows(p, q, out, min(b * size, n), min((b + 1) * size, n))
-    return out, infs
+    return infs
 
 
 @helper(inline=True, options=VECTOR_KERNEL)
@@ -305,27 +302,18 @@ def _qinv_rows(q, out, lo, hi):
     return zeros, infs
 
 
-@kernel(F2, options=VECTOR_KERNEL)
-def qinv_counted(q):
-    """Inverses of (n, 4) quaternions, with counts of zero rows and infinities.
+@kernel(F2, F2, options=VECTOR_KERNEL)
+def qinv_into(q, out):
+    """Inverses of (n, 4) quaternions into ``out`` (n, 4) (allocated by the
+    caller, see :func:`rotate_vectors_into`; NaN in zero rows); counts of
+    zero rows and of infinities."""
+    return _qinv_rows(q, out, 0, q.shape[0])
 
-    Returns
-    -------
-    out : ndarray, shape (n, 4)
-        NaN in zero rows.
-    zeros, infs : int
-    """
+
+@kernel(F2, F2, options=_PARALLEL_VECTOR)
+def qinv_into_parallel(q, out):
+    """:func:`qinv_into` with blocks of rows on numba's threads."""
     n = q.shape[0]
-    out = np.empty((n, 4))
-    zeros, infs = _qinv_rows(q, out, 0, n)
-    return out, zeros, infs
-
-
-@kernel(F2, options=_PARALLEL_VECTOR)
-def qinv_counted_parallel(q):
-    """:func:`qinv_counted` with blocks of rows on numba's threads."""
-    n = q.shape[0]
-    out = np.empty((n, 4))
     size = (n + _BLOCKS - 1) // _BLOCKS
     zeros = 0
     infs = 0
@@ -333,4 +321,4 @@ def qinv_counted_parallel(q):
         z, f = _qinv_rows(q, out, min(b * size, n), min((b + 1) * size, n))
         zeros += z
         infs += f
-    return out, zeros, infs
+    return zeros, infs

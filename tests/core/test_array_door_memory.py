@@ -93,27 +93,28 @@ def test_one_pass_kernels_equal_the_row_helpers():
     q = rng.normal(size=(1000, 4))
     v = rng.normal(size=(1000, 3))
     for single in (slice(None), slice(0, 1)):
-        out, infs = rk.qmul_counted(p[single].copy(), q)
+        out = np.empty((1000, 4))
+        assert rk.qmul_into(p[single].copy(), q, out) == 0
         np.testing.assert_allclose(
             out, kq.qmul(p[single].copy(), q), rtol=0, atol=1e-14
         )
-        assert infs == 0
-        out, zeros, infs = rk.rotate_vectors_counted(p[single].copy(), v)
+        out = np.empty((1000, 3))
+        assert rk.rotate_vectors_into(p[single].copy(), v, out) == (0, 0)
         want, _ = rk.rotate_vectors_checked(p[single].copy(), v)
         np.testing.assert_allclose(out, want, rtol=0, atol=1e-13)
-        assert zeros == infs == 0
-    out, zeros, infs = rk.qinv_counted(p)
+    out = np.empty((1000, 4))
+    assert rk.qinv_into(p, out) == (0, 0)
     np.testing.assert_allclose(out, rk.qinv_checked(p)[0], rtol=1e-15, atol=0)
     p[[3, 7]] = 0.0
     q[5, 2] = -np.inf
-    assert rk.qinv_counted(p)[1:] == (2, 0)
-    assert rk.qmul_counted(p, q)[1] == 1
-    assert rk.rotate_vectors_counted(p, v)[1] == 2
-    for serial, parallel, args in (
-        (rk.qmul_counted, rk.qmul_counted_parallel, (p, q)),
-        (rk.qinv_counted, rk.qinv_counted_parallel, (p,)),
-        (rk.rotate_vectors_counted, rk.rotate_vectors_counted_parallel, (p, v)),
+    assert rk.qinv_into(p, np.empty((1000, 4))) == (2, 0)
+    assert rk.qmul_into(p, q, np.empty((1000, 4))) == 1
+    assert rk.rotate_vectors_into(p, v, np.empty((1000, 3)))[0] == 2
+    for serial, parallel, args, width in (
+        (rk.qmul_into, rk.qmul_into_parallel, (p, q), 4),
+        (rk.qinv_into, rk.qinv_into_parallel, (p,), 4),
+        (rk.rotate_vectors_into, rk.rotate_vectors_into_parallel, (p, v), 3),
     ):
-        a, b = serial(*args), parallel(*args)
-        np.testing.assert_array_equal(a[0], b[0])
-        assert a[1:] == b[1:]
+        a, b = np.empty((1000, width)), np.empty((1000, width))
+        assert serial(*args, a) == parallel(*args, b)
+        np.testing.assert_array_equal(a, b)

@@ -229,3 +229,15 @@ def test_bad_input_still_named_on_the_fast_door(bad, match):
         t_out[1] = 9.0
     with pytest.raises(ValueError, match=match):
         rbm.qinterp(q, t_in, t_out)
+
+
+def test_read_only_datetimes_take_the_fast_door():
+    rng = np.random.default_rng(8)
+    q = series(rng, 50, 0.05, 1e-3)
+    start = np.datetime64("2020-02-02T00:00:00", "ns")
+    t_in = start + (np.arange(50) * 10_000_000).astype("timedelta64[ns]")
+    t_out = t_in[:-1] + np.timedelta64(3_000_000, "ns")
+    want = rbm.qinterp(q, t_in, t_out)
+    t_in.flags.writeable = False
+    t_out.flags.writeable = False
+    np.testing.assert_array_equal(rbm.qinterp(q, t_in, t_out), want)

@@ -131,6 +131,8 @@ def _atan_over_x(x2):
 @helper(inline=True)
 def _exp_small(x):
     """exp(x), by its series near 0 (the scales of near-unit quaternions)."""
+    if abs(x) < _TINY2:
+        return 1.0 + x * (1.0 + x * 0.5 * (1.0 + x / 3.0))  # next term < 4.2e-18
     if abs(x) < _SMALL:
         return 1.0 + x * (
             1.0
@@ -269,7 +271,7 @@ def _prepare(q, sign, t_in, s0, s1, smp, logs, ctl, rec, r0):
     the processor overlaps their long dependency chains; no helper in the
     loops takes an array (each would cost atomic reference counting per
     call). Scratch: ``smp`` (samples: unit parts, ln scale, NaN), ``logs``
-    (log r[k]⁻¹ r[k+1], vector part), ``ctl`` (end sample and control
+    (log r[k]⁻¹ r[k+1], vector part; t[k+1] - t[k] and its inverse), ``ctl`` (end sample and control
     points: r[i+1], A[i], B[i], their ln scales, NaN count).
     """
     n = q.shape[0]
@@ -293,6 +295,10 @@ def _prepare(q, sign, t_in, s0, s1, smp, logs, ctl, rec, r0):
         logs[a, 0] = v[0]
         logs[a, 1] = v[1]
         logs[a, 2] = v[2]
+        # the sampling interval and its inverse, for the ratios below
+        dt = t_in[k0 + a + 1] - t_in[k0 + a]
+        logs[a, 3] = dt
+        logs[a, 4] = 1.0 / dt
     for i in range(s0, s1 + 1):
         r = r0 + i - s0
         c = i - k0  # row of sample i
@@ -328,7 +334,7 @@ def _prepare(q, sign, t_in, s0, s1, smp, logs, ctl, rec, r0):
         ctl[r, 12] = ln_
         # A[i] = r[i] exp((-L[i] + L[i-1] (t[i+1]-t[i]) / (t[i]-t[i-1])) / 4)
         if 1 <= i <= n - 2:
-            ratio = (t_in[i + 1] - t_in[i]) / (t_in[i] - t_in[i - 1])
+            ratio = logs[c, 3] * logs[c - 1, 4]  # (t[i+1]-t[i]) / (t[i]-t[i-1])
             aw, ax, ay, az = _control_point(
                 smp[c, 0], smp[c, 1], smp[c, 2], smp[c, 3],
                 (-logs[c, 0] + logs[c - 1, 0] * ratio) * 0.25,
@@ -345,7 +351,7 @@ def _prepare(q, sign, t_in, s0, s1, smp, logs, ctl, rec, r0):
         ctl[r, 13] = la
         # B[i] = r[i+1] exp((L[i+1] (t[i+1]-t[i]) / (t[i+2]-t[i+1]) - L[i]) / -4)
         if i <= n - 3:
-            ratio = (t_in[i + 1] - t_in[i]) / (t_in[i + 2] - t_in[i + 1])
+            ratio = logs[c, 3] * logs[c + 1, 4]  # (t[i+1]-t[i]) / (t[i+2]-t[i+1])
             bw, bx, by, bz = _control_point(
                 nw, nx, ny, nz,
                 (logs[c + 1, 0] * ratio - logs[c, 0]) * -0.25,
@@ -507,7 +513,7 @@ def _walk(q, sign, t_in, t_out, out, first, last):
     found = np.empty(_BLOCK, dtype=np.int64)
     slot = np.empty(_BLOCK, dtype=np.int64)
     smp = np.empty((_SPAN + 3, 6))
-    logs = np.empty((_SPAN + 3, 3))
+    logs = np.empty((_SPAN + 3, 5))
     ctl = np.empty((_SPAN, 16))
     rec = np.empty((_SPAN, _N_REC))
     inner = np.empty((_BLOCK, 9))

@@ -376,11 +376,19 @@ def _prepare(q, sign, t_in, s0, s1, smp, logs, ctl, rec, r0):
         nw, nx, ny, nz, ln_ = ctl[r, 0], ctl[r, 1], ctl[r, 2], ctl[r, 3], ctl[r, 12]
         # the "shorter way round", decided as for the scaled values
         f = _decide(rw * nw + rx * nx + ry * ny + rz * nz, _flip_bound(lr, ln_))
-        arc = _great_circle(rw, rx, ry, rz, f * nw, f * nx, f * ny, f * nz)
         rec[r, 0] = rw
         rec[r, 1] = rx
         rec[r, 2] = ry
         rec[r, 3] = rz
+        if f == 1.0 and i < n - 1:
+            # the arc towards r[i+1] is r[i] exp(τ L[i]): o = r[i] (0, L[i])
+            # has length θ, so g = 1 (no great circle to work out)
+            lx, ly, lz = logs[c, 0], logs[c, 1], logs[c, 2]
+            ow, ox, oy, oz = _qmul1(rw, rx, ry, rz, 0.0, lx, ly, lz)
+            theta2 = lx * lx + ly * ly + lz * lz
+            arc = (ow, ox, oy, oz, theta2, math.sqrt(theta2), 1.0)
+        else:
+            arc = _great_circle(rw, rx, ry, rz, f * nw, f * nx, f * ny, f * nz)
         for k in range(7):
             rec[r, 4 + k] = arc[k]
         rec[r, 22] = lr

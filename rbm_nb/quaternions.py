@@ -640,20 +640,29 @@ def _qinterp_dataarray(
             f"the new coordinate for {dim!r} must be a scalar or one-dimensional, "
             f"got shape {t_out_values.shape}"
         )
-    t_in_f, t_out_f = _time_values(t_in, t_out_values)
+    times = _fast_times(np.asarray(getattr(t_in, "values", t_in)), t_out_values)
+    t_in_f, t_out_f = times if times is not None else _time_values(t_in, t_out_values)
     flat_out = t_out_f.reshape(-1)
-    inside = np.ones(flat_out.shape, dtype=bool)
+    inside = None  # None: every time is inside the sampled range
     if out_of_range == "nan" and t_in_f.ndim == 1 and t_in_f.size:
         inside = (flat_out >= t_in_f[0]) & (flat_out <= t_in_f[-1])
-    _check_times(t_in_f, flat_out[inside], da.sizes[dim])
+        if inside.all():
+            inside = None
+    _check_times(
+        t_in_f, flat_out if inside is None else flat_out[inside], da.sizes[dim]
+    )
 
     data = np.moveaxis(_float_array(da.values, "q"), da.dims.index(qdim), -1)
     ax = [d for d in da.dims if d != qdim].index(dim)
-    values = np.full(data.shape[:ax] + (flat_out.size,) + data.shape[ax + 1 :], np.nan)
-    if inside.any():
-        index: list[Any] = [slice(None)] * values.ndim
-        index[ax] = inside
-        values[tuple(index)] = _squad_along(data, ax, t_in_f, flat_out[inside])
+    if inside is None:
+        values = _squad_along(data, ax, t_in_f, flat_out)
+    else:
+        shape = data.shape[:ax] + (flat_out.size,) + data.shape[ax + 1 :]
+        values = np.full(shape, np.nan)
+        if inside.any():
+            index: list[Any] = [slice(None)] * values.ndim
+            index[ax] = inside
+            values[tuple(index)] = _squad_along(data, ax, t_in_f, flat_out[inside])
     values = np.moveaxis(values, -1, da.dims.index(qdim))
 
     coords = {}

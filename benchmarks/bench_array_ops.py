@@ -120,9 +120,21 @@ def operations(work):
     q1m = np.ascontiguousarray(continuous_rotations(rng, 1_000_000, 0.001))
     p1m = np.ascontiguousarray(continuous_rotations(rng, 1_000_000, 0.002))
     v1m = rng.normal(size=(1_000_000, 3))
+    import importlib
+
+    import xarray as xr
+
+    da = xr.DataArray(head_rot, {"time": head_ts}, ("time", "quaternion_axis"))
+
+    def accessor(m):
+        # both packages register ".rbm": call each one's accessor class
+        return importlib.import_module(f"{m.__name__}.accessors").DataArrayAccessor(da)
+
     return [
         (f"qinterp {len(head_ts)} head -> {len(inside)} eye times",
          lambda m: m.qinterp(head_rot, head_ts, inside), True),
+        ("  the same with .rbm.qinterp(time=...)",
+         lambda m: accessor(m).qinterp(time=inside), True),
         ("rotate_vectors 1M", lambda m: m.rotate_vectors(q1m, v1m), True),
         ("qmul 1M", lambda m: m.qmul(q1m, p1m), True),
         ("qinv 1M", lambda m: m.qinv(q1m), True),

@@ -194,6 +194,8 @@ def peak_memory(fn):
     peak = tracemalloc.get_traced_memory()[1] - before
     tracemalloc.stop()
     arrays = result if isinstance(result, tuple) else (result,)
+    # DataArrays count their data
+    arrays = tuple(getattr(a, "data", a) for a in arrays)
     return peak, sum(a.nbytes for a in arrays if isinstance(a, np.ndarray))
 
 

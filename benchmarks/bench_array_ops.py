@@ -195,7 +195,9 @@ def peak_memory(fn):
     tracemalloc.stop()
     arrays = result if isinstance(result, tuple) else (result,)
     # DataArrays count their data
-    arrays = tuple(getattr(a, "data", a) for a in arrays)
+    arrays = tuple(
+        a if isinstance(a, np.ndarray) else getattr(a, "data", a) for a in arrays
+    )
     return peak, sum(a.nbytes for a in arrays if isinstance(a, np.ndarray))
 
 

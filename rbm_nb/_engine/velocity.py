@@ -27,6 +27,7 @@ from .._door import kernel_array
 from .._kernels import differences as _dk
 from .._kernels import quaternion as _qk
 from .._kernels import rotations as _rk
+from .._kernels import velocity_fused as _vf
 from .._validation import is_scalar
 
 __all__ = [
@@ -205,10 +206,18 @@ def angular_series(
     if zero >= 0:
         raise ValueError(f"arr contains a zero quaternion (row {zero} when flattened)")
     need_rv = mode == "rotation_vector" or outlier_thresh is not None
+    no_breaks = breaks is None or not breaks.any()
     w = np.empty((n, nb, 3))
     # rotation vectors, needed by that mode and by the outlier score
     rv = np.empty((n, nb, 3) if need_rv else (0, nb, 3))
     for b in range(nb):
+        if not need_rv and mode == "quaternion" and n >= 4 and no_breaks:
+            # unflip, spline slopes and 2 q⁻¹ dq/dt in one kernel, unless a
+            # sample is missing (then the runs below)
+            rates, bad = _vf.body_rates(kernel_array(q[:, b, :]), t)
+            if not bad:
+                w[:, b, :] = rates
+                continue
         # q and -q are the same rotation: differentiate a sign-continuous series
         qb = _qk.unflip(kernel_array(q[:, b, :]))
         if need_rv:

@@ -2,10 +2,14 @@
 
 :func:`squad_walk` gives what ``unflip`` → ``squad`` → ``stored_signs`` give
 together (``rbm_nb.quaternions.qinterp`` on one series), without their
-temporaries: no sign-corrected copy of the input, no coefficient tables over
-every sample. The output times are walked in order; each squad segment that
-an output time falls in is set up once, from the four samples around it,
-when the walk reaches it, and serves every output time inside it.
+temporaries: no sign-corrected copy of the input (only its signs), no
+coefficient tables over every sample. The output times are walked in blocks
+of :data:`_BLOCK` rows; the squad segments a block falls in are set up once,
+from the samples around them, in scratch space of the size of a block
+(every segment from the block's first to its last when they are few, else
+only the segments used), and then serve every output time inside them. The
+stages are short loops over independent segments or rows, so that the
+processor overlaps their long dependency chains.
 
 Non-unit samples (recordings store quaternions with 4-7 digits) follow
 numpy-quaternion's arithmetic, which treats them as a unit rotation times a

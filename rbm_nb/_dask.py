@@ -123,7 +123,7 @@ def over_time(
         piece = source.isel({time_dim: slice(read_lo, read_hi)})
         task = run(
             func,
-            piece.data,
+            _one_block(piece.data),
             {k: v.variable for k, v in piece.coords.items()},
             piece.dims,
             piece.name,
@@ -144,6 +144,18 @@ def over_time(
         {k: v.variable for k, v in layout.coords.items() if time_dim not in v.dims}
     )
     return xr.DataArray(data, coords, layout.dims, layout.name, layout.attrs)
+
+
+def _one_block(data):
+    """A dask array as one Delayed block, its graph left as it is.
+
+    Handing the array itself to a delayed call would optimise (fuse and
+    rename) its graph once per call: every chunk's task would then carry
+    its own copy of what the array depends on -- for a cumulative fill,
+    every chunk before it.
+    """
+    whole = data.rechunk(tuple(-1 for _ in data.shape))
+    return whole.to_delayed(optimize_graph=False).ravel()[0]
 
 
 def _seconds_from_first(times: np.ndarray) -> np.ndarray:
@@ -332,13 +344,185 @@ def estimate(
     comp_dim = dim if dim is not None else arr.dims[-1 if axis is None else axis]
     if quaternions:
         arr = sign_continuous(arr, time_dim, comp_dim)
+    fill = {comp_dim: (1.0, 0.0, 0.0, 0.0) if quaternions else 0.0}
+    thresh = options.pop("outlier_thresh", None)
+    cutoff = options.get("cutoff") if thresh is not None else None
+    if thresh is not None:
+        # the velocity without rejection and filtering, then both lazily
+        options["cutoff"] = None
 
     def block(b):
         return eager(b, dim=dim, axis=axis, timestamps=time_dim, **options)
 
-    fill = {comp_dim: (1.0, 0.0, 0.0, 0.0) if quaternions else 0.0}
     out = over_time(block, arr, time_dim, halo=halo, fill=fill, global_seconds=True)
+    if thresh is not None:
+        score = over_time(
+            lambda b: _outlier_score(b, time_dim, comp_dim, quaternions),
+            arr,
+            time_dim,
+            halo=GRADIENT_HALO,
+            fill=fill,
+        )
+        seconds = _seconds_from_first(arr[time_dim].values)
+        out = reinterpolate(out, score <= thresh, seconds, time_dim, thresh)
+        if cutoff is not None:
+            out = lowpass(out, time_dim, cutoff)
     return out.data if plain else out
+
+
+# ---------------------------------------------------------------------------
+# outlier rejection: a rejected sample may be re-interpolated from kept
+# samples any distance away, which no halo covers; the previous and next kept
+# samples are carried across chunks by cumulative fills instead
+# ---------------------------------------------------------------------------
+
+
+def _outlier_score(block, time_dim: str, comp_dim: str, quaternions: bool):
+    """The eager estimators' outlier score of a block, dims (time, others...).
+
+    Second differences of the positions, or of the rotation vectors of the
+    (already sign-continuous) quaternions; a sample's score reads one sample
+    before it and two after, which the halo provides.
+    """
+    import xarray as xr
+
+    from ._door import kernel_array
+    from ._kernels import differences as dk
+    from ._kernels import quaternion as qk
+    from ._kernels import rotations as rk
+
+    moved = block.transpose(time_dim, ..., comp_dim)
+    data = np.asarray(moved.values, dtype=np.float64)
+    n, k = data.shape[0], data.shape[-1]
+    series = data.reshape(n, -1, k)
+    if quaternions:
+        rv = np.empty((n, series.shape[1], 3))
+        for b in range(series.shape[1]):
+            rv[:, b, :] = rk.rotation_vectors(qk.unflip(kernel_array(series[:, b, :])))
+        series = rv
+    score = dk.second_difference_score(kernel_array(series))
+    return xr.DataArray(
+        score.reshape(data.shape[:-1]),
+        {time_dim: moved[time_dim].variable},
+        moved.dims[:-1],
+    )
+
+
+def _ffill_block(a: np.ndarray, axis: int) -> np.ndarray:
+    """NaN replaced by the last non-NaN value before it along ``axis`` (in a block)."""
+    moved = np.moveaxis(a, axis, 0)
+    rows = np.arange(moved.shape[0]).reshape((-1,) + (1,) * (moved.ndim - 1))
+    last = np.where(np.isnan(moved), 0, rows)
+    np.maximum.accumulate(last, axis=0, out=last)
+    return np.moveaxis(np.take_along_axis(moved, last, axis=0), 0, axis)
+
+
+def _fill_from_previous_block(carried: np.ndarray, block: np.ndarray) -> np.ndarray:
+    return np.where(np.isnan(block), carried, block)
+
+
+def push(data, axis: int, backward: bool = False):
+    """Forward (or backward) fill of NaN along ``axis`` of a dask array.
+
+    Each block is filled on its own, then the last value of the blocks
+    before it is carried in (dask's cumulative reduction), so the result is
+    that of one fill over the whole array, whatever the chunks.
+    """
+    from dask.array.reductions import cumreduction
+
+    index = [slice(None)] * data.ndim
+    index[axis] = slice(None, None, -1)
+    flip = tuple(index)
+    if backward:
+        data = data[flip]
+    out = cumreduction(
+        _ffill_block, _fill_from_previous_block, np.nan, data, axis, data.dtype
+    )
+    return out[flip] if backward else out
+
+
+def _pushed(da, time_dim: str, backward: bool = False):
+    return da.copy(data=push(da.data, da.dims.index(time_dim), backward))
+
+
+def reinterpolate(v, keep, seconds: np.ndarray, time_dim: str, thresh: float):
+    """Rejected samples of ``v`` interpolated in time between the kept ones.
+
+    The lazy counterpart of the eager rejection: for a rejected sample at t,
+    ``v_prev + (t - t_prev) / (t_next - t_prev) * (v_next - v_prev)`` with
+    the previous and next kept samples of its series (the same arithmetic,
+    so the same numbers). A series whose first or last samples are rejected,
+    or that keeps fewer than 2, raises the eager path's error on compute.
+
+    Parameters
+    ----------
+    v : xarray.DataArray
+        Dask-backed velocities; ``time_dim`` plus components and others.
+    keep : xarray.DataArray of bool
+        Dask-backed, ``v``'s dims without the components, chunked alike.
+    seconds : ndarray, shape (n,)
+        Times of the samples in seconds from the first (as the eager path).
+    """
+    import dask
+    import dask.array as dsa
+    import xarray as xr
+
+    n = len(seconds)
+    chunks = {time_dim: v.chunksizes[time_dim]}
+    t = xr.DataArray(seconds, dims=time_dim).chunk(chunks)
+    rows = xr.DataArray(np.arange(n, dtype=np.float64), dims=time_dim).chunk(chunks)
+    t_kept, rows_kept, v_kept = t.where(keep), rows.where(keep), v.where(keep)
+    t_prev, t_next = _pushed(t_kept, time_dim), _pushed(t_kept, time_dim, True)
+    v_prev, v_next = _pushed(v_kept, time_dim), _pushed(v_kept, time_dim, True)
+    # kept samples (where t_next == t_prev) take v itself: divide them by 1
+    w = (t - t_prev) / (t_next - t_prev).where(~keep, 1.0)
+    filled = xr.where(keep, v, v_prev + w * (v_next - v_prev))
+    data = filled.transpose(*v.dims).data
+    # the checks read the first kept row from the start and the last from the end
+    first_kept = _pushed(rows_kept, time_dim, True).isel({time_dim: 0}).data
+    last_kept = _pushed(rows_kept, time_dim).isel({time_dim: -1}).data
+    check = dask.delayed(_check_kept, pure=True)(first_kept, last_kept, n, thresh)
+    ok = dsa.from_delayed(check, (), dtype=bool)
+    data = dsa.map_blocks(_after_check, data, ok, dtype=data.dtype)
+    return v.copy(data=data)
+
+
+def _after_check(block: np.ndarray, ok) -> np.ndarray:
+    return block
+
+
+def _check_kept(first: np.ndarray, last: np.ndarray, n: int, thresh: float) -> bool:
+    """The eager rejection's errors, from each series' first and last kept row."""
+    first, last = np.atleast_1d(first), np.atleast_1d(last)
+    counts = np.where(np.isnan(first), 0, np.where(first == last, 1, 2))
+    if counts.min() < 2:
+        raise ValueError(
+            f"outlier_thresh={thresh} keeps only {counts.min()} sample(s) of a "
+            f"series; at least 2 are needed to interpolate the others"
+        )
+    if (first > 0).any() or (last < n - 1).any():
+        lead = (first > 0).any()
+        edge = int(first.min()) if lead else int(n - 1 - last.max())
+        raise ValueError(
+            f"outlier_thresh={thresh} rejects the {'first' if lead else 'last'} "
+            f"{max(edge, 1)} sample(s) of a series, which have no kept sample on "
+            f"that side to be interpolated from; raise outlier_thresh or trim "
+            f"the series"
+        )
+    return True
+
+
+def lowpass(v, time_dim: str, cutoff: float):
+    """The estimators' forward-backward low-pass of dask-backed ``v``, per chunk."""
+    from ._engine.velocity import _lowpass, lowpass_reach
+
+    axis = v.dims.index(time_dim)
+
+    def block(b):
+        values = np.moveaxis(np.asarray(b.values), axis, 0)
+        return b.copy(data=np.moveaxis(_lowpass(values, cutoff), 0, axis))
+
+    return over_time(block, v, time_dim, halo=lowpass_reach(cutoff))
 
 
 def elementwise(eager: Callable, arr, core_dim: str | int, fill: Any = 0.0, **kwargs):
@@ -474,7 +658,7 @@ def qinterp(eager: Callable, da, dim: str, qdim: str, t_out, out_of_range: str):
         piece = q.isel({dim: slice(max(lo, 0), min(hi, len(t_in)))})
         task = run(
             eager,
-            piece.data,
+            _one_block(piece.data),
             {k: v.variable for k, v in piece.coords.items()},
             piece.dims,
             da.name,

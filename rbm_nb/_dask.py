@@ -264,8 +264,13 @@ def transform(
     resolve: Callable,
     attr: str,
     quaternions: bool,
+    spans: Sequence[tuple[Any, Any]] = (),
 ):
-    """A transform of dask-backed data: the frames looked up at each chunk's times."""
+    """A transform of dask-backed data: the frames looked up at each chunk's times.
+
+    ``spans`` are further (first, last) time ranges the result is cropped to,
+    as the eager matching crops it to those of the arrays taking part.
+    """
     plain = not hasattr(arr, "dims")
     if plain:
         if timestamps is None:
@@ -293,6 +298,10 @@ def transform(
         if source is None
         else frame_time_range(resolve(source, "outof"), resolve(into, "into"))
     )
+    for first, last in spans:
+        span = (
+            (first, last) if span is None else (max(span[0], first), min(span[1], last))
+        )
     times = arr[time_dim].values
     start, stop = 0, len(times)
     if span is not None:
@@ -695,3 +704,235 @@ def _run_qinterp(
     block = xr.DataArray(np.asarray(data), coords, dims, name, attrs)
     out = eager(block, dim, qdim, part, out_of_range=out_of_range)
     return np.asarray(out.transpose(*out_dims).data)
+
+
+# ---------------------------------------------------------------------------
+# velocity transforms: the frames' own velocities once, then per chunk
+# ---------------------------------------------------------------------------
+
+
+def velocity_terms(linear: bool, frame, to_frame, what: str, options: dict):
+    """The looked-up terms of a change of frame of velocities, and how to add them.
+
+    The frames are in memory: their velocities (and for linear velocities
+    the lever arm) are estimated here once, as the eager transform does,
+    and each chunk then only matches them to its own timestamps. Mirrors
+    :func:`rbm_nb._engine.twist.transform_angular_velocity` and
+    :func:`~rbm_nb._engine.twist.transform_linear_velocity`.
+
+    Returns
+    -------
+    extras : list of (ndarray (n|1, 3), Track or None)
+    combine : callable
+        ``combine(rotated, extras_matched)``: the transformed velocities.
+    """
+    from ._engine import chain as ch
+    from ._engine import twist as tw
+    from ._engine.transform import track_of
+    from ._engine.transform import transform as engine_transform
+
+    cutoff = options.get("cutoff")
+    if not linear:
+        # w_M/R' = w_M/R + w_R/R'  or  w_M'/R = w_M/R + w_M'/M
+        moving, reference = (
+            (frame, to_frame) if what == "reference_frame" else (to_frame, frame)
+        )
+        angular, ang_ts = tw.lookup_angular_velocity(
+            moving, reference, to_frame, None, cutoff, "quaternion", True, True
+        )
+        return [(angular, ang_ts)], lambda rotated, ext: rotated + ext[0]
+    thresh = options.get("outlier_thresh")
+    if what == "reference_frame":
+        # v_M/R' = v_M/R + v_R/R' + w_R/R' x t_M/R
+        if options.get("moving_frame") is None:
+            raise ValueError(
+                "moving_frame must be given to transform the reference frame of a "
+                "linear velocity (its position enters the three-term formula)"
+            )
+        lin, ang, lin_ts = tw.lookup_twist(
+            frame, to_frame, to_frame, thresh, cutoff, "quaternion", True, True
+        )
+        ang_ts = lin_ts
+        translation, _, trans_target = ch.lookup(options["moving_frame"], frame)
+    else:
+        # v_M'/R = v_M/R + v_M'/M + w_M/R x t_M'/M
+        if options.get("reference_frame") is None:
+            raise ValueError(
+                "reference_frame must be given to transform the moving frame of a "
+                "linear velocity (its angular velocity enters the three-term formula)"
+            )
+        lin, lin_ts = tw.lookup_linear_velocity(
+            to_frame, frame, to_frame, thresh, cutoff, True, True
+        )
+        ang, ang_ts = tw.lookup_angular_velocity(
+            frame, options["reference_frame"], to_frame, None, cutoff,
+            "quaternion", True, True,
+        )  # fmt: skip
+        translation, _, trans_target = ch.lookup(to_frame, frame)
+    lever, lever_ts = engine_transform(
+        frame, "vectors", translation, to_frame, -1, 0, trans_target.track
+    )
+    lever_track = None if lever_ts is None else track_of(trans_target.track, lever_ts)
+    extras = [(lin, lin_ts), (ang, ang_ts), (lever, lever_track)]
+    return extras, lambda rotated, ext: rotated + ext[0] + np.cross(ext[1], ext[2])
+
+
+def velocity_transform(
+    linear: bool,
+    arr,
+    into,
+    outof,
+    what: str,
+    dim,
+    axis,
+    timestamps,
+    time_axis,
+    return_timestamps: bool,
+    resolve: Callable,
+    **options,
+):
+    """A change of frame of dask-backed velocities, lazily per time chunk.
+
+    ``what`` is "reference_frame" or "moving_frame" ("representation_frame"
+    is a vector transform). ``options`` are those of the public function
+    (``cutoff``, and for linear velocities ``moving_frame``,
+    ``reference_frame``, ``outlier_thresh``).
+    """
+    import warnings
+
+    from ._door import unpack
+    from ._engine.transform import Blocks
+    from ._xarray import wrap
+
+    attrs = getattr(arr, "attrs", {})
+    if outof is None:
+        if what not in attrs:
+            raise ValueError(
+                f"outof must be given unless arr is a DataArray whose attrs name a "
+                f"registered frame under {what!r}"
+            )
+        frame = resolve(attrs[what], f"the DataArray's {what} attribute")
+    else:
+        frame = resolve(outof, "outof")
+        if what in attrs and attrs[what] != frame.name:
+            warnings.warn(
+                f"transforming the {what!r} of the array out of {frame.name!r}, but "
+                f"its attrs say its {what} is {attrs[what]!r}",
+                stacklevel=4,
+            )
+    to_frame = resolve(into, "into")
+    for key in ("moving_frame", "reference_frame"):
+        if options.get(key) is not None:
+            options[key] = resolve(options[key], key)
+    extras, combine = velocity_terms(linear, frame, to_frame, what, options)
+    spans = [(t.values[0], t.values[-1]) for _, t in extras if t is not None]
+
+    time_dim = time_dim_of(arr, timestamps, time_axis)
+    whole = arr[time_dim].values if time_dim is not None else timestamps
+    if whole is None:
+        raise ValueError(
+            "a dask array needs timestamps= to be transformed lazily "
+            "(without them the result would follow the frames' own times)"
+        )
+    origin = _origin(whole)
+    interpolated = _interpolated_terms(frame, to_frame, whole, extras)
+
+    def eager(block, into, outof, dim, axis, timestamps):
+        unpacked = unpack(block, dim=dim, axis=axis, timestamps=timestamps)
+        blocks = Blocks(
+            unpacked.data, 3, unpacked.axis, unpacked.time_axis,
+            _track_from(unpacked.timestamps, origin), "vectors",
+        )  # fmt: skip
+        rotated, matched, final = _velocity_parts(
+            blocks, frame, to_frame, extras, interpolated
+        )
+        out = blocks.restore(combine(rotated, matched), final)
+        new_attrs = dict(unpacked.attrs)
+        new_attrs[what] = new_attrs["representation_frame"] = to_frame.name
+        return wrap(unpacked, out, final.timestamps, new_attrs)
+
+    return transform(
+        eager, arr, to_frame, frame, dim, axis, timestamps, time_axis,
+        return_timestamps, resolve, what, False, spans,
+    )  # fmt: skip
+
+
+def time_dim_of(arr, timestamps, time_axis) -> str | None:
+    """The time dimension of a DataArray argument (None for a plain array)."""
+    if not hasattr(arr, "dims"):
+        return None
+    if isinstance(timestamps, str):
+        return timestamps
+    return arr.dims[0 if time_axis is None else time_axis]
+
+
+def _origin(times) -> int | None:
+    """Nanoseconds of the first of datetime64 ``times`` (None for numbers)."""
+    from ._time import as_track
+
+    first = as_track(np.asarray(times)[:1])
+    return first.origin if first.is_datetime else None
+
+
+def _track_from(timestamps, origin: int | None):
+    """A chunk's timestamps as a Track counted from the whole array's first sample.
+
+    Interpolation reads times as float seconds from an origin; with the
+    chunk's own first sample as origin they would differ from the eager
+    call's by rounding, which fast-changing velocities turn into ~1e-10.
+    """
+    from ._time import Track, as_track
+
+    track = as_track(timestamps, copy=False)
+    if origin is None or not track.is_datetime:
+        return track
+    return Track(
+        track.values, track.key, (track.key - origin) / 1e9, origin, track.kind
+    )
+
+
+def _interpolated_terms(frame, to_frame, times, extras) -> list[bool]:
+    """Which looked-up terms the eager transform of the whole array interpolates.
+
+    The eager call takes a term's own values where the array's times are a
+    run of the term's times, and interpolates it otherwise -- at a time
+    equal to a sample, up to the rounding of seconds between the two time
+    origins. A chunk's times may be a run of the term's times where the whole
+    array's are not, so each chunk follows the whole array's choice.
+    """
+    from ._engine import chain as ch
+    from ._time import as_track
+
+    track = as_track(np.asarray(times))
+    target = ch.match([f for f, _ in ch.chain(frame, to_frame)], [track])
+    final = ch.match([], [target.track] + [t for _, t in extras])
+    return [t is not None and ch._same_times(t, final.track) is None for _, t in extras]
+
+
+def _velocity_parts(blocks, frame, to_frame, extras, interpolated):
+    """The input represented in ``to_frame`` and the terms at the chunk's times.
+
+    :func:`rbm_nb._engine.twist._velocity_parts`, with each term
+    interpolated where the eager call on the whole array interpolates it
+    (``interpolated``), so that chunks give the eager numbers.
+    """
+    from ._door import kernel_array
+    from ._engine import chain as ch
+    from ._kernels import resample as kr
+
+    steps = ch.chain(frame, to_frame)
+    target = ch.match([f for f, _ in steps], [blocks.track])
+    data = ch.resample_array(blocks.data, blocks.track, target, False)
+    rotated = ch.apply("vectors", steps, target, data)
+    final = ch.match([], [target.track] + [t for _, t in extras])
+    rotated = ch.resample_array(rotated, target.track, final, False)
+    matched = []
+    for (values, track), interpolate in zip(extras, interpolated, strict=True):
+        block = kernel_array(np.reshape(values, (-1, 1, 3)))
+        if interpolate:
+            t_out = final.track.base_in(track.origin)
+            block = kr.interp_linear(track.base, kernel_array(block[:, 0, :]), t_out)
+            matched.append(block[:, None, :])
+        else:
+            matched.append(ch.resample_array(block, track, final, False))
+    return rotated, matched, final

@@ -355,13 +355,78 @@ def test_outlier_errors_are_the_eager_ones():
         )
 
 
-def test_velocity_transforms_say_they_are_not_lazy(recording, tree):
-    v = _eye(recording, "position").chunk(time=CHUNK)
-    with pytest.raises(NotImplementedError, match="compute"):
+VELOCITY_CASES = {
+    "angular_reference_frame": lambda a: rbm.transform_angular_velocity(
+        a, outof="head", into="world", what="reference_frame", dim="cartesian_axis"
+    ),
+    "angular_moving_frame": lambda a: rbm.transform_angular_velocity(
+        a, outof="head", into="eye", what="moving_frame", dim="cartesian_axis"
+    ),
+    "angular_representation_frame": lambda a: rbm.transform_angular_velocity(
+        a, outof="head", into="world", what="representation_frame",
+        dim="cartesian_axis",
+    ),
+    "linear_reference_frame": lambda a: rbm.transform_linear_velocity(
+        a, outof="head", into="world", what="reference_frame", moving_frame="eye",
+        dim="cartesian_axis",
+    ),
+    "linear_moving_frame": lambda a: rbm.transform_linear_velocity(
+        a, outof="head", into="eye", what="moving_frame", reference_frame="world",
+        dim="cartesian_axis",
+    ),
+    "linear_reference_frame_filtered": lambda a: rbm.transform_linear_velocity(
+        a, outof="head", into="world", what="reference_frame", moving_frame="eye",
+        dim="cartesian_axis", cutoff=0.2,
+    ),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("name", VELOCITY_CASES)
+def test_velocity_transforms_are_lazy_and_equal(name, recording, tree):
+    """The frames' velocities are estimated once; chunks only match them to their times."""
+    rbm.ReferenceFrame.from_dataset(
+        recording.left_eye.dropna("time"), "position", "orientation", "time",
+        parent="head", name="eye",
+    ).register()  # fmt: skip
+    func = VELOCITY_CASES[name]
+    # the eye's samples, cut at both ends: the frames' ranges crop the result
+    v = _eye(recording, "position").isel(time=slice(100, -100))
+    eager = func(v)
+    counter = ComputeCounter()
+    with counter:
+        lazy = func(v.chunk(time=CHUNK))
+    assert counter.count == 0
+    assert isinstance(lazy.data, dsa.Array)
+    assert lazy.dims == eager.dims and lazy.attrs == eager.attrs
+    assert list(lazy.coords) == list(eager.coords)
+    assert not np.isnan(sum(lazy.chunks[0]))
+    with counter:
+        result = lazy.compute()
+    assert counter.count == 1
+    np.testing.assert_array_equal(result.time.values, eager.time.values)
+    np.testing.assert_allclose(result.values, eager.values, rtol=1e-12, atol=1e-12)
+
+
+def test_velocity_transform_of_a_plain_dask_array(recording, tree):
+    v = _eye(recording, "position")
+    ts = v.time.values
+    eager, eager_ts = rbm.transform_angular_velocity(
+        v.values, outof="head", into="world", timestamps=ts, return_timestamps=True
+    )
+    lazy, lazy_ts = rbm.transform_angular_velocity(
+        dsa.from_array(v.values, chunks=(CHUNK, 3)),
+        outof="head",
+        into="world",
+        timestamps=ts,
+        return_timestamps=True,
+    )
+    assert isinstance(lazy, dsa.Array)
+    np.testing.assert_array_equal(lazy_ts, eager_ts)
+    np.testing.assert_allclose(lazy.compute(), eager, rtol=1e-12, atol=1e-12)
+    with pytest.raises(ValueError, match="moving_frame must be given"):
         rbm.transform_linear_velocity(
-            v,
+            dsa.from_array(v.values, chunks=(CHUNK, 3)),
             outof="head",
             into="world",
-            what="representation_frame",
-            dim="cartesian_axis",
+            timestamps=ts,
         )

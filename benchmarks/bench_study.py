@@ -156,6 +156,12 @@ def max_rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
+def cpu_seconds() -> float:
+    """User + system CPU time of this process so far (all its threads)."""
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
+
+
 START: dict[str, int] = {}
 
 
@@ -190,6 +196,7 @@ def run_loop(folder: Path, trace: bool) -> dict:
     warm_up()
     if trace:
         start_tracing()
+    cpu = cpu_seconds()
     start = time.perf_counter()
     out = {}
     for name in names:
@@ -197,9 +204,11 @@ def run_loop(folder: Path, trace: bool) -> dict:
         out[name] = analysis(rec, frames(rec))
         del rec
     seconds = time.perf_counter() - start
+    cpu = cpu_seconds() - cpu
     result = xr.concat(list(out.values()), dim="recording")
     return {
         "seconds": seconds,
+        "cpu": cpu,
         "rss_mb": [max_rss_mb()],
         "traced_mb": [traced_peak_mb()],
         "result": result.walking_speed.values.tolist(),
@@ -213,11 +222,13 @@ def run_threads(folder: Path, trace: bool) -> dict:
     warm_up()
     if trace:
         start_tracing()
+    cpu = cpu_seconds()
     start = time.perf_counter()
     result = study.map(analysis, frames=frames, progress=False)
     seconds = time.perf_counter() - start
     return {
         "seconds": seconds,
+        "cpu": cpu_seconds() - cpu,
         "workers": dask.config.get("num_workers", None) or os.cpu_count(),
         "rss_mb": [max_rss_mb()],
         "traced_mb": [traced_peak_mb()],
@@ -242,6 +253,8 @@ def run_cluster(folder: Path, windows: list[float | None], trace: bool) -> dict:
             client.run(warm_up)
             if trace:
                 client.run(start_tracing)
+            cpu = client.run(cpu_seconds)
+            client.get_task_stream()  # start recording the task stream
             start = time.perf_counter()
             if window is None:
                 result = study.map(analysis, frames=frames, progress=False)
@@ -252,16 +265,40 @@ def run_cluster(folder: Path, windows: list[float | None], trace: bool) -> dict:
                 )
                 speeds = []
             seconds = time.perf_counter() - start
+            cpu_after = client.run(cpu_seconds)
+            stream = client.get_task_stream()
             runs.append(
                 {
                     "window": window,
                     "seconds": seconds,
+                    "cpu": sum(cpu_after[w] - cpu[w] for w in cpu),
+                    "tasks": _task_times(stream, start),
                     "rss_mb": list(client.run(max_rss_mb).values()),
                     "traced_mb": list(client.run(traced_peak_mb).values()),
                     "result": speeds,
                 }
             )
     return {"runs": runs}
+
+
+def _task_times(stream: list, start: float) -> dict:
+    """From distributed's task stream: busy time per worker, first start, last end.
+
+    Times are wall-clock seconds on the workers (same machine as this process).
+    """
+    busy: dict[str, float] = {}
+    first, last = float("inf"), 0.0
+    epoch = time.time() - (time.perf_counter() - start)  # the run's start
+    for task in stream:
+        for span in task.get("startstops", ()):
+            if span.get("action") != "compute":
+                continue
+            busy[task["worker"]] = busy.get(task["worker"], 0.0) + (
+                span["stop"] - span["start"]
+            )
+            first = min(first, span["start"] - epoch)
+            last = max(last, span["stop"] - epoch)
+    return {"busy": sorted(busy.values()), "first": first, "last": last}
 
 
 def child(mode: str, folder: Path, windows: list[float | None], trace: bool) -> None:
@@ -292,8 +329,12 @@ def in_subprocess(mode: str, folder: Path, windows=(), trace=False) -> dict:
 # ---------------------------------------------------------------------------
 
 
-def _row(label: str, seconds: float, loop: float, rss: list) -> str:
-    return f"{label:40s} {seconds:8.1f} {loop / seconds:7.2f} {max(rss):9.0f}"
+def _row(label: str, run: dict, loop: float) -> str:
+    seconds = run["seconds"]
+    return (
+        f"{label:40s} {seconds:8.1f} {loop / seconds:7.2f} {run['cpu']:8.1f} "
+        f"{run['cpu'] / seconds:6.2f} {max(run['rss_mb']):9.0f}"
+    )
 
 
 def main() -> None:
@@ -329,23 +370,45 @@ def main() -> None:
 
     t_loop = loop["seconds"]
     print()
-    print(f"{'run':40s} {'seconds':>8s} {'x loop':>7s} {'RSS MB':>9s}")
-    print(_row("sequential loop", t_loop, t_loop, loop["rss_mb"]))
     print(
-        _row(
-            f"Study.map, threads ({threads['workers']})", threads["seconds"],
-            t_loop, threads["rss_mb"],
-        )
+        f"{'run':40s} {'seconds':>8s} {'x loop':>7s} {'CPU s':>8s} {'cores':>6s} "
+        f"{'RSS MB':>9s}"
+    )
+    print(_row("sequential loop", loop, t_loop))
+    print(
+        _row(f"Study.map, threads ({threads['workers']})", threads, t_loop)
     )  # fmt: skip
     for run in cluster:
         label = "Study.map, LocalCluster(2)"
         if run["window"]:
             label += f", {run['window']:g} s windows"
-        print(_row(label, run["seconds"], t_loop, run["rss_mb"]))
+        print(_row(label, run, t_loop))
     print(
-        "(RSS MB: the high-water resident set of the process doing the work -- for"
-        " the cluster, of the larger worker;\n every run in fresh processes;"
-        f" load average now {os.getloadavg()})"
+        "(CPU s: user + system time of the processes doing the work -- the loop's,"
+        " the threads', both workers';\n cores: CPU s / seconds, the cores they got"
+        " on average; RSS MB: the high-water resident set of\n that process -- for"
+        " the cluster, of the larger worker; every run in fresh processes;\n load"
+        f" average now {os.getloadavg()})"
+    )
+    whole = cluster[0]
+    tasks = whole["tasks"]
+    print()
+    print("where the cluster's time goes (whole recordings):")
+    print(
+        f"  first task started {tasks['first']:.2f} s after the call, last ended "
+        f"{tasks['last']:.2f} s, call returned {whole['seconds']:.2f} s"
+    )
+    print(
+        "  busy (task) seconds per worker: "
+        + ", ".join(f"{b:.1f}" for b in tasks["busy"])
+        + f"; CPU per recording: loop {loop['cpu'] / len(loop['result']):.2f} s,"
+        f" cluster {whole['cpu'] / len(loop['result']):.2f} s"
+    )
+    share = loop["cpu"] / t_loop
+    print(
+        f"  speed-up = (CPU loop / CPU cluster) x (cores cluster / cores loop) = "
+        f"{loop['cpu'] / whole['cpu']:.2f} x {whole['cpu'] / whole['seconds']:.2f}"
+        f" / {share:.2f} = {t_loop / whole['seconds']:.2f}"
     )
 
     windows = [

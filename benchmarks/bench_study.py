@@ -236,10 +236,14 @@ def run_threads(folder: Path, trace: bool) -> dict:
     }
 
 
-def run_cluster(folder: Path, windows: list[float | None], trace: bool) -> dict:
+def run_cluster(
+    folder: Path, windows: list[float | None], trace: bool, limit: int | None = None
+) -> dict:
     from distributed import Client, LocalCluster
 
-    study = open_study(folder)
+    from rbm_nb.study import Study, find_sources
+
+    study = Study(find_sources(folder)[:limit])
     runs = []
     for window in windows:
         # fresh workers per run: their high-water marks are this run's
@@ -301,18 +305,21 @@ def _task_times(stream: list, start: float) -> dict:
     return {"busy": sorted(busy.values()), "first": first, "last": last}
 
 
-def child(mode: str, folder: Path, windows: list[float | None], trace: bool) -> None:
+def child(
+    mode: str, folder: Path, windows: list[float | None], trace: bool, limit: int
+) -> None:
     if mode == "loop":
         out = run_loop(folder, trace)
     elif mode == "threads":
         out = run_threads(folder, trace)
     else:
-        out = run_cluster(folder, windows, trace)
+        out = run_cluster(folder, windows, trace, limit or None)
     print("RESULT " + json.dumps(out), flush=True)
 
 
-def in_subprocess(mode: str, folder: Path, windows=(), trace=False) -> dict:
+def in_subprocess(mode: str, folder: Path, windows=(), trace=False, limit=0) -> dict:
     command = [sys.executable, __file__, "--child", mode, "--folder", str(folder)]
+    command += ["--limit", str(limit)]
     if trace:
         command.append("--trace")
     for w in windows:
@@ -345,6 +352,11 @@ def main() -> None:
     parser.add_argument("--child", default=None, help=argparse.SUPPRESS)
     parser.add_argument("--window", action="append", default=[], help=argparse.SUPPRESS)
     parser.add_argument("--trace", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--limit", type=int, default=0, help=argparse.SUPPRESS)
+    parser.add_argument(
+        "--memory-recordings", type=int, default=4,
+        help="recordings in the memory-vs-window runs (the first ones)",
+    )  # fmt: skip
     parser.add_argument(
         "--memory-windows", default="30,60,300,whole",
         help="window lengths (s) for the memory table, 'whole' for none",
@@ -352,7 +364,7 @@ def main() -> None:
     args = parser.parse_args()
     if args.child:
         windows = [None if w == "whole" else float(w) for w in args.window]
-        child(args.child, args.folder, windows, args.trace)
+        child(args.child, args.folder, windows, args.trace, args.limit)
         return
 
     folder = args.folder or cache_folder(args.recordings, args.minutes)
@@ -415,11 +427,12 @@ def main() -> None:
         None if w == "whole" else float(w) for w in args.memory_windows.split(",")
     ]
     print()
-    print(f"peak per worker vs window, LocalCluster(2), {args.recordings} recordings")
+    count = min(args.memory_recordings, args.recordings)
+    print(f"peak per worker vs window, LocalCluster(2), {count} recordings")
     print("(alloc MB: the most a worker allocated above what it held after its")
     print(" warm-up, tracemalloc in the worker; this table's runs are traced)")
     print(f"{'window':>10s} {'seconds':>8s} {'RSS MB':>9s} {'alloc MB':>10s}")
-    for run in in_subprocess("cluster", folder, windows, trace=True)["runs"]:
+    for run in in_subprocess("cluster", folder, windows, True, count)["runs"]:
         label = "whole" if run["window"] is None else f"{run['window']:g} s"
         print(
             f"{label:>10s} {run['seconds']:8.1f} {max(run['rss_mb']):9.0f} "

@@ -18,7 +18,10 @@ run's own:
 - ``threads``: ``Study.map`` on dask's default threaded scheduler;
 - ``cluster``: ``Study.map`` on ``LocalCluster(n_workers=2,
   threads_per_worker=1, processes=True)``, started before the clock runs;
-- ``cluster-window``: the same with 60 s windows (one task per window).
+- ``tuned``: the same cluster with worker settings for big arrays (``TUNED``:
+  glibc's malloc keeps arrays up to 32 MB on its heap instead of mapping and
+  page-faulting each afresh, as distributed's default MALLOC_TRIM_THRESHOLD_
+  makes it do; no statistical profiler), whole recordings and 60 s windows.
 
 Printed per run: wall time, speed-up over the loop, and peak memory per
 process -- the high-water resident set (``ru_maxrss``) and, above what the
@@ -26,6 +29,10 @@ process held after its warm-up, what it allocated at most (tracemalloc, read
 inside each worker). Then the peak per worker for several window lengths
 on the cluster, and the machine's load (``os.getloadavg``): the machine has
 2 cores and other jobs may share them; run when it is quiet, and read ratios.
+
+The cluster's rows end with where its time went: the task stream (busy
+seconds per worker), CPU seconds per recording, and the speed-up as the
+product of the CPU ratio and the ratio of cores the runs got.
 
     python benchmarks/bench_study.py                       # 16 x 60 min
     python benchmarks/bench_study.py --recordings 8 --minutes 10
@@ -236,9 +243,27 @@ def run_threads(folder: Path, trace: bool) -> dict:
     }
 
 
+# Worker settings for big arrays. distributed's nanny sets MALLOC_TRIM_THRESHOLD_
+# for its workers, which also fixes glibc's mmap threshold at 128 kB: every
+# array above it is a fresh mmap, page-faulted in again by each task (system
+# time). Here arrays up to 32 MB come from the heap, which keeps 256 MB when
+# freed; the statistical profiler (a stack sample every 10 ms) is off.
+TUNED = {
+    "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": str(256 << 20),
+    "distributed.nanny.pre-spawn-environ.MALLOC_MMAP_THRESHOLD_": str(32 << 20),
+    "distributed.nanny.pre-spawn-environ.MALLOC_TOP_PAD_": str(64 << 20),
+    "distributed.worker.profile.enabled": False,
+}
+
+
 def run_cluster(
-    folder: Path, windows: list[float | None], trace: bool, limit: int | None = None
+    folder: Path,
+    windows: list[float | None],
+    trace: bool,
+    limit: int | None = None,
+    tuned: bool = False,
 ) -> dict:
+    import dask
     from distributed import Client, LocalCluster
 
     from rbm_nb.study import Study, find_sources
@@ -248,6 +273,7 @@ def run_cluster(
     for window in windows:
         # fresh workers per run: their high-water marks are this run's
         with (
+            dask.config.set(TUNED if tuned else {}),
             LocalCluster(
                 n_workers=2, threads_per_worker=1, processes=True,
                 host="127.0.0.1", dashboard_address=None, silence_logs=50,
@@ -313,7 +339,7 @@ def child(
     elif mode == "threads":
         out = run_threads(folder, trace)
     else:
-        out = run_cluster(folder, windows, trace, limit or None)
+        out = run_cluster(folder, windows, trace, limit or None, mode == "tuned")
     print("RESULT " + json.dumps(out), flush=True)
 
 
@@ -341,6 +367,30 @@ def _row(label: str, run: dict, loop: float) -> str:
     return (
         f"{label:40s} {seconds:8.1f} {loop / seconds:7.2f} {run['cpu']:8.1f} "
         f"{run['cpu'] / seconds:6.2f} {max(run['rss_mb']):9.0f}"
+    )
+
+
+def _explain(whole: dict, loop: dict, label: str) -> None:
+    """Where a cluster run's time went, and its speed-up decomposed."""
+    tasks = whole["tasks"]
+    t_loop = loop["seconds"]
+    print()
+    print(f"where the cluster's time goes ({label}, whole recordings):")
+    print(
+        f"  first task started {tasks['first']:.2f} s after the call, last ended "
+        f"{tasks['last']:.2f} s, call returned {whole['seconds']:.2f} s"
+    )
+    print(
+        "  busy (task) seconds per worker: "
+        + ", ".join(f"{b:.1f}" for b in tasks["busy"])
+        + f"; CPU per recording: loop {loop['cpu'] / len(loop['result']):.2f} s,"
+        f" cluster {whole['cpu'] / len(loop['result']):.2f} s"
+    )
+    share = loop["cpu"] / t_loop
+    print(
+        f"  speed-up = (CPU loop / CPU cluster) x (cores cluster / cores loop) = "
+        f"{loop['cpu'] / whole['cpu']:.2f} x {whole['cpu'] / whole['seconds']:.2f}"
+        f" / {share:.2f} = {t_loop / whole['seconds']:.2f}"
     )
 
 
@@ -376,8 +426,9 @@ def main() -> None:
 
     loop = in_subprocess("loop", folder)
     threads = in_subprocess("threads", folder)
-    cluster = in_subprocess("cluster", folder, [None, 60.0])["runs"]
-    for run in (threads, *cluster[:1]):
+    cluster = in_subprocess("cluster", folder, [None])["runs"]
+    tuned = in_subprocess("tuned", folder, [None, 60.0])["runs"]
+    for run in (threads, cluster[0], tuned[0]):
         np.testing.assert_allclose(run["result"], loop["result"], rtol=1e-12)
 
     t_loop = loop["seconds"]
@@ -390,10 +441,11 @@ def main() -> None:
     print(
         _row(f"Study.map, threads ({threads['workers']})", threads, t_loop)
     )  # fmt: skip
-    for run in cluster:
-        label = "Study.map, LocalCluster(2)"
+    print(_row("Study.map, LocalCluster(2)", cluster[0], t_loop))
+    for run in tuned:
+        label = "Study.map, LocalCluster(2), tuned"
         if run["window"]:
-            label += f", {run['window']:g} s windows"
+            label += f", {run['window']:g} s win"
         print(_row(label, run, t_loop))
     print(
         "(CPU s: user + system time of the processes doing the work -- the loop's,"
@@ -402,26 +454,12 @@ def main() -> None:
         " the cluster, of the larger worker; every run in fresh processes;\n load"
         f" average now {os.getloadavg()})"
     )
-    whole = cluster[0]
-    tasks = whole["tasks"]
-    print()
-    print("where the cluster's time goes (whole recordings):")
     print(
-        f"  first task started {tasks['first']:.2f} s after the call, last ended "
-        f"{tasks['last']:.2f} s, call returned {whole['seconds']:.2f} s"
+        " tuned: workers' malloc keeps arrays up to 32 MB and 256 MB of freed heap, no"
     )
-    print(
-        "  busy (task) seconds per worker: "
-        + ", ".join(f"{b:.1f}" for b in tasks["busy"])
-        + f"; CPU per recording: loop {loop['cpu'] / len(loop['result']):.2f} s,"
-        f" cluster {whole['cpu'] / len(loop['result']):.2f} s"
-    )
-    share = loop["cpu"] / t_loop
-    print(
-        f"  speed-up = (CPU loop / CPU cluster) x (cores cluster / cores loop) = "
-        f"{loop['cpu'] / whole['cpu']:.2f} x {whole['cpu'] / whole['seconds']:.2f}"
-        f" / {share:.2f} = {t_loop / whole['seconds']:.2f}"
-    )
+    print(" profiler (TUNED in this script)")
+    for whole in (cluster[0], tuned[0]):
+        _explain(whole, loop, "tuned" if whole is tuned[0] else "default")
 
     windows = [
         None if w == "whole" else float(w) for w in args.memory_windows.split(",")

@@ -343,14 +343,19 @@ def child(
     print("RESULT " + json.dumps(out), flush=True)
 
 
-def in_subprocess(mode: str, folder: Path, windows=(), trace=False, limit=0) -> dict:
+def in_subprocess(
+    mode: str, folder: Path, windows=(), trace=False, limit=0, env=None
+) -> dict:
     command = [sys.executable, __file__, "--child", mode, "--folder", str(folder)]
     command += ["--limit", str(limit)]
     if trace:
         command.append("--trace")
     for w in windows:
         command += ["--window", "whole" if w is None else str(w)]
-    done = subprocess.run(command, capture_output=True, text=True, check=False)
+    done = subprocess.run(
+        command, capture_output=True, text=True, check=False,
+        env=None if env is None else {**os.environ, **env},
+    )  # fmt: skip
     for line in done.stdout.splitlines():
         if line.startswith("RESULT "):
             return json.loads(line[len("RESULT ") :])
@@ -425,10 +430,17 @@ def main() -> None:
     warm_folder()
 
     loop = in_subprocess("loop", folder)
+    # the loop with the workers' tuned malloc settings, for a fair comparison
+    malloc = {
+        key.rsplit(".", 1)[1]: value
+        for key, value in TUNED.items()
+        if key.startswith("distributed.nanny.pre-spawn-environ.")
+    }
+    loop_tuned = in_subprocess("loop", folder, env=malloc)
     threads = in_subprocess("threads", folder)
     cluster = in_subprocess("cluster", folder, [None])["runs"]
     tuned = in_subprocess("tuned", folder, [None, 60.0])["runs"]
-    for run in (threads, cluster[0], tuned[0]):
+    for run in (loop_tuned, threads, cluster[0], tuned[0]):
         np.testing.assert_allclose(run["result"], loop["result"], rtol=1e-12)
 
     t_loop = loop["seconds"]
@@ -438,6 +450,7 @@ def main() -> None:
         f"{'RSS MB':>9s}"
     )
     print(_row("sequential loop", loop, t_loop))
+    print(_row("sequential loop, tuned malloc", loop_tuned, t_loop))
     print(
         _row(f"Study.map, threads ({threads['workers']})", threads, t_loop)
     )  # fmt: skip
@@ -458,8 +471,9 @@ def main() -> None:
         " tuned: workers' malloc keeps arrays up to 32 MB and 256 MB of freed heap, no"
     )
     print(" profiler (TUNED in this script)")
-    for whole in (cluster[0], tuned[0]):
-        _explain(whole, loop, "tuned" if whole is tuned[0] else "default")
+    _explain(cluster[0], loop, "default, vs the loop")
+    _explain(tuned[0], loop, "tuned, vs the loop")
+    _explain(tuned[0], loop_tuned, "tuned, vs the loop with the same malloc")
 
     windows = [
         None if w == "whole" else float(w) for w in args.memory_windows.split(",")

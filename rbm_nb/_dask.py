@@ -123,7 +123,7 @@ def over_time(
         piece = source.isel({time_dim: slice(read_lo, read_hi)})
         task = run(
             func,
-            piece.data,
+            _one_block(piece.data),
             {k: v.variable for k, v in piece.coords.items()},
             piece.dims,
             piece.name,
@@ -144,6 +144,18 @@ def over_time(
         {k: v.variable for k, v in layout.coords.items() if time_dim not in v.dims}
     )
     return xr.DataArray(data, coords, layout.dims, layout.name, layout.attrs)
+
+
+def _one_block(data):
+    """A dask array as one Delayed block, its graph left as it is.
+
+    Handing the array itself to a delayed call would optimise (fuse and
+    rename) its graph once per call: every chunk's task would then carry
+    its own copy of what the array depends on -- for a cumulative fill,
+    every chunk before it.
+    """
+    whole = data.rechunk(tuple(-1 for _ in data.shape))
+    return whole.to_delayed(optimize_graph=False).ravel()[0]
 
 
 def _seconds_from_first(times: np.ndarray) -> np.ndarray:
@@ -252,8 +264,13 @@ def transform(
     resolve: Callable,
     attr: str,
     quaternions: bool,
+    spans: Sequence[tuple[Any, Any]] = (),
 ):
-    """A transform of dask-backed data: the frames looked up at each chunk's times."""
+    """A transform of dask-backed data: the frames looked up at each chunk's times.
+
+    ``spans`` are further (first, last) time ranges the result is cropped to,
+    as the eager matching crops it to those of the arrays taking part.
+    """
     plain = not hasattr(arr, "dims")
     if plain:
         if timestamps is None:
@@ -281,6 +298,10 @@ def transform(
         if source is None
         else frame_time_range(resolve(source, "outof"), resolve(into, "into"))
     )
+    for first, last in spans:
+        span = (
+            (first, last) if span is None else (max(span[0], first), min(span[1], last))
+        )
     times = arr[time_dim].values
     start, stop = 0, len(times)
     if span is not None:
@@ -332,13 +353,185 @@ def estimate(
     comp_dim = dim if dim is not None else arr.dims[-1 if axis is None else axis]
     if quaternions:
         arr = sign_continuous(arr, time_dim, comp_dim)
+    fill = {comp_dim: (1.0, 0.0, 0.0, 0.0) if quaternions else 0.0}
+    thresh = options.pop("outlier_thresh", None)
+    cutoff = options.get("cutoff") if thresh is not None else None
+    if thresh is not None:
+        # the velocity without rejection and filtering, then both lazily
+        options["cutoff"] = None
 
     def block(b):
         return eager(b, dim=dim, axis=axis, timestamps=time_dim, **options)
 
-    fill = {comp_dim: (1.0, 0.0, 0.0, 0.0) if quaternions else 0.0}
     out = over_time(block, arr, time_dim, halo=halo, fill=fill, global_seconds=True)
+    if thresh is not None:
+        score = over_time(
+            lambda b: _outlier_score(b, time_dim, comp_dim, quaternions),
+            arr,
+            time_dim,
+            halo=GRADIENT_HALO,
+            fill=fill,
+        )
+        seconds = _seconds_from_first(arr[time_dim].values)
+        out = reinterpolate(out, score <= thresh, seconds, time_dim, thresh)
+        if cutoff is not None:
+            out = lowpass(out, time_dim, cutoff)
     return out.data if plain else out
+
+
+# ---------------------------------------------------------------------------
+# outlier rejection: a rejected sample may be re-interpolated from kept
+# samples any distance away, which no halo covers; the previous and next kept
+# samples are carried across chunks by cumulative fills instead
+# ---------------------------------------------------------------------------
+
+
+def _outlier_score(block, time_dim: str, comp_dim: str, quaternions: bool):
+    """The eager estimators' outlier score of a block, dims (time, others...).
+
+    Second differences of the positions, or of the rotation vectors of the
+    (already sign-continuous) quaternions; a sample's score reads one sample
+    before it and two after, which the halo provides.
+    """
+    import xarray as xr
+
+    from ._door import kernel_array
+    from ._kernels import differences as dk
+    from ._kernels import quaternion as qk
+    from ._kernels import rotations as rk
+
+    moved = block.transpose(time_dim, ..., comp_dim)
+    data = np.asarray(moved.values, dtype=np.float64)
+    n, k = data.shape[0], data.shape[-1]
+    series = data.reshape(n, -1, k)
+    if quaternions:
+        rv = np.empty((n, series.shape[1], 3))
+        for b in range(series.shape[1]):
+            rv[:, b, :] = rk.rotation_vectors(qk.unflip(kernel_array(series[:, b, :])))
+        series = rv
+    score = dk.second_difference_score(kernel_array(series))
+    return xr.DataArray(
+        score.reshape(data.shape[:-1]),
+        {time_dim: moved[time_dim].variable},
+        moved.dims[:-1],
+    )
+
+
+def _ffill_block(a: np.ndarray, axis: int) -> np.ndarray:
+    """NaN replaced by the last non-NaN value before it along ``axis`` (in a block)."""
+    moved = np.moveaxis(a, axis, 0)
+    rows = np.arange(moved.shape[0]).reshape((-1,) + (1,) * (moved.ndim - 1))
+    last = np.where(np.isnan(moved), 0, rows)
+    np.maximum.accumulate(last, axis=0, out=last)
+    return np.moveaxis(np.take_along_axis(moved, last, axis=0), 0, axis)
+
+
+def _fill_from_previous_block(carried: np.ndarray, block: np.ndarray) -> np.ndarray:
+    return np.where(np.isnan(block), carried, block)
+
+
+def push(data, axis: int, backward: bool = False):
+    """Forward (or backward) fill of NaN along ``axis`` of a dask array.
+
+    Each block is filled on its own, then the last value of the blocks
+    before it is carried in (dask's cumulative reduction), so the result is
+    that of one fill over the whole array, whatever the chunks.
+    """
+    from dask.array.reductions import cumreduction
+
+    index = [slice(None)] * data.ndim
+    index[axis] = slice(None, None, -1)
+    flip = tuple(index)
+    if backward:
+        data = data[flip]
+    out = cumreduction(
+        _ffill_block, _fill_from_previous_block, np.nan, data, axis, data.dtype
+    )
+    return out[flip] if backward else out
+
+
+def _pushed(da, time_dim: str, backward: bool = False):
+    return da.copy(data=push(da.data, da.dims.index(time_dim), backward))
+
+
+def reinterpolate(v, keep, seconds: np.ndarray, time_dim: str, thresh: float):
+    """Rejected samples of ``v`` interpolated in time between the kept ones.
+
+    The lazy counterpart of the eager rejection: for a rejected sample at t,
+    ``v_prev + (t - t_prev) / (t_next - t_prev) * (v_next - v_prev)`` with
+    the previous and next kept samples of its series (the same arithmetic,
+    so the same numbers). A series whose first or last samples are rejected,
+    or that keeps fewer than 2, raises the eager path's error on compute.
+
+    Parameters
+    ----------
+    v : xarray.DataArray
+        Dask-backed velocities; ``time_dim`` plus components and others.
+    keep : xarray.DataArray of bool
+        Dask-backed, ``v``'s dims without the components, chunked alike.
+    seconds : ndarray, shape (n,)
+        Times of the samples in seconds from the first (as the eager path).
+    """
+    import dask
+    import dask.array as dsa
+    import xarray as xr
+
+    n = len(seconds)
+    chunks = {time_dim: v.chunksizes[time_dim]}
+    t = xr.DataArray(seconds, dims=time_dim).chunk(chunks)
+    rows = xr.DataArray(np.arange(n, dtype=np.float64), dims=time_dim).chunk(chunks)
+    t_kept, rows_kept, v_kept = t.where(keep), rows.where(keep), v.where(keep)
+    t_prev, t_next = _pushed(t_kept, time_dim), _pushed(t_kept, time_dim, True)
+    v_prev, v_next = _pushed(v_kept, time_dim), _pushed(v_kept, time_dim, True)
+    # kept samples (where t_next == t_prev) take v itself: divide them by 1
+    w = (t - t_prev) / (t_next - t_prev).where(~keep, 1.0)
+    filled = xr.where(keep, v, v_prev + w * (v_next - v_prev))
+    data = filled.transpose(*v.dims).data
+    # the checks read the first kept row from the start and the last from the end
+    first_kept = _pushed(rows_kept, time_dim, True).isel({time_dim: 0}).data
+    last_kept = _pushed(rows_kept, time_dim).isel({time_dim: -1}).data
+    check = dask.delayed(_check_kept, pure=True)(first_kept, last_kept, n, thresh)
+    ok = dsa.from_delayed(check, (), dtype=bool)
+    data = dsa.map_blocks(_after_check, data, ok, dtype=data.dtype)
+    return v.copy(data=data)
+
+
+def _after_check(block: np.ndarray, ok) -> np.ndarray:
+    return block
+
+
+def _check_kept(first: np.ndarray, last: np.ndarray, n: int, thresh: float) -> bool:
+    """The eager rejection's errors, from each series' first and last kept row."""
+    first, last = np.atleast_1d(first), np.atleast_1d(last)
+    counts = np.where(np.isnan(first), 0, np.where(first == last, 1, 2))
+    if counts.min() < 2:
+        raise ValueError(
+            f"outlier_thresh={thresh} keeps only {counts.min()} sample(s) of a "
+            f"series; at least 2 are needed to interpolate the others"
+        )
+    if (first > 0).any() or (last < n - 1).any():
+        lead = (first > 0).any()
+        edge = int(first.min()) if lead else int(n - 1 - last.max())
+        raise ValueError(
+            f"outlier_thresh={thresh} rejects the {'first' if lead else 'last'} "
+            f"{max(edge, 1)} sample(s) of a series, which have no kept sample on "
+            f"that side to be interpolated from; raise outlier_thresh or trim "
+            f"the series"
+        )
+    return True
+
+
+def lowpass(v, time_dim: str, cutoff: float):
+    """The estimators' forward-backward low-pass of dask-backed ``v``, per chunk."""
+    from ._engine.velocity import _lowpass, lowpass_reach
+
+    axis = v.dims.index(time_dim)
+
+    def block(b):
+        values = np.moveaxis(np.asarray(b.values), axis, 0)
+        return b.copy(data=np.moveaxis(_lowpass(values, cutoff), 0, axis))
+
+    return over_time(block, v, time_dim, halo=lowpass_reach(cutoff))
 
 
 def elementwise(eager: Callable, arr, core_dim: str | int, fill: Any = 0.0, **kwargs):
@@ -474,7 +667,7 @@ def qinterp(eager: Callable, da, dim: str, qdim: str, t_out, out_of_range: str):
         piece = q.isel({dim: slice(max(lo, 0), min(hi, len(t_in)))})
         task = run(
             eager,
-            piece.data,
+            _one_block(piece.data),
             {k: v.variable for k, v in piece.coords.items()},
             piece.dims,
             da.name,
@@ -511,3 +704,235 @@ def _run_qinterp(
     block = xr.DataArray(np.asarray(data), coords, dims, name, attrs)
     out = eager(block, dim, qdim, part, out_of_range=out_of_range)
     return np.asarray(out.transpose(*out_dims).data)
+
+
+# ---------------------------------------------------------------------------
+# velocity transforms: the frames' own velocities once, then per chunk
+# ---------------------------------------------------------------------------
+
+
+def velocity_terms(linear: bool, frame, to_frame, what: str, options: dict):
+    """The looked-up terms of a change of frame of velocities, and how to add them.
+
+    The frames are in memory: their velocities (and for linear velocities
+    the lever arm) are estimated here once, as the eager transform does,
+    and each chunk then only matches them to its own timestamps. Mirrors
+    :func:`rbm_nb._engine.twist.transform_angular_velocity` and
+    :func:`~rbm_nb._engine.twist.transform_linear_velocity`.
+
+    Returns
+    -------
+    extras : list of (ndarray (n|1, 3), Track or None)
+    combine : callable
+        ``combine(rotated, extras_matched)``: the transformed velocities.
+    """
+    from ._engine import chain as ch
+    from ._engine import twist as tw
+    from ._engine.transform import track_of
+    from ._engine.transform import transform as engine_transform
+
+    cutoff = options.get("cutoff")
+    if not linear:
+        # w_M/R' = w_M/R + w_R/R'  or  w_M'/R = w_M/R + w_M'/M
+        moving, reference = (
+            (frame, to_frame) if what == "reference_frame" else (to_frame, frame)
+        )
+        angular, ang_ts = tw.lookup_angular_velocity(
+            moving, reference, to_frame, None, cutoff, "quaternion", True, True
+        )
+        return [(angular, ang_ts)], lambda rotated, ext: rotated + ext[0]
+    thresh = options.get("outlier_thresh")
+    if what == "reference_frame":
+        # v_M/R' = v_M/R + v_R/R' + w_R/R' x t_M/R
+        if options.get("moving_frame") is None:
+            raise ValueError(
+                "moving_frame must be given to transform the reference frame of a "
+                "linear velocity (its position enters the three-term formula)"
+            )
+        lin, ang, lin_ts = tw.lookup_twist(
+            frame, to_frame, to_frame, thresh, cutoff, "quaternion", True, True
+        )
+        ang_ts = lin_ts
+        translation, _, trans_target = ch.lookup(options["moving_frame"], frame)
+    else:
+        # v_M'/R = v_M/R + v_M'/M + w_M/R x t_M'/M
+        if options.get("reference_frame") is None:
+            raise ValueError(
+                "reference_frame must be given to transform the moving frame of a "
+                "linear velocity (its angular velocity enters the three-term formula)"
+            )
+        lin, lin_ts = tw.lookup_linear_velocity(
+            to_frame, frame, to_frame, thresh, cutoff, True, True
+        )
+        ang, ang_ts = tw.lookup_angular_velocity(
+            frame, options["reference_frame"], to_frame, None, cutoff,
+            "quaternion", True, True,
+        )  # fmt: skip
+        translation, _, trans_target = ch.lookup(to_frame, frame)
+    lever, lever_ts = engine_transform(
+        frame, "vectors", translation, to_frame, -1, 0, trans_target.track
+    )
+    lever_track = None if lever_ts is None else track_of(trans_target.track, lever_ts)
+    extras = [(lin, lin_ts), (ang, ang_ts), (lever, lever_track)]
+    return extras, lambda rotated, ext: rotated + ext[0] + np.cross(ext[1], ext[2])
+
+
+def velocity_transform(
+    linear: bool,
+    arr,
+    into,
+    outof,
+    what: str,
+    dim,
+    axis,
+    timestamps,
+    time_axis,
+    return_timestamps: bool,
+    resolve: Callable,
+    **options,
+):
+    """A change of frame of dask-backed velocities, lazily per time chunk.
+
+    ``what`` is "reference_frame" or "moving_frame" ("representation_frame"
+    is a vector transform). ``options`` are those of the public function
+    (``cutoff``, and for linear velocities ``moving_frame``,
+    ``reference_frame``, ``outlier_thresh``).
+    """
+    import warnings
+
+    from ._door import unpack
+    from ._engine.transform import Blocks
+    from ._xarray import wrap
+
+    attrs = getattr(arr, "attrs", {})
+    if outof is None:
+        if what not in attrs:
+            raise ValueError(
+                f"outof must be given unless arr is a DataArray whose attrs name a "
+                f"registered frame under {what!r}"
+            )
+        frame = resolve(attrs[what], f"the DataArray's {what} attribute")
+    else:
+        frame = resolve(outof, "outof")
+        if what in attrs and attrs[what] != frame.name:
+            warnings.warn(
+                f"transforming the {what!r} of the array out of {frame.name!r}, but "
+                f"its attrs say its {what} is {attrs[what]!r}",
+                stacklevel=4,
+            )
+    to_frame = resolve(into, "into")
+    for key in ("moving_frame", "reference_frame"):
+        if options.get(key) is not None:
+            options[key] = resolve(options[key], key)
+    extras, combine = velocity_terms(linear, frame, to_frame, what, options)
+    spans = [(t.values[0], t.values[-1]) for _, t in extras if t is not None]
+
+    time_dim = time_dim_of(arr, timestamps, time_axis)
+    whole = arr[time_dim].values if time_dim is not None else timestamps
+    if whole is None:
+        raise ValueError(
+            "a dask array needs timestamps= to be transformed lazily "
+            "(without them the result would follow the frames' own times)"
+        )
+    origin = _origin(whole)
+    interpolated = _interpolated_terms(frame, to_frame, whole, extras)
+
+    def eager(block, into, outof, dim, axis, timestamps):
+        unpacked = unpack(block, dim=dim, axis=axis, timestamps=timestamps)
+        blocks = Blocks(
+            unpacked.data, 3, unpacked.axis, unpacked.time_axis,
+            _track_from(unpacked.timestamps, origin), "vectors",
+        )  # fmt: skip
+        rotated, matched, final = _velocity_parts(
+            blocks, frame, to_frame, extras, interpolated
+        )
+        out = blocks.restore(combine(rotated, matched), final)
+        new_attrs = dict(unpacked.attrs)
+        new_attrs[what] = new_attrs["representation_frame"] = to_frame.name
+        return wrap(unpacked, out, final.timestamps, new_attrs)
+
+    return transform(
+        eager, arr, to_frame, frame, dim, axis, timestamps, time_axis,
+        return_timestamps, resolve, what, False, spans,
+    )  # fmt: skip
+
+
+def time_dim_of(arr, timestamps, time_axis) -> str | None:
+    """The time dimension of a DataArray argument (None for a plain array)."""
+    if not hasattr(arr, "dims"):
+        return None
+    if isinstance(timestamps, str):
+        return timestamps
+    return arr.dims[0 if time_axis is None else time_axis]
+
+
+def _origin(times) -> int | None:
+    """Nanoseconds of the first of datetime64 ``times`` (None for numbers)."""
+    from ._time import as_track
+
+    first = as_track(np.asarray(times)[:1])
+    return first.origin if first.is_datetime else None
+
+
+def _track_from(timestamps, origin: int | None):
+    """A chunk's timestamps as a Track counted from the whole array's first sample.
+
+    Interpolation reads times as float seconds from an origin; with the
+    chunk's own first sample as origin they would differ from the eager
+    call's by rounding, which fast-changing velocities turn into ~1e-10.
+    """
+    from ._time import Track, as_track
+
+    track = as_track(timestamps, copy=False)
+    if origin is None or not track.is_datetime:
+        return track
+    return Track(
+        track.values, track.key, (track.key - origin) / 1e9, origin, track.kind
+    )
+
+
+def _interpolated_terms(frame, to_frame, times, extras) -> list[bool]:
+    """Which looked-up terms the eager transform of the whole array interpolates.
+
+    The eager call takes a term's own values where the array's times are a
+    run of the term's times, and interpolates it otherwise -- at a time
+    equal to a sample, up to the rounding of seconds between the two time
+    origins. A chunk's times may be a run of the term's times where the whole
+    array's are not, so each chunk follows the whole array's choice.
+    """
+    from ._engine import chain as ch
+    from ._time import as_track
+
+    track = as_track(np.asarray(times))
+    target = ch.match([f for f, _ in ch.chain(frame, to_frame)], [track])
+    final = ch.match([], [target.track] + [t for _, t in extras])
+    return [t is not None and ch._same_times(t, final.track) is None for _, t in extras]
+
+
+def _velocity_parts(blocks, frame, to_frame, extras, interpolated):
+    """The input represented in ``to_frame`` and the terms at the chunk's times.
+
+    :func:`rbm_nb._engine.twist._velocity_parts`, with each term
+    interpolated where the eager call on the whole array interpolates it
+    (``interpolated``), so that chunks give the eager numbers.
+    """
+    from ._door import kernel_array
+    from ._engine import chain as ch
+    from ._kernels import resample as kr
+
+    steps = ch.chain(frame, to_frame)
+    target = ch.match([f for f, _ in steps], [blocks.track])
+    data = ch.resample_array(blocks.data, blocks.track, target, False)
+    rotated = ch.apply("vectors", steps, target, data)
+    final = ch.match([], [target.track] + [t for _, t in extras])
+    rotated = ch.resample_array(rotated, target.track, final, False)
+    matched = []
+    for (values, track), interpolate in zip(extras, interpolated, strict=True):
+        block = kernel_array(np.reshape(values, (-1, 1, 3)))
+        if interpolate:
+            t_out = final.track.base_in(track.origin)
+            block = kr.interp_linear(track.base, kernel_array(block[:, 0, :]), t_out)
+            matched.append(block[:, None, :])
+        else:
+            matched.append(ch.resample_array(block, track, final, False))
+    return rotated, matched, final

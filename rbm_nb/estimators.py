@@ -42,7 +42,6 @@ from ._kernels import conversions as _kc
 from ._kernels import quaternion as _qk
 from ._validation import check_no_inf, check_unit_norms, is_scalar
 from .coordinates import _replace_dim
-from .errors import UnsupportedError
 
 __all__ = [
     "best_fit_rotation",
@@ -144,11 +143,8 @@ def _from_series(series, moved_shape, axis, time_axis, width):
 def _lazy_estimate(eager, arr, dim, axis, timestamps, time_axis, halo, **options):
     """A velocity estimate of dask-backed data, chunk by chunk with a halo (see _dask)."""
     if options.get("outlier_thresh") is not None:
-        raise UnsupportedError(
-            "outlier_thresh on dask-backed data is not lazy: a rejected sample "
-            "is re-interpolated from kept samples that may lie any distance "
-            "away, beyond what a chunk sees; call .compute() first"
-        )
+        # its value, before the graph is built (rejection is lazy, see _dask)
+        _check_options(options["outlier_thresh"], None, sys.maxsize)
     if options.get("cutoff") is not None:
         # the value of cutoff, before it sets the halo; the series' length is
         # checked by each chunk's eager call, which reads the whole halo

@@ -20,7 +20,6 @@ from ._engine import transform as _engine_transform
 from ._engine import twist as _twist
 from ._validation import check_what
 from ._xarray import unpack, wrap
-from .errors import UnsupportedError
 from .frames import FrameLike, resolve_frame
 
 __all__ = [
@@ -49,7 +48,7 @@ def _transform(
     if _dask.is_dask(arr):
         return _lazy_transform(
             method, arr, into, outof, dim, axis, timestamps, time_axis, attr,
-            return_timestamps,
+            return_timestamps, **kwargs,
         )  # fmt: skip
     unpacked = unpack(
         arr, dim=dim, axis=axis, time_axis=time_axis, timestamps=timestamps
@@ -95,20 +94,23 @@ def _transform(
 
 
 def _lazy_transform(
-    method, arr, into, outof, dim, axis, timestamps, time_axis, attr, return_timestamps
-):
+    method, arr, into, outof, dim, axis, timestamps, time_axis, attr,
+    return_timestamps, **kwargs,
+):  # fmt: skip
     """The transform of dask-backed data, one task per time chunk (see _dask)."""
-    if method not in (_points, _vectors, _quaternions):
-        raise UnsupportedError(
-            "velocity transforms of dask-backed arrays are not lazy (each chunk "
-            "would estimate the frames' velocities again); call .compute() on "
-            "the array first"
-        )
+    if kwargs.get("what", "representation_frame") != "representation_frame":
+        # the frames' velocities are estimated once, not per chunk
+        return _dask.velocity_transform(
+            method is _frame_transform_linear_velocity_kw, arr, into, outof,
+            dim=dim, axis=axis, timestamps=timestamps, time_axis=time_axis,
+            return_timestamps=return_timestamps, resolve=resolve_frame, **kwargs,
+        )  # fmt: skip
 
     def eager(block, into, outof, dim, axis, timestamps):
         return _transform(
-            method, block, into, outof, dim, axis, timestamps, None, attr, False
-        )
+            method, block, into, outof, dim, axis, timestamps, None, attr, False,
+            **kwargs,
+        )  # fmt: skip
 
     return _dask.transform(
         eager, arr, into, outof, dim, axis, timestamps, time_axis,

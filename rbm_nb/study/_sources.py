@@ -11,11 +11,12 @@ from __future__ import annotations
 
 import os
 import threading
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import xarray as xr
 
 STREAM_SUFFIXES = (".nc", ".bag")
@@ -96,42 +97,57 @@ class RecordingSource:
     datasets: Mapping[str, xr.Dataset] = field(default_factory=dict)
 
     def open(
-        self, chunks: Any = None, start: Any = None, stop: Any = None
+        self,
+        chunks: Any = None,
+        start: Any = None,
+        stop: Any = None,
+        rows: Mapping[str, tuple[int, int]] | None = None,
     ) -> Recording:
         """Load the streams, restricted to ``start <= time <= stop`` if given.
 
         Files are read into memory (only the selected span) and closed; with
         ``chunks`` the loaded streams are then made dask-backed, so that an
         analysis written with rbm_nb's lazy functions computes chunk by chunk.
+
+        ``rows`` gives, per stream, the ``(first, stop)`` rows of that span
+        (from :meth:`window_rows`): a netCDF file or dataset is then cut by
+        position before anything else is read or decoded, so that neither the
+        data nor the time coordinate outside the span is ever in memory.
+        Streams not in ``rows`` (bags) are cut by time.
         """
         span = slice(start, stop)
+        rows = rows or {}
         streams: dict[str, xr.Dataset] = {}
         for stream, path in self.paths.items():
-            streams.update(_load_path(stream, path, span))
+            if stream in rows:
+                streams[stream] = _read_rows(path, rows[stream])
+            else:
+                streams.update(_load_path(stream, path, span))
         for stream, ds in self.datasets.items():
-            streams[stream] = ds.sel(time=span) if span != slice(None) else ds
+            if stream in rows:
+                streams[stream] = ds.isel(time=slice(*rows[stream]))
+            else:
+                streams[stream] = ds.sel(time=span) if span != slice(None) else ds
         if chunks is not None:
             streams = {k: ds.chunk(chunks) for k, ds in streams.items()}
         return Recording(self.name, streams)
 
     def time_range(self) -> tuple[Any, Any]:
-        """First and last timestamp over all streams, reading only time coordinates."""
-        if not self.paths:
-            return Recording(self.name, dict(self.datasets)).time_range()
+        """First and last timestamp over all streams.
+
+        Reads two values of each netCDF file's time coordinate (the first and
+        the last); a bag is read whole.
+        """
         firsts, lasts = [], []
         for stream, path in self.paths.items():
-            if path.suffix == ".bag" or path.is_dir():
+            if _is_bag(path):
                 first, last = Recording(
                     self.name, _load_path(stream, path, slice(None))
                 ).time_range()
             else:
-                with _NETCDF_LOCK, xr.open_dataset(path) as ds:
-                    if "time" not in ds.coords or ds.sizes.get("time", 0) == 0:
-                        raise ValueError(
-                            f"stream {stream!r} of recording {self.name!r} ({path}) "
-                            f"has no 'time' coordinate with samples"
-                        )
-                    first, last = ds.indexes["time"][0], ds.indexes["time"][-1]
+                with _NETCDF_LOCK, _open_unindexed(path) as ds:
+                    _check_time(ds, stream, self.name, path)
+                    first, last = ds["time"].isel(time=[0, -1]).values
             firsts.append(first)
             lasts.append(last)
         if self.datasets:
@@ -140,9 +156,109 @@ class RecordingSource:
             lasts.append(last)
         return min(firsts), max(lasts)
 
+    def window_rows(
+        self, spans: Sequence[tuple[Any, Any]]
+    ) -> list[dict[str, tuple[int, int]]]:
+        """The rows of each stream inside each span ``start <= time <= stop``.
+
+        Each netCDF file's time coordinate is read once, in blocks of
+        :data:`TIME_BLOCK` samples, so memory does not grow with the length
+        of the recording. Bags are left out (they are cut by time).
+
+        Returns
+        -------
+        list of dict
+            One per span: ``{stream: (first_row, stop_row)}``.
+        """
+        starts = np.array([s for s, _ in spans])
+        stops = np.array([s for _, s in spans])
+        per_stream: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        for stream, path in self.paths.items():
+            if not _is_bag(path):
+                per_stream[stream] = _rows_in_file(
+                    path, stream, self.name, starts, stops
+                )
+        for stream, ds in self.datasets.items():
+            time = ds.indexes["time"]
+            if not time.is_monotonic_increasing:
+                raise ValueError(_unsorted(stream, self.name, "the dataset"))
+            per_stream[stream] = (
+                time.searchsorted(starts, side="left"),
+                time.searchsorted(stops, side="right"),
+            )
+        return [
+            {k: (int(lo[j]), int(hi[j])) for k, (lo, hi) in per_stream.items()}
+            for j in range(len(spans))
+        ]
+
+
+# samples of a time coordinate decoded at once when finding window rows
+TIME_BLOCK = 1 << 16
+
+
+def _is_bag(path: Path) -> bool:
+    return path.suffix == ".bag" or path.is_dir()
+
+
+def _open_unindexed(path: Path) -> xr.Dataset:
+    """A netCDF file opened lazily without building indexes.
+
+    Building the index of the ``time`` coordinate would read and decode all
+    of it; without indexes, ``isel`` reads only the rows selected.
+    """
+    return xr.open_dataset(path, create_default_indexes=False)
+
+
+def _check_time(ds: xr.Dataset, stream: str, recording: str, path: Path) -> None:
+    if "time" not in ds.variables or ds.sizes.get("time", 0) == 0:
+        raise ValueError(
+            f"stream {stream!r} of recording {recording!r} ({path}) "
+            f"has no 'time' coordinate with samples"
+        )
+
+
+def _unsorted(stream: str, recording: str, where: Any) -> str:
+    return (
+        f"the times of stream {stream!r} of recording {recording!r} ({where}) "
+        f"are not sorted; windows need increasing times"
+    )
+
+
+def _rows_in_file(
+    path: Path, stream: str, recording: str, starts: np.ndarray, stops: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per span, the number of samples before it and up to its end."""
+    lo = np.zeros(len(starts), dtype=np.int64)
+    hi = np.zeros(len(stops), dtype=np.int64)
+    with _NETCDF_LOCK, _open_unindexed(path) as ds:
+        _check_time(ds, stream, recording, path)
+        time = ds["time"]
+        previous = None
+        for first in range(0, time.size, TIME_BLOCK):
+            block = time.isel(time=slice(first, first + TIME_BLOCK)).values
+            if (previous is not None and block[0] < previous) or np.any(
+                block[1:] < block[:-1]
+            ):
+                raise ValueError(_unsorted(stream, recording, path))
+            previous = block[-1]
+            # sorted blocks: the rows before a time are the sum over blocks
+            lo += np.searchsorted(block, starts, side="left")
+            hi += np.searchsorted(block, stops, side="right")
+    return lo, hi
+
+
+def _read_rows(path: Path, rows: tuple[int, int]) -> xr.Dataset:
+    """Rows ``first:stop`` of a netCDF file, decoded, with their indexes."""
+    with _NETCDF_LOCK, _open_unindexed(path) as ds:
+        part = ds.isel(time=slice(*rows)).load()
+    for name in part.dims:
+        if name in part.coords and name not in part.indexes:
+            part = part.set_xindex(name)
+    return part
+
 
 def _load_path(stream: str, path: Path, span: slice) -> dict[str, xr.Dataset]:
-    if path.suffix == ".bag" or path.is_dir():
+    if _is_bag(path):
         from ..ros import RosbagReader
 
         reader = RosbagReader(path)

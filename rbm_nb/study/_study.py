@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import gc
+import threading
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
 import xarray as xr
 
+from .._engine import chain as _engine_chain
 from . import _windows
 from ._sources import _NETCDF_LOCK, Recording, RecordingSource, find_sources
 
@@ -115,6 +118,7 @@ class Study:
             _check_callable(frames, "frames")
         run = dask.delayed(_run_piece, pure=True)
         join = dask.delayed(_join_windows, pure=True)
+        find_rows = dask.delayed(_window_rows, pure=True)
         # functions and in-memory sources go into the graph once, as keys
         analysis_key = dask.delayed(analysis, pure=True)
         frames_key = dask.delayed(frames, pure=True)
@@ -126,10 +130,15 @@ class Study:
                     source_key, self.chunks, analysis_key, frames_key, None
                 )
                 continue
-            span = source.time_range()
+            # the span costs two values per file; the rows of every window
+            # are found by one small task per recording (it reads each time
+            # coordinate once, in blocks), so a window task reads its rows
+            # and nothing else
+            windows = _windows.split(*source.time_range(), window, margin)
+            rows = find_rows(source_key, [(w.read_start, w.read_stop) for w in windows])
             pieces = [
-                run(source_key, self.chunks, analysis_key, frames_key, w)
-                for w in _windows.split(*span, window, margin)
+                run(source_key, self.chunks, analysis_key, frames_key, w, rows, k)
+                for k, w in enumerate(windows)
             ]
             results[name] = join(name, pieces)
         return results
@@ -219,12 +228,25 @@ def _check_callable(value: Any, name: str) -> None:
         raise TypeError(f"{name} must be callable, got {type(value).__name__}")
 
 
-def _run_piece(source: RecordingSource, chunks, analysis, frames, window):
+def _window_rows(source: RecordingSource, spans) -> list[dict[str, tuple[int, int]]]:
+    return source.window_rows(spans)
+
+
+def _run_piece(
+    source: RecordingSource, chunks, analysis, frames, window, rows=None, k=0
+):
     """Open, build frames, analyse and (for a window) trim: one task's work."""
+    with _task_garbage:
+        return _analyse_piece(source, chunks, analysis, frames, window, rows, k)
+
+
+def _analyse_piece(source, chunks, analysis, frames, window, rows, k):
     if window is None:
         recording = source.open(chunks)
     else:
-        recording = source.open(chunks, window.read_start, window.read_stop)
+        recording = source.open(
+            chunks, window.read_start, window.read_stop, rows=rows[k]
+        )
     if frames is None:
         result = analysis(recording)
     else:
@@ -234,6 +256,51 @@ def _run_piece(source: RecordingSource, chunks, analysis, frames, window):
         result = window.trim(result, recording.name)
     # compute chunk by chunk inside this task: parallelism is across tasks
     return result.compute(scheduler="synchronous")
+
+
+class _TaskGarbage:
+    """Frees the reference cycles a task leaves behind, scanning only the task's objects.
+
+    A task's frame tree is a reference cycle (a parent lists its children),
+    so its arrays -- the window's data and the tables the lookups cache on
+    the frames -- are freed only by Python's cycle collector, whose full
+    passes are rare in a process holding many long-lived objects (compiled
+    kernels, dask, xarray): without help a worker's memory grows with the
+    number of windows it has run. A full pass over everything takes about
+    0.1 s in a worker, longer than a short window's task. So the objects
+    that exist when the task starts are frozen (:func:`gc.freeze`), the
+    pass after the task scans only what was created since, and they are
+    unfrozen again; the engine's cache of chains, which holds the frames
+    last used, is emptied first. One task per process does this at a time, and only if
+    nothing else has frozen objects (a freeze of others is never undone).
+    """
+
+    def __init__(self) -> None:
+        self.lock = threading.Lock()
+        self.owner: int | None = None
+
+    def __enter__(self) -> _TaskGarbage:
+        if gc.get_freeze_count() == 0 and self.lock.acquire(blocking=False):
+            self.owner = threading.get_ident()
+            gc.freeze()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.owner != threading.get_ident():
+            return
+        try:
+            # the engine caches the chains of the frames last used (until a
+            # frame is built), which would keep this task's tree alive into
+            # the next task, when it is frozen
+            _engine_chain.invalidate()
+            gc.collect()
+        finally:
+            gc.unfreeze()
+            self.owner = None
+            self.lock.release()
+
+
+_task_garbage = _TaskGarbage()
 
 
 def _as_xarray(result: Any, name: str):

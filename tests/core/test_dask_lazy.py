@@ -233,19 +233,200 @@ def test_sign_flips_across_chunks(recording, tree):
     np.testing.assert_allclose(lazy.values, eager.values, rtol=1e-11, atol=1e-11)
 
 
-def test_outlier_rejection_is_refused_lazily(recording):
-    pos = _eye(recording, "position").chunk(time=CHUNK)
-    with pytest.raises(NotImplementedError, match="outlier_thresh"):
+def _scores(arr, quaternions):
+    """The eager estimators' outlier score of each sample (kernel of the engine)."""
+    from rbm_nb._kernels import differences as dk
+    from rbm_nb._kernels import quaternion as qk
+    from rbm_nb._kernels import rotations as rk
+
+    x = np.ascontiguousarray(arr.values, dtype=np.float64)
+    if quaternions:
+        x = rk.rotation_vectors(qk.unflip(x))
+    return dk.second_difference_score(np.ascontiguousarray(x[:, None, :]))[:, 0]
+
+
+ESTIMATORS = {
+    "linear": (
+        "position",
+        lambda a, **kw: rbm.estimate_linear_velocity(a, dim="cartesian_axis", **kw),
+    ),
+    "angular": (
+        "orientation",
+        lambda a, **kw: rbm.estimate_angular_velocity(a, dim="quaternion_axis", **kw),
+    ),
+    "angular_rotvec": (
+        "orientation",
+        lambda a, **kw: rbm.estimate_angular_velocity(
+            a, dim="quaternion_axis", mode="rotation_vector", **kw
+        ),
+    ),
+}
+
+
+@pytest.mark.parametrize("kind", ESTIMATORS)
+def test_outlier_rejection_is_lazy_and_equal(kind, recording):
+    """A fifth of the samples rejected; the series trimmed to start and end on kept ones."""
+    var, estimate = ESTIMATORS[kind]
+    arr = _eye(recording, var)
+    score = _scores(arr, var == "orientation")
+    thresh = float(np.quantile(score[np.isfinite(score)], 0.8))
+    kept = np.flatnonzero(score <= thresh)
+    arr = arr.isel(time=slice(kept[0], kept[-1] + 1))
+    assert (score[kept[0] : kept[-1] + 1] > thresh).sum() > 100
+    eager = estimate(arr, outlier_thresh=thresh)
+    counter = ComputeCounter()
+    with counter:
+        lazy = estimate(arr.chunk(time=CHUNK), outlier_thresh=thresh)
+    assert counter.count == 0
+    assert isinstance(lazy.data, dsa.Array)
+    assert lazy.chunks[0] == arr.chunk(time=CHUNK).chunks[0]
+    np.testing.assert_allclose(lazy.values, eager.values, rtol=1e-12, atol=1e-12)
+    # rejection and then the low-pass, both lazily
+    eager = estimate(arr, outlier_thresh=thresh, cutoff=0.2)
+    lazy = estimate(arr.chunk(time=CHUNK), outlier_thresh=thresh, cutoff=0.2)
+    np.testing.assert_allclose(lazy.values, eager.values, rtol=1e-8, atol=1e-10)
+
+
+def _spiky_line(n=3000, run=(600, 1650)):
+    """Positions on a line at uneven times, with noise over one long run of samples."""
+    import xarray as xr
+
+    rng = np.random.default_rng(7)
+    t = np.cumsum(rng.uniform(0.002, 0.004, n))
+    pos = 0.01 * np.c_[np.sin(t), np.cos(t), t]
+    pos[run[0] : run[1]] += rng.normal(0.0, 0.05, (run[1] - run[0], 3))
+    return xr.DataArray(
+        pos,
+        {"time": t, "cartesian_axis": list("xyz")},
+        ("time", "cartesian_axis"),
+    )
+
+
+def test_outliers_across_chunk_boundaries():
+    """A run of 1000+ rejected samples spans two chunk boundaries (700, 1400):
+    each is interpolated from kept samples in other chunks."""
+    pos = _spiky_line()
+    eager = rbm.estimate_linear_velocity(pos, dim="cartesian_axis", outlier_thresh=1e-3)
+    score = _scores(pos, False)
+    rejected = np.flatnonzero(score > 1e-3)
+    assert rejected.min() < CHUNK and rejected.max() > 2 * CHUNK
+    assert (np.diff(rejected) == 1).all()  # one run
+    lazy = rbm.estimate_linear_velocity(
+        pos.chunk(time=CHUNK), dim="cartesian_axis", outlier_thresh=1e-3
+    )
+    np.testing.assert_allclose(lazy.values, eager.values, rtol=1e-12, atol=1e-12)
+    # the run is a straight line in time between its two kept neighbours
+    before, after = rejected.min() - 1, rejected.max() + 1
+    t = pos.time.values
+    w = (t[rejected] - t[before]) / (t[after] - t[before])
+    line = eager.values[before] + w[:, None] * (
+        eager.values[after] - eager.values[before]
+    )
+    np.testing.assert_allclose(lazy.values[rejected], line, rtol=1e-12, atol=1e-12)
+    # plain dask arrays too
+    plain = rbm.estimate_linear_velocity(
+        dsa.from_array(pos.values, chunks=(CHUNK, 3)),
+        timestamps=pos.time.values,
+        outlier_thresh=1e-3,
+    )
+    np.testing.assert_allclose(plain.compute(), eager.values, rtol=1e-12, atol=1e-12)
+
+
+def test_outlier_errors_are_the_eager_ones():
+    """Rejected first samples (nothing to interpolate from) fail on compute,
+    with the eager message; a bad threshold fails at once."""
+    pos = _spiky_line(run=(0, 900))
+    with pytest.raises(ValueError) as eager:
         rbm.estimate_linear_velocity(pos, dim="cartesian_axis", outlier_thresh=1e-3)
+    lazy = rbm.estimate_linear_velocity(
+        pos.chunk(time=CHUNK), dim="cartesian_axis", outlier_thresh=1e-3
+    )
+    with pytest.raises(ValueError) as on_compute:
+        lazy.compute()
+    assert str(on_compute.value) == str(eager.value)
+    assert "rejects the first" in str(eager.value)
+    with pytest.raises(ValueError, match="keeps only"):
+        rbm.estimate_linear_velocity(
+            pos.chunk(time=CHUNK), dim="cartesian_axis", outlier_thresh=0.0
+        ).compute()
+    with pytest.raises(ValueError, match="outlier_thresh must be a non-negative"):
+        rbm.estimate_linear_velocity(
+            pos.chunk(time=CHUNK), dim="cartesian_axis", outlier_thresh=-1.0
+        )
 
 
-def test_velocity_transforms_say_they_are_not_lazy(recording, tree):
-    v = _eye(recording, "position").chunk(time=CHUNK)
-    with pytest.raises(NotImplementedError, match="compute"):
+VELOCITY_CASES = {
+    "angular_reference_frame": lambda a: rbm.transform_angular_velocity(
+        a, outof="head", into="world", what="reference_frame", dim="cartesian_axis"
+    ),
+    "angular_moving_frame": lambda a: rbm.transform_angular_velocity(
+        a, outof="head", into="eye", what="moving_frame", dim="cartesian_axis"
+    ),
+    "angular_representation_frame": lambda a: rbm.transform_angular_velocity(
+        a, outof="head", into="world", what="representation_frame",
+        dim="cartesian_axis",
+    ),
+    "linear_reference_frame": lambda a: rbm.transform_linear_velocity(
+        a, outof="head", into="world", what="reference_frame", moving_frame="eye",
+        dim="cartesian_axis",
+    ),
+    "linear_moving_frame": lambda a: rbm.transform_linear_velocity(
+        a, outof="head", into="eye", what="moving_frame", reference_frame="world",
+        dim="cartesian_axis",
+    ),
+    "linear_reference_frame_filtered": lambda a: rbm.transform_linear_velocity(
+        a, outof="head", into="world", what="reference_frame", moving_frame="eye",
+        dim="cartesian_axis", cutoff=0.2,
+    ),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("name", VELOCITY_CASES)
+def test_velocity_transforms_are_lazy_and_equal(name, recording, tree):
+    """The frames' velocities are estimated once; chunks only match them to their times."""
+    rbm.ReferenceFrame.from_dataset(
+        recording.left_eye.dropna("time"), "position", "orientation", "time",
+        parent="head", name="eye",
+    ).register()  # fmt: skip
+    func = VELOCITY_CASES[name]
+    # the eye's samples, cut at both ends: the frames' ranges crop the result
+    v = _eye(recording, "position").isel(time=slice(100, -100))
+    eager = func(v)
+    counter = ComputeCounter()
+    with counter:
+        lazy = func(v.chunk(time=CHUNK))
+    assert counter.count == 0
+    assert isinstance(lazy.data, dsa.Array)
+    assert lazy.dims == eager.dims and lazy.attrs == eager.attrs
+    assert list(lazy.coords) == list(eager.coords)
+    assert not np.isnan(sum(lazy.chunks[0]))
+    with counter:
+        result = lazy.compute()
+    assert counter.count == 1
+    np.testing.assert_array_equal(result.time.values, eager.time.values)
+    np.testing.assert_allclose(result.values, eager.values, rtol=1e-12, atol=1e-12)
+
+
+def test_velocity_transform_of_a_plain_dask_array(recording, tree):
+    v = _eye(recording, "position")
+    ts = v.time.values
+    eager, eager_ts = rbm.transform_angular_velocity(
+        v.values, outof="head", into="world", timestamps=ts, return_timestamps=True
+    )
+    lazy, lazy_ts = rbm.transform_angular_velocity(
+        dsa.from_array(v.values, chunks=(CHUNK, 3)),
+        outof="head",
+        into="world",
+        timestamps=ts,
+        return_timestamps=True,
+    )
+    assert isinstance(lazy, dsa.Array)
+    np.testing.assert_array_equal(lazy_ts, eager_ts)
+    np.testing.assert_allclose(lazy.compute(), eager, rtol=1e-12, atol=1e-12)
+    with pytest.raises(ValueError, match="moving_frame must be given"):
         rbm.transform_linear_velocity(
-            v,
+            dsa.from_array(v.values, chunks=(CHUNK, 3)),
             outof="head",
             into="world",
-            what="representation_frame",
-            dim="cartesian_axis",
+            timestamps=ts,
         )

@@ -18,7 +18,8 @@ run's own:
 - ``threads``: ``Study.map`` on dask's default threaded scheduler;
 - ``cluster``: ``Study.map`` on ``LocalCluster(n_workers=2,
   threads_per_worker=1, processes=True)``, started before the clock runs;
-- ``tuned``: the same cluster with worker settings for big arrays (``TUNED``:
+- ``tuned``: ``rbm_nb.study.local_cluster(2)``, the same cluster with the study's
+  worker settings for big arrays (``rbm_nb.study.WORKER_SETTINGS``:
   glibc's malloc keeps arrays up to 32 MB on its heap instead of mapping and
   page-faulting each afresh, as distributed's default MALLOC_TRIM_THRESHOLD_
   makes it do; no statistical profiler), whole recordings and 60 s windows.
@@ -243,17 +244,11 @@ def run_threads(folder: Path, trace: bool) -> dict:
     }
 
 
-# Worker settings for big arrays. distributed's nanny sets MALLOC_TRIM_THRESHOLD_
-# for its workers, which also fixes glibc's mmap threshold at 128 kB: every
-# array above it is a fresh mmap, page-faulted in again by each task (system
-# time). Here arrays up to 32 MB come from the heap, which keeps 256 MB when
-# freed; the statistical profiler (a stack sample every 10 ms) is off.
-TUNED = {
-    "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": str(256 << 20),
-    "distributed.nanny.pre-spawn-environ.MALLOC_MMAP_THRESHOLD_": str(32 << 20),
-    "distributed.nanny.pre-spawn-environ.MALLOC_TOP_PAD_": str(64 << 20),
-    "distributed.worker.profile.enabled": False,
-}
+def _tuned_settings() -> dict:
+    """rbm_nb.study.WORKER_SETTINGS (what ``rbm_nb.study.local_cluster`` sets)."""
+    from rbm_nb.study import WORKER_SETTINGS
+
+    return dict(WORKER_SETTINGS)
 
 
 def run_cluster(
@@ -263,22 +258,25 @@ def run_cluster(
     limit: int | None = None,
     tuned: bool = False,
 ) -> dict:
-    import dask
     from distributed import Client, LocalCluster
 
-    from rbm_nb.study import Study, find_sources
+    from rbm_nb.study import Study, find_sources, local_cluster
 
     study = Study(find_sources(folder)[:limit])
     runs = []
     for window in windows:
         # fresh workers per run: their high-water marks are this run's
         with (
-            dask.config.set(TUNED if tuned else {}),
-            LocalCluster(
-                n_workers=2, threads_per_worker=1, processes=True,
-                host="127.0.0.1", dashboard_address=None, silence_logs=50,
+            (
+                # the study's own cluster: WORKER_SETTINGS, TLS
+                local_cluster(2, silence_logs=50)
+                if tuned
+                else LocalCluster(
+                    n_workers=2, threads_per_worker=1, processes=True,
+                    host="127.0.0.1", dashboard_address=None, silence_logs=50,
+                )
             ) as cluster,
-            Client(cluster) as client,
+            Client(cluster, security=cluster.security) as client,
         ):  # fmt: skip
             client.run(warm_up)
             if trace:
@@ -433,7 +431,7 @@ def main() -> None:
     # the loop with the workers' tuned malloc settings, for a fair comparison
     malloc = {
         key.rsplit(".", 1)[1]: value
-        for key, value in TUNED.items()
+        for key, value in _tuned_settings().items()
         if key.startswith("distributed.nanny.pre-spawn-environ.")
     }
     loop_tuned = in_subprocess("loop", folder, env=malloc)
@@ -456,7 +454,7 @@ def main() -> None:
     )  # fmt: skip
     print(_row("Study.map, LocalCluster(2)", cluster[0], t_loop))
     for run in tuned:
-        label = "Study.map, LocalCluster(2), tuned"
+        label = "Study.map, rbm_nb.study.local_cluster(2)"
         if run["window"]:
             label += f", {run['window']:g} s win"
         print(_row(label, run, t_loop))
@@ -470,7 +468,7 @@ def main() -> None:
     print(
         " tuned: workers' malloc keeps arrays up to 32 MB and 256 MB of freed heap, no"
     )
-    print(" profiler (TUNED in this script)")
+    print(" profiler (rbm_nb.study.WORKER_SETTINGS, set by rbm_nb.study.local_cluster)")
     _explain(cluster[0], loop, "default, vs the loop")
     _explain(tuned[0], loop, "tuned, vs the loop")
     _explain(tuned[0], loop_tuned, "tuned, vs the loop with the same malloc")

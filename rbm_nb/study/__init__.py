@@ -11,7 +11,16 @@ so that a task's memory depends on the window, not the recording.
 Needs the ``dask`` extra (``pip install 'rbm_nb[dask]'``).
 """
 
+from ._cluster import WORKER_SETTINGS, local_cluster
 from ._sources import Recording, RecordingSource, find_sources
 from ._study import Study, open_study
 
-__all__ = ["Recording", "RecordingSource", "Study", "find_sources", "open_study"]
+__all__ = [
+    "WORKER_SETTINGS",
+    "Recording",
+    "RecordingSource",
+    "Study",
+    "find_sources",
+    "local_cluster",
+    "open_study",
+]

@@ -16,7 +16,7 @@ dask = pytest.importorskip("dask")
 import rbm_nb as rbm  # noqa: E402
 from rbm_nb.data import synthetic_head_eye  # noqa: E402
 from rbm_nb.explorer import SCENE_CAM_ROTATION, SCENE_CAM_TRANSLATION  # noqa: E402
-from rbm_nb.study import open_study  # noqa: E402
+from rbm_nb.study import WORKER_SETTINGS, local_cluster, open_study  # noqa: E402
 
 N_RECORDINGS = 8
 
@@ -190,15 +190,8 @@ def test_bad_input_is_named(study_folder, tmp_path):
 def cluster():
     distributed = pytest.importorskip("distributed")
     with (
-        distributed.LocalCluster(
-            n_workers=2,
-            threads_per_worker=1,
-            processes=True,
-            host="127.0.0.1",
-            dashboard_address=None,
-            silence_logs=50,
-        ) as cl,
-        distributed.Client(cl) as client,
+        local_cluster(2, silence_logs=50) as cl,
+        distributed.Client(cl, security=cl.security) as client,
     ):
         yield client
 
@@ -210,6 +203,39 @@ def test_local_cluster_gives_the_sequential_numbers(cluster, study_folder, expec
     assert_summaries_equal(result, expected)
     # both workers took part
     assert len(cluster.run(os.getpid)) == 2
+
+
+@pytest.mark.slow
+def test_the_study_cluster_is_private_and_tuned(cluster):
+    distributed = pytest.importorskip("distributed")
+    address = cluster.scheduler.address
+    assert address.startswith("tls://127.0.0.1:")
+    # every worker runs with the study's settings
+    prefix = "distributed.nanny.pre-spawn-environ."
+    wanted = {
+        k[len(prefix) :]: v for k, v in WORKER_SETTINGS.items() if k.startswith(prefix)
+    }
+    for env in cluster.run(lambda: dict(os.environ)).values():
+        assert {k: env.get(k) for k in wanted} == wanted
+    profiling = cluster.run(
+        lambda: __import__("dask").config.get("distributed.worker.profile.enabled")
+    )
+    assert set(profiling.values()) == {False}
+    # a client holding another certificate is refused by the scheduler
+    from distributed.security import Security
+
+    with pytest.raises(OSError, match="certificate"):
+        distributed.Client(address, security=Security.temporary(), timeout=5)
+
+
+def test_local_cluster_names_a_bad_argument():
+    pytest.importorskip("distributed")
+    with pytest.raises(ValueError, match="n_workers must be a positive integer"):
+        local_cluster(0)
+    with pytest.raises(
+        ValueError, match="threads_per_worker must be a positive integer"
+    ):
+        local_cluster(1, threads_per_worker=1.5)
 
 
 @pytest.mark.slow

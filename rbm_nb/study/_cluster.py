@@ -1,0 +1,118 @@
+"""A local dask.distributed cluster set up for studies of long recordings.
+
+Two things make a stock ``LocalCluster`` slower than it needs to be for
+rbm_nb's analyses, and one makes it less private than it should be:
+
+* distributed's nanny starts every worker with ``MALLOC_TRIM_THRESHOLD_``
+  set, which also pins glibc's mmap threshold at 128 kB: every array above
+  it is a fresh mapping that the next task page-faults in again. An hour of
+  eye data is arrays of tens of MB, and on 2 cores the faults cost the
+  workers a third more CPU than the same analysis in a plain loop
+  (``benchmarks/bench_study.py``: 620k faults against 233k).
+  :data:`WORKER_SETTINGS` keeps arrays up to 32 MB on the heap and 256 MB
+  of freed heap.
+* the statistical profiler samples every worker's stack every 10 ms;
+  it is switched off.
+* the scheduler and workers listen on local ports; :func:`local_cluster`
+  secures them with a throw-away TLS certificate (distributed's
+  ``Security.temporary()``), so only this process's clients can connect:
+  the certificate is the token. No dashboard is served unless asked.
+
+For an existing cluster, give its workers the same environment variables
+(e.g. in the worker's job script, or ``distributed.nanny.pre-spawn-environ``
+in its dask configuration).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Final
+
+__all__ = ["WORKER_SETTINGS", "local_cluster"]
+
+#: dask configuration for worker processes analysing long recordings.
+WORKER_SETTINGS: Final[dict[str, Any]] = {
+    "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": str(256 << 20),
+    "distributed.nanny.pre-spawn-environ.MALLOC_MMAP_THRESHOLD_": str(32 << 20),
+    "distributed.nanny.pre-spawn-environ.MALLOC_TOP_PAD_": str(64 << 20),
+    "distributed.worker.profile.enabled": False,
+}
+
+
+def local_cluster(
+    n_workers: int | None = None,
+    *,
+    threads_per_worker: int = 1,
+    dashboard: bool = False,
+    secure: bool = True,
+    **kwargs: Any,
+):
+    """Start a ``distributed.LocalCluster`` of worker processes for a study.
+
+    Parameters
+    ----------
+    n_workers : int, optional
+        Worker processes (default: one per core).
+    threads_per_worker : int
+        Threads per worker. 1 by default: rbm_nb's kernels already use the
+        core they run on, and netCDF reads in one process take one lock.
+    dashboard : bool
+        Serve distributed's dashboard (on a free local port) if True.
+    secure : bool
+        Connect scheduler, workers and clients over TLS with a temporary
+        certificate (needs the ``cryptography`` package, part of the
+        ``dask`` extra). False gives plain TCP on 127.0.0.1.
+    **kwargs
+        Passed on to ``LocalCluster``.
+
+    Returns
+    -------
+    distributed.LocalCluster
+        Close it (or use it as a context manager) when done. A ``Client``
+        connected with ``cluster.get_client()`` makes :meth:`Study.map` run on
+        it.
+
+    Raises
+    ------
+    ImportError
+        If distributed (or, with ``secure``, cryptography) is not installed.
+    ValueError
+        If ``n_workers`` or ``threads_per_worker`` is not a positive integer.
+    """
+    for name, value in (
+        ("n_workers", n_workers),
+        ("threads_per_worker", threads_per_worker),
+    ):
+        if value is None and name == "n_workers":
+            continue
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ValueError(f"{name} must be a positive integer, got {value!r}")
+    try:
+        import dask
+        from distributed import LocalCluster
+    except ImportError as err:
+        raise ImportError(
+            "local_cluster needs dask.distributed: pip install 'rbm_nb[dask]'"
+        ) from err
+    options: dict[str, Any] = {
+        "threads_per_worker": threads_per_worker,
+        "processes": True,
+        "host": "127.0.0.1",
+        "dashboard_address": ":0" if dashboard else None,
+    }
+    if n_workers is not None:
+        options["n_workers"] = n_workers
+    if secure:
+        try:
+            from distributed.security import Security
+
+            options["security"] = Security.temporary()
+        except ImportError as err:
+            raise ImportError(
+                "local_cluster(secure=True) needs the cryptography package: "
+                "pip install 'rbm_nb[dask]' (or pass secure=False)"
+            ) from err
+        options["protocol"] = "tls://"
+    options.update(kwargs)
+    # the nanny reads pre-spawn-environ when it starts each worker
+    with dask.config.set(WORKER_SETTINGS):
+        return LocalCluster(**options)

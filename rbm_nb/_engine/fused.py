@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import _parallel
 from .._kernels import fused as kf
 
 __all__ = ["Plan", "forget", "plan", "lookup", "transform"]
@@ -35,6 +36,8 @@ _EMPTY_R = np.array([[1.0, 0.0, 0.0, 0.0]])
 _EMPTY_TABLE = np.ones((1, kf.TABLE_COLUMNS))
 _EMPTY_SLOT = (_EMPTY_TIMES, _EMPTY_T, _EMPTY_R, _EMPTY_R, _EMPTY_TABLE)
 _TABLE_LOCK = threading.Lock()
+# prefill_chain takes the chain kernels' arguments up to the target times
+_PREFILL_ARGS = 5 + 5 * kf.SLOTS + 1
 
 
 class _Table:
@@ -170,12 +173,25 @@ def _build(steps, compose) -> Plan | None:
     return Plan(steps, np.array(code, dtype=np.int64), stat, frames, kinds, tables)
 
 
-def _run(p: Plan, call):
+def _run(p: Plan, rows: int, serial, parallel, args: tuple[Any, ...]):
+    """``serial(*args)`` or its prange twin (``_parallel.launch``), tables kept safe.
+
+    Complete tables are only read: no lock. Otherwise the call holds the
+    table lock, and a parallel call first fills every table row it will read
+    (``prefill_chain``, also on all threads), so that the twin's threads only
+    read the tables.
+    """
     incomplete = p.incomplete()
     if not incomplete:
-        return call()
+        return _parallel.launch(serial, parallel, rows, *args)
+
+    def prefilled(*a: Any):
+        computed = kf.prefill_chain(*a[:_PREFILL_ARGS])
+        *result, late = parallel(*a)
+        return (*result, late + computed)
+
     with _TABLE_LOCK:
-        result = call()
+        result = _parallel.launch(serial, prefilled, rows, *args)
         if result[-1]:
             for table in incomplete:
                 table.update()
@@ -196,16 +212,13 @@ def lookup(p: Plan, target, own, rotation_only: bool = False):
     """
     base = target.track.base
 
-    def call():
-        # one tuple: the kernel takes the 3 x 5 slot arrays as separate arguments
-        args: tuple[Any, ...] = (
-            (p.code, p.statics, p.offsets(target), p.gaps(), _own(own))
-            + p.slots()
-            + (base, rotation_only)
-        )
-        return kf.lookup_chain(*args)
-
-    t, r, _ = _run(p, call)
+    # one tuple: the kernels take the 3 x 5 slot arrays as separate arguments
+    args: tuple[Any, ...] = (
+        (p.code, p.statics, p.offsets(target), p.gaps(), _own(own))
+        + p.slots()
+        + (base, rotation_only)
+    )
+    t, r, _ = _run(p, len(base), kf.lookup_chain, kf.lookup_chain_parallel, args)
     return t, r
 
 
@@ -217,13 +230,12 @@ def transform(p: Plan, target, own, data: np.ndarray, kind: str) -> np.ndarray:
     mode = {"points": 0, "vectors": 1, "quaternions": 2}[kind]
     base = target.track.base
 
-    def call():
-        args: tuple[Any, ...] = (
-            (p.code, p.statics, p.offsets(target), p.gaps(), _own(own))
-            + p.slots()
-            + (base, data, mode)
-        )
-        return kf.transform_chain(*args)
-
-    out, _ = _run(p, call)
+    args: tuple[Any, ...] = (
+        (p.code, p.statics, p.offsets(target), p.gaps(), _own(own))
+        + p.slots()
+        + (base, data, mode)
+    )
+    out, _ = _run(
+        p, len(base), kf.transform_chain, kf.transform_chain_parallel, args
+    )
     return out

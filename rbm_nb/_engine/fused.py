@@ -235,7 +235,5 @@ def transform(p: Plan, target, own, data: np.ndarray, kind: str) -> np.ndarray:
         + p.slots()
         + (base, data, mode)
     )
-    out, _ = _run(
-        p, len(base), kf.transform_chain, kf.transform_chain_parallel, args
-    )
+    out, _ = _run(p, len(base), kf.transform_chain, kf.transform_chain_parallel, args)
     return out

@@ -118,6 +118,9 @@ HELD = 3
 TABLE_COLUMNS = 20
 _DONE = 19
 
+# below this, exp(w) is 1 + w and log(1 + d) is d - d²/2 to within an ulp
+_TINY = 2.0**-27
+
 
 # ---------------------------------------------------------------------------
 # the squad table, one segment at a time
@@ -135,7 +138,9 @@ def _qexp_table(w, x, y, z):
     """
     v2 = x * x + y * y + z * z
     if v2 < SERIES_ANGLE * SERIES_ANGLE and v2 > _EPS * _EPS:
-        e = math.exp(w)
+        # w is a sum of log-norms of unit quaternions (~1e-16): then 1 + w
+        # is exp(w) to within w²/2, below half an ulp of 1
+        e = 1.0 + w if abs(w) < _TINY else math.exp(w)
         c = cos_series(v2)
         k = e * sinc_series(v2)
         return e * c, k * x, k * y, k * z
@@ -155,7 +160,12 @@ def _qlog_table(w, x, y, z):
         inv_w = 1.0 / w
         f = atan_over_x(b2 * inv_w * inv_w) * inv_w
         b = math.sqrt(b2)  # the real part exactly as _qlog1 forms it
-        return math.log(w * w + b * b) / 2.0, f * x, f * y, f * z
+        n2 = w * w + b * b
+        d = n2 - 1.0  # exact (Sterbenz)
+        # a unit quaternion's norm² is 1 to within rounding: then log(1 + d)
+        # is d - d²/2 to within d³/3, far below an ulp of the result
+        half_log = (d - 0.5 * d * d) / 2.0 if abs(d) < _TINY else math.log(n2) / 2.0
+        return half_log, f * x, f * y, f * z
     return _qlog1(w, x, y, z)
 
 

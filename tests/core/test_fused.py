@@ -279,6 +279,29 @@ def test_series_exp_and_log_are_within_4_ulp_of_libm():
         np.testing.assert_array_max_ulp(got[1:], want[1:], maxulp=4)
 
 
+def test_exp_and_log_near_the_identity_are_within_4_ulp_of_libm():
+    """exp(w) of w ~ 1e-16 (sums of log-norms) and log of unit quaternions' norms."""
+    rng = np.random.default_rng(18)
+    n = 5_000
+    w = rng.normal(scale=1e-16, size=n) * 10.0 ** rng.uniform(-3, 8, n)  # to ~1e-8
+    v = rng.normal(size=(n, 3))
+    v *= (10.0 ** rng.uniform(-9, -1.1, n) / np.linalg.norm(v, axis=1))[:, None]
+    for i in range(n):
+        got = np.array(kf._qexp_table(w[i], *v[i]))
+        want = np.array(kq._qexp1(w[i], *v[i]))
+        np.testing.assert_array_max_ulp(got, want, maxulp=4)
+    # unit quaternions of small arcs: norm² within rounding of 1
+    q = np.column_stack([np.ones(n), v * 0.4])
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    tiny = 0
+    for i in range(n):
+        got = np.array(kf._qlog_table(*q[i]))
+        want = np.array(kq._qlog1(*q[i]))
+        np.testing.assert_array_max_ulp(got, want, maxulp=4)
+        tiny += got[0] != 0.0
+    assert tiny > n // 10  # norms not exactly 1 took the short series
+
+
 def test_squad_rows_are_computed_only_for_the_segments_used():
     """Rows come in runs from the first segment used (each log computed once)."""
     rng = np.random.default_rng(11)

@@ -813,12 +813,12 @@ def _segments_read(times, own, gap, off, target, j0, j1):
 
 @helper
 def _fill_pieces(plan, sizes, lo, hi, last, pieces_wanted):
-    """Disjoint pieces (p, 3) of table rows to fill: (slot, start, stop).
+    """The table rows to fill: disjoint intervals, and pieces of them.
 
     ``lo``, ``hi``, ``last`` (SLOTS, chunks) as from :func:`_segments_read`;
     ``sizes`` (SLOTS,) the tables' lengths. Per slot the chunks' ranges are
-    merged into disjoint intervals, then cut into about ``pieces_wanted``
-    pieces of at least RUN rows overall.
+    merged into disjoint intervals (q, 3): (slot, start, stop), then cut
+    into about ``pieces_wanted`` pieces (p, 3) of at least RUN rows overall.
     """
     nch = lo.shape[1]
     starts = np.empty(nch + 1, dtype=np.int64)
@@ -877,7 +877,7 @@ def _fill_pieces(plan, sizes, lo, hi, last, pieces_wanted):
             pieces[p, 1] = a
             pieces[p, 2] = min(a + size, merged[q, 2])
             p += 1
-    return pieces
+    return merged[:count], pieces
 
 
 @helper
@@ -909,8 +909,11 @@ def prefill_chain(
 
     Returns
     -------
-    int
+    computed : int
         Rows of the squad tables computed.
+    filled : ndarray, shape (q, 3)
+        Disjoint intervals (slot, start, stop) of table rows that are all
+        computed now: every row the call reads is in one of them.
     """
     m = target.shape[0]
     bounds = _chunk_bounds(m, CHUNKS)
@@ -937,7 +940,7 @@ def prefill_chain(
             lo[slot, ch] = a
             hi[slot, ch] = b
             last[slot, ch] = before
-    pieces = _fill_pieces(plan, sizes, lo, hi, last, CHUNKS)
+    filled, pieces = _fill_pieces(plan, sizes, lo, hi, last, CHUNKS)
     computed = 0
     for p in prange(pieces.shape[0]):
         slot = pieces[p, 0]
@@ -947,7 +950,7 @@ def prefill_chain(
             computed += _fill_range(r1, times1, c1, pieces[p, 1], pieces[p, 2])
         else:
             computed += _fill_range(r2, times2, c2, pieces[p, 1], pieces[p, 2])
-    return computed
+    return computed, filled
 
 
 @kernel(I1, F2, F1, F1, I1, *_SLOT_TYPES, F1, B, options=PARALLEL_KERNEL)

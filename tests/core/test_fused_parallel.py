@@ -83,6 +83,7 @@ def _forget_tables():
         if table is not None:
             table.rows[:] = 0.0
             table.complete = False
+            table.filled = []
 
 
 def _identical(a, b):
@@ -297,7 +298,7 @@ def test_unsorted_targets_beyond_the_samples(seed):
             t_s, r_s, _ = kf.lookup_chain(*(*args, times, False))
             rows_serial = [t.rows.copy() for t in plan.tables if t is not None]
             _forget_tables()
-            filled = kf.prefill_chain(*(*args, times))
+            filled, _ = kf.prefill_chain(*(*args, times))
             t_p, r_p, late = kf.lookup_chain_parallel(*(*args, times, False))
             assert late == 0  # the twin only read the tables
             _identical((t_s, r_s), (t_p, r_p))
@@ -337,17 +338,21 @@ def test_prefill_fills_only_the_segments_read():
     assert table is not None
     args = _kernel_args(plan, np.zeros(kf.SLOTS), [False])
     times = np.linspace(50.0, 60.0, 30_000)  # segments 5000 .. 6000
-    filled = kf.prefill_chain(*(*args, times))
+    filled, intervals = kf.prefill_chain(*(*args, times))
     done = np.flatnonzero(table.rows[:, -1])
     assert filled == len(done) == 1001
     assert done[0] == 5000 and done[-1] == 6000
+    assert intervals.tolist() == [[0, 5000, 6001]]
     # at the frame's own times (own = 1) no squad row is read at all
     table.rows[:] = 0.0
     own = np.array([1, 0, 0], dtype=np.int64)
     args = (plan.code, plan.statics, np.zeros(kf.SLOTS), plan.gaps(), own)
-    assert kf.prefill_chain(*(*args, *plan.slots(), ts[100:9000].copy())) == 0
+    assert kf.prefill_chain(*(*args, *plan.slots(), ts[100:9000].copy()))[0] == 0
     # a target before the first sample reads the last segment (n - 1)
-    assert kf.prefill_chain(*(*args, *plan.slots(), np.array([-1.0, 0.005]))) == 2
+    filled, intervals = kf.prefill_chain(
+        *(*args, *plan.slots(), np.array([-1.0, 0.005]))
+    )
+    assert filled == 2 and intervals.tolist() == [[0, 0, 1], [0, n - 1, n]]
     assert np.flatnonzero(table.rows[:, -1]).tolist() == [0, n - 1]
 
 
@@ -401,3 +406,44 @@ def test_real_recording(modes, shared_data):
     serial, parallel = modes(calls)
     assert np.isnan(serial[1]).any() and not np.isnan(serial[1]).all()
     _identical(serial, parallel)
+
+
+def test_rows_known_to_be_filled_need_no_second_prefill(monkeypatch):
+    """A parallel call records what its prefill filled; calls inside it skip the prefill."""
+    rng = np.random.default_rng(10)
+    n = 20_000
+    rbm.register_frame("world")
+    rbm.register_frame(
+        "m",
+        parent="world",
+        translation=rng.normal(size=(n, 3)),
+        rotation=_rotations(rng, n, 0.05),
+        timestamps=np.arange(n) * 0.01,
+    )
+    prefills = []
+    prefill = kf.prefill_chain
+
+    def spy(*args):
+        prefills.append(args[-1].shape[0])
+        return prefill(*args)
+
+    monkeypatch.setattr(kf, "prefill_chain", spy)
+    monkeypatch.setattr(_parallel, "MIN_ROWS", 1)
+    monkeypatch.setenv(_parallel.ENV_THREADS, "2")
+    points = rng.normal(size=(3000, 3))
+
+    def transform(lo, hi):
+        ts = np.linspace(lo, hi, len(points))
+        return rbm.transform_points(points, "world", "m", timestamps=ts)
+
+    first = transform(50.0, 60.0)
+    table = _frames.resolve_frame("m")._fused_table
+    assert prefills == [3000] and table.filled == [(5000, 6001)]
+    assert not table.complete
+    np.testing.assert_array_equal(transform(50.0, 60.0), first)
+    transform(52.0, 58.5)  # inside: read-only, no lock, no prefill
+    assert len(prefills) == 1
+    transform(55.0, 70.0)  # beyond: the missing rows are filled, the record grows
+    assert len(prefills) == 2 and table.filled == [(5000, 7001)]
+    monkeypatch.setenv(_parallel.ENV_THREADS, "1")
+    np.testing.assert_array_equal(transform(50.0, 60.0), first)  # serial reads too

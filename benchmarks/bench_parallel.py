@@ -16,7 +16,7 @@ operations. Best of 7 (3 from 1e6 rows) in one process, serial and parallel call
 in turns, tables complete
 (the steady state); the load average is printed, as the machine is shared.
 
-Run:  PYTHONPATH=. .venv/bin/python benchmarks/bench_parallel.py [--quick]
+Run:  PYTHONPATH=. .venv/bin/python benchmarks/bench_parallel.py [--quick] [--sizes 1e4 1e7]
 (--quick stops at 1e6 rows; the whole run takes a few minutes.)
 """
 
@@ -80,8 +80,11 @@ def parallel(fn):
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--quick", action="store_true", help="stop at 1e6 rows")
+    parser.add_argument("--sizes", nargs="+", type=float, help="these sizes only")
     args = parser.parse_args()
     sizes = [n for n in SIZES if not (args.quick and n > 1_000_000)]
+    if args.sizes:
+        sizes = [int(n) for n in args.sizes]
 
     import numba
 

@@ -36,8 +36,15 @@ from typing import Any, Final, TypeVar
 
 __all__ = ["MIN_ROWS", "ENV_THREADS", "threads", "launch"]
 
-#: Rows from which a parallel twin is used (benchmarks/bench_parallel.py).
-MIN_ROWS: Final = 50_000
+#: Rows from which a parallel twin is used. benchmarks/bench_parallel.py on
+#: the 2-core machine (fused lookup_transform and transform_points of the
+#: head/eye chain, 2 threads against 1, best of 7 in turns, load average
+#: ~2.4): 1.25-1.35x at 1e3-5e3 rows, 1.7-1.8x at 1e4, 1.8-1.85x from 2e4 to
+#: 1e6. The twins win from 1e3 rows already; the threshold sits where the
+#: gain is near its plateau and a serial call takes ~1 ms, so that the pool's
+#: fixed costs (waking it; on a loaded machine, a descheduled worker) stay
+#: small against the call.
+MIN_ROWS: Final = 10_000
 
 #: Environment variable capping the threads of rbm_nb's parallel kernels.
 ENV_THREADS: Final = "RBM_NB_NUM_THREADS"

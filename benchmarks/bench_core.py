@@ -5,8 +5,9 @@ The workload has the shape of the example head/eye recording:
     world -> t265/world (static rotation) -> head (66,629 samples, 200 Hz)
           -> scene_cam (static) -> left_eye (113,373 samples, offset times)
 
-Each operation is timed as the best of 5 after a warm-up call (a reference
-call that takes more than 60 s is timed once), rbm_nb twice in the same run:
+Each operation is timed as the best of 5 after a warm-up call, the
+contenders called in turns (a reference call that takes more than 60 s is
+timed once), rbm_nb twice in the same run:
 on one thread and on two (``RBM_NB_NUM_THREADS=1`` and ``=2``; its parallel
 kernels run only for calls of at least ``rbm_nb._parallel.MIN_ROWS`` rows). Also reported: the first call
 in a fresh process with an empty and with a warm numba cache, and the time
@@ -50,6 +51,33 @@ def best_time(fn, repeats=REPEATS):
         fn()
         times.append(time.perf_counter() - t0)
     return min(times), False
+
+
+def best_in_turns(fns, repeats=REPEATS):
+    """Best time of each function, called in turns after one warm-up call each.
+
+    On a shared machine the load changes during a run; calling the
+    contenders in turns exposes them to it alike, so their ratios hold.
+    """
+    for fn in fns:
+        fn()
+    times = [[] for _ in fns]
+    for _ in range(repeats):
+        for fn, out in zip(fns, times, strict=True):
+            t0 = time.perf_counter()
+            fn()
+            out.append(time.perf_counter() - t0)
+    return [min(t) for t in times]
+
+
+def on_threads(n, fn):
+    """fn, called with rbm_nb's kernels on at most n threads."""
+
+    def call():
+        with threads(n):
+            return fn()
+
+    return call
 
 
 @contextlib.contextmanager
@@ -235,14 +263,15 @@ def main():
     rows = []
 
     def compare(label, fn_nb, fn_ref, check=None):
-        with threads(1):
-            t_nb, _ = best_time(fn_nb)
-        with threads(2):
-            t_nb2, _ = best_time(fn_nb)
+        contenders = [on_threads(1, fn_nb), on_threads(2, fn_nb)]
         if fn_ref is None:
-            rows.append((label, t_nb, t_nb2, None, False))
+            rows.append((label, *best_in_turns(contenders), None, False))
             return
         t_ref, once = best_time(fn_ref)
+        if once:  # the reference is too slow for turns
+            t_nb, t_nb2 = best_in_turns(contenders)
+        else:
+            t_nb, t_nb2, t_ref = best_in_turns([*contenders, fn_ref])
         if check is not None:
             check(fn_nb(), fn_ref())
         rows.append((label, t_nb, t_nb2, t_ref, once))

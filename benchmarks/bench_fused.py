@@ -7,7 +7,8 @@ Prints, for the head/eye workload (the real recording when
 1. every frame-tree operation, rbm_nb on 1 and on 2 threads
    (``RBM_NB_NUM_THREADS``; the parallel kernels run only for calls of at
    least ``_parallel.MIN_ROWS`` rows) against rigid-body-motion 0.9.3 in
-   the same process (best of 5 after a warm-up call), and for lookups and
+   the same process (best of 5 after a warm-up call, the contenders called
+   in turns), and for lookups and
    transforms also the fused kernels called directly on the engine
    (``_engine.fused``, 1 thread);
 2. that table in three malloc regimes, each in its own process:
@@ -48,9 +49,11 @@ warnings.filterwarnings("ignore")
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_core import (  # noqa: E402
+    best_in_turns,
     build_workload,
     continuous_rotations,
     datetimes,
+    on_threads,
     threads,
 )
 
@@ -220,12 +223,15 @@ def table(reference: bool) -> None:
         f" {'x ref 1T':>8} {'x ref 2T':>8} {'x ref fused':>11}"
     )
     for label, call, fused in ops:
-        with threads(1):
-            t_1 = best(lambda call=call: call(rbm))
-            t_fu = best(fused) if fused is not None else None
-        with threads(2):
-            t_2 = best(lambda call=call: call(rbm))
-        t_ref = best(lambda call=call: call(ref)) if ref is not None else None
+        # in turns, so that the machine's load changes hit every contender alike
+        fns = [on_threads(1, lambda call=call: call(rbm))]
+        fns += [on_threads(2, lambda call=call: call(rbm))]
+        fns += [on_threads(1, fused)] if fused is not None else []
+        fns += [lambda call=call: call(ref)] if ref is not None else []
+        got = best_in_turns(fns)
+        t_1, t_2 = got[0], got[1]
+        t_fu = got[2] if fused is not None else None
+        t_ref = got[-1] if ref is not None else None
         cells = [f"{t_1 * 1e3:7.2f}ms", f"{t_2 * 1e3:7.2f}ms"]
         cells += [f"{t_fu * 1e3:7.2f}ms" if t_fu else " " * 9]
         if t_ref is not None:

@@ -817,7 +817,8 @@ def _fill_pieces(plan, sizes, lo, hi, last, pieces_wanted):
 
     ``lo``, ``hi``, ``last`` (SLOTS, chunks) as from :func:`_segments_read`;
     ``sizes`` (SLOTS,) the tables' lengths. Per slot the chunks' ranges are
-    merged into disjoint intervals (q, 3): (slot, start, stop), then cut
+    merged into disjoint intervals (q, 3): (slot, start, stop), ranges less
+    than RUN rows apart into one, then cut
     into about ``pieces_wanted`` pieces (p, 3) of at least RUN rows overall.
     """
     nch = lo.shape[1]
@@ -851,7 +852,11 @@ def _fill_pieces(plan, sizes, lo, hi, last, pieces_wanted):
         for q in range(1, k):
             sa = starts[order[q]]
             sb = stops[order[q]]
-            if sa <= b:
+            if sa <= b + RUN:
+                # a short hole (segments no target falls in, such as a
+                # dropout of the target clock) is filled too, as the serial
+                # kernels' runs would: the interval stays whole, and later
+                # calls inside it find every row they read computed
                 b = max(b, sb)
             else:
                 merged[count, 0] = slot

@@ -38,10 +38,10 @@ own : int64 (SLOTS,)
 gaps : float64 (SLOTS,)
     Each slot's ``max_gap`` (inf: none): target times strictly inside a
     longer gap between two samples get NaN.
-slot k : ``times_k`` (n,), ``t_k`` (n, 3), ``r_k`` (n, 4), ``p_k`` (n, 4), ``c_k`` (n, 20)
+slot k : ``times_k`` (n,), ``t_k`` (n, 3), ``r_k`` (n, 4), ``p_k`` (n, 4), ``c_k`` (n, 15)
     A moving frame's sample times, translations, rotations free of sign
     flips (``unflip``), rotations as stored (with their signs) and its
-    squad table (:func:`squad_table`; any (1, 20) array for a frame that is
+    squad table (:func:`squad_table`; any (1, 15) array for a frame that is
     not interpolated by squad). Unused slots get any arrays of these types.
 
 Signs: squad runs on the sign-continuous rotations; an interpolated value
@@ -112,11 +112,15 @@ SQUAD = 1
 CONSTANT = 2
 HELD = 3
 
-# squad table columns: a (0:4), b (4:8), the great circles r[i] -> r[i+1]
-# (8:13: θ, u) and a[i] -> b[i] (13:18), the non-unit flag (18) and whether
-# the row has been computed (19: 1.0 yes, 0.0 not yet)
-TABLE_COLUMNS = 20
-_DONE = 19
+# squad table columns: a (0:4); for a segment of unit quaternions the great
+# circles r[i] -> r[i+1] (4:9: θ, u) and a[i] -> b[i] (9:14), else b (4:8)
+# (squad falls back to slerps, which need b and nothing else); the state
+# (14: 0.0 not computed yet, 1.0 unit, 2.0 not unit). 15 float64 per sample:
+# b of unit segments is not kept, as the great circle a -> b replaces it.
+TABLE_COLUMNS = 15
+_DONE = 14
+_UNIT = 1.0
+_NOT_UNIT = 2.0
 
 # below this, exp(w) is 1 + w and log(1 + d) is d - d²/2 to within an ulp
 _TINY = 2.0**-27
@@ -265,10 +269,6 @@ def _table_row(r, t, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz):
     c[i, 1] = ax
     c[i, 2] = ay
     c[i, 3] = az
-    c[i, 4] = bw
-    c[i, 5] = bx
-    c[i, 6] = by
-    c[i, 7] = bz
     unit = (
         _is_unit(r[i, 0], r[i, 1], r[i, 2], r[i, 3])
         and _is_unit(ew, ex, ey, ez)
@@ -277,23 +277,26 @@ def _table_row(r, t, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz):
     )
     if unit:
         g = _geodesic_table(r[i, 0], r[i, 1], r[i, 2], r[i, 3], ew, ex, ey, ez)
-        c[i, 8] = g[0]
-        c[i, 9] = g[1]
-        c[i, 10] = g[2]
-        c[i, 11] = g[3]
-        c[i, 12] = g[4]
+        c[i, 4] = g[0]
+        c[i, 5] = g[1]
+        c[i, 6] = g[2]
+        c[i, 7] = g[3]
+        c[i, 8] = g[4]
         g = _geodesic_table(aw, ax, ay, az, bw, bx, by, bz)
-        c[i, 13] = g[0]
-        c[i, 14] = g[1]
-        c[i, 15] = g[2]
-        c[i, 16] = g[3]
-        c[i, 17] = g[4]
-        c[i, 18] = 0.0
+        c[i, 9] = g[0]
+        c[i, 10] = g[1]
+        c[i, 11] = g[2]
+        c[i, 12] = g[3]
+        c[i, 13] = g[4]
+        c[i, _DONE] = _UNIT
     else:
-        for k in range(8, 18):
+        c[i, 4] = bw
+        c[i, 5] = bx
+        c[i, 6] = by
+        c[i, 7] = bz
+        for k in range(8, 14):
             c[i, k] = 0.0
-        c[i, 18] = 1.0
-    c[i, _DONE] = 1.0
+        c[i, _DONE] = _NOT_UNIT
 
 
 @helper
@@ -327,7 +330,7 @@ def squad_table(r, t):
 
     Returns
     -------
-    ndarray, shape (n, 20)
+    ndarray, shape (n, 15)
         See the module docstring; every row computed.
     """
     n = r.shape[0]
@@ -532,18 +535,18 @@ def _chain_block(
                             n - 1
                         ]
                     tau = (t - times[g]) / dt
-                    if c[g, 18] == 0.0:
-                        sn, cs = _sincos(tau * c[g, 8])
-                        s1w = cs * r[g, 0] + sn * c[g, 9]
-                        s1x = cs * r[g, 1] + sn * c[g, 10]
-                        s1y = cs * r[g, 2] + sn * c[g, 11]
-                        s1z = cs * r[g, 3] + sn * c[g, 12]
-                        sn, cs = _sincos(tau * c[g, 13])
-                        s2w = cs * c[g, 0] + sn * c[g, 14]
-                        s2x = cs * c[g, 1] + sn * c[g, 15]
-                        s2y = cs * c[g, 2] + sn * c[g, 16]
-                        s2z = cs * c[g, 3] + sn * c[g, 17]
-                    else:
+                    if c[g, _DONE] == _UNIT:
+                        sn, cs = _sincos(tau * c[g, 4])
+                        s1w = cs * r[g, 0] + sn * c[g, 5]
+                        s1x = cs * r[g, 1] + sn * c[g, 6]
+                        s1y = cs * r[g, 2] + sn * c[g, 7]
+                        s1z = cs * r[g, 3] + sn * c[g, 8]
+                        sn, cs = _sincos(tau * c[g, 9])
+                        s2w = cs * c[g, 0] + sn * c[g, 10]
+                        s2x = cs * c[g, 1] + sn * c[g, 11]
+                        s2y = cs * c[g, 2] + sn * c[g, 12]
+                        s2z = cs * c[g, 3] + sn * c[g, 13]
+                    else:  # not unit: b in columns 4:8
                         if g < n - 1:
                             nw, nx, ny, nz = (
                                 r[g + 1, 0],

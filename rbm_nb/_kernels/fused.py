@@ -761,7 +761,7 @@ def transform_chain(
 # of segments its squad evaluations use (a merge walk with the serial
 # kernel's rules: the frame's own sample times and rows inside a gap read
 # no table row); the ranges merged into disjoint intervals; and their
-# missing rows filled in pieces, one thread per piece. The twins then only
+# missing rows filled in pieces shared out to the threads. The twins then only
 # read the tables. The engine calls both under its table lock, as one
 # launch (rbm_nb._engine.fused).
 
@@ -911,7 +911,7 @@ def prefill_chain(
 ):  # fmt: skip
     """Compute every squad table row a call at these target times will read.
 
-    On all threads (``prange``); afterwards :func:`lookup_chain_parallel`
+    The rows on all threads (``prange``); afterwards :func:`lookup_chain_parallel`
     and :func:`transform_chain_parallel` at the same targets only read the
     tables. Arguments as for :func:`lookup_chain`.
 
@@ -930,7 +930,10 @@ def prefill_chain(
     hi = np.full((SLOTS, nch), -1, dtype=np.int64)
     last = np.zeros((SLOTS, nch), dtype=np.bool_)
     sizes = np.array([times0.shape[0], times1.shape[0], times2.shape[0]])
-    for ch in prange(nch):
+    # the walk is a few ns per row: serial, as every parallel region costs a
+    # wait for the other threads (milliseconds when another process keeps
+    # their core busy), and a first call already has two (fill, evaluate)
+    for ch in range(nch):
         for s in range(plan.shape[0] // 3):
             if plan[3 * s] != SQUAD:
                 continue

@@ -57,16 +57,20 @@ def best_in_turns(fns, repeats=REPEATS):
     """Best time of each function, called in turns after one warm-up call each.
 
     On a shared machine the load changes during a run; calling the
-    contenders in turns exposes them to it alike, so their ratios hold.
+    contenders in turns exposes them to it alike, so their ratios hold. The
+    order rotates from one turn to the next: a call right after another
+    contender's (whose freed memory glibc may have returned to the system)
+    pays page faults that a call after itself does not.
     """
     for fn in fns:
         fn()
-    times = [[] for _ in fns]
-    for _ in range(repeats):
-        for fn, out in zip(fns, times, strict=True):
+    times: list[list[float]] = [[] for _ in fns]
+    for turn in range(repeats):
+        for k in range(len(fns)):
+            i = (k + turn) % len(fns)
             t0 = time.perf_counter()
-            fn()
-            out.append(time.perf_counter() - t0)
+            fns[i]()
+            times[i].append(time.perf_counter() - t0)
     return [min(t) for t in times]
 
 

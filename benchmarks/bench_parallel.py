@@ -42,9 +42,11 @@ SIZES += [500_000, 1_000_000, 10_000_000]
 
 def alternating(fn_a, fn_b, repeats):
     """Best times of fn_a and fn_b, called in turns (load changes hit both alike)."""
-    a, b = [], []
-    for _ in range(repeats):
-        for fn, out in ((fn_a, a), (fn_b, b)):
+    a: list[float] = []
+    b: list[float] = []
+    pairs = [(fn_a, a), (fn_b, b)]
+    for turn in range(repeats):
+        for fn, out in pairs[turn % 2 :] + pairs[: turn % 2]:  # the order alternates
             t0 = time.perf_counter()
             fn()
             out.append(time.perf_counter() - t0)

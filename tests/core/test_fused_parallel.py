@@ -447,3 +447,16 @@ def test_rows_known_to_be_filled_need_no_second_prefill(monkeypatch):
     assert len(prefills) == 2 and table.filled == [(5000, 7001)]
     monkeypatch.setenv(_parallel.ENV_THREADS, "1")
     np.testing.assert_array_equal(transform(50.0, 60.0), first)  # serial reads too
+
+
+def test_filled_intervals_merge_and_cover():
+    table = _fused._Table(100)
+    table.add(10, 20)
+    table.add(30, 40)
+    assert table.filled == [(10, 20), (30, 40)]
+    assert table.covers(12, 20) and not table.covers(15, 35)
+    table.add(20, 30)  # touching both: one interval
+    assert table.filled == [(10, 40)] and table.covers(15, 35)
+    table.add(0, 5)
+    assert table.filled == [(0, 5), (10, 40)]
+    assert not table.covers(0, 12)

@@ -44,7 +44,9 @@ __all__ = ["MIN_ROWS", "ENV_THREADS", "threads", "launch"]
 #:   1e4, 1.8-1.85x from 2e4 to 1e6 (and 1.86x at 1e7);
 #: * another process keeping one core busy: every parallel call waits ~5-7 ms
 #:   for the second core (its worker thread must be scheduled), so 2 threads
-#:   lose up to 5x below 2e4 rows and win 1.5-1.6x from 5e4.
+#:   lose up to 5x below 2e4 rows and win 1.5-1.6x from 5e4. That is numba's
+#:   ``omp`` layer (GNU libgomp, chosen here by default); ``workqueue`` waited
+#:   ~0.1 ms under the same load.
 #:
 #: 50,000 rows (a ~6 ms serial call; the head/eye recording's lookups have
 #: 76k-113k) keeps most of the gain on a quiet machine and loses little on

@@ -778,7 +778,7 @@ def _chunk_bounds(m, chunks):
     """Row bounds (k+1,) of at most ``chunks`` chunks of whole blocks over m rows."""
     blocks = (m + BLOCK - 1) // BLOCK
     k = max(min(chunks, blocks), 1)
-    per = (blocks + k - 1) // k
+    per = max((blocks + k - 1) // k, 1)
     k = max((blocks + per - 1) // per, 1)
     bounds = np.empty(k + 1, dtype=np.int64)
     for c in range(k + 1):

@@ -460,3 +460,16 @@ def test_filled_intervals_merge_and_cover():
     table.add(0, 5)
     assert table.filled == [(0, 5), (10, 40)]
     assert not table.covers(0, 12)
+
+
+def test_no_rows_and_fewer_rows_than_a_block():
+    rng = np.random.default_rng(12)
+    _tree(rng, "float", False)
+    _, target, plan, own = _engine_lookup("c", "world")
+    args = _kernel_args(plan, np.zeros(kf.SLOTS), [False] * len(own))
+    for m in (0, 1, kf.BLOCK - 1, kf.BLOCK + 1):
+        times = np.ascontiguousarray(target.track.base[:m])
+        _forget_tables()
+        serial = kf.lookup_chain(*(*args, times, False))[:2]
+        kf.prefill_chain(*(*args, times))
+        _identical(serial, kf.lookup_chain_parallel(*(*args, times, False))[:2])

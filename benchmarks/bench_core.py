@@ -5,8 +5,11 @@ The workload has the shape of the example head/eye recording:
     world -> t265/world (static rotation) -> head (66,629 samples, 200 Hz)
           -> scene_cam (static) -> left_eye (113,373 samples, offset times)
 
-Each operation is timed as the best of 5 after a warm-up call (a reference
-call that takes more than 60 s is timed once). Also reported: the first call
+Each operation is timed as the best of 5 after a warm-up call, the
+contenders called in turns (a reference call that takes more than 60 s is
+timed once), rbm_nb twice in the same run:
+on one thread and on two (``RBM_NB_NUM_THREADS=1`` and ``=2``; its parallel
+kernels run only for calls of at least ``rbm_nb._parallel.MIN_ROWS`` rows). Also reported: the first call
 in a fresh process with an empty and with a warm numba cache, and the time
 ``import rbm_nb`` takes.
 
@@ -17,6 +20,7 @@ Run:  .venv/bin/python benchmarks/bench_core.py  [--quick]
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import statistics
 import subprocess
@@ -47,6 +51,56 @@ def best_time(fn, repeats=REPEATS):
         fn()
         times.append(time.perf_counter() - t0)
     return min(times), False
+
+
+def best_in_turns(fns, repeats=REPEATS):
+    """Best time of each function, called in turns after one warm-up call each.
+
+    On a shared machine the load changes during a run; calling the
+    contenders in turns exposes them to it alike, so their ratios hold. The
+    order rotates from one turn to the next: a call right after another
+    contender's (whose freed memory glibc may have returned to the system)
+    pays page faults that a call after itself does not.
+    """
+    for fn in fns:
+        fn()
+    times: list[list[float]] = [[] for _ in fns]
+    for turn in range(repeats):
+        for k in range(len(fns)):
+            i = (k + turn) % len(fns)
+            t0 = time.perf_counter()
+            fns[i]()
+            times[i].append(time.perf_counter() - t0)
+    return [min(t) for t in times]
+
+
+def on_threads(n, fn):
+    """fn, called with rbm_nb's kernels on at most n threads."""
+
+    def call():
+        with threads(n):
+            return fn()
+
+    return call
+
+
+@contextlib.contextmanager
+def threads(n):
+    """rbm_nb's kernels on at most n threads inside the block (RBM_NB_NUM_THREADS).
+
+    rbm_nb reads the variable at each call; its parallel kernels run only for
+    calls of at least ``rbm_nb._parallel.MIN_ROWS`` rows.
+    """
+    name = "RBM_NB_NUM_THREADS"
+    before = os.environ.get(name)
+    os.environ[name] = str(n)
+    try:
+        yield
+    finally:
+        if before is None:
+            del os.environ[name]
+        else:
+            os.environ[name] = before
 
 
 def continuous_rotations(rng, n, step):
@@ -213,14 +267,18 @@ def main():
     rows = []
 
     def compare(label, fn_nb, fn_ref, check=None):
-        t_nb, _ = best_time(fn_nb)
+        contenders = [on_threads(1, fn_nb), on_threads(2, fn_nb)]
         if fn_ref is None:
-            rows.append((label, t_nb, None, False))
+            rows.append((label, *best_in_turns(contenders), None, False))
             return
         t_ref, once = best_time(fn_ref)
+        if once:  # the reference is too slow for turns
+            t_nb, t_nb2 = best_in_turns(contenders)
+        else:
+            t_nb, t_nb2, t_ref = best_in_turns([*contenders, fn_ref])
         if check is not None:
             check(fn_nb(), fn_ref())
-        rows.append((label, t_nb, t_ref, once))
+        rows.append((label, t_nb, t_nb2, t_ref, once))
 
     def same(a, b):
         a = a if isinstance(a, tuple) else (a,)
@@ -301,7 +359,7 @@ def main():
     plain(q1m[:10], v1m[:10])
     t_plain, _ = best_time(lambda: plain(q1m, v1m))
     np.testing.assert_allclose(plain(q1m, v1m), rbm.rotate_vectors(q1m, v1m), atol=1e-9)
-    rows.append(("rotate_vectors 1M: plain numba loop", t_plain, None, False))
+    rows.append(("rotate_vectors 1M: plain numba loop", t_plain, t_plain, None, False))
 
     moving, discrete, t_points, points = build_big(rng)
     for module in (rbm, ref):
@@ -337,15 +395,23 @@ def main():
     )
 
     print()
-    print(f"{'operation':<52} {'rbm_nb':>11} {'rbm 0.9.3':>11} {'speed-up':>9}")
-    print("-" * 86)
-    for label, t_nb, t_ref, once in rows:
+    print(
+        f"load average {os.getloadavg()}; best of {REPEATS}; 1T/2T: RBM_NB_NUM_THREADS"
+    )
+    print(
+        f"{'operation':<52} {'rbm_nb 1T':>11} {'rbm_nb 2T':>11} {'rbm 0.9.3':>11}"
+        f" {'x ref 1T':>9} {'x ref 2T':>9}"
+    )
+    print("-" * 108)
+    for label, t_nb, t_nb2, t_ref, once in rows:
+        cells = f"{label:<52} {t_nb * 1e3:>9.2f}ms {t_nb2 * 1e3:>9.2f}ms"
         if t_ref is None:
-            print(f"{label:<52} {t_nb * 1e3:>9.2f}ms {'':>11} {'':>9}")
+            print(cells)
         else:
             mark = "*" if once else " "
             print(
-                f"{label:<52} {t_nb * 1e3:>9.2f}ms {t_ref * 1e3:>9.1f}ms{mark}{t_ref / t_nb:>8.0f}x"
+                f"{cells} {t_ref * 1e3:>9.1f}ms{mark}{t_ref / t_nb:>8.0f}x"
+                f"{t_ref / t_nb2:>9.0f}x"
             )
     ratio = rows[[r[0] for r in rows].index("rotate_vectors 1M")][1] / t_plain
     print(f"{'rotate_vectors 1M: rbm_nb / plain numba loop':<52} {ratio:>10.2f}x")

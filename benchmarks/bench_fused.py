@@ -4,18 +4,21 @@ Prints, for the head/eye workload (the real recording when
 ``RBM_NB_DATA_DIR`` points at it, else the synthetic one of
 ``bench_core.py``):
 
-1. every frame-tree operation, rbm_nb against rigid-body-motion 0.9.3 in
-   the same process (best of 5 after a warm-up call), and for lookups and
+1. every frame-tree operation, rbm_nb on 1 and on 2 threads
+   (``RBM_NB_NUM_THREADS``; the parallel kernels run only for calls of at
+   least ``_parallel.MIN_ROWS`` rows) against rigid-body-motion 0.9.3 in
+   the same process (best of 5 after a warm-up call, the contenders called
+   in turns), and for lookups and
    transforms also the fused kernels called directly on the engine
-   (``_engine.fused``, whether or not the public path uses them yet);
+   (``_engine.fused``, 1 thread);
 2. that table in three malloc regimes, each in its own process:
    ``MALLOC_MMAP_THRESHOLD_=131072`` (big arrays are fresh mmap pages on
    every call: first-touch page faults), a large threshold (freed memory is
    reused: no page faults) and glibc's default (adaptive);
 3. the scaling of a lookup from 1e3 to 1e6 samples (1e7 with ``--big``) in
-   ns/sample, public API and fused engine beside a fused *floor* kernel
-   (below: exactly the arithmetic of the lookup, for this one chain, with
-   precomputed coefficients and nothing else);
+   ns/sample on 1 and 2 threads, beside a fused *floor* kernel and its
+   ``prange`` twin (below: exactly the arithmetic of the lookup, for this
+   one chain, with precomputed coefficients and nothing else);
 4. peak temporary memory of a lookup, a transform and an angular-velocity
    lookup against their output size (tracemalloc traces numpy's
    allocations);
@@ -45,7 +48,14 @@ import numpy as np
 warnings.filterwarnings("ignore")
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_core import build_workload, continuous_rotations, datetimes  # noqa: E402
+from bench_core import (  # noqa: E402
+    best_in_turns,
+    build_workload,
+    continuous_rotations,
+    datetimes,
+    on_threads,
+    threads,
+)
 
 REPEATS = 5
 REGIMES = {
@@ -207,17 +217,29 @@ def table(reference: bool) -> None:
          lambda m: m.qinterp(head_rot, head_ts, inside), None),
         ("rotate_vectors 1M", lambda m: m.rotate_vectors(q1m, v1m), None),
     ]  # fmt: skip
-    print(f"{name}; best of {REPEATS}")
+    print(f"{name}; best of {REPEATS}; rbm_nb on 1 and 2 threads (RBM_NB_NUM_THREADS)")
     print(
-        f"{'operation':<46} {'rbm_nb':>9} {'fused':>9} {'rbm 0.9.3':>10} {'x ref':>7} {'x ref fused':>11}"
+        f"{'operation':<46} {'rbm 1T':>9} {'rbm 2T':>9} {'fused':>9} {'rbm 0.9.3':>10}"
+        f" {'x ref 1T':>8} {'x ref 2T':>8} {'x ref fused':>11}"
     )
     for label, call, fused in ops:
-        t_nb = best(lambda call=call: call(rbm))
-        t_fu = best(fused) if fused is not None else None
-        t_ref = best(lambda call=call: call(ref)) if ref is not None else None
-        cells = [f"{t_nb * 1e3:7.2f}ms", f"{t_fu * 1e3:7.2f}ms" if t_fu else " " * 9]
+        # in turns, so that the machine's load changes hit every contender alike
+        fns = [on_threads(1, lambda call=call: call(rbm))]
+        fns += [on_threads(2, lambda call=call: call(rbm))]
+        fns += [on_threads(1, fused)] if fused is not None else []
+        fns += [lambda call=call: call(ref)] if ref is not None else []
+        got = best_in_turns(fns)
+        t_1, t_2 = got[0], got[1]
+        t_fu = got[2] if fused is not None else None
+        t_ref = got[-1] if ref is not None else None
+        cells = [f"{t_1 * 1e3:7.2f}ms", f"{t_2 * 1e3:7.2f}ms"]
+        cells += [f"{t_fu * 1e3:7.2f}ms" if t_fu else " " * 9]
         if t_ref is not None:
-            cells += [f"{t_ref * 1e3:8.1f}ms", f"{t_ref / t_nb:6.1f}x"]
+            cells += [
+                f"{t_ref * 1e3:8.1f}ms",
+                f"{t_ref / t_1:7.1f}x",
+                f"{t_ref / t_2:7.1f}x",
+            ]
             cells += [f"{t_ref / t_fu:10.1f}x" if t_fu else ""]
         print(f"{label:<46} " + " ".join(cells), flush=True)
 
@@ -236,15 +258,19 @@ def regimes(args) -> None:
 # ---------------------------------------------------------------------------
 
 
-def floor_kernel():
-    """A fused kernel with exactly a lookup's arithmetic, for one chain shape.
+def floor_kernels():
+    """Fused kernels with exactly a lookup's arithmetic, for one chain shape.
 
     world <- S0 <- head (moving, squad) <- S1 <- eye (moving, evaluated at
     its own sample times): per output row, one merge-walk step in the head's
     times, one squad evaluation with precomputed coefficients, the eye's
     sample and two static transforms, composed like ``chain_step``.
+
+    Returns the serial kernel and its two-thread twin (``prange`` over
+    contiguous chunks of rows, each starting its walk by a binary search):
+    the floors of rbm_nb's serial and parallel lookups.
     """
-    from numba import njit
+    from numba import njit, prange
 
     from rbm_nb._kernels.quaternion import (
         _qmul1,
@@ -261,13 +287,11 @@ def floor_kernel():
         return x + tx, y + ty, z + tz, w, rx, ry, rz
 
     @njit(cache=False, nogil=True)
-    def lookup(s1, s0, h_times, h_t, h_r, a, b, seg, e_t, e_r, target, off):
-        m = target.shape[0]
+    def rows(s1, s0, h_times, h_t, h_r, a, b, seg, e_t, e_r, target, off, j0, j1,
+             t_out, r_out):  # fmt: skip
         n = h_times.shape[0]
-        t_out = np.empty((m, 3))
-        r_out = np.empty((m, 4))
-        i = 0
-        for j in range(m):
+        i = max(np.searchsorted(h_times, target[j0] + off, side="right") - 1, 0)
+        for j in range(j0, j1):
             # eye sample j, then the static scene_cam -> head
             x, y, z, w, qx, qy, qz = compose(
                 e_t[j, 0], e_t[j, 1], e_t[j, 2], e_r[j, 0], e_r[j, 1], e_r[j, 2], e_r[j, 3],
@@ -317,9 +341,62 @@ def floor_kernel():
             r_out[j, 1] = qx
             r_out[j, 2] = qy
             r_out[j, 3] = qz
+
+    @njit(cache=False, nogil=True)
+    def lookup(s1, s0, h_times, h_t, h_r, a, b, seg, e_t, e_r, target, off):
+        m = target.shape[0]
+        t_out = np.empty((m, 3))
+        r_out = np.empty((m, 4))
+        rows(s1, s0, h_times, h_t, h_r, a, b, seg, e_t, e_r, target, off, 0, m,
+             t_out, r_out)  # fmt: skip
         return t_out, r_out
 
-    return lookup
+    @njit(cache=False, nogil=True, parallel=True)
+    def lookup_parallel(s1, s0, h_times, h_t, h_r, a, b, seg, e_t, e_r, target, off):
+        m = target.shape[0]
+        t_out = np.empty((m, 3))
+        r_out = np.empty((m, 4))
+        chunks = 64
+        per = (m + chunks - 1) // chunks
+        for c in prange(chunks):
+            j0 = min(c * per, m)
+            j1 = min(j0 + per, m)
+            if j1 > j0:
+                rows(s1, s0, h_times, h_t, h_r, a, b, seg, e_t, e_r, target, off,
+                     j0, j1, t_out, r_out)  # fmt: skip
+        return t_out, r_out
+
+    return lookup, lookup_parallel
+
+
+def floor_kernel():
+    """The serial floor kernel (:func:`floor_kernels`)."""
+    return floor_kernels()[0]
+
+
+def floor_args(n):
+    """Register the scaling chain with n eye samples; the floor kernels' arguments.
+
+    Also checks that the floor computes rbm_nb's lookup (to 1e-9).
+    """
+    import rbm_nb as rbm
+    from rbm_nb import frames as F
+    from rbm_nb._engine import chain as C
+
+    register(rbm, scaling_frames(n))
+    head, eye = F.resolve_frame("head"), F.resolve_frame("left_eye")
+    s0 = C.static_transform(F.resolve_frame("t265/world"), F.resolve_frame("world"))
+    s1 = C.static_transform(F.resolve_frame("scene_cam"), head)
+    s0 = np.concatenate([s0[0][0], s0[1][0]])
+    s1 = np.concatenate([s1[0][0], s1[1][0]])
+    a, b, seg = head._squad_coefficients()
+    target = C.match([eye, head])
+    lo = int(np.searchsorted(eye._track.key, target.track.key[0]))
+    e_t = eye._t[lo : lo + len(target)]
+    e_r = eye._rotation_public[lo : lo + len(target)]
+    off = (target.track.origin - head._track.origin) / 1e9
+    return (s1, s0, head._track.base, head._t, head._r, a, b, seg, e_t, e_r,
+            target.track.base, off)  # fmt: skip
 
 
 def scaling_frames(n):
@@ -344,39 +421,41 @@ def scaling_frames(n):
 
 
 def scaling(sizes) -> None:
-    import rbm_nb as rbm
-    from rbm_nb import frames as F
-    from rbm_nb._engine import chain as C
+    import numba
 
-    floor = floor_kernel()
-    print("\n== scaling: lookup_transform left_eye->world, ns per output row")
+    import rbm_nb as rbm
+
+    floor, floor_2 = floor_kernels()
     print(
-        f"{'samples':>9} {'rbm_nb':>9} {'fused':>9} {'floor':>9} {'rbm/floor':>10} {'fused/floor':>12}"
+        "\n== scaling: lookup_transform left_eye->world, ns per output row, "
+        "1 and 2 threads (rbm_nb: RBM_NB_NUM_THREADS; its parallel twins run "
+        "from _parallel.MIN_ROWS rows)"
+    )
+    print(
+        f"{'samples':>9} {'rbm 1T':>8} {'rbm 2T':>8} {'floor 1T':>9} {'floor 2T':>9}"
+        f" {'rbm/floor 1T':>13} {'rbm/floor 2T':>13}"
     )
     for n in sizes:
-        register(rbm, scaling_frames(n))
-        head, eye = F.resolve_frame("head"), F.resolve_frame("left_eye")
-        s0 = C.static_transform(F.resolve_frame("t265/world"), F.resolve_frame("world"))
-        s1 = C.static_transform(F.resolve_frame("scene_cam"), head)
-        s0 = np.concatenate([s0[0][0], s0[1][0]])
-        s1 = np.concatenate([s1[0][0], s1[1][0]])
-        a, b, seg = head._squad_coefficients()
-        target = C.match([eye, head])
-        lo = int(np.searchsorted(eye._track.key, target.track.key[0]))
-        e_t = eye._t[lo : lo + len(target)]
-        e_r = eye._rotation_public[lo : lo + len(target)]
-        off = (target.track.origin - head._track.origin) / 1e9
-        args = (s1, s0, head._track.base, head._t, head._r, a, b, seg, e_t, e_r,
-                target.track.base, off)  # fmt: skip
+        args = floor_args(n)
         t_f, r_f = floor(*args)
         t_p, r_p = rbm.lookup_transform("left_eye", "world")[:2]
         assert np.abs(t_f - t_p).max() < 1e-9 and np.abs(r_f - r_p).max() < 1e-9
+        m = len(args[-2])
         reps = 5 if n <= 1_000_000 else 3
-        m = len(target)
-        t_nb = best(lambda: rbm.lookup_transform("left_eye", "world"), reps) / m * 1e9
-        t_fu = best(lambda: fused_direct("left_eye", "world"), reps) / m * 1e9
-        t_fl = best(lambda args=args: floor(*args), reps) / m * 1e9
-        print(f"{n:>9.0e} {t_nb:>8.1f}  {t_fu:>8.1f}  {t_fl:>8.1f}  {t_nb / t_fl:>9.2f}x {t_fu / t_fl:>11.2f}x", flush=True)  # fmt: skip
+        with threads(1):
+            t_1 = best(lambda: rbm.lookup_transform("left_eye", "world"), reps)
+        with threads(2):
+            t_2 = best(lambda: rbm.lookup_transform("left_eye", "world"), reps)
+        f_1 = best(lambda args=args: floor(*args), reps)
+        numba.set_num_threads(2)
+        f_2 = best(lambda args=args: floor_2(*args), reps)
+        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+        ns = [x / m * 1e9 for x in (t_1, t_2, f_1, f_2)]
+        print(
+            f"{n:>9.0e} {ns[0]:>8.1f} {ns[1]:>8.1f} {ns[2]:>9.1f} {ns[3]:>9.1f}"
+            f" {t_1 / f_1:>12.2f}x {t_2 / f_2:>12.2f}x",
+            flush=True,
+        )
 
 
 # ---------------------------------------------------------------------------
@@ -432,18 +511,21 @@ def registration() -> None:
     print("\n== registration and first use")
     t_reg = best(lambda: register(rbm, frames))
     print(f"register the 5 head/eye frames: {t_reg * 1e3:.2f} ms (best of {REPEATS})")
-    firsts, steadies = [], []
-    for _ in range(3):
-        register(rbm, frames)
-        t0 = time.perf_counter()
-        rbm.lookup_transform("left_eye", "world")
-        firsts.append(time.perf_counter() - t0)
-        steadies.append(best(lambda: rbm.lookup_transform("left_eye", "world")))
-    first, steady = min(firsts), min(steadies)
-    print(
-        f"lookup_transform left_eye->world: first after registration {first * 1e3:.2f} ms, "
-        f"steady {steady * 1e3:.2f} ms, ratio {first / steady:.2f}x"
-    )
+    for n_threads in (1, 2):
+        firsts, steadies = [], []
+        with threads(n_threads):
+            for _ in range(5):
+                register(rbm, frames)
+                t0 = time.perf_counter()
+                rbm.lookup_transform("left_eye", "world")
+                firsts.append(time.perf_counter() - t0)
+                steadies.append(best(lambda: rbm.lookup_transform("left_eye", "world")))
+        first, steady = min(firsts), min(steadies)
+        print(
+            f"lookup_transform left_eye->world, {n_threads}T: first after registration "
+            f"{first * 1e3:.2f} ms, steady {steady * 1e3:.2f} ms, ratio {first / steady:.2f}x "
+            "(best of 5 each)"
+        )
     rbm.clear_registry()
     rbm.register_frame("world")
     rbm.register_frame(

@@ -36,7 +36,21 @@ from typing import Any, Final, TypeVar
 
 __all__ = ["MIN_ROWS", "ENV_THREADS", "threads", "launch"]
 
-#: Rows from which a parallel twin is used (benchmarks/bench_parallel.py).
+#: Rows from which a parallel twin is used. benchmarks/bench_parallel.py on
+#: the 2-core machine (fused lookup_transform and transform_points of the
+#: head/eye chain, 2 threads against 1, best of 7 in turns):
+#:
+#: * other processes mostly idle: 1.25-1.35x at 1e3-5e3 rows, 1.7-1.8x at
+#:   1e4, 1.8-1.85x from 2e4 to 1e6 (and 1.86x at 1e7);
+#: * another process keeping one core busy: every parallel call waits ~5-7 ms
+#:   for the second core (its worker thread must be scheduled), so 2 threads
+#:   lose up to 5x below 2e4 rows and win 1.5-1.6x from 5e4. That is numba's
+#:   ``omp`` layer (GNU libgomp, chosen here by default); ``workqueue`` waited
+#:   ~0.1 ms under the same load.
+#:
+#: 50,000 rows (a ~6 ms serial call; the head/eye recording's lookups have
+#: 76k-113k) keeps most of the gain on a quiet machine and loses little on
+#: a busy one.
 MIN_ROWS: Final = 50_000
 
 #: Environment variable capping the threads of rbm_nb's parallel kernels.

@@ -12,9 +12,15 @@ but their result. Chains with more moving frames return None from
 Squad tables are per frame, created empty (zeroed pages cost nothing until
 touched) and filled by the kernels one segment at a time, as segments are
 first used: registering a frame computes no coefficients, and a lookup
-computes only those of the segments it needs. While a table is incomplete,
-calls that may fill it hold one lock, so that two threads never write the
-same row; complete tables are only read, without the lock.
+computes only those of the segments it needs. Calls that may fill a table
+hold one lock, so that two threads never write the same row; calls that
+read only rows known to be computed (a complete table, or intervals a
+parallel call's prefill reported) run without it, as nothing writes those
+rows again.
+
+Long calls run the kernels' ``prange`` twins (``rbm_nb._parallel.launch``
+decides); the twins only read the tables, so a parallel call that may fill
+first runs ``prefill_chain`` (under the lock, in the same launch).
 """
 
 from __future__ import annotations
@@ -24,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import _parallel
 from .._kernels import fused as kf
 
 __all__ = ["Plan", "forget", "plan", "lookup", "transform"]
@@ -35,19 +42,43 @@ _EMPTY_R = np.array([[1.0, 0.0, 0.0, 0.0]])
 _EMPTY_TABLE = np.ones((1, kf.TABLE_COLUMNS))
 _EMPTY_SLOT = (_EMPTY_TIMES, _EMPTY_T, _EMPTY_R, _EMPTY_R, _EMPTY_TABLE)
 _TABLE_LOCK = threading.Lock()
+# prefill_chain takes the chain kernels' arguments up to the target times
+_PREFILL_ARGS = 5 + 5 * kf.SLOTS + 1
 
 
 class _Table:
-    """A frame's squad table and whether every row of it is computed."""
+    """A frame's squad table, and what is known to be computed in it.
 
-    __slots__ = ("rows", "complete")
+    ``complete``: every row. ``filled``: disjoint, sorted row intervals
+    ``(start, stop)`` all computed (recorded by parallel calls, whose prefill
+    reports them): a call that reads only rows inside them needs no lock.
+    """
+
+    __slots__ = ("rows", "complete", "filled")
 
     def __init__(self, n: int) -> None:
         self.rows = np.zeros((n, kf.TABLE_COLUMNS))
         self.complete = False
+        self.filled: list[tuple[int, int]] = []
 
     def update(self) -> None:
         self.complete = bool(self.rows[:, kf.TABLE_COLUMNS - 1].all())
+
+    def add(self, start: int, stop: int) -> None:
+        """Record rows start:stop as computed (merged with touching intervals)."""
+        kept = []
+        for a, b in self.filled:
+            if b < start or a > stop:
+                kept.append((a, b))
+            else:
+                start, stop = min(a, start), max(b, stop)
+        kept.append((start, stop))
+        # a new list, bound at once: readers without the lock see old or new
+        self.filled = sorted(kept)
+
+    def covers(self, start: int, stop: int) -> bool:
+        """Whether rows start:stop are known to be computed."""
+        return self.complete or any(a <= start and stop <= b for a, b in self.filled)
 
 
 def _table(frame) -> _Table:
@@ -100,8 +131,33 @@ class Plan:
                 out[k] = frame.max_gap
         return out
 
-    def incomplete(self) -> list[_Table]:
-        return [t for t in self.tables if t is not None and not t.complete]
+    def unfilled(self, base: np.ndarray, offsets: np.ndarray, own) -> list[_Table]:
+        """The tables a call at target times ``base`` may have to fill.
+
+        A table is left out when the rows the call can read are known to be
+        computed: the segments between those of the earliest and the latest
+        target time (and the last row, which squad reads before the first
+        sample). A frame evaluated at its own sample times on the same time
+        origin reads no row at all.
+        """
+        out: list[_Table] = []
+        span = None
+        for k, (frame, table) in enumerate(zip(self.frames, self.tables, strict=True)):
+            if table is None or table.complete:
+                continue
+            if own[k] and offsets[k] == 0.0:
+                continue  # every target time is one of its sample times exactly
+            if span is None:
+                if len(base) == 0:
+                    return out
+                span = float(base.min()), float(base.max())
+            times = frame._track.base
+            n = len(times)
+            lo, hi = np.searchsorted(times, np.add(span, offsets[k]), side="right") - 1
+            inside = hi < 0 or table.covers(max(int(lo), 0), int(hi) + 1)
+            if not (inside and (lo >= 0 or table.covers(n - 1, n))):
+                out.append(table)
+        return out
 
 
 # plans per chain, keyed by the identity of the chain's step list (the
@@ -170,14 +226,36 @@ def _build(steps, compose) -> Plan | None:
     return Plan(steps, np.array(code, dtype=np.int64), stat, frames, kinds, tables)
 
 
-def _run(p: Plan, call):
-    incomplete = p.incomplete()
-    if not incomplete:
-        return call()
+def _run(p: Plan, serial, parallel, args: tuple[Any, ...], target, offsets, own):
+    """``serial(*args)`` or its prange twin (``_parallel.launch``), tables kept safe.
+
+    A call that reads only table rows known to be computed runs without a
+    lock: nothing writes those rows again. Otherwise it holds the table
+    lock, and a parallel call first fills every table row it will read
+    (``prefill_chain``, also on all threads), so that the twin's threads
+    only read the tables; the intervals it filled are recorded.
+    """
+    base = target.track.base
+    unfilled = p.unfilled(base, offsets, own)
+    if not unfilled:
+        return _parallel.launch(serial, parallel, len(base), *args)
+    reports = []
+
+    def prefilled(*a: Any):
+        computed, filled = kf.prefill_chain(*a[:_PREFILL_ARGS])
+        reports.append(filled)
+        *result, late = parallel(*a)
+        return (*result, late + computed)
+
     with _TABLE_LOCK:
-        result = call()
+        result = _parallel.launch(serial, prefilled, len(base), *args)
+        for filled in reports:
+            for slot, start, stop in filled.tolist():
+                table = p.tables[slot]
+                if table is not None:
+                    table.add(start, stop)
         if result[-1]:
-            for table in incomplete:
+            for table in unfilled:
                 table.update()
     return result
 
@@ -196,16 +274,16 @@ def lookup(p: Plan, target, own, rotation_only: bool = False):
     """
     base = target.track.base
 
-    def call():
-        # one tuple: the kernel takes the 3 x 5 slot arrays as separate arguments
-        args: tuple[Any, ...] = (
-            (p.code, p.statics, p.offsets(target), p.gaps(), _own(own))
-            + p.slots()
-            + (base, rotation_only)
-        )
-        return kf.lookup_chain(*args)
-
-    t, r, _ = _run(p, call)
+    offsets = p.offsets(target)
+    # one tuple: the kernels take the 3 x 5 slot arrays as separate arguments
+    args: tuple[Any, ...] = (
+        (p.code, p.statics, offsets, p.gaps(), _own(own))
+        + p.slots()
+        + (base, rotation_only)
+    )
+    t, r, _ = _run(
+        p, kf.lookup_chain, kf.lookup_chain_parallel, args, target, offsets, own
+    )
     return t, r
 
 
@@ -217,13 +295,13 @@ def transform(p: Plan, target, own, data: np.ndarray, kind: str) -> np.ndarray:
     mode = {"points": 0, "vectors": 1, "quaternions": 2}[kind]
     base = target.track.base
 
-    def call():
-        args: tuple[Any, ...] = (
-            (p.code, p.statics, p.offsets(target), p.gaps(), _own(own))
-            + p.slots()
-            + (base, data, mode)
-        )
-        return kf.transform_chain(*args)
-
-    out, _ = _run(p, call)
+    offsets = p.offsets(target)
+    args: tuple[Any, ...] = (
+        (p.code, p.statics, offsets, p.gaps(), _own(own))
+        + p.slots()
+        + (base, data, mode)
+    )
+    out, _ = _run(
+        p, kf.transform_chain, kf.transform_chain_parallel, args, target, offsets, own
+    )
     return out

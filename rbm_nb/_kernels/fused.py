@@ -38,10 +38,10 @@ own : int64 (SLOTS,)
 gaps : float64 (SLOTS,)
     Each slot's ``max_gap`` (inf: none): target times strictly inside a
     longer gap between two samples get NaN.
-slot k : ``times_k`` (n,), ``t_k`` (n, 3), ``r_k`` (n, 4), ``p_k`` (n, 4), ``c_k`` (n, 20)
+slot k : ``times_k`` (n,), ``t_k`` (n, 3), ``r_k`` (n, 4), ``p_k`` (n, 4), ``c_k`` (n, 15)
     A moving frame's sample times, translations, rotations free of sign
     flips (``unflip``), rotations as stored (with their signs) and its
-    squad table (:func:`squad_table`; any (1, 20) array for a frame that is
+    squad table (:func:`squad_table`; any (1, 15) array for a frame that is
     not interpolated by squad). Unused slots get any arrays of these types.
 
 Signs: squad runs on the sign-continuous rotations; an interpolated value
@@ -65,7 +65,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import prange
 
+from .._config import PARALLEL_KERNEL
 from ._jit import F1, F2, F3, I1, B, I, helper, kernel  # noqa: E741
 from .quaternion import (
     _EPS,
@@ -99,6 +101,9 @@ __all__ = [
     "squad_table",
     "lookup_chain",
     "transform_chain",
+    "prefill_chain",
+    "lookup_chain_parallel",
+    "transform_chain_parallel",
 ]
 
 SLOTS = 3
@@ -107,11 +112,18 @@ SQUAD = 1
 CONSTANT = 2
 HELD = 3
 
-# squad table columns: a (0:4), b (4:8), the great circles r[i] -> r[i+1]
-# (8:13: θ, u) and a[i] -> b[i] (13:18), the non-unit flag (18) and whether
-# the row has been computed (19: 1.0 yes, 0.0 not yet)
-TABLE_COLUMNS = 20
-_DONE = 19
+# squad table columns: a (0:4); for a segment of unit quaternions the great
+# circles r[i] -> r[i+1] (4:9: θ, u) and a[i] -> b[i] (9:14), else b (4:8)
+# (squad falls back to slerps, which need b and nothing else); the state
+# (14: 0.0 not computed yet, 1.0 unit, 2.0 not unit). 15 float64 per sample:
+# b of unit segments is not kept, as the great circle a -> b replaces it.
+TABLE_COLUMNS = 15
+_DONE = 14
+_UNIT = 1.0
+_NOT_UNIT = 2.0
+
+# below this, exp(w) is 1 + w and log(1 + d) is d - d²/2 to within an ulp
+_TINY = 2.0**-27
 
 
 # ---------------------------------------------------------------------------
@@ -130,7 +142,9 @@ def _qexp_table(w, x, y, z):
     """
     v2 = x * x + y * y + z * z
     if v2 < SERIES_ANGLE * SERIES_ANGLE and v2 > _EPS * _EPS:
-        e = math.exp(w)
+        # w is a sum of log-norms of unit quaternions (~1e-16): then 1 + w
+        # is exp(w) to within w²/2, below half an ulp of 1
+        e = 1.0 + w if abs(w) < _TINY else math.exp(w)
         c = cos_series(v2)
         k = e * sinc_series(v2)
         return e * c, k * x, k * y, k * z
@@ -150,7 +164,12 @@ def _qlog_table(w, x, y, z):
         inv_w = 1.0 / w
         f = atan_over_x(b2 * inv_w * inv_w) * inv_w
         b = math.sqrt(b2)  # the real part exactly as _qlog1 forms it
-        return math.log(w * w + b * b) / 2.0, f * x, f * y, f * z
+        n2 = w * w + b * b
+        d = n2 - 1.0  # exact (Sterbenz)
+        # a unit quaternion's norm² is 1 to within rounding: then log(1 + d)
+        # is d - d²/2 to within d³/3, far below an ulp of the result
+        half_log = (d - 0.5 * d * d) / 2.0 if abs(d) < _TINY else math.log(n2) / 2.0
+        return half_log, f * x, f * y, f * z
     return _qlog1(w, x, y, z)
 
 
@@ -250,10 +269,6 @@ def _table_row(r, t, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz):
     c[i, 1] = ax
     c[i, 2] = ay
     c[i, 3] = az
-    c[i, 4] = bw
-    c[i, 5] = bx
-    c[i, 6] = by
-    c[i, 7] = bz
     unit = (
         _is_unit(r[i, 0], r[i, 1], r[i, 2], r[i, 3])
         and _is_unit(ew, ex, ey, ez)
@@ -262,23 +277,26 @@ def _table_row(r, t, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz):
     )
     if unit:
         g = _geodesic_table(r[i, 0], r[i, 1], r[i, 2], r[i, 3], ew, ex, ey, ez)
-        c[i, 8] = g[0]
-        c[i, 9] = g[1]
-        c[i, 10] = g[2]
-        c[i, 11] = g[3]
-        c[i, 12] = g[4]
+        c[i, 4] = g[0]
+        c[i, 5] = g[1]
+        c[i, 6] = g[2]
+        c[i, 7] = g[3]
+        c[i, 8] = g[4]
         g = _geodesic_table(aw, ax, ay, az, bw, bx, by, bz)
-        c[i, 13] = g[0]
-        c[i, 14] = g[1]
-        c[i, 15] = g[2]
-        c[i, 16] = g[3]
-        c[i, 17] = g[4]
-        c[i, 18] = 0.0
+        c[i, 9] = g[0]
+        c[i, 10] = g[1]
+        c[i, 11] = g[2]
+        c[i, 12] = g[3]
+        c[i, 13] = g[4]
+        c[i, _DONE] = _UNIT
     else:
-        for k in range(8, 18):
+        c[i, 4] = bw
+        c[i, 5] = bx
+        c[i, 6] = by
+        c[i, 7] = bz
+        for k in range(8, 14):
             c[i, k] = 0.0
-        c[i, 18] = 1.0
-    c[i, _DONE] = 1.0
+        c[i, _DONE] = _NOT_UNIT
 
 
 @helper
@@ -312,7 +330,7 @@ def squad_table(r, t):
 
     Returns
     -------
-    ndarray, shape (n, 20)
+    ndarray, shape (n, 15)
         See the module docstring; every row computed.
     """
     n = r.shape[0]
@@ -332,6 +350,36 @@ def squad_table(r, t):
 # references whenever an array is assigned or handed to a function, and
 # per-row reference counting costs more than the arithmetic.
 BLOCK = 128
+
+
+@helper(inline=True)
+def _seek(times, t, i):
+    """The segment of time t: i with times[i] <= t < times[i+1], -1 before, n-1 after.
+
+    A merge walk: gallops forward from ``i``, the previous row's segment (an
+    earlier time restarts from -1, which makes it a binary search). The
+    answer does not depend on ``i`` (times are strictly increasing), so
+    rows can be evaluated in any order and in chunks.
+    """
+    n = times.shape[0]
+    if i >= 0 and t < times[i]:
+        i = -1
+    lo = i
+    step = 1
+    hi = i + 1
+    while hi < n and times[hi] <= t:
+        lo = hi
+        hi = i + 1 + step
+        step *= 2
+    if hi > n:
+        hi = n
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if times[mid] <= t:
+            lo = mid
+        else:
+            hi = mid
+    return lo
 
 
 @helper
@@ -430,27 +478,7 @@ def _chain_block(
                     tx, ty, tz = tr[0, 0], tr[0, 1], tr[0, 2]
                 qw, qx, qy, qz = rp[0, 0], rp[0, 1], rp[0, 2], rp[0, 3]
             else:
-                # merge walk: gallop forward from the previous row's segment
-                # (an earlier time restarts from the beginning): i with
-                # times[i] <= t < times[i+1], -1 before, n-1 at/after the end
-                if i >= 0 and t < times[i]:
-                    i = -1
-                lo = i
-                step = 1
-                hi = i + 1
-                while hi < n and times[hi] <= t:
-                    lo = hi
-                    hi = i + 1 + step
-                    step *= 2
-                if hi > n:
-                    hi = n
-                while hi - lo > 1:
-                    mid = (lo + hi) // 2
-                    if times[mid] <= t:
-                        lo = mid
-                    else:
-                        hi = mid
-                i = lo
+                i = _seek(times, t, i)
                 k = i if i >= 0 else 0
                 if kind == HELD:
                     if not rotation_only:
@@ -507,18 +535,18 @@ def _chain_block(
                             n - 1
                         ]
                     tau = (t - times[g]) / dt
-                    if c[g, 18] == 0.0:
-                        sn, cs = _sincos(tau * c[g, 8])
-                        s1w = cs * r[g, 0] + sn * c[g, 9]
-                        s1x = cs * r[g, 1] + sn * c[g, 10]
-                        s1y = cs * r[g, 2] + sn * c[g, 11]
-                        s1z = cs * r[g, 3] + sn * c[g, 12]
-                        sn, cs = _sincos(tau * c[g, 13])
-                        s2w = cs * c[g, 0] + sn * c[g, 14]
-                        s2x = cs * c[g, 1] + sn * c[g, 15]
-                        s2y = cs * c[g, 2] + sn * c[g, 16]
-                        s2z = cs * c[g, 3] + sn * c[g, 17]
-                    else:
+                    if c[g, _DONE] == _UNIT:
+                        sn, cs = _sincos(tau * c[g, 4])
+                        s1w = cs * r[g, 0] + sn * c[g, 5]
+                        s1x = cs * r[g, 1] + sn * c[g, 6]
+                        s1y = cs * r[g, 2] + sn * c[g, 7]
+                        s1z = cs * r[g, 3] + sn * c[g, 8]
+                        sn, cs = _sincos(tau * c[g, 9])
+                        s2w = cs * c[g, 0] + sn * c[g, 10]
+                        s2x = cs * c[g, 1] + sn * c[g, 11]
+                        s2y = cs * c[g, 2] + sn * c[g, 12]
+                        s2z = cs * c[g, 3] + sn * c[g, 13]
+                    else:  # not unit: b in columns 4:8
                         if g < n - 1:
                             nw, nx, ny, nz = (
                                 r[g + 1, 0],
@@ -580,6 +608,57 @@ def _chain_block(
     return computed
 
 
+@helper
+def _store_lookup(acc, t_out, r_out, j0, j1, rotation_only):
+    """Rows j0:j1 of a lookup's result from the block's transforms in ``acc``."""
+    for b in range(j1 - j0):
+        j = j0 + b
+        if not rotation_only:
+            t_out[j, 0] = acc[b, 0]
+            t_out[j, 1] = acc[b, 1]
+            t_out[j, 2] = acc[b, 2]
+        r_out[j, 0] = acc[b, 3]
+        r_out[j, 1] = acc[b, 4]
+        r_out[j, 2] = acc[b, 5]
+        r_out[j, 3] = acc[b, 6]
+
+
+@helper
+def _apply_block(acc, data, out, j0, j1, mode):
+    """Rows j0:j1 of ``data`` carried by the block's transforms in ``acc``.
+
+    ``data`` (m|1, k, c) as for :func:`transform_chain`.
+    """
+    k = data.shape[1]
+    s_d = 1 if data.shape[0] > 1 else 0
+    for b in range(j1 - j0):
+        j = j0 + b
+        row = j * s_d
+        w, qx, qy, qz = acc[b, 3], acc[b, 4], acc[b, 5], acc[b, 6]
+        if mode == 2:
+            for e in range(k):
+                ow, ox, oy, oz = _qmul1(
+                    w, qx, qy, qz, data[row, e, 0], data[row, e, 1],
+                    data[row, e, 2], data[row, e, 3],
+                )  # fmt: skip
+                out[j, e, 0] = ow
+                out[j, e, 1] = ox
+                out[j, e, 2] = oy
+                out[j, e, 3] = oz
+        else:
+            for e in range(k):
+                px, py, pz = _rotate1(
+                    w, qx, qy, qz, data[row, e, 0], data[row, e, 1], data[row, e, 2]
+                )
+                if mode == 0:
+                    px += acc[b, 0]
+                    py += acc[b, 1]
+                    pz += acc[b, 2]
+                out[j, e, 0] = px
+                out[j, e, 1] = py
+                out[j, e, 2] = pz
+
+
 _SLOT_TYPES = (F1, F2, F2, F2, F2) * SLOTS
 
 
@@ -619,16 +698,7 @@ def lookup_chain(
             times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
             target, j0, j1, acc, cur, rotation_only,
         )  # fmt: skip
-        for b in range(j1 - j0):
-            j = j0 + b
-            if not rotation_only:
-                t_out[j, 0] = acc[b, 0]
-                t_out[j, 1] = acc[b, 1]
-                t_out[j, 2] = acc[b, 2]
-            r_out[j, 0] = acc[b, 3]
-            r_out[j, 1] = acc[b, 4]
-            r_out[j, 2] = acc[b, 5]
-            r_out[j, 3] = acc[b, 6]
+        _store_lookup(acc, t_out, r_out, j0, j1, rotation_only)
     return t_out, r_out, computed
 
 
@@ -659,10 +729,7 @@ def transform_chain(
         Rows of the squad tables computed by this call.
     """
     m = target.shape[0]
-    k = data.shape[1]
-    nc = data.shape[2]
-    s_d = 1 if data.shape[0] > 1 else 0
-    out = np.empty((m, k, nc))
+    out = np.empty((m, data.shape[1], data.shape[2]))
     rotation_only = mode != 0
     acc = np.empty((BLOCK, 7))
     cur = np.full(SLOTS, -1, dtype=np.int64)
@@ -674,30 +741,295 @@ def transform_chain(
             times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
             target, j0, j1, acc, cur, rotation_only,
         )  # fmt: skip
-        for b in range(j1 - j0):
-            j = j0 + b
-            row = j * s_d
-            w, qx, qy, qz = acc[b, 3], acc[b, 4], acc[b, 5], acc[b, 6]
-            if mode == 2:
-                for e in range(k):
-                    ow, ox, oy, oz = _qmul1(
-                        w, qx, qy, qz, data[row, e, 0], data[row, e, 1],
-                        data[row, e, 2], data[row, e, 3],
-                    )  # fmt: skip
-                    out[j, e, 0] = ow
-                    out[j, e, 1] = ox
-                    out[j, e, 2] = oy
-                    out[j, e, 3] = oz
+        _apply_block(acc, data, out, j0, j1, mode)
+    return out, computed
+
+
+# ---------------------------------------------------------------------------
+# both cores: prange twins
+# ---------------------------------------------------------------------------
+
+# The twins split the output rows into contiguous chunks (:data:`CHUNKS`,
+# each a whole number of blocks), each with its own scratch and its own
+# segment cursors: a chunk starts its walk from -1, a binary search, and
+# the segment of a time does not depend on where the walk started, so every
+# row gets exactly the arithmetic of the serial kernel (bit for bit).
+#
+# The lazily filled squad tables must never be written by two threads, nor
+# read half-written. So before a twin runs, :func:`prefill_chain` computes
+# every table row the call will read: per chunk of target rows, the range
+# of segments its squad evaluations use (a merge walk with the serial
+# kernel's rules: the frame's own sample times and rows inside a gap read
+# no table row); the ranges merged into disjoint intervals; and their
+# missing rows filled in pieces shared out to the threads. The twins then only
+# read the tables. The engine calls both under its table lock, as one
+# launch (rbm_nb._engine.fused).
+
+# Chunks per call: enough for many threads (numba hands each thread an equal
+# run of consecutive chunks). A fixed number rather than one per thread:
+# ``numba.get_num_threads()`` inside a kernel makes it uncacheable (numba
+# reaches the threading layer through a ctypes pointer), and a chunk costs
+# only one binary search per moving frame.
+CHUNKS = 128
+
+
+@helper
+def _chunk_bounds(m, chunks):
+    """Row bounds (k+1,) of at most ``chunks`` chunks of whole blocks over m rows."""
+    blocks = (m + BLOCK - 1) // BLOCK
+    k = max(min(chunks, blocks), 1)
+    per = max((blocks + k - 1) // k, 1)
+    k = max((blocks + per - 1) // per, 1)
+    bounds = np.empty(k + 1, dtype=np.int64)
+    for c in range(k + 1):
+        bounds[c] = min(c * per * BLOCK, m)
+    return bounds
+
+
+@helper
+def _segments_read(times, own, gap, off, target, j0, j1):
+    """The squad table rows read by rows j0:j1, as (lo, hi, last).
+
+    Rows lo..hi (lo > hi: none), and whether row n-1 is read by a target
+    before the first sample. The rules of ``_chain_block``: a sample time
+    of the frame's own times and a time inside a gap read no row.
+    """
+    n = times.shape[0]
+    lo = n
+    hi = -1
+    last = False
+    i = -1
+    for j in range(j0, j1):
+        t = target[j] + off
+        i = _seek(times, t, i)
+        if own != 0 and i >= 0 and t == times[i]:
+            continue
+        if 0 <= i < n - 1 and t != times[i] and times[i + 1] - times[i] > gap:
+            continue
+        if i < 0:
+            last = True
+        else:
+            lo = min(lo, i)
+            hi = max(hi, i)
+    return lo, hi, last
+
+
+@helper
+def _fill_pieces(plan, sizes, lo, hi, last, pieces_wanted):
+    """The table rows to fill: disjoint intervals, and pieces of them.
+
+    ``lo``, ``hi``, ``last`` (SLOTS, chunks) as from :func:`_segments_read`;
+    ``sizes`` (SLOTS,) the tables' lengths. Per slot the chunks' ranges are
+    merged into disjoint intervals (q, 3): (slot, start, stop), ranges less
+    than RUN rows apart into one, then cut
+    into about ``pieces_wanted`` pieces (p, 3) of at least RUN rows overall.
+    """
+    nch = lo.shape[1]
+    starts = np.empty(nch + 1, dtype=np.int64)
+    stops = np.empty(nch + 1, dtype=np.int64)
+    # merged intervals of every slot, (slot, start, stop)
+    merged = np.empty((SLOTS * (nch + 1), 3), dtype=np.int64)
+    count = 0
+    total = 0
+    for s in range(plan.shape[0] // 3):
+        if plan[3 * s] != SQUAD:
+            continue
+        slot = plan[3 * s + 1]
+        k = 0
+        need_last = False
+        for ch in range(nch):
+            if lo[slot, ch] <= hi[slot, ch]:
+                starts[k] = lo[slot, ch]
+                stops[k] = hi[slot, ch] + 1
+                k += 1
+            need_last = need_last or last[slot, ch]
+        if need_last:
+            starts[k] = sizes[slot] - 1
+            stops[k] = sizes[slot]
+            k += 1
+        if k == 0:
+            continue
+        order = np.argsort(starts[:k])
+        a = starts[order[0]]
+        b = stops[order[0]]
+        for q in range(1, k):
+            sa = starts[order[q]]
+            sb = stops[order[q]]
+            if sa <= b + RUN:
+                # a short hole (segments no target falls in, such as a
+                # dropout of the target clock) is filled too, as the serial
+                # kernels' runs would: the interval stays whole, and later
+                # calls inside it find every row they read computed
+                b = max(b, sb)
             else:
-                for e in range(k):
-                    px, py, pz = _rotate1(
-                        w, qx, qy, qz, data[row, e, 0], data[row, e, 1], data[row, e, 2]
-                    )
-                    if mode == 0:
-                        px += acc[b, 0]
-                        py += acc[b, 1]
-                        pz += acc[b, 2]
-                    out[j, e, 0] = px
-                    out[j, e, 1] = py
-                    out[j, e, 2] = pz
+                merged[count, 0] = slot
+                merged[count, 1] = a
+                merged[count, 2] = b
+                count += 1
+                total += b - a
+                a, b = sa, sb
+        merged[count, 0] = slot
+        merged[count, 1] = a
+        merged[count, 2] = b
+        count += 1
+        total += b - a
+    size = max(RUN, (total + pieces_wanted - 1) // max(pieces_wanted, 1))
+    n_pieces = 0
+    for q in range(count):
+        n_pieces += (merged[q, 2] - merged[q, 1] + size - 1) // size
+    pieces = np.empty((n_pieces, 3), dtype=np.int64)
+    p = 0
+    for q in range(count):
+        for a in range(merged[q, 1], merged[q, 2], size):
+            pieces[p, 0] = merged[q, 0]
+            pieces[p, 1] = a
+            pieces[p, 2] = min(a + size, merged[q, 2])
+            p += 1
+    return merged[:count], pieces
+
+
+@helper
+def _fill_range(r, t, c, a, b):
+    """Compute the missing rows of ``c[a:b]`` (nothing outside). Returns their number."""
+    done = 0
+    i = a
+    while i < b:
+        if c[i, _DONE] != 0.0:
+            i += 1
+            continue
+        k = _fill_run(r, t, c, i, b - i)
+        done += k
+        i += k
+    return done
+
+
+@kernel(I1, F2, F1, F1, I1, *_SLOT_TYPES, F1, options=PARALLEL_KERNEL)
+def prefill_chain(
+    plan, statics, offsets, gaps, own,
+    times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
+    target,
+):  # fmt: skip
+    """Compute every squad table row a call at these target times will read.
+
+    The rows on all threads (``prange``); afterwards :func:`lookup_chain_parallel`
+    and :func:`transform_chain_parallel` at the same targets only read the
+    tables. Arguments as for :func:`lookup_chain`.
+
+    Returns
+    -------
+    computed : int
+        Rows of the squad tables computed.
+    filled : ndarray, shape (q, 3)
+        Disjoint intervals (slot, start, stop) of table rows that are all
+        computed now: every row the call reads is in one of them.
+    """
+    m = target.shape[0]
+    bounds = _chunk_bounds(m, CHUNKS)
+    nch = bounds.shape[0] - 1
+    lo = np.zeros((SLOTS, nch), dtype=np.int64)
+    hi = np.full((SLOTS, nch), -1, dtype=np.int64)
+    last = np.zeros((SLOTS, nch), dtype=np.bool_)
+    sizes = np.array([times0.shape[0], times1.shape[0], times2.shape[0]])
+    # the walk is a few ns per row: serial, as every parallel region costs a
+    # wait for the other threads (milliseconds when another process keeps
+    # their core busy), and a first call already has two (fill, evaluate)
+    for ch in range(nch):
+        for s in range(plan.shape[0] // 3):
+            if plan[3 * s] != SQUAD:
+                continue
+            slot = plan[3 * s + 1]
+            if slot == 0:
+                times = times0
+            elif slot == 1:
+                times = times1
+            else:
+                times = times2
+            a, b, before = _segments_read(
+                times, own[slot], gaps[slot], offsets[slot],
+                target, bounds[ch], bounds[ch + 1],
+            )  # fmt: skip
+            lo[slot, ch] = a
+            hi[slot, ch] = b
+            last[slot, ch] = before
+    filled, pieces = _fill_pieces(plan, sizes, lo, hi, last, CHUNKS)
+    computed = 0
+    for p in prange(pieces.shape[0]):
+        slot = pieces[p, 0]
+        if slot == 0:
+            computed += _fill_range(r0, times0, c0, pieces[p, 1], pieces[p, 2])
+        elif slot == 1:
+            computed += _fill_range(r1, times1, c1, pieces[p, 1], pieces[p, 2])
+        else:
+            computed += _fill_range(r2, times2, c2, pieces[p, 1], pieces[p, 2])
+    return computed, filled
+
+
+@kernel(I1, F2, F1, F1, I1, *_SLOT_TYPES, F1, B, options=PARALLEL_KERNEL)
+def lookup_chain_parallel(
+    plan, statics, offsets, gaps, own,
+    times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
+    target, rotation_only,
+):  # fmt: skip
+    """:func:`lookup_chain` on all threads, with tables prefilled.
+
+    Call :func:`prefill_chain` first (unless the tables are complete): rows
+    are evaluated in parallel chunks that only read the tables. Returns
+    what :func:`lookup_chain` returns, bit for bit (``computed`` is 0 when
+    the tables were prefilled).
+    """
+    m = target.shape[0]
+    t_out = np.empty((0 if rotation_only else m, 3))
+    r_out = np.empty((m, 4))
+    bounds = _chunk_bounds(m, CHUNKS)
+    nch = bounds.shape[0] - 1
+    # each chunk's scratch and segment cursors, allocated outside the prange
+    acc = np.empty((nch, BLOCK, 7))
+    cur = np.full((nch, SLOTS), -1, dtype=np.int64)
+    computed = 0
+    for ch in prange(nch):
+        acc_c = acc[ch]
+        cur_c = cur[ch]
+        for j0 in range(bounds[ch], bounds[ch + 1], BLOCK):
+            j1 = min(j0 + BLOCK, bounds[ch + 1])
+            computed += _chain_block(
+                plan, statics, offsets, gaps, own,
+                times0, t0, r0, p0, c0, times1, t1, r1, p1, c1,
+                times2, t2, r2, p2, c2,
+                target, j0, j1, acc_c, cur_c, rotation_only,
+            )  # fmt: skip
+            _store_lookup(acc_c, t_out, r_out, j0, j1, rotation_only)
+    return t_out, r_out, computed
+
+
+@kernel(I1, F2, F1, F1, I1, *_SLOT_TYPES, F1, F3, I, options=PARALLEL_KERNEL)
+def transform_chain_parallel(
+    plan, statics, offsets, gaps, own,
+    times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
+    target, data, mode,
+):  # fmt: skip
+    """:func:`transform_chain` on all threads, with tables prefilled.
+
+    As :func:`lookup_chain_parallel`; returns what :func:`transform_chain`
+    returns, bit for bit.
+    """
+    m = target.shape[0]
+    out = np.empty((m, data.shape[1], data.shape[2]))
+    rotation_only = mode != 0
+    bounds = _chunk_bounds(m, CHUNKS)
+    nch = bounds.shape[0] - 1
+    acc = np.empty((nch, BLOCK, 7))
+    cur = np.full((nch, SLOTS), -1, dtype=np.int64)
+    computed = 0
+    for ch in prange(nch):
+        acc_c = acc[ch]
+        cur_c = cur[ch]
+        for j0 in range(bounds[ch], bounds[ch + 1], BLOCK):
+            j1 = min(j0 + BLOCK, bounds[ch + 1])
+            computed += _chain_block(
+                plan, statics, offsets, gaps, own,
+                times0, t0, r0, p0, c0, times1, t1, r1, p1, c1,
+                times2, t2, r2, p2, c2,
+                target, j0, j1, acc_c, cur_c, rotation_only,
+            )  # fmt: skip
+            _apply_block(acc_c, data, out, j0, j1, mode)
     return out, computed

@@ -240,8 +240,11 @@ def test_unsorted_target_times_give_the_same_rows():
 
 def test_squad_table_equals_the_engine_coefficients():
     rng = np.random.default_rng(5)
-    for n in (2, 3, 4, 50):
+    not_unit = 0
+    for n in (2, 3, 4, 50, 50):
         r = kq.unflip(_rotations(rng, n, 0.3))
+        if n == 50 and not_unit == 0:  # some samples far from unit norm
+            r[rng.choice(n, 5, replace=False)] *= 1.5
         t = np.cumsum(rng.uniform(0.5, 1.5, n))
         a, b = kq.squad_coefficients(r, t)
         seg = kq.squad_segments(r, a, b)
@@ -249,10 +252,13 @@ def test_squad_table_equals_the_engine_coefficients():
         # exp/log by short series for small arcs: within a few ulp of 1
         tol = 4 * np.finfo(float).eps
         np.testing.assert_allclose(table[:, 0:4], a, rtol=0, atol=tol)
-        np.testing.assert_allclose(table[:, 4:8], b, rtol=0, atol=tol)
-        np.testing.assert_allclose(table[:, 8:18], seg[:, 0:10], rtol=0, atol=tol)
-        np.testing.assert_array_equal(table[:, 18], seg[:, 10])
-        assert (table[:, 19] == 1.0).all()
+        # unit segments keep the great circles, the others b
+        unit = seg[:, 10] == 0.0
+        np.testing.assert_array_equal(table[:, 14], np.where(unit, 1.0, 2.0))
+        np.testing.assert_allclose(table[unit, 4:14], seg[unit, 0:10], rtol=0, atol=tol)
+        np.testing.assert_allclose(table[~unit, 4:8], b[~unit], rtol=0, atol=tol)
+        not_unit += int((~unit).sum())
+    assert not_unit > 0
 
 
 def test_series_exp_and_log_are_within_4_ulp_of_libm():
@@ -279,6 +285,29 @@ def test_series_exp_and_log_are_within_4_ulp_of_libm():
         np.testing.assert_array_max_ulp(got[1:], want[1:], maxulp=4)
 
 
+def test_exp_and_log_near_the_identity_are_within_4_ulp_of_libm():
+    """exp(w) of w ~ 1e-16 (sums of log-norms) and log of unit quaternions' norms."""
+    rng = np.random.default_rng(18)
+    n = 5_000
+    w = rng.normal(scale=1e-16, size=n) * 10.0 ** rng.uniform(-3, 8, n)  # to ~1e-8
+    v = rng.normal(size=(n, 3))
+    v *= (10.0 ** rng.uniform(-9, -1.1, n) / np.linalg.norm(v, axis=1))[:, None]
+    for i in range(n):
+        got = np.array(kf._qexp_table(w[i], *v[i]))
+        want = np.array(kq._qexp1(w[i], *v[i]))
+        np.testing.assert_array_max_ulp(got, want, maxulp=4)
+    # unit quaternions of small arcs: norm² within rounding of 1
+    q = np.column_stack([np.ones(n), v * 0.4])
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    tiny = 0
+    for i in range(n):
+        got = np.array(kf._qlog_table(*q[i]))
+        want = np.array(kq._qlog1(*q[i]))
+        np.testing.assert_array_max_ulp(got, want, maxulp=4)
+        tiny += got[0] != 0.0
+    assert tiny > n // 10  # norms not exactly 1 took the short series
+
+
 def test_squad_rows_are_computed_only_for_the_segments_used():
     """Rows come in runs from the first segment used (each log computed once)."""
     rng = np.random.default_rng(11)
@@ -299,7 +328,7 @@ def test_squad_rows_are_computed_only_for_the_segments_used():
     assert not table.rows.any()  # nothing computed by registering
 
     def computed():
-        return set(np.flatnonzero(table.rows[:, 19]).tolist())
+        return set(np.flatnonzero(table.rows[:, kf.TABLE_COLUMNS - 1]).tolist())
 
     _fused.lookup(plan, _chain.Target(m._track), [True])  # its own times
     assert computed() == set()
@@ -497,7 +526,7 @@ def test_threads_filling_one_table_get_the_same_results():
         th.start()
     for th in threads:
         th.join()
-    assert len(results) == 4 and table.rows[:, 19].any()
+    assert len(results) == 4 and table.rows[:, kf.TABLE_COLUMNS - 1].any()
     for t, r in results:
         _close(t, t_ref)
         _close(r, r_ref)

@@ -13,6 +13,9 @@ rbm_nb's analyses, and one makes it less private than it should be:
   of freed heap.
 * the statistical profiler samples every worker's stack every 10 ms;
   it is switched off.
+* each worker would run rbm_nb's parallel kernels on every core while the
+  other workers do the same; :func:`local_cluster` gives each worker its
+  share of the cores (``RBM_NB_NUM_THREADS``, see :mod:`rbm_nb._parallel`).
 * the scheduler and workers listen on local ports; :func:`local_cluster`
   secures them with a throw-away TLS certificate (distributed's
   ``Security.temporary()``), so only this process's clients can connect:
@@ -25,7 +28,10 @@ in its dask configuration).
 
 from __future__ import annotations
 
+import os
 from typing import Any, Final
+
+from .._parallel import ENV_THREADS
 
 __all__ = ["WORKER_SETTINGS", "local_cluster"]
 
@@ -101,6 +107,14 @@ def local_cluster(
     }
     if n_workers is not None:
         options["n_workers"] = n_workers
+    cores = os.cpu_count() or 1
+    workers = (
+        n_workers if n_workers is not None else max(1, cores // threads_per_worker)
+    )
+    # the cores left to each of a worker's threads for rbm_nb's parallel kernels
+    share = max(1, cores // (workers * threads_per_worker))
+    settings = dict(WORKER_SETTINGS)
+    settings["distributed.nanny.environ." + ENV_THREADS] = str(share)
     if secure:
         try:
             from distributed.security import Security
@@ -114,5 +128,5 @@ def local_cluster(
         options["protocol"] = "tls://"
     options.update(kwargs)
     # the nanny reads pre-spawn-environ when it starts each worker
-    with dask.config.set(WORKER_SETTINGS):
+    with dask.config.set(settings):
         return LocalCluster(**options)

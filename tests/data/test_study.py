@@ -215,6 +215,8 @@ def test_the_study_cluster_is_private_and_tuned(cluster):
     wanted = {
         k[len(prefix) :]: v for k, v in WORKER_SETTINGS.items() if k.startswith(prefix)
     }
+    # and its share of the cores for rbm_nb's parallel kernels (2 workers)
+    wanted["RBM_NB_NUM_THREADS"] = str(max(1, (os.cpu_count() or 1) // 2))
     for env in cluster.run(lambda: dict(os.environ)).values():
         assert {k: env.get(k) for k in wanted} == wanted
     profiling = cluster.run(

@@ -4,8 +4,9 @@ The velocity estimators follow rigid-body-motion: finite differences on
 (possibly uneven) timestamps, optional suppression of outliers found by
 second-order differences (the rejected samples are re-interpolated), and an
 optional 7th-order Butterworth low-pass applied forwards and backwards
-(``scipy.signal.filtfilt``) with ``cutoff`` as a fraction of the Nyquist
-frequency. Linear velocity uses numpy's gradient scheme; angular velocity uses
+(the reference's ``filtfilt`` filter, run in second-order sections, which
+keeps its rounding noise ~100x lower) with ``cutoff`` as a fraction of the
+Nyquist frequency. Linear velocity uses numpy's gradient scheme; angular velocity uses
 the derivative of the not-a-knot cubic spline through the quaternions
 ("quaternion" mode) or the gradient of the rotation vectors
 ("rotation_vector" mode).

@@ -3,9 +3,9 @@
 The scheme follows rigid-body-motion: finite differences on (possibly
 uneven) timestamps, optional suppression of outliers found by second-order
 differences (the rejected samples are re-interpolated), and an optional
-7th-order Butterworth low-pass applied forwards and backwards
-(``scipy.signal.filtfilt``) with ``cutoff`` as a fraction of the Nyquist
-frequency. Linear velocity uses numpy's gradient scheme; angular velocity
+7th-order Butterworth low-pass applied forwards and backwards with
+``cutoff`` as a fraction of the Nyquist frequency (the reference's
+``filtfilt`` filter, run in second-order sections: ``sosfiltfilt``). Linear velocity uses numpy's gradient scheme; angular velocity
 uses the derivative of the not-a-knot cubic spline through the quaternions
 ("quaternion" mode) or the gradient of the rotation vectors
 ("rotation_vector" mode).
@@ -122,12 +122,17 @@ def _lowpass(values: np.ndarray, cutoff: float) -> np.ndarray:
     too short for the filter become NaN, instead of the NaN spreading over
     the whole series.
     """
-    from scipy.signal import butter, filtfilt
+    from scipy.signal import butter, sosfiltfilt
 
-    b, a = butter(_BUTTER_ORDER, cutoff)
+    # second-order sections, not the transfer function (b, a) that
+    # rigid-body-motion hands to filtfilt: the same filter, but a 7th-order
+    # polynomial's rounding noise (~1e-10, depending on where a pass starts)
+    # drops to that of each section, so a chunked series filters like the
+    # whole one (rbm_nb._dask); both pad by the same 3 * 8 samples
+    sos = butter(_BUTTER_ORDER, cutoff, output="sos")
     finite = np.isfinite(values)
     if finite.all():
-        return filtfilt(b, a, values, axis=0)
+        return sosfiltfilt(sos, values, axis=0)
     flat = values.reshape(values.shape[0], -1)
     out = np.full(flat.shape, np.nan)
     for col in range(flat.shape[1]):
@@ -135,7 +140,7 @@ def _lowpass(values: np.ndarray, cutoff: float) -> np.ndarray:
         edges = np.flatnonzero(np.diff(np.concatenate(([0], ok.view(np.int8), [0]))))
         for start, stop in zip(edges[::2], edges[1::2], strict=True):
             if stop - start > _FILTER_PADLEN:
-                out[start:stop, col] = filtfilt(b, a, flat[start:stop, col])
+                out[start:stop, col] = sosfiltfilt(sos, flat[start:stop, col])
     return out.reshape(values.shape)
 
 

@@ -982,12 +982,13 @@ def lookup_chain_parallel(
     r_out = np.empty((m, 4))
     bounds = _chunk_bounds(m, CHUNKS)
     nch = bounds.shape[0] - 1
-    # each chunk's scratch and segment cursors, allocated outside the prange
-    acc = np.empty((nch, BLOCK, 7))
+    # each chunk's segment cursors; its scratch is allocated in the loop,
+    # which numba hoists to once per thread (a (chunks, BLOCK, 7) array
+    # would be half of a transform_points output of the recording)
     cur = np.full((nch, SLOTS), -1, dtype=np.int64)
     computed = 0
     for ch in prange(nch):
-        acc_c = acc[ch]
+        acc_c = np.empty((BLOCK, 7))
         cur_c = cur[ch]
         for j0 in range(bounds[ch], bounds[ch + 1], BLOCK):
             j1 = min(j0 + BLOCK, bounds[ch + 1])
@@ -1017,11 +1018,10 @@ def transform_chain_parallel(
     rotation_only = mode != 0
     bounds = _chunk_bounds(m, CHUNKS)
     nch = bounds.shape[0] - 1
-    acc = np.empty((nch, BLOCK, 7))
     cur = np.full((nch, SLOTS), -1, dtype=np.int64)
     computed = 0
     for ch in prange(nch):
-        acc_c = acc[ch]
+        acc_c = np.empty((BLOCK, 7))
         cur_c = cur[ch]
         for j0 in range(bounds[ch], bounds[ch + 1], BLOCK):
             j1 = min(j0 + BLOCK, bounds[ch + 1])

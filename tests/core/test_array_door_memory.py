@@ -50,7 +50,17 @@ def moving_tree():
     rbm.clear_registry()
 
 
-def test_transform_points_makes_no_timestamps_nobody_asked_for(moving_tree):
+@pytest.mark.parametrize("threads", [1, 2])
+def test_transform_points_makes_no_timestamps_nobody_asked_for(
+    moving_tree, threads, monkeypatch
+):
+    # on 2 threads the parallel twin runs (and its scratch must stay per thread)
+    from rbm_nb import _parallel
+
+    if threads > 1 and _parallel.threads() < 2:
+        pytest.skip("numba has a single thread here")
+    monkeypatch.setenv(_parallel.ENV_THREADS, str(threads))
+    monkeypatch.setattr(_parallel, "MIN_ROWS", 0)
     ts = moving_tree
     points = np.random.default_rng(1).normal(size=(len(ts) - 7, 3))
     at = ts[3:-4]

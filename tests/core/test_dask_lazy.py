@@ -29,6 +29,34 @@ class ComputeCounter(Callback):
         self.count += 1
 
 
+def assert_lazy_until_computed(func, data, name, rtol=1e-11):
+    """func on ``data`` chunked along time builds a graph and computes nothing;
+    computing it once gives the eager result's metadata, chunks and values."""
+    eager = func(data)
+    lazy_in = data.chunk(time=CHUNK)
+    counter = ComputeCounter()
+    with counter:
+        lazy = func(lazy_in)
+    assert counter.count == 0, (
+        f"{name} computed {counter.count} graph(s) before being asked"
+    )
+    assert isinstance(lazy.data, dsa.Array), f"{name} returned {type(lazy.data)}"
+    assert lazy.dims == eager.dims
+    assert list(lazy.coords) == list(eager.coords)
+    assert lazy.attrs == eager.attrs
+    assert not np.isnan(sum(lazy.chunks[0]))
+    if lazy.sizes["time"] == lazy_in.sizes["time"]:
+        assert (
+            lazy.chunks[lazy.dims.index("time")]
+            == lazy_in.chunks[lazy_in.dims.index("time")]
+        )
+    with counter:
+        result = lazy.compute()
+    assert counter.count == 1
+    np.testing.assert_array_equal(result["time"].values, eager["time"].values)
+    np.testing.assert_allclose(result.values, eager.values, rtol=rtol, atol=1e-12)
+
+
 @pytest.fixture(scope="module", params=["synthetic", "real"])
 def recording(request):
     """20 s of the synthetic recording, or the first 60 s of the real one
@@ -123,28 +151,7 @@ CASES = list(_cases(synthetic_head_eye(duration=16.0, seed=0)))
 @pytest.mark.parametrize("name", CASES)
 def test_dataarray_results_are_lazy_and_equal(name, recording, tree):
     data, func = _cases(recording)[name]
-    eager = func(data)
-    lazy_in = data.chunk(time=CHUNK)
-    counter = ComputeCounter()
-    with counter:
-        lazy = func(lazy_in)
-    assert counter.count == 0, (
-        f"{name} computed {counter.count} graph(s) before being asked"
-    )
-    assert isinstance(lazy.data, dsa.Array), f"{name} returned {type(lazy.data)}"
-    assert lazy.dims == eager.dims
-    assert list(lazy.coords) == list(eager.coords)
-    assert lazy.attrs == eager.attrs
-    if lazy.sizes["time"] == lazy_in.sizes["time"]:
-        assert (
-            lazy.chunks[lazy.dims.index("time")]
-            == lazy_in.chunks[lazy_in.dims.index("time")]
-        )
-    with counter:
-        result = lazy.compute()
-    assert counter.count == 1
-    np.testing.assert_array_equal(result["time"].values, eager["time"].values)
-    np.testing.assert_allclose(result.values, eager.values, rtol=1e-11, atol=1e-12)
+    assert_lazy_until_computed(func, data, name)
 
 
 def test_plain_dask_arrays(recording, tree):
@@ -385,20 +392,7 @@ def test_velocity_transforms_are_lazy_and_equal(name, recording, tree):
     func = VELOCITY_CASES[name]
     # the eye's samples, cut at both ends: the frames' ranges crop the result
     v = _eye(recording, "position").isel(time=slice(100, -100))
-    eager = func(v)
-    counter = ComputeCounter()
-    with counter:
-        lazy = func(v.chunk(time=CHUNK))
-    assert counter.count == 0
-    assert isinstance(lazy.data, dsa.Array)
-    assert lazy.dims == eager.dims and lazy.attrs == eager.attrs
-    assert list(lazy.coords) == list(eager.coords)
-    assert not np.isnan(sum(lazy.chunks[0]))
-    with counter:
-        result = lazy.compute()
-    assert counter.count == 1
-    np.testing.assert_array_equal(result.time.values, eager.time.values)
-    np.testing.assert_allclose(result.values, eager.values, rtol=1e-12, atol=1e-12)
+    assert_lazy_until_computed(func, v, name, rtol=1e-12)
 
 
 def test_velocity_transform_of_a_plain_dask_array(recording, tree):

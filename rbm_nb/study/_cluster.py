@@ -84,12 +84,10 @@ def local_cluster(
     ValueError
         If ``n_workers`` or ``threads_per_worker`` is not a positive integer.
     """
-    for name, value in (
-        ("n_workers", n_workers),
-        ("threads_per_worker", threads_per_worker),
-    ):
-        if value is None and name == "n_workers":
-            continue
+    checked: dict[str, Any] = {"threads_per_worker": threads_per_worker}
+    if n_workers is not None:
+        checked["n_workers"] = n_workers
+    for name, value in checked.items():
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
             raise ValueError(f"{name} must be a positive integer, got {value!r}")
     try:

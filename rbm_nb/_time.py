@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from ._door import kernel_array
+from ._kernels.times import seconds_since
 
 __all__ = [
     "Track",
@@ -40,6 +41,7 @@ __all__ = [
 ]
 
 _NS_PER_S = 1e9
+_NAT = np.iinfo(np.int64).min  # NaT as an int64 key
 
 # dtype kind -> name of the kind of time (numeric kinds share one name)
 _KINDS = {"M": "datetime64", "m": "timedelta64"}
@@ -274,12 +276,12 @@ def seconds(timestamps: Any, n: int, name: str = "timestamps") -> np.ndarray:
 def _raw_seconds(values: np.ndarray, origin: int | None) -> tuple[np.ndarray, int]:
     """Seconds from ``origin`` (default: the first value); NaT becomes NaN."""
     unit = "datetime64[ns]" if values.dtype.kind == "M" else "timedelta64[ns]"
-    key = values.astype(unit).view(np.int64)
-    nat = np.isnat(values)
+    key = values.astype(unit, copy=False).view(np.int64).reshape(-1)
+    if not (key.flags.c_contiguous and key.flags.writeable):
+        key = np.array(key, order="C")  # the kernel's one signature
     if origin is None:
-        origin = int(key.reshape(-1)[0]) if key.size and not nat.reshape(-1)[0] else 0
-    out = np.asarray((key - origin) / _NS_PER_S, dtype=np.float64)
-    return np.where(nat, np.nan, out), origin
+        origin = int(key[0]) if key.size and key[0] != _NAT else 0
+    return seconds_since(key, origin).reshape(values.shape), origin
 
 
 def seconds_pair(

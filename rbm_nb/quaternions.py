@@ -455,24 +455,13 @@ def _fast_times(t_in: Any, t_out: Any) -> tuple[np.ndarray, np.ndarray] | None:
         return None
     if t_in.ndim != 1 or t_out.ndim != 1 or t_in.dtype != t_out.dtype:
         return None
-    if t_in.dtype == np.float64:
-        return kernel_array(t_in), kernel_array(t_out)
-    if t_in.dtype == np.dtype("datetime64[ns]") and t_in.size:
-        keys_in = _int64_keys(t_in)
-        keys_out = _int64_keys(t_out)
-        origin = int(keys_in[0])
-        if origin == np.iinfo(np.int64).min:  # NaT: the general path says so
-            return None
-        return _sw.seconds_since(keys_in, origin), _sw.seconds_since(keys_out, origin)
+    if t_in.dtype == np.float64 or (
+        t_in.dtype == np.dtype("datetime64[ns]") and t_in.size
+    ):
+        # a NaT becomes NaN, which the caller's one-pass check sends to the
+        # general path (that names it)
+        return _time.seconds_pair(t_in, t_out)
     return None
-
-
-def _int64_keys(t: np.ndarray) -> np.ndarray:
-    """datetime64[ns] values as a writeable C-contiguous int64 array (the
-    kernels' one signature), a view when they already are."""
-    if t.flags.c_contiguous and t.flags.writeable:
-        return t.view(np.int64)
-    return np.array(t, order="C").view(np.int64)
 
 
 def _qinterp_fast(q: Any, t_in: Any, t_out: Any, axis: Any, qaxis: Any):

@@ -37,7 +37,7 @@ import numpy as np
 from numba import prange
 
 from .._config import KERNEL, PARALLEL_KERNEL
-from ._jit import F1, F2, I1, F, I, helper, kernel
+from ._jit import F1, F2, F, helper, kernel
 from .quaternion import (
     _qexp1,
     _qinv1,
@@ -53,7 +53,6 @@ __all__ = [
     "squad_walk",
     "squad_walk_parallel",
     "unflip_signs",
-    "seconds_since",
     "squad_input_fault",
 ]
 
@@ -703,21 +702,6 @@ def squad_walk_parallel(q, t_in, t_out):
     size = ((m + chunks - 1) // chunks + _BLOCK - 1) // _BLOCK * _BLOCK
     for c in prange(chunks):
         _walk(q, sign, t_in, t_out, out, min(c * size, m), min((c + 1) * size, m))
-    return out
-
-
-@kernel(I1, I)
-def seconds_since(keys, origin):
-    """int64 nanosecond keys as float64 seconds since ``origin`` (NaT -> NaN).
-
-    The arithmetic of :func:`rbm_nb._time.seconds_pair`, in one pass.
-    """
-    n = keys.shape[0]
-    out = np.empty(n)
-    nat = np.iinfo(np.int64).min
-    for i in range(n):
-        k = keys[i]
-        out[i] = np.nan if k == nat else (k - origin) / 1e9
     return out
 
 

@@ -95,33 +95,53 @@ def _rotate_rows(q, v, out, lo, hi):
     tested. Infinities are counted in ``v`` and in ``q`` (through |q|²).
     ``q`` or ``v`` may hold a single row that every output row reuses.
     """
+    # Flat views indexed 4 i + k: numba indexes a 2-D array's rows with its
+    # row stride, a runtime value, and LLVM vectorises no loop over such
+    # rows; with constant strides it does (1M rows: 3.4 -> 2.0 ms, 1 thread).
+    qf = q.reshape(-1)
+    vf = v.reshape(-1)
+    of = out.reshape(-1)
     zeros = 0
     infs = 0
     if q.shape[0] == 1 and v.shape[0] != 1:
-        w, x, y, z = q[0, 0], q[0, 1], q[0, 2], q[0, 3]
+        w, x, y, z = qf[0], qf[1], qf[2], qf[3]
         n2 = w * w + x * x + y * y + z * z
         zeros += hi > lo and n2 == 0.0
         infs += hi > lo and abs(n2) == np.inf
         for i in range(lo, hi):
-            vx, vy, vz = v[i, 0], v[i, 1], v[i, 2]
+            vx, vy, vz = vf[3 * i], vf[3 * i + 1], vf[3 * i + 2]
             infs += (abs(vx) == np.inf) + (abs(vy) == np.inf) + (abs(vz) == np.inf)
             rx, ry, rz = _rotate_inline(w, x, y, z, vx, vy, vz)
-            out[i, 0] = rx
-            out[i, 1] = ry
-            out[i, 2] = rz
+            of[3 * i] = rx
+            of[3 * i + 1] = ry
+            of[3 * i + 2] = rz
         return zeros, infs
-    sv = 1 if v.shape[0] > 1 else 0
+    if v.shape[0] == 1 and q.shape[0] != 1:
+        vx, vy, vz = vf[0], vf[1], vf[2]
+        infs += hi > lo and (
+            (abs(vx) == np.inf) + (abs(vy) == np.inf) + (abs(vz) == np.inf)
+        )
+        for i in range(lo, hi):
+            w, x, y, z = qf[4 * i], qf[4 * i + 1], qf[4 * i + 2], qf[4 * i + 3]
+            n2 = w * w + x * x + y * y + z * z
+            zeros += n2 == 0.0
+            infs += abs(n2) == np.inf
+            rx, ry, rz = _rotate_inline(w, x, y, z, vx, vy, vz)
+            of[3 * i] = rx
+            of[3 * i + 1] = ry
+            of[3 * i + 2] = rz
+        return zeros, infs
     for i in range(lo, hi):
-        w, x, y, z = q[i, 0], q[i, 1], q[i, 2], q[i, 3]
-        vx, vy, vz = v[i * sv, 0], v[i * sv, 1], v[i * sv, 2]
+        w, x, y, z = qf[4 * i], qf[4 * i + 1], qf[4 * i + 2], qf[4 * i + 3]
+        vx, vy, vz = vf[3 * i], vf[3 * i + 1], vf[3 * i + 2]
         n2 = w * w + x * x + y * y + z * z
         zeros += n2 == 0.0
         infs += (abs(n2) == np.inf) + (abs(vx) == np.inf) + (abs(vy) == np.inf)
         infs += abs(vz) == np.inf
         rx, ry, rz = _rotate_inline(w, x, y, z, vx, vy, vz)
-        out[i, 0] = rx
-        out[i, 1] = ry
-        out[i, 2] = rz
+        of[3 * i] = rx
+        of[3 * i + 1] = ry
+        of[3 * i + 2] = rz
     return zeros, infs
 
 
@@ -241,25 +261,41 @@ def rotation_vectors(q):
     return out
 
 
+@helper(inline=True)
+def _qmul_flat(pf, a, qf, b, of, i):
+    """Row i of ``of`` = p[a] * q[b] (flat views, rows of 4); the number of
+    infinities in the two operand rows."""
+    aw, ax, ay, az = pf[a], pf[a + 1], pf[a + 2], pf[a + 3]
+    bw, bx, by, bz = qf[b], qf[b + 1], qf[b + 2], qf[b + 3]
+    infs = (abs(aw) == np.inf) + (abs(ax) == np.inf) + (abs(ay) == np.inf)
+    infs += (abs(az) == np.inf) + (abs(bw) == np.inf) + (abs(bx) == np.inf)
+    infs += (abs(by) == np.inf) + (abs(bz) == np.inf)
+    of[4 * i] = aw * bw - ax * bx - ay * by - az * bz
+    of[4 * i + 1] = aw * bx + ax * bw + ay * bz - az * by
+    of[4 * i + 2] = aw * by - ax * bz + ay * bw + az * bx
+    of[4 * i + 3] = aw * bz + ax * by - ay * bx + az * bw
+    return infs
+
+
 @helper(inline=True, options=VECTOR_KERNEL)
 def _qmul_rows(p, q, out, lo, hi):
     """p * q for rows lo..hi-1 into ``out`` (either operand may be one row);
     the number of infinities in the operands' rows used. Branch-free."""
-    sp = 1 if p.shape[0] > 1 else 0
-    sq = 1 if q.shape[0] > 1 else 0
+    # flat views and one loop per broadcast case, so that every index has a
+    # constant stride (see _rotate_rows)
+    pf = p.reshape(-1)
+    qf = q.reshape(-1)
+    of = out.reshape(-1)
     infs = 0
-    for i in range(lo, hi):
-        a = i * sp
-        b = i * sq
-        aw, ax, ay, az = p[a, 0], p[a, 1], p[a, 2], p[a, 3]
-        bw, bx, by, bz = q[b, 0], q[b, 1], q[b, 2], q[b, 3]
-        infs += (abs(aw) == np.inf) + (abs(ax) == np.inf) + (abs(ay) == np.inf)
-        infs += (abs(az) == np.inf) + (abs(bw) == np.inf) + (abs(bx) == np.inf)
-        infs += (abs(by) == np.inf) + (abs(bz) == np.inf)
-        out[i, 0] = aw * bw - ax * bx - ay * by - az * bz
-        out[i, 1] = aw * bx + ax * bw + ay * bz - az * by
-        out[i, 2] = aw * by - ax * bz + ay * bw + az * bx
-        out[i, 3] = aw * bz + ax * by - ay * bx + az * bw
+    if p.shape[0] == q.shape[0]:
+        for i in range(lo, hi):
+            infs += _qmul_flat(pf, 4 * i, qf, 4 * i, of, i)
+    elif p.shape[0] == 1:
+        for i in range(lo, hi):
+            infs += _qmul_flat(pf, 0, qf, 4 * i, of, i)
+    else:
+        for i in range(lo, hi):
+            infs += _qmul_flat(pf, 4 * i, qf, 0, of, i)
     return infs
 
 
@@ -286,19 +322,21 @@ def qmul_into_parallel(p, q, out):
 def _qinv_rows(q, out, lo, hi):
     """conj(q) / |q|² for rows lo..hi-1 into ``out``; counts of zero rows and
     of infinities. Branch-free: a zero row gives NaN through 0 * (1 / 0)."""
+    qf = q.reshape(-1)  # constant strides: see _rotate_rows
+    of = out.reshape(-1)
     zeros = 0
     infs = 0
     for i in range(lo, hi):
-        w, x, y, z = q[i, 0], q[i, 1], q[i, 2], q[i, 3]
+        w, x, y, z = qf[4 * i], qf[4 * i + 1], qf[4 * i + 2], qf[4 * i + 3]
         n2 = w * w + x * x + y * y + z * z
         zeros += n2 == 0.0
         infs += (abs(w) == np.inf) + (abs(x) == np.inf) + (abs(y) == np.inf)
         infs += abs(z) == np.inf
         k = 1.0 / n2  # one division per row, not four (within an ulp)
-        out[i, 0] = w * k
-        out[i, 1] = -x * k
-        out[i, 2] = -y * k
-        out[i, 3] = -z * k
+        of[4 * i] = w * k
+        of[4 * i + 1] = -x * k
+        of[4 * i + 2] = -y * k
+        of[4 * i + 3] = -z * k
     return zeros, infs
 
 

@@ -86,9 +86,9 @@ from .scalar import (
     SERIES_ANGLE,
     SERIES_RATIO,
     atan2,
-    atan_over_x,
-    cos_series,
-    sinc_series,
+    atan_over_x_small,
+    cos_small,
+    sinc_small,
 )
 
 __all__ = [
@@ -145,8 +145,8 @@ def _qexp_table(w, x, y, z):
         # w is a sum of log-norms of unit quaternions (~1e-16): then 1 + w
         # is exp(w) to within w²/2, below half an ulp of 1
         e = 1.0 + w if abs(w) < _TINY else math.exp(w)
-        c = cos_series(v2)
-        k = e * sinc_series(v2)
+        c = cos_small(v2)
+        k = e * sinc_small(v2)
         return e * c, k * x, k * y, k * z
     return _qexp1(w, x, y, z)
 
@@ -162,7 +162,7 @@ def _qlog_table(w, x, y, z):
     b2 = x * x + y * y + z * z
     if w > 0.0 and b2 < (SERIES_RATIO * w) ** 2 and b2 > (_EPS * w) ** 2:
         inv_w = 1.0 / w
-        f = atan_over_x(b2 * inv_w * inv_w) * inv_w
+        f = atan_over_x_small(b2 * inv_w * inv_w) * inv_w
         b = math.sqrt(b2)  # the real part exactly as _qlog1 forms it
         n2 = w * w + b * b
         d = n2 - 1.0  # exact (Sterbenz)
@@ -191,7 +191,7 @@ def _geodesic_table(aw, ax, ay, az, bw, bx, by, bz):
     k = 1.0 / so
     if d > 0.0 and so < SERIES_RATIO * d:
         x = so / d
-        theta = x * atan_over_x(x * x)
+        theta = x * atan_over_x_small(x * x)
     else:
         theta = atan2(so, d)
     return theta, ow * k, ox * k, oy * k, oz * k
@@ -210,7 +210,10 @@ def _log_step(r, i):
     n = r.shape[0]
     if i < 0 or i > n - 2:
         return 0.0, 0.0, 0.0, 0.0  # not used by any row
-    iw, ix, iy, iz = _qinv1(r[i, 0], r[i, 1], r[i, 2], r[i, 3])
+    # r[i]⁻¹ with one division, not _qinv1's four (within an ulp of it)
+    w, x, y, z = r[i, 0], r[i, 1], r[i, 2], r[i, 3]
+    k = 1.0 / (w * w + x * x + y * y + z * z)
+    iw, ix, iy, iz = w * k, -x * k, -y * k, -z * k
     nw, nx, ny, nz = _qmul1(
         iw, ix, iy, iz, r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3]
     )
@@ -218,34 +221,53 @@ def _log_step(r, i):
 
 
 @helper(inline=True)
-def _table_row(r, t, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz):
+def _inv_interval(t, k):
+    """1 / (t[k+1] - t[k]), or 0.0 where sample k or k+1 does not exist."""
+    if k < 0 or k > t.shape[0] - 2:
+        return 0.0
+    return 1.0 / (t[k + 1] - t[k])
+
+
+@helper(inline=True)
+def _first_half(r, i):
+    """Whether r[i]·r[i+1] > 0 (the arc between them is under π/2)."""
+    return (
+        r[i, 0] * r[i + 1, 0]
+        + r[i, 1] * r[i + 1, 1]
+        + r[i, 2] * r[i + 1, 2]
+        + r[i, 3] * r[i + 1, 3]
+    ) > 0.0
+
+
+@helper(inline=True)
+def _table_row(r, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, rb):
     """Fill row i of the squad table of (r, t) (n >= 2) into ``c``.
 
-    Equal to row i of ``squad_coefficients`` (a, b) and ``squad_segments``
-    (operation for operation), from samples i-1 .. i+2 and the logs
-    p = L[i-1], l = L[i], n = L[i+1] (``_log_step``).
+    Row i of ``squad_coefficients`` (a, b) and ``squad_segments`` to within
+    4 ulp, from samples i-1 .. i+2, the logs p = L[i-1], l = L[i],
+    n = L[i+1] (``_log_step``) and the ratios of sampling intervals
+    ra = (t[i+1]-t[i]) / (t[i]-t[i-1]), rb = (t[i+1]-t[i]) / (t[i+2]-t[i+1])
+    (where those samples exist).
     """
     n = r.shape[0]
     # a[i]
     if i == 0 or i == n - 1:
         aw, ax, ay, az = r[i, 0], r[i, 1], r[i, 2], r[i, 3]
     else:
-        ratio = (t[i + 1] - t[i]) / (t[i] - t[i - 1])
         ew, ex, ey, ez = _qexp_table(
-            (-lw + pw * ratio) * 0.25,
-            (-lx + px * ratio) * 0.25,
-            (-ly + py * ratio) * 0.25,
-            (-lz + pz * ratio) * 0.25,
+            (-lw + pw * ra) * 0.25,
+            (-lx + px * ra) * 0.25,
+            (-ly + py * ra) * 0.25,
+            (-lz + pz * ra) * 0.25,
         )
         aw, ax, ay, az = _qmul1(r[i, 0], r[i, 1], r[i, 2], r[i, 3], ew, ex, ey, ez)
     # b[i], and the sample the segment ends at
     if i < n - 2:
-        ratio = (t[i + 1] - t[i]) / (t[i + 2] - t[i + 1])
         ew, ex, ey, ez = _qexp_table(
-            (nw * ratio - lw) * -0.25,
-            (nx * ratio - lx) * -0.25,
-            (ny * ratio - ly) * -0.25,
-            (nz * ratio - lz) * -0.25,
+            (nw * rb - lw) * -0.25,
+            (nx * rb - lx) * -0.25,
+            (ny * rb - ly) * -0.25,
+            (nz * rb - lz) * -0.25,
         )
         bw, bx, by, bz = _qmul1(
             r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3], ew, ex, ey, ez
@@ -276,12 +298,28 @@ def _table_row(r, t, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz):
         and _is_unit(bw, bx, by, bz)
     )
     if unit:
-        g = _geodesic_table(r[i, 0], r[i, 1], r[i, 2], r[i, 3], ew, ex, ey, ez)
-        c[i, 4] = g[0]
-        c[i, 5] = g[1]
-        c[i, 6] = g[2]
-        c[i, 7] = g[3]
-        c[i, 8] = g[4]
+        theta2 = lx * lx + ly * ly + lz * lz
+        if i < n - 1 and theta2 > 0.0 and abs(lw) < _TINY and _first_half(r, i):
+            # r[i+1] = r[i] exp(l) with |l| < π/2 (r[i]·r[i+1] > 0, no flip):
+            # the arc is θ = |l| along u = r[i] (0, l / θ), which the log has
+            # all but worked out (within 4 ulp of _geodesic_table's atan)
+            theta = math.sqrt(theta2)
+            k = 1.0 / theta
+            ow, ox, oy, oz = _qmul1(
+                r[i, 0], r[i, 1], r[i, 2], r[i, 3], 0.0, lx * k, ly * k, lz * k
+            )
+            c[i, 4] = theta
+            c[i, 5] = ow
+            c[i, 6] = ox
+            c[i, 7] = oy
+            c[i, 8] = oz
+        else:
+            g = _geodesic_table(r[i, 0], r[i, 1], r[i, 2], r[i, 3], ew, ex, ey, ez)
+            c[i, 4] = g[0]
+            c[i, 5] = g[1]
+            c[i, 6] = g[2]
+            c[i, 7] = g[3]
+            c[i, 8] = g[4]
         g = _geodesic_table(aw, ax, ay, az, bw, bx, by, bz)
         c[i, 9] = g[0]
         c[i, 10] = g[1]
@@ -310,17 +348,26 @@ def _fill_run(r, t, c, g, count):
     end = min(g + count, n)
     pw, px, py, pz = _log_step(r, g - 1)
     lw, lx, ly, lz = _log_step(r, g)
+    # 1 / (t[k+1] - t[k]) for k = i-1, i, i+1: each interval's inverse is
+    # computed once and serves the ratios of rows k-1 and k+1
+    inv_p = _inv_interval(t, g - 1)
+    inv_l = _inv_interval(t, g)
+    inv_n = _inv_interval(t, g + 1)
     done = 0
     for i in range(g, end):
         if i > g and c[i, _DONE] != 0.0:
             break
         nw, nx, ny, nz = _log_step(r, i + 1)
+        dt = t[i + 1] - t[i] if i < n - 1 else 0.0
         _table_row(
-            r, t, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz
+            r, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz,
+            dt * inv_p, dt * inv_n,
         )  # fmt: skip
         done += 1
         pw, px, py, pz = lw, lx, ly, lz
         lw, lx, ly, lz = nw, nx, ny, nz
+        inv_p, inv_l = inv_l, inv_n
+        inv_n = _inv_interval(t, i + 2)
     return done
 
 

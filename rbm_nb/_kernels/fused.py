@@ -62,12 +62,13 @@ needs its held event. Nothing else produces NaN.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 from numba import prange
 
-from .._config import PARALLEL_KERNEL
+from .._config import KERNEL, PARALLEL_KERNEL
 from ._jit import F1, F2, F3, I1, B, I, helper, kernel  # noqa: E741
 from .quaternion import (
     _EPS,
@@ -337,38 +338,238 @@ def _table_row(r, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, rb):
         c[i, _DONE] = _NOT_UNIT
 
 
+# Rows are filled in blocks: the samples, logs and intervals a block reads
+# are gathered into structure-of-arrays scratch (one contiguous row of
+# FILL_BLOCK + 3 per quantity), and the common case -- interior rows of
+# unit quaternions whose arcs are small enough for the short series -- is
+# computed in loops over the block without calls or exceptions, which LLVM
+# vectorises. Each row records whether it took that route; the others (the
+# first and last two rows, non-unit samples, large arcs, a control-point
+# arc that goes the other way round) are filled by _table_row afterwards,
+# one by one. Every operation of the block loops is the one _table_row
+# performs (no fused multiply-add: vector lanes round as scalar code), so a
+# row's value depends only on the data, not on the block it fell in.
+FILL_BLOCK = 64
+_FILL_OPTIONS = dataclasses.replace(KERNEL, error_model="numpy")
+# scratch rows: samples (0:4), intervals and their inverses (4, 5), logs
+# (6:10), whether a log needs the exact route (10), the table row (11:26),
+# whether the row needs the exact route (26), the control point b (27:31)
+_S_Q = 0
+_S_DT = 4
+_S_IDT = 5
+_S_L = 6
+_S_LBAD = 10
+_S_OUT = 11
+_S_BAD = 26
+_S_B = 27
+_S_ROWS = 31
+
+
+@helper(options=_FILL_OPTIONS)
+def _fill_block(r, t, c, i0, i1, s):
+    """Rows i0..i1-1 of the table (1 <= i0, i1 <= n - 2, i1 - i0 <= FILL_BLOCK).
+
+    ``s``: scratch of shape (_S_ROWS, FILL_BLOCK + 3).
+    """
+    m = i1 - i0
+    # gather samples i0-1 .. i1+1 (index k: sample i0 - 1 + k)
+    for j in range(4):
+        for k in range(m + 3):
+            s[_S_Q + j, k] = r[i0 - 1 + k, j]
+    for k in range(m + 2):
+        s[_S_DT, k] = t[i0 + k] - t[i0 - 1 + k]
+    for k in range(m + 2):
+        s[_S_IDT, k] = 1.0 / s[_S_DT, k]
+    # logs L[i0-1+k] = log(q[k]⁻¹ q[k+1]), k = 0 .. m+1 (_log_step, _qlog_table)
+    for k in range(m + 2):
+        aw, ax, ay, az = s[0, k], s[1, k], s[2, k], s[3, k]
+        bw, bx, by, bz = s[0, k + 1], s[1, k + 1], s[2, k + 1], s[3, k + 1]
+        inv = 1.0 / (aw * aw + ax * ax + ay * ay + az * az)
+        iw, ix, iy, iz = aw * inv, -ax * inv, -ay * inv, -az * inv
+        pw, px, py, pz = _qmul1(iw, ix, iy, iz, bw, bx, by, bz)
+        b2 = px * px + py * py + pz * pz
+        inv_w = 1.0 / pw
+        f = atan_over_x_small(b2 * inv_w * inv_w) * inv_w
+        b = math.sqrt(b2)
+        d = (pw * pw + b * b) - 1.0
+        s[_S_L, k] = (d - 0.5 * d * d) / 2.0
+        s[_S_L + 1, k] = f * px
+        s[_S_L + 2, k] = f * py
+        s[_S_L + 3, k] = f * pz
+        fast = (
+            (pw > 0.0)
+            & (b2 < (SERIES_RATIO * pw) ** 2)
+            & (b2 > (_EPS * pw) ** 2)
+            & (abs(d) < _TINY)
+        )
+        s[_S_LBAD, k] = 0.0 if fast else 1.0
+    for k in range(m + 2):
+        if s[_S_LBAD, k] != 0.0:
+            lw, lx, ly, lz = _log_step(r, i0 - 1 + k)
+            s[_S_L, k] = lw
+            s[_S_L + 1, k] = lx
+            s[_S_L + 2, k] = ly
+            s[_S_L + 3, k] = lz
+    # rows: row b is sample i = i0 + b, at scratch index b + 1. Three short
+    # loops rather than one long one: LLVM vectorises each of them.
+    for b in range(m):
+        # the control points a = r[i] exp((-l + p ra) / 4) and
+        # b = r[i+1] exp((n rb - l) / -4), as _qexp_table's series route
+        ra = s[_S_DT, b + 1] * s[_S_IDT, b]
+        rb = s[_S_DT, b + 1] * s[_S_IDT, b + 2]
+        lw, lx, ly, lz = (
+            s[_S_L, b + 1], s[_S_L + 1, b + 1], s[_S_L + 2, b + 1], s[_S_L + 3, b + 1]
+        )  # fmt: skip
+        ew = (-lw + s[_S_L, b] * ra) * 0.25
+        ex = (-lx + s[_S_L + 1, b] * ra) * 0.25
+        ey = (-ly + s[_S_L + 2, b] * ra) * 0.25
+        ez = (-lz + s[_S_L + 3, b] * ra) * 0.25
+        v2 = ex * ex + ey * ey + ez * ez
+        e = 1.0 + ew
+        ka = e * sinc_small(v2)
+        aw, ax, ay, az = _qmul1(
+            s[0, b + 1], s[1, b + 1], s[2, b + 1], s[3, b + 1],
+            e * cos_small(v2), ka * ex, ka * ey, ka * ez,
+        )  # fmt: skip
+        fast = (
+            (v2 < SERIES_ANGLE * SERIES_ANGLE) & (v2 > _EPS * _EPS) & (abs(ew) < _TINY)
+        )
+        ew = (s[_S_L, b + 2] * rb - lw) * -0.25
+        ex = (s[_S_L + 1, b + 2] * rb - lx) * -0.25
+        ey = (s[_S_L + 2, b + 2] * rb - ly) * -0.25
+        ez = (s[_S_L + 3, b + 2] * rb - lz) * -0.25
+        v2 = ex * ex + ey * ey + ez * ez
+        e = 1.0 + ew
+        kb = e * sinc_small(v2)
+        bw, bx, by, bz = _qmul1(
+            s[0, b + 2], s[1, b + 2], s[2, b + 2], s[3, b + 2],
+            e * cos_small(v2), kb * ex, kb * ey, kb * ez,
+        )  # fmt: skip
+        fast = (
+            fast
+            & (v2 < SERIES_ANGLE * SERIES_ANGLE)
+            & (v2 > _EPS * _EPS)
+            & (abs(ew) < _TINY)
+            & (abs(aw * aw + ax * ax + ay * ay + az * az - 1.0) <= 1e-12)
+            & (abs(bw * bw + bx * bx + by * by + bz * bz - 1.0) <= 1e-12)
+        )
+        s[_S_OUT, b] = aw
+        s[_S_OUT + 1, b] = ax
+        s[_S_OUT + 2, b] = ay
+        s[_S_OUT + 3, b] = az
+        s[_S_B, b] = bw
+        s[_S_B + 1, b] = bx
+        s[_S_B + 2, b] = by
+        s[_S_B + 3, b] = bz
+        s[_S_BAD, b] = 0.0 if fast else 1.0
+    for b in range(m):
+        # the arc r[i] -> r[i+1] from the log (see _table_row)
+        rw, rx, ry, rz = s[0, b + 1], s[1, b + 1], s[2, b + 1], s[3, b + 1]
+        qw, qx, qy, qz = s[0, b + 2], s[1, b + 2], s[2, b + 2], s[3, b + 2]
+        lw, lx, ly, lz = (
+            s[_S_L, b + 1], s[_S_L + 1, b + 1], s[_S_L + 2, b + 1], s[_S_L + 3, b + 1]
+        )  # fmt: skip
+        theta2 = lx * lx + ly * ly + lz * lz
+        theta = math.sqrt(theta2)
+        k = 1.0 / theta
+        ow, ox, oy, oz = _qmul1(rw, rx, ry, rz, 0.0, lx * k, ly * k, lz * k)
+        fast = (
+            (abs(rw * rw + rx * rx + ry * ry + rz * rz - 1.0) <= 1e-12)
+            & (abs(qw * qw + qx * qx + qy * qy + qz * qz - 1.0) <= 1e-12)
+            & (theta2 > 0.0)
+            & (abs(lw) < _TINY)
+            & (rw * qw + rx * qx + ry * qy + rz * qz > 0.0)
+        )
+        s[_S_OUT + 4, b] = theta
+        s[_S_OUT + 5, b] = ow
+        s[_S_OUT + 6, b] = ox
+        s[_S_OUT + 7, b] = oy
+        s[_S_OUT + 8, b] = oz
+        if not fast:
+            s[_S_BAD, b] = 1.0
+    for b in range(m):
+        # the arc a -> b (_geodesic_table's series route, no flip)
+        aw, ax, ay, az = (
+            s[_S_OUT, b],
+            s[_S_OUT + 1, b],
+            s[_S_OUT + 2, b],
+            s[_S_OUT + 3, b],
+        )
+        bw, bx, by, bz = s[_S_B, b], s[_S_B + 1, b], s[_S_B + 2, b], s[_S_B + 3, b]
+        dw, dx, dy, dz = aw - bw, ax - bx, ay - by, az - bz
+        d = aw * bw + ax * bx + ay * by + az * bz
+        gw, gx, gy, gz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
+        so = math.sqrt(gw * gw + gx * gx + gy * gy + gz * gz)
+        kg = 1.0 / so
+        x = so / d
+        fast = (
+            (dw * dw + dx * dx + dy * dy + dz * dz <= _SQRT2 * _SQRT2)
+            & (so != 0.0)
+            & (d > 0.0)
+            & (so < SERIES_RATIO * d)
+        )
+        s[_S_OUT + 9, b] = x * atan_over_x_small(x * x)
+        s[_S_OUT + 10, b] = gw * kg
+        s[_S_OUT + 11, b] = gx * kg
+        s[_S_OUT + 12, b] = gy * kg
+        s[_S_OUT + 13, b] = gz * kg
+        if not fast:
+            s[_S_BAD, b] = 1.0
+    for b in range(m):
+        i = i0 + b
+        if s[_S_BAD, b] != 0.0:
+            _table_row(
+                r, c, i,
+                s[_S_L, b], s[_S_L + 1, b], s[_S_L + 2, b], s[_S_L + 3, b],
+                s[_S_L, b + 1], s[_S_L + 1, b + 1], s[_S_L + 2, b + 1],
+                s[_S_L + 3, b + 1],
+                s[_S_L, b + 2], s[_S_L + 1, b + 2], s[_S_L + 2, b + 2],
+                s[_S_L + 3, b + 2],
+                s[_S_DT, b + 1] * s[_S_IDT, b], s[_S_DT, b + 1] * s[_S_IDT, b + 2],
+            )  # fmt: skip
+        else:
+            for j in range(_DONE):
+                c[i, j] = s[_S_OUT + j, b]
+            c[i, _DONE] = _UNIT
+
+
+@helper
+def _fill_row(r, t, c, i):
+    """Row i of the table alone (its three logs computed here)."""
+    n = r.shape[0]
+    pw, px, py, pz = _log_step(r, i - 1)
+    lw, lx, ly, lz = _log_step(r, i)
+    nw, nx, ny, nz = _log_step(r, i + 1)
+    dt = t[i + 1] - t[i] if i < n - 1 else 0.0
+    _table_row(
+        r, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz,
+        dt * _inv_interval(t, i - 1), dt * _inv_interval(t, i + 1),
+    )  # fmt: skip
+
+
 @helper
 def _fill_run(r, t, c, g, count):
     """Compute row g of the table and the missing rows after it (``count`` at most).
 
-    Stops before the first row already computed; each log is computed
-    once. Returns the number of rows computed.
+    Stops before the first row already computed. Returns the number of
+    rows computed.
     """
     n = r.shape[0]
     end = min(g + count, n)
-    pw, px, py, pz = _log_step(r, g - 1)
-    lw, lx, ly, lz = _log_step(r, g)
-    # 1 / (t[k+1] - t[k]) for k = i-1, i, i+1: each interval's inverse is
-    # computed once and serves the ratios of rows k-1 and k+1
-    inv_p = _inv_interval(t, g - 1)
-    inv_l = _inv_interval(t, g)
-    inv_n = _inv_interval(t, g + 1)
-    done = 0
-    for i in range(g, end):
-        if i > g and c[i, _DONE] != 0.0:
-            break
-        nw, nx, ny, nz = _log_step(r, i + 1)
-        dt = t[i + 1] - t[i] if i < n - 1 else 0.0
-        _table_row(
-            r, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz,
-            dt * inv_p, dt * inv_n,
-        )  # fmt: skip
-        done += 1
-        pw, px, py, pz = lw, lx, ly, lz
-        lw, lx, ly, lz = nw, nx, ny, nz
-        inv_p, inv_l = inv_l, inv_n
-        inv_n = _inv_interval(t, i + 2)
-    return done
+    stop = g + 1
+    while stop < end and c[stop, _DONE] == 0.0:
+        stop += 1
+    s = np.empty((_S_ROWS, FILL_BLOCK + 3))
+    i = g
+    while i < stop:
+        if i == 0 or i >= n - 2:
+            _fill_row(r, t, c, i)
+            i += 1
+        else:
+            j = min(i + FILL_BLOCK, stop, n - 2)
+            _fill_block(r, t, c, i, j, s)
+            i = j
+    return stop - g
 
 
 @kernel(F2, F1)

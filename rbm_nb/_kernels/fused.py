@@ -471,8 +471,10 @@ def _fill_block(r, t, c, i0, i1, s):
         )  # fmt: skip
         theta2 = lx * lx + ly * ly + lz * lz
         theta = math.sqrt(theta2)
-        k = 1.0 / theta
-        ow, ox, oy, oz = _qmul1(rw, rx, ry, rz, 0.0, lx * k, ly * k, lz * k)
+        inv_theta = 1.0 / theta
+        ow, ox, oy, oz = _qmul1(
+            rw, rx, ry, rz, 0.0, lx * inv_theta, ly * inv_theta, lz * inv_theta
+        )
         fast = (
             (abs(rw * rw + rx * rx + ry * ry + rz * rz - 1.0) <= 1e-12)
             & (abs(qw * qw + qx * qx + qy * qy + qz * qz - 1.0) <= 1e-12)

@@ -413,55 +413,58 @@ def _fill_block(r, t, c, i0, i1, s):
     # rows: row b is sample i = i0 + b, at scratch index b + 1. Three short
     # loops rather than one long one: LLVM vectorises each of them.
     for b in range(m):
-        # the control points a = r[i] exp((-l + p ra) / 4) and
-        # b = r[i+1] exp((n rb - l) / -4), as _qexp_table's series route
+        # the control point a = r[i] exp((-l + p ra) / 4), as _qexp_table's
+        # series route (a and b in loops of their own: together, LLVM did
+        # not vectorise them)
         ra = s[_S_DT, b + 1] * s[_S_IDT, b]
-        rb = s[_S_DT, b + 1] * s[_S_IDT, b + 2]
-        lw, lx, ly, lz = (
-            s[_S_L, b + 1], s[_S_L + 1, b + 1], s[_S_L + 2, b + 1], s[_S_L + 3, b + 1]
-        )  # fmt: skip
-        ew = (-lw + s[_S_L, b] * ra) * 0.25
-        ex = (-lx + s[_S_L + 1, b] * ra) * 0.25
-        ey = (-ly + s[_S_L + 2, b] * ra) * 0.25
-        ez = (-lz + s[_S_L + 3, b] * ra) * 0.25
+        ew = (-s[_S_L, b + 1] + s[_S_L, b] * ra) * 0.25
+        ex = (-s[_S_L + 1, b + 1] + s[_S_L + 1, b] * ra) * 0.25
+        ey = (-s[_S_L + 2, b + 1] + s[_S_L + 2, b] * ra) * 0.25
+        ez = (-s[_S_L + 3, b + 1] + s[_S_L + 3, b] * ra) * 0.25
         v2 = ex * ex + ey * ey + ez * ez
         e = 1.0 + ew
-        ka = e * sinc_small(v2)
+        k = e * sinc_small(v2)
         aw, ax, ay, az = _qmul1(
             s[0, b + 1], s[1, b + 1], s[2, b + 1], s[3, b + 1],
-            e * cos_small(v2), ka * ex, ka * ey, ka * ez,
+            e * cos_small(v2), k * ex, k * ey, k * ez,
         )  # fmt: skip
         fast = (
-            (v2 < SERIES_ANGLE * SERIES_ANGLE) & (v2 > _EPS * _EPS) & (abs(ew) < _TINY)
-        )
-        ew = (s[_S_L, b + 2] * rb - lw) * -0.25
-        ex = (s[_S_L + 1, b + 2] * rb - lx) * -0.25
-        ey = (s[_S_L + 2, b + 2] * rb - ly) * -0.25
-        ez = (s[_S_L + 3, b + 2] * rb - lz) * -0.25
-        v2 = ex * ex + ey * ey + ez * ez
-        e = 1.0 + ew
-        kb = e * sinc_small(v2)
-        bw, bx, by, bz = _qmul1(
-            s[0, b + 2], s[1, b + 2], s[2, b + 2], s[3, b + 2],
-            e * cos_small(v2), kb * ex, kb * ey, kb * ez,
-        )  # fmt: skip
-        fast = (
-            fast
-            & (v2 < SERIES_ANGLE * SERIES_ANGLE)
+            (v2 < SERIES_ANGLE * SERIES_ANGLE)
             & (v2 > _EPS * _EPS)
             & (abs(ew) < _TINY)
             & (abs(aw * aw + ax * ax + ay * ay + az * az - 1.0) <= 1e-12)
-            & (abs(bw * bw + bx * bx + by * by + bz * bz - 1.0) <= 1e-12)
         )
         s[_S_OUT, b] = aw
         s[_S_OUT + 1, b] = ax
         s[_S_OUT + 2, b] = ay
         s[_S_OUT + 3, b] = az
+        s[_S_BAD, b] = 0.0 if fast else 1.0
+    for b in range(m):
+        # the control point b = r[i+1] exp((n rb - l) / -4)
+        rb = s[_S_DT, b + 1] * s[_S_IDT, b + 2]
+        ew = (s[_S_L, b + 2] * rb - s[_S_L, b + 1]) * -0.25
+        ex = (s[_S_L + 1, b + 2] * rb - s[_S_L + 1, b + 1]) * -0.25
+        ey = (s[_S_L + 2, b + 2] * rb - s[_S_L + 2, b + 1]) * -0.25
+        ez = (s[_S_L + 3, b + 2] * rb - s[_S_L + 3, b + 1]) * -0.25
+        v2 = ex * ex + ey * ey + ez * ez
+        e = 1.0 + ew
+        k = e * sinc_small(v2)
+        bw, bx, by, bz = _qmul1(
+            s[0, b + 2], s[1, b + 2], s[2, b + 2], s[3, b + 2],
+            e * cos_small(v2), k * ex, k * ey, k * ez,
+        )  # fmt: skip
+        fast = (
+            (v2 < SERIES_ANGLE * SERIES_ANGLE)
+            & (v2 > _EPS * _EPS)
+            & (abs(ew) < _TINY)
+            & (abs(bw * bw + bx * bx + by * by + bz * bz - 1.0) <= 1e-12)
+        )
         s[_S_B, b] = bw
         s[_S_B + 1, b] = bx
         s[_S_B + 2, b] = by
         s[_S_B + 3, b] = bz
-        s[_S_BAD, b] = 0.0 if fast else 1.0
+        if not fast:
+            s[_S_BAD, b] = 1.0
     for b in range(m):
         # the arc r[i] -> r[i+1] from the log (see _table_row)
         rw, rx, ry, rz = s[0, b + 1], s[1, b + 1], s[2, b + 1], s[3, b + 1]

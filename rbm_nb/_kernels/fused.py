@@ -365,6 +365,23 @@ _S_B = 27
 _S_ROWS = 31
 
 
+@helper(inline=True)
+def _control_point_series(rw, rx, ry, rz, ew, ex, ey, ez):
+    """r exp(e) by _qexp_table's series route, and whether that route holds
+    (a small arc, a scale of 1 to within rounding, a unit result)."""
+    v2 = ex * ex + ey * ey + ez * ez
+    e = 1.0 + ew
+    k = e * sinc_small(v2)
+    w, x, y, z = _qmul1(rw, rx, ry, rz, e * cos_small(v2), k * ex, k * ey, k * ez)
+    fast = (
+        (v2 < SERIES_ANGLE * SERIES_ANGLE)
+        & (v2 > _EPS * _EPS)
+        & (abs(ew) < _TINY)
+        & (abs(w * w + x * x + y * y + z * z - 1.0) <= 1e-12)
+    )
+    return w, x, y, z, fast
+
+
 @helper(options=_FILL_OPTIONS)
 def _fill_block(r, t, c, i0, i1, s):
     """Rows i0..i1-1 of the table (1 <= i0, i1 <= n - 2, i1 - i0 <= FILL_BLOCK).
@@ -412,53 +429,32 @@ def _fill_block(r, t, c, i0, i1, s):
             s[_S_L + 3, k] = lz
     # rows: row b is sample i = i0 + b, at scratch index b + 1. Three short
     # loops rather than one long one: LLVM vectorises each of them.
+    # the control points a = r[i] exp((-l + p ra) / 4) and
+    # b = r[i+1] exp((n rb - l) / -4), each in a loop of its own (together,
+    # LLVM did not vectorise them)
     for b in range(m):
-        # the control point a = r[i] exp((-l + p ra) / 4), as _qexp_table's
-        # series route (a and b in loops of their own: together, LLVM did
-        # not vectorise them)
         ra = s[_S_DT, b + 1] * s[_S_IDT, b]
-        ew = (-s[_S_L, b + 1] + s[_S_L, b] * ra) * 0.25
-        ex = (-s[_S_L + 1, b + 1] + s[_S_L + 1, b] * ra) * 0.25
-        ey = (-s[_S_L + 2, b + 1] + s[_S_L + 2, b] * ra) * 0.25
-        ez = (-s[_S_L + 3, b + 1] + s[_S_L + 3, b] * ra) * 0.25
-        v2 = ex * ex + ey * ey + ez * ez
-        e = 1.0 + ew
-        k = e * sinc_small(v2)
-        aw, ax, ay, az = _qmul1(
+        aw, ax, ay, az, fast = _control_point_series(
             s[0, b + 1], s[1, b + 1], s[2, b + 1], s[3, b + 1],
-            e * cos_small(v2), k * ex, k * ey, k * ez,
+            (-s[_S_L, b + 1] + s[_S_L, b] * ra) * 0.25,
+            (-s[_S_L + 1, b + 1] + s[_S_L + 1, b] * ra) * 0.25,
+            (-s[_S_L + 2, b + 1] + s[_S_L + 2, b] * ra) * 0.25,
+            (-s[_S_L + 3, b + 1] + s[_S_L + 3, b] * ra) * 0.25,
         )  # fmt: skip
-        fast = (
-            (v2 < SERIES_ANGLE * SERIES_ANGLE)
-            & (v2 > _EPS * _EPS)
-            & (abs(ew) < _TINY)
-            & (abs(aw * aw + ax * ax + ay * ay + az * az - 1.0) <= 1e-12)
-        )
         s[_S_OUT, b] = aw
         s[_S_OUT + 1, b] = ax
         s[_S_OUT + 2, b] = ay
         s[_S_OUT + 3, b] = az
         s[_S_BAD, b] = 0.0 if fast else 1.0
     for b in range(m):
-        # the control point b = r[i+1] exp((n rb - l) / -4)
         rb = s[_S_DT, b + 1] * s[_S_IDT, b + 2]
-        ew = (s[_S_L, b + 2] * rb - s[_S_L, b + 1]) * -0.25
-        ex = (s[_S_L + 1, b + 2] * rb - s[_S_L + 1, b + 1]) * -0.25
-        ey = (s[_S_L + 2, b + 2] * rb - s[_S_L + 2, b + 1]) * -0.25
-        ez = (s[_S_L + 3, b + 2] * rb - s[_S_L + 3, b + 1]) * -0.25
-        v2 = ex * ex + ey * ey + ez * ez
-        e = 1.0 + ew
-        k = e * sinc_small(v2)
-        bw, bx, by, bz = _qmul1(
+        bw, bx, by, bz, fast = _control_point_series(
             s[0, b + 2], s[1, b + 2], s[2, b + 2], s[3, b + 2],
-            e * cos_small(v2), k * ex, k * ey, k * ez,
+            (s[_S_L, b + 2] * rb - s[_S_L, b + 1]) * -0.25,
+            (s[_S_L + 1, b + 2] * rb - s[_S_L + 1, b + 1]) * -0.25,
+            (s[_S_L + 2, b + 2] * rb - s[_S_L + 2, b + 1]) * -0.25,
+            (s[_S_L + 3, b + 2] * rb - s[_S_L + 3, b + 1]) * -0.25,
         )  # fmt: skip
-        fast = (
-            (v2 < SERIES_ANGLE * SERIES_ANGLE)
-            & (v2 > _EPS * _EPS)
-            & (abs(ew) < _TINY)
-            & (abs(bw * bw + bx * bx + by * by + bz * bz - 1.0) <= 1e-12)
-        )
         s[_S_B, b] = bw
         s[_S_B + 1, b] = bx
         s[_S_B + 2, b] = by

@@ -86,6 +86,15 @@ def lookup_transform(
     >>> np.round(t, 6) + 0.0
     array([0., 5., 0.])
     """
+    if (
+        not (as_dataset or return_timestamps or as_matrix or as_transform)
+        and time is None
+    ):
+        # the common call, in a handful of operations (widgets and the
+        # tf2-style Transformer make it all the time, often on static chains)
+        to_frame = resolve_frame(into, "into")  # named first, as lookup_at does
+        t, r, _ = _chain.lookup_transform(resolve_frame(outof, "outof"), to_frame)
+        return t, r
     return lookup_at(
         outof,
         into,

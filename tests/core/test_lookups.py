@@ -140,3 +140,28 @@ def test_lookups_see_re_registered_frames(trees):
     after, _ = rbm.lookup_transform("cam", "world")
     assert not np.allclose(before, after)
     np.testing.assert_allclose(after[:, 1], 1.0)
+
+
+def test_the_plain_call_is_lookup_at_and_hands_out_copies():
+    """lookup_transform(outof, into) takes a short path; it must give what
+    the general one gives, and arrays the caller may change."""
+    from rbm_nb.lookups import lookup_at
+
+    rbm.clear_registry()
+    rbm.register_frame("world")
+    rbm.register_frame("a", parent="world", translation=(1.0, 2.0, 3.0),
+                       rotation=(np.cos(0.3), 0.0, np.sin(0.3), 0.0))  # fmt: skip
+    ts = np.arange(20) * 0.1
+    rbm.register_frame("m", parent="a", translation=np.ones((20, 3)) * ts[:, None],
+                       rotation=np.tile([1.0, 0.0, 0.0, 0.0], (20, 1)), timestamps=ts)  # fmt: skip
+    for outof, into in (("a", "world"), ("world", "a"), ("m", "world"), ("world", "m")):
+        t, r = rbm.lookup_transform(outof, into)
+        t_at, r_at = lookup_at(outof, into)
+        np.testing.assert_array_equal(t, t_at)
+        np.testing.assert_array_equal(r, r_at)
+        t[...] = 99.0
+        r[...] = 99.0
+        np.testing.assert_array_equal(rbm.lookup_transform(outof, into)[0], t_at)
+    with pytest.raises(ValueError, match="into"):
+        rbm.lookup_transform("nowhere", "nothere")
+    rbm.clear_registry()

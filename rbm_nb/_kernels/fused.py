@@ -481,32 +481,47 @@ def _compose_rows(work, inverse, first):
         work[a + 6 * BLOCK + b] = rz
 
 
+@helper(inline=True, options=_ROWS)
+def _arc_rows(work, theta, start, u):
+    """Rows ``start`` (4 quantities) moved along their great circles towards ``u``.
+
+    cos(τθ) start + sin(τθ) u, over the block, into the rows of ``start``.
+    """
+    for b in range(BLOCK):
+        sn, cs = sincos(work[_TAU + b] * work[theta + b])
+        for e in range(4):
+            work[start + e * BLOCK + b] = (
+                cs * work[start + e * BLOCK + b] + sn * work[u + e * BLOCK + b]
+            )
+
+
 @helper(options=_ROWS)
 def _squad_rows(work):
     """Squad at the gathered rows of the block, into their step rotations.
 
-    Rows with ``work[_PATH] == _GATHERED``: the inner slerps along the
+    Rows with ``work[_PATH + b] == _GATHERED``: the inner slerps along the
     segment's unit great circles (``sincos``, whose range the gathering
     checked), then ``_qslerp_unit1``'s small-arc branch, without branches;
     where that branch does not apply (an argument not unit, a wide arc),
     the row is marked ``_GENERAL``, its inner slerps kept in rows _P and _Q
     for the scalar route. Returns the number of rows marked.
+
+    In several loops, each short: an iteration of one long loop would fill
+    the processor's reorder window, and its long chains of dependent
+    operations (the polynomials) would then run one after another.
     """
-    general = 0
+    # the inner slerps, into rows _P and _Q
+    _arc_rows(work, _TH1, _P, _U1)
+    _arc_rows(work, _TH2, _Q, _U2)
+    # _qslerp_unit1(p, q, h): q taken the shorter way round; the arc's
+    # d = p.q and the part o of q orthogonal to p (into rows _U1), the
+    # conditions of its small-arc branch so far (into _TH1) and x² = tan²
+    # of the arc (into _TH2), 1/d (into _U2)
     for b in range(BLOCK):
-        tau = work[_TAU + b]
-        sn, cs = sincos(tau * work[_TH1 + b])
-        aw = cs * work[_P + b] + sn * work[_U1 + b]
-        ax = cs * work[_P + BLOCK + b] + sn * work[_U1 + BLOCK + b]
-        ay = cs * work[_P + 2 * BLOCK + b] + sn * work[_U1 + 2 * BLOCK + b]
-        az = cs * work[_P + 3 * BLOCK + b] + sn * work[_U1 + 3 * BLOCK + b]
-        sn, cs = sincos(tau * work[_TH2 + b])
-        bw = cs * work[_Q + b] + sn * work[_U2 + b]
-        bx = cs * work[_Q + BLOCK + b] + sn * work[_U2 + BLOCK + b]
-        by = cs * work[_Q + 2 * BLOCK + b] + sn * work[_U2 + 2 * BLOCK + b]
-        bz = cs * work[_Q + 3 * BLOCK + b] + sn * work[_U2 + 3 * BLOCK + b]
-        h = 2.0 * tau * (1.0 - tau)
-        # _qslerp_unit1(a, b, h), small arcs
+        aw, ax = work[_P + b], work[_P + BLOCK + b]
+        ay, az = work[_P + 2 * BLOCK + b], work[_P + 3 * BLOCK + b]
+        bw, bx = work[_Q + b], work[_Q + BLOCK + b]
+        by, bz = work[_Q + 2 * BLOCK + b], work[_Q + 3 * BLOCK + b]
         unit = _is_unit_rows(aw, ax, ay, az) & _is_unit_rows(bw, bx, by, bz)
         dw, dx, dy, dz = aw - bw, ax - bx, ay - by, az - bz
         far = dw * dw + dx * dx + dy * dy + dz * dz > _SQRT2 * _SQRT2
@@ -518,42 +533,36 @@ def _squad_rows(work):
         ow, ox, oy, oz = cw - d * aw, cx - d * ax, cy - d * ay, cz - d * az
         o2 = ow * ow + ox * ox + oy * oy + oz * oz
         inv_d = 1.0 / d
-        x2 = o2 * inv_d * inv_d
+        work[_U1 + b] = ow
+        work[_U1 + BLOCK + b] = ox
+        work[_U1 + 2 * BLOCK + b] = oy
+        work[_U1 + 3 * BLOCK + b] = oz
+        small = unit & (d > 0.0) & (o2 < (SERIES_RATIO * d) ** 2)
+        work[_TH1 + b] = 1.0 if small else 0.0
+        work[_TH2 + b] = o2 * inv_d * inv_d
+        work[_U2 + b] = inv_d
+    # the series, and the result where they apply
+    general = 0
+    for b in range(BLOCK):
+        tau = work[_TAU + b]
+        h = 2.0 * tau * (1.0 - tau)
+        x2 = work[_TH2 + b]
         p = atan_over_x(x2)
         y2 = h * h * x2 * p * p
         c = cos_series(y2)
-        k = sinc_series(y2) * h * p * inv_d
-        qw, qx, qy, qz = (
-            c * aw + k * ow,
-            c * ax + k * ox,
-            c * ay + k * oy,
-            c * az + k * oz,
-        )
-        if work[_NEG + b] != 0.0:
-            qw, qx, qy, qz = -qw, -qx, -qy, -qz
-        series = (
-            unit
-            & (d > 0.0)
-            & (o2 < (SERIES_RATIO * d) ** 2)
-            & (y2 < SERIES_ANGLE * SERIES_ANGLE)
-        )
+        k = sinc_series(y2) * h * p * work[_U2 + b]
+        sign = -1.0 if work[_NEG + b] != 0.0 else 1.0
+        series = (work[_TH1 + b] != 0.0) & (y2 < SERIES_ANGLE * SERIES_ANGLE)
         gathered = work[_PATH + b] == _GATHERED
         done = gathered & series
         redo = gathered & ~series
         general += redo
         # only the gathered rows change (the others were evaluated already)
-        work[_STEP + 3 * BLOCK + b] = qw if done else work[_STEP + 3 * BLOCK + b]
-        work[_STEP + 4 * BLOCK + b] = qx if done else work[_STEP + 4 * BLOCK + b]
-        work[_STEP + 5 * BLOCK + b] = qy if done else work[_STEP + 5 * BLOCK + b]
-        work[_STEP + 6 * BLOCK + b] = qz if done else work[_STEP + 6 * BLOCK + b]
-        work[_P + b] = aw
-        work[_P + BLOCK + b] = ax
-        work[_P + 2 * BLOCK + b] = ay
-        work[_P + 3 * BLOCK + b] = az
-        work[_Q + b] = bw
-        work[_Q + BLOCK + b] = bx
-        work[_Q + 2 * BLOCK + b] = by
-        work[_Q + 3 * BLOCK + b] = bz
+        for e in range(4):
+            q = c * work[_P + e * BLOCK + b] + k * work[_U1 + e * BLOCK + b]
+            q = -q if sign < 0.0 else q
+            at = _STEP + (3 + e) * BLOCK + b
+            work[at] = q if done else work[at]
         work[_PATH + b] = _GENERAL if redo else work[_PATH + b]
     return general
 
@@ -627,14 +636,25 @@ def _chain_block(
                     # the rotation's squad segment reads i-1 .. i+2, the
                     # translation's linear one i-1 and i, and a missing
                     # rotation spoils the translation too (as the reference)
-                    missing_r = False
-                    for q in range(max(i - 1, 0), min(i + 3, n)):
-                        if math.isnan(rp[q, 0] + rp[q, 1] + rp[q, 2] + rp[q, 3]):
-                            missing_r = True
-                    missing_t = missing_r
-                    for q in range(max(i - 1, 0), i + 1):
-                        if math.isnan(tr[q, 0] + tr[q, 1] + tr[q, 2]):
-                            missing_t = True
+                    clean = False
+                    if 1 <= i and i + 3 <= n:
+                        # the usual case in one test: a NaN anywhere makes
+                        # the sum NaN
+                        st = tr[i - 1, 0] + tr[i - 1, 1] + tr[i - 1, 2]
+                        st += tr[i, 0] + tr[i, 1] + tr[i, 2]
+                        sr = 0.0
+                        for q in range(i - 1, i + 3):
+                            sr += rp[q, 0] + rp[q, 1] + rp[q, 2] + rp[q, 3]
+                        clean = not math.isnan(sr + st)
+                    missing_r = missing_t = False
+                    if not clean:
+                        for q in range(max(i - 1, 0), min(i + 3, n)):
+                            if math.isnan(rp[q, 0] + rp[q, 1] + rp[q, 2] + rp[q, 3]):
+                                missing_r = True
+                        missing_t = missing_r
+                        for q in range(max(i - 1, 0), i + 1):
+                            if math.isnan(tr[q, 0] + tr[q, 1] + tr[q, 2]):
+                                missing_t = True
                     if missing_r:
                         qw = qx = qy = qz = math.nan
                     else:
@@ -653,13 +673,6 @@ def _chain_block(
                 else:
                     if k > n - 2:
                         k = n - 2
-                    if not rotation_only and i >= 0 and t == times[i]:
-                        tx, ty, tz = tr[i, 0], tr[i, 1], tr[i, 2]
-                    elif not rotation_only:
-                        w = (t - times[k]) / (times[k + 1] - times[k])
-                        tx = tr[k, 0] + w * (tr[k + 1, 0] - tr[k, 0])
-                        ty = tr[k, 1] + w * (tr[k + 1, 1] - tr[k, 1])
-                        tz = tr[k, 2] + w * (tr[k + 1, 2] - tr[k, 2])
                     # squad in segment g (numpy-quaternion uses the last
                     # segment before the start, indexing with -1)
                     g = i if i >= 0 else n - 1
@@ -672,6 +685,18 @@ def _chain_block(
                             n - 1
                         ]
                     tau = (t - times[g]) / dt
+                    if not rotation_only and i >= 0 and t == times[i]:
+                        tx, ty, tz = tr[i, 0], tr[i, 1], tr[i, 2]
+                    elif not rotation_only:
+                        # inside the samples k == g: the translation's weight
+                        # is tau (the same operations)
+                        if 0 <= i < n - 1:
+                            w = tau
+                        else:
+                            w = (t - times[k]) / (times[k + 1] - times[k])
+                        tx = tr[k, 0] + w * (tr[k + 1, 0] - tr[k, 0])
+                        ty = tr[k, 1] + w * (tr[k + 1, 1] - tr[k, 1])
+                        tz = tr[k, 2] + w * (tr[k + 1, 2] - tr[k, 2])
                     # the sign of the stored sample the segment starts from
                     neg = (
                         r[k, 0] * rp[k, 0]

@@ -798,16 +798,50 @@ def _chain_block(
 @helper
 def _store_lookup(work, t_out, r_out, j0, j1, rotation_only):
     """Rows j0:j1 of a lookup's result from the block's transforms in ``work``."""
-    for b in range(j1 - j0):
-        j = j0 + b
-        if not rotation_only:
-            t_out[j, 0] = work[_ACC + b]
-            t_out[j, 1] = work[_ACC + BLOCK + b]
-            t_out[j, 2] = work[_ACC + 2 * BLOCK + b]
-        r_out[j, 0] = work[_ACC + 3 * BLOCK + b]
-        r_out[j, 1] = work[_ACC + 4 * BLOCK + b]
-        r_out[j, 2] = work[_ACC + 5 * BLOCK + b]
-        r_out[j, 3] = work[_ACC + 6 * BLOCK + b]
+    nb = j1 - j0
+    # flat views of the block's rows: constant strides, so that the copy
+    # from the scratch's columns vectorises (LLVM's interleaved stores)
+    r = r_out.reshape(-1)[4 * j0 : 4 * j1]
+    for b in range(nb):
+        r[4 * b] = work[_ACC + 3 * BLOCK + b]
+        r[4 * b + 1] = work[_ACC + 4 * BLOCK + b]
+        r[4 * b + 2] = work[_ACC + 5 * BLOCK + b]
+        r[4 * b + 3] = work[_ACC + 6 * BLOCK + b]
+    if not rotation_only:
+        t = t_out.reshape(-1)[3 * j0 : 3 * j1]
+        for b in range(nb):
+            t[3 * b] = work[_ACC + b]
+            t[3 * b + 1] = work[_ACC + BLOCK + b]
+            t[3 * b + 2] = work[_ACC + 2 * BLOCK + b]
+
+
+@helper(options=_ROWS)
+def _apply_rows(work, d, out, nb, mode):
+    """:func:`_apply_block` for one item per row: ``d`` and ``out`` (nb * c,) flat."""
+    w, x, y, z = _ACC + 3 * BLOCK, _ACC + 4 * BLOCK, _ACC + 5 * BLOCK, _ACC + 6 * BLOCK
+    if mode == 2:
+        for b in range(nb):
+            ow, ox, oy, oz = _qmul_rows(
+                work[w + b], work[x + b], work[y + b], work[z + b],
+                d[4 * b], d[4 * b + 1], d[4 * b + 2], d[4 * b + 3],
+            )  # fmt: skip
+            out[4 * b] = ow
+            out[4 * b + 1] = ox
+            out[4 * b + 2] = oy
+            out[4 * b + 3] = oz
+        return
+    for b in range(nb):
+        px, py, pz = _rotate_rows(
+            work[w + b], work[x + b], work[y + b], work[z + b],
+            d[3 * b], d[3 * b + 1], d[3 * b + 2],
+        )  # fmt: skip
+        if mode == 0:
+            px += work[_ACC + b]
+            py += work[_ACC + BLOCK + b]
+            pz += work[_ACC + 2 * BLOCK + b]
+        out[3 * b] = px
+        out[3 * b + 1] = py
+        out[3 * b + 2] = pz
 
 
 @helper
@@ -817,6 +851,12 @@ def _apply_block(work, data, out, j0, j1, mode):
     ``data`` (m|1, k, c) as for :func:`transform_chain`.
     """
     k = data.shape[1]
+    if k == 1 and data.shape[0] > 1:
+        # one item per row (the usual case): flat views, vectorised
+        c = data.shape[2]
+        d = data.reshape(-1)[c * j0 : c * j1]
+        _apply_rows(work, d, out.reshape(-1)[c * j0 : c * j1], j1 - j0, mode)
+        return
     s_d = 1 if data.shape[0] > 1 else 0
     for b in range(j1 - j0):
         j = j0 + b

@@ -567,6 +567,59 @@ def _squad_rows(work):
     return general
 
 
+# A block with at least this many outer slerps off the small-arc series
+# takes them in a vector pass (:func:`_wide_rows`), fewer one by one.
+_WIDE_ROWS = 8
+
+
+@helper(options=_ROWS)
+def _wide_rows(work):
+    """The outer slerps marked ``_GENERAL``, along their great circles.
+
+    ``_qslerp_unit1``'s general branch (with ``_geodesic1``), without
+    branches, for the rows whose arguments (rows _P and _Q) are unit, not
+    equal and whose angle is in ``sincos``'s range; their rotations go into
+    the step's rows and their mark is lifted. Returns the number of rows
+    left marked (for the scalar route).
+    """
+    left = 0
+    for b in range(BLOCK):
+        aw, ax = work[_P + b], work[_P + BLOCK + b]
+        ay, az = work[_P + 2 * BLOCK + b], work[_P + 3 * BLOCK + b]
+        bw, bx = work[_Q + b], work[_Q + BLOCK + b]
+        by, bz = work[_Q + 2 * BLOCK + b], work[_Q + 3 * BLOCK + b]
+        unit = _is_unit_rows(aw, ax, ay, az) & _is_unit_rows(bw, bx, by, bz)
+        # the shorter way round, tested by _qslerp_unit1 and again by
+        # _geodesic1
+        for _ in range(2):
+            dw, dx, dy, dz = aw - bw, ax - bx, ay - by, az - bz
+            far = dw * dw + dx * dx + dy * dy + dz * dz > _SQRT2 * _SQRT2
+            bw = -bw if far else bw
+            bx = -bx if far else bx
+            by = -by if far else by
+            bz = -bz if far else bz
+        d = aw * bw + ax * bx + ay * by + az * bz
+        ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
+        so = math.sqrt(ow * ow + ox * ox + oy * oy + oz * oz)
+        k = 1.0 / so
+        theta = atan2(so, d)
+        tau = work[_TAU + b]
+        h = 2.0 * tau * (1.0 - tau)
+        y = h * theta
+        sn, cs = sincos(y)
+        sign = -1.0 if work[_NEG + b] != 0.0 else 1.0
+        wide = work[_PATH + b] == _GENERAL
+        done = wide & unit & (so != 0.0) & (abs(y) < SINCOS_LIMIT)
+        left += wide & ~done
+        for e, (a_e, o_e) in enumerate(((aw, ow), (ax, ox), (ay, oy), (az, oz))):
+            q = cs * a_e + sn * (o_e * k)
+            q = -q if sign < 0.0 else q
+            at = _STEP + (3 + e) * BLOCK + b
+            work[at] = q if done else work[at]
+        work[_PATH + b] = _GATHERED if done else work[_PATH + b]
+    return left
+
+
 @helper
 def _chain_block(
     plan, statics, offsets, gaps, own,
@@ -774,8 +827,11 @@ def _chain_block(
         cur[slot] = i
         for b in range(nb, BLOCK):  # past the end of a short last block
             work[_PATH + b] = 0.0
-        if gathered > 0 and _squad_rows(work) > 0:
-            # the outer slerps the small-arc series does not cover
+        wide = _squad_rows(work) if gathered > 0 else 0
+        if wide >= _WIDE_ROWS:
+            wide = _wide_rows(work)
+        if wide > 0:
+            # the outer slerps left, by the scalar route
             for b in range(nb):
                 if work[_PATH + b] != _GENERAL:
                     continue

@@ -353,20 +353,22 @@ def squad_table(r, t):
 # references whenever an array is assigned or handed to a function, and
 # per-row reference counting costs more than the arithmetic.
 #
-# The scratch ``work`` (WORK, BLOCK) holds one quantity per row and one
-# target row per column (structure of arrays), so that the arithmetic of a
-# step is a loop over contiguous rows without branches or calls, which
-# LLVM vectorises (4 or 8 rows per instruction). A moving step runs in
-# passes: a scalar pass finds each row's segment and either evaluates the
-# row (held and constant frames, own sample times, gaps, segments that are
-# not unit, arguments beyond the polynomial sine's range) or gathers its
-# squad segment into the scratch; the vector pass :func:`_squad_rows`
-# evaluates the gathered rows (both inner great circles and the outer
-# slerp's small-arc series) and marks the rows whose outer slerp needs the
-# general route, which a scalar pass then takes with ``_qslerp_unit1``;
+# The scratch ``work`` holds each quantity for the block's rows side by
+# side (structure of arrays), so that the arithmetic of a step is a loop
+# over contiguous rows without branches or calls, which LLVM vectorises (8
+# rows per instruction with AVX-512). A moving step runs in passes: a
+# scalar pass finds each row's segment and either evaluates the row (held
+# and constant frames, own sample times, gaps, segments that are not unit,
+# arguments beyond the polynomial sine's range) or gathers its squad
+# segment into the scratch; the vector pass :func:`_squad_rows` evaluates
+# the gathered rows (both inner great circles and the outer slerp's
+# small-arc series) and marks the rows whose outer slerp needs the general
+# branch, which :func:`_wide_rows` (another vector pass, for blocks with
+# many) and then a scalar pass (``_qslerp_unit1``) take;
 # :func:`_compose_rows` composes the step into the block's transforms.
 # Every row gets exactly the operations of the scalar code, in the same
-# order (no fastmath): results are bit for bit those of a row-by-row loop.
+# order (no fastmath): results are bit for bit those of a row-by-row loop
+# (tests/core/test_fused_rows.py).
 BLOCK = 128
 
 # ``work`` (WORK * BLOCK,): quantity q of row b at q * BLOCK + b. One flat

@@ -89,7 +89,9 @@ def threads(n):
     """rbm_nb's kernels on at most n threads inside the block (RBM_NB_NUM_THREADS).
 
     rbm_nb reads the variable at each call; its parallel kernels run only for
-    calls of at least ``rbm_nb._parallel.MIN_ROWS`` rows.
+    calls of at least ``rbm_nb._parallel.MIN_ROWS`` rows, and only on cores
+    that no other runnable thread wants at the time (``_parallel.free_cores``):
+    on a busy machine the 2-thread columns measure the serial kernels.
     """
     name = "RBM_NB_NUM_THREADS"
     before = os.environ.get(name)

@@ -592,6 +592,13 @@ def main() -> None:
         "--only", choices=["table", "scaling", "memory", "registration"]
     )
     args = parser.parse_args()
+    from rbm_nb import _parallel
+
+    print(
+        f"load average {os.getloadavg()[0]:.2f}, free cores now {_parallel.free_cores()} "
+        "(rbm_nb's parallel kernels use only free cores)",
+        flush=True,
+    )
     if args.regime:
         table(not args.no_reference)
         return

@@ -8,7 +8,14 @@ of these hold:
 * the call has at least :data:`MIN_ROWS` rows: below that, waking numba's
   thread pool costs more than the second core saves (the threshold is
   measured by ``benchmarks/bench_parallel.py``);
-* more than one thread is allowed (:func:`threads`);
+* more than one thread is allowed (:func:`threads`) and more than one core
+  is free right now (:func:`free_cores`): a parallel kernel splits its rows
+  evenly between its threads, so a thread that has to share its core with
+  another busy process holds up the whole call. Measured on the 2-core
+  machine with another process keeping one core busy: 1M rotations took
+  3.4-7.7 ms on 2 threads against 1.8 ms on 1 (see :data:`MIN_ROWS` for the
+  lookups). As with OpenMP's ``OMP_DYNAMIC``, the thread count follows the
+  load; results do not depend on it (twins are bit for bit equal);
 * no other thread of this process is running a parallel kernel. numba's
   ``workqueue`` threading layer -- the only one a plain ``pip install`` is
   sure to have, as OpenMP needs the system's libgomp and TBB the ``tbb``
@@ -34,7 +41,7 @@ import threading
 from collections.abc import Callable
 from typing import Any, Final, TypeVar
 
-__all__ = ["MIN_ROWS", "ENV_THREADS", "threads", "launch"]
+__all__ = ["MIN_ROWS", "ENV_THREADS", "threads", "free_cores", "launch"]
 
 #: Rows from which a parallel twin is used. benchmarks/bench_parallel.py on
 #: the 2-core machine (fused lookup_transform and transform_points of the
@@ -55,6 +62,9 @@ MIN_ROWS: Final = 50_000
 
 #: Environment variable capping the threads of rbm_nb's parallel kernels.
 ENV_THREADS: Final = "RBM_NB_NUM_THREADS"
+
+# Linux's count of runnable threads, in its 4th field ("running/total")
+_LOADAVG = "/proc/loadavg"
 
 _LOCK = threading.Lock()
 # pid of the process that first launched a parallel kernel (None: none yet)
@@ -92,6 +102,27 @@ def threads() -> int:
     return min(wanted, available)
 
 
+def free_cores() -> int | None:
+    """Cores this process may use that no other runnable thread wants now.
+
+    The cores of the process's affinity mask less the threads the kernel
+    counts as runnable at this instant (``/proc/loadavg``), not counting
+    the calling thread. A thread of this process that is running (a dask
+    worker's, say) counts as busy too. None where the count is not
+    available (not Linux): then the load is not taken into account.
+    """
+    try:
+        with open(_LOADAVG, "rb") as f:
+            running = int(f.read().split()[3].split(b"/")[0])
+    except (OSError, ValueError, IndexError):
+        return None
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not on Linux
+        cores = os.cpu_count() or 1
+    return max(cores - (running - 1), 1)
+
+
 def launch(
     serial: Callable[..., _Result],
     parallel: Callable[..., _Result],
@@ -114,6 +145,10 @@ def launch(
     if rows < MIN_ROWS:
         return serial(*args)
     n = threads()
+    if n > 1:
+        free = free_cores()
+        if free is not None:
+            n = min(n, free)
     pid = os.getpid()
     if n < 2 or (_launched_in is not None and _launched_in != pid):
         return serial(*args)

@@ -22,7 +22,7 @@ from typing import Any, TypeAlias
 import numpy as np
 
 from . import _frame_paths, _time
-from ._door import ArrayInput, float_array
+from ._door import ArrayInput, float_array, kernel_array
 from ._engine import chain as _chain
 from ._engine import transform as _transform
 from ._engine import twist as _twist
@@ -482,9 +482,11 @@ class ReferenceFrame:
             r = normalize_quaternions(
                 stored, f"{label}rotation", allow_nan=self._track is not None
             )
-        # private copies: the caller's arrays may change later
+        # private copies: the caller's arrays may change later (a moving
+        # frame's rotations are copied by unflip below, which makes a new array)
         t = np.array(t.reshape(-1, 3), dtype=np.float64, order="C")
-        r = np.array(r.reshape(-1, 4), dtype=np.float64, order="C")
+        moving = self._track is not None and len(r.reshape(-1, 4)) > 1
+        r = kernel_array(r.reshape(-1, 4)) if moving else np.array(r.reshape(-1, 4))
         if inverse:
             r = kq.qconj(r)  # unit quaternions: the conjugate is the inverse
             t = -kq.rotate_vectors(r, t)
@@ -497,7 +499,7 @@ class ReferenceFrame:
             stored.reshape(-1, 4), dtype=np.float64, order="C"
         )
         # interpolation needs unit quaternions on the same hemisphere
-        self._r = kq.unflip(r) if self._track is not None and len(r) > 1 else r
+        self._r = kq.unflip(r) if moving else r
 
     # -- data -------------------------------------------------------------
 

@@ -101,6 +101,20 @@ def shared_data() -> Path:
 
 
 @pytest.fixture
+def ignore_load(monkeypatch):
+    """rbm_nb's parallel twins run whatever other processes do at the time.
+
+    ``_parallel.launch`` runs serially when other runnable threads keep the
+    cores busy; tests that check the twins themselves, or measure a call's
+    memory after a warm-up call (which must have taken the same twin), must
+    not depend on what else runs on the machine.
+    """
+    from rbm_nb import _parallel
+
+    monkeypatch.setattr(_parallel, "free_cores", lambda: None)
+
+
+@pytest.fixture
 def recording_comm(monkeypatch):
     """Widgets open a ``RecordingComm`` (widget_support.py) instead of a kernel's.
 

@@ -62,6 +62,7 @@ needs its held event. Nothing else produces NaN.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import replace
 
@@ -89,8 +90,11 @@ from .scalar import (
     SINCOS_LIMIT,
     atan2,
     atan_over_x,
+    atan_over_x_small,
     cos_series,
+    cos_small,
     sinc_series,
+    sinc_small,
     sincos,
 )
 
@@ -148,8 +152,8 @@ def _qexp_table(w, x, y, z):
         # w is a sum of log-norms of unit quaternions (~1e-16): then 1 + w
         # is exp(w) to within w²/2, below half an ulp of 1
         e = 1.0 + w if abs(w) < _TINY else math.exp(w)
-        c = cos_series(v2)
-        k = e * sinc_series(v2)
+        c = cos_small(v2)
+        k = e * sinc_small(v2)
         return e * c, k * x, k * y, k * z
     return _qexp1(w, x, y, z)
 
@@ -165,7 +169,7 @@ def _qlog_table(w, x, y, z):
     b2 = x * x + y * y + z * z
     if w > 0.0 and b2 < (SERIES_RATIO * w) ** 2 and b2 > (_EPS * w) ** 2:
         inv_w = 1.0 / w
-        f = atan_over_x(b2 * inv_w * inv_w) * inv_w
+        f = atan_over_x_small(b2 * inv_w * inv_w) * inv_w
         b = math.sqrt(b2)  # the real part exactly as _qlog1 forms it
         n2 = w * w + b * b
         d = n2 - 1.0  # exact (Sterbenz)
@@ -194,7 +198,7 @@ def _geodesic_table(aw, ax, ay, az, bw, bx, by, bz):
     k = 1.0 / so
     if d > 0.0 and so < SERIES_RATIO * d:
         x = so / d
-        theta = x * atan_over_x(x * x)
+        theta = x * atan_over_x_small(x * x)
     else:
         theta = atan2(so, d)
     return theta, ow * k, ox * k, oy * k, oz * k
@@ -213,7 +217,10 @@ def _log_step(r, i):
     n = r.shape[0]
     if i < 0 or i > n - 2:
         return 0.0, 0.0, 0.0, 0.0  # not used by any row
-    iw, ix, iy, iz = _qinv1(r[i, 0], r[i, 1], r[i, 2], r[i, 3])
+    # r[i]⁻¹ with one division, not _qinv1's four (within an ulp of it)
+    w, x, y, z = r[i, 0], r[i, 1], r[i, 2], r[i, 3]
+    k = 1.0 / (w * w + x * x + y * y + z * z)
+    iw, ix, iy, iz = w * k, -x * k, -y * k, -z * k
     nw, nx, ny, nz = _qmul1(
         iw, ix, iy, iz, r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3]
     )
@@ -221,34 +228,53 @@ def _log_step(r, i):
 
 
 @helper(inline=True)
-def _table_row(r, t, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz):
+def _inv_interval(t, k):
+    """1 / (t[k+1] - t[k]), or 0.0 where sample k or k+1 does not exist."""
+    if k < 0 or k > t.shape[0] - 2:
+        return 0.0
+    return 1.0 / (t[k + 1] - t[k])
+
+
+@helper(inline=True)
+def _first_half(r, i):
+    """Whether r[i]·r[i+1] > 0 (the arc between them is under π/2)."""
+    return (
+        r[i, 0] * r[i + 1, 0]
+        + r[i, 1] * r[i + 1, 1]
+        + r[i, 2] * r[i + 1, 2]
+        + r[i, 3] * r[i + 1, 3]
+    ) > 0.0
+
+
+@helper(inline=True)
+def _table_row(r, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, rb):
     """Fill row i of the squad table of (r, t) (n >= 2) into ``c``.
 
-    Equal to row i of ``squad_coefficients`` (a, b) and ``squad_segments``
-    (operation for operation), from samples i-1 .. i+2 and the logs
-    p = L[i-1], l = L[i], n = L[i+1] (``_log_step``).
+    Row i of ``squad_coefficients`` (a, b) and ``squad_segments`` to within
+    4 ulp, from samples i-1 .. i+2, the logs p = L[i-1], l = L[i],
+    n = L[i+1] (``_log_step``) and the ratios of sampling intervals
+    ra = (t[i+1]-t[i]) / (t[i]-t[i-1]), rb = (t[i+1]-t[i]) / (t[i+2]-t[i+1])
+    (where those samples exist).
     """
     n = r.shape[0]
     # a[i]
     if i == 0 or i == n - 1:
         aw, ax, ay, az = r[i, 0], r[i, 1], r[i, 2], r[i, 3]
     else:
-        ratio = (t[i + 1] - t[i]) / (t[i] - t[i - 1])
         ew, ex, ey, ez = _qexp_table(
-            (-lw + pw * ratio) * 0.25,
-            (-lx + px * ratio) * 0.25,
-            (-ly + py * ratio) * 0.25,
-            (-lz + pz * ratio) * 0.25,
+            (-lw + pw * ra) * 0.25,
+            (-lx + px * ra) * 0.25,
+            (-ly + py * ra) * 0.25,
+            (-lz + pz * ra) * 0.25,
         )
         aw, ax, ay, az = _qmul1(r[i, 0], r[i, 1], r[i, 2], r[i, 3], ew, ex, ey, ez)
     # b[i], and the sample the segment ends at
     if i < n - 2:
-        ratio = (t[i + 1] - t[i]) / (t[i + 2] - t[i + 1])
         ew, ex, ey, ez = _qexp_table(
-            (nw * ratio - lw) * -0.25,
-            (nx * ratio - lx) * -0.25,
-            (ny * ratio - ly) * -0.25,
-            (nz * ratio - lz) * -0.25,
+            (nw * rb - lw) * -0.25,
+            (nx * rb - lx) * -0.25,
+            (ny * rb - ly) * -0.25,
+            (nz * rb - lz) * -0.25,
         )
         bw, bx, by, bz = _qmul1(
             r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3], ew, ex, ey, ez
@@ -279,12 +305,28 @@ def _table_row(r, t, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz):
         and _is_unit(bw, bx, by, bz)
     )
     if unit:
-        g = _geodesic_table(r[i, 0], r[i, 1], r[i, 2], r[i, 3], ew, ex, ey, ez)
-        c[i, 4] = g[0]
-        c[i, 5] = g[1]
-        c[i, 6] = g[2]
-        c[i, 7] = g[3]
-        c[i, 8] = g[4]
+        theta2 = lx * lx + ly * ly + lz * lz
+        if i < n - 1 and theta2 > 0.0 and abs(lw) < _TINY and _first_half(r, i):
+            # r[i+1] = r[i] exp(l) with |l| < π/2 (r[i]·r[i+1] > 0, no flip):
+            # the arc is θ = |l| along u = r[i] (0, l / θ), which the log has
+            # all but worked out (within 4 ulp of _geodesic_table's atan)
+            theta = math.sqrt(theta2)
+            k = 1.0 / theta
+            ow, ox, oy, oz = _qmul1(
+                r[i, 0], r[i, 1], r[i, 2], r[i, 3], 0.0, lx * k, ly * k, lz * k
+            )
+            c[i, 4] = theta
+            c[i, 5] = ow
+            c[i, 6] = ox
+            c[i, 7] = oy
+            c[i, 8] = oz
+        else:
+            g = _geodesic_table(r[i, 0], r[i, 1], r[i, 2], r[i, 3], ew, ex, ey, ez)
+            c[i, 4] = g[0]
+            c[i, 5] = g[1]
+            c[i, 6] = g[2]
+            c[i, 7] = g[3]
+            c[i, 8] = g[4]
         g = _geodesic_table(aw, ax, ay, az, bw, bx, by, bz)
         c[i, 9] = g[0]
         c[i, 10] = g[1]
@@ -302,29 +344,239 @@ def _table_row(r, t, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz):
         c[i, _DONE] = _NOT_UNIT
 
 
+# Rows are filled in blocks: the samples, logs and intervals a block reads
+# are gathered into structure-of-arrays scratch (one contiguous row of
+# FILL_BLOCK + 3 per quantity), and the common case -- interior rows of
+# unit quaternions whose arcs are small enough for the short series -- is
+# computed in loops over the block without calls or exceptions, which LLVM
+# vectorises. Each row records whether it took that route; the others (the
+# first and last two rows, non-unit samples, large arcs, a control-point
+# arc that goes the other way round) are filled by _table_row afterwards,
+# one by one. Every operation of the block loops is the one _table_row
+# performs (no fused multiply-add: vector lanes round as scalar code), so a
+# row's value depends only on the data, not on the block it fell in.
+FILL_BLOCK = 64
+_FILL_OPTIONS = dataclasses.replace(KERNEL, error_model="numpy")
+# scratch rows: samples (0:4), intervals and their inverses (4, 5), logs
+# (6:10), whether a log needs the exact route (10), the table row (11:26),
+# whether the row needs the exact route (26), the control point b (27:31)
+_S_Q = 0
+_S_DT = 4
+_S_IDT = 5
+_S_L = 6
+_S_LBAD = 10
+_S_OUT = 11
+_S_BAD = 26
+_S_B = 27
+_S_ROWS = 31
+
+
+@helper(inline=True)
+def _control_point_series(rw, rx, ry, rz, ew, ex, ey, ez):
+    """r exp(e) by _qexp_table's series route, and whether that route holds
+    (a small arc, a scale of 1 to within rounding, a unit result)."""
+    v2 = ex * ex + ey * ey + ez * ez
+    e = 1.0 + ew
+    k = e * sinc_small(v2)
+    w, x, y, z = _qmul1(rw, rx, ry, rz, e * cos_small(v2), k * ex, k * ey, k * ez)
+    fast = (
+        (v2 < SERIES_ANGLE * SERIES_ANGLE)
+        & (v2 > _EPS * _EPS)
+        & (abs(ew) < _TINY)
+        & (abs(w * w + x * x + y * y + z * z - 1.0) <= 1e-12)
+    )
+    return w, x, y, z, fast
+
+
+@helper(options=_FILL_OPTIONS)
+def _fill_block(r, t, c, i0, i1, s):
+    """Rows i0..i1-1 of the table (1 <= i0, i1 <= n - 2, i1 - i0 <= FILL_BLOCK).
+
+    ``s``: scratch of shape (_S_ROWS, FILL_BLOCK + 3).
+    """
+    m = i1 - i0
+    # gather samples i0-1 .. i1+1 (index k: sample i0 - 1 + k)
+    for j in range(4):
+        for k in range(m + 3):
+            s[_S_Q + j, k] = r[i0 - 1 + k, j]
+    for k in range(m + 2):
+        s[_S_DT, k] = t[i0 + k] - t[i0 - 1 + k]
+    for k in range(m + 2):
+        s[_S_IDT, k] = 1.0 / s[_S_DT, k]
+    # logs L[i0-1+k] = log(q[k]⁻¹ q[k+1]), k = 0 .. m+1 (_log_step, _qlog_table)
+    for k in range(m + 2):
+        aw, ax, ay, az = s[0, k], s[1, k], s[2, k], s[3, k]
+        bw, bx, by, bz = s[0, k + 1], s[1, k + 1], s[2, k + 1], s[3, k + 1]
+        inv = 1.0 / (aw * aw + ax * ax + ay * ay + az * az)
+        iw, ix, iy, iz = aw * inv, -ax * inv, -ay * inv, -az * inv
+        pw, px, py, pz = _qmul1(iw, ix, iy, iz, bw, bx, by, bz)
+        b2 = px * px + py * py + pz * pz
+        inv_w = 1.0 / pw
+        f = atan_over_x_small(b2 * inv_w * inv_w) * inv_w
+        b = math.sqrt(b2)
+        d = (pw * pw + b * b) - 1.0
+        s[_S_L, k] = (d - 0.5 * d * d) / 2.0
+        s[_S_L + 1, k] = f * px
+        s[_S_L + 2, k] = f * py
+        s[_S_L + 3, k] = f * pz
+        fast = (
+            (pw > 0.0)
+            & (b2 < (SERIES_RATIO * pw) ** 2)
+            & (b2 > (_EPS * pw) ** 2)
+            & (abs(d) < _TINY)
+        )
+        s[_S_LBAD, k] = 0.0 if fast else 1.0
+    for k in range(m + 2):
+        if s[_S_LBAD, k] != 0.0:
+            lw, lx, ly, lz = _log_step(r, i0 - 1 + k)
+            s[_S_L, k] = lw
+            s[_S_L + 1, k] = lx
+            s[_S_L + 2, k] = ly
+            s[_S_L + 3, k] = lz
+    # rows: row b is sample i = i0 + b, at scratch index b + 1. Three short
+    # loops rather than one long one: LLVM vectorises each of them.
+    # the control points a = r[i] exp((-l + p ra) / 4) and
+    # b = r[i+1] exp((n rb - l) / -4), each in a loop of its own (together,
+    # LLVM did not vectorise them)
+    for b in range(m):
+        ra = s[_S_DT, b + 1] * s[_S_IDT, b]
+        aw, ax, ay, az, fast = _control_point_series(
+            s[0, b + 1], s[1, b + 1], s[2, b + 1], s[3, b + 1],
+            (-s[_S_L, b + 1] + s[_S_L, b] * ra) * 0.25,
+            (-s[_S_L + 1, b + 1] + s[_S_L + 1, b] * ra) * 0.25,
+            (-s[_S_L + 2, b + 1] + s[_S_L + 2, b] * ra) * 0.25,
+            (-s[_S_L + 3, b + 1] + s[_S_L + 3, b] * ra) * 0.25,
+        )  # fmt: skip
+        s[_S_OUT, b] = aw
+        s[_S_OUT + 1, b] = ax
+        s[_S_OUT + 2, b] = ay
+        s[_S_OUT + 3, b] = az
+        s[_S_BAD, b] = 0.0 if fast else 1.0
+    for b in range(m):
+        rb = s[_S_DT, b + 1] * s[_S_IDT, b + 2]
+        bw, bx, by, bz, fast = _control_point_series(
+            s[0, b + 2], s[1, b + 2], s[2, b + 2], s[3, b + 2],
+            (s[_S_L, b + 2] * rb - s[_S_L, b + 1]) * -0.25,
+            (s[_S_L + 1, b + 2] * rb - s[_S_L + 1, b + 1]) * -0.25,
+            (s[_S_L + 2, b + 2] * rb - s[_S_L + 2, b + 1]) * -0.25,
+            (s[_S_L + 3, b + 2] * rb - s[_S_L + 3, b + 1]) * -0.25,
+        )  # fmt: skip
+        s[_S_B, b] = bw
+        s[_S_B + 1, b] = bx
+        s[_S_B + 2, b] = by
+        s[_S_B + 3, b] = bz
+        if not fast:
+            s[_S_BAD, b] = 1.0
+    for b in range(m):
+        # the arc r[i] -> r[i+1] from the log (see _table_row)
+        rw, rx, ry, rz = s[0, b + 1], s[1, b + 1], s[2, b + 1], s[3, b + 1]
+        qw, qx, qy, qz = s[0, b + 2], s[1, b + 2], s[2, b + 2], s[3, b + 2]
+        lw, lx, ly, lz = (
+            s[_S_L, b + 1], s[_S_L + 1, b + 1], s[_S_L + 2, b + 1], s[_S_L + 3, b + 1]
+        )  # fmt: skip
+        theta2 = lx * lx + ly * ly + lz * lz
+        theta = math.sqrt(theta2)
+        inv_theta = 1.0 / theta
+        ow, ox, oy, oz = _qmul1(
+            rw, rx, ry, rz, 0.0, lx * inv_theta, ly * inv_theta, lz * inv_theta
+        )
+        fast = (
+            (abs(rw * rw + rx * rx + ry * ry + rz * rz - 1.0) <= 1e-12)
+            & (abs(qw * qw + qx * qx + qy * qy + qz * qz - 1.0) <= 1e-12)
+            & (theta2 > 0.0)
+            & (abs(lw) < _TINY)
+            & (rw * qw + rx * qx + ry * qy + rz * qz > 0.0)
+        )
+        s[_S_OUT + 4, b] = theta
+        s[_S_OUT + 5, b] = ow
+        s[_S_OUT + 6, b] = ox
+        s[_S_OUT + 7, b] = oy
+        s[_S_OUT + 8, b] = oz
+        if not fast:
+            s[_S_BAD, b] = 1.0
+    for b in range(m):
+        # the arc a -> b (_geodesic_table's series route, no flip)
+        aw, ax, ay, az = (
+            s[_S_OUT, b],
+            s[_S_OUT + 1, b],
+            s[_S_OUT + 2, b],
+            s[_S_OUT + 3, b],
+        )
+        bw, bx, by, bz = s[_S_B, b], s[_S_B + 1, b], s[_S_B + 2, b], s[_S_B + 3, b]
+        dw, dx, dy, dz = aw - bw, ax - bx, ay - by, az - bz
+        d = aw * bw + ax * bx + ay * by + az * bz
+        gw, gx, gy, gz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
+        so = math.sqrt(gw * gw + gx * gx + gy * gy + gz * gz)
+        kg = 1.0 / so
+        x = so / d
+        fast = (
+            (dw * dw + dx * dx + dy * dy + dz * dz <= _SQRT2 * _SQRT2)
+            & (so != 0.0)
+            & (d > 0.0)
+            & (so < SERIES_RATIO * d)
+        )
+        s[_S_OUT + 9, b] = x * atan_over_x_small(x * x)
+        s[_S_OUT + 10, b] = gw * kg
+        s[_S_OUT + 11, b] = gx * kg
+        s[_S_OUT + 12, b] = gy * kg
+        s[_S_OUT + 13, b] = gz * kg
+        if not fast:
+            s[_S_BAD, b] = 1.0
+    for b in range(m):
+        i = i0 + b
+        if s[_S_BAD, b] != 0.0:
+            _table_row(
+                r, c, i,
+                s[_S_L, b], s[_S_L + 1, b], s[_S_L + 2, b], s[_S_L + 3, b],
+                s[_S_L, b + 1], s[_S_L + 1, b + 1], s[_S_L + 2, b + 1],
+                s[_S_L + 3, b + 1],
+                s[_S_L, b + 2], s[_S_L + 1, b + 2], s[_S_L + 2, b + 2],
+                s[_S_L + 3, b + 2],
+                s[_S_DT, b + 1] * s[_S_IDT, b], s[_S_DT, b + 1] * s[_S_IDT, b + 2],
+            )  # fmt: skip
+        else:
+            for j in range(_DONE):
+                c[i, j] = s[_S_OUT + j, b]
+            c[i, _DONE] = _UNIT
+
+
+@helper
+def _fill_row(r, t, c, i):
+    """Row i of the table alone (its three logs computed here)."""
+    n = r.shape[0]
+    pw, px, py, pz = _log_step(r, i - 1)
+    lw, lx, ly, lz = _log_step(r, i)
+    nw, nx, ny, nz = _log_step(r, i + 1)
+    dt = t[i + 1] - t[i] if i < n - 1 else 0.0
+    _table_row(
+        r, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz,
+        dt * _inv_interval(t, i - 1), dt * _inv_interval(t, i + 1),
+    )  # fmt: skip
+
+
 @helper
 def _fill_run(r, t, c, g, count):
     """Compute row g of the table and the missing rows after it (``count`` at most).
 
-    Stops before the first row already computed; each log is computed
-    once. Returns the number of rows computed.
+    Stops before the first row already computed. Returns the number of
+    rows computed.
     """
     n = r.shape[0]
     end = min(g + count, n)
-    pw, px, py, pz = _log_step(r, g - 1)
-    lw, lx, ly, lz = _log_step(r, g)
-    done = 0
-    for i in range(g, end):
-        if i > g and c[i, _DONE] != 0.0:
-            break
-        nw, nx, ny, nz = _log_step(r, i + 1)
-        _table_row(
-            r, t, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz
-        )  # fmt: skip
-        done += 1
-        pw, px, py, pz = lw, lx, ly, lz
-        lw, lx, ly, lz = nw, nx, ny, nz
-    return done
+    stop = g + 1
+    while stop < end and c[stop, _DONE] == 0.0:
+        stop += 1
+    s = np.empty((_S_ROWS, FILL_BLOCK + 3))
+    i = g
+    while i < stop:
+        if i == 0 or i >= n - 2:
+            _fill_row(r, t, c, i)
+            i += 1
+        else:
+            j = min(i + FILL_BLOCK, stop, n - 2)
+            _fill_block(r, t, c, i, j, s)
+            i = j
+    return stop - g
 
 
 @kernel(F2, F1)
@@ -369,11 +621,18 @@ def squad_table(r, t):
 # Every row gets exactly the operations of the scalar code, in the same
 # order (no fastmath): results are bit for bit those of a row-by-row loop
 # (tests/core/test_fused_rows.py).
-BLOCK = 128
+#
+# 96 rows: the scratch (27 kB) and the rows streamed through stay in L1
+# (256 rows were 1.4x slower, 64 rows 1.05x, 128 rows 1-2 % faster but
+# their scratch, one per thread in the prange twins, took a 20k-row
+# transform over 1.5x its output's memory).
+BLOCK = 96
 
 # ``work`` (WORK * BLOCK,): quantity q of row b at q * BLOCK + b. One flat
 # array with fixed offsets (and loops over whole blocks), so that LLVM sees
 # that the quantities do not overlap and vectorises without runtime checks.
+# Allocated empty: every row a pass uses is written first, and the vector
+# passes compute on whatever the others hold (kept, never used).
 _ACC = 0  # 0:7 the block's accumulated transforms (tx, ty, tz, w, x, y, z)
 _STEP = 7 * BLOCK  # 7:14 the step's transform at each row
 _TAU = 14 * BLOCK  # squad's fraction τ of the row's segment g
@@ -490,7 +749,11 @@ def _arc_rows(work, theta, start, u):
     cos(τθ) start + sin(τθ) u, over the block, into the rows of ``start``.
     """
     for b in range(BLOCK):
-        sn, cs = sincos(work[_TAU + b] * work[theta + b])
+        y = work[_TAU + b] * work[theta + b]
+        # (in range for the gathered rows; the others, whatever the scratch
+        # holds, are kept in it too: out of range sincos's rounding to an
+        # integer would be undefined)
+        sn, cs = sincos(y if abs(y) < SINCOS_LIMIT else 0.0)
         for e in range(4):
             work[start + e * BLOCK + b] = (
                 cs * work[start + e * BLOCK + b] + sn * work[u + e * BLOCK + b]
@@ -608,7 +871,7 @@ def _wide_rows(work):
         tau = work[_TAU + b]
         h = 2.0 * tau * (1.0 - tau)
         y = h * theta
-        sn, cs = sincos(y)
+        sn, cs = sincos(y if abs(y) < SINCOS_LIMIT else 0.0)  # (as in _arc_rows)
         sign = -1.0 if work[_NEG + b] != 0.0 else 1.0
         wide = work[_PATH + b] == _GENERAL
         done = wide & unit & (so != 0.0) & (abs(y) < SINCOS_LIMIT)
@@ -978,7 +1241,7 @@ def lookup_chain(
     m = target.shape[0]
     t_out = np.empty((0 if rotation_only else m, 3))
     r_out = np.empty((m, 4))
-    work = np.zeros(WORK * BLOCK)
+    work = np.empty(WORK * BLOCK)
     cur = np.full(SLOTS, -1, dtype=np.int64)
     computed = 0
     for j0 in range(0, m, BLOCK):
@@ -1021,7 +1284,7 @@ def transform_chain(
     m = target.shape[0]
     out = np.empty((m, data.shape[1], data.shape[2]))
     rotation_only = mode != 0
-    work = np.zeros(WORK * BLOCK)
+    work = np.empty(WORK * BLOCK)
     cur = np.full(SLOTS, -1, dtype=np.int64)
     computed = 0
     for j0 in range(0, m, BLOCK):
@@ -1278,7 +1541,7 @@ def lookup_chain_parallel(
     cur = np.full((nch, SLOTS), -1, dtype=np.int64)
     computed = 0
     for ch in prange(nch):
-        work_c = np.zeros(WORK * BLOCK)
+        work_c = np.empty(WORK * BLOCK)
         cur_c = cur[ch]
         for j0 in range(bounds[ch], bounds[ch + 1], BLOCK):
             j1 = min(j0 + BLOCK, bounds[ch + 1])
@@ -1311,7 +1574,7 @@ def transform_chain_parallel(
     cur = np.full((nch, SLOTS), -1, dtype=np.int64)
     computed = 0
     for ch in prange(nch):
-        work_c = np.zeros(WORK * BLOCK)
+        work_c = np.empty(WORK * BLOCK)
         cur_c = cur[ch]
         for j0 in range(bounds[ch], bounds[ch + 1], BLOCK):
             j1 = min(j0 + BLOCK, bounds[ch + 1])

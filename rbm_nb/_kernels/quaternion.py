@@ -622,15 +622,22 @@ def unflip(q):
     """
     n = q.shape[0]
     out = np.empty((n, 4))
-    prev = -1
+    # flat views (constant strides) and the last valid row kept in registers
+    f = q.reshape(-1)
+    o = out.reshape(-1)
+    have = False
+    pw = px = py = pz = 0.0
     for i in range(n):
+        w, x, y, z = f[4 * i], f[4 * i + 1], f[4 * i + 2], f[4 * i + 3]
         d = 0.0
-        if prev >= 0:
-            for j in range(4):
-                d += out[prev, j] * q[i, j]
+        if have:
+            d = pw * w + px * x + py * y + pz * z
         sign = -1.0 if d < 0.0 else 1.0
-        for j in range(4):
-            out[i, j] = sign * q[i, j]
-        if not math.isnan(q[i, 0] + q[i, 1] + q[i, 2] + q[i, 3]):
-            prev = i
+        o[4 * i] = sign * w
+        o[4 * i + 1] = sign * x
+        o[4 * i + 2] = sign * y
+        o[4 * i + 3] = sign * z
+        if not math.isnan(w + x + y + z):
+            pw, px, py, pz = sign * w, sign * x, sign * y, sign * z
+            have = True
     return out

@@ -66,6 +66,20 @@ def rotate_vectors_checked(q, v):
     return out, zero_idx
 
 
+@helper(inline=True)
+def _flat(a):
+    """The rows of a C-contiguous 2-D array as one 1-D view.
+
+    The row loops index these views as ``4 i + k``: numba indexes a 2-D
+    array's rows with its row stride, a runtime value, and LLVM vectorises
+    no loop over such rows, while with constant strides it does (1M
+    rotations on 1 thread: 3.4 -> 1.9 ms). The views are taken outside a
+    ``prange`` loop: inside it the arrays lose their contiguous layout and
+    the loops would be scalar again (and 3x slower than the serial kernel).
+    """
+    return a.reshape(-1)
+
+
 @helper(inline=True, options=VECTOR_KERNEL)
 def _rotate_inline(w, x, y, z, vx, vy, vz):
     """:func:`~rbm_nb._kernels.quaternion._rotate1` inlined into vector loops
@@ -87,41 +101,57 @@ def _rotate_inline(w, x, y, z, vx, vy, vz):
 
 
 @helper(inline=True, options=VECTOR_KERNEL)
-def _rotate_rows(q, v, out, lo, hi):
-    """Rotate rows lo..hi-1 into ``out``; count zero quaternions and infinities.
+def _rotate_rows(qf, nq, vf, nv, of, lo, hi):
+    """Rotate rows lo..hi-1 into ``of``; count zero quaternions and infinities.
 
     Branch-free, so that LLVM vectorises the loop: a zero quaternion gives
     NaN through 0 * (1 / 0) (``error_model="numpy"``) and is counted, not
     tested. Infinities are counted in ``v`` and in ``q`` (through |q|²).
-    ``q`` or ``v`` may hold a single row that every output row reuses.
+    ``qf``, ``vf`` and ``of`` are flat views of the (nq, 4), (nv, 3) and
+    output (n, 3) arrays (see :func:`_flat`); ``q`` or ``v`` may hold a
+    single row (nq or nv 1) that every output row reuses.
     """
     zeros = 0
     infs = 0
-    if q.shape[0] == 1 and v.shape[0] != 1:
-        w, x, y, z = q[0, 0], q[0, 1], q[0, 2], q[0, 3]
+    if nq == 1 and nv != 1:
+        w, x, y, z = qf[0], qf[1], qf[2], qf[3]
         n2 = w * w + x * x + y * y + z * z
         zeros += hi > lo and n2 == 0.0
         infs += hi > lo and abs(n2) == np.inf
         for i in range(lo, hi):
-            vx, vy, vz = v[i, 0], v[i, 1], v[i, 2]
+            vx, vy, vz = vf[3 * i], vf[3 * i + 1], vf[3 * i + 2]
             infs += (abs(vx) == np.inf) + (abs(vy) == np.inf) + (abs(vz) == np.inf)
             rx, ry, rz = _rotate_inline(w, x, y, z, vx, vy, vz)
-            out[i, 0] = rx
-            out[i, 1] = ry
-            out[i, 2] = rz
+            of[3 * i] = rx
+            of[3 * i + 1] = ry
+            of[3 * i + 2] = rz
         return zeros, infs
-    sv = 1 if v.shape[0] > 1 else 0
+    if nv == 1 and nq != 1:
+        vx, vy, vz = vf[0], vf[1], vf[2]
+        infs += hi > lo and (
+            (abs(vx) == np.inf) + (abs(vy) == np.inf) + (abs(vz) == np.inf)
+        )
+        for i in range(lo, hi):
+            w, x, y, z = qf[4 * i], qf[4 * i + 1], qf[4 * i + 2], qf[4 * i + 3]
+            n2 = w * w + x * x + y * y + z * z
+            zeros += n2 == 0.0
+            infs += abs(n2) == np.inf
+            rx, ry, rz = _rotate_inline(w, x, y, z, vx, vy, vz)
+            of[3 * i] = rx
+            of[3 * i + 1] = ry
+            of[3 * i + 2] = rz
+        return zeros, infs
     for i in range(lo, hi):
-        w, x, y, z = q[i, 0], q[i, 1], q[i, 2], q[i, 3]
-        vx, vy, vz = v[i * sv, 0], v[i * sv, 1], v[i * sv, 2]
+        w, x, y, z = qf[4 * i], qf[4 * i + 1], qf[4 * i + 2], qf[4 * i + 3]
+        vx, vy, vz = vf[3 * i], vf[3 * i + 1], vf[3 * i + 2]
         n2 = w * w + x * x + y * y + z * z
         zeros += n2 == 0.0
         infs += (abs(n2) == np.inf) + (abs(vx) == np.inf) + (abs(vy) == np.inf)
         infs += abs(vz) == np.inf
         rx, ry, rz = _rotate_inline(w, x, y, z, vx, vy, vz)
-        out[i, 0] = rx
-        out[i, 1] = ry
-        out[i, 2] = rz
+        of[3 * i] = rx
+        of[3 * i + 1] = ry
+        of[3 * i + 2] = rz
     return zeros, infs
 
 
@@ -148,7 +178,9 @@ def rotate_vectors_into(q, v, out):
     infs : int
         How many infinities ``v`` and ``q`` hold (idem).
     """
-    return _rotate_rows(q, v, out, 0, out.shape[0])
+    return _rotate_rows(
+        _flat(q), q.shape[0], _flat(v), v.shape[0], _flat(out), 0, out.shape[0]
+    )
 
 
 @kernel(F2, F2, F2, options=_PARALLEL_VECTOR)
@@ -159,10 +191,13 @@ def rotate_vectors_into_parallel(q, v, out):
     # thread count is not read here: that would keep the kernel out of the
     # on-disk cache)
     size = (n + _BLOCKS - 1) // _BLOCKS
+    qf, vf, of = _flat(q), _flat(v), _flat(out)  # outside the loop: see _flat
+    nq, nv = q.shape[0], v.shape[0]
     zeros = 0
     infs = 0
     for b in prange(_BLOCKS):
-        z, f = _rotate_rows(q, v, out, min(b * size, n), min((b + 1) * size, n))
+        lo, hi = min(b * size, n), min((b + 1) * size, n)
+        z, f = _rotate_rows(qf, nq, vf, nv, of, lo, hi)
         zeros += z
         infs += f
     return zeros, infs
@@ -241,25 +276,38 @@ def rotation_vectors(q):
     return out
 
 
+@helper(inline=True)
+def _qmul_flat(pf, a, qf, b, of, i):
+    """Row i of ``of`` = p[a] * q[b] (flat views, rows of 4); the number of
+    infinities in the two operand rows."""
+    aw, ax, ay, az = pf[a], pf[a + 1], pf[a + 2], pf[a + 3]
+    bw, bx, by, bz = qf[b], qf[b + 1], qf[b + 2], qf[b + 3]
+    infs = (abs(aw) == np.inf) + (abs(ax) == np.inf) + (abs(ay) == np.inf)
+    infs += (abs(az) == np.inf) + (abs(bw) == np.inf) + (abs(bx) == np.inf)
+    infs += (abs(by) == np.inf) + (abs(bz) == np.inf)
+    of[4 * i] = aw * bw - ax * bx - ay * by - az * bz
+    of[4 * i + 1] = aw * bx + ax * bw + ay * bz - az * by
+    of[4 * i + 2] = aw * by - ax * bz + ay * bw + az * bx
+    of[4 * i + 3] = aw * bz + ax * by - ay * bx + az * bw
+    return infs
+
+
 @helper(inline=True, options=VECTOR_KERNEL)
-def _qmul_rows(p, q, out, lo, hi):
-    """p * q for rows lo..hi-1 into ``out`` (either operand may be one row);
-    the number of infinities in the operands' rows used. Branch-free."""
-    sp = 1 if p.shape[0] > 1 else 0
-    sq = 1 if q.shape[0] > 1 else 0
+def _qmul_rows(pf, np_, qf, nq, of, lo, hi):
+    """p * q for rows lo..hi-1 into ``of`` (flat views, see :func:`_flat`;
+    either operand may be one row, np_ or nq 1); the number of infinities in
+    the operands' rows used. Branch-free, one loop per broadcast case, so
+    that every index has a constant stride."""
     infs = 0
-    for i in range(lo, hi):
-        a = i * sp
-        b = i * sq
-        aw, ax, ay, az = p[a, 0], p[a, 1], p[a, 2], p[a, 3]
-        bw, bx, by, bz = q[b, 0], q[b, 1], q[b, 2], q[b, 3]
-        infs += (abs(aw) == np.inf) + (abs(ax) == np.inf) + (abs(ay) == np.inf)
-        infs += (abs(az) == np.inf) + (abs(bw) == np.inf) + (abs(bx) == np.inf)
-        infs += (abs(by) == np.inf) + (abs(bz) == np.inf)
-        out[i, 0] = aw * bw - ax * bx - ay * by - az * bz
-        out[i, 1] = aw * bx + ax * bw + ay * bz - az * by
-        out[i, 2] = aw * by - ax * bz + ay * bw + az * bx
-        out[i, 3] = aw * bz + ax * by - ay * bx + az * bw
+    if np_ == nq:
+        for i in range(lo, hi):
+            infs += _qmul_flat(pf, 4 * i, qf, 4 * i, of, i)
+    elif np_ == 1:
+        for i in range(lo, hi):
+            infs += _qmul_flat(pf, 0, qf, 4 * i, of, i)
+    else:
+        for i in range(lo, hi):
+            infs += _qmul_flat(pf, 4 * i, qf, 0, of, i)
     return infs
 
 
@@ -268,7 +316,9 @@ def qmul_into(p, q, out):
     """Hamilton product p * q row by row ((n|1, 4) x (n|1, 4)) into ``out``
     (n, 4) (allocated by the caller, see :func:`rotate_vectors_into`); how
     many infinities the operands hold (the caller names one)."""
-    return _qmul_rows(p, q, out, 0, out.shape[0])
+    return _qmul_rows(
+        _flat(p), p.shape[0], _flat(q), q.shape[0], _flat(out), 0, out.shape[0]
+    )
 
 
 @kernel(F2, F2, F2, options=_PARALLEL_VECTOR)
@@ -276,29 +326,32 @@ def qmul_into_parallel(p, q, out):
     """:func:`qmul_into` with blocks of rows on numba's threads."""
     n = out.shape[0]
     size = (n + _BLOCKS - 1) // _BLOCKS
+    pf, qf, of = _flat(p), _flat(q), _flat(out)  # outside the loop: see _flat
+    np_, nq = p.shape[0], q.shape[0]
     infs = 0
     for b in prange(_BLOCKS):
-        infs += _qmul_rows(p, q, out, min(b * size, n), min((b + 1) * size, n))
+        lo, hi = min(b * size, n), min((b + 1) * size, n)
+        infs += _qmul_rows(pf, np_, qf, nq, of, lo, hi)
     return infs
 
 
 @helper(inline=True, options=VECTOR_KERNEL)
-def _qinv_rows(q, out, lo, hi):
+def _qinv_rows(qf, of, lo, hi):
     """conj(q) / |q|² for rows lo..hi-1 into ``out``; counts of zero rows and
     of infinities. Branch-free: a zero row gives NaN through 0 * (1 / 0)."""
     zeros = 0
     infs = 0
     for i in range(lo, hi):
-        w, x, y, z = q[i, 0], q[i, 1], q[i, 2], q[i, 3]
+        w, x, y, z = qf[4 * i], qf[4 * i + 1], qf[4 * i + 2], qf[4 * i + 3]
         n2 = w * w + x * x + y * y + z * z
         zeros += n2 == 0.0
         infs += (abs(w) == np.inf) + (abs(x) == np.inf) + (abs(y) == np.inf)
         infs += abs(z) == np.inf
         k = 1.0 / n2  # one division per row, not four (within an ulp)
-        out[i, 0] = w * k
-        out[i, 1] = -x * k
-        out[i, 2] = -y * k
-        out[i, 3] = -z * k
+        of[4 * i] = w * k
+        of[4 * i + 1] = -x * k
+        of[4 * i + 2] = -y * k
+        of[4 * i + 3] = -z * k
     return zeros, infs
 
 
@@ -307,7 +360,7 @@ def qinv_into(q, out):
     """Inverses of (n, 4) quaternions into ``out`` (n, 4) (allocated by the
     caller, see :func:`rotate_vectors_into`; NaN in zero rows); counts of
     zero rows and of infinities."""
-    return _qinv_rows(q, out, 0, q.shape[0])
+    return _qinv_rows(_flat(q), _flat(out), 0, q.shape[0])
 
 
 @kernel(F2, F2, options=_PARALLEL_VECTOR)
@@ -315,10 +368,11 @@ def qinv_into_parallel(q, out):
     """:func:`qinv_into` with blocks of rows on numba's threads."""
     n = q.shape[0]
     size = (n + _BLOCKS - 1) // _BLOCKS
+    qf, of = _flat(q), _flat(out)  # outside the loop: see _flat
     zeros = 0
     infs = 0
     for b in prange(_BLOCKS):
-        z, f = _qinv_rows(q, out, min(b * size, n), min((b + 1) * size, n))
+        z, f = _qinv_rows(qf, of, min(b * size, n), min((b + 1) * size, n))
         zeros += z
         infs += f
     return zeros, infs

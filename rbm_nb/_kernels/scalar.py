@@ -43,6 +43,10 @@ __all__ = [
     "SINCOS_LIMIT",
     "SERIES_ANGLE",
     "SERIES_RATIO",
+    "TINY_SQUARE",
+    "atan_over_x_small",
+    "cos_small",
+    "sinc_small",
     "TINY_ANGLE",
 ]
 
@@ -135,6 +139,37 @@ def atan_over_x(x2):
             )
         )
     )
+
+
+# Below this square of an angle (or of tan), the series above need four
+# terms only: the first omitted term is under 1.2e-17 relative. Densely
+# sampled recordings have arcs of ~1e-3 between samples, so this is the
+# common case of the table fill and of squad's evaluation.
+TINY_SQUARE = 1e-4
+
+
+@helper(inline=True)
+def cos_small(y2):
+    """cos(y) from y² < SERIES_ANGLE² (four terms when y² < TINY_SQUARE)."""
+    if y2 < TINY_SQUARE:
+        return 1.0 + y2 * (-0.5 + y2 * (1.0 / 24.0 - y2 / 720.0))
+    return cos_series(y2)
+
+
+@helper(inline=True)
+def sinc_small(y2):
+    """sin(y)/y from y² < SERIES_ANGLE² (four terms when y² < TINY_SQUARE)."""
+    if y2 < TINY_SQUARE:
+        return 1.0 + y2 * (-1.0 / 6.0 + y2 * (1.0 / 120.0 - y2 / 5040.0))
+    return sinc_series(y2)
+
+
+@helper(inline=True)
+def atan_over_x_small(x2):
+    """atan(x)/x from x² < SERIES_RATIO² (four terms when x² < TINY_SQUARE)."""
+    if x2 < TINY_SQUARE:
+        return 1.0 + x2 * (-1.0 / 3.0 + x2 * (0.2 - x2 / 7.0))
+    return atan_over_x(x2)
 
 
 @helper(inline=True)

@@ -47,7 +47,14 @@ from .quaternion import (
     _qslerp_unit1,
     _sincos,
 )
-from .scalar import SERIES_ANGLE, SERIES_RATIO, atan_over_x, cos_series, sinc_series
+from .scalar import (
+    SERIES_ANGLE,
+    SERIES_RATIO,
+    TINY_SQUARE,
+    atan_over_x_small,
+    cos_small,
+    sinc_small,
+)
 
 __all__ = [
     "squad_walk",
@@ -102,39 +109,10 @@ def unflip_signs(q):
     return out
 
 
-# Below this square of an angle (or of tan), the series below need four
-# terms only: the first omitted term is under 1.2e-17 relative.
-_TINY2 = 1e-4
-
-
-@helper(inline=True)
-def _cos(y2):
-    """cos(y) from y² < SERIES_ANGLE² (four terms when y² < _TINY2)."""
-    if y2 < _TINY2:
-        return 1.0 + y2 * (-0.5 + y2 * (1.0 / 24.0 - y2 / 720.0))
-    return cos_series(y2)
-
-
-@helper(inline=True)
-def _sinc(y2):
-    """sin(y)/y from y² < SERIES_ANGLE² (four terms when y² < _TINY2)."""
-    if y2 < _TINY2:
-        return 1.0 + y2 * (-1.0 / 6.0 + y2 * (1.0 / 120.0 - y2 / 5040.0))
-    return sinc_series(y2)
-
-
-@helper(inline=True)
-def _atan_over_x(x2):
-    """atan(x)/x from x² < SERIES_RATIO² (four terms when x² < _TINY2)."""
-    if x2 < _TINY2:
-        return 1.0 + x2 * (-1.0 / 3.0 + x2 * (0.2 - x2 / 7.0))
-    return atan_over_x(x2)
-
-
 @helper(inline=True)
 def _exp_small(x):
     """exp(x), by its series near 0 (the scales of near-unit quaternions)."""
-    if abs(x) < _TINY2:
+    if abs(x) < TINY_SQUARE:
         return 1.0 + x * (1.0 + x * 0.5 * (1.0 + x / 3.0))  # next term < 4.2e-18
     if abs(x) < _SMALL:
         return 1.0 + x * (
@@ -173,7 +151,7 @@ def _log_vec(aw, ax, ay, az, bw, bx, by, bz):
     pw, px, py, pz = _qmul1(aw, -ax, -ay, -az, bw, bx, by, bz)
     b2 = px * px + py * py + pz * pz
     if pw > 0.0 and b2 < (SERIES_RATIO * pw) ** 2:
-        f = _atan_over_x(b2 / (pw * pw)) / pw
+        f = atan_over_x_small(b2 / (pw * pw)) / pw
         return f * px, f * py, f * pz
     b = math.sqrt(b2)
     if b <= 1e-14 * abs(pw):
@@ -189,8 +167,8 @@ def _exp_vec(ux, uy, uz):
     """exp of the pure quaternion (0, u): (cos|u|, sin|u| u/|u|)."""
     u2 = ux * ux + uy * uy + uz * uz
     if u2 < SERIES_ANGLE * SERIES_ANGLE:
-        c = _cos(u2)
-        s = _sinc(u2)
+        c = cos_small(u2)
+        s = sinc_small(u2)
     else:
         un = math.sqrt(u2)
         c = math.cos(un)
@@ -210,7 +188,7 @@ def _great_circle(aw, ax, ay, az, bw, bx, by, bz):
     o2 = ow * ow + ox * ox + oy * oy + oz * oz
     if d > 0.0 and o2 < (SERIES_RATIO * d) ** 2:
         # x = tan θ = |o| / d is small: θ / |o| = atan(x) / x / d
-        g = _atan_over_x(o2 / (d * d)) / d
+        g = atan_over_x_small(o2 / (d * d)) / d
         theta2 = o2 * g * g
         return ow, ox, oy, oz, theta2, math.sqrt(theta2), g
     so = math.sqrt(o2)
@@ -223,8 +201,8 @@ def _along(aw, ax, ay, az, ow, ox, oy, oz, theta2, theta, g, tau):
     """The point at τ of the arc (a, o, θ², θ, g) of :func:`_great_circle`."""
     y2 = tau * tau * theta2
     if y2 < SERIES_ANGLE * SERIES_ANGLE:
-        c = _cos(y2)
-        k = _sinc(y2) * tau * g
+        c = cos_small(y2)
+        k = sinc_small(y2) * tau * g
     else:
         s, c = _sincos(tau * theta)
         k = s * g / theta
@@ -499,11 +477,11 @@ def _outer(aw, ax, ay, az, bw, bx, by, bz, tau):
     if d > 0.0 and o2 < (SERIES_RATIO * d) ** 2:
         inv_d = 1.0 / d
         x2 = o2 * inv_d * inv_d
-        p = _atan_over_x(x2)
+        p = atan_over_x_small(x2)
         y2 = tau * tau * x2 * p * p
         if y2 < SERIES_ANGLE * SERIES_ANGLE:
-            c = _cos(y2)
-            k = _sinc(y2) * tau * p * inv_d
+            c = cos_small(y2)
+            k = sinc_small(y2) * tau * p * inv_d
             return c * aw + k * ow, c * ax + k * ox, c * ay + k * oy, c * az + k * oz
     so = math.sqrt(o2)
     if so == 0.0:

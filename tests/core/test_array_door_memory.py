@@ -52,7 +52,7 @@ def moving_tree():
 
 @pytest.mark.parametrize("threads", [1, 2])
 def test_transform_points_makes_no_timestamps_nobody_asked_for(
-    moving_tree, threads, monkeypatch
+    moving_tree, threads, monkeypatch, ignore_load
 ):
     # on 2 threads the parallel twin runs (and its scratch must stay per thread)
     from rbm_nb import _parallel
@@ -77,14 +77,14 @@ def test_transform_points_makes_no_timestamps_nobody_asked_for(
     )
 
 
-def test_rotate_vectors_allocates_its_output_only():
+def test_rotate_vectors_allocates_its_output_only(ignore_load):
     rng = np.random.default_rng(2)
     q = rng.normal(size=(200_000, 4))
     v = rng.normal(size=(200_000, 3))
     assert peak_over_output(lambda: rbm.rotate_vectors(q, v)) <= 1.05
 
 
-def test_qmul_and_qinv_allocate_their_output_only():
+def test_qmul_and_qinv_allocate_their_output_only(ignore_load):
     rng = np.random.default_rng(3)
     p = rng.normal(size=(200_000, 4))
     q = rng.normal(size=(200_000, 4))

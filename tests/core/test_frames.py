@@ -308,3 +308,29 @@ def test_cached_chains_follow_tree_changes():
     np.testing.assert_allclose(rbm.transform_points(origin, "w2", "moved"), [5, 0, 0])
     rbm.register_frame("moved", parent="w2", translation=(6.0, 0, 0), update=True)
     np.testing.assert_allclose(rbm.transform_points(origin, "w2", "moved"), [6, 0, 0])
+
+
+@pytest.mark.parametrize("unit", [True, False])
+def test_a_moving_frame_keeps_its_own_copies(unit):
+    """Changing the arrays a frame was registered with changes nothing."""
+    rng = np.random.default_rng(8)
+    n = 50
+    q = rng.normal(size=(n, 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    if unit:
+        q[:] = [[1.0, 0.0, 0.0, 0.0]] * n  # norms exactly 1: nothing to normalise
+    t = rng.normal(size=(n, 3))
+    ts = np.arange(n) * 0.1
+    rbm.clear_registry()
+    rbm.register_frame("world")
+    rbm.register_frame("m", parent="world", translation=t, rotation=q, timestamps=ts)
+    before = [
+        a.copy() for a in rbm.lookup_transform("m", "world", return_timestamps=True)
+    ]
+    q[:] = [0.0, 0.0, 0.0, 1.0]
+    t[:] = 7.0
+    ts[:] += 3.0
+    after = rbm.lookup_transform("m", "world", return_timestamps=True)
+    for a, b in zip(before, after, strict=True):
+        np.testing.assert_array_equal(a, b)
+    rbm.clear_registry()

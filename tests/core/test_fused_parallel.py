@@ -54,7 +54,7 @@ class _Spy:
 
 
 @pytest.fixture
-def modes(monkeypatch):
+def modes(monkeypatch, ignore_load):
     """``modes(fn)``: fn() run serially and in parallel, each on fresh tables."""
     spy = _Spy(monkeypatch)
 
@@ -408,7 +408,7 @@ def test_real_recording(modes, shared_data):
     _identical(serial, parallel)
 
 
-def test_rows_known_to_be_filled_need_no_second_prefill(monkeypatch):
+def test_rows_known_to_be_filled_need_no_second_prefill(monkeypatch, ignore_load):
     """A parallel call records what its prefill filled; calls inside it skip the prefill."""
     rng = np.random.default_rng(10)
     n = 20_000

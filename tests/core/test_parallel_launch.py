@@ -26,7 +26,7 @@ def _twins():
 
 
 @pytest.fixture(autouse=True)
-def _two_threads_allowed(monkeypatch):
+def _two_threads_allowed(monkeypatch, ignore_load):
     monkeypatch.delenv(_parallel.ENV_THREADS, raising=False)
     monkeypatch.setattr(numba.config, "NUMBA_NUM_THREADS", max(2, os.cpu_count() or 2))
     monkeypatch.setattr(_parallel, "_launched_in", None)
@@ -98,3 +98,84 @@ def test_a_forked_child_of_a_launching_process_runs_serially(monkeypatch):
     ran, serial, parallel = _twins()
     _parallel.launch(serial, parallel, _parallel.MIN_ROWS, 0)
     assert ran == [("serial", 1)]
+
+
+# ---------------------------------------------------------------------------
+# the load: cores that other runnable threads want
+# ---------------------------------------------------------------------------
+
+
+@pytest.fixture
+def load(monkeypatch, tmp_path):
+    """``load(running, cores)``: /proc/loadavg as Linux writes it, with
+    ``running`` runnable threads, on ``cores`` cores; free_cores reads it."""
+    monkeypatch.undo()  # ignore_load's stand-in goes: the real free_cores reads
+    monkeypatch.setattr(_parallel, "_launched_in", None)
+    monkeypatch.setattr(numba.config, "NUMBA_NUM_THREADS", 2)
+    monkeypatch.setenv(_parallel.ENV_THREADS, "2")
+
+    def set_load(running, cores):
+        path = tmp_path / "loadavg"
+        path.write_text(f"0.52 0.58 0.59 {running}/345 12345\n")
+        monkeypatch.setattr(_parallel, "_LOADAVG", str(path))
+        monkeypatch.setattr(os, "sched_getaffinity", lambda pid: set(range(cores)))
+
+    return set_load
+
+
+@pytest.mark.parametrize(
+    ("running", "cores", "free"),
+    [(1, 2, 2), (2, 2, 1), (5, 2, 1), (1, 8, 8), (3, 8, 6)],
+)
+def test_free_cores_leaves_out_the_other_runnable_threads(load, running, cores, free):
+    load(running, cores)  # the calling thread is one of the running
+    assert _parallel.free_cores() == free
+
+
+def test_a_busy_core_means_serial(load):
+    load(2, 2)
+    ran, serial, parallel = _twins()
+    _parallel.launch(serial, parallel, 10 * _parallel.MIN_ROWS, 0)
+    assert ran == [("serial", 1)]
+    load(1, 2)
+    _parallel.launch(serial, parallel, 10 * _parallel.MIN_ROWS, 0)
+    assert ran[-1] == ("parallel", 2)
+
+
+def test_without_a_load_count_the_load_is_not_considered(load, monkeypatch):
+    load(1, 2)
+    monkeypatch.setattr(_parallel, "_LOADAVG", "/nonexistent/loadavg")
+    assert _parallel.free_cores() is None
+    ran, serial, parallel = _twins()
+    _parallel.launch(serial, parallel, 10 * _parallel.MIN_ROWS, 0)
+    assert ran == [("parallel", 2)]
+
+
+def test_processes_that_keep_every_core_busy_make_calls_serial(monkeypatch):
+    """Real load: one busy process per core, seen through the real /proc/loadavg."""
+    monkeypatch.undo()  # the real free_cores
+    if not os.path.exists(_parallel._LOADAVG):
+        pytest.skip("no /proc/loadavg here")
+    import subprocess
+    import sys
+    import time
+
+    cores = len(os.sched_getaffinity(0))
+    busy = [
+        subprocess.Popen([sys.executable, "-c", "while True: pass"])
+        for _ in range(cores)
+    ]
+    try:
+        deadline = time.monotonic() + 10
+        while _parallel.free_cores() != 1 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert _parallel.free_cores() == 1
+        monkeypatch.setenv(_parallel.ENV_THREADS, "2")
+        monkeypatch.setattr(_parallel, "_launched_in", None)
+        ran, serial, parallel = _twins()
+        _parallel.launch(serial, parallel, 10 * _parallel.MIN_ROWS, 0)
+        assert ran == [("serial", 1)]
+    finally:
+        for process in busy:
+            process.kill()
+            process.wait()

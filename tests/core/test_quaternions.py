@@ -134,6 +134,45 @@ def test_rotate_vectors_is_correct_for_non_unit_quaternions():
     np.testing.assert_allclose(np.linalg.norm(out, axis=1), np.linalg.norm(v, axis=1))
 
 
+@pytest.mark.parametrize("rows", [7, 60_001])  # 60k: the prange twins run on 2+ threads
+@pytest.mark.parametrize("case", ["n x n", "1 x n", "n x 1"])
+def test_row_kernels_every_broadcast_case(rows, case):
+    """rotate_vectors, qmul and qinv through their flat-indexed row loops.
+
+    Each broadcast case has its own loop (so that every index has a constant
+    stride); each is checked against numpy-quaternion, with the single row
+    on either side, and an infinity in a single row is still reported.
+    """
+    rng = np.random.default_rng(rows)
+    nq, nv = {"n x n": (rows, rows), "1 x n": (1, rows), "n x 1": (rows, 1)}[case]
+    q = random_quaternions(nq, rng, unit=False)
+    p = random_quaternions(nv, rng, unit=False)
+    v = rng.standard_normal((nv, 3))
+    wide = lambda a: a.repeat(rows, 0) if len(a) == 1 else a  # noqa: E731
+    np.testing.assert_allclose(
+        rotate_vectors(q, v),
+        explicit_rotation(wide(q), wide(v)),
+        rtol=1e-12,
+        atol=1e-12,
+    )
+    np.testing.assert_allclose(
+        qmul(q, p), naive.hamilton(wide(q), wide(p)), rtol=1e-14, atol=1e-14
+    )
+    np.testing.assert_allclose(
+        qinv(wide(q)), quaternion.as_float_array(1 / quaternion.as_quat_array(wide(q)))
+    )
+    bad_v = v.copy()
+    bad_v[-1, 1] = np.inf
+    with pytest.raises(ValueError, match="v"):
+        rotate_vectors(q, bad_v)
+    bad_q = q.copy()
+    bad_q[-1, 2] = -np.inf
+    with pytest.raises(ValueError, match="q"):
+        rotate_vectors(bad_q, v)
+    with pytest.raises(ValueError, match="finite|inf"):
+        qmul(p, bad_q)
+
+
 def test_rotate_vectors_shapes_and_axes():
     q = random_quaternions(6)
     v = RNG.standard_normal((6, 3))

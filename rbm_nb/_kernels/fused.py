@@ -246,7 +246,7 @@ def _first_half(r, i):
     ) > 0.0
 
 
-@helper(inline=True)
+@helper
 def _table_row(r, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, rb):
     """Fill row i of the squad table of (r, t) (n >= 2) into ``c``.
 
@@ -255,6 +255,10 @@ def _table_row(r, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, rb):
     n = L[i+1] (``_log_step``) and the ratios of sampling intervals
     ra = (t[i+1]-t[i]) / (t[i]-t[i-1]), rb = (t[i+1]-t[i]) / (t[i+2]-t[i+1])
     (where those samples exist).
+
+    Not inlined: the vectorised blocks call it only for the rows their
+    route does not cover, and inlining its exact routes (exp, log and
+    great circles) into every caller multiplied compile time.
     """
     n = r.shape[0]
     # a[i]

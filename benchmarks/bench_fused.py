@@ -264,7 +264,11 @@ def floor_kernels():
     world <- S0 <- head (moving, squad) <- S1 <- eye (moving, evaluated at
     its own sample times): per output row, one merge-walk step in the head's
     times, one squad evaluation with precomputed coefficients, the eye's
-    sample and two static transforms, composed like ``chain_step``.
+    sample and two static transforms, composed like ``chain_step``. In
+    blocks of rows with the passes of rbm_nb's chain kernels (a scalar walk
+    that gathers each row's segment, then rbm_nb's vector passes for the
+    great circles, the outer slerp and the compositions), as the lookup
+    computes; nothing else (no plan, no missing samples, gaps or signs).
 
     Returns the serial kernel and its two-thread twin (``prange`` over
     contiguous chunks of rows, each starting its walk by a binary search):
@@ -272,83 +276,101 @@ def floor_kernels():
     """
     from numba import njit, prange
 
-    from rbm_nb._kernels.quaternion import (
-        _qmul1,
-        _qslerp1,
-        _qslerp_unit1,
-        _rotate1,
-        _sincos,
-    )
+    from rbm_nb._kernels import fused as kf
+    from rbm_nb._kernels.quaternion import _qslerp1, _qslerp_unit1
+
+    block = kf.BLOCK
+    acc, step = kf._ACC, kf._STEP
 
     @njit(cache=False, nogil=True)
-    def compose(ax, ay, az, aw, bx, by, bz, tx, ty, tz, qw, qx, qy, qz):
-        x, y, z = _rotate1(qw, qx, qy, qz, ax, ay, az)
-        w, rx, ry, rz = _qmul1(qw, qx, qy, qz, aw, bx, by, bz)
-        return x + tx, y + ty, z + tz, w, rx, ry, rz
+    def static(work, s):
+        for e in range(7):
+            for b in range(block):
+                work[step + e * block + b] = s[e]
+        kf._compose_rows(work, False, False)
 
     @njit(cache=False, nogil=True)
     def rows(s1, s0, h_times, h_t, h_r, a, b, seg, e_t, e_r, target, off, j0, j1,
-             t_out, r_out):  # fmt: skip
+             t_out, r_out, work):  # fmt: skip
         n = h_times.shape[0]
         i = max(np.searchsorted(h_times, target[j0] + off, side="right") - 1, 0)
-        for j in range(j0, j1):
+        for k0 in range(j0, j1, block):
+            nb = min(block, j1 - k0)
             # eye sample j, then the static scene_cam -> head
-            x, y, z, w, qx, qy, qz = compose(
-                e_t[j, 0], e_t[j, 1], e_t[j, 2], e_r[j, 0], e_r[j, 1], e_r[j, 2], e_r[j, 3],
-                s1[0], s1[1], s1[2], s1[3], s1[4], s1[5], s1[6],
-            )  # fmt: skip
-            # the head at the eye's time
-            t = target[j] + off
-            while i < n - 2 and h_times[i + 1] <= t:
-                i += 1
-            u = (t - h_times[i]) / (h_times[i + 1] - h_times[i])
-            tx = h_t[i, 0] + u * (h_t[i + 1, 0] - h_t[i, 0])
-            ty = h_t[i, 1] + u * (h_t[i + 1, 1] - h_t[i, 1])
-            tz = h_t[i, 2] + u * (h_t[i + 1, 2] - h_t[i, 2])
-            if seg[i, 10] == 0.0:
-                sn, cs = _sincos(u * seg[i, 0])
-                p0 = cs * h_r[i, 0] + sn * seg[i, 1]
-                p1 = cs * h_r[i, 1] + sn * seg[i, 2]
-                p2 = cs * h_r[i, 2] + sn * seg[i, 3]
-                p3 = cs * h_r[i, 3] + sn * seg[i, 4]
-                sn, cs = _sincos(u * seg[i, 5])
-                q0 = cs * a[i, 0] + sn * seg[i, 6]
-                q1 = cs * a[i, 1] + sn * seg[i, 7]
-                q2 = cs * a[i, 2] + sn * seg[i, 8]
-                q3 = cs * a[i, 3] + sn * seg[i, 9]
-            else:
-                p0, p1, p2, p3 = _qslerp1(
-                    h_r[i, 0], h_r[i, 1], h_r[i, 2], h_r[i, 3],
-                    h_r[i + 1, 0], h_r[i + 1, 1], h_r[i + 1, 2], h_r[i + 1, 3], u,
-                )  # fmt: skip
-                q0, q1, q2, q3 = _qslerp1(
-                    a[i, 0], a[i, 1], a[i, 2], a[i, 3], b[i, 0], b[i, 1], b[i, 2], b[i, 3], u
-                )  # fmt: skip
-            hw, hx, hy, hz = _qslerp_unit1(
-                p0, p1, p2, p3, q0, q1, q2, q3, 2.0 * u * (1.0 - u)
-            )
-            x, y, z, w, qx, qy, qz = compose(
-                x, y, z, w, qx, qy, qz, tx, ty, tz, hw, hx, hy, hz
-            )
-            x, y, z, w, qx, qy, qz = compose(
-                x, y, z, w, qx, qy, qz,
-                s0[0], s0[1], s0[2], s0[3], s0[4], s0[5], s0[6],
-            )  # fmt: skip
-            t_out[j, 0] = x
-            t_out[j, 1] = y
-            t_out[j, 2] = z
-            r_out[j, 0] = w
-            r_out[j, 1] = qx
-            r_out[j, 2] = qy
-            r_out[j, 3] = qz
+            for q in range(nb):
+                for e in range(3):
+                    work[acc + e * block + q] = e_t[k0 + q, e]
+                for e in range(4):
+                    work[acc + (3 + e) * block + q] = e_r[k0 + q, e]
+            static(work, s1)
+            # the head at the eye's time: walk and gather, then the passes
+            for q in range(block):
+                work[kf._PATH + q] = 0.0
+            for q in range(nb):
+                t = target[k0 + q] + off
+                while i < n - 2 and h_times[i + 1] <= t:
+                    i += 1
+                u = (t - h_times[i]) / (h_times[i + 1] - h_times[i])
+                work[step + q] = h_t[i, 0] + u * (h_t[i + 1, 0] - h_t[i, 0])
+                work[step + block + q] = h_t[i, 1] + u * (h_t[i + 1, 1] - h_t[i, 1])
+                work[step + 2 * block + q] = h_t[i, 2] + u * (h_t[i + 1, 2] - h_t[i, 2])
+                if seg[i, 10] == 0.0:
+                    work[kf._PATH + q] = kf._GATHERED
+                    work[kf._NEG + q] = 0.0
+                    work[kf._TAU + q] = u
+                    work[kf._TH1 + q] = seg[i, 0]
+                    work[kf._TH2 + q] = seg[i, 5]
+                    for e in range(4):
+                        work[kf._P + e * block + q] = h_r[i, e]
+                        work[kf._U1 + e * block + q] = seg[i, 1 + e]
+                        work[kf._Q + e * block + q] = a[i, e]
+                        work[kf._U2 + e * block + q] = seg[i, 6 + e]
+                else:
+                    p0, p1, p2, p3 = _qslerp1(
+                        h_r[i, 0], h_r[i, 1], h_r[i, 2], h_r[i, 3],
+                        h_r[i + 1, 0], h_r[i + 1, 1], h_r[i + 1, 2], h_r[i + 1, 3], u,
+                    )  # fmt: skip
+                    q0, q1, q2, q3 = _qslerp1(
+                        a[i, 0], a[i, 1], a[i, 2], a[i, 3], b[i, 0], b[i, 1], b[i, 2], b[i, 3], u
+                    )  # fmt: skip
+                    hq = _qslerp_unit1(
+                        p0, p1, p2, p3, q0, q1, q2, q3, 2.0 * u * (1.0 - u)
+                    )
+                    for e in range(4):
+                        work[step + (3 + e) * block + q] = hq[e]
+            wide = kf._squad_rows(work)
+            if wide >= kf._WIDE_ROWS:
+                wide = kf._wide_rows(work)
+            if wide > 0:
+                for q in range(nb):
+                    if work[kf._PATH + q] != kf._GENERAL:
+                        continue
+                    u = work[kf._TAU + q]
+                    hq = _qslerp_unit1(
+                        work[kf._P + q], work[kf._P + block + q],
+                        work[kf._P + 2 * block + q], work[kf._P + 3 * block + q],
+                        work[kf._Q + q], work[kf._Q + block + q],
+                        work[kf._Q + 2 * block + q], work[kf._Q + 3 * block + q],
+                        2.0 * u * (1.0 - u),
+                    )  # fmt: skip
+                    for e in range(4):
+                        work[step + (3 + e) * block + q] = hq[e]
+            kf._compose_rows(work, False, False)
+            static(work, s0)
+            for q in range(nb):
+                for e in range(3):
+                    t_out[k0 + q, e] = work[acc + e * block + q]
+                for e in range(4):
+                    r_out[k0 + q, e] = work[acc + (3 + e) * block + q]
 
     @njit(cache=False, nogil=True)
     def lookup(s1, s0, h_times, h_t, h_r, a, b, seg, e_t, e_r, target, off):
         m = target.shape[0]
         t_out = np.empty((m, 3))
         r_out = np.empty((m, 4))
+        work = np.zeros(kf.WORK * block)
         rows(s1, s0, h_times, h_t, h_r, a, b, seg, e_t, e_r, target, off, 0, m,
-             t_out, r_out)  # fmt: skip
+             t_out, r_out, work)  # fmt: skip
         return t_out, r_out
 
     @njit(cache=False, nogil=True, parallel=True)
@@ -357,13 +379,14 @@ def floor_kernels():
         t_out = np.empty((m, 3))
         r_out = np.empty((m, 4))
         chunks = 64
-        per = (m + chunks - 1) // chunks
+        per = ((m + chunks - 1) // chunks + block - 1) // block * block
         for c in prange(chunks):
+            work = np.zeros(kf.WORK * block)
             j0 = min(c * per, m)
             j1 = min(j0 + per, m)
             if j1 > j0:
                 rows(s1, s0, h_times, h_t, h_r, a, b, seg, e_t, e_r, target, off,
-                     j0, j1, t_out, r_out)  # fmt: skip
+                     j0, j1, t_out, r_out, work)  # fmt: skip
         return t_out, r_out
 
     return lookup, lookup_parallel

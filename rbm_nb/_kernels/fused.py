@@ -64,6 +64,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from dataclasses import replace
 
 import numpy as np
 from numba import prange
@@ -86,10 +87,15 @@ from .quaternion import (
 from .scalar import (
     SERIES_ANGLE,
     SERIES_RATIO,
+    SINCOS_LIMIT,
     atan2,
+    atan_over_x,
     atan_over_x_small,
+    cos_series,
     cos_small,
+    sinc_series,
     sinc_small,
+    sincos,
 )
 
 __all__ = [
@@ -602,7 +608,60 @@ def squad_table(r, t):
 # arrays are picked once per block, not once per row: numba counts
 # references whenever an array is assigned or handed to a function, and
 # per-row reference counting costs more than the arithmetic.
-BLOCK = 128
+#
+# The scratch ``work`` holds each quantity for the block's rows side by
+# side (structure of arrays), so that the arithmetic of a step is a loop
+# over contiguous rows without branches or calls, which LLVM vectorises (8
+# rows per instruction with AVX-512). A moving step runs in passes: a
+# scalar pass finds each row's segment and either evaluates the row (held
+# and constant frames, own sample times, gaps, segments that are not unit,
+# arguments beyond the polynomial sine's range) or gathers its squad
+# segment into the scratch; the vector pass :func:`_squad_rows` evaluates
+# the gathered rows (both inner great circles and the outer slerp's
+# small-arc series) and marks the rows whose outer slerp needs the general
+# branch, which :func:`_wide_rows` (another vector pass, for blocks with
+# many) and then a scalar pass (``_qslerp_unit1``) take;
+# :func:`_compose_rows` composes the step into the block's transforms.
+# Every row gets exactly the operations of the scalar code, in the same
+# order (no fastmath): results are bit for bit those of a row-by-row loop
+# (tests/core/test_fused_rows.py).
+#
+# 96 rows: the scratch (27 kB) and the rows streamed through stay in L1
+# (256 rows were 1.4x slower, 64 rows 1.05x, 128 rows 1-2 % faster but
+# their scratch, one per thread in the prange twins, took a 20k-row
+# transform over 1.5x its output's memory).
+BLOCK = 96
+
+# ``work`` (WORK * BLOCK,): quantity q of row b at q * BLOCK + b. One flat
+# array with fixed offsets (and loops over whole blocks), so that LLVM sees
+# that the quantities do not overlap and vectorises without runtime checks.
+# Allocated empty: every row a pass uses is written first, and the vector
+# passes compute on whatever the others hold (kept, never used).
+_ACC = 0  # 0:7 the block's accumulated transforms (tx, ty, tz, w, x, y, z)
+_STEP = 7 * BLOCK  # 7:14 the step's transform at each row
+_TAU = 14 * BLOCK  # squad's fraction τ of the row's segment g
+_TH1 = 15 * BLOCK  # θ of the great circle r[g] -> r[g+1] (table column 4)
+_TH2 = 16 * BLOCK  # θ of the great circle a[g] -> b[g] (table column 9)
+_P = 17 * BLOCK  # 17:21 r[g]; after the squad pass the inner slerp r[g] -> r[g+1]
+_U1 = 21 * BLOCK  # 21:25 u of the first great circle (table columns 5:9)
+_Q = 25 * BLOCK  # 25:29 a[g]; after the squad pass the inner slerp a[g] -> b[g]
+_U2 = 29 * BLOCK  # 29:33 u of the second great circle (table columns 10:14)
+_NEG = 33 * BLOCK  # 1.0 where the result takes the opposite sign (the stored sample's)
+# 1.0 rows gathered for the squad pass, 0.0 rows already evaluated; the
+# squad pass turns 1.0 into 2.0 where the outer slerp needs the general route
+_PATH = 34 * BLOCK
+WORK = 35
+_GATHERED = 1.0
+_GENERAL = 2.0
+
+# The vector passes divide without numba's ZeroDivisionError check (a branch
+# out of the loop, which stops LLVM from vectorising it); nothing else
+# changes (no fastmath). Their quaternion helpers are the ones of
+# :mod:`.quaternion`, inlined with these options.
+_ROWS = replace(KERNEL, error_model="numpy")
+_rotate_rows = helper(inline=True, options=_ROWS)(_rotate1.py_func)
+_qmul_rows = helper(inline=True, options=_ROWS)(_qmul1.py_func)
+_is_unit_rows = helper(inline=True, options=_ROWS)(_is_unit.py_func)
 
 
 @helper(inline=True)
@@ -635,7 +694,7 @@ def _seek(times, t, i):
     return lo
 
 
-@helper
+@helper(inline=True, options=_ROWS)
 def _compose(ax, ay, az, aw, bx, by, bz, tx, ty, tz, qw, qx, qy, qz, inverse):
     """Accumulated transform followed by (t, q), as ``resample.chain_step``.
 
@@ -643,75 +702,228 @@ def _compose(ax, ay, az, aw, bx, by, bz, tx, ty, tz, qw, qx, qy, qz, inverse):
     (aw, bx, by, bz), then the step's translation and rotation.
     """
     if inverse:
-        x, y, z = _rotate1(qw, -qx, -qy, -qz, ax - tx, ay - ty, az - tz)
+        x, y, z = _rotate_rows(qw, -qx, -qy, -qz, ax - tx, ay - ty, az - tz)
         k = 1.0 / (qw * qw + qx * qx + qy * qy + qz * qz)
         qw, qx, qy, qz = qw * k, -qx * k, -qy * k, -qz * k
     else:
-        x, y, z = _rotate1(qw, qx, qy, qz, ax, ay, az)
+        x, y, z = _rotate_rows(qw, qx, qy, qz, ax, ay, az)
         x += tx
         y += ty
         z += tz
-    w, rx, ry, rz = _qmul1(qw, qx, qy, qz, aw, bx, by, bz)
+    w, rx, ry, rz = _qmul_rows(qw, qx, qy, qz, aw, bx, by, bz)
     return x, y, z, w, rx, ry, rz
+
+
+@helper(options=_ROWS)
+def _compose_rows(work, inverse, first):
+    """The step's transforms (rows _STEP) composed into the block's (rows _ACC).
+
+    Over the whole block (rows past the block's end hold stale values,
+    never read). ``first``: the chain's first step, not inverted, is taken
+    as it is (``chain.compose`` does the same).
+    """
+    a, s = _ACC, _STEP
+    if first:
+        for b in range(7 * BLOCK):
+            work[a + b] = work[s + b]
+        return
+    for b in range(BLOCK):
+        x, y, z, w, rx, ry, rz = _compose(
+            work[a + b], work[a + BLOCK + b], work[a + 2 * BLOCK + b],
+            work[a + 3 * BLOCK + b], work[a + 4 * BLOCK + b],
+            work[a + 5 * BLOCK + b], work[a + 6 * BLOCK + b],
+            work[s + b], work[s + BLOCK + b], work[s + 2 * BLOCK + b],
+            work[s + 3 * BLOCK + b], work[s + 4 * BLOCK + b],
+            work[s + 5 * BLOCK + b], work[s + 6 * BLOCK + b],
+            inverse,
+        )  # fmt: skip
+        work[a + b] = x
+        work[a + BLOCK + b] = y
+        work[a + 2 * BLOCK + b] = z
+        work[a + 3 * BLOCK + b] = w
+        work[a + 4 * BLOCK + b] = rx
+        work[a + 5 * BLOCK + b] = ry
+        work[a + 6 * BLOCK + b] = rz
+
+
+@helper(inline=True, options=_ROWS)
+def _arc_rows(work, theta, start, u):
+    """Rows ``start`` (4 quantities) moved along their great circles towards ``u``.
+
+    cos(τθ) start + sin(τθ) u, over the block, into the rows of ``start``.
+    """
+    for b in range(BLOCK):
+        y = work[_TAU + b] * work[theta + b]
+        # (in range for the gathered rows; the others, whatever the scratch
+        # holds, are kept in it too: out of range sincos's rounding to an
+        # integer would be undefined)
+        sn, cs = sincos(y if abs(y) < SINCOS_LIMIT else 0.0)
+        for e in range(4):
+            work[start + e * BLOCK + b] = (
+                cs * work[start + e * BLOCK + b] + sn * work[u + e * BLOCK + b]
+            )
+
+
+@helper(options=_ROWS)
+def _squad_rows(work):
+    """Squad at the gathered rows of the block, into their step rotations.
+
+    Rows with ``work[_PATH + b] == _GATHERED``: the inner slerps along the
+    segment's unit great circles (``sincos``, whose range the gathering
+    checked), then ``_qslerp_unit1``'s small-arc branch, without branches;
+    where that branch does not apply (an argument not unit, a wide arc),
+    the row is marked ``_GENERAL``, its inner slerps kept in rows _P and _Q
+    for the scalar route. Returns the number of rows marked.
+
+    In several loops, each short: an iteration of one long loop would fill
+    the processor's reorder window, and its long chains of dependent
+    operations (the polynomials) would then run one after another.
+    """
+    # the inner slerps, into rows _P and _Q
+    _arc_rows(work, _TH1, _P, _U1)
+    _arc_rows(work, _TH2, _Q, _U2)
+    # _qslerp_unit1(p, q, h): q taken the shorter way round; the arc's
+    # d = p.q and the part o of q orthogonal to p (into rows _U1), the
+    # conditions of its small-arc branch so far (into _TH1) and x² = tan²
+    # of the arc (into _TH2), 1/d (into _U2)
+    for b in range(BLOCK):
+        aw, ax = work[_P + b], work[_P + BLOCK + b]
+        ay, az = work[_P + 2 * BLOCK + b], work[_P + 3 * BLOCK + b]
+        bw, bx = work[_Q + b], work[_Q + BLOCK + b]
+        by, bz = work[_Q + 2 * BLOCK + b], work[_Q + 3 * BLOCK + b]
+        unit = _is_unit_rows(aw, ax, ay, az) & _is_unit_rows(bw, bx, by, bz)
+        dw, dx, dy, dz = aw - bw, ax - bx, ay - by, az - bz
+        far = dw * dw + dx * dx + dy * dy + dz * dz > _SQRT2 * _SQRT2
+        cw = -bw if far else bw
+        cx = -bx if far else bx
+        cy = -by if far else by
+        cz = -bz if far else bz
+        d = aw * cw + ax * cx + ay * cy + az * cz
+        ow, ox, oy, oz = cw - d * aw, cx - d * ax, cy - d * ay, cz - d * az
+        o2 = ow * ow + ox * ox + oy * oy + oz * oz
+        inv_d = 1.0 / d
+        work[_U1 + b] = ow
+        work[_U1 + BLOCK + b] = ox
+        work[_U1 + 2 * BLOCK + b] = oy
+        work[_U1 + 3 * BLOCK + b] = oz
+        small = unit & (d > 0.0) & (o2 < (SERIES_RATIO * d) ** 2)
+        work[_TH1 + b] = 1.0 if small else 0.0
+        work[_TH2 + b] = o2 * inv_d * inv_d
+        work[_U2 + b] = inv_d
+    # the series, and the result where they apply
+    general = 0
+    for b in range(BLOCK):
+        tau = work[_TAU + b]
+        h = 2.0 * tau * (1.0 - tau)
+        x2 = work[_TH2 + b]
+        p = atan_over_x(x2)
+        y2 = h * h * x2 * p * p
+        c = cos_series(y2)
+        k = sinc_series(y2) * h * p * work[_U2 + b]
+        sign = -1.0 if work[_NEG + b] != 0.0 else 1.0
+        series = (work[_TH1 + b] != 0.0) & (y2 < SERIES_ANGLE * SERIES_ANGLE)
+        gathered = work[_PATH + b] == _GATHERED
+        done = gathered & series
+        redo = gathered & ~series
+        general += redo
+        # only the gathered rows change (the others were evaluated already)
+        for e in range(4):
+            q = c * work[_P + e * BLOCK + b] + k * work[_U1 + e * BLOCK + b]
+            q = -q if sign < 0.0 else q
+            at = _STEP + (3 + e) * BLOCK + b
+            work[at] = q if done else work[at]
+        work[_PATH + b] = _GENERAL if redo else work[_PATH + b]
+    return general
+
+
+# A block with at least this many outer slerps off the small-arc series
+# takes them in a vector pass (:func:`_wide_rows`), fewer one by one.
+_WIDE_ROWS = 8
+
+
+@helper(options=_ROWS)
+def _wide_rows(work):
+    """The outer slerps marked ``_GENERAL``, along their great circles.
+
+    ``_qslerp_unit1``'s general branch (with ``_geodesic1``), without
+    branches, for the rows whose arguments (rows _P and _Q) are unit, not
+    equal and whose angle is in ``sincos``'s range; their rotations go into
+    the step's rows and their mark is lifted. Returns the number of rows
+    left marked (for the scalar route).
+    """
+    left = 0
+    for b in range(BLOCK):
+        aw, ax = work[_P + b], work[_P + BLOCK + b]
+        ay, az = work[_P + 2 * BLOCK + b], work[_P + 3 * BLOCK + b]
+        bw, bx = work[_Q + b], work[_Q + BLOCK + b]
+        by, bz = work[_Q + 2 * BLOCK + b], work[_Q + 3 * BLOCK + b]
+        unit = _is_unit_rows(aw, ax, ay, az) & _is_unit_rows(bw, bx, by, bz)
+        # the shorter way round, tested by _qslerp_unit1 and again by
+        # _geodesic1
+        for _ in range(2):
+            dw, dx, dy, dz = aw - bw, ax - bx, ay - by, az - bz
+            far = dw * dw + dx * dx + dy * dy + dz * dz > _SQRT2 * _SQRT2
+            bw = -bw if far else bw
+            bx = -bx if far else bx
+            by = -by if far else by
+            bz = -bz if far else bz
+        d = aw * bw + ax * bx + ay * by + az * bz
+        ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
+        so = math.sqrt(ow * ow + ox * ox + oy * oy + oz * oz)
+        k = 1.0 / so
+        theta = atan2(so, d)
+        tau = work[_TAU + b]
+        h = 2.0 * tau * (1.0 - tau)
+        y = h * theta
+        sn, cs = sincos(y if abs(y) < SINCOS_LIMIT else 0.0)  # (as in _arc_rows)
+        sign = -1.0 if work[_NEG + b] != 0.0 else 1.0
+        wide = work[_PATH + b] == _GENERAL
+        done = wide & unit & (so != 0.0) & (abs(y) < SINCOS_LIMIT)
+        left += wide & ~done
+        for e, (a_e, o_e) in enumerate(((aw, ow), (ax, ox), (ay, oy), (az, oz))):
+            q = cs * a_e + sn * (o_e * k)
+            q = -q if sign < 0.0 else q
+            at = _STEP + (3 + e) * BLOCK + b
+            work[at] = q if done else work[at]
+        work[_PATH + b] = _GATHERED if done else work[_PATH + b]
+    return left
 
 
 @helper
 def _chain_block(
     plan, statics, offsets, gaps, own,
     times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
-    target, j0, j1, acc, cur, rotation_only,
+    target, j0, j1, work, cur, rotation_only,
 ):  # fmt: skip
-    """The chain at target[j0:j1], into acc[:j1-j0] as (tx, ty, tz, w, x, y, z).
+    """The chain at target[j0:j1], into the scratch ``work`` (WORK * BLOCK,).
 
-    ``cur`` (SLOTS,) holds each slot's segment of the previous row and is
-    updated. Returns the number of squad table rows computed.
+    Row b's transform (tx, ty, tz, w, x, y, z) ends in ``work[_ACC + q *
+    BLOCK + b]`` for q = 0..6. ``cur`` (SLOTS,) holds each
+    slot's segment of the previous row and is updated. Returns the number
+    of squad table rows computed.
     """
     computed = 0
     nb = j1 - j0
-    for b in range(nb):
-        acc[b, 0] = 0.0
-        acc[b, 1] = 0.0
-        acc[b, 2] = 0.0
-        acc[b, 3] = 1.0
-        acc[b, 4] = 0.0
-        acc[b, 5] = 0.0
-        acc[b, 6] = 0.0
+    for b in range(BLOCK):
+        work[_ACC + b] = 0.0
+        work[_ACC + BLOCK + b] = 0.0
+        work[_ACC + 2 * BLOCK + b] = 0.0
+        work[_ACC + 3 * BLOCK + b] = 1.0
+        work[_ACC + 4 * BLOCK + b] = 0.0
+        work[_ACC + 5 * BLOCK + b] = 0.0
+        work[_ACC + 6 * BLOCK + b] = 0.0
     for s in range(plan.shape[0] // 3):
         kind = plan[3 * s]
         slot = plan[3 * s + 1]
         inverse = plan[3 * s + 2] != 0
         if kind == STATIC:
-            tx, ty, tz = statics[slot, 0], statics[slot, 1], statics[slot, 2]
-            qw, qx, qy, qz = (
-                statics[slot, 3],
-                statics[slot, 4],
-                statics[slot, 5],
-                statics[slot, 6],
-            )
-            if rotation_only:
-                tx = ty = tz = 0.0
-            for b in range(nb):
-                if s == 0 and not inverse:
-                    acc[b, 0] = tx
-                    acc[b, 1] = ty
-                    acc[b, 2] = tz
-                    acc[b, 3] = qw
-                    acc[b, 4] = qx
-                    acc[b, 5] = qy
-                    acc[b, 6] = qz
-                    continue
-                x, y, z, w, rx, ry, rz = _compose(
-                    acc[b, 0], acc[b, 1], acc[b, 2],
-                    acc[b, 3], acc[b, 4], acc[b, 5], acc[b, 6],
-                    tx, ty, tz, qw, qx, qy, qz, inverse,
-                )  # fmt: skip
-                acc[b, 0] = x
-                acc[b, 1] = y
-                acc[b, 2] = z
-                acc[b, 3] = w
-                acc[b, 4] = rx
-                acc[b, 5] = ry
-                acc[b, 6] = rz
+            for e in range(7):
+                v = statics[slot, e]
+                if rotation_only and e < 3:
+                    v = 0.0
+                for b in range(BLOCK):
+                    work[_STEP + e * BLOCK + b] = v
+            _compose_rows(work, inverse, s == 0 and not inverse)
             continue
         # the slot's arrays, picked once per block
         if slot == 0:
@@ -723,9 +935,12 @@ def _chain_block(
         off = offsets[slot]
         n = times.shape[0]
         i = cur[slot]
+        gathered = 0
         for b in range(nb):
             t = target[j0 + b] + off
             tx = ty = tz = 0.0
+            qw = qx = qy = qz = 0.0
+            path = 0.0
             if kind == CONSTANT:
                 if not rotation_only:
                     tx, ty, tz = tr[0, 0], tr[0, 1], tr[0, 2]
@@ -743,14 +958,25 @@ def _chain_block(
                     # the rotation's squad segment reads i-1 .. i+2, the
                     # translation's linear one i-1 and i, and a missing
                     # rotation spoils the translation too (as the reference)
-                    missing_r = False
-                    for q in range(max(i - 1, 0), min(i + 3, n)):
-                        if math.isnan(rp[q, 0] + rp[q, 1] + rp[q, 2] + rp[q, 3]):
-                            missing_r = True
-                    missing_t = missing_r
-                    for q in range(max(i - 1, 0), i + 1):
-                        if math.isnan(tr[q, 0] + tr[q, 1] + tr[q, 2]):
-                            missing_t = True
+                    clean = False
+                    if 1 <= i and i + 3 <= n:
+                        # the usual case in one test: a NaN anywhere makes
+                        # the sum NaN
+                        st = tr[i - 1, 0] + tr[i - 1, 1] + tr[i - 1, 2]
+                        st += tr[i, 0] + tr[i, 1] + tr[i, 2]
+                        sr = 0.0
+                        for q in range(i - 1, i + 3):
+                            sr += rp[q, 0] + rp[q, 1] + rp[q, 2] + rp[q, 3]
+                        clean = not math.isnan(sr + st)
+                    missing_r = missing_t = False
+                    if not clean:
+                        for q in range(max(i - 1, 0), min(i + 3, n)):
+                            if math.isnan(rp[q, 0] + rp[q, 1] + rp[q, 2] + rp[q, 3]):
+                                missing_r = True
+                        missing_t = missing_r
+                        for q in range(max(i - 1, 0), i + 1):
+                            if math.isnan(tr[q, 0] + tr[q, 1] + tr[q, 2]):
+                                missing_t = True
                     if missing_r:
                         qw = qx = qy = qz = math.nan
                     else:
@@ -769,13 +995,6 @@ def _chain_block(
                 else:
                     if k > n - 2:
                         k = n - 2
-                    if not rotation_only and i >= 0 and t == times[i]:
-                        tx, ty, tz = tr[i, 0], tr[i, 1], tr[i, 2]
-                    elif not rotation_only:
-                        w = (t - times[k]) / (times[k + 1] - times[k])
-                        tx = tr[k, 0] + w * (tr[k + 1, 0] - tr[k, 0])
-                        ty = tr[k, 1] + w * (tr[k + 1, 1] - tr[k, 1])
-                        tz = tr[k, 2] + w * (tr[k + 1, 2] - tr[k, 2])
                     # squad in segment g (numpy-quaternion uses the last
                     # segment before the start, indexing with -1)
                     g = i if i >= 0 else n - 1
@@ -788,106 +1007,191 @@ def _chain_block(
                             n - 1
                         ]
                     tau = (t - times[g]) / dt
-                    if c[g, _DONE] == _UNIT:
-                        sn, cs = _sincos(tau * c[g, 4])
-                        s1w = cs * r[g, 0] + sn * c[g, 5]
-                        s1x = cs * r[g, 1] + sn * c[g, 6]
-                        s1y = cs * r[g, 2] + sn * c[g, 7]
-                        s1z = cs * r[g, 3] + sn * c[g, 8]
-                        sn, cs = _sincos(tau * c[g, 9])
-                        s2w = cs * c[g, 0] + sn * c[g, 10]
-                        s2x = cs * c[g, 1] + sn * c[g, 11]
-                        s2y = cs * c[g, 2] + sn * c[g, 12]
-                        s2z = cs * c[g, 3] + sn * c[g, 13]
-                    else:  # not unit: b in columns 4:8
-                        if g < n - 1:
-                            nw, nx, ny, nz = (
-                                r[g + 1, 0],
-                                r[g + 1, 1],
-                                r[g + 1, 2],
-                                r[g + 1, 3],
-                            )
+                    if not rotation_only and i >= 0 and t == times[i]:
+                        tx, ty, tz = tr[i, 0], tr[i, 1], tr[i, 2]
+                    elif not rotation_only:
+                        # inside the samples k == g: the translation's weight
+                        # is tau (the same operations)
+                        if 0 <= i < n - 1:
+                            w = tau
                         else:
-                            nw, nx, ny, nz = (
-                                c[n - 1, 4],
-                                c[n - 1, 5],
-                                c[n - 1, 6],
-                                c[n - 1, 7],
-                            )
-                        s1w, s1x, s1y, s1z = _qslerp1(
-                            r[g, 0], r[g, 1], r[g, 2], r[g, 3], nw, nx, ny, nz, tau
-                        )
-                        s2w, s2x, s2y, s2z = _qslerp1(
-                            c[g, 0], c[g, 1], c[g, 2], c[g, 3],
-                            c[g, 4], c[g, 5], c[g, 6], c[g, 7],
-                            tau,
-                        )  # fmt: skip
-                    qw, qx, qy, qz = _qslerp_unit1(
-                        s1w, s1x, s1y, s1z, s2w, s2x, s2y, s2z,
-                        2.0 * tau * (1.0 - tau),
-                    )  # fmt: skip
+                            w = (t - times[k]) / (times[k + 1] - times[k])
+                        tx = tr[k, 0] + w * (tr[k + 1, 0] - tr[k, 0])
+                        ty = tr[k, 1] + w * (tr[k + 1, 1] - tr[k, 1])
+                        tz = tr[k, 2] + w * (tr[k + 1, 2] - tr[k, 2])
                     # the sign of the stored sample the segment starts from
-                    d = (
+                    neg = (
                         r[k, 0] * rp[k, 0]
                         + r[k, 1] * rp[k, 1]
                         + r[k, 2] * rp[k, 2]
                         + r[k, 3] * rp[k, 3]
-                    )
-                    if d < 0.0:
-                        qw, qx, qy, qz = -qw, -qx, -qy, -qz
-            if s == 0 and not inverse:
-                # the first step as it is (``chain.compose`` does the same)
-                acc[b, 0] = tx
-                acc[b, 1] = ty
-                acc[b, 2] = tz
-                acc[b, 3] = qw
-                acc[b, 4] = qx
-                acc[b, 5] = qy
-                acc[b, 6] = qz
-                continue
-            x, y, z, w, rx, ry, rz = _compose(
-                acc[b, 0], acc[b, 1], acc[b, 2],
-                acc[b, 3], acc[b, 4], acc[b, 5], acc[b, 6],
-                tx, ty, tz, qw, qx, qy, qz, inverse,
-            )  # fmt: skip
-            acc[b, 0] = x
-            acc[b, 1] = y
-            acc[b, 2] = z
-            acc[b, 3] = w
-            acc[b, 4] = rx
-            acc[b, 5] = ry
-            acc[b, 6] = rz
+                    ) < 0.0
+                    if (
+                        c[g, _DONE] == _UNIT
+                        and abs(tau * c[g, 4]) < SINCOS_LIMIT
+                        and abs(tau * c[g, 9]) < SINCOS_LIMIT
+                    ):
+                        # for the squad pass
+                        path = _GATHERED
+                        gathered += 1
+                        work[_TAU + b] = tau
+                        work[_TH1 + b] = c[g, 4]
+                        work[_TH2 + b] = c[g, 9]
+                        for e in range(4):
+                            work[_P + e * BLOCK + b] = r[g, e]
+                            work[_U1 + e * BLOCK + b] = c[g, 5 + e]
+                            work[_Q + e * BLOCK + b] = c[g, e]
+                            work[_U2 + e * BLOCK + b] = c[g, 10 + e]
+                        work[_NEG + b] = 1.0 if neg else 0.0
+                    else:
+                        if c[g, _DONE] == _UNIT:
+                            sn, cs = _sincos(tau * c[g, 4])
+                            s1w = cs * r[g, 0] + sn * c[g, 5]
+                            s1x = cs * r[g, 1] + sn * c[g, 6]
+                            s1y = cs * r[g, 2] + sn * c[g, 7]
+                            s1z = cs * r[g, 3] + sn * c[g, 8]
+                            sn, cs = _sincos(tau * c[g, 9])
+                            s2w = cs * c[g, 0] + sn * c[g, 10]
+                            s2x = cs * c[g, 1] + sn * c[g, 11]
+                            s2y = cs * c[g, 2] + sn * c[g, 12]
+                            s2z = cs * c[g, 3] + sn * c[g, 13]
+                        else:  # not unit: b in columns 4:8
+                            if g < n - 1:
+                                nw, nx, ny, nz = (
+                                    r[g + 1, 0],
+                                    r[g + 1, 1],
+                                    r[g + 1, 2],
+                                    r[g + 1, 3],
+                                )
+                            else:
+                                nw, nx, ny, nz = (
+                                    c[n - 1, 4],
+                                    c[n - 1, 5],
+                                    c[n - 1, 6],
+                                    c[n - 1, 7],
+                                )
+                            s1w, s1x, s1y, s1z = _qslerp1(
+                                r[g, 0], r[g, 1], r[g, 2], r[g, 3],
+                                nw, nx, ny, nz, tau,
+                            )  # fmt: skip
+                            s2w, s2x, s2y, s2z = _qslerp1(
+                                c[g, 0], c[g, 1], c[g, 2], c[g, 3],
+                                c[g, 4], c[g, 5], c[g, 6], c[g, 7],
+                                tau,
+                            )  # fmt: skip
+                        qw, qx, qy, qz = _qslerp_unit1(
+                            s1w, s1x, s1y, s1z, s2w, s2x, s2y, s2z,
+                            2.0 * tau * (1.0 - tau),
+                        )  # fmt: skip
+                        if neg:
+                            qw, qx, qy, qz = -qw, -qx, -qy, -qz
+            work[_PATH + b] = path
+            work[_STEP + b] = tx
+            work[_STEP + BLOCK + b] = ty
+            work[_STEP + 2 * BLOCK + b] = tz
+            work[_STEP + 3 * BLOCK + b] = qw
+            work[_STEP + 4 * BLOCK + b] = qx
+            work[_STEP + 5 * BLOCK + b] = qy
+            work[_STEP + 6 * BLOCK + b] = qz
         cur[slot] = i
+        for b in range(nb, BLOCK):  # past the end of a short last block
+            work[_PATH + b] = 0.0
+        wide = _squad_rows(work) if gathered > 0 else 0
+        if wide >= _WIDE_ROWS:
+            wide = _wide_rows(work)
+        if wide > 0:
+            # the outer slerps left, by the scalar route
+            for b in range(nb):
+                if work[_PATH + b] != _GENERAL:
+                    continue
+                tau = work[_TAU + b]
+                qw, qx, qy, qz = _qslerp_unit1(
+                    work[_P + b], work[_P + BLOCK + b], work[_P + 2 * BLOCK + b], work[_P + 3 * BLOCK + b],
+                    work[_Q + b], work[_Q + BLOCK + b], work[_Q + 2 * BLOCK + b], work[_Q + 3 * BLOCK + b],
+                    2.0 * tau * (1.0 - tau),
+                )  # fmt: skip
+                if work[_NEG + b] != 0.0:
+                    qw, qx, qy, qz = -qw, -qx, -qy, -qz
+                work[_STEP + 3 * BLOCK + b] = qw
+                work[_STEP + 4 * BLOCK + b] = qx
+                work[_STEP + 5 * BLOCK + b] = qy
+                work[_STEP + 6 * BLOCK + b] = qz
+        _compose_rows(work, inverse, s == 0 and not inverse)
     return computed
 
 
 @helper
-def _store_lookup(acc, t_out, r_out, j0, j1, rotation_only):
-    """Rows j0:j1 of a lookup's result from the block's transforms in ``acc``."""
-    for b in range(j1 - j0):
-        j = j0 + b
-        if not rotation_only:
-            t_out[j, 0] = acc[b, 0]
-            t_out[j, 1] = acc[b, 1]
-            t_out[j, 2] = acc[b, 2]
-        r_out[j, 0] = acc[b, 3]
-        r_out[j, 1] = acc[b, 4]
-        r_out[j, 2] = acc[b, 5]
-        r_out[j, 3] = acc[b, 6]
+def _store_lookup(work, t_out, r_out, j0, j1, rotation_only):
+    """Rows j0:j1 of a lookup's result from the block's transforms in ``work``."""
+    nb = j1 - j0
+    # flat views of the block's rows: constant strides, so that the copy
+    # from the scratch's columns vectorises (LLVM's interleaved stores)
+    r = r_out.reshape(-1)[4 * j0 : 4 * j1]
+    for b in range(nb):
+        r[4 * b] = work[_ACC + 3 * BLOCK + b]
+        r[4 * b + 1] = work[_ACC + 4 * BLOCK + b]
+        r[4 * b + 2] = work[_ACC + 5 * BLOCK + b]
+        r[4 * b + 3] = work[_ACC + 6 * BLOCK + b]
+    if not rotation_only:
+        t = t_out.reshape(-1)[3 * j0 : 3 * j1]
+        for b in range(nb):
+            t[3 * b] = work[_ACC + b]
+            t[3 * b + 1] = work[_ACC + BLOCK + b]
+            t[3 * b + 2] = work[_ACC + 2 * BLOCK + b]
+
+
+@helper(options=_ROWS)
+def _apply_rows(work, d, out, nb, mode):
+    """:func:`_apply_block` for one item per row: ``d`` and ``out`` (nb * c,) flat."""
+    w, x, y, z = _ACC + 3 * BLOCK, _ACC + 4 * BLOCK, _ACC + 5 * BLOCK, _ACC + 6 * BLOCK
+    if mode == 2:
+        for b in range(nb):
+            ow, ox, oy, oz = _qmul_rows(
+                work[w + b], work[x + b], work[y + b], work[z + b],
+                d[4 * b], d[4 * b + 1], d[4 * b + 2], d[4 * b + 3],
+            )  # fmt: skip
+            out[4 * b] = ow
+            out[4 * b + 1] = ox
+            out[4 * b + 2] = oy
+            out[4 * b + 3] = oz
+        return
+    for b in range(nb):
+        px, py, pz = _rotate_rows(
+            work[w + b], work[x + b], work[y + b], work[z + b],
+            d[3 * b], d[3 * b + 1], d[3 * b + 2],
+        )  # fmt: skip
+        if mode == 0:
+            px += work[_ACC + b]
+            py += work[_ACC + BLOCK + b]
+            pz += work[_ACC + 2 * BLOCK + b]
+        out[3 * b] = px
+        out[3 * b + 1] = py
+        out[3 * b + 2] = pz
 
 
 @helper
-def _apply_block(acc, data, out, j0, j1, mode):
-    """Rows j0:j1 of ``data`` carried by the block's transforms in ``acc``.
+def _apply_block(work, data, out, j0, j1, mode):
+    """Rows j0:j1 of ``data`` carried by the block's transforms in ``work``.
 
     ``data`` (m|1, k, c) as for :func:`transform_chain`.
     """
     k = data.shape[1]
+    if k == 1 and data.shape[0] > 1:
+        # one item per row (the usual case): flat views, vectorised
+        c = data.shape[2]
+        d = data.reshape(-1)[c * j0 : c * j1]
+        _apply_rows(work, d, out.reshape(-1)[c * j0 : c * j1], j1 - j0, mode)
+        return
     s_d = 1 if data.shape[0] > 1 else 0
     for b in range(j1 - j0):
         j = j0 + b
         row = j * s_d
-        w, qx, qy, qz = acc[b, 3], acc[b, 4], acc[b, 5], acc[b, 6]
+        w, qx, qy, qz = (
+            work[_ACC + 3 * BLOCK + b],
+            work[_ACC + 4 * BLOCK + b],
+            work[_ACC + 5 * BLOCK + b],
+            work[_ACC + 6 * BLOCK + b],
+        )
         if mode == 2:
             for e in range(k):
                 ow, ox, oy, oz = _qmul1(
@@ -904,9 +1208,9 @@ def _apply_block(acc, data, out, j0, j1, mode):
                     w, qx, qy, qz, data[row, e, 0], data[row, e, 1], data[row, e, 2]
                 )
                 if mode == 0:
-                    px += acc[b, 0]
-                    py += acc[b, 1]
-                    pz += acc[b, 2]
+                    px += work[_ACC + b]
+                    py += work[_ACC + BLOCK + b]
+                    pz += work[_ACC + 2 * BLOCK + b]
                 out[j, e, 0] = px
                 out[j, e, 1] = py
                 out[j, e, 2] = pz
@@ -941,7 +1245,7 @@ def lookup_chain(
     m = target.shape[0]
     t_out = np.empty((0 if rotation_only else m, 3))
     r_out = np.empty((m, 4))
-    acc = np.empty((BLOCK, 7))
+    work = np.empty(WORK * BLOCK)
     cur = np.full(SLOTS, -1, dtype=np.int64)
     computed = 0
     for j0 in range(0, m, BLOCK):
@@ -949,9 +1253,9 @@ def lookup_chain(
         computed += _chain_block(
             plan, statics, offsets, gaps, own,
             times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
-            target, j0, j1, acc, cur, rotation_only,
+            target, j0, j1, work, cur, rotation_only,
         )  # fmt: skip
-        _store_lookup(acc, t_out, r_out, j0, j1, rotation_only)
+        _store_lookup(work, t_out, r_out, j0, j1, rotation_only)
     return t_out, r_out, computed
 
 
@@ -984,7 +1288,7 @@ def transform_chain(
     m = target.shape[0]
     out = np.empty((m, data.shape[1], data.shape[2]))
     rotation_only = mode != 0
-    acc = np.empty((BLOCK, 7))
+    work = np.empty(WORK * BLOCK)
     cur = np.full(SLOTS, -1, dtype=np.int64)
     computed = 0
     for j0 in range(0, m, BLOCK):
@@ -992,9 +1296,9 @@ def transform_chain(
         computed += _chain_block(
             plan, statics, offsets, gaps, own,
             times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
-            target, j0, j1, acc, cur, rotation_only,
+            target, j0, j1, work, cur, rotation_only,
         )  # fmt: skip
-        _apply_block(acc, data, out, j0, j1, mode)
+        _apply_block(work, data, out, j0, j1, mode)
     return out, computed
 
 
@@ -1241,7 +1545,7 @@ def lookup_chain_parallel(
     cur = np.full((nch, SLOTS), -1, dtype=np.int64)
     computed = 0
     for ch in prange(nch):
-        acc_c = np.empty((BLOCK, 7))
+        work_c = np.empty(WORK * BLOCK)
         cur_c = cur[ch]
         for j0 in range(bounds[ch], bounds[ch + 1], BLOCK):
             j1 = min(j0 + BLOCK, bounds[ch + 1])
@@ -1249,9 +1553,9 @@ def lookup_chain_parallel(
                 plan, statics, offsets, gaps, own,
                 times0, t0, r0, p0, c0, times1, t1, r1, p1, c1,
                 times2, t2, r2, p2, c2,
-                target, j0, j1, acc_c, cur_c, rotation_only,
+                target, j0, j1, work_c, cur_c, rotation_only,
             )  # fmt: skip
-            _store_lookup(acc_c, t_out, r_out, j0, j1, rotation_only)
+            _store_lookup(work_c, t_out, r_out, j0, j1, rotation_only)
     return t_out, r_out, computed
 
 
@@ -1274,7 +1578,7 @@ def transform_chain_parallel(
     cur = np.full((nch, SLOTS), -1, dtype=np.int64)
     computed = 0
     for ch in prange(nch):
-        acc_c = np.empty((BLOCK, 7))
+        work_c = np.empty(WORK * BLOCK)
         cur_c = cur[ch]
         for j0 in range(bounds[ch], bounds[ch + 1], BLOCK):
             j1 = min(j0 + BLOCK, bounds[ch + 1])
@@ -1282,7 +1586,7 @@ def transform_chain_parallel(
                 plan, statics, offsets, gaps, own,
                 times0, t0, r0, p0, c0, times1, t1, r1, p1, c1,
                 times2, t2, r2, p2, c2,
-                target, j0, j1, acc_c, cur_c, rotation_only,
+                target, j0, j1, work_c, cur_c, rotation_only,
             )  # fmt: skip
-            _apply_block(acc_c, data, out, j0, j1, mode)
+            _apply_block(work_c, data, out, j0, j1, mode)
     return out, computed

@@ -64,7 +64,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import replace
 
 import numpy as np
 from numba import prange
@@ -131,6 +130,12 @@ _NOT_UNIT = 2.0
 
 # below this, exp(w) is 1 + w and log(1 + d) is d - d²/2 to within an ulp
 _TINY = 2.0**-27
+
+# The vectorised loops (the table fill's blocks, the chain's passes) divide
+# without numba's ZeroDivisionError check: it is a branch out of the loop,
+# which stops LLVM from vectorising it. Nothing else changes (no fastmath:
+# vector lanes round as scalar code does).
+_NO_DIVISION_CHECK = dataclasses.replace(KERNEL, error_model="numpy")
 
 
 # ---------------------------------------------------------------------------
@@ -360,7 +365,6 @@ def _table_row(r, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, rb):
 # performs (no fused multiply-add: vector lanes round as scalar code), so a
 # row's value depends only on the data, not on the block it fell in.
 FILL_BLOCK = 64
-_FILL_OPTIONS = dataclasses.replace(KERNEL, error_model="numpy")
 # scratch rows: samples (0:4), intervals and their inverses (4, 5), logs
 # (6:10), whether a log needs the exact route (10), the table row (11:26),
 # whether the row needs the exact route (26), the control point b (27:31)
@@ -392,7 +396,7 @@ def _control_point_series(rw, rx, ry, rz, ew, ex, ey, ez):
     return w, x, y, z, fast
 
 
-@helper(options=_FILL_OPTIONS)
+@helper(options=_NO_DIVISION_CHECK)
 def _fill_block(r, t, c, i0, i1, s):
     """Rows i0..i1-1 of the table (1 <= i0, i1 <= n - 2, i1 - i0 <= FILL_BLOCK).
 
@@ -654,14 +658,12 @@ WORK = 35
 _GATHERED = 1.0
 _GENERAL = 2.0
 
-# The vector passes divide without numba's ZeroDivisionError check (a branch
-# out of the loop, which stops LLVM from vectorising it); nothing else
-# changes (no fastmath). Their quaternion helpers are the ones of
-# :mod:`.quaternion`, inlined with these options.
-_ROWS = replace(KERNEL, error_model="numpy")
-_rotate_rows = helper(inline=True, options=_ROWS)(_rotate1.py_func)
-_qmul_rows = helper(inline=True, options=_ROWS)(_qmul1.py_func)
-_is_unit_rows = helper(inline=True, options=_ROWS)(_is_unit.py_func)
+# The chain's vector passes use the table fill's options (_NO_DIVISION_CHECK);
+# their quaternion helpers are the ones of :mod:`.quaternion`, inlined with
+# those options.
+_rotate_rows = helper(inline=True, options=_NO_DIVISION_CHECK)(_rotate1.py_func)
+_qmul_rows = helper(inline=True, options=_NO_DIVISION_CHECK)(_qmul1.py_func)
+_is_unit_rows = helper(inline=True, options=_NO_DIVISION_CHECK)(_is_unit.py_func)
 
 
 @helper(inline=True)
@@ -694,7 +696,7 @@ def _seek(times, t, i):
     return lo
 
 
-@helper(inline=True, options=_ROWS)
+@helper(inline=True, options=_NO_DIVISION_CHECK)
 def _compose(ax, ay, az, aw, bx, by, bz, tx, ty, tz, qw, qx, qy, qz, inverse):
     """Accumulated transform followed by (t, q), as ``resample.chain_step``.
 
@@ -714,7 +716,7 @@ def _compose(ax, ay, az, aw, bx, by, bz, tx, ty, tz, qw, qx, qy, qz, inverse):
     return x, y, z, w, rx, ry, rz
 
 
-@helper(options=_ROWS)
+@helper(options=_NO_DIVISION_CHECK)
 def _compose_rows(work, inverse, first):
     """The step's transforms (rows _STEP) composed into the block's (rows _ACC).
 
@@ -746,7 +748,7 @@ def _compose_rows(work, inverse, first):
         work[a + 6 * BLOCK + b] = rz
 
 
-@helper(inline=True, options=_ROWS)
+@helper(inline=True, options=_NO_DIVISION_CHECK)
 def _arc_rows(work, theta, start, u):
     """Rows ``start`` (4 quantities) moved along their great circles towards ``u``.
 
@@ -764,7 +766,7 @@ def _arc_rows(work, theta, start, u):
             )
 
 
-@helper(options=_ROWS)
+@helper(options=_NO_DIVISION_CHECK)
 def _squad_rows(work):
     """Squad at the gathered rows of the block, into their step rotations.
 
@@ -841,7 +843,7 @@ def _squad_rows(work):
 _WIDE_ROWS = 8
 
 
-@helper(options=_ROWS)
+@helper(options=_NO_DIVISION_CHECK)
 def _wide_rows(work):
     """The outer slerps marked ``_GENERAL``, along their great circles.
 
@@ -1140,7 +1142,7 @@ def _store_lookup(work, t_out, r_out, j0, j1, rotation_only):
             t[3 * b + 2] = work[_ACC + 2 * BLOCK + b]
 
 
-@helper(options=_ROWS)
+@helper(options=_NO_DIVISION_CHECK)
 def _apply_rows(work, d, out, nb, mode):
     """:func:`_apply_block` for one item per row: ``d`` and ``out`` (nb * c,) flat."""
     w, x, y, z = _ACC + 3 * BLOCK, _ACC + 4 * BLOCK, _ACC + 5 * BLOCK, _ACC + 6 * BLOCK

@@ -102,18 +102,26 @@ def threads() -> int:
     return min(wanted, available)
 
 
+def _runnable() -> int:
+    """Runnable threads right now, by Linux's count in ``/proc/loadavg``."""
+    with open(_LOADAVG, "rb") as f:
+        return int(f.read().split()[3].split(b"/")[0])
+
+
 def free_cores() -> int | None:
     """Cores this process may use that no other runnable thread wants now.
 
     The cores of the process's affinity mask less the threads the kernel
     counts as runnable at this instant (``/proc/loadavg``), not counting
     the calling thread. A thread of this process that is running (a dask
-    worker's, say) counts as busy too. None where the count is not
-    available (not Linux): then the load is not taken into account.
+    worker's, say) counts as busy too. The count is read twice and the
+    smaller kept: a busy process is runnable both times, while kernel
+    workers and short-lived processes, which would otherwise cost a long
+    call its second core now and then, rarely are. None where the count is
+    not available (not Linux): then the load is not taken into account.
     """
     try:
-        with open(_LOADAVG, "rb") as f:
-            running = int(f.read().split()[3].split(b"/")[0])
+        running = min(_runnable(), _runnable())
     except (OSError, ValueError, IndexError):
         return None
     try:

@@ -63,8 +63,10 @@ MIN_ROWS: Final = 50_000
 #: Environment variable capping the threads of rbm_nb's parallel kernels.
 ENV_THREADS: Final = "RBM_NB_NUM_THREADS"
 
-# Linux's count of runnable threads, in its 4th field ("running/total")
+# Linux's count of runnable threads, in its 4th field ("running/total"), and
+# this process's threads (each with its state in its stat file)
 _LOADAVG = "/proc/loadavg"
+_TASKS = "/proc/self/task"
 
 _LOCK = threading.Lock()
 # pid of the process that first launched a parallel kernel (None: none yet)
@@ -108,27 +110,44 @@ def _runnable() -> int:
         return int(f.read().split()[3].split(b"/")[0])
 
 
-def free_cores() -> int | None:
-    """Cores this process may use that no other runnable thread wants now.
+def _own_runnable() -> int:
+    """Runnable threads of this process right now (``/proc/self/task``)."""
+    count = 0
+    for task in os.listdir(_TASKS):
+        try:
+            with open(f"{_TASKS}/{task}/stat", "rb") as f:
+                stat = f.read()
+        except OSError:  # the thread ended meanwhile
+            continue
+        # the state follows the command name, which is in parentheses
+        count += stat[stat.rindex(b")") + 2 : stat.rindex(b")") + 3] == b"R"
+    return count
 
-    The cores of the process's affinity mask less the threads the kernel
-    counts as runnable at this instant (``/proc/loadavg``), not counting
-    the calling thread. A thread of this process that is running (a dask
-    worker's, say) counts as busy too. The count is read twice and the
-    smaller kept: a busy process is runnable both times, while kernel
-    workers and short-lived processes, which would otherwise cost a long
-    call its second core now and then, rarely are. None where the count is
-    not available (not Linux): then the load is not taken into account.
+
+def free_cores() -> int | None:
+    """Cores this process may use that no other process's thread wants now.
+
+    The cores of the process's affinity mask less the threads of other
+    processes that the kernel counts as runnable at this instant
+    (``/proc/loadavg``'s count less this process's own runnable threads).
+    This process's threads are left out: numba's workers keep spinning for
+    a moment after a parallel call, and counting them made every other
+    call of a loop serial; rbm_nb runs one parallel kernel per process at
+    a time anyway. The count is read twice and the smaller kept: a busy
+    process is runnable both times, while kernel workers and short-lived
+    processes, which would otherwise cost a long call its second core now
+    and then, rarely are. None where the counts are not available (not
+    Linux): then the load is not taken into account.
     """
     try:
-        running = min(_runnable(), _runnable())
+        others = min(_runnable() - _own_runnable(), _runnable() - _own_runnable())
     except (OSError, ValueError, IndexError):
         return None
     try:
         cores = len(os.sched_getaffinity(0))
     except AttributeError:  # pragma: no cover - not on Linux
         cores = os.cpu_count() or 1
-    return max(cores - (running - 1), 1)
+    return max(cores - max(others, 0), 1)
 
 
 def launch(

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import threading
+import time
 
 import numba
 import pytest
@@ -114,22 +115,58 @@ def load(monkeypatch, tmp_path):
     monkeypatch.setattr(numba.config, "NUMBA_NUM_THREADS", 2)
     monkeypatch.setenv(_parallel.ENV_THREADS, "2")
 
-    def set_load(running, cores):
+    def set_load(running, cores, own=1):
         path = tmp_path / "loadavg"
         path.write_text(f"0.52 0.58 0.59 {running}/345 12345\n")
         monkeypatch.setattr(_parallel, "_LOADAVG", str(path))
         monkeypatch.setattr(os, "sched_getaffinity", lambda pid: set(range(cores)))
+        if own is not None:  # this process's runnable threads (None: the real count)
+            monkeypatch.setattr(_parallel, "_own_runnable", lambda: own)
 
     return set_load
 
 
 @pytest.mark.parametrize(
-    ("running", "cores", "free"),
-    [(1, 2, 2), (2, 2, 1), (5, 2, 1), (1, 8, 8), (3, 8, 6)],
+    ("running", "cores", "own", "free"),
+    [
+        (1, 2, 1, 2),
+        (2, 2, 1, 1),
+        (5, 2, 1, 1),
+        (1, 8, 1, 8),
+        (3, 8, 1, 6),
+        (3, 2, 3, 2),
+    ],
 )
-def test_free_cores_leaves_out_the_other_runnable_threads(load, running, cores, free):
-    load(running, cores)  # the calling thread is one of the running
+def test_free_cores_leaves_out_the_other_processes_runnable_threads(
+    load, running, cores, own, free
+):
+    load(running, cores, own)  # the calling thread is one of the running
     assert _parallel.free_cores() == free
+
+
+def test_this_processs_own_busy_threads_do_not_count(load):
+    """numba's workers spin for a moment after a parallel call: a thread of
+    this process that is running must not make the next call serial."""
+    from numba import njit
+
+    @njit(nogil=True)
+    def spin(seconds):  # releases the GIL: the thread really runs
+        x = 0.0
+        for i in range(int(seconds * 2e8)):
+            x += i * 1e-9
+        return x
+
+    spin(0.0)
+    thread = threading.Thread(target=spin, args=(1.0,))
+    thread.start()
+    try:
+        time.sleep(0.05)
+        own = _parallel._own_runnable()
+        assert own >= 2  # this thread and the spinning one
+        load(own, 2, own=None)  # every runnable thread is ours
+        assert _parallel.free_cores() == 2
+    finally:
+        thread.join()
 
 
 def test_a_busy_core_means_serial(load):

@@ -140,13 +140,17 @@ def free_cores() -> int | None:
     Linux): then the load is not taken into account.
     """
     try:
-        others = min(_runnable() - _own_runnable(), _runnable() - _own_runnable())
-    except (OSError, ValueError, IndexError):
-        return None
-    try:
         cores = len(os.sched_getaffinity(0))
     except AttributeError:  # pragma: no cover - not on Linux
         cores = os.cpu_count() or 1
+    try:
+        if _runnable() <= 1:
+            # only the calling thread: every core is free, and the 40 µs of
+            # reading this process's threads are not needed
+            return cores
+        others = min(_runnable() - _own_runnable(), _runnable() - _own_runnable())
+    except (OSError, ValueError, IndexError):
+        return None
     return max(cores - max(others, 0), 1)
 
 

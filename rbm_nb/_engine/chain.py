@@ -422,7 +422,10 @@ def _compose_static(run):
 
 
 def fused_plan(steps, target: Target):
-    """The fused plan of a moving chain and its ``own`` flags, or (None, None).
+    """The fused plan of a moving chain and its ``own`` runs, or (None, None).
+
+    ``own[k]`` is 1 + the index of the first target time among slot k's
+    samples when the target times are a run of them, else 0.
 
     Chains with moving frames (up to ``_kernels.fused.SLOTS`` of them) are
     evaluated in one pass by :mod:`rbm_nb._engine.fused`, with the rules of
@@ -433,8 +436,8 @@ def fused_plan(steps, target: Target):
     plan = _fused.plan(steps, _compose_static)
     if plan is None:
         return None, None
-    own = [_same_times(f._track, target.track) is not None for f in plan.frames]
-    return plan, own
+    runs = [_same_times(f._track, target.track) for f in plan.frames]
+    return plan, [0 if run is None else run.start + 1 for run in runs]
 
 
 def apply(kind: str, steps, target: Target, data: np.ndarray) -> np.ndarray:

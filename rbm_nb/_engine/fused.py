@@ -288,8 +288,9 @@ def _own(own) -> np.ndarray:
 def lookup(p: Plan, target, own, rotation_only: bool = False):
     """(t (m, 3) or (0, 3), r (m, 4)) of a planned chain at the target times.
 
-    ``own[k]`` is true if the target times are a run of slot k's frame's own
-    sample times (``chain._same_times``).
+    ``own[k]``: 1 + the index of the first target time among slot k's
+    frame's samples if the target times are a run of them
+    (``chain._same_times``), else 0.
     """
     base = target.track.base
 

@@ -30,11 +30,13 @@ statics : float64 (s, 7)
 offsets : float64 (SLOTS,)
     Added to the target times to put them on each slot's time origin.
 own : int64 (SLOTS,)
-    1 where the target times are a run of the slot's own sample times
-    (then every row is a sample: its stored value, or NaN if its squad
-    segment reads a missing sample), else 0 (a target time that happens to
-    equal a sample time is evaluated like any other: the stored
-    translation, squad's unit rotation).
+    1 + i0 where the target times are the run of the slot's own sample
+    times from sample i0 (then every row is a sample: its stored value, or
+    NaN if its squad segment reads a missing sample), else 0 (a target time
+    that happens to equal a sample time is evaluated like any other: the
+    stored translation, squad's unit rotation). With a wrong i0 the
+    results are the same, only slower (blocks are checked before they are
+    copied).
 gaps : float64 (SLOTS,)
     Each slot's ``max_gap`` (inf: none): target times strictly inside a
     longer gap between two samples get NaN.
@@ -891,6 +893,55 @@ def _wide_rows(work):
     return left
 
 
+@helper(options=_NO_DIVISION_CHECK)
+def _own_rows(work, times, tr, rp, target, i0, j0, nb, rotation_only):
+    """Rows j0 .. j0+nb at the frame's own samples i0 .., copied into the step.
+
+    The scalar pass's own-times rule for a whole block at once, in loops
+    LLVM vectorises: taken when the block's target times are exactly
+    times[i0:i0+nb] and no sample the rule reads (rotations i-1 .. i+2,
+    translations i-1 and i) is missing, so that every row is its stored
+    sample. Returns False otherwise, and the scalar pass takes the block
+    (the rows written here are then all written again).
+    """
+    n = times.shape[0]
+    if i0 < 0 or j0 < 0 or i0 + nb > n:
+        return False
+    lo = max(i0 - 1, 0)
+    hi = min(i0 + nb + 2, n)
+    rf = rp.reshape(-1)
+    tf = tr.reshape(-1)
+    # (loop counters from 0 and bases known non-negative: LLVM vectorises
+    # only loops whose indices it can bound)
+    odd = 0
+    for b in range(nb):
+        odd += np.int64(target[j0 + b] != times[i0 + b])
+    for q in range(4 * (hi - lo)):
+        odd += np.int64(rf[4 * lo + q] != rf[4 * lo + q])
+    for q in range(3 * (i0 + nb - lo)):
+        odd += np.int64(tf[3 * lo + q] != tf[3 * lo + q])
+    if odd != 0:
+        return False
+    for b in range(nb):
+        k = 4 * (i0 + b)
+        work[_STEP + 3 * BLOCK + b] = rf[k]
+        work[_STEP + 4 * BLOCK + b] = rf[k + 1]
+        work[_STEP + 5 * BLOCK + b] = rf[k + 2]
+        work[_STEP + 6 * BLOCK + b] = rf[k + 3]
+    if rotation_only:
+        for b in range(3 * BLOCK):
+            work[_STEP + b] = 0.0
+    else:
+        for b in range(nb):
+            k = 3 * (i0 + b)
+            work[_STEP + b] = tf[k]
+            work[_STEP + BLOCK + b] = tf[k + 1]
+            work[_STEP + 2 * BLOCK + b] = tf[k + 2]
+    for b in range(BLOCK):
+        work[_PATH + b] = 0.0
+    return True
+
+
 @helper
 def _chain_block(
     plan, statics, offsets, gaps, own,
@@ -936,6 +987,17 @@ def _chain_block(
             times, tr, r, rp, c = times2, t2, r2, p2, c2
         off = offsets[slot]
         n = times.shape[0]
+        if (
+            kind == SQUAD
+            and own[slot] != 0
+            and off == 0.0
+            and _own_rows(
+                work, times, tr, rp, target, own[slot] - 1 + j0, j0, nb, rotation_only
+            )
+        ):
+            cur[slot] = own[slot] - 1 + j1 - 1
+            _compose_rows(work, inverse, s == 0 and not inverse)
+            continue
         i = cur[slot]
         gathered = 0
         for b in range(nb):

@@ -138,3 +138,111 @@ def test_vector_passes_give_the_scalar_route(arc, wide_pass):
     assert counts[2] > 0
     if wide_pass and arc >= 0.3:
         assert counts[1] > 0
+
+
+# ---------------------------------------------------------------------------
+# the frame's own sample times: whole blocks copied (``_own_rows``)
+# ---------------------------------------------------------------------------
+
+
+@numba.njit(cache=False)
+def _own_blocks(times, t, r, target, i0, rotation_only):
+    """``_own_rows`` over the target's blocks: (steps (m, 7), taken (blocks,))."""
+    m = target.shape[0]
+    w = np.empty(kf.WORK * B)
+    out = np.full((m, 7), np.nan)
+    taken = np.zeros((m + B - 1) // B, dtype=np.bool_)
+    for j0 in range(0, m, B):
+        nb = min(B, m - j0)
+        taken[j0 // B] = kf._own_rows(
+            w, times, t, r, target, i0 + j0, j0, nb, rotation_only
+        )
+        if taken[j0 // B]:
+            for e in range(7):
+                for b in range(nb):
+                    out[j0 + b, e] = w[kf._STEP + e * B + b]
+    return out, taken
+
+
+def _own_frame(n, rng):
+    times = np.cumsum(rng.uniform(0.5, 1.5, n))
+    t = rng.normal(size=(n, 3))
+    r = _unit(rng, n)
+    return times, t, r
+
+
+@pytest.mark.parametrize("rotation_only", [False, True])
+def test_own_blocks_are_the_stored_samples_or_left_to_the_scalar_pass(rotation_only):
+    rng = np.random.default_rng(5)
+    n = 10 * B + 17
+    times, t, r = _own_frame(n, rng)
+    # missing samples whose windows reach into neighbouring blocks: rotation
+    # i is read by rows i-2 .. i+1, translation i by rows i and i+1
+    r[3 * B + 1] = np.nan  # read by the last row of block 2
+    t[5 * B - 1] = np.nan  # read by the first row of block 5
+    r[7 * B + 40, 2] = np.nan
+    start = 30
+    target = times[start : start + 9 * B].copy()
+    target[8 * B + 3] += 1e-9  # not a sample time
+    steps, taken = _own_blocks(times, t, r, target, start, rotation_only)
+    # the blocks whose rows read a missing sample, or are not all samples
+    bad_rot = np.isnan(r).any(axis=1)
+    bad_t = np.isnan(t).any(axis=1)
+    want_taken = []
+    for j0 in range(0, len(target), B):
+        i = np.arange(start + j0, start + min(j0 + B, len(target)))
+        reads_r = np.unique(np.clip(np.concatenate([i - 1, i, i + 1, i + 2]), 0, n - 1))
+        reads_t = np.unique(np.clip(np.concatenate([i - 1, i]), 0, n - 1))
+        clean = not (bad_rot[reads_r].any() or bad_t[reads_t].any())
+        want_taken.append(clean and np.array_equal(target[i - start], times[i]))
+    np.testing.assert_array_equal(taken, want_taken)
+    assert taken.sum() == 5 and (~taken).sum() == 4
+    rows = np.repeat(taken, B)[: len(target)]
+    i = np.arange(start, start + len(target))[rows]
+    want_t = np.zeros((len(i), 3)) if rotation_only else t[i]
+    np.testing.assert_array_equal(steps[rows, :3], want_t)
+    np.testing.assert_array_equal(steps[rows, 3:], r[i])
+    # a run that would end past the samples, or start before them
+    assert not _own_blocks(times, t, r, times[n - 50 :], n - 40, False)[1].any()
+    assert not _own_blocks(times, t, r, times[:50], -1, False)[1].any()
+
+
+@pytest.mark.parametrize("missing", [False, True])
+def test_own_runs_give_the_scalar_own_rule_bit_for_bit(missing):
+    """A lookup told the right first sample equals one told a wrong one
+    (which the scalar pass takes), and both are the own-times rule."""
+    from rbm_nb._engine import fused as _fused
+
+    rng = np.random.default_rng(6)
+    n = 20 * B + 5
+    times, t, r = _own_frame(n, rng)
+    if missing:
+        for k in rng.choice(n, 12, replace=False):
+            (r if k % 2 else t)[k, k % 3] = np.nan
+    plan = np.array([kf.SQUAD, 0, 0], dtype=np.int64)
+    table = np.zeros((n, kf.TABLE_COLUMNS))
+    empty = _fused._EMPTY_SLOT
+    start = 7
+    target = times[start : n - 3]
+    results = []
+    for own in (start + 1, start + 2):
+        slots = (times, t, r, r, table) + empty + empty
+        got = kf.lookup_chain(
+            plan, np.zeros((1, 7)), np.zeros(kf.SLOTS), np.full(kf.SLOTS, np.inf),
+            np.array([own, 0, 0]), *slots, target, False,
+        )  # fmt: skip
+        results.append(got[:2])
+    for a, b in zip(results[0], results[1], strict=True):
+        np.testing.assert_array_equal(a, b)
+    # the rule: the stored sample, NaN where the rotation's window i-1 .. i+2
+    # or the translation's i-1, i reads a missing sample
+    i = np.arange(start, n - 3)
+    bad_r = np.isnan(r).any(axis=1)
+    bad_t = np.isnan(t).any(axis=1)
+    no_r = bad_r[i - 1] | bad_r[i] | bad_r[i + 1] | bad_r[i + 2]
+    no_t = no_r | bad_t[i - 1] | bad_t[i]
+    want_t, want_r = t[i].copy(), r[i].copy()
+    want_t[no_t], want_r[no_r] = np.nan, np.nan
+    np.testing.assert_array_equal(results[0][0], want_t)
+    np.testing.assert_array_equal(results[0][1], want_r)
+    assert no_r.any() == missing

@@ -1000,8 +1000,58 @@ def _chain_block(
             continue
         i = cur[slot]
         gathered = 0
+        gap = gaps[slot]
         for b in range(nb):
             t = target[j0 + b] + off
+            if kind == SQUAD:
+                # the usual row, in few operations and branches: inside the
+                # samples, not a sample time of the frame's own times nor
+                # inside a gap, its segment's table row unit (the same
+                # operations as the general rules below, which take the rest)
+                i = _seek(times, t, i)
+                if 0 <= i < n - 1:
+                    if c[i, _DONE] == 0.0:  # first use of the segment
+                        computed += _fill_run(r, times, c, i, RUN)
+                    ti = times[i]
+                    dt = times[i + 1] - ti
+                    at_sample = t == ti
+                    tau = (t - ti) / dt
+                    if (
+                        (not at_sample or own[slot] == 0)
+                        and (at_sample or not dt > gap)
+                        and c[i, _DONE] == _UNIT
+                        and abs(tau * c[i, 4]) < SINCOS_LIMIT
+                        and abs(tau * c[i, 9]) < SINCOS_LIMIT
+                    ):
+                        if rotation_only:
+                            tx = ty = tz = 0.0
+                        elif at_sample:
+                            tx, ty, tz = tr[i, 0], tr[i, 1], tr[i, 2]
+                        else:
+                            tx = tr[i, 0] + tau * (tr[i + 1, 0] - tr[i, 0])
+                            ty = tr[i, 1] + tau * (tr[i + 1, 1] - tr[i, 1])
+                            tz = tr[i, 2] + tau * (tr[i + 1, 2] - tr[i, 2])
+                        neg = (
+                            r[i, 0] * rp[i, 0]
+                            + r[i, 1] * rp[i, 1]
+                            + r[i, 2] * rp[i, 2]
+                            + r[i, 3] * rp[i, 3]
+                        ) < 0.0
+                        gathered += 1
+                        work[_TAU + b] = tau
+                        work[_TH1 + b] = c[i, 4]
+                        work[_TH2 + b] = c[i, 9]
+                        for e in range(4):
+                            work[_P + e * BLOCK + b] = r[i, e]
+                            work[_U1 + e * BLOCK + b] = c[i, 5 + e]
+                            work[_Q + e * BLOCK + b] = c[i, e]
+                            work[_U2 + e * BLOCK + b] = c[i, 10 + e]
+                        work[_NEG + b] = 1.0 if neg else 0.0
+                        work[_PATH + b] = _GATHERED
+                        work[_STEP + b] = tx
+                        work[_STEP + BLOCK + b] = ty
+                        work[_STEP + 2 * BLOCK + b] = tz
+                        continue
             tx = ty = tz = 0.0
             qw = qx = qy = qz = 0.0
             path = 0.0

@@ -750,6 +750,39 @@ def _compose_rows(work, inverse, first):
         work[a + 6 * BLOCK + b] = rz
 
 
+@helper(options=_NO_DIVISION_CHECK)
+def _compose_static_rows(work, statics, k, inverse, first, rotation_only):
+    """Static transform ``statics[k]`` composed into the block's (rows _ACC).
+
+    :func:`_compose_rows` with the same step at every row, taken as scalars
+    (no step rows written and read again).
+    """
+    tx, ty, tz = statics[k, 0], statics[k, 1], statics[k, 2]
+    if rotation_only:
+        tx = ty = tz = 0.0
+    qw, qx, qy, qz = statics[k, 3], statics[k, 4], statics[k, 5], statics[k, 6]
+    a = _ACC
+    if first:
+        for e, v in enumerate((tx, ty, tz, qw, qx, qy, qz)):
+            for b in range(BLOCK):
+                work[a + e * BLOCK + b] = v
+        return
+    for b in range(BLOCK):
+        x, y, z, w, rx, ry, rz = _compose(
+            work[a + b], work[a + BLOCK + b], work[a + 2 * BLOCK + b],
+            work[a + 3 * BLOCK + b], work[a + 4 * BLOCK + b],
+            work[a + 5 * BLOCK + b], work[a + 6 * BLOCK + b],
+            tx, ty, tz, qw, qx, qy, qz, inverse,
+        )  # fmt: skip
+        work[a + b] = x
+        work[a + BLOCK + b] = y
+        work[a + 2 * BLOCK + b] = z
+        work[a + 3 * BLOCK + b] = w
+        work[a + 4 * BLOCK + b] = rx
+        work[a + 5 * BLOCK + b] = ry
+        work[a + 6 * BLOCK + b] = rz
+
+
 @helper(inline=True, options=_NO_DIVISION_CHECK)
 def _arc_rows(work, theta, start, u):
     """Rows ``start`` (4 quantities) moved along their great circles towards ``u``.
@@ -970,13 +1003,9 @@ def _chain_block(
         slot = plan[3 * s + 1]
         inverse = plan[3 * s + 2] != 0
         if kind == STATIC:
-            for e in range(7):
-                v = statics[slot, e]
-                if rotation_only and e < 3:
-                    v = 0.0
-                for b in range(BLOCK):
-                    work[_STEP + e * BLOCK + b] = v
-            _compose_rows(work, inverse, s == 0 and not inverse)
+            _compose_static_rows(
+                work, statics, slot, inverse, s == 0 and not inverse, rotation_only
+            )
             continue
         # the slot's arrays, picked once per block
         if slot == 0:

@@ -17,14 +17,32 @@ evaluates through FITPACK, used for quaternions).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 
-from ._jit import B2, F1, F2, F3, kernel
+from .._config import KERNEL
+from ._jit import B2, F1, F2, F3, helper, kernel
+
+# Strictly increasing times never divide by zero, and without numba's
+# ZeroDivisionError branches (error_model="numpy") the row loops vectorise;
+# the arithmetic is unchanged (no fastmath).
+_ROWS = dataclasses.replace(KERNEL, error_model="numpy")
 
 
-@kernel(F2, F1)
+@helper(inline=True, options=_ROWS)
+def _weights(t0, t1, t2):
+    """numpy.gradient's three-point weights at t1, between t0 and t2."""
+    h1 = t1 - t0
+    h2 = t2 - t1
+    a = -h2 / (h1 * (h1 + h2))
+    b = (h2 - h1) / (h1 * h2)
+    c = h1 / (h2 * (h1 + h2))
+    return a, b, c
+
+
+@kernel(F2, F1, options=_ROWS)
 def gradient(f, t):
     """First derivative by central differences on uneven spacing (numpy's).
 
@@ -47,14 +65,28 @@ def gradient(f, t):
     for j in range(k):
         out[0, j] = (f[1, j] - f[0, j]) / h0
         out[n - 1, j] = (f[n - 1, j] - f[n - 2, j]) / hn
-    for i in range(1, n - 1):
-        h1 = t[i] - t[i - 1]
-        h2 = t[i + 1] - t[i]
-        a = -h2 / (h1 * (h1 + h2))
-        b = (h2 - h1) / (h1 * h2)
-        c = h1 / (h2 * (h1 + h2))
+    # flat views with constant strides: numba indexes 2-D rows with a
+    # runtime stride, which keeps LLVM from vectorising the loop over rows
+    ff = f.reshape(-1)
+    of = out.reshape(-1)
+    # (loop counters from 0: LLVM vectorises only loops whose indices it
+    # can bound, and numba's negative-index wraparound hides that otherwise)
+    if k == 3:
+        for r in range(n - 2):
+            a, b, c = _weights(t[r], t[r + 1], t[r + 2])
+            x0, y0, z0 = ff[3 * r], ff[3 * r + 1], ff[3 * r + 2]
+            x1, y1, z1 = ff[3 * r + 3], ff[3 * r + 4], ff[3 * r + 5]
+            x2, y2, z2 = ff[3 * r + 6], ff[3 * r + 7], ff[3 * r + 8]
+            of[3 * r + 3] = a * x0 + b * x1 + c * x2
+            of[3 * r + 4] = a * y0 + b * y1 + c * y2
+            of[3 * r + 5] = a * z0 + b * z1 + c * z2
+        return out
+    for r in range(n - 2):
+        a, b, c = _weights(t[r], t[r + 1], t[r + 2])
         for j in range(k):
-            out[i, j] = a * f[i - 1, j] + b * f[i, j] + c * f[i + 1, j]
+            of[(r + 1) * k + j] = (
+                a * ff[r * k + j] + b * ff[(r + 1) * k + j] + c * ff[(r + 2) * k + j]
+            )
     return out
 
 

@@ -64,6 +64,16 @@ def test_derivative_kernels_match_twins(kernel, twin, n):
     np.testing.assert_allclose(kernel(f, t), twin(f, t), rtol=1e-9, atol=1e-9)
 
 
+@pytest.mark.parametrize("k", [1, 3, 4])
+@pytest.mark.parametrize("n", [2, 3, 4, 97])
+def test_gradient_is_numpys_bit_for_bit(n, k):
+    """Every row route of the kernel (3 columns, any other) is numpy.gradient's."""
+    t = uneven_times(n) * 100
+    f = RNG.standard_normal((n, k))
+    want = np.gradient(f, t, axis=0, edge_order=1)
+    np.testing.assert_array_equal(dk.gradient(f, t), want)
+
+
 @pytest.mark.parametrize("n", [1, 2, 3, 10])
 def test_second_difference_score_matches_twin(n):
     x = RNG.standard_normal((n, 2, 3))

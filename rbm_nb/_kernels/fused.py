@@ -927,15 +927,16 @@ def _wide_rows(work):
 
 
 @helper(options=_NO_DIVISION_CHECK)
-def _own_rows(work, times, tr, rp, target, i0, j0, nb, rotation_only):
+def _own_rows(work, times, tr, rp, target, i0, j0, nb, rotation_only, into):
     """Rows j0 .. j0+nb at the frame's own samples i0 .., copied into the step.
 
     The scalar pass's own-times rule for a whole block at once, in loops
     LLVM vectorises: taken when the block's target times are exactly
     times[i0:i0+nb] and no sample the rule reads (rotations i-1 .. i+2,
     translations i-1 and i) is missing, so that every row is its stored
-    sample. Returns False otherwise, and the scalar pass takes the block
-    (the rows written here are then all written again).
+    sample. ``into``: the scratch's rows to write (_STEP, or _ACC for the
+    chain's first step). Returns False otherwise, and the scalar pass takes
+    the block (the rows written here are then all written again).
     """
     n = times.shape[0]
     if i0 < 0 or j0 < 0 or i0 + nb > n:
@@ -957,19 +958,19 @@ def _own_rows(work, times, tr, rp, target, i0, j0, nb, rotation_only):
         return False
     for b in range(nb):
         k = 4 * (i0 + b)
-        work[_STEP + 3 * BLOCK + b] = rf[k]
-        work[_STEP + 4 * BLOCK + b] = rf[k + 1]
-        work[_STEP + 5 * BLOCK + b] = rf[k + 2]
-        work[_STEP + 6 * BLOCK + b] = rf[k + 3]
+        work[into + 3 * BLOCK + b] = rf[k]
+        work[into + 4 * BLOCK + b] = rf[k + 1]
+        work[into + 5 * BLOCK + b] = rf[k + 2]
+        work[into + 6 * BLOCK + b] = rf[k + 3]
     if rotation_only:
         for b in range(3 * BLOCK):
-            work[_STEP + b] = 0.0
+            work[into + b] = 0.0
     else:
         for b in range(nb):
             k = 3 * (i0 + b)
-            work[_STEP + b] = tf[k]
-            work[_STEP + BLOCK + b] = tf[k + 1]
-            work[_STEP + 2 * BLOCK + b] = tf[k + 2]
+            work[into + b] = tf[k]
+            work[into + BLOCK + b] = tf[k + 1]
+            work[into + 2 * BLOCK + b] = tf[k + 2]
     for b in range(BLOCK):
         work[_PATH + b] = 0.0
     return True
@@ -990,14 +991,17 @@ def _chain_block(
     """
     computed = 0
     nb = j1 - j0
-    for b in range(BLOCK):
-        work[_ACC + b] = 0.0
-        work[_ACC + BLOCK + b] = 0.0
-        work[_ACC + 2 * BLOCK + b] = 0.0
-        work[_ACC + 3 * BLOCK + b] = 1.0
-        work[_ACC + 4 * BLOCK + b] = 0.0
-        work[_ACC + 5 * BLOCK + b] = 0.0
-        work[_ACC + 6 * BLOCK + b] = 0.0
+    if plan[2] != 0:
+        # the identity, for a first step taken inverted (a first step taken
+        # forward is written over the rows as it is)
+        for b in range(BLOCK):
+            work[_ACC + b] = 0.0
+            work[_ACC + BLOCK + b] = 0.0
+            work[_ACC + 2 * BLOCK + b] = 0.0
+            work[_ACC + 3 * BLOCK + b] = 1.0
+            work[_ACC + 4 * BLOCK + b] = 0.0
+            work[_ACC + 5 * BLOCK + b] = 0.0
+            work[_ACC + 6 * BLOCK + b] = 0.0
     for s in range(plan.shape[0] // 3):
         kind = plan[3 * s]
         slot = plan[3 * s + 1]
@@ -1016,16 +1020,19 @@ def _chain_block(
             times, tr, r, rp, c = times2, t2, r2, p2, c2
         off = offsets[slot]
         n = times.shape[0]
+        # the chain's first step, forward, is its accumulated transform
+        first = s == 0 and not inverse
+        into = _ACC if first else _STEP
+        i0 = own[slot] - 1 + j0
         if (
             kind == SQUAD
             and own[slot] != 0
             and off == 0.0
-            and _own_rows(
-                work, times, tr, rp, target, own[slot] - 1 + j0, j0, nb, rotation_only
-            )
+            and _own_rows(work, times, tr, rp, target, i0, j0, nb, rotation_only, into)
         ):
             cur[slot] = own[slot] - 1 + j1 - 1
-            _compose_rows(work, inverse, s == 0 and not inverse)
+            if not first:
+                _compose_rows(work, inverse, False)
             continue
         i = cur[slot]
         gathered = 0

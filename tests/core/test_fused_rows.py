@@ -155,7 +155,7 @@ def _own_blocks(times, t, r, target, i0, rotation_only):
     for j0 in range(0, m, B):
         nb = min(B, m - j0)
         taken[j0 // B] = kf._own_rows(
-            w, times, t, r, target, i0 + j0, j0, nb, rotation_only
+            w, times, t, r, target, i0 + j0, j0, nb, rotation_only, kf._STEP
         )
         if taken[j0 // B]:
             for e in range(7):

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import _parallel
+from .. import _memory, _parallel
 from .._kernels import fused as kf
 
 __all__ = ["Plan", "forget", "plan", "lookup", "transform"]
@@ -46,25 +46,6 @@ _TABLE_LOCK = threading.Lock()
 _PREFILL_ARGS = 5 + 5 * kf.SLOTS + 1
 
 
-# numpy asks for transparent huge pages on arrays of 4 MB or more; a table
-# starting on a 2 MB boundary is then faulted in a few huge pages instead of
-# ~1000 small ones at its unaligned ends (a first lookup of the 66k-sample
-# head recording took 2,033 faults, 1,434 of them the table's).
-_HUGE_PAGE = 2 << 20
-_HUGE_PAGE_MIN = 4 << 20
-
-
-def _zeroed_rows(n: int, columns: int) -> np.ndarray:
-    """np.zeros((n, columns)), starting on a huge page boundary when large."""
-    size = n * columns * 8
-    if size < _HUGE_PAGE_MIN:
-        return np.zeros((n, columns))
-    # zeroed by the allocator (fresh pages of an mmap: nothing touched yet)
-    raw = np.zeros(size + _HUGE_PAGE, dtype=np.uint8)
-    start = -raw.ctypes.data % _HUGE_PAGE
-    return raw[start : start + size].view(np.float64).reshape(n, columns)
-
-
 class _Table:
     """A frame's squad table, and what is known to be computed in it.
 
@@ -76,7 +57,9 @@ class _Table:
     __slots__ = ("rows", "complete", "filled")
 
     def __init__(self, n: int) -> None:
-        self.rows = _zeroed_rows(n, kf.TABLE_COLUMNS)
+        # (huge page aligned: a first lookup of the 66k-sample head recording
+        # took 1,434 page faults for its table, 4 once aligned)
+        self.rows = _memory.zeros((n, kf.TABLE_COLUMNS))
         self.complete = False
         self.filled: list[tuple[int, int]] = []
 

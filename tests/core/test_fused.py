@@ -359,19 +359,6 @@ def test_squad_rows_are_computed_only_for_the_segments_used():
     assert not table.complete
 
 
-@pytest.mark.parametrize("n", [10, 40_000, 300_001])
-def test_large_tables_start_on_a_huge_page(n):
-    """Zeroed, C-contiguous, and 2 MB aligned once numpy asks for huge pages."""
-    rows = _fused._zeroed_rows(n, kf.TABLE_COLUMNS)
-    assert rows.shape == (n, kf.TABLE_COLUMNS) and rows.dtype == np.float64
-    assert rows.flags.c_contiguous and rows.flags.writeable
-    assert not rows.any()
-    if rows.nbytes >= _fused._HUGE_PAGE_MIN:
-        assert rows.ctypes.data % _fused._HUGE_PAGE == 0
-    rows[-1, -1] = 1.0  # the last byte is inside the allocation
-    assert rows.base is None or rows.base.nbytes >= rows.nbytes
-
-
 # ---------------------------------------------------------------------------
 # missing samples
 # ---------------------------------------------------------------------------

@@ -1,4 +1,4 @@
-"""Large result arrays that start on a transparent huge page boundary.
+"""Large arrays that start on a transparent huge page boundary.
 
 numpy advises the kernel to back arrays of 4 MB or more with 2 MB huge pages
 (``MADV_HUGEPAGE``), so that writing a fresh array takes a few huge page
@@ -9,13 +9,18 @@ pages, up to 1,022 of them. Starting the array on a 2 MB boundary (the
 allocation is 2 MB longer; its untouched head costs no memory) leaves none.
 Measured on the 2-core VM, where a fault costs 1-2 µs: the first lookup of
 the head/eye chain took 1,434 faults for its squad table, 4 once aligned.
+
+The price is up to 2 MB of address space per array, never touched (so
+never memory), but counted by allocation tracers: used for the squad
+tables, which live as long as their frames, and not for results, whose
+callers measure their allocations (tests/core/test_array_door_memory.py).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["HUGE_PAGE", "ADVISED", "empty", "zeros"]
+__all__ = ["HUGE_PAGE", "ADVISED", "zeros"]
 
 HUGE_PAGE = 2 << 20
 #: numpy's threshold for the huge page advice
@@ -25,14 +30,6 @@ ADVISED = 4 << 20
 def _aligned(raw: np.ndarray, shape: tuple[int, ...], nbytes: int) -> np.ndarray:
     start = -raw.ctypes.data % HUGE_PAGE
     return raw[start : start + nbytes].view(np.float64).reshape(shape)
-
-
-def empty(shape: tuple[int, ...]) -> np.ndarray:
-    """``np.empty(shape)`` (float64, C order), huge page aligned when large."""
-    nbytes = 8 * int(np.prod(shape))
-    if nbytes < ADVISED:
-        return np.empty(shape)
-    return _aligned(np.empty(nbytes + HUGE_PAGE, dtype=np.uint8), shape, nbytes)
 
 
 def zeros(shape: tuple[int, ...]) -> np.ndarray:

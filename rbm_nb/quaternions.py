@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _dask, _memory, _parallel, _time
+from . import _dask, _parallel, _time
 from ._config import UNIT_QUATERNION_TOLERANCE
 from ._door import ArrayInput, kernel_array
 from ._door import float_array as _door_float_array
@@ -188,7 +188,7 @@ def _qinv_rows(rows: np.ndarray, given: Any) -> np.ndarray:
     """Inverses of kernel rows (n, 4), on both cores when long; rejects
     infinities and zero quaternions (named in ``given``, as passed)."""
     rows = kernel_array(rows)
-    out = _memory.empty(rows.shape)  # huge pages when large
+    out = np.empty(rows.shape)  # numpy's allocation: huge pages when large
     zeros, infs = _parallel.launch(
         _rk.qinv_into, _rk.qinv_into_parallel, rows.shape[0], rows, out
     )
@@ -288,7 +288,7 @@ def _qmul_rows(p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, int]:
     """p * q for kernel rows (n|1, 4), on both cores when long, and how many
     infinities the operands hold."""
     rows = 0 if 0 in (p.shape[0], q.shape[0]) else max(p.shape[0], q.shape[0])
-    out = _memory.empty((rows, 4))  # huge pages when large
+    out = np.empty((rows, 4))  # numpy's allocation: huge pages when large
     infs = _parallel.launch(_rk.qmul_into, _rk.qmul_into_parallel, rows, p, q, out)
     return out, infs
 
@@ -725,7 +725,7 @@ def _rotate_rows(
         if 0 in (q_rows.shape[0], v_rows.shape[0])
         else max(q_rows.shape[0], v_rows.shape[0])
     )
-    out = _memory.empty((rows, 3))  # huge pages when large
+    out = np.empty((rows, 3))  # numpy's allocation: huge pages when large
     zeros, infs = _parallel.launch(
         _rk.rotate_vectors_into,
         _rk.rotate_vectors_into_parallel,

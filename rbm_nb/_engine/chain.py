@@ -63,7 +63,10 @@ class Target:
 # its parent (frames tell the engine through invalidate(); a frame's data never
 # changes after construction). Values keep the two frames alive, so their ids
 # cannot be reused while an entry exists.
-_CHAINS: dict[tuple[int, int], tuple[Any, Any, list, Any]] = {}
+# Entries: (outof, into, steps, static, static rows), the static transform
+# (t (1, 3), r (1, 4)) when no frame of the chain moves, and its rows t (3,)
+# and r (4,), kept for lookup_transform's copies.
+_CHAINS: dict[tuple[int, int], tuple[Any, Any, list, Any, Any]] = {}
 _MAX_CACHED = 4096
 
 
@@ -73,17 +76,18 @@ def invalidate() -> None:
     _fused.forget()
 
 
-def _cached(outof, into) -> tuple[Any, Any, list, Any]:
+def _cached(outof, into) -> tuple[Any, Any, list, Any, Any]:
     key = (id(outof), id(into))
     entry = _CHAINS.get(key)
     if entry is None:
         if len(_CHAINS) >= _MAX_CACHED:
             _CHAINS.clear()
         steps = _chain(outof, into)
-        static = None
+        static = rows = None
         if all(f._track is None for f, _ in steps):
             static = compose(steps, Target(None))
-        entry = (outof, into, steps, static)
+            rows = static[0][0], static[1][0]
+        entry = (outof, into, steps, static, rows)
         _CHAINS[key] = entry
     return entry
 
@@ -484,9 +488,9 @@ def lookup_transform(frame, to_frame):
     Static transforms come back with shapes (3,) and (4,), moving ones with
     (n, 3) and (n, 4).
     """
-    static = static_transform(frame, to_frame)
-    if static is not None:
+    rows = _cached(frame, to_frame)[4]
+    if rows is not None:
         # copies: the cached transform is shared by every later call
-        return static[0][0].copy(), static[1][0].copy(), None
+        return rows[0].copy(), rows[1].copy(), None
     t, r, target = lookup(frame, to_frame)
     return t, r, target.timestamps

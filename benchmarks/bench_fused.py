@@ -286,10 +286,7 @@ def floor_kernels():
 
     @njit(cache=False, nogil=True)
     def static(work, s):
-        for e in range(7):
-            for b in range(block):
-                work[step + e * block + b] = s[e]
-        kf._compose_rows(work, False, False)
+        kf._compose_static_rows(work, s.reshape(1, 7), 0, False, False, False)
 
     @njit(cache=False, nogil=True)
     def rows(s1, s0, h_times, h_t, h_r, a, b, seg, e_t, e_r, target, off, j0, j1,
@@ -359,11 +356,7 @@ def floor_kernels():
                         work[step + (3 + e) * block + q] = hq[e]
             kf._compose_rows(work, False, False)
             static(work, s0)
-            for q in range(nb):
-                for e in range(3):
-                    t_out[k0 + q, e] = work[acc + e * block + q]
-                for e in range(4):
-                    r_out[k0 + q, e] = work[acc + (3 + e) * block + q]
+            kf._store_lookup(work, t_out, r_out, k0, k0 + nb, False)
 
     @njit(cache=False, nogil=True)
     def lookup(s1, s0, h_times, h_t, h_r, a, b, seg, e_t, e_r, target, off):

@@ -16,12 +16,21 @@ import math
 import numpy as np
 
 from .._config import KERNEL
-from ._jit import F2, B, F, helper, kernel
+from ._jit import F1, F2, B, F, helper, kernel
 
 # Branch-free passes that LLVM vectorises (division without a
 # ZeroDivisionError branch; no fused multiply-add, so that results stay those
 # of the plain arithmetic bit for bit).
 _COUNTING = dataclasses.replace(KERNEL, error_model="numpy")
+
+
+@kernel(F1, options=_COUNTING)
+def infinities(f):
+    """How many values of ``f`` are infinite (one vectorised pass)."""
+    count = 0
+    for i in range(f.shape[0]):
+        count += np.int64(abs(f[i]) == np.inf)
+    return count
 
 
 @helper(inline=True)

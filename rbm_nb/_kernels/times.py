@@ -2,11 +2,46 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
-from ._jit import I1, I, kernel  # noqa: E741
+from .._config import KERNEL
+from ._jit import F1, I1, I, kernel  # noqa: E741
 
-__all__ = ["seconds_since"]
+__all__ = ["seconds_since", "ns_key_faults", "float_key_faults"]
+
+# Counting passes LLVM vectorises (no ZeroDivisionError branch; loop
+# counters from 0): the caller looks for the offending index, to name it,
+# only when a count is not zero.
+_COUNTING = dataclasses.replace(KERNEL, error_model="numpy")
+_NAT = np.iinfo(np.int64).min
+
+
+@kernel(I1, options=_COUNTING)
+def ns_key_faults(keys):
+    """(NaT keys, keys not greater than their predecessor) of int64 keys."""
+    n = keys.shape[0]
+    nat = 0
+    for i in range(n):
+        nat += np.int64(keys[i] == _NAT)
+    unordered = 0
+    for i in range(n - 1):
+        unordered += np.int64(keys[i + 1] <= keys[i])
+    return nat, unordered
+
+
+@kernel(F1, options=_COUNTING)
+def float_key_faults(keys):
+    """(NaN or infinite keys, keys not greater than their predecessor)."""
+    n = keys.shape[0]
+    bad = 0
+    for i in range(n):
+        bad += np.int64(~(abs(keys[i]) < np.inf))
+    unordered = 0
+    for i in range(n - 1):
+        unordered += np.int64(~(keys[i + 1] > keys[i]))
+    return bad, unordered
 
 
 @kernel(I1, I)

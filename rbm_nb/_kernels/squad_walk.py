@@ -60,6 +60,7 @@ from .scalar import (
 __all__ = [
     "squad_walk",
     "squad_walk_parallel",
+    "squad_walk_scalar",
     "unflip_signs",
     "squad_input_fault",
 ]
@@ -286,7 +287,7 @@ def _control_point(bw, bx, by, bz, ux, uy, uz):
 # holds sample s0 - 1 + a, and the log row a the step from sample
 # s0 - 1 + a to the next; segment s0 + r has slot r (row r + 1 holds its
 # first sample).
-_W = _SPAN + 4
+_W = 520
 # samples: unit parts w, x, y, z (0:4), ln of the scale (4), 1.0 if NaN (5)
 _SMP = 0
 # log r[k]⁻¹ r[k+1] (vector part, 0:3), t[k+1] - t[k] (3) and its inverse (4)
@@ -298,11 +299,23 @@ _CTL = 11 * _W
 _REC = 27 * _W
 # per segment: 1.0 where a vector stage's branch does not apply
 _REDO = (27 + _N_REC) * _W
-_WS = _REDO + _W
+# per output row of the block: its segment's record (_N_REC quantities),
+# its τ, the sign of its stored sample, its two inner slerps (8), and 1.0
+# where it takes the scalar route
+_ROW = _REDO + _W
+_TAU = _ROW + _N_REC * _W
+_SGN = _TAU + _W
+_INN = _SGN + _W
+_EXACT = _INN + 8 * _W
+_WS = _EXACT + _W
+# the record quantities the vector route reads (θ of the arcs only serves
+# their sincos branch, 27 is not used)
+_ROW_QUANTITIES = (0, 1, 2, 3, 4, 5, 6, 7, 8, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19)
+_ROW_QUANTITIES += (21, 22, 23, 24, 25, 26, 28)
 
 
 @helper(options=_VECTOR)
-def _samples(qf, sign, ws, k0, k1, a0):
+def _samples(qf, sign, ws, k0, k1, a0, scalar):
     """Samples k0..k1 of ``qf`` (n * 4, flat), sign-corrected, as unit parts,
     ln scale and NaN flag into rows a0.. (as :func:`_unit`; a0 is 0 or 1)."""
     base = max(k0, 0)
@@ -338,7 +351,7 @@ def _samples(qf, sign, ws, k0, k1, a0):
         dst[_SMP + 4 * _W + b] = 0.0 if one else lam
         dst[_SMP + 5 * _W + b] = 1.0 if math.isnan(n2) else 0.0
         slow += not abs(e) < _SMALL
-    if slow:
+    if slow or scalar:
         for b in range(k1 - k0 + 1):
             k = base + b
             s = sign[k]
@@ -355,7 +368,7 @@ def _samples(qf, sign, ws, k0, k1, a0):
 
 
 @helper(options=_VECTOR)
-def _logs(t_in, ws, k0, k1, a0):
+def _logs(t_in, ws, k0, k1, a0, scalar):
     """Log rows a0.. of the steps between samples k0..k1 (rows a0.. of the
     samples), with the sampling intervals and their inverses (as
     :func:`_log_vec`; a0 is 0 or 1)."""
@@ -380,7 +393,7 @@ def _logs(t_in, ws, k0, k1, a0):
         dst[_LOG + 3 * _W + b] = dt
         dst[_LOG + 4 * _W + b] = 1.0 / dt
         slow += not ((pw > 0.0) & (b2 < (SERIES_RATIO * pw) ** 2))
-    if slow:
+    if slow or scalar:
         for b in range(k1 - k0):
             a = row + b
             v = _log_vec(
@@ -685,8 +698,8 @@ def _prepare(qf, sign, t_in, n, s0, s1, ws):
     k0 = max(s0 - 1, 0)
     k1 = min(s1 + 2, n - 1)
     a0 = k0 - s0 + 1
-    _samples(qf, sign, ws, k0, k1, a0)
-    _logs(t_in, ws, k0, k1, a0)
+    _samples(qf, sign, ws, k0, k1, a0, False)
+    _logs(t_in, ws, k0, k1, a0, False)
     # the control points: the segments with two samples on either side in
     # a vector loop, the others (at the ends of the series) one by one
     for r in range(s1 - s0 + 1):
@@ -707,6 +720,125 @@ def _prepare(qf, sign, t_in, n, s0, s1, ws):
         for r in range(s1 - s0 + 1):
             if ws[_REDO + r] != 0.0:
                 _records_exact(ws, n, s0 + r, r, r + 1)
+
+
+@helper(inline=True)
+def _along_series(aw, ax, ay, az, ow, ox, oy, oz, theta2, g, tau):
+    """:func:`_along` where τ²θ² < SERIES_ANGLE² (its first branch), and τ²θ²."""
+    y2 = tau * tau * theta2
+    c = cos_small(y2)
+    k = sinc_small(y2) * tau * g
+    return c * aw + k * ow, c * ax + k * ox, c * ay + k * oy, c * az + k * oz, y2
+
+
+@helper(inline=True)
+def _outer_series(aw, ax, ay, az, bw, bx, by, bz, tau):
+    """:func:`_outer`'s series branch, and whether it applies."""
+    d = aw * bw + ax * bx + ay * by + az * bz
+    ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
+    o2 = ow * ow + ox * ox + oy * oy + oz * oz
+    inv_d = 1.0 / d
+    x2 = o2 * inv_d * inv_d
+    p = atan_over_x_small(x2)
+    y2 = tau * tau * x2 * p * p
+    c = cos_small(y2)
+    k = sinc_small(y2) * tau * p * inv_d
+    ok = (d > 0.0) & (o2 < (SERIES_RATIO * d) ** 2) & (y2 < SERIES_ANGLE * SERIES_ANGLE)
+    return (
+        c * aw + k * ow,
+        c * ax + k * ox,
+        c * ay + k * oy,
+        c * az + k * oz,
+        ok,
+    )
+
+
+@helper(inline=True)
+def _exp_series(x):
+    """:func:`_exp_small` for |x| < _SMALL (its first two branches)."""
+    tiny = 1.0 + x * (1.0 + x * 0.5 * (1.0 + x / 3.0))
+    small = 1.0 + x * (
+        1.0
+        + x
+        * 0.5
+        * (1.0 + x / 3.0 * (1.0 + x * 0.25 * (1.0 + x * 0.2 * (1.0 + x / 6.0))))
+    )
+    return tiny if abs(x) < TINY_SQUARE else small
+
+
+@helper(options=_VECTOR)
+def _rows(ws, ob, count):
+    """The first ``count`` rows of the block, from the row scratch (record,
+    τ, sign) into ``ob`` (4 per row, flat), where the fast route's series
+    apply: the two inner slerps (:func:`_along`), the outer slerp
+    (:func:`_outer`), the scale (:func:`_exp_small`) and the stored sign.
+    Marks the other rows in _EXACT (they take the scalar route) and returns
+    how many it marked."""
+    limit = SERIES_ANGLE * SERIES_ANGLE
+    for b in range(min(count, _BLOCK)):
+        tau = ws[_TAU + b]
+        aw, ax, ay, az, ya = _along_series(
+            ws[_ROW + b], ws[_ROW + _W + b], ws[_ROW + 2 * _W + b],
+            ws[_ROW + 3 * _W + b], ws[_ROW + 4 * _W + b], ws[_ROW + 5 * _W + b],
+            ws[_ROW + 6 * _W + b], ws[_ROW + 7 * _W + b], ws[_ROW + 8 * _W + b],
+            ws[_ROW + 10 * _W + b], tau,
+        )  # fmt: skip
+        bw, bx, by, bz, yb = _along_series(
+            ws[_ROW + 11 * _W + b], ws[_ROW + 12 * _W + b], ws[_ROW + 13 * _W + b],
+            ws[_ROW + 14 * _W + b], ws[_ROW + 15 * _W + b], ws[_ROW + 16 * _W + b],
+            ws[_ROW + 17 * _W + b], ws[_ROW + 18 * _W + b], ws[_ROW + 19 * _W + b],
+            ws[_ROW + 21 * _W + b], tau,
+        )  # fmt: skip
+        ws[_INN + b] = aw
+        ws[_INN + _W + b] = ax
+        ws[_INN + 2 * _W + b] = ay
+        ws[_INN + 3 * _W + b] = az
+        ws[_INN + 4 * _W + b] = bw
+        ws[_INN + 5 * _W + b] = bx
+        ws[_INN + 6 * _W + b] = by
+        ws[_INN + 7 * _W + b] = bz
+        ws[_EXACT + b] = 0.0 if (ya < limit) & (yb < limit) else 1.0
+    exact = 0
+    for b in range(min(count, _BLOCK)):
+        tau = ws[_TAU + b]
+        aw, ax, ay, az = (
+            ws[_INN + b],
+            ws[_INN + _W + b],
+            ws[_INN + 2 * _W + b],
+            ws[_INN + 3 * _W + b],
+        )
+        bw, bx, by, bz = (
+            ws[_INN + 4 * _W + b],
+            ws[_INN + 5 * _W + b],
+            ws[_INN + 6 * _W + b],
+            ws[_INN + 7 * _W + b],
+        )
+        flip = _decide(aw * bw + ax * bx + ay * by + az * bz, ws[_ROW + 26 * _W + b])
+        h = 2.0 * tau * (1.0 - tau)
+        w, x, y, z, ok = _outer_series(
+            aw, ax, ay, az, flip * bw, flip * bx, flip * by, flip * bz, h
+        )
+        u = 1.0 - tau
+        e = (1.0 - h) * (
+            u * ws[_ROW + 22 * _W + b] + tau * ws[_ROW + 23 * _W + b]
+        ) + h * (u * ws[_ROW + 24 * _W + b] + tau * ws[_ROW + 25 * _W + b])
+        k = ws[_SGN + b] * _exp_series(e)
+        ob[4 * b] = k * w
+        ob[4 * b + 1] = k * x
+        ob[4 * b + 2] = k * y
+        ob[4 * b + 3] = k * z
+        fast = (
+            (ws[_ROW + 28 * _W + b] > 0.0)
+            & (0.0 <= tau)
+            & (tau <= 1.0)
+            & (flip != 0.0)
+            & ok
+            & (abs(e) < _SMALL)
+            & (ws[_EXACT + b] == 0.0)
+        )
+        ws[_EXACT + b] = 0.0 if fast else 1.0
+        exact += not fast
+    return exact
 
 
 @helper
@@ -799,18 +931,70 @@ def _outer(aw, ax, ay, az, bw, bx, by, bz, tau):
 
 
 @helper(inline=True)
-def _walk(q, sign, t_in, t_out, out, first, last):
-    """Rows first..last-1 of :func:`squad_walk` (n >= 2), block by block."""
+def _row_exact(q, sign, t_in, out, ws, n, j, jj, i_j, r):
+    """Output row j (row jj of the block, sample i_j, segment slot r) by
+    the scalar route: :func:`_along`, :func:`_outer` and :func:`_exp_small`
+    with all their branches, or :func:`_exact_row`; NaN if the segment
+    touches a missing sample."""
+    seg = i_j if i_j >= 0 else n - 1
+    s = ws[_SGN + jj]
+    tau = ws[_TAU + jj]
+    state = ws[_REC + 28 * _W + r]
+    if state < 0.0:
+        out[j, 0] = out[j, 1] = out[j, 2] = out[j, 3] = np.nan
+        return
+    if state > 0.0 and 0.0 <= tau <= 1.0:
+        aw, ax, ay, az = _along(
+            ws[_REC + r], ws[_REC + _W + r], ws[_REC + 2 * _W + r],
+            ws[_REC + 3 * _W + r], ws[_REC + 4 * _W + r], ws[_REC + 5 * _W + r],
+            ws[_REC + 6 * _W + r], ws[_REC + 7 * _W + r], ws[_REC + 8 * _W + r],
+            ws[_REC + 9 * _W + r], ws[_REC + 10 * _W + r], tau,
+        )  # fmt: skip
+        bw, bx, by, bz = _along(
+            ws[_REC + 11 * _W + r], ws[_REC + 12 * _W + r], ws[_REC + 13 * _W + r],
+            ws[_REC + 14 * _W + r], ws[_REC + 15 * _W + r], ws[_REC + 16 * _W + r],
+            ws[_REC + 17 * _W + r], ws[_REC + 18 * _W + r], ws[_REC + 19 * _W + r],
+            ws[_REC + 20 * _W + r], ws[_REC + 21 * _W + r], tau,
+        )  # fmt: skip
+        flip = _decide(aw * bw + ax * bx + ay * by + az * bz, ws[_REC + 26 * _W + r])
+        if flip != 0.0:
+            h = 2.0 * tau * (1.0 - tau)
+            w, x, y, z = _outer(
+                aw, ax, ay, az, flip * bw, flip * bx, flip * by, flip * bz, h
+            )
+            u = 1.0 - tau
+            scale = _exp_small(
+                (1.0 - h) * (u * ws[_REC + 22 * _W + r] + tau * ws[_REC + 23 * _W + r])
+                + h * (u * ws[_REC + 24 * _W + r] + tau * ws[_REC + 25 * _W + r])
+            )
+            k = s * scale
+            out[j, 0] = k * w
+            out[j, 1] = k * x
+            out[j, 2] = k * y
+            out[j, 3] = k * z
+            return
+    w, x, y, z = _exact_row(q, sign, t_in, seg, tau)
+    out[j, 0] = s * w
+    out[j, 1] = s * x
+    out[j, 2] = s * y
+    out[j, 3] = s * z
+
+
+@helper(inline=True)
+def _walk(q, sign, t_in, t_out, out, first, last, scalar):
+    """Rows first..last-1 of :func:`squad_walk` (n >= 2), block by block;
+    ``scalar``: every segment and row by the scalar code (see
+    :func:`squad_walk_scalar`)."""
     n = q.shape[0]
     qf = q.reshape(-1)
     # scratch for one block of output rows: each row's sample index and
     # segment slot, the segments' samples, logs, control points and records
     # (at most _SPAN segments when set up at once; see _prepare), the rows'
-    # two inner slerps
+    # records, τ, signs and inner slerps
     found = np.empty(_BLOCK, dtype=np.int64)
     slot = np.empty(_BLOCK, dtype=np.int64)
     ws = np.empty(_WS)
-    inner = np.empty((_BLOCK, 9))
+    of = out.reshape(-1)
     dt_last = t_in[n - 1] - t_in[n - 2]
     i = -1
     for start in range(first, last, _BLOCK):
@@ -843,7 +1027,7 @@ def _walk(q, sign, t_in, t_out, out, first, last):
             found[j - start] = i
         s0 = found[0]
         s1 = found[stop - start - 1]
-        if ordered and s0 >= 0 and s1 - s0 < _SPAN:
+        if ordered and s0 >= 0 and s1 - s0 < _SPAN and not scalar:
             # dense: every segment from the first to the last at once
             _prepare(qf, sign, t_in, n, s0, s1, ws)
             for j in range(start, stop):
@@ -860,85 +1044,59 @@ def _walk(q, sign, t_in, t_out, out, first, last):
                     # control points and record in the next free slot
                     k0 = max(seg - 1, 0)
                     k1 = min(seg + 2, n - 1)
-                    _samples(qf, sign, ws, k0, k1, k0 - seg + 1)
-                    _logs(t_in, ws, k0, k1, k0 - seg + 1)
+                    _samples(qf, sign, ws, k0, k1, k0 - seg + 1, scalar)
+                    _logs(t_in, ws, k0, k1, k0 - seg + 1, scalar)
                     _controls_exact(ws, n, seg, free, 1)
                     _records_exact(ws, n, seg, free, 1)
                     loaded = seg
                     free += 1
                 slot[j - start] = free - 1
-        # first stage: the two inner slerps of each row
-        for j in range(start, stop):
-            jj = j - start
+        # each row's τ, stored sign and segment record into the row scratch
+        # (a scalar loop: the records are gathered by slot), then the rows
+        # in vector loops, and the rows these do not cover one by one
+        for jj in range(stop - start):
+            j = start + jj
             i_j = found[jj]
             seg = i_j if i_j >= 0 else n - 1
-            r = slot[jj]
             if seg < n - 1:
                 dt = t_in[seg + 1] - t_in[seg]
             else:
                 dt = (t_in[n - 1] + dt_last) - t_in[n - 1]
-            tau = (t_out[j] - t_in[seg]) / dt
-            inner[jj, 8] = tau
-            if ws[_REC + 28 * _W + r] > 0.0 and 0.0 <= tau <= 1.0:
-                aw, ax, ay, az = _along(
-                    ws[_REC + r], ws[_REC + 1 * _W + r], ws[_REC + 2 * _W + r], ws[_REC + 3 * _W + r],
-                    ws[_REC + 4 * _W + r], ws[_REC + 5 * _W + r], ws[_REC + 6 * _W + r], ws[_REC + 7 * _W + r],
-                    ws[_REC + 8 * _W + r], ws[_REC + 9 * _W + r], ws[_REC + 10 * _W + r], tau,
-                )  # fmt: skip
-                bw, bx, by, bz = _along(
-                    ws[_REC + 11 * _W + r], ws[_REC + 12 * _W + r], ws[_REC + 13 * _W + r], ws[_REC + 14 * _W + r],
-                    ws[_REC + 15 * _W + r], ws[_REC + 16 * _W + r], ws[_REC + 17 * _W + r], ws[_REC + 18 * _W + r],
-                    ws[_REC + 19 * _W + r], ws[_REC + 20 * _W + r], ws[_REC + 21 * _W + r], tau,
-                )  # fmt: skip
-                inner[jj, 0] = aw
-                inner[jj, 1] = ax
-                inner[jj, 2] = ay
-                inner[jj, 3] = az
-                inner[jj, 4] = bw
-                inner[jj, 5] = bx
-                inner[jj, 6] = by
-                inner[jj, 7] = bz
-        # second stage: the outer slerp, the scale and the stored sign
-        for j in range(start, stop):
-            jj = j - start
-            i_j = found[jj]
-            seg = i_j if i_j >= 0 else n - 1
-            r = slot[jj]
-            s = sign[min(max(i_j, 0), n - 2)]
-            tau = inner[jj, 8]
-            state = ws[_REC + 28 * _W + r]
-            if state < 0.0:
-                out[j, 0] = out[j, 1] = out[j, 2] = out[j, 3] = np.nan
-                continue
-            if state > 0.0 and 0.0 <= tau <= 1.0:
-                aw, ax, ay, az = inner[jj, 0], inner[jj, 1], inner[jj, 2], inner[jj, 3]
-                bw, bx, by, bz = inner[jj, 4], inner[jj, 5], inner[jj, 6], inner[jj, 7]
-                flip = _decide(
-                    aw * bw + ax * bx + ay * by + az * bz, ws[_REC + 26 * _W + r]
-                )
-                if flip != 0.0:
-                    h = 2.0 * tau * (1.0 - tau)
-                    w, x, y, z = _outer(
-                        aw, ax, ay, az, flip * bw, flip * bx, flip * by, flip * bz, h
-                    )
-                    u = 1.0 - tau
-                    scale = _exp_small(
-                        (1.0 - h)
-                        * (u * ws[_REC + 22 * _W + r] + tau * ws[_REC + 23 * _W + r])
-                        + h
-                        * (u * ws[_REC + 24 * _W + r] + tau * ws[_REC + 25 * _W + r])
-                    )
-                    k = s * scale
-                    out[j, 0] = k * w
-                    out[j, 1] = k * x
-                    out[j, 2] = k * y
-                    out[j, 3] = k * z
-                    continue
-            w, x, y, z = _exact_row(q, sign, t_in, seg, tau)
-            out[j, 0] = s * w
-            out[j, 1] = s * x
-            out[j, 2] = s * y
-            out[j, 3] = s * z
+            ws[_TAU + jj] = (t_out[j] - t_in[seg]) / dt
+            ws[_SGN + jj] = sign[min(max(i_j, 0), n - 2)]
+            # (slots are >= 0: max spares the negative-index wraparound)
+            r = max(slot[jj], 0)
+            ws[_ROW + 0 * _W + jj] = ws[_REC + 0 * _W + r]
+            ws[_ROW + 1 * _W + jj] = ws[_REC + 1 * _W + r]
+            ws[_ROW + 2 * _W + jj] = ws[_REC + 2 * _W + r]
+            ws[_ROW + 3 * _W + jj] = ws[_REC + 3 * _W + r]
+            ws[_ROW + 4 * _W + jj] = ws[_REC + 4 * _W + r]
+            ws[_ROW + 5 * _W + jj] = ws[_REC + 5 * _W + r]
+            ws[_ROW + 6 * _W + jj] = ws[_REC + 6 * _W + r]
+            ws[_ROW + 7 * _W + jj] = ws[_REC + 7 * _W + r]
+            ws[_ROW + 8 * _W + jj] = ws[_REC + 8 * _W + r]
+            ws[_ROW + 10 * _W + jj] = ws[_REC + 10 * _W + r]
+            ws[_ROW + 11 * _W + jj] = ws[_REC + 11 * _W + r]
+            ws[_ROW + 12 * _W + jj] = ws[_REC + 12 * _W + r]
+            ws[_ROW + 13 * _W + jj] = ws[_REC + 13 * _W + r]
+            ws[_ROW + 14 * _W + jj] = ws[_REC + 14 * _W + r]
+            ws[_ROW + 15 * _W + jj] = ws[_REC + 15 * _W + r]
+            ws[_ROW + 16 * _W + jj] = ws[_REC + 16 * _W + r]
+            ws[_ROW + 17 * _W + jj] = ws[_REC + 17 * _W + r]
+            ws[_ROW + 18 * _W + jj] = ws[_REC + 18 * _W + r]
+            ws[_ROW + 19 * _W + jj] = ws[_REC + 19 * _W + r]
+            ws[_ROW + 21 * _W + jj] = ws[_REC + 21 * _W + r]
+            ws[_ROW + 22 * _W + jj] = ws[_REC + 22 * _W + r]
+            ws[_ROW + 23 * _W + jj] = ws[_REC + 23 * _W + r]
+            ws[_ROW + 24 * _W + jj] = ws[_REC + 24 * _W + r]
+            ws[_ROW + 25 * _W + jj] = ws[_REC + 25 * _W + r]
+            ws[_ROW + 26 * _W + jj] = ws[_REC + 26 * _W + r]
+            ws[_ROW + 28 * _W + jj] = ws[_REC + 28 * _W + r]
+        if scalar or _rows(ws, of[4 * start :], stop - start):
+            for j in range(start, stop):
+                jj = j - start
+                if scalar or ws[_EXACT + jj] != 0.0:
+                    _row_exact(q, sign, t_in, out, ws, n, j, jj, found[jj], slot[jj])
 
 
 @kernel(F2, F1, F1, options=_SERIAL)
@@ -974,7 +1132,7 @@ def squad_walk(q, t_in, t_out):
                 out[j, k] = q[0, k]
         return out
     sign = unflip_signs(q)
-    _walk(q, sign, t_in, t_out, out, 0, m)
+    _walk(q, sign, t_in, t_out, out, 0, m, False)
     return out
 
 
@@ -995,7 +1153,31 @@ def squad_walk_parallel(q, t_in, t_out):
     chunks = _CHUNKS
     size = ((m + chunks - 1) // chunks + _BLOCK - 1) // _BLOCK * _BLOCK
     for c in prange(chunks):
-        _walk(q, sign, t_in, t_out, out, min(c * size, m), min((c + 1) * size, m))
+        _walk(
+            q, sign, t_in, t_out, out, min(c * size, m), min((c + 1) * size, m), False
+        )
+    return out
+
+
+@kernel(F2, F1, F1, options=_SERIAL)
+def squad_walk_scalar(q, t_in, t_out):
+    """:func:`squad_walk` by its scalar code alone: every segment set up on
+    its own (:func:`_unit`, :func:`_log_vec`, :func:`_controls_exact`,
+    :func:`_records_exact`) and every row evaluated by :func:`_row_exact`.
+
+    The vector loops compute the common branches of the same expressions,
+    so the two agree bit for bit; the tests hold them to that.
+    """
+    n = q.shape[0]
+    m = t_out.shape[0]
+    out = np.empty((m, 4))
+    if n < 2 or m == 0:
+        for j in range(m):
+            for k in range(4):
+                out[j, k] = q[0, k]
+        return out
+    sign = unflip_signs(q)
+    _walk(q, sign, t_in, t_out, out, 0, m, True)
     return out
 
 

@@ -82,10 +82,10 @@ _DECISION_MARGIN = 1e-9
 # Below this, exp and log1p are evaluated by their Taylor series.
 _SMALL = 1e-3
 
-# a segment's record (see _setup)
+# a segment's record (see _prepare)
 _N_REC = 29
 # output rows per block, and the most segments a block sets up at once
-_BLOCK = 128
+_BLOCK = 96
 _SPAN = 2 * _BLOCK
 # chunks of output rows the parallel twin hands to numba's threads
 _CHUNKS = 64
@@ -287,7 +287,7 @@ def _control_point(bw, bx, by, bz, ux, uy, uz):
 # holds sample s0 - 1 + a, and the log row a the step from sample
 # s0 - 1 + a to the next; segment s0 + r has slot r (row r + 1 holds its
 # first sample).
-_W = 520
+_W = _SPAN + 8
 # samples: unit parts w, x, y, z (0:4), ln of the scale (4), 1.0 if NaN (5)
 _SMP = 0
 # log r[k]⁻¹ r[k+1] (vector part, 0:3), t[k+1] - t[k] (3) and its inverse (4)
@@ -299,19 +299,22 @@ _CTL = 11 * _W
 _REC = 27 * _W
 # per segment: 1.0 where a vector stage's branch does not apply
 _REDO = (27 + _N_REC) * _W
-# per output row of the block: its segment's record (_N_REC quantities),
+_WS = _REDO + _W
+# The rows' scratch (a second flat array, :data:`_WR` float64, quantity k of
+# row b at ``k * _R + b``): each row's segment record (_N_REC quantities),
 # its τ, the sign of its stored sample, its two inner slerps (8), and 1.0
-# where it takes the scalar route
-_ROW = _REDO + _W
-_TAU = _ROW + _N_REC * _W
-_SGN = _TAU + _W
-_INN = _SGN + _W
-_EXACT = _INN + 8 * _W
-_WS = _EXACT + _W
-# the record quantities the vector route reads (θ of the arcs only serves
-# their sincos branch, 27 is not used)
-_ROW_QUANTITIES = (0, 1, 2, 3, 4, 5, 6, 7, 8, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19)
-_ROW_QUANTITIES += (21, 22, 23, 24, 25, 26, 28)
+# where it takes the scalar route. Together the two take 124,480 bytes,
+# below 128 KiB, glibc's default thresholds for mmap and for trimming the heap:
+# allocated for every chunk of the parallel twin, they come from the heap
+# and cost no page faults (a 400 KB scratch cost 230 more per call when
+# big arrays are fresh mmap pages, MALLOC_MMAP_THRESHOLD_=131072).
+_R = _BLOCK + 8
+_ROW = 0
+_TAU = _ROW + _N_REC * _R
+_SGN = _TAU + _R
+_INN = _SGN + _R
+_EXACT = _INN + 8 * _R
+_WR = _EXACT + _R
 
 
 @helper(options=_VECTOR)
@@ -767,7 +770,7 @@ def _exp_series(x):
 
 
 @helper(options=_VECTOR)
-def _rows(ws, ob, count):
+def _rows(wr, ob, count):
     """The first ``count`` rows of the block, from the row scratch (record,
     τ, sign) into ``ob`` (4 per row, flat), where the fast route's series
     apply: the two inner slerps (:func:`_along`), the outer slerp
@@ -776,67 +779,67 @@ def _rows(ws, ob, count):
     how many it marked."""
     limit = SERIES_ANGLE * SERIES_ANGLE
     for b in range(min(count, _BLOCK)):
-        tau = ws[_TAU + b]
+        tau = wr[_TAU + b]
         aw, ax, ay, az, ya = _along_series(
-            ws[_ROW + b], ws[_ROW + _W + b], ws[_ROW + 2 * _W + b],
-            ws[_ROW + 3 * _W + b], ws[_ROW + 4 * _W + b], ws[_ROW + 5 * _W + b],
-            ws[_ROW + 6 * _W + b], ws[_ROW + 7 * _W + b], ws[_ROW + 8 * _W + b],
-            ws[_ROW + 10 * _W + b], tau,
+            wr[_ROW + b], wr[_ROW + _R + b], wr[_ROW + 2 * _R + b],
+            wr[_ROW + 3 * _R + b], wr[_ROW + 4 * _R + b], wr[_ROW + 5 * _R + b],
+            wr[_ROW + 6 * _R + b], wr[_ROW + 7 * _R + b], wr[_ROW + 8 * _R + b],
+            wr[_ROW + 10 * _R + b], tau,
         )  # fmt: skip
         bw, bx, by, bz, yb = _along_series(
-            ws[_ROW + 11 * _W + b], ws[_ROW + 12 * _W + b], ws[_ROW + 13 * _W + b],
-            ws[_ROW + 14 * _W + b], ws[_ROW + 15 * _W + b], ws[_ROW + 16 * _W + b],
-            ws[_ROW + 17 * _W + b], ws[_ROW + 18 * _W + b], ws[_ROW + 19 * _W + b],
-            ws[_ROW + 21 * _W + b], tau,
+            wr[_ROW + 11 * _R + b], wr[_ROW + 12 * _R + b], wr[_ROW + 13 * _R + b],
+            wr[_ROW + 14 * _R + b], wr[_ROW + 15 * _R + b], wr[_ROW + 16 * _R + b],
+            wr[_ROW + 17 * _R + b], wr[_ROW + 18 * _R + b], wr[_ROW + 19 * _R + b],
+            wr[_ROW + 21 * _R + b], tau,
         )  # fmt: skip
-        ws[_INN + b] = aw
-        ws[_INN + _W + b] = ax
-        ws[_INN + 2 * _W + b] = ay
-        ws[_INN + 3 * _W + b] = az
-        ws[_INN + 4 * _W + b] = bw
-        ws[_INN + 5 * _W + b] = bx
-        ws[_INN + 6 * _W + b] = by
-        ws[_INN + 7 * _W + b] = bz
-        ws[_EXACT + b] = 0.0 if (ya < limit) & (yb < limit) else 1.0
+        wr[_INN + b] = aw
+        wr[_INN + _R + b] = ax
+        wr[_INN + 2 * _R + b] = ay
+        wr[_INN + 3 * _R + b] = az
+        wr[_INN + 4 * _R + b] = bw
+        wr[_INN + 5 * _R + b] = bx
+        wr[_INN + 6 * _R + b] = by
+        wr[_INN + 7 * _R + b] = bz
+        wr[_EXACT + b] = 0.0 if (ya < limit) & (yb < limit) else 1.0
     exact = 0
     for b in range(min(count, _BLOCK)):
-        tau = ws[_TAU + b]
+        tau = wr[_TAU + b]
         aw, ax, ay, az = (
-            ws[_INN + b],
-            ws[_INN + _W + b],
-            ws[_INN + 2 * _W + b],
-            ws[_INN + 3 * _W + b],
+            wr[_INN + b],
+            wr[_INN + _R + b],
+            wr[_INN + 2 * _R + b],
+            wr[_INN + 3 * _R + b],
         )
         bw, bx, by, bz = (
-            ws[_INN + 4 * _W + b],
-            ws[_INN + 5 * _W + b],
-            ws[_INN + 6 * _W + b],
-            ws[_INN + 7 * _W + b],
+            wr[_INN + 4 * _R + b],
+            wr[_INN + 5 * _R + b],
+            wr[_INN + 6 * _R + b],
+            wr[_INN + 7 * _R + b],
         )
-        flip = _decide(aw * bw + ax * bx + ay * by + az * bz, ws[_ROW + 26 * _W + b])
+        flip = _decide(aw * bw + ax * bx + ay * by + az * bz, wr[_ROW + 26 * _R + b])
         h = 2.0 * tau * (1.0 - tau)
         w, x, y, z, ok = _outer_series(
             aw, ax, ay, az, flip * bw, flip * bx, flip * by, flip * bz, h
         )
         u = 1.0 - tau
         e = (1.0 - h) * (
-            u * ws[_ROW + 22 * _W + b] + tau * ws[_ROW + 23 * _W + b]
-        ) + h * (u * ws[_ROW + 24 * _W + b] + tau * ws[_ROW + 25 * _W + b])
-        k = ws[_SGN + b] * _exp_series(e)
+            u * wr[_ROW + 22 * _R + b] + tau * wr[_ROW + 23 * _R + b]
+        ) + h * (u * wr[_ROW + 24 * _R + b] + tau * wr[_ROW + 25 * _R + b])
+        k = wr[_SGN + b] * _exp_series(e)
         ob[4 * b] = k * w
         ob[4 * b + 1] = k * x
         ob[4 * b + 2] = k * y
         ob[4 * b + 3] = k * z
         fast = (
-            (ws[_ROW + 28 * _W + b] > 0.0)
+            (wr[_ROW + 28 * _R + b] > 0.0)
             & (0.0 <= tau)
             & (tau <= 1.0)
             & (flip != 0.0)
             & ok
             & (abs(e) < _SMALL)
-            & (ws[_EXACT + b] == 0.0)
+            & (wr[_EXACT + b] == 0.0)
         )
-        ws[_EXACT + b] = 0.0 if fast else 1.0
+        wr[_EXACT + b] = 0.0 if fast else 1.0
         exact += not fast
     return exact
 
@@ -931,14 +934,14 @@ def _outer(aw, ax, ay, az, bw, bx, by, bz, tau):
 
 
 @helper(inline=True)
-def _row_exact(q, sign, t_in, out, ws, n, j, jj, i_j, r):
+def _row_exact(q, sign, t_in, out, ws, wr, n, j, jj, i_j, r):
     """Output row j (row jj of the block, sample i_j, segment slot r) by
     the scalar route: :func:`_along`, :func:`_outer` and :func:`_exp_small`
     with all their branches, or :func:`_exact_row`; NaN if the segment
     touches a missing sample."""
     seg = i_j if i_j >= 0 else n - 1
-    s = ws[_SGN + jj]
-    tau = ws[_TAU + jj]
+    s = wr[_SGN + jj]
+    tau = wr[_TAU + jj]
     state = ws[_REC + 28 * _W + r]
     if state < 0.0:
         out[j, 0] = out[j, 1] = out[j, 2] = out[j, 3] = np.nan
@@ -994,6 +997,7 @@ def _walk(q, sign, t_in, t_out, out, first, last, scalar):
     found = np.empty(_BLOCK, dtype=np.int64)
     slot = np.empty(_BLOCK, dtype=np.int64)
     ws = np.empty(_WS)
+    wr = np.empty(_WR)
     of = out.reshape(-1)
     dt_last = t_in[n - 1] - t_in[n - 2]
     i = -1
@@ -1062,41 +1066,43 @@ def _walk(q, sign, t_in, t_out, out, first, last, scalar):
                 dt = t_in[seg + 1] - t_in[seg]
             else:
                 dt = (t_in[n - 1] + dt_last) - t_in[n - 1]
-            ws[_TAU + jj] = (t_out[j] - t_in[seg]) / dt
-            ws[_SGN + jj] = sign[min(max(i_j, 0), n - 2)]
+            wr[_TAU + jj] = (t_out[j] - t_in[seg]) / dt
+            wr[_SGN + jj] = sign[min(max(i_j, 0), n - 2)]
             # (slots are >= 0: max spares the negative-index wraparound)
             r = max(slot[jj], 0)
-            ws[_ROW + 0 * _W + jj] = ws[_REC + 0 * _W + r]
-            ws[_ROW + 1 * _W + jj] = ws[_REC + 1 * _W + r]
-            ws[_ROW + 2 * _W + jj] = ws[_REC + 2 * _W + r]
-            ws[_ROW + 3 * _W + jj] = ws[_REC + 3 * _W + r]
-            ws[_ROW + 4 * _W + jj] = ws[_REC + 4 * _W + r]
-            ws[_ROW + 5 * _W + jj] = ws[_REC + 5 * _W + r]
-            ws[_ROW + 6 * _W + jj] = ws[_REC + 6 * _W + r]
-            ws[_ROW + 7 * _W + jj] = ws[_REC + 7 * _W + r]
-            ws[_ROW + 8 * _W + jj] = ws[_REC + 8 * _W + r]
-            ws[_ROW + 10 * _W + jj] = ws[_REC + 10 * _W + r]
-            ws[_ROW + 11 * _W + jj] = ws[_REC + 11 * _W + r]
-            ws[_ROW + 12 * _W + jj] = ws[_REC + 12 * _W + r]
-            ws[_ROW + 13 * _W + jj] = ws[_REC + 13 * _W + r]
-            ws[_ROW + 14 * _W + jj] = ws[_REC + 14 * _W + r]
-            ws[_ROW + 15 * _W + jj] = ws[_REC + 15 * _W + r]
-            ws[_ROW + 16 * _W + jj] = ws[_REC + 16 * _W + r]
-            ws[_ROW + 17 * _W + jj] = ws[_REC + 17 * _W + r]
-            ws[_ROW + 18 * _W + jj] = ws[_REC + 18 * _W + r]
-            ws[_ROW + 19 * _W + jj] = ws[_REC + 19 * _W + r]
-            ws[_ROW + 21 * _W + jj] = ws[_REC + 21 * _W + r]
-            ws[_ROW + 22 * _W + jj] = ws[_REC + 22 * _W + r]
-            ws[_ROW + 23 * _W + jj] = ws[_REC + 23 * _W + r]
-            ws[_ROW + 24 * _W + jj] = ws[_REC + 24 * _W + r]
-            ws[_ROW + 25 * _W + jj] = ws[_REC + 25 * _W + r]
-            ws[_ROW + 26 * _W + jj] = ws[_REC + 26 * _W + r]
-            ws[_ROW + 28 * _W + jj] = ws[_REC + 28 * _W + r]
-        if scalar or _rows(ws, of[4 * start :], stop - start):
+            wr[_ROW + 0 * _R + jj] = ws[_REC + 0 * _W + r]
+            wr[_ROW + 1 * _R + jj] = ws[_REC + 1 * _W + r]
+            wr[_ROW + 2 * _R + jj] = ws[_REC + 2 * _W + r]
+            wr[_ROW + 3 * _R + jj] = ws[_REC + 3 * _W + r]
+            wr[_ROW + 4 * _R + jj] = ws[_REC + 4 * _W + r]
+            wr[_ROW + 5 * _R + jj] = ws[_REC + 5 * _W + r]
+            wr[_ROW + 6 * _R + jj] = ws[_REC + 6 * _W + r]
+            wr[_ROW + 7 * _R + jj] = ws[_REC + 7 * _W + r]
+            wr[_ROW + 8 * _R + jj] = ws[_REC + 8 * _W + r]
+            wr[_ROW + 10 * _R + jj] = ws[_REC + 10 * _W + r]
+            wr[_ROW + 11 * _R + jj] = ws[_REC + 11 * _W + r]
+            wr[_ROW + 12 * _R + jj] = ws[_REC + 12 * _W + r]
+            wr[_ROW + 13 * _R + jj] = ws[_REC + 13 * _W + r]
+            wr[_ROW + 14 * _R + jj] = ws[_REC + 14 * _W + r]
+            wr[_ROW + 15 * _R + jj] = ws[_REC + 15 * _W + r]
+            wr[_ROW + 16 * _R + jj] = ws[_REC + 16 * _W + r]
+            wr[_ROW + 17 * _R + jj] = ws[_REC + 17 * _W + r]
+            wr[_ROW + 18 * _R + jj] = ws[_REC + 18 * _W + r]
+            wr[_ROW + 19 * _R + jj] = ws[_REC + 19 * _W + r]
+            wr[_ROW + 21 * _R + jj] = ws[_REC + 21 * _W + r]
+            wr[_ROW + 22 * _R + jj] = ws[_REC + 22 * _W + r]
+            wr[_ROW + 23 * _R + jj] = ws[_REC + 23 * _W + r]
+            wr[_ROW + 24 * _R + jj] = ws[_REC + 24 * _W + r]
+            wr[_ROW + 25 * _R + jj] = ws[_REC + 25 * _W + r]
+            wr[_ROW + 26 * _R + jj] = ws[_REC + 26 * _W + r]
+            wr[_ROW + 28 * _R + jj] = ws[_REC + 28 * _W + r]
+        if scalar or _rows(wr, of[4 * start :], stop - start):
             for j in range(start, stop):
                 jj = j - start
-                if scalar or ws[_EXACT + jj] != 0.0:
-                    _row_exact(q, sign, t_in, out, ws, n, j, jj, found[jj], slot[jj])
+                if scalar or wr[_EXACT + jj] != 0.0:
+                    _row_exact(
+                        q, sign, t_in, out, ws, wr, n, j, jj, found[jj], slot[jj]
+                    )
 
 
 @kernel(F2, F1, F1, options=_SERIAL)

@@ -353,14 +353,23 @@ def _samples(qf, sign, ws, k0, k1, a0, scalar):
         dst[_SMP + 3 * _W + b] = z if one else z * inv
         dst[_SMP + 4 * _W + b] = 0.0 if one else lam
         dst[_SMP + 5 * _W + b] = 1.0 if math.isnan(n2) else 0.0
-        slow += not abs(e) < _SMALL
+        # (a missing sample's values are never used: it makes NaN every
+        # segment that reads it)
+        slow += abs(e) >= _SMALL
     if slow or scalar:
         for b in range(k1 - k0 + 1):
             k = base + b
             s = sign[k]
-            w, x, y, z, lam, bad = _unit(
-                s * qf[4 * k], s * qf[4 * k + 1], s * qf[4 * k + 2], s * qf[4 * k + 3]
+            w, x, y, z = (
+                s * qf[4 * k],
+                s * qf[4 * k + 1],
+                s * qf[4 * k + 2],
+                s * qf[4 * k + 3],
             )
+            # (the vector loop's test, on the same values)
+            if not scalar and not abs((w * w + x * x + y * y + z * z) - 1.0) >= _SMALL:
+                continue
+            w, x, y, z, lam, bad = _unit(w, x, y, z)
             a = row + b
             ws[_SMP + a] = w
             ws[_SMP + _W + a] = x
@@ -395,15 +404,22 @@ def _logs(t_in, ws, k0, k1, a0, scalar):
         dt = tt[b + 1] - tt[b]
         dst[_LOG + 3 * _W + b] = dt
         dst[_LOG + 4 * _W + b] = 1.0 / dt
-        slow += not ((pw > 0.0) & (b2 < (SERIES_RATIO * pw) ** 2))
+        # (a step from or to a missing sample, pw NaN, is never used)
+        slow += (not ((pw > 0.0) & (b2 < (SERIES_RATIO * pw) ** 2))) & (pw == pw)
     if slow or scalar:
         for b in range(k1 - k0):
             a = row + b
-            v = _log_vec(
-                ws[_SMP + a], ws[_SMP + _W + a], ws[_SMP + 2 * _W + a],
-                ws[_SMP + 3 * _W + a], ws[_SMP + a + 1], ws[_SMP + _W + a + 1],
-                ws[_SMP + 2 * _W + a + 1], ws[_SMP + 3 * _W + a + 1],
-            )  # fmt: skip
+            aw, ax = ws[_SMP + a], ws[_SMP + _W + a]
+            ay, az = ws[_SMP + 2 * _W + a], ws[_SMP + 3 * _W + a]
+            bw, bx = ws[_SMP + a + 1], ws[_SMP + _W + a + 1]
+            by, bz = ws[_SMP + 2 * _W + a + 1], ws[_SMP + 3 * _W + a + 1]
+            if not scalar:
+                # (the vector loop's test, on the same values)
+                pw, px, py, pz = _qmul_plain(aw, -ax, -ay, -az, bw, bx, by, bz)
+                b2 = px * px + py * py + pz * pz
+                if (pw > 0.0) & (b2 < (SERIES_RATIO * pw) ** 2) or pw != pw:
+                    continue
+            v = _log_vec(aw, ax, ay, az, bw, bx, by, bz)
             ws[_LOG + a] = v[0]
             ws[_LOG + _W + a] = v[1]
             ws[_LOG + 2 * _W + a] = v[2]
@@ -934,56 +950,6 @@ def _outer(aw, ax, ay, az, bw, bx, by, bz, tau):
 
 
 @helper(inline=True)
-def _row_exact(q, sign, t_in, out, ws, wr, n, j, jj, i_j, r):
-    """Output row j (row jj of the block, sample i_j, segment slot r) by
-    the scalar route: :func:`_along`, :func:`_outer` and :func:`_exp_small`
-    with all their branches, or :func:`_exact_row`; NaN if the segment
-    touches a missing sample."""
-    seg = i_j if i_j >= 0 else n - 1
-    s = wr[_SGN + jj]
-    tau = wr[_TAU + jj]
-    state = ws[_REC + 28 * _W + r]
-    if state < 0.0:
-        out[j, 0] = out[j, 1] = out[j, 2] = out[j, 3] = np.nan
-        return
-    if state > 0.0 and 0.0 <= tau <= 1.0:
-        aw, ax, ay, az = _along(
-            ws[_REC + r], ws[_REC + _W + r], ws[_REC + 2 * _W + r],
-            ws[_REC + 3 * _W + r], ws[_REC + 4 * _W + r], ws[_REC + 5 * _W + r],
-            ws[_REC + 6 * _W + r], ws[_REC + 7 * _W + r], ws[_REC + 8 * _W + r],
-            ws[_REC + 9 * _W + r], ws[_REC + 10 * _W + r], tau,
-        )  # fmt: skip
-        bw, bx, by, bz = _along(
-            ws[_REC + 11 * _W + r], ws[_REC + 12 * _W + r], ws[_REC + 13 * _W + r],
-            ws[_REC + 14 * _W + r], ws[_REC + 15 * _W + r], ws[_REC + 16 * _W + r],
-            ws[_REC + 17 * _W + r], ws[_REC + 18 * _W + r], ws[_REC + 19 * _W + r],
-            ws[_REC + 20 * _W + r], ws[_REC + 21 * _W + r], tau,
-        )  # fmt: skip
-        flip = _decide(aw * bw + ax * bx + ay * by + az * bz, ws[_REC + 26 * _W + r])
-        if flip != 0.0:
-            h = 2.0 * tau * (1.0 - tau)
-            w, x, y, z = _outer(
-                aw, ax, ay, az, flip * bw, flip * bx, flip * by, flip * bz, h
-            )
-            u = 1.0 - tau
-            scale = _exp_small(
-                (1.0 - h) * (u * ws[_REC + 22 * _W + r] + tau * ws[_REC + 23 * _W + r])
-                + h * (u * ws[_REC + 24 * _W + r] + tau * ws[_REC + 25 * _W + r])
-            )
-            k = s * scale
-            out[j, 0] = k * w
-            out[j, 1] = k * x
-            out[j, 2] = k * y
-            out[j, 3] = k * z
-            return
-    w, x, y, z = _exact_row(q, sign, t_in, seg, tau)
-    out[j, 0] = s * w
-    out[j, 1] = s * x
-    out[j, 2] = s * y
-    out[j, 3] = s * z
-
-
-@helper(inline=True)
 def _walk(q, sign, t_in, t_out, out, first, last, scalar):
     """Rows first..last-1 of :func:`squad_walk` (n >= 2), block by block;
     ``scalar``: every segment and row by the scalar code (see
@@ -1096,13 +1062,65 @@ def _walk(q, sign, t_in, t_out, out, first, last, scalar):
             wr[_ROW + 25 * _R + jj] = ws[_REC + 25 * _W + r]
             wr[_ROW + 26 * _R + jj] = ws[_REC + 26 * _W + r]
             wr[_ROW + 28 * _R + jj] = ws[_REC + 28 * _W + r]
-        if scalar or _rows(wr, of[4 * start :], stop - start):
-            for j in range(start, stop):
-                jj = j - start
-                if scalar or wr[_EXACT + jj] != 0.0:
-                    _row_exact(
-                        q, sign, t_in, out, ws, wr, n, j, jj, found[jj], slot[jj]
+        if not (scalar or _rows(wr, of[4 * start :], stop - start)):
+            continue
+        # the other rows by the scalar route: _along, _outer and _exp_small
+        # with all their branches, or _exact_row (written out here: a
+        # helper receiving the arrays would cost reference counting per row)
+        for jj in range(stop - start):
+            if not scalar and wr[_EXACT + jj] == 0.0:
+                continue
+            j = start + jj
+            r = slot[jj]
+            s = wr[_SGN + jj]
+            tau = wr[_TAU + jj]
+            state = ws[_REC + 28 * _W + r]
+            if state < 0.0:
+                out[j, 0] = out[j, 1] = out[j, 2] = out[j, 3] = np.nan
+                continue
+            if state > 0.0 and 0.0 <= tau <= 1.0:
+                aw, ax, ay, az = _along(
+                    ws[_REC + r], ws[_REC + _W + r], ws[_REC + 2 * _W + r],
+                    ws[_REC + 3 * _W + r], ws[_REC + 4 * _W + r],
+                    ws[_REC + 5 * _W + r], ws[_REC + 6 * _W + r],
+                    ws[_REC + 7 * _W + r], ws[_REC + 8 * _W + r],
+                    ws[_REC + 9 * _W + r], ws[_REC + 10 * _W + r], tau,
+                )  # fmt: skip
+                bw, bx, by, bz = _along(
+                    ws[_REC + 11 * _W + r], ws[_REC + 12 * _W + r],
+                    ws[_REC + 13 * _W + r], ws[_REC + 14 * _W + r],
+                    ws[_REC + 15 * _W + r], ws[_REC + 16 * _W + r],
+                    ws[_REC + 17 * _W + r], ws[_REC + 18 * _W + r],
+                    ws[_REC + 19 * _W + r], ws[_REC + 20 * _W + r],
+                    ws[_REC + 21 * _W + r], tau,
+                )  # fmt: skip
+                flip = _decide(
+                    aw * bw + ax * bx + ay * by + az * bz, ws[_REC + 26 * _W + r]
+                )
+                if flip != 0.0:
+                    h = 2.0 * tau * (1.0 - tau)
+                    w, x, y, z = _outer(
+                        aw, ax, ay, az, flip * bw, flip * bx, flip * by, flip * bz, h
                     )
+                    u = 1.0 - tau
+                    scale = _exp_small(
+                        (1.0 - h)
+                        * (u * ws[_REC + 22 * _W + r] + tau * ws[_REC + 23 * _W + r])
+                        + h
+                        * (u * ws[_REC + 24 * _W + r] + tau * ws[_REC + 25 * _W + r])
+                    )
+                    k = s * scale
+                    out[j, 0] = k * w
+                    out[j, 1] = k * x
+                    out[j, 2] = k * y
+                    out[j, 3] = k * z
+                    continue
+            i_j = found[jj]
+            w, x, y, z = _exact_row(q, sign, t_in, i_j if i_j >= 0 else n - 1, tau)
+            out[j, 0] = s * w
+            out[j, 1] = s * x
+            out[j, 2] = s * y
+            out[j, 3] = s * z
 
 
 @kernel(F2, F1, F1, options=_SERIAL)
@@ -1169,7 +1187,7 @@ def squad_walk_parallel(q, t_in, t_out):
 def squad_walk_scalar(q, t_in, t_out):
     """:func:`squad_walk` by its scalar code alone: every segment set up on
     its own (:func:`_unit`, :func:`_log_vec`, :func:`_controls_exact`,
-    :func:`_records_exact`) and every row evaluated by :func:`_row_exact`.
+    :func:`_records_exact`) and every row evaluated by the scalar route of :func:`_walk`.
 
     The vector loops compute the common branches of the same expressions,
     so the two agree bit for bit; the tests hold them to that.

@@ -7,9 +7,19 @@ coefficient tables over every sample. The output times are walked in blocks
 of :data:`_BLOCK` rows; the squad segments a block falls in are set up once,
 from the samples around them, in scratch space of the size of a block
 (every segment from the block's first to its last when they are few, else
-only the segments used), and then serve every output time inside them. The
-stages are short loops over independent segments or rows, so that the
-processor overlaps their long dependency chains.
+only the segments used), and then serve every output time inside them.
+
+When a block's segments are set up at once, short vector loops do the work:
+over its samples (unit parts, scales), the steps between them (logs), its
+segments (control points, then the two great-circle arcs) and its rows
+(inner slerps, outer slerp, scale). They compute the common branch of each
+formula (scales near 1, arcs within the series) in one flat scratch array
+with fixed offsets, so that LLVM vectorises them without runtime checks;
+whatever they do not cover (the ends of the series, wide arcs, scales off
+the series, extrapolation, missing samples) is then done by the scalar code
+with all its branches. Both compute the same expressions in the same order
+and give the same bits (:func:`squad_walk_scalar` runs the scalar code
+alone, for the tests).
 
 Non-unit samples (recordings store quaternions with 4-7 digits) follow
 numpy-quaternion's arithmetic, which treats them as a unit rotation times a
@@ -32,6 +42,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import Any
 
 import numpy as np
 from numba import prange, types
@@ -97,9 +108,8 @@ _CHUNKS = 64
 _PLAIN = ("arcp",)
 
 
-@intrinsic
-def _qmul_plain(typingctx, aw, ax, ay, az, bw, bx, by, bz):
-    """:func:`_qmul1` emitted in place, with its rounding.
+def _qmul_plain_ir(typingctx, aw, ax, ay, az, bw, bx, by, bz):
+    """:func:`_qmul1` emitted in place, with its rounding (``_qmul_plain``).
 
     A call of the helper _qmul1 keeps a loop from vectorising; inlined by
     numba it would take the caller's "contract" flag and round differently
@@ -127,6 +137,10 @@ def _qmul_plain(typingctx, aw, ax, ay, az, bw, bx, by, bz):
         return context.make_tuple(builder, sig.return_type, (w, x, y, z))
 
     return signature, codegen
+
+
+# called from kernels with the eight components (typing context aside)
+_qmul_plain: Any = intrinsic(_qmul_plain_ir)
 
 
 @kernel(F2)
@@ -320,7 +334,11 @@ _WR = _EXACT + _R
 @helper(options=_VECTOR)
 def _samples(qf, sign, ws, k0, k1, a0, scalar):
     """Samples k0..k1 of ``qf`` (n * 4, flat), sign-corrected, as unit parts,
-    ln scale and NaN flag into rows a0.. (as :func:`_unit`; a0 is 0 or 1)."""
+    ln scale and NaN flag into rows a0.. (as :func:`_unit`; a0 is 0 or 1).
+
+    A vector loop takes _unit's series branch for ln |q|; the samples off
+    it (all of them if ``scalar``) are then redone by _unit itself.
+    """
     base = max(k0, 0)
     row = min(max(a0, 0), 1)
     # views from the first item, and a count LLVM can bound, so that every
@@ -383,7 +401,11 @@ def _samples(qf, sign, ws, k0, k1, a0, scalar):
 def _logs(t_in, ws, k0, k1, a0, scalar):
     """Log rows a0.. of the steps between samples k0..k1 (rows a0.. of the
     samples), with the sampling intervals and their inverses (as
-    :func:`_log_vec`; a0 is 0 or 1)."""
+    :func:`_log_vec`; a0 is 0 or 1).
+
+    A vector loop takes _log_vec's series branch; the steps off it (all of
+    them if ``scalar``) are then redone by _log_vec itself.
+    """
     base = max(k0, 0)
     row = min(max(a0, 0), 1)
     tt = t_in[base:]

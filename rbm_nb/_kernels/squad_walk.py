@@ -7,9 +7,19 @@ coefficient tables over every sample. The output times are walked in blocks
 of :data:`_BLOCK` rows; the squad segments a block falls in are set up once,
 from the samples around them, in scratch space of the size of a block
 (every segment from the block's first to its last when they are few, else
-only the segments used), and then serve every output time inside them. The
-stages are short loops over independent segments or rows, so that the
-processor overlaps their long dependency chains.
+only the segments used), and then serve every output time inside them.
+
+When a block's segments are set up at once, short vector loops do the work:
+over its samples (unit parts, scales), the steps between them (logs), its
+segments (control points, then the two great-circle arcs) and its rows
+(inner slerps, outer slerp, scale). They compute the common branch of each
+formula (scales near 1, arcs within the series) in one flat scratch array
+with fixed offsets, so that LLVM vectorises them without runtime checks;
+whatever they do not cover (the ends of the series, wide arcs, scales off
+the series, extrapolation, missing samples) is then done by the scalar code
+with all its branches. Both compute the same expressions in the same order
+and give the same bits (:func:`squad_walk_scalar` runs the scalar code
+alone, for the tests).
 
 Non-unit samples (recordings store quaternions with 4-7 digits) follow
 numpy-quaternion's arithmetic, which treats them as a unit rotation times a
@@ -32,9 +42,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import Any
 
 import numpy as np
-from numba import prange
+from numba import prange, types
+from numba.extending import intrinsic
 
 from .._config import KERNEL, PARALLEL_KERNEL
 from ._jit import F1, F2, F, helper, kernel
@@ -59,6 +71,7 @@ from .scalar import (
 __all__ = [
     "squad_walk",
     "squad_walk_parallel",
+    "squad_walk_scalar",
     "unflip_signs",
     "squad_input_fault",
 ]
@@ -67,6 +80,9 @@ __all__ = [
 # an ulp at most, far inside the 1e-12 the tests hold them to)
 _SERIAL = dataclasses.replace(KERNEL, fastmath=frozenset({"contract"}))
 _PARALLEL = dataclasses.replace(PARALLEL_KERNEL, fastmath=frozenset({"contract"}))
+# the vector loops: the same, and no ZeroDivisionError branch (it would keep
+# LLVM from vectorising them; nothing else changes)
+_VECTOR = dataclasses.replace(_SERIAL, error_model="numpy")
 
 # Scales |q| whose log is beyond this take the exact route (the bounds used
 # to decide a slerp's direction assume scales near 1).
@@ -77,13 +93,54 @@ _DECISION_MARGIN = 1e-9
 # Below this, exp and log1p are evaluated by their Taylor series.
 _SMALL = 1e-3
 
-# a segment's record (see _setup)
+# a segment's record (see _prepare)
 _N_REC = 29
 # output rows per block, and the most segments a block sets up at once
-_BLOCK = 128
+_BLOCK = 96
 _SPAN = 2 * _BLOCK
 # chunks of output rows the parallel twin hands to numba's threads
 _CHUNKS = 64
+
+
+# fast-math flags of the arithmetic of _qmul_plain: numba adds a function's
+# flags ("contract") only to operations that carry none, and "arcp"
+# concerns divisions, of which there are none
+_PLAIN = ("arcp",)
+
+
+def _qmul_plain_ir(typingctx, aw, ax, ay, az, bw, bx, by, bz):
+    """:func:`_qmul1` emitted in place, with its rounding (``_qmul_plain``).
+
+    A call of the helper _qmul1 keeps a loop from vectorising; inlined by
+    numba it would take the caller's "contract" flag and round differently
+    (fused multiply-adds), whereas _qmul1 is compiled without it.
+    """
+    f8 = types.float64
+    signature = types.UniTuple(f8, 4)(f8, f8, f8, f8, f8, f8, f8, f8)
+
+    def codegen(context, builder, sig, args):
+        pw, px, py, pz, qw, qx, qy, qz = args
+
+        def mul(a, b):
+            return builder.fmul(a, b, flags=_PLAIN)
+
+        def add(a, b):
+            return builder.fadd(a, b, flags=_PLAIN)
+
+        def sub(a, b):
+            return builder.fsub(a, b, flags=_PLAIN)
+
+        w = sub(sub(sub(mul(pw, qw), mul(px, qx)), mul(py, qy)), mul(pz, qz))
+        x = sub(add(add(mul(pw, qx), mul(px, qw)), mul(py, qz)), mul(pz, qy))
+        y = add(add(sub(mul(pw, qy), mul(px, qz)), mul(py, qw)), mul(pz, qx))
+        z = add(sub(add(mul(pw, qz), mul(px, qy)), mul(py, qx)), mul(pz, qw))
+        return context.make_tuple(builder, sig.return_type, (w, x, y, z))
+
+    return signature, codegen
+
+
+# called from kernels with the eight components (typing context aside)
+_qmul_plain: Any = intrinsic(_qmul_plain_ir)
 
 
 @kernel(F2)
@@ -236,170 +293,593 @@ def _control_point(bw, bx, by, bz, ux, uy, uz):
     return _qmul1(bw, bx, by, bz, ew, ex, ey, ez)
 
 
-@helper(inline=True)
-def _prepare(q, sign, t_in, s0, s1, smp, logs, ctl, rec, r0):
-    """Set up segments s0..s1 of the squad spline in rec[r0..r0+s1-s0].
+# The scratch of a block (one flat array, :data:`_WS` float64): quantity k
+# of item a at ``k * _W + a``. Fixed offsets in one array let LLVM see that
+# the quantities do not overlap, so that the loops over a block's samples and
+# segments vectorise without runtime checks. Samples are stored from the
+# sample before the block's first segment: with s0 the first segment, row a
+# holds sample s0 - 1 + a, and the log row a the step from sample
+# s0 - 1 + a to the next; segment s0 + r has slot r (row r + 1 holds its
+# first sample).
+_W = _SPAN + 8
+# samples: unit parts w, x, y, z (0:4), ln of the scale (4), 1.0 if NaN (5)
+_SMP = 0
+# log r[k]⁻¹ r[k+1] (vector part, 0:3), t[k+1] - t[k] (3) and its inverse (4)
+_LOG = 6 * _W
+# per segment: the end sample r[i+1] (0:4), A[i] (4:8), B[i] (8:12), their
+# ln scales (12:15), the number of missing samples among i-1..i+2 (15)
+_CTL = 11 * _W
+# per segment: the record of _N_REC quantities (see _prepare)
+_REC = 27 * _W
+# per segment: 1.0 where a vector stage's branch does not apply
+_REDO = (27 + _N_REC) * _W
+_WS = _REDO + _W
+# The rows' scratch (a second flat array, :data:`_WR` float64, quantity k of
+# row b at ``k * _R + b``): each row's segment record (_N_REC quantities),
+# its τ, the sign of its stored sample, its two inner slerps (8), and 1.0
+# where it takes the scalar route. Together the two take 124,480 bytes,
+# below 128 KiB, glibc's default thresholds for mmap and for trimming the heap:
+# allocated for every chunk of the parallel twin, they come from the heap
+# and cost no page faults (a 400 KB scratch cost 230 more per call when
+# big arrays are fresh mmap pages, MALLOC_MMAP_THRESHOLD_=131072).
+_R = _BLOCK + 8
+_ROW = 0
+_TAU = _ROW + _N_REC * _R
+_SGN = _TAU + _R
+_INN = _SGN + _R
+_EXACT = _INN + 8 * _R
+_WR = _EXACT + _R
 
-    rec[r, 0:11]: the arc r[i] -> r[i+1] (r[i], then o, θ², θ, g of
-    :func:`_great_circle`); rec[r, 11:22]: the arc A[i] -> B[i] (unit
-    parts; the last segment continues to the virtual sample
-    r[n-1] r[n-2]⁻¹ r[n-1]); rec[r, 22:26]: ln of the scales of r[i],
-    r[i+1], A[i], B[i]; rec[r, 26]: the bound of the outer slerp's
-    direction decision; rec[r, 28]: 1 if the fast route applies, 0 for the
-    exact route, -1 if the segment touches a missing sample (NaN).
 
-    Each stage is a loop over independent items with a short body, so that
-    the processor overlaps their long dependency chains; no helper in the
-    loops takes an array (each would cost atomic reference counting per
-    call). Scratch: ``smp`` (samples: unit parts, ln scale, NaN), ``logs``
-    (log r[k]⁻¹ r[k+1], vector part; t[k+1] - t[k] and its inverse), ``ctl`` (end sample and control
-    points: r[i+1], A[i], B[i], their ln scales, NaN count).
+@helper(options=_VECTOR)
+def _samples(qf, sign, ws, k0, k1, a0, scalar):
+    """Samples k0..k1 of ``qf`` (n * 4, flat), sign-corrected, as unit parts,
+    ln scale and NaN flag into rows a0.. (as :func:`_unit`; a0 is 0 or 1).
+
+    A vector loop takes _unit's series branch for ln |q|; the samples off
+    it (all of them if ``scalar``) are then redone by _unit itself.
     """
-    n = q.shape[0]
+    base = max(k0, 0)
+    row = min(max(a0, 0), 1)
+    # views from the first item, and a count LLVM can bound, so that every
+    # index is provably within the arrays (no negative-index wraparound)
+    src = qf[4 * base :]
+    sg = sign[base:]
+    dst = ws[row:]
+    slow = 0
+    for b in range(min(k1 - k0 + 1, _W - 1)):
+        s = sg[b]
+        w, x, y, z = (
+            s * src[4 * b],
+            s * src[4 * b + 1],
+            s * src[4 * b + 2],
+            s * src[4 * b + 3],
+        )
+        n2 = w * w + x * x + y * y + z * z
+        e = n2 - 1.0
+        # _unit's series branch for ln |q| (the others are redone below)
+        lam = (
+            0.5
+            * e
+            * (1.0 - e * (0.5 - e * (1.0 / 3.0 - e * (0.25 - e * (0.2 - e / 6.0)))))
+        )
+        one = n2 == 1.0
+        inv = 1.0 / math.sqrt(n2)
+        dst[_SMP + b] = w if one else w * inv
+        dst[_SMP + _W + b] = x if one else x * inv
+        dst[_SMP + 2 * _W + b] = y if one else y * inv
+        dst[_SMP + 3 * _W + b] = z if one else z * inv
+        dst[_SMP + 4 * _W + b] = 0.0 if one else lam
+        dst[_SMP + 5 * _W + b] = 1.0 if math.isnan(n2) else 0.0
+        # (a missing sample's values are never used: it makes NaN every
+        # segment that reads it)
+        slow += abs(e) >= _SMALL
+    if slow or scalar:
+        for b in range(k1 - k0 + 1):
+            k = base + b
+            s = sign[k]
+            w, x, y, z = (
+                s * qf[4 * k],
+                s * qf[4 * k + 1],
+                s * qf[4 * k + 2],
+                s * qf[4 * k + 3],
+            )
+            # (the vector loop's test, on the same values)
+            if not scalar and not abs((w * w + x * x + y * y + z * z) - 1.0) >= _SMALL:
+                continue
+            w, x, y, z, lam, bad = _unit(w, x, y, z)
+            a = row + b
+            ws[_SMP + a] = w
+            ws[_SMP + _W + a] = x
+            ws[_SMP + 2 * _W + a] = y
+            ws[_SMP + 3 * _W + a] = z
+            ws[_SMP + 4 * _W + a] = lam
+            ws[_SMP + 5 * _W + a] = 1.0 if bad else 0.0
+
+
+@helper(options=_VECTOR)
+def _logs(t_in, ws, k0, k1, a0, scalar):
+    """Log rows a0.. of the steps between samples k0..k1 (rows a0.. of the
+    samples), with the sampling intervals and their inverses (as
+    :func:`_log_vec`; a0 is 0 or 1).
+
+    A vector loop takes _log_vec's series branch; the steps off it (all of
+    them if ``scalar``) are then redone by _log_vec itself.
+    """
+    base = max(k0, 0)
+    row = min(max(a0, 0), 1)
+    tt = t_in[base:]
+    dst = ws[row:]
+    slow = 0
+    for b in range(min(k1 - k0, _W - 2)):
+        pw, px, py, pz = _qmul_plain(
+            dst[_SMP + b], -dst[_SMP + _W + b], -dst[_SMP + 2 * _W + b],
+            -dst[_SMP + 3 * _W + b], dst[_SMP + b + 1], dst[_SMP + _W + b + 1],
+            dst[_SMP + 2 * _W + b + 1], dst[_SMP + 3 * _W + b + 1],
+        )  # fmt: skip
+        b2 = px * px + py * py + pz * pz
+        # _log_vec's series branch (the others are redone below)
+        f = atan_over_x_small(b2 / (pw * pw)) / pw
+        dst[_LOG + b] = f * px
+        dst[_LOG + _W + b] = f * py
+        dst[_LOG + 2 * _W + b] = f * pz
+        dt = tt[b + 1] - tt[b]
+        dst[_LOG + 3 * _W + b] = dt
+        dst[_LOG + 4 * _W + b] = 1.0 / dt
+        # (a step from or to a missing sample, pw NaN, is never used)
+        slow += (not ((pw > 0.0) & (b2 < (SERIES_RATIO * pw) ** 2))) & (pw == pw)
+    if slow or scalar:
+        for b in range(k1 - k0):
+            a = row + b
+            aw, ax = ws[_SMP + a], ws[_SMP + _W + a]
+            ay, az = ws[_SMP + 2 * _W + a], ws[_SMP + 3 * _W + a]
+            bw, bx = ws[_SMP + a + 1], ws[_SMP + _W + a + 1]
+            by, bz = ws[_SMP + 2 * _W + a + 1], ws[_SMP + 3 * _W + a + 1]
+            if not scalar:
+                # (the vector loop's test, on the same values)
+                pw, px, py, pz = _qmul_plain(aw, -ax, -ay, -az, bw, bx, by, bz)
+                b2 = px * px + py * py + pz * pz
+                if (pw > 0.0) & (b2 < (SERIES_RATIO * pw) ** 2) or pw != pw:
+                    continue
+            v = _log_vec(aw, ax, ay, az, bw, bx, by, bz)
+            ws[_LOG + a] = v[0]
+            ws[_LOG + _W + a] = v[1]
+            ws[_LOG + 2 * _W + a] = v[2]
+
+
+@helper(inline=True)
+def _exp_vec_series(ux, uy, uz, u2):
+    """:func:`_exp_vec`'s branch for u² < SERIES_ANGLE²."""
+    c = cos_small(u2)
+    s = sinc_small(u2)
+    return c, s * ux, s * uy, s * uz
+
+
+@helper(options=_VECTOR)
+def _controls(ws, r0, count):
+    """End sample, control points and missing-sample count of the segments
+    at slots r0..r0+count-1, all with 1 <= i <= n-3 (as
+    :func:`_controls_exact`); returns how many need that function (a
+    control point's angle beyond the series) and marks them in _REDO."""
+    ws = ws[min(max(r0, 0), 1) :]  # (r0 is 0 or 1; see _samples)
+    slow = 0
+    for r in range(min(count, _SPAN)):
+        c = r + 1  # sample row of i
+        nan = ws[_SMP + 5 * _W + c] + ws[_SMP + 5 * _W + c - 1]
+        nan += ws[_SMP + 5 * _W + c + 1]
+        nan += ws[_SMP + 5 * _W + c + 2]
+        ws[_CTL + 15 * _W + r] = nan
+        rw, rx = ws[_SMP + c], ws[_SMP + _W + c]
+        ry, rz = ws[_SMP + 2 * _W + c], ws[_SMP + 3 * _W + c]
+        lr = ws[_SMP + 4 * _W + c]
+        nw, nx = ws[_SMP + c + 1], ws[_SMP + _W + c + 1]
+        ny, nz = ws[_SMP + 2 * _W + c + 1], ws[_SMP + 3 * _W + c + 1]
+        ln_ = ws[_SMP + 4 * _W + c + 1]
+        ws[_CTL + r] = nw
+        ws[_CTL + _W + r] = nx
+        ws[_CTL + 2 * _W + r] = ny
+        ws[_CTL + 3 * _W + r] = nz
+        ws[_CTL + 12 * _W + r] = ln_
+        ratio = ws[_LOG + 3 * _W + c] * ws[_LOG + 4 * _W + c - 1]
+        ux = (-ws[_LOG + c] + ws[_LOG + c - 1] * ratio) * 0.25
+        uy = (-ws[_LOG + _W + c] + ws[_LOG + _W + c - 1] * ratio) * 0.25
+        uz = (-ws[_LOG + 2 * _W + c] + ws[_LOG + 2 * _W + c - 1] * ratio) * 0.25
+        u2a = ux * ux + uy * uy + uz * uz
+        ew, ex, ey, ez = _exp_vec_series(ux, uy, uz, u2a)
+        aw, ax, ay, az = _qmul_plain(rw, rx, ry, rz, ew, ex, ey, ez)
+        la = lr + (-(ln_ - lr) + (lr - ws[_SMP + 4 * _W + c - 1]) * ratio) * 0.25
+        ws[_CTL + 4 * _W + r] = aw
+        ws[_CTL + 5 * _W + r] = ax
+        ws[_CTL + 6 * _W + r] = ay
+        ws[_CTL + 7 * _W + r] = az
+        ws[_CTL + 13 * _W + r] = la
+        ratio = ws[_LOG + 3 * _W + c] * ws[_LOG + 4 * _W + c + 1]
+        ux = (ws[_LOG + c + 1] * ratio - ws[_LOG + c]) * -0.25
+        uy = (ws[_LOG + _W + c + 1] * ratio - ws[_LOG + _W + c]) * -0.25
+        uz = (ws[_LOG + 2 * _W + c + 1] * ratio - ws[_LOG + 2 * _W + c]) * -0.25
+        u2b = ux * ux + uy * uy + uz * uz
+        ew, ex, ey, ez = _exp_vec_series(ux, uy, uz, u2b)
+        bw, bx, by, bz = _qmul_plain(nw, nx, ny, nz, ew, ex, ey, ez)
+        lb = ln_ + ((ws[_SMP + 4 * _W + c + 2] - ln_) * ratio - (ln_ - lr)) * -0.25
+        ws[_CTL + 8 * _W + r] = bw
+        ws[_CTL + 9 * _W + r] = bx
+        ws[_CTL + 10 * _W + r] = by
+        ws[_CTL + 11 * _W + r] = bz
+        ws[_CTL + 14 * _W + r] = lb
+        limit = SERIES_ANGLE * SERIES_ANGLE
+        redo = (nan == 0.0) & (not ((u2a < limit) & (u2b < limit)))
+        ws[_REDO + r] = 1.0 if redo else 0.0
+        slow += redo
+    return slow
+
+
+@helper(inline=True)
+def _controls_exact(ws, n, i, r, c):
+    """End sample r[i+1] (the virtual one past the last), control points
+    A[i] and B[i], their ln scales and the number of missing samples among
+    i-1..i+2, of segment i (slot r, sample i in row c)."""
+    # samples i-1..i+2 (those that exist) all present?
+    nan = ws[_SMP + 5 * _W + c]
+    if i >= 1:
+        nan += ws[_SMP + 5 * _W + c - 1]
+    if i + 1 <= n - 1:
+        nan += ws[_SMP + 5 * _W + c + 1]
+    if i + 2 <= n - 1:
+        nan += ws[_SMP + 5 * _W + c + 2]
+    ws[_CTL + 15 * _W + r] = nan
+    if nan > 0.0:
+        return
+    rw, rx = ws[_SMP + c], ws[_SMP + _W + c]
+    ry, rz = ws[_SMP + 2 * _W + c], ws[_SMP + 3 * _W + c]
+    lr = ws[_SMP + 4 * _W + c]
+    if i < n - 1:
+        nw, nx = ws[_SMP + c + 1], ws[_SMP + _W + c + 1]
+        ny, nz = ws[_SMP + 2 * _W + c + 1], ws[_SMP + 3 * _W + c + 1]
+        ln_ = ws[_SMP + 4 * _W + c + 1]
+    else:
+        # r[n-1] r[n-2]⁻¹ r[n-1], of scale |r[n-1]|² / |r[n-2]|
+        pw, px, py, pz = _qmul1(
+            rw, rx, ry, rz, ws[_SMP + c - 1], -ws[_SMP + _W + c - 1],
+            -ws[_SMP + 2 * _W + c - 1], -ws[_SMP + 3 * _W + c - 1],
+        )  # fmt: skip
+        nw, nx, ny, nz = _qmul1(pw, px, py, pz, rw, rx, ry, rz)
+        ln_ = 2.0 * lr - ws[_SMP + 4 * _W + c - 1]
+    ws[_CTL + r] = nw
+    ws[_CTL + _W + r] = nx
+    ws[_CTL + 2 * _W + r] = ny
+    ws[_CTL + 3 * _W + r] = nz
+    ws[_CTL + 12 * _W + r] = ln_
+    # A[i] = r[i] exp((-L[i] + L[i-1] (t[i+1]-t[i]) / (t[i]-t[i-1])) / 4)
+    if 1 <= i <= n - 2:
+        ratio = ws[_LOG + 3 * _W + c] * ws[_LOG + 4 * _W + c - 1]
+        aw, ax, ay, az = _control_point(
+            rw, rx, ry, rz,
+            (-ws[_LOG + c] + ws[_LOG + c - 1] * ratio) * 0.25,
+            (-ws[_LOG + _W + c] + ws[_LOG + _W + c - 1] * ratio) * 0.25,
+            (-ws[_LOG + 2 * _W + c] + ws[_LOG + 2 * _W + c - 1] * ratio) * 0.25,
+        )  # fmt: skip
+        la = lr + (-(ln_ - lr) + (lr - ws[_SMP + 4 * _W + c - 1]) * ratio) * 0.25
+    else:
+        aw, ax, ay, az, la = rw, rx, ry, rz, lr
+    ws[_CTL + 4 * _W + r] = aw
+    ws[_CTL + 5 * _W + r] = ax
+    ws[_CTL + 6 * _W + r] = ay
+    ws[_CTL + 7 * _W + r] = az
+    ws[_CTL + 13 * _W + r] = la
+    # B[i] = r[i+1] exp((L[i+1] (t[i+1]-t[i]) / (t[i+2]-t[i+1]) - L[i]) / -4)
+    if i <= n - 3:
+        ratio = ws[_LOG + 3 * _W + c] * ws[_LOG + 4 * _W + c + 1]
+        bw, bx, by, bz = _control_point(
+            nw, nx, ny, nz,
+            (ws[_LOG + c + 1] * ratio - ws[_LOG + c]) * -0.25,
+            (ws[_LOG + _W + c + 1] * ratio - ws[_LOG + _W + c]) * -0.25,
+            (ws[_LOG + 2 * _W + c + 1] * ratio - ws[_LOG + 2 * _W + c]) * -0.25,
+        )  # fmt: skip
+        lb = ln_ + ((ws[_SMP + 4 * _W + c + 2] - ln_) * ratio - (ln_ - lr)) * -0.25
+    else:
+        bw, bx, by, bz, lb = nw, nx, ny, nz, ln_
+    ws[_CTL + 8 * _W + r] = bw
+    ws[_CTL + 9 * _W + r] = bx
+    ws[_CTL + 10 * _W + r] = by
+    ws[_CTL + 11 * _W + r] = bz
+    ws[_CTL + 14 * _W + r] = lb
+
+
+@helper(options=_VECTOR)
+def _records(ws, n, s0, count):
+    """Records of the segments at slots 0..count-1 (segment s0 + r) from
+    their samples, logs and control points, as :func:`_records_exact` where
+    both arcs are short (the arc r[i] -> r[i+1] then is r[i] exp(τ L[i]));
+    marks the others in _REDO (those whose state would be 1) and returns
+    how many it marked, with the earlier marks of :func:`_controls`."""
+    slow = 0
+    for r in range(min(count, _SPAN)):
+        c = r + 1
+        nan = ws[_CTL + 15 * _W + r]
+        rw, rx = ws[_SMP + c], ws[_SMP + _W + c]
+        ry, rz = ws[_SMP + 2 * _W + c], ws[_SMP + 3 * _W + c]
+        lr = ws[_SMP + 4 * _W + c]
+        nw, nx = ws[_CTL + r], ws[_CTL + _W + r]
+        ny, nz = ws[_CTL + 2 * _W + r], ws[_CTL + 3 * _W + r]
+        ln_ = ws[_CTL + 12 * _W + r]
+        f1 = _decide(rw * nw + rx * nx + ry * ny + rz * nz, _flip_bound(lr, ln_))
+        ws[_REC + r] = rw
+        ws[_REC + _W + r] = rx
+        ws[_REC + 2 * _W + r] = ry
+        ws[_REC + 3 * _W + r] = rz
+        lx, ly, lz = ws[_LOG + c], ws[_LOG + _W + c], ws[_LOG + 2 * _W + c]
+        ow, ox, oy, oz = _qmul_plain(rw, rx, ry, rz, 0.0, lx, ly, lz)
+        theta2 = lx * lx + ly * ly + lz * lz
+        ws[_REC + 4 * _W + r] = ow
+        ws[_REC + 5 * _W + r] = ox
+        ws[_REC + 6 * _W + r] = oy
+        ws[_REC + 7 * _W + r] = oz
+        ws[_REC + 8 * _W + r] = theta2
+        ws[_REC + 9 * _W + r] = math.sqrt(theta2)
+        ws[_REC + 10 * _W + r] = 1.0
+        ws[_REC + 22 * _W + r] = lr
+        ws[_REC + 23 * _W + r] = ln_
+        aw, ax = ws[_CTL + 4 * _W + r], ws[_CTL + 5 * _W + r]
+        ay, az = ws[_CTL + 6 * _W + r], ws[_CTL + 7 * _W + r]
+        la = ws[_CTL + 13 * _W + r]
+        bw, bx = ws[_CTL + 8 * _W + r], ws[_CTL + 9 * _W + r]
+        by, bz = ws[_CTL + 10 * _W + r], ws[_CTL + 11 * _W + r]
+        lb = ws[_CTL + 14 * _W + r]
+        f2 = _decide(aw * bw + ax * bx + ay * by + az * bz, _flip_bound(la, lb))
+        bw, bx, by, bz = f2 * bw, f2 * bx, f2 * by, f2 * bz
+        # _great_circle's series branch
+        d = aw * bw + ax * bx + ay * by + az * bz
+        ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
+        o2 = ow * ow + ox * ox + oy * oy + oz * oz
+        g = atan_over_x_small(o2 / (d * d)) / d
+        theta2 = o2 * g * g
+        ws[_REC + 11 * _W + r] = aw
+        ws[_REC + 12 * _W + r] = ax
+        ws[_REC + 13 * _W + r] = ay
+        ws[_REC + 14 * _W + r] = az
+        ws[_REC + 15 * _W + r] = ow
+        ws[_REC + 16 * _W + r] = ox
+        ws[_REC + 17 * _W + r] = oy
+        ws[_REC + 18 * _W + r] = oz
+        ws[_REC + 19 * _W + r] = theta2
+        # (θ² >= 0: abs lets LLVM use the sqrt instruction, not libm's call)
+        ws[_REC + 20 * _W + r] = math.sqrt(abs(theta2))
+        ws[_REC + 21 * _W + r] = g
+        ws[_REC + 24 * _W + r] = la
+        ws[_REC + 25 * _W + r] = lb
+        ws[_REC + 26 * _W + r] = _flip_bound(
+            max(abs(lr), abs(ln_)), max(abs(la), abs(lb))
+        )
+        wide1 = max(abs(lr), abs(ln_)) > _LOG_SCALE_LIMIT
+        wide2 = max(abs(la), abs(lb)) > _LOG_SCALE_LIMIT
+        fast = (f1 != 0.0) & (not wide1) & (f2 != 0.0) & (not wide2)
+        state = -1.0 if nan > 0.0 else (1.0 if fast else 0.0)
+        ws[_REC + 28 * _W + r] = state
+        short = (d > 0.0) & (o2 < (SERIES_RATIO * d) ** 2)
+        redo = (state > 0.0) & ((f1 != 1.0) | (s0 + r >= n - 1) | (not short))
+        redo |= ws[_REDO + r] != 0.0
+        ws[_REDO + r] = 1.0 if redo else 0.0
+        slow += redo
+    return slow
+
+
+@helper(inline=True)
+def _records_exact(ws, n, i, r, c):
+    """The record of segment i (slot r, sample i in row c), see _prepare."""
+    if ws[_CTL + 15 * _W + r] > 0.0:
+        ws[_REC + 28 * _W + r] = -1.0
+        return
+    rw, rx = ws[_SMP + c], ws[_SMP + _W + c]
+    ry, rz = ws[_SMP + 2 * _W + c], ws[_SMP + 3 * _W + c]
+    lr = ws[_SMP + 4 * _W + c]
+    nw, nx = ws[_CTL + r], ws[_CTL + _W + r]
+    ny, nz = ws[_CTL + 2 * _W + r], ws[_CTL + 3 * _W + r]
+    ln_ = ws[_CTL + 12 * _W + r]
+    # the "shorter way round", decided as for the scaled values
+    f = _decide(rw * nw + rx * nx + ry * ny + rz * nz, _flip_bound(lr, ln_))
+    ws[_REC + r] = rw
+    ws[_REC + _W + r] = rx
+    ws[_REC + 2 * _W + r] = ry
+    ws[_REC + 3 * _W + r] = rz
+    if f == 1.0 and i < n - 1:
+        # the arc towards r[i+1] is r[i] exp(τ L[i]): o = r[i] (0, L[i])
+        # has length θ, so g = 1 (no great circle to work out)
+        lx, ly, lz = ws[_LOG + c], ws[_LOG + _W + c], ws[_LOG + 2 * _W + c]
+        ow, ox, oy, oz = _qmul1(rw, rx, ry, rz, 0.0, lx, ly, lz)
+        theta2 = lx * lx + ly * ly + lz * lz
+        arc = (ow, ox, oy, oz, theta2, math.sqrt(theta2), 1.0)
+    else:
+        arc = _great_circle(rw, rx, ry, rz, f * nw, f * nx, f * ny, f * nz)
+    for k in range(7):
+        ws[_REC + (4 + k) * _W + r] = arc[k]
+    ws[_REC + 22 * _W + r] = lr
+    ws[_REC + 23 * _W + r] = ln_
+    fast = f != 0.0 and not max(abs(lr), abs(ln_)) > _LOG_SCALE_LIMIT
+    aw, ax = ws[_CTL + 4 * _W + r], ws[_CTL + 5 * _W + r]
+    ay, az = ws[_CTL + 6 * _W + r], ws[_CTL + 7 * _W + r]
+    la = ws[_CTL + 13 * _W + r]
+    bw, bx = ws[_CTL + 8 * _W + r], ws[_CTL + 9 * _W + r]
+    by, bz = ws[_CTL + 10 * _W + r], ws[_CTL + 11 * _W + r]
+    lb = ws[_CTL + 14 * _W + r]
+    f = _decide(aw * bw + ax * bx + ay * by + az * bz, _flip_bound(la, lb))
+    arc = _great_circle(aw, ax, ay, az, f * bw, f * bx, f * by, f * bz)
+    ws[_REC + 11 * _W + r] = aw
+    ws[_REC + 12 * _W + r] = ax
+    ws[_REC + 13 * _W + r] = ay
+    ws[_REC + 14 * _W + r] = az
+    for k in range(7):
+        ws[_REC + (15 + k) * _W + r] = arc[k]
+    ws[_REC + 24 * _W + r] = la
+    ws[_REC + 25 * _W + r] = lb
+    # the outer slerp's scales lie between e^lr and e^ln_, and between
+    # e^la and e^lb
+    ws[_REC + 26 * _W + r] = _flip_bound(max(abs(lr), abs(ln_)), max(abs(la), abs(lb)))
+    fast = fast and f != 0.0 and not max(abs(la), abs(lb)) > _LOG_SCALE_LIMIT
+    ws[_REC + 28 * _W + r] = 1.0 if fast else 0.0
+
+
+@helper(inline=True)
+def _prepare(qf, sign, t_in, n, s0, s1, ws):
+    """Set up segments s0..s1 of the squad spline, into slots 0..s1-s0.
+
+    The record of a segment (quantity k of slot r at ``_REC + k * _W + r``):
+    0:11 the arc r[i] -> r[i+1] (r[i], then o, θ², θ, g of
+    :func:`_great_circle`); 11:22 the arc A[i] -> B[i] (unit parts; the
+    last segment continues to the virtual sample r[n-1] r[n-2]⁻¹ r[n-1]);
+    22:26 ln of the scales of r[i], r[i+1], A[i], B[i]; 26 the bound of
+    the outer slerp's direction decision; 28: 1 if the fast route applies,
+    0 for the exact route, -1 if the segment touches a missing sample (NaN).
+
+    Vector loops over the samples, the steps between them and the segments
+    compute the common case (scales near 1, short arcs) and mark what they
+    do not cover; the marked segments, and those at the ends of the series
+    (no sample before, or fewer than two after), are then set up one by one
+    (:func:`_controls_exact`, :func:`_records_exact`).
+    """
     k0 = max(s0 - 1, 0)
     k1 = min(s1 + 2, n - 1)
-    for k in range(k0, k1 + 1):
-        s = sign[k]
-        w, x, y, z, lam, bad = _unit(s * q[k, 0], s * q[k, 1], s * q[k, 2], s * q[k, 3])
-        a = k - k0
-        smp[a, 0] = w
-        smp[a, 1] = x
-        smp[a, 2] = y
-        smp[a, 3] = z
-        smp[a, 4] = lam
-        smp[a, 5] = 1.0 if bad else 0.0
-    for a in range(k1 - k0):
-        v = _log_vec(
-            smp[a, 0], smp[a, 1], smp[a, 2], smp[a, 3],
-            smp[a + 1, 0], smp[a + 1, 1], smp[a + 1, 2], smp[a + 1, 3],
+    a0 = k0 - s0 + 1
+    _samples(qf, sign, ws, k0, k1, a0, False)
+    _logs(t_in, ws, k0, k1, a0, False)
+    # the control points: the segments with two samples on either side in
+    # a vector loop, the others (at the ends of the series) one by one
+    for r in range(s1 - s0 + 1):
+        ws[_REDO + r] = 0.0
+    ia = max(s0, 1)
+    ib = min(s1, n - 3)
+    slow = 0
+    if ib >= ia:
+        slow = _controls(ws, ia - s0, ib - ia + 1)
+    for i in range(s0, s1 + 1):
+        if i < ia or i > ib:
+            _controls_exact(ws, n, i, i - s0, i - s0 + 1)
+    if slow:
+        for r in range(s1 - s0 + 1):
+            if ws[_REDO + r] != 0.0:
+                _controls_exact(ws, n, s0 + r, r, r + 1)
+    if _records(ws, n, s0, s1 - s0 + 1):
+        for r in range(s1 - s0 + 1):
+            if ws[_REDO + r] != 0.0:
+                _records_exact(ws, n, s0 + r, r, r + 1)
+
+
+@helper(inline=True)
+def _along_series(aw, ax, ay, az, ow, ox, oy, oz, theta2, g, tau):
+    """:func:`_along` where τ²θ² < SERIES_ANGLE² (its first branch), and τ²θ²."""
+    y2 = tau * tau * theta2
+    c = cos_small(y2)
+    k = sinc_small(y2) * tau * g
+    return c * aw + k * ow, c * ax + k * ox, c * ay + k * oy, c * az + k * oz, y2
+
+
+@helper(inline=True)
+def _outer_series(aw, ax, ay, az, bw, bx, by, bz, tau):
+    """:func:`_outer`'s series branch, and whether it applies."""
+    d = aw * bw + ax * bx + ay * by + az * bz
+    ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
+    o2 = ow * ow + ox * ox + oy * oy + oz * oz
+    inv_d = 1.0 / d
+    x2 = o2 * inv_d * inv_d
+    p = atan_over_x_small(x2)
+    y2 = tau * tau * x2 * p * p
+    c = cos_small(y2)
+    k = sinc_small(y2) * tau * p * inv_d
+    ok = (d > 0.0) & (o2 < (SERIES_RATIO * d) ** 2) & (y2 < SERIES_ANGLE * SERIES_ANGLE)
+    return (
+        c * aw + k * ow,
+        c * ax + k * ox,
+        c * ay + k * oy,
+        c * az + k * oz,
+        ok,
+    )
+
+
+@helper(inline=True)
+def _exp_series(x):
+    """:func:`_exp_small` for |x| < _SMALL (its first two branches)."""
+    tiny = 1.0 + x * (1.0 + x * 0.5 * (1.0 + x / 3.0))
+    small = 1.0 + x * (
+        1.0
+        + x
+        * 0.5
+        * (1.0 + x / 3.0 * (1.0 + x * 0.25 * (1.0 + x * 0.2 * (1.0 + x / 6.0))))
+    )
+    return tiny if abs(x) < TINY_SQUARE else small
+
+
+@helper(options=_VECTOR)
+def _rows(wr, ob, count):
+    """The first ``count`` rows of the block, from the row scratch (record,
+    τ, sign) into ``ob`` (4 per row, flat), where the fast route's series
+    apply: the two inner slerps (:func:`_along`), the outer slerp
+    (:func:`_outer`), the scale (:func:`_exp_small`) and the stored sign.
+    Marks the other rows in _EXACT (they take the scalar route) and returns
+    how many it marked."""
+    limit = SERIES_ANGLE * SERIES_ANGLE
+    for b in range(min(count, _BLOCK)):
+        tau = wr[_TAU + b]
+        aw, ax, ay, az, ya = _along_series(
+            wr[_ROW + b], wr[_ROW + _R + b], wr[_ROW + 2 * _R + b],
+            wr[_ROW + 3 * _R + b], wr[_ROW + 4 * _R + b], wr[_ROW + 5 * _R + b],
+            wr[_ROW + 6 * _R + b], wr[_ROW + 7 * _R + b], wr[_ROW + 8 * _R + b],
+            wr[_ROW + 10 * _R + b], tau,
         )  # fmt: skip
-        logs[a, 0] = v[0]
-        logs[a, 1] = v[1]
-        logs[a, 2] = v[2]
-        # the sampling interval and its inverse, for the ratios below
-        dt = t_in[k0 + a + 1] - t_in[k0 + a]
-        logs[a, 3] = dt
-        logs[a, 4] = 1.0 / dt
-    for i in range(s0, s1 + 1):
-        r = r0 + i - s0
-        c = i - k0  # row of sample i
-        # samples i-1..i+2 (those that exist) all present?
-        nan = smp[c, 5]
-        if i >= 1:
-            nan += smp[c - 1, 5]
-        if i + 1 <= n - 1:
-            nan += smp[c + 1, 5]
-        if i + 2 <= n - 1:
-            nan += smp[c + 2, 5]
-        ctl[r, 15] = nan
-        if nan > 0.0:
-            continue
-        lr = smp[c, 4]
-        if i < n - 1:
-            nw, nx, ny, nz = smp[c + 1, 0], smp[c + 1, 1], smp[c + 1, 2], smp[c + 1, 3]
-            ln_ = smp[c + 1, 4]
-        else:
-            # r[n-1] r[n-2]⁻¹ r[n-1], of scale |r[n-1]|² / |r[n-2]|
-            pw, px, py, pz = _qmul1(
-                smp[c, 0], smp[c, 1], smp[c, 2], smp[c, 3],
-                smp[c - 1, 0], -smp[c - 1, 1], -smp[c - 1, 2], -smp[c - 1, 3],
-            )  # fmt: skip
-            nw, nx, ny, nz = _qmul1(
-                pw, px, py, pz, smp[c, 0], smp[c, 1], smp[c, 2], smp[c, 3]
-            )
-            ln_ = 2.0 * lr - smp[c - 1, 4]
-        ctl[r, 0] = nw
-        ctl[r, 1] = nx
-        ctl[r, 2] = ny
-        ctl[r, 3] = nz
-        ctl[r, 12] = ln_
-        # A[i] = r[i] exp((-L[i] + L[i-1] (t[i+1]-t[i]) / (t[i]-t[i-1])) / 4)
-        if 1 <= i <= n - 2:
-            ratio = logs[c, 3] * logs[c - 1, 4]  # (t[i+1]-t[i]) / (t[i]-t[i-1])
-            aw, ax, ay, az = _control_point(
-                smp[c, 0], smp[c, 1], smp[c, 2], smp[c, 3],
-                (-logs[c, 0] + logs[c - 1, 0] * ratio) * 0.25,
-                (-logs[c, 1] + logs[c - 1, 1] * ratio) * 0.25,
-                (-logs[c, 2] + logs[c - 1, 2] * ratio) * 0.25,
-            )  # fmt: skip
-            la = lr + (-(ln_ - lr) + (lr - smp[c - 1, 4]) * ratio) * 0.25
-        else:
-            aw, ax, ay, az, la = smp[c, 0], smp[c, 1], smp[c, 2], smp[c, 3], lr
-        ctl[r, 4] = aw
-        ctl[r, 5] = ax
-        ctl[r, 6] = ay
-        ctl[r, 7] = az
-        ctl[r, 13] = la
-        # B[i] = r[i+1] exp((L[i+1] (t[i+1]-t[i]) / (t[i+2]-t[i+1]) - L[i]) / -4)
-        if i <= n - 3:
-            ratio = logs[c, 3] * logs[c + 1, 4]  # (t[i+1]-t[i]) / (t[i+2]-t[i+1])
-            bw, bx, by, bz = _control_point(
-                nw, nx, ny, nz,
-                (logs[c + 1, 0] * ratio - logs[c, 0]) * -0.25,
-                (logs[c + 1, 1] * ratio - logs[c, 1]) * -0.25,
-                (logs[c + 1, 2] * ratio - logs[c, 2]) * -0.25,
-            )  # fmt: skip
-            lb = ln_ + ((smp[c + 2, 4] - ln_) * ratio - (ln_ - lr)) * -0.25
-        else:
-            bw, bx, by, bz, lb = nw, nx, ny, nz, ln_
-        ctl[r, 8] = bw
-        ctl[r, 9] = bx
-        ctl[r, 10] = by
-        ctl[r, 11] = bz
-        ctl[r, 14] = lb
-    for i in range(s0, s1 + 1):
-        r = r0 + i - s0
-        if ctl[r, 15] > 0.0:
-            rec[r, 28] = -1.0
-            continue
-        c = i - k0
-        rw, rx, ry, rz, lr = smp[c, 0], smp[c, 1], smp[c, 2], smp[c, 3], smp[c, 4]
-        nw, nx, ny, nz, ln_ = ctl[r, 0], ctl[r, 1], ctl[r, 2], ctl[r, 3], ctl[r, 12]
-        # the "shorter way round", decided as for the scaled values
-        f = _decide(rw * nw + rx * nx + ry * ny + rz * nz, _flip_bound(lr, ln_))
-        rec[r, 0] = rw
-        rec[r, 1] = rx
-        rec[r, 2] = ry
-        rec[r, 3] = rz
-        if f == 1.0 and i < n - 1:
-            # the arc towards r[i+1] is r[i] exp(τ L[i]): o = r[i] (0, L[i])
-            # has length θ, so g = 1 (no great circle to work out)
-            lx, ly, lz = logs[c, 0], logs[c, 1], logs[c, 2]
-            ow, ox, oy, oz = _qmul1(rw, rx, ry, rz, 0.0, lx, ly, lz)
-            theta2 = lx * lx + ly * ly + lz * lz
-            arc = (ow, ox, oy, oz, theta2, math.sqrt(theta2), 1.0)
-        else:
-            arc = _great_circle(rw, rx, ry, rz, f * nw, f * nx, f * ny, f * nz)
-        for k in range(7):
-            rec[r, 4 + k] = arc[k]
-        rec[r, 22] = lr
-        rec[r, 23] = ln_
-        rec[r, 28] = (
-            0.0 if f == 0.0 or max(abs(lr), abs(ln_)) > _LOG_SCALE_LIMIT else 1.0
+        bw, bx, by, bz, yb = _along_series(
+            wr[_ROW + 11 * _R + b], wr[_ROW + 12 * _R + b], wr[_ROW + 13 * _R + b],
+            wr[_ROW + 14 * _R + b], wr[_ROW + 15 * _R + b], wr[_ROW + 16 * _R + b],
+            wr[_ROW + 17 * _R + b], wr[_ROW + 18 * _R + b], wr[_ROW + 19 * _R + b],
+            wr[_ROW + 21 * _R + b], tau,
+        )  # fmt: skip
+        wr[_INN + b] = aw
+        wr[_INN + _R + b] = ax
+        wr[_INN + 2 * _R + b] = ay
+        wr[_INN + 3 * _R + b] = az
+        wr[_INN + 4 * _R + b] = bw
+        wr[_INN + 5 * _R + b] = bx
+        wr[_INN + 6 * _R + b] = by
+        wr[_INN + 7 * _R + b] = bz
+        wr[_EXACT + b] = 0.0 if (ya < limit) & (yb < limit) else 1.0
+    exact = 0
+    for b in range(min(count, _BLOCK)):
+        tau = wr[_TAU + b]
+        aw, ax, ay, az = (
+            wr[_INN + b],
+            wr[_INN + _R + b],
+            wr[_INN + 2 * _R + b],
+            wr[_INN + 3 * _R + b],
         )
-    for i in range(s0, s1 + 1):
-        r = r0 + i - s0
-        if rec[r, 28] < 0.0:
-            continue
-        aw, ax, ay, az, la = ctl[r, 4], ctl[r, 5], ctl[r, 6], ctl[r, 7], ctl[r, 13]
-        bw, bx, by, bz, lb = ctl[r, 8], ctl[r, 9], ctl[r, 10], ctl[r, 11], ctl[r, 14]
-        f = _decide(aw * bw + ax * bx + ay * by + az * bz, _flip_bound(la, lb))
-        arc = _great_circle(aw, ax, ay, az, f * bw, f * bx, f * by, f * bz)
-        rec[r, 11] = aw
-        rec[r, 12] = ax
-        rec[r, 13] = ay
-        rec[r, 14] = az
-        for k in range(7):
-            rec[r, 15 + k] = arc[k]
-        rec[r, 24] = la
-        rec[r, 25] = lb
-        # the outer slerp's scales lie between e^lr and e^ln_, and between
-        # e^la and e^lb
-        rec[r, 26] = _flip_bound(
-            max(abs(rec[r, 22]), abs(rec[r, 23])), max(abs(la), abs(lb))
+        bw, bx, by, bz = (
+            wr[_INN + 4 * _R + b],
+            wr[_INN + 5 * _R + b],
+            wr[_INN + 6 * _R + b],
+            wr[_INN + 7 * _R + b],
         )
-        if f == 0.0 or max(abs(la), abs(lb)) > _LOG_SCALE_LIMIT:
-            rec[r, 28] = 0.0
+        flip = _decide(aw * bw + ax * bx + ay * by + az * bz, wr[_ROW + 26 * _R + b])
+        h = 2.0 * tau * (1.0 - tau)
+        w, x, y, z, ok = _outer_series(
+            aw, ax, ay, az, flip * bw, flip * bx, flip * by, flip * bz, h
+        )
+        u = 1.0 - tau
+        e = (1.0 - h) * (
+            u * wr[_ROW + 22 * _R + b] + tau * wr[_ROW + 23 * _R + b]
+        ) + h * (u * wr[_ROW + 24 * _R + b] + tau * wr[_ROW + 25 * _R + b])
+        k = wr[_SGN + b] * _exp_series(e)
+        ob[4 * b] = k * w
+        ob[4 * b + 1] = k * x
+        ob[4 * b + 2] = k * y
+        ob[4 * b + 3] = k * z
+        fast = (
+            (wr[_ROW + 28 * _R + b] > 0.0)
+            & (0.0 <= tau)
+            & (tau <= 1.0)
+            & (flip != 0.0)
+            & ok
+            & (abs(e) < _SMALL)
+            & (wr[_EXACT + b] == 0.0)
+        )
+        wr[_EXACT + b] = 0.0 if fast else 1.0
+        exact += not fast
+    return exact
 
 
 @helper
@@ -492,20 +972,21 @@ def _outer(aw, ax, ay, az, bw, bx, by, bz, tau):
 
 
 @helper(inline=True)
-def _walk(q, sign, t_in, t_out, out, first, last):
-    """Rows first..last-1 of :func:`squad_walk` (n >= 2), block by block."""
+def _walk(q, sign, t_in, t_out, out, first, last, scalar):
+    """Rows first..last-1 of :func:`squad_walk` (n >= 2), block by block;
+    ``scalar``: every segment and row by the scalar code (see
+    :func:`squad_walk_scalar`)."""
     n = q.shape[0]
+    qf = q.reshape(-1)
     # scratch for one block of output rows: each row's sample index and
-    # segment record, the segments' samples, logs, control points and
-    # records (at most _SPAN segments when set up at once), the rows' two
-    # inner slerps
+    # segment slot, the segments' samples, logs, control points and records
+    # (at most _SPAN segments when set up at once; see _prepare), the rows'
+    # records, τ, signs and inner slerps
     found = np.empty(_BLOCK, dtype=np.int64)
     slot = np.empty(_BLOCK, dtype=np.int64)
-    smp = np.empty((_SPAN + 3, 6))
-    logs = np.empty((_SPAN + 3, 5))
-    ctl = np.empty((_SPAN, 16))
-    rec = np.empty((_SPAN, _N_REC))
-    inner = np.empty((_BLOCK, 9))
+    ws = np.empty(_WS)
+    wr = np.empty(_WR)
+    of = out.reshape(-1)
     dt_last = t_in[n - 1] - t_in[n - 2]
     i = -1
     for start in range(first, last, _BLOCK):
@@ -538,9 +1019,9 @@ def _walk(q, sign, t_in, t_out, out, first, last):
             found[j - start] = i
         s0 = found[0]
         s1 = found[stop - start - 1]
-        if ordered and s0 >= 0 and s1 - s0 < _SPAN:
+        if ordered and s0 >= 0 and s1 - s0 < _SPAN and not scalar:
             # dense: every segment from the first to the last at once
-            _prepare(q, sign, t_in, s0, s1, smp, logs, ctl, rec, 0)
+            _prepare(qf, sign, t_in, n, s0, s1, ws)
             for j in range(start, stop):
                 slot[j - start] = found[j - start] - s0
         else:
@@ -551,57 +1032,93 @@ def _walk(q, sign, t_in, t_out, out, first, last):
                 i_j = found[j - start]
                 seg = i_j if i_j >= 0 else n - 1  # numpy-quaternion indexes with -1
                 if seg != loaded:
-                    _prepare(q, sign, t_in, seg, seg, smp, logs, ctl, rec, free)
+                    # its samples in rows 0.. (sample seg in row 1), its
+                    # control points and record in the next free slot
+                    k0 = max(seg - 1, 0)
+                    k1 = min(seg + 2, n - 1)
+                    _samples(qf, sign, ws, k0, k1, k0 - seg + 1, scalar)
+                    _logs(t_in, ws, k0, k1, k0 - seg + 1, scalar)
+                    _controls_exact(ws, n, seg, free, 1)
+                    _records_exact(ws, n, seg, free, 1)
                     loaded = seg
                     free += 1
                 slot[j - start] = free - 1
-        # first stage: the two inner slerps of each row
-        for j in range(start, stop):
-            jj = j - start
+        # each row's τ, stored sign and segment record into the row scratch
+        # (a scalar loop: the records are gathered by slot), then the rows
+        # in vector loops, and the rows these do not cover one by one
+        for jj in range(stop - start):
+            j = start + jj
             i_j = found[jj]
             seg = i_j if i_j >= 0 else n - 1
-            r = slot[jj]
             if seg < n - 1:
                 dt = t_in[seg + 1] - t_in[seg]
             else:
                 dt = (t_in[n - 1] + dt_last) - t_in[n - 1]
-            tau = (t_out[j] - t_in[seg]) / dt
-            inner[jj, 8] = tau
-            if rec[r, 28] > 0.0 and 0.0 <= tau <= 1.0:
-                aw, ax, ay, az = _along(
-                    rec[r, 0], rec[r, 1], rec[r, 2], rec[r, 3],
-                    rec[r, 4], rec[r, 5], rec[r, 6], rec[r, 7],
-                    rec[r, 8], rec[r, 9], rec[r, 10], tau,
-                )  # fmt: skip
-                bw, bx, by, bz = _along(
-                    rec[r, 11], rec[r, 12], rec[r, 13], rec[r, 14],
-                    rec[r, 15], rec[r, 16], rec[r, 17], rec[r, 18],
-                    rec[r, 19], rec[r, 20], rec[r, 21], tau,
-                )  # fmt: skip
-                inner[jj, 0] = aw
-                inner[jj, 1] = ax
-                inner[jj, 2] = ay
-                inner[jj, 3] = az
-                inner[jj, 4] = bw
-                inner[jj, 5] = bx
-                inner[jj, 6] = by
-                inner[jj, 7] = bz
-        # second stage: the outer slerp, the scale and the stored sign
-        for j in range(start, stop):
-            jj = j - start
-            i_j = found[jj]
-            seg = i_j if i_j >= 0 else n - 1
+            wr[_TAU + jj] = (t_out[j] - t_in[seg]) / dt
+            wr[_SGN + jj] = sign[min(max(i_j, 0), n - 2)]
+            # (slots are >= 0: max spares the negative-index wraparound)
+            r = max(slot[jj], 0)
+            wr[_ROW + 0 * _R + jj] = ws[_REC + 0 * _W + r]
+            wr[_ROW + 1 * _R + jj] = ws[_REC + 1 * _W + r]
+            wr[_ROW + 2 * _R + jj] = ws[_REC + 2 * _W + r]
+            wr[_ROW + 3 * _R + jj] = ws[_REC + 3 * _W + r]
+            wr[_ROW + 4 * _R + jj] = ws[_REC + 4 * _W + r]
+            wr[_ROW + 5 * _R + jj] = ws[_REC + 5 * _W + r]
+            wr[_ROW + 6 * _R + jj] = ws[_REC + 6 * _W + r]
+            wr[_ROW + 7 * _R + jj] = ws[_REC + 7 * _W + r]
+            wr[_ROW + 8 * _R + jj] = ws[_REC + 8 * _W + r]
+            wr[_ROW + 10 * _R + jj] = ws[_REC + 10 * _W + r]
+            wr[_ROW + 11 * _R + jj] = ws[_REC + 11 * _W + r]
+            wr[_ROW + 12 * _R + jj] = ws[_REC + 12 * _W + r]
+            wr[_ROW + 13 * _R + jj] = ws[_REC + 13 * _W + r]
+            wr[_ROW + 14 * _R + jj] = ws[_REC + 14 * _W + r]
+            wr[_ROW + 15 * _R + jj] = ws[_REC + 15 * _W + r]
+            wr[_ROW + 16 * _R + jj] = ws[_REC + 16 * _W + r]
+            wr[_ROW + 17 * _R + jj] = ws[_REC + 17 * _W + r]
+            wr[_ROW + 18 * _R + jj] = ws[_REC + 18 * _W + r]
+            wr[_ROW + 19 * _R + jj] = ws[_REC + 19 * _W + r]
+            wr[_ROW + 21 * _R + jj] = ws[_REC + 21 * _W + r]
+            wr[_ROW + 22 * _R + jj] = ws[_REC + 22 * _W + r]
+            wr[_ROW + 23 * _R + jj] = ws[_REC + 23 * _W + r]
+            wr[_ROW + 24 * _R + jj] = ws[_REC + 24 * _W + r]
+            wr[_ROW + 25 * _R + jj] = ws[_REC + 25 * _W + r]
+            wr[_ROW + 26 * _R + jj] = ws[_REC + 26 * _W + r]
+            wr[_ROW + 28 * _R + jj] = ws[_REC + 28 * _W + r]
+        if not (scalar or _rows(wr, of[4 * start :], stop - start)):
+            continue
+        # the other rows by the scalar route: _along, _outer and _exp_small
+        # with all their branches, or _exact_row (written out here: a
+        # helper receiving the arrays would cost reference counting per row)
+        for jj in range(stop - start):
+            if not scalar and wr[_EXACT + jj] == 0.0:
+                continue
+            j = start + jj
             r = slot[jj]
-            s = sign[min(max(i_j, 0), n - 2)]
-            tau = inner[jj, 8]
-            state = rec[r, 28]
+            s = wr[_SGN + jj]
+            tau = wr[_TAU + jj]
+            state = ws[_REC + 28 * _W + r]
             if state < 0.0:
                 out[j, 0] = out[j, 1] = out[j, 2] = out[j, 3] = np.nan
                 continue
             if state > 0.0 and 0.0 <= tau <= 1.0:
-                aw, ax, ay, az = inner[jj, 0], inner[jj, 1], inner[jj, 2], inner[jj, 3]
-                bw, bx, by, bz = inner[jj, 4], inner[jj, 5], inner[jj, 6], inner[jj, 7]
-                flip = _decide(aw * bw + ax * bx + ay * by + az * bz, rec[r, 26])
+                aw, ax, ay, az = _along(
+                    ws[_REC + r], ws[_REC + _W + r], ws[_REC + 2 * _W + r],
+                    ws[_REC + 3 * _W + r], ws[_REC + 4 * _W + r],
+                    ws[_REC + 5 * _W + r], ws[_REC + 6 * _W + r],
+                    ws[_REC + 7 * _W + r], ws[_REC + 8 * _W + r],
+                    ws[_REC + 9 * _W + r], ws[_REC + 10 * _W + r], tau,
+                )  # fmt: skip
+                bw, bx, by, bz = _along(
+                    ws[_REC + 11 * _W + r], ws[_REC + 12 * _W + r],
+                    ws[_REC + 13 * _W + r], ws[_REC + 14 * _W + r],
+                    ws[_REC + 15 * _W + r], ws[_REC + 16 * _W + r],
+                    ws[_REC + 17 * _W + r], ws[_REC + 18 * _W + r],
+                    ws[_REC + 19 * _W + r], ws[_REC + 20 * _W + r],
+                    ws[_REC + 21 * _W + r], tau,
+                )  # fmt: skip
+                flip = _decide(
+                    aw * bw + ax * bx + ay * by + az * bz, ws[_REC + 26 * _W + r]
+                )
                 if flip != 0.0:
                     h = 2.0 * tau * (1.0 - tau)
                     w, x, y, z = _outer(
@@ -609,8 +1126,10 @@ def _walk(q, sign, t_in, t_out, out, first, last):
                     )
                     u = 1.0 - tau
                     scale = _exp_small(
-                        (1.0 - h) * (u * rec[r, 22] + tau * rec[r, 23])
-                        + h * (u * rec[r, 24] + tau * rec[r, 25])
+                        (1.0 - h)
+                        * (u * ws[_REC + 22 * _W + r] + tau * ws[_REC + 23 * _W + r])
+                        + h
+                        * (u * ws[_REC + 24 * _W + r] + tau * ws[_REC + 25 * _W + r])
                     )
                     k = s * scale
                     out[j, 0] = k * w
@@ -618,7 +1137,8 @@ def _walk(q, sign, t_in, t_out, out, first, last):
                     out[j, 2] = k * y
                     out[j, 3] = k * z
                     continue
-            w, x, y, z = _exact_row(q, sign, t_in, seg, tau)
+            i_j = found[jj]
+            w, x, y, z = _exact_row(q, sign, t_in, i_j if i_j >= 0 else n - 1, tau)
             out[j, 0] = s * w
             out[j, 1] = s * x
             out[j, 2] = s * y
@@ -658,7 +1178,7 @@ def squad_walk(q, t_in, t_out):
                 out[j, k] = q[0, k]
         return out
     sign = unflip_signs(q)
-    _walk(q, sign, t_in, t_out, out, 0, m)
+    _walk(q, sign, t_in, t_out, out, 0, m, False)
     return out
 
 
@@ -679,7 +1199,31 @@ def squad_walk_parallel(q, t_in, t_out):
     chunks = _CHUNKS
     size = ((m + chunks - 1) // chunks + _BLOCK - 1) // _BLOCK * _BLOCK
     for c in prange(chunks):
-        _walk(q, sign, t_in, t_out, out, min(c * size, m), min((c + 1) * size, m))
+        _walk(
+            q, sign, t_in, t_out, out, min(c * size, m), min((c + 1) * size, m), False
+        )
+    return out
+
+
+@kernel(F2, F1, F1, options=_SERIAL)
+def squad_walk_scalar(q, t_in, t_out):
+    """:func:`squad_walk` by its scalar code alone: every segment set up on
+    its own (:func:`_unit`, :func:`_log_vec`, :func:`_controls_exact`,
+    :func:`_records_exact`) and every row evaluated by the scalar route of :func:`_walk`.
+
+    The vector loops compute the common branches of the same expressions,
+    so the two agree bit for bit; the tests hold them to that.
+    """
+    n = q.shape[0]
+    m = t_out.shape[0]
+    out = np.empty((m, 4))
+    if n < 2 or m == 0:
+        for j in range(m):
+            for k in range(4):
+                out[j, k] = q[0, k]
+        return out
+    sign = unflip_signs(q)
+    _walk(q, sign, t_in, t_out, out, 0, m, True)
     return out
 
 

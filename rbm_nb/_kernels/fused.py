@@ -618,11 +618,14 @@ def squad_table(r, t):
 # The scratch ``work`` holds each quantity for the block's rows side by
 # side (structure of arrays), so that the arithmetic of a step is a loop
 # over contiguous rows without branches or calls, which LLVM vectorises (8
-# rows per instruction with AVX-512). A moving step runs in passes: a
-# scalar pass finds each row's segment and either evaluates the row (held
-# and constant frames, own sample times, gaps, segments that are not unit,
-# arguments beyond the polynomial sine's range) or gathers its squad
-# segment into the scratch; the vector pass :func:`_squad_rows` evaluates
+# rows per instruction with AVX-512). A moving step runs in passes: whole
+# blocks at the frame's own sample times are copied (:func:`_own_rows`);
+# otherwise a scalar pass finds each row's segment and either gathers its
+# squad segment into the scratch (the usual row: inside the samples, no
+# gap, a unit segment, in a short route of its own) or evaluates the row
+# (held and constant frames, own sample times, gaps, segments that are not
+# unit, arguments beyond the polynomial sine's range, times outside the
+# samples); the vector pass :func:`_squad_rows` evaluates
 # the gathered rows (both inner great circles and the outer slerp's
 # small-arc series) and marks the rows whose outer slerp needs the general
 # branch, which :func:`_wide_rows` (another vector pass, for blocks with
@@ -1090,7 +1093,6 @@ def _chain_block(
                         continue
             tx = ty = tz = 0.0
             qw = qx = qy = qz = 0.0
-            path = 0.0
             if kind == CONSTANT:
                 if not rotation_only:
                     tx, ty, tz = tr[0, 0], tr[0, 1], tr[0, 2]
@@ -1176,66 +1178,52 @@ def _chain_block(
                         + r[k, 2] * rp[k, 2]
                         + r[k, 3] * rp[k, 3]
                     ) < 0.0
-                    if (
-                        c[g, _DONE] == _UNIT
-                        and abs(tau * c[g, 4]) < SINCOS_LIMIT
-                        and abs(tau * c[g, 9]) < SINCOS_LIMIT
-                    ):
-                        # for the squad pass
-                        path = _GATHERED
-                        gathered += 1
-                        work[_TAU + b] = tau
-                        work[_TH1 + b] = c[g, 4]
-                        work[_TH2 + b] = c[g, 9]
-                        for e in range(4):
-                            work[_P + e * BLOCK + b] = r[g, e]
-                            work[_U1 + e * BLOCK + b] = c[g, 5 + e]
-                            work[_Q + e * BLOCK + b] = c[g, e]
-                            work[_U2 + e * BLOCK + b] = c[g, 10 + e]
-                        work[_NEG + b] = 1.0 if neg else 0.0
-                    else:
-                        if c[g, _DONE] == _UNIT:
-                            sn, cs = _sincos(tau * c[g, 4])
-                            s1w = cs * r[g, 0] + sn * c[g, 5]
-                            s1x = cs * r[g, 1] + sn * c[g, 6]
-                            s1y = cs * r[g, 2] + sn * c[g, 7]
-                            s1z = cs * r[g, 3] + sn * c[g, 8]
-                            sn, cs = _sincos(tau * c[g, 9])
-                            s2w = cs * c[g, 0] + sn * c[g, 10]
-                            s2x = cs * c[g, 1] + sn * c[g, 11]
-                            s2y = cs * c[g, 2] + sn * c[g, 12]
-                            s2z = cs * c[g, 3] + sn * c[g, 13]
-                        else:  # not unit: b in columns 4:8
-                            if g < n - 1:
-                                nw, nx, ny, nz = (
-                                    r[g + 1, 0],
-                                    r[g + 1, 1],
-                                    r[g + 1, 2],
-                                    r[g + 1, 3],
-                                )
-                            else:
-                                nw, nx, ny, nz = (
-                                    c[n - 1, 4],
-                                    c[n - 1, 5],
-                                    c[n - 1, 6],
-                                    c[n - 1, 7],
-                                )
-                            s1w, s1x, s1y, s1z = _qslerp1(
-                                r[g, 0], r[g, 1], r[g, 2], r[g, 3],
-                                nw, nx, ny, nz, tau,
-                            )  # fmt: skip
-                            s2w, s2x, s2y, s2z = _qslerp1(
-                                c[g, 0], c[g, 1], c[g, 2], c[g, 3],
-                                c[g, 4], c[g, 5], c[g, 6], c[g, 7],
-                                tau,
-                            )  # fmt: skip
-                        qw, qx, qy, qz = _qslerp_unit1(
-                            s1w, s1x, s1y, s1z, s2w, s2x, s2y, s2z,
-                            2.0 * tau * (1.0 - tau),
+                    # (rows inside the samples with a unit segment took the
+                    # short route above, into the squad pass; here the rest,
+                    # by the scalar route, which the squad pass equals bit for
+                    # bit: tests/core/test_fused_rows.py)
+                    if c[g, _DONE] == _UNIT:
+                        sn, cs = _sincos(tau * c[g, 4])
+                        s1w = cs * r[g, 0] + sn * c[g, 5]
+                        s1x = cs * r[g, 1] + sn * c[g, 6]
+                        s1y = cs * r[g, 2] + sn * c[g, 7]
+                        s1z = cs * r[g, 3] + sn * c[g, 8]
+                        sn, cs = _sincos(tau * c[g, 9])
+                        s2w = cs * c[g, 0] + sn * c[g, 10]
+                        s2x = cs * c[g, 1] + sn * c[g, 11]
+                        s2y = cs * c[g, 2] + sn * c[g, 12]
+                        s2z = cs * c[g, 3] + sn * c[g, 13]
+                    else:  # not unit: b in columns 4:8
+                        if g < n - 1:
+                            nw, nx, ny, nz = (
+                                r[g + 1, 0],
+                                r[g + 1, 1],
+                                r[g + 1, 2],
+                                r[g + 1, 3],
+                            )
+                        else:
+                            nw, nx, ny, nz = (
+                                c[n - 1, 4],
+                                c[n - 1, 5],
+                                c[n - 1, 6],
+                                c[n - 1, 7],
+                            )
+                        s1w, s1x, s1y, s1z = _qslerp1(
+                            r[g, 0], r[g, 1], r[g, 2], r[g, 3],
+                            nw, nx, ny, nz, tau,
                         )  # fmt: skip
-                        if neg:
-                            qw, qx, qy, qz = -qw, -qx, -qy, -qz
-            work[_PATH + b] = path
+                        s2w, s2x, s2y, s2z = _qslerp1(
+                            c[g, 0], c[g, 1], c[g, 2], c[g, 3],
+                            c[g, 4], c[g, 5], c[g, 6], c[g, 7],
+                            tau,
+                        )  # fmt: skip
+                    qw, qx, qy, qz = _qslerp_unit1(
+                        s1w, s1x, s1y, s1z, s2w, s2x, s2y, s2z,
+                        2.0 * tau * (1.0 - tau),
+                    )  # fmt: skip
+                    if neg:
+                        qw, qx, qy, qz = -qw, -qx, -qy, -qz
+            work[_PATH + b] = 0.0  # (evaluated here)
             work[_STEP + b] = tx
             work[_STEP + BLOCK + b] = ty
             work[_STEP + 2 * BLOCK + b] = tz

@@ -46,14 +46,15 @@ def is_dataarray(obj: Any) -> bool:
     return xr is not None and isinstance(obj, xr.DataArray)
 
 
+def kernel_ready(arr: Any) -> bool:
+    """Whether ``arr`` is a writeable C-contiguous ndarray, the layout every
+    kernel signature takes (the dtype is the caller's to check)."""
+    return type(arr) is np.ndarray and arr.flags.c_contiguous and arr.flags.writeable
+
+
 def kernel_array(arr: Any) -> np.ndarray:
     """``arr`` as a writeable C-contiguous float64 array (a copy only if needed)."""
-    if (
-        type(arr) is np.ndarray
-        and arr.dtype == np.float64
-        and arr.flags.c_contiguous
-        and arr.flags.writeable
-    ):
+    if kernel_ready(arr) and arr.dtype == np.float64:
         return arr
     return np.array(arr, dtype=np.float64, order="C")
 

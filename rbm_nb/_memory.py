@@ -28,11 +28,6 @@ HUGE_PAGE = 2 << 20
 ADVISED = 4 << 20
 
 
-def _aligned(raw: np.ndarray, shape: tuple[int, ...], nbytes: int) -> np.ndarray:
-    start = -raw.ctypes.data % HUGE_PAGE
-    return raw[start : start + nbytes].view(np.float64).reshape(shape)
-
-
 def zeros(shape: tuple[int, ...]) -> np.ndarray:
     """``np.zeros(shape)`` (float64, C order), huge page aligned when large.
 
@@ -42,4 +37,6 @@ def zeros(shape: tuple[int, ...]) -> np.ndarray:
     nbytes = 8 * int(np.prod(shape))
     if nbytes < ADVISED:
         return np.zeros(shape)
-    return _aligned(np.zeros(nbytes + HUGE_PAGE, dtype=np.uint8), shape, nbytes)
+    raw = np.zeros(nbytes + HUGE_PAGE, dtype=np.uint8)
+    start = -raw.ctypes.data % HUGE_PAGE
+    return raw[start : start + nbytes].view(np.float64).reshape(shape)

@@ -120,7 +120,8 @@ def _own_runnable() -> int:
         except OSError:  # the thread ended meanwhile
             continue
         # the state follows the command name, which is in parentheses
-        count += stat[stat.rindex(b")") + 2 : stat.rindex(b")") + 3] == b"R"
+        state = stat.rindex(b")") + 2
+        count += stat[state : state + 1] == b"R"
     return count
 
 
@@ -144,11 +145,12 @@ def free_cores() -> int | None:
     except AttributeError:  # pragma: no cover - not on Linux
         cores = os.cpu_count() or 1
     try:
-        if _runnable() <= 1:
+        first = _runnable()
+        if first <= 1:
             # only the calling thread: every core is free, and the 40 µs of
             # reading this process's threads are not needed
             return cores
-        others = min(_runnable() - _own_runnable(), _runnable() - _own_runnable())
+        others = min(first - _own_runnable(), _runnable() - _own_runnable())
     except (OSError, ValueError, IndexError):
         return None
     return max(cores - max(others, 0), 1)

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from ._door import kernel_array
+from ._door import kernel_array, kernel_ready
 from ._kernels.times import float_key_faults, ns_key_faults, seconds_since
 
 __all__ = [
@@ -145,11 +145,6 @@ def _first_unordered(key: np.ndarray) -> int:
     return int(bad[0]) + 1 if bad.size else -1
 
 
-def _kernel_ready(a: np.ndarray) -> bool:
-    """Whether a 1-D array matches the time kernels' one signature as it is."""
-    return a.ndim == 1 and a.flags.c_contiguous and a.flags.writeable
-
-
 def _ordered_keys(values: np.ndarray, name: str) -> tuple[np.ndarray, str]:
     """:func:`_keys` of strictly increasing times; raises naming the first fault.
 
@@ -161,9 +156,9 @@ def _ordered_keys(values: np.ndarray, name: str) -> tuple[np.ndarray, str]:
     dtype = values.dtype
     if dtype in (_DATETIME_NS, _TIMEDELTA_NS):
         key = values.view(np.int64)
-        if _kernel_ready(key) and ns_key_faults(key) == (0, 0):
+        if kernel_ready(key) and ns_key_faults(key) == (0, 0):
             return key, _KINDS[dtype.kind]
-    elif dtype == np.float64 and _kernel_ready(values):
+    elif dtype == np.float64 and kernel_ready(values):
         if float_key_faults(values) == (0, 0):
             return values, "numeric"
     key, kind = _keys(values, name)
@@ -222,7 +217,7 @@ def as_track(
         key = kernel_array(key)  # the kernels interpolate on it directly
         return Track(values, key, key, 0, kind)
     origin = int(key[0])
-    if _kernel_ready(key):
+    if kernel_ready(key):
         return Track(values, key, seconds_since(key, origin), origin, kind)
     return Track(values, key, (key - origin) / _NS_PER_S, origin, kind)
 
@@ -306,7 +301,7 @@ def _raw_seconds(values: np.ndarray, origin: int | None) -> tuple[np.ndarray, in
     """Seconds from ``origin`` (default: the first value); NaT becomes NaN."""
     unit = "datetime64[ns]" if values.dtype.kind == "M" else "timedelta64[ns]"
     key = values.astype(unit, copy=False).view(np.int64).reshape(-1)
-    if not (key.flags.c_contiguous and key.flags.writeable):
+    if not kernel_ready(key):
         key = np.array(key, order="C")  # the kernel's one signature
     if origin is None:
         origin = int(key[0]) if key.size and key[0] != _NAT else 0

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from ._config import UNIT_QUATERNION_TOLERANCE
-from ._door import kernel_array, resolve_axis
+from ._door import kernel_array, kernel_ready, resolve_axis
 from ._kernels import rows as _rows
 
 __all__ = [
@@ -87,7 +87,7 @@ def check_no_inf(arr: np.ndarray, name: str, row_axis: bool = True) -> None:
 
     With ``row_axis`` the message names the row (all but the last index).
     """
-    if arr.dtype == np.float64 and arr.flags.c_contiguous and arr.flags.writeable:
+    if kernel_ready(arr) and arr.dtype == np.float64:
         if _rows.infinities(arr.reshape(-1)) == 0:
             return  # one pass when there is none; below: where the first is
     inf = np.isinf(arr)

@@ -9,7 +9,8 @@ of these hold:
   thread pool costs more than the second core saves (the threshold is
   measured by ``benchmarks/bench_parallel.py``);
 * more than one thread is allowed (:func:`threads`) and more than one core
-  is free right now (:func:`free_cores`): a parallel kernel splits its rows
+  is free (:func:`free_cores`, read at most every :data:`RECHECK_AFTER`
+  seconds): a parallel kernel splits its rows
   evenly between its threads, so a thread that has to share its core with
   another busy process holds up the whole call. Measured on the 2-core
   machine with another process keeping one core busy: 1M rotations took
@@ -36,8 +37,10 @@ every layer is safe under the rules above.
 
 from __future__ import annotations
 
+import math
 import os
 import threading
+import time
 from collections.abc import Callable
 from typing import Any, Final, TypeVar
 
@@ -63,6 +66,15 @@ MIN_ROWS: Final = 50_000
 #: Environment variable capping the threads of rbm_nb's parallel kernels.
 ENV_THREADS: Final = "RBM_NB_NUM_THREADS"
 
+#: Seconds for which a reading of the load (:func:`free_cores`) also stands
+#: for the launches that follow. In a loop of parallel calls numba's workers
+#: are still spinning from one call when the next starts, so each reading
+#: has to look up every thread of this process in /proc: 180 µs with 6
+#: threads, measured after a lookup of 76k rows on 2 threads (1.1 ms). A
+#: process that starts keeping a core busy meanwhile makes the calls of at
+#: most this long wait for the second core.
+RECHECK_AFTER: Final = 0.02
+
 # Linux's count of runnable threads, in its 4th field ("running/total"), and
 # this process's threads (each with its state in its stat file)
 _LOADAVG = "/proc/loadavg"
@@ -71,6 +83,9 @@ _TASKS = "/proc/self/task"
 _LOCK = threading.Lock()
 # pid of the process that first launched a parallel kernel (None: none yet)
 _launched_in: int | None = None
+# (_now(), free_cores()) of the last reading that launch took
+_reading: tuple[float, int | None] = (-math.inf, None)
+_now = time.monotonic
 
 _Result = TypeVar("_Result")
 
@@ -156,6 +171,18 @@ def free_cores() -> int | None:
     return max(cores - max(others, 0), 1)
 
 
+def _free_cores_lately() -> int | None:
+    """:func:`free_cores`, read again only :data:`RECHECK_AFTER` after the last time."""
+    global _reading
+    now = _now()
+    when, free = _reading
+    if now - when < RECHECK_AFTER:
+        return free
+    free = free_cores()
+    _reading = (now, free)
+    return free
+
+
 def launch(
     serial: Callable[..., _Result],
     parallel: Callable[..., _Result],
@@ -179,7 +206,7 @@ def launch(
         return serial(*args)
     n = threads()
     if n > 1:
-        free = free_cores()
+        free = _free_cores_lately()
         if free is not None:
             n = min(n, free)
     pid = os.getpid()

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import importlib.abc
 import importlib.util
+import math
 import os
 import sys
 import warnings
@@ -112,6 +113,7 @@ def ignore_load(monkeypatch):
     from rbm_nb import _parallel
 
     monkeypatch.setattr(_parallel, "free_cores", lambda: None)
+    monkeypatch.setattr(_parallel, "_reading", (-math.inf, None))  # read it now
 
 
 @pytest.fixture

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 import threading
 import time
@@ -116,6 +117,8 @@ def load(monkeypatch, tmp_path):
     monkeypatch.setenv(_parallel.ENV_THREADS, "2")
 
     def set_load(running, cores, own=1):
+        # launch reads the new load at once (not RECHECK_AFTER later)
+        monkeypatch.setattr(_parallel, "_reading", (-math.inf, None))
         path = tmp_path / "loadavg"
         path.write_text(f"0.52 0.58 0.59 {running}/345 12345\n")
         monkeypatch.setattr(_parallel, "_LOADAVG", str(path))
@@ -179,6 +182,28 @@ def test_a_busy_core_means_serial(load):
     assert ran[-1] == ("parallel", 2)
 
 
+def test_launches_read_the_load_again_only_after_a_while(load, monkeypatch):
+    """In a loop of calls the reading stands for RECHECK_AFTER seconds."""
+    load(1, 2)
+    readings = []
+    real = _parallel.free_cores
+    monkeypatch.setattr(_parallel, "free_cores", lambda: readings.append(1) or real())
+    now = [1000.0]
+    monkeypatch.setattr(_parallel, "_now", lambda: now[0])
+    ran, serial, parallel = _twins()
+    rows = 10 * _parallel.MIN_ROWS
+    _parallel.launch(serial, parallel, rows, 0)
+    now[0] += 0.5 * _parallel.RECHECK_AFTER
+    path = _parallel._LOADAVG
+    with open(path, "w") as f:  # another process starts: 2 runnable threads
+        f.write("0.52 0.58 0.59 2/345 12345\n")
+    _parallel.launch(serial, parallel, rows, 0)
+    assert len(readings) == 1 and ran == [("parallel", 2)] * 2
+    now[0] += _parallel.RECHECK_AFTER
+    _parallel.launch(serial, parallel, rows, 0)
+    assert len(readings) == 2 and ran[-1] == ("serial", 1)
+
+
 def test_without_a_load_count_the_load_is_not_considered(load, monkeypatch):
     load(1, 2)
     monkeypatch.setattr(_parallel, "_LOADAVG", "/nonexistent/loadavg")
@@ -191,6 +216,7 @@ def test_without_a_load_count_the_load_is_not_considered(load, monkeypatch):
 def test_processes_that_keep_every_core_busy_make_calls_serial(monkeypatch):
     """Real load: one busy process per core, seen through the real /proc/loadavg."""
     monkeypatch.undo()  # the real free_cores
+    monkeypatch.setattr(_parallel, "_reading", (-math.inf, None))
     if not os.path.exists(_parallel._LOADAVG):
         pytest.skip("no /proc/loadavg here")
     import subprocess

@@ -124,8 +124,11 @@ HELD = 3
 # squad table columns: a (0:4); for a segment of unit quaternions the great
 # circles r[i] -> r[i+1] (4:9: θ, u) and a[i] -> b[i] (9:14), else b (4:8)
 # (squad falls back to slerps, which need b and nothing else); the state
-# (14: 0.0 not computed yet, 1.0 unit, 2.0 not unit). 15 float64 per sample:
-# b of unit segments is not kept, as the great circle a -> b replaces it.
+# (14: 0.0 not computed yet, 1.0 unit, 2.0 not unit), negative where the
+# stored sample i is -r[i] (so that the usual row reads the sign its result
+# takes here rather than the stored rotations: 32 bytes less per row). 15
+# float64 per sample: b of unit segments is not kept, as the great circle
+# a -> b replaces it.
 TABLE_COLUMNS = 15
 _DONE = 14
 _UNIT = 1.0
@@ -255,8 +258,22 @@ def _first_half(r, i):
 
 
 @helper
-def _table_row(r, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, rb):
+def _stored_sign(r, rp, i):
+    """-1.0 where the stored sample i is -r[i], else 1.0 (the chain's test)."""
+    dot = (
+        r[i, 0] * rp[i, 0]
+        + r[i, 1] * rp[i, 1]
+        + r[i, 2] * rp[i, 2]
+        + r[i, 3] * rp[i, 3]
+    )
+    return -1.0 if dot < 0.0 else 1.0
+
+
+@helper
+def _table_row(r, rp, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, rb):
     """Fill row i of the squad table of (r, t) (n >= 2) into ``c``.
+
+    ``rp``: the rotations as stored, for the sign in the state column.
 
     Row i of ``squad_coefficients`` (a, b) and ``squad_segments`` to within
     4 ulp, from samples i-1 .. i+2, the logs p = L[i-1], l = L[i],
@@ -345,7 +362,7 @@ def _table_row(r, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, rb):
         c[i, 11] = g[2]
         c[i, 12] = g[3]
         c[i, 13] = g[4]
-        c[i, _DONE] = _UNIT
+        c[i, _DONE] = _UNIT * _stored_sign(r, rp, i)
     else:
         c[i, 4] = bw
         c[i, 5] = bx
@@ -353,7 +370,7 @@ def _table_row(r, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, rb):
         c[i, 7] = bz
         for k in range(8, 14):
             c[i, k] = 0.0
-        c[i, _DONE] = _NOT_UNIT
+        c[i, _DONE] = _NOT_UNIT * _stored_sign(r, rp, i)
 
 
 # Rows are filled in blocks: the samples, logs and intervals a block reads
@@ -400,7 +417,7 @@ def _control_point_series(rw, rx, ry, rz, ew, ex, ey, ez):
 
 
 @helper(options=_NO_DIVISION_CHECK)
-def _fill_block(r, t, c, i0, i1, s):
+def _fill_block(r, rp, t, c, i0, i1, s):
     """Rows i0..i1-1 of the table (1 <= i0, i1 <= n - 2, i1 - i0 <= FILL_BLOCK).
 
     ``s``: scratch of shape (_S_ROWS, FILL_BLOCK + 3).
@@ -537,7 +554,7 @@ def _fill_block(r, t, c, i0, i1, s):
         i = i0 + b
         if s[_S_BAD, b] != 0.0:
             _table_row(
-                r, c, i,
+                r, rp, c, i,
                 s[_S_L, b], s[_S_L + 1, b], s[_S_L + 2, b], s[_S_L + 3, b],
                 s[_S_L, b + 1], s[_S_L + 1, b + 1], s[_S_L + 2, b + 1],
                 s[_S_L + 3, b + 1],
@@ -548,11 +565,19 @@ def _fill_block(r, t, c, i0, i1, s):
         else:
             for j in range(_DONE):
                 c[i, j] = s[_S_OUT + j, b]
-            c[i, _DONE] = _UNIT
+            # (_stored_sign written out: a helper taking the arrays would
+            # count references once per row)
+            dot = (
+                r[i, 0] * rp[i, 0]
+                + r[i, 1] * rp[i, 1]
+                + r[i, 2] * rp[i, 2]
+                + r[i, 3] * rp[i, 3]
+            )
+            c[i, _DONE] = -_UNIT if dot < 0.0 else _UNIT
 
 
 @helper
-def _fill_row(r, t, c, i):
+def _fill_row(r, rp, t, c, i):
     """Row i of the table alone (its three logs computed here)."""
     n = r.shape[0]
     pw, px, py, pz = _log_step(r, i - 1)
@@ -560,13 +585,13 @@ def _fill_row(r, t, c, i):
     nw, nx, ny, nz = _log_step(r, i + 1)
     dt = t[i + 1] - t[i] if i < n - 1 else 0.0
     _table_row(
-        r, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz,
+        r, rp, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz,
         dt * _inv_interval(t, i - 1), dt * _inv_interval(t, i + 1),
     )  # fmt: skip
 
 
 @helper
-def _fill_run(r, t, c, g, count):
+def _fill_run(r, rp, t, c, g, count):
     """Compute row g of the table and the missing rows after it (``count`` at most).
 
     Stops before the first row already computed. Returns the number of
@@ -581,18 +606,21 @@ def _fill_run(r, t, c, g, count):
     i = g
     while i < stop:
         if i == 0 or i >= n - 2:
-            _fill_row(r, t, c, i)
+            _fill_row(r, rp, t, c, i)
             i += 1
         else:
             j = min(i + FILL_BLOCK, stop, n - 2)
-            _fill_block(r, t, c, i, j, s)
+            _fill_block(r, rp, t, c, i, j, s)
             i = j
     return stop - g
 
 
-@kernel(F2, F1)
-def squad_table(r, t):
+@kernel(F2, F2, F1)
+def squad_table(r, p, t):
     """The whole squad table of rotations r (n >= 2) at strictly increasing t.
+
+    ``r``: the rotations free of sign flips (``unflip``) of ``p``, the
+    rotations as stored.
 
     Returns
     -------
@@ -601,7 +629,7 @@ def squad_table(r, t):
     """
     n = r.shape[0]
     c = np.zeros((n, TABLE_COLUMNS))
-    _fill_run(r, t, c, 0, n)
+    _fill_run(r, p, t, c, 0, n)
     return c
 
 
@@ -1074,10 +1102,9 @@ def _chain_block(
                         prefetch(c, TABLE_COLUMNS * g)
                         prefetch(c, TABLE_COLUMNS * g + 8)
                         prefetch(r, 4 * g)
-                        prefetch(rp, 4 * g)
                         prefetch(tr, 3 * g)
                     if c[i, _DONE] == 0.0:  # first use of the segment
-                        computed += _fill_run(r, times, c, i, RUN)
+                        computed += _fill_run(r, rp, times, c, i, RUN)
                     ti = times[i]
                     dt = times[i + 1] - ti
                     at_sample = t == ti
@@ -1085,7 +1112,7 @@ def _chain_block(
                     if (
                         (not at_sample or own[slot] == 0)
                         and (at_sample or not dt > gap)
-                        and c[i, _DONE] == _UNIT
+                        and abs(c[i, _DONE]) == _UNIT
                         and abs(tau * c[i, 4]) < SINCOS_LIMIT
                         and abs(tau * c[i, 9]) < SINCOS_LIMIT
                     ):
@@ -1097,12 +1124,7 @@ def _chain_block(
                             tx = tr[i, 0] + tau * (tr[i + 1, 0] - tr[i, 0])
                             ty = tr[i, 1] + tau * (tr[i + 1, 1] - tr[i, 1])
                             tz = tr[i, 2] + tau * (tr[i + 1, 2] - tr[i, 2])
-                        neg = (
-                            r[i, 0] * rp[i, 0]
-                            + r[i, 1] * rp[i, 1]
-                            + r[i, 2] * rp[i, 2]
-                            + r[i, 3] * rp[i, 3]
-                        ) < 0.0
+                        neg = c[i, _DONE] < 0.0  # the stored sample's sign
                         gathered += 1
                         work[_TAU + b] = tau
                         work[_TH1 + b] = c[i, 4]
@@ -1178,7 +1200,7 @@ def _chain_block(
                     # segment before the start, indexing with -1)
                     g = i if i >= 0 else n - 1
                     if c[g, _DONE] == 0.0:  # first use of the segment
-                        computed += _fill_run(r, times, c, g, RUN)
+                        computed += _fill_run(r, rp, times, c, g, RUN)
                     if g < n - 1:
                         dt = times[g + 1] - times[g]
                     else:
@@ -1209,7 +1231,7 @@ def _chain_block(
                     # short route above, into the squad pass; here the rest,
                     # by the scalar route, which the squad pass equals bit for
                     # bit: tests/core/test_fused_rows.py)
-                    if c[g, _DONE] == _UNIT:
+                    if abs(c[g, _DONE]) == _UNIT:
                         sn, cs = _sincos(tau * c[g, 4])
                         s1w = cs * r[g, 0] + sn * c[g, 5]
                         s1x = cs * r[g, 1] + sn * c[g, 6]
@@ -1625,7 +1647,7 @@ def _fill_pieces(plan, sizes, lo, hi, last, pieces_wanted):
 
 
 @helper
-def _fill_range(r, t, c, a, b):
+def _fill_range(r, rp, t, c, a, b):
     """Compute the missing rows of ``c[a:b]`` (nothing outside). Returns their number."""
     done = 0
     i = a
@@ -1633,7 +1655,7 @@ def _fill_range(r, t, c, a, b):
         if c[i, _DONE] != 0.0:
             i += 1
             continue
-        k = _fill_run(r, t, c, i, b - i)
+        k = _fill_run(r, rp, t, c, i, b - i)
         done += k
         i += k
     return done
@@ -1692,11 +1714,11 @@ def prefill_chain(
     for p in prange(pieces.shape[0]):
         slot = pieces[p, 0]
         if slot == 0:
-            computed += _fill_range(r0, times0, c0, pieces[p, 1], pieces[p, 2])
+            computed += _fill_range(r0, p0, times0, c0, pieces[p, 1], pieces[p, 2])
         elif slot == 1:
-            computed += _fill_range(r1, times1, c1, pieces[p, 1], pieces[p, 2])
+            computed += _fill_range(r1, p1, times1, c1, pieces[p, 1], pieces[p, 2])
         else:
-            computed += _fill_range(r2, times2, c2, pieces[p, 1], pieces[p, 2])
+            computed += _fill_range(r2, p2, times2, c2, pieces[p, 1], pieces[p, 2])
     return computed, filled
 
 

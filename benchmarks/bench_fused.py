@@ -270,7 +270,8 @@ def floor_kernels():
     blocks of rows with the passes of rbm_nb's chain kernels (a scalar walk
     that gathers each row's segment, then rbm_nb's vector passes for the
     great circles, the outer slerp and the compositions), as the lookup
-    computes; nothing else (no plan, no missing samples, gaps or signs).
+    computes, with its prefetch hints; nothing else (no plan, no missing
+    samples, gaps or signs).
 
     Returns the serial kernel and its two-thread twin (``prange`` over
     contiguous chunks of rows, each starting its walk by a binary search):
@@ -279,9 +280,11 @@ def floor_kernels():
     from numba import njit, prange
 
     from rbm_nb._kernels import fused as kf
+    from rbm_nb._kernels._prefetch import prefetch
     from rbm_nb._kernels.quaternion import _qslerp1, _qslerp_unit1
 
     block = kf.BLOCK
+    ahead = kf.AHEAD
     acc, step = kf._ACC, kf._STEP
 
     @njit(cache=False, nogil=True)
@@ -293,8 +296,16 @@ def floor_kernels():
              t_out, r_out, work):  # fmt: skip
         n = h_times.shape[0]
         i = max(np.searchsorted(h_times, target[j0] + off, side="right") - 1, 0)
+        m = target.shape[0]
         for k0 in range(j0, j1, block):
             nb = min(block, j1 - k0)
+            # the next block's eye samples and times asked for (as rbm_nb)
+            for q in range(k0 + block, min(k0 + 2 * block, m), 8):
+                prefetch(target, q)
+                prefetch(e_t, 3 * q)
+                prefetch(e_t, 3 * q + 4)
+                prefetch(e_r, 4 * q)
+                prefetch(e_r, 4 * q + 4)
             # eye sample j, then the static scene_cam -> head
             for q in range(nb):
                 for e in range(3):
@@ -309,6 +320,13 @@ def floor_kernels():
                 t = target[k0 + q] + off
                 while i < n - 2 and h_times[i + 1] <= t:
                     i += 1
+                if i + ahead < n:  # the segment further on (as rbm_nb)
+                    g = i + ahead
+                    prefetch(seg, 11 * g)
+                    prefetch(seg, 11 * g + 8)
+                    prefetch(a, 4 * g)
+                    prefetch(h_r, 4 * g)
+                    prefetch(h_t, 3 * g)
                 u = (t - h_times[i]) / (h_times[i + 1] - h_times[i])
                 work[step + q] = h_t[i, 0] + u * (h_t[i + 1, 0] - h_t[i, 0])
                 work[step + block + q] = h_t[i, 1] + u * (h_t[i + 1, 1] - h_t[i, 1])

@@ -464,15 +464,19 @@ def apply(kind: str, steps, target: Target, data: np.ndarray) -> np.ndarray:
     return kr.transform_blocks(r, t, data, kind == "points")
 
 
-def lookup(frame, to_frame):
-    """Translation (n|1, 3), rotation (n|1, 4) and Target from frame to to_frame."""
+def lookup(frame, to_frame, rotation_only: bool = False):
+    """Translation (n|1, 3), rotation (n|1, 4) and Target from frame to to_frame.
+
+    ``rotation_only``: the caller needs the rotation alone, so the fused
+    kernels may skip the translations (then ``t`` may have 0 rows).
+    """
     steps = chain(frame, to_frame)
     target = match([f for f, _ in steps])
     plan, own = fused_plan(steps, target)
     if plan is not None and not all(own):
         # something to interpolate; at their own times frames are slices,
         # which the step-by-step path composes without evaluating anything
-        t, r = _fused.lookup(plan, target, own)
+        t, r = _fused.lookup(plan, target, own, rotation_only)
         return t, r, target
     t, r = compose(steps, target)
     n = len(target)

@@ -50,8 +50,8 @@ def defaults(frame, reference, represent_in):
     return reference, represent_in
 
 
-def _moving_lookup(frame, reference, allow_static):
-    t, r, target = _chain.lookup(frame, reference)
+def _moving_lookup(frame, reference, allow_static, rotation_only=False):
+    t, r, target = _chain.lookup(frame, reference, rotation_only)
     if target.track is None:
         if allow_static:
             return None
@@ -166,7 +166,8 @@ def lookup_angular_velocity(
     """Angular velocity (n, 3) of ``frame`` wrt ``reference`` and its timestamps."""
     check_mode(mode)
     reference, represent_in = defaults(frame, reference, represent_in)
-    looked_up = _moving_lookup(frame, reference, allow_static)
+    # (the translations are not needed: not computed, not held in memory)
+    looked_up = _moving_lookup(frame, reference, allow_static, rotation_only=True)
     if looked_up is None:
         return np.zeros(3), None
     angular, track = _angular_part(

@@ -212,11 +212,18 @@ def angular_series(
         raise ValueError(f"arr contains a zero quaternion (row {zero} when flattened)")
     need_rv = mode == "rotation_vector" or outlier_thresh is not None
     no_breaks = breaks is None or not breaks.any()
+    fused = not need_rv and mode == "quaternion" and n >= 4 and no_breaks
+    if fused and nb == 1:
+        # one series (a lookup's): the kernel's rates are the result, no copy
+        rates, bad = _vf.body_rates(kernel_array(q[:, 0, :]), t)
+        if not bad:
+            w = rates.reshape(n, 1, 3)
+            return w if cutoff is None else _lowpass(w, cutoff)
     w = np.empty((n, nb, 3))
     # rotation vectors, needed by that mode and by the outlier score
     rv = np.empty((n, nb, 3) if need_rv else (0, nb, 3))
     for b in range(nb):
-        if not need_rv and mode == "quaternion" and n >= 4 and no_breaks:
+        if fused and nb > 1:
             # unflip, spline slopes and 2 q⁻¹ dq/dt in one kernel, unless a
             # sample is missing (then the runs below)
             rates, bad = _vf.body_rates(kernel_array(q[:, b, :]), t)

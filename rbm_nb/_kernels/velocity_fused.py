@@ -42,7 +42,7 @@ def body_rates(q, t):
     """
     n = q.shape[0]
     out = np.empty((n, 3))
-    sign = np.empty(n)
+    sign = np.empty(n, dtype=np.int8)  # ±1 (a byte: less memory than a float64)
     # unflip's signs; missing or zero samples send the caller elsewhere
     pw = px = py = pz = 0.0
     for i in range(n):
@@ -50,8 +50,9 @@ def body_rates(q, t):
         n2 = w * w + x * x + y * y + z * z
         if math.isnan(n2) or n2 == 0.0:
             return out, 1
-        s = -1.0 if i > 0 and (pw * w + px * x + py * y + pz * z) < 0.0 else 1.0
-        sign[i] = s
+        flip = i > 0 and (pw * w + px * x + py * y + pz * z) < 0.0
+        s = -1.0 if flip else 1.0
+        sign[i] = -1 if flip else 1
         pw, px, py, pz = s * w, s * x, s * y, s * z
     # the slopes: spline_derivative's rows, secants formed as they are needed
     slope = np.empty((n, 4))

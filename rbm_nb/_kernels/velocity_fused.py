@@ -5,7 +5,9 @@
 give together for a series without missing samples, with the same
 arithmetic in the same order, but without their intermediate (n, 4) arrays:
 the sign-continuous samples and their secant slopes are formed when the
-tridiagonal sweep reaches them (the slopes are the one (n, 4) array left).
+tridiagonal sweep reaches them, and the slopes are kept in the result's
+own rows (x, y, z) and one (n,) column (w) until each row's rate is
+written over them. Besides the result: 17 bytes per sample.
 
 Quaternions are float64 (n, 4) arrays in ``w, x, y, z`` order.
 """
@@ -54,8 +56,10 @@ def body_rates(q, t):
         s = -1.0 if flip else 1.0
         sign[i] = -1 if flip else 1
         pw, px, py, pz = s * w, s * x, s * y, s * z
-    # the slopes: spline_derivative's rows, secants formed as they are needed
-    slope = np.empty((n, 4))
+    # the slopes: spline_derivative's rows, secants formed as they are needed;
+    # their x, y, z in ``out`` until the last pass writes the rates over
+    # them, w in a column of its own (no (n, 4) array)
+    slope_w = np.empty(n)
     cp = np.empty(n)
     h0 = t[1] - t[0]
     h1 = t[2] - t[1]
@@ -101,21 +105,28 @@ def body_rates(q, t):
             if i == n - 2:
                 rhs -= r_end[j]
             if i > 1:
-                rhs -= sub * slope[i - 1, j]
-            slope[i, j] = rhs * inv
+                rhs -= sub * (slope_w[i - 1] if j == 0 else out[i - 1, j - 1])
+            if j == 0:
+                slope_w[i] = rhs * inv
+            else:
+                out[i, j - 1] = rhs * inv
         prev_cp = cp[i]
     # back substitution
     for i in range(n - 3, 0, -1):
-        for j in range(4):
-            slope[i, j] -= cp[i] * slope[i + 1, j]
-    for j in range(4):
-        slope[0, j] = (r_start[j] - d_start * slope[1, j]) / h1
-        slope[n - 1, j] = (r_end[j] - d_end * slope[n - 2, j]) / hm1
-    # angular_velocity_from_derivative, row by row
+        slope_w[i] -= cp[i] * slope_w[i + 1]
+        for j in range(3):
+            out[i, j] -= cp[i] * out[i + 1, j]
+    slope_w[0] = (r_start[0] - d_start * slope_w[1]) / h1
+    slope_w[n - 1] = (r_end[0] - d_end * slope_w[n - 2]) / hm1
+    for j in range(3):
+        out[0, j] = (r_start[j + 1] - d_start * out[1, j]) / h1
+        out[n - 1, j] = (r_end[j + 1] - d_end * out[n - 2, j]) / hm1
+    # angular_velocity_from_derivative, row by row (each row's slopes are
+    # read before its result is written over them)
     for i in range(n):
         s = sign[i]
         w, x, y, z = s * q[i, 0], s * q[i, 1], s * q[i, 2], s * q[i, 3]
-        dw, dx, dy, dz = slope[i, 0], slope[i, 1], slope[i, 2], slope[i, 3]
+        dw, dx, dy, dz = slope_w[i], out[i, 0], out[i, 1], out[i, 2]
         f = 2.0 / (w * w + x * x + y * y + z * z)
         out[i, 0] = f * (w * dx - dw * x - (y * dz - z * dy))
         out[i, 1] = f * (w * dy - dw * y - (z * dx - x * dz))

@@ -299,13 +299,15 @@ def floor_kernels():
         m = target.shape[0]
         for k0 in range(j0, j1, block):
             nb = min(block, j1 - k0)
-            # the next block's eye samples and times asked for (as rbm_nb)
-            for q in range(k0 + block, min(k0 + 2 * block, m), 8):
+            # the next block's eye samples and times asked for, a cache line
+            # (8 values) at a time (as rbm_nb)
+            k1, k2 = k0 + block, min(k0 + 2 * block, m)
+            for q in range(k1, k2, 8):
                 prefetch(target, q)
-                prefetch(e_t, 3 * q)
-                prefetch(e_t, 3 * q + 4)
-                prefetch(e_r, 4 * q)
-                prefetch(e_r, 4 * q + 4)
+            for q in range(3 * k1, 3 * k2, 8):
+                prefetch(e_t, q)
+            for q in range(4 * k1, 4 * k2, 8):
+                prefetch(e_r, q)
             # eye sample j, then the static scene_cam -> head
             for q in range(nb):
                 for e in range(3):

@@ -1370,11 +1370,13 @@ def _apply_block(work, data, out, j0, j1, mode):
     ``data`` (m|1, k, c) as for :func:`transform_chain`.
     """
     k = data.shape[1]
-    # the next block's items and results (as _store_lookup)
+    # the next block's items (unless one is reused for every row) and results
+    # (as _store_lookup)
     w = k * data.shape[2]
     m = out.shape[0]
+    per_row = data.shape[0] > 1
     for q in range(w * j1, w * min(j1 + BLOCK, m), 8):
-        if data.shape[0] > 1:
+        if per_row:
             prefetch(data, q)
         prefetch_for_write(out, q)
     if k == 1 and data.shape[0] > 1:

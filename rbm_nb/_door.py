@@ -11,6 +11,8 @@ take, so that each kernel compiles one signature
   only when the input is not that already (read-only views, other dtypes,
   strided views);
 * :func:`kernel_array`: the same for arrays the core built itself;
+* :func:`read_only`: a C-contiguous array as the read-only view the few
+  kernels that only read it take (no copy, writeable or not);
 * :func:`resolve_axis`: an axis argument checked and made non-negative;
 * :func:`unpack`: the spatial and time axes of an array or DataArray
   argument, and its timestamps (from a coordinate for DataArrays).
@@ -34,6 +36,7 @@ __all__ = [
     "is_dataarray",
     "float_array",
     "kernel_array",
+    "read_only",
     "resolve_axis",
     "Unpacked",
     "unpack",
@@ -50,6 +53,22 @@ def kernel_ready(arr: Any) -> bool:
     """Whether ``arr`` is a writeable C-contiguous ndarray, the layout every
     kernel signature takes (the dtype is the caller's to check)."""
     return type(arr) is np.ndarray and arr.flags.c_contiguous and arr.flags.writeable
+
+
+def read_only(arr: Any) -> np.ndarray | None:
+    """A read-only view of a C-contiguous ndarray, or None if ``arr`` is not one.
+
+    For the kernels declared on read-only arrays (``_jit.RF1``, ``RI1``): a
+    writeable array is viewed read-only rather than handed over as it is,
+    which would make numba compile a second, writeable variant.
+    """
+    if type(arr) is not np.ndarray or not arr.flags.c_contiguous:
+        return None
+    if not arr.flags.writeable:
+        return arr
+    view = arr.view()
+    view.flags.writeable = False
+    return view
 
 
 def kernel_array(arr: Any) -> np.ndarray:

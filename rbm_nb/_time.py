@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from ._door import kernel_array, kernel_ready
+from ._door import kernel_array, read_only
 from ._kernels.times import float_key_faults, ns_key_faults, seconds_since
 
 __all__ = [
@@ -156,10 +156,12 @@ def _ordered_keys(values: np.ndarray, name: str) -> tuple[np.ndarray, str]:
     dtype = values.dtype
     if dtype in (_DATETIME_NS, _TIMEDELTA_NS):
         key = values.view(np.int64)
-        if kernel_ready(key) and ns_key_faults(key) == (0, 0):
+        view = read_only(key)
+        if view is not None and ns_key_faults(view) == (0, 0):
             return key, _KINDS[dtype.kind]
-    elif dtype == np.float64 and kernel_ready(values):
-        if float_key_faults(values) == (0, 0):
+    elif dtype == np.float64:
+        view = read_only(values)
+        if view is not None and float_key_faults(view) == (0, 0):
             return values, "numeric"
     key, kind = _keys(values, name)
     i = _first_unordered(key)
@@ -217,8 +219,9 @@ def as_track(
         key = kernel_array(key)  # the kernels interpolate on it directly
         return Track(values, key, key, 0, kind)
     origin = int(key[0])
-    if kernel_ready(key):
-        return Track(values, key, seconds_since(key, origin), origin, kind)
+    view = read_only(key)
+    if view is not None:
+        return Track(values, key, seconds_since(view, origin), origin, kind)
     return Track(values, key, (key - origin) / _NS_PER_S, origin, kind)
 
 
@@ -301,11 +304,12 @@ def _raw_seconds(values: np.ndarray, origin: int | None) -> tuple[np.ndarray, in
     """Seconds from ``origin`` (default: the first value); NaT becomes NaN."""
     unit = "datetime64[ns]" if values.dtype.kind == "M" else "timedelta64[ns]"
     key = values.astype(unit, copy=False).view(np.int64).reshape(-1)
-    if not kernel_ready(key):
-        key = np.array(key, order="C")  # the kernel's one signature
+    view = read_only(key)
+    if view is None:
+        view = read_only(np.array(key, order="C"))  # the kernel's one layout
     if origin is None:
         origin = int(key[0]) if key.size and key[0] != _NAT else 0
-    return seconds_since(key, origin).reshape(values.shape), origin
+    return seconds_since(view, origin).reshape(values.shape), origin
 
 
 def seconds_pair(

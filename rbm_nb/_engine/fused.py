@@ -152,7 +152,8 @@ class Plan:
             if span is None:
                 if len(base) == 0:
                     return out
-                span = float(base.min()), float(base.max())
+                # (a track's times are increasing: no pass over them)
+                span = float(base[0]), float(base[-1])
             times = frame._track.base
             n = len(times)
             lo, hi = np.searchsorted(times, np.add(span, offsets[k]), side="right") - 1

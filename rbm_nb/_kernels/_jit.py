@@ -45,6 +45,8 @@ __all__ = [
     "F3",
     "I1",
     "B2",
+    "RF1",
+    "RI1",
 ]
 
 # numba type strings for the argument types kernels take: C-contiguous,
@@ -57,6 +59,12 @@ F2 = "float64[:, ::1]"
 F3 = "float64[:, :, ::1]"
 I1 = "int64[::1]"
 B2 = "boolean[:, ::1]"
+# read-only C-contiguous arrays, for the few kernels that only read an
+# argument users often hand over read-only (timestamps from an xarray or
+# pandas index): the door passes them a read-only view (``_door.read_only``)
+# whatever the caller's array is, so that they, too, compile one signature
+RF1 = "Array(float64, 1, 'C', readonly=True)"
+RI1 = "Array(int64, 1, 'C', readonly=True)"
 
 _Func = TypeVar("_Func", bound=Callable[..., Any])
 

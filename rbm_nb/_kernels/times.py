@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 
 from .._config import KERNEL
-from ._jit import F1, I1, I, kernel  # noqa: E741
+from ._jit import RF1, RI1, I, kernel  # noqa: E741
 
 __all__ = ["seconds_since", "ns_key_faults", "float_key_faults"]
 
@@ -18,7 +18,7 @@ _COUNTING = dataclasses.replace(KERNEL, error_model="numpy")
 _NAT = np.iinfo(np.int64).min
 
 
-@kernel(I1, options=_COUNTING)
+@kernel(RI1, options=_COUNTING)
 def ns_key_faults(keys):
     """(NaT keys, keys not greater than their predecessor) of int64 keys."""
     n = keys.shape[0]
@@ -31,7 +31,7 @@ def ns_key_faults(keys):
     return nat, unordered
 
 
-@kernel(F1, options=_COUNTING)
+@kernel(RF1, options=_COUNTING)
 def float_key_faults(keys):
     """(NaN or infinite keys, keys not greater than their predecessor)."""
     n = keys.shape[0]
@@ -44,7 +44,7 @@ def float_key_faults(keys):
     return bad, unordered
 
 
-@kernel(I1, I)
+@kernel(RI1, I)
 def seconds_since(keys, origin):
     """int64 nanosecond keys as float64 seconds since ``origin`` (NaT -> NaN).
 

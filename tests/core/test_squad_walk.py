@@ -8,6 +8,7 @@ import pytest
 
 import rbm_nb as rbm
 from rbm_nb import _time
+from rbm_nb._door import read_only
 from rbm_nb._engine.chain import stored_signs
 from rbm_nb._kernels import quaternion as kq
 from rbm_nb._kernels import squad_walk as sw
@@ -216,7 +217,7 @@ def test_seconds_since_is_numpys_arithmetic():
         ["2020-01-01T00:00:00.000000001", "NaT", "2020-01-01T00:01:00"], "M8[ns]"
     )
     k = keys.view(np.int64)
-    got = seconds_since(k.copy(), int(k[0]))
+    got = seconds_since(read_only(k.copy()), int(k[0]))
     want = np.where(np.isnat(keys), np.nan, (k - int(k[0])) / 1e9)
     np.testing.assert_array_equal(got, want)
     # and the time module converts with it
@@ -280,3 +281,27 @@ def test_read_only_datetimes_take_the_fast_door():
     t_in.flags.writeable = False
     t_out.flags.writeable = False
     np.testing.assert_array_equal(rbm.qinterp(q, t_in, t_out), want)
+
+
+@pytest.mark.parametrize("dtype", ["M8[ns]", "m8[ns]", "f8"])
+def test_read_only_timestamps_are_checked_in_one_kernel_pass(monkeypatch, dtype):
+    # timestamps from an xarray or pandas index come read-only: they take the
+    # kernels' route (numpy's checks, _keys, only run to name a fault)
+    values = (np.arange(1000) * 5_000_000).astype(dtype)
+    want = _time.as_track(values.copy(), copy=False)
+    values.flags.writeable = False
+
+    def numpy_route(*args):
+        raise AssertionError("read-only timestamps took numpy's checks")
+
+    with monkeypatch.context() as m:
+        m.setattr(_time, "_keys", numpy_route)
+        got = _time.as_track(values, copy=False)
+    np.testing.assert_array_equal(got.key, want.key)
+    np.testing.assert_array_equal(got.base, want.base)
+    assert got.origin == want.origin
+    duplicate = values.copy()
+    duplicate[7] = duplicate[6]
+    duplicate.flags.writeable = False
+    with pytest.raises(ValueError, match=r"timestamps\[7\] = .* is a duplicate of"):
+        _time.as_track(duplicate, copy=False)

@@ -162,7 +162,25 @@ def test_small_angle_series_are_exact_to_rounding():
             assert abs(scalar.atan2(y * x, x) - expected) <= 4.5e-16 * expected
 
 
-@pytest.mark.parametrize("angle", [0.0, 1e-9, 1e-4, 0.02, 0.09, 0.5, 3.0])
+def test_truncated_series_are_within_an_ulp_over_their_ranges():
+    """atan(x)/x, cos(y) and sin(y)/y by their series, against long double,
+    up to the thresholds below which the kernels take them."""
+    x = np.linspace(0.0, scalar.SERIES_RATIO, 20001)[1:]
+    y = np.linspace(0.0, scalar.SERIES_ANGLE, 20001)[1:]
+    xl, yl = x.astype(np.longdouble), y.astype(np.longdouble)
+    cases = [
+        (scalar.atan_over_x, x, np.arctan(xl) / xl),
+        (scalar.cos_series, y, np.cos(yl)),
+        (scalar.sinc_series, y, np.sin(yl) / yl),
+    ]
+    for series, arg, exact in cases:
+        got = np.array([series.py_func(v * v) for v in arg])
+        want = exact.astype(np.float64)
+        ulps = np.abs(got - want) / np.spacing(want)
+        assert ulps.max() <= 1.0, series.__name__
+
+
+@pytest.mark.parametrize("angle", [0.0, 1e-9, 1e-4, 0.02, 0.09, 0.15, 0.5, 3.0])
 def test_unit_slerp_shortcuts_equal_the_general_slerp(angle):
     """Small arcs use series, larger ones the great circle: both equal exp/log."""
     a = unit(30)

@@ -1548,13 +1548,41 @@ def _chunk_bounds(m, chunks):
 
 @helper
 def _segments_read(times, own, gap, off, target, j0, j1):
-    """The squad table rows read by rows j0:j1, as (lo, hi, last).
+    """The squad table rows read by rows j0:j1, as (lo, hi, last), or more.
 
     Rows lo..hi (lo > hi: none), and whether row n-1 is read by a target
     before the first sample. The rules of ``_chain_block``: a sample time
-    of the frame's own times and a time inside a gap read no row.
+    of the frame's own times and a time inside a gap read no row; for
+    increasing times of a frame not evaluated at its own times, the range
+    also takes in the rows inside gaps.
     """
     n = times.shape[0]
+    if j1 <= j0:
+        return n, -1, False
+    if own != 0:
+        # the target times said to be the frame's own, from sample own - 1:
+        # if they are (one vectorised comparison), no row is read
+        i0 = own - 1 + j0
+        if off == 0.0 and i0 >= 0 and i0 + (j1 - j0) <= n:
+            odd = 0
+            for j in range(j1 - j0):
+                odd += np.int64(target[j0 + j] != times[i0 + j])
+            if odd == 0:
+                return n, -1, False
+    else:
+        # increasing target times (the engine's always are): every row from
+        # the first time's segment to the last one's, found by two searches
+        # instead of a walk over the rows. A row inside a gap is filled too
+        # (rows hold the same values whoever fills them; one per gap).
+        decreasing = 0
+        for j in range(j0, j1 - 1):
+            decreasing += np.int64(target[j + 1] < target[j])
+        if decreasing == 0:
+            a = _seek(times, target[j0] + off, -1)
+            b = _seek(times, target[j1 - 1] + off, a)
+            if b < 0:
+                return n, -1, True  # every time before the first sample
+            return max(a, 0), b, a < 0
     lo = n
     hi = -1
     last = False

@@ -356,6 +356,47 @@ def test_prefill_fills_only_the_segments_read():
     assert np.flatnonzero(table.rows[:, -1]).tolist() == [0, n - 1]
 
 
+def test_prefill_of_increasing_times_searches_instead_of_walking():
+    """Increasing times take the rows between two searches per chunk, any
+    other order a walk over the rows: the same rows here (a gap's row, which
+    no time reads, is inside a short hole the walk's intervals fill too), and
+    the same results as the serial kernel."""
+    rng = np.random.default_rng(12)
+    n = 1000
+    ts = np.arange(n) * 0.01
+    ts[500:] += 1.0  # samples 499 and 500 are 1.01 s apart
+    rbm.register_frame("world")
+    rbm.register_frame(
+        "m",
+        parent="world",
+        translation=rng.normal(size=(n, 3)),
+        rotation=_rotations(rng, n, 0.05),
+        timestamps=ts,
+        max_gap=0.1,
+    )
+    steps = _chain.chain(_frames.resolve_frame("m"), _frames.resolve_frame("world"))
+    plan = _fused.plan(steps, _chain._compose_static)
+    assert plan is not None and plan.tables[0] is not None
+    args = _kernel_args(plan, np.zeros(kf.SLOTS), [False])
+    times = np.linspace(4.0, 6.495, 2000)  # segments 400 .. 499 (the gap) .. 549
+    assert ((times > ts[499]) & (times < ts[500])).any()
+    numba.set_num_threads(2)
+    rows = []
+    try:
+        for order in (np.arange(len(times)), rng.permutation(len(times))):
+            _forget_tables()
+            filled, intervals = kf.prefill_chain(*(*args, times[order]))
+            rows.append(np.flatnonzero(plan.tables[0].rows[:, -1]))
+            assert filled == len(rows[-1]) and intervals.tolist() == [[0, 400, 550]]
+            t_p, r_p, late = kf.lookup_chain_parallel(*(*args, times[order], False))
+            assert late == 0  # the prefill left no row the twin reads
+            _forget_tables()
+            _identical(kf.lookup_chain(*(*args, times[order], False))[:2], (t_p, r_p))
+    finally:
+        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]
+    assert rows[0].tolist() == rows[1].tolist() == list(range(400, 550))
+
+
 # ---------------------------------------------------------------------------
 # the real recording
 # ---------------------------------------------------------------------------

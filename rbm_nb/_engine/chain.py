@@ -232,6 +232,8 @@ def _span(track) -> str:
 def _same_times(track, target_track) -> slice | None:
     """The slice of ``track`` equal to the target's timestamps, if there is one."""
     n = len(target_track)
+    if track is target_track:
+        return slice(0, n)  # an array's own times as the target: nothing to compare
     if len(track) < n:
         return None
     lo = int(np.searchsorted(track.key, target_track.key[0], side="left"))
@@ -241,9 +243,20 @@ def _same_times(track, target_track) -> slice | None:
         track.key[lo] == target_track.key[0]
         and track.key[lo + n - 1] == target_track.key[-1]
     ):
-        if np.array_equal(track.key[lo : lo + n], target_track.key):
+        run = track.key[lo : lo + n]
+        if _same_memory(run, target_track.key) or np.array_equal(run, target_track.key):
             return slice(lo, lo + n)
     return None
+
+
+def _same_memory(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two arrays are views of the same elements (a target that is a
+    slice of an array's own times: no need to compare them)."""
+    return (
+        a.__array_interface__["data"][0] == b.__array_interface__["data"][0]
+        and a.strides == b.strides
+        and a.dtype == b.dtype
+    )
 
 
 def resample_frame(frame, target: Target):

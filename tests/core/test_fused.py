@@ -205,6 +205,26 @@ def test_transforms_equal_the_engine_on_random_trees(kind, seed, missing):
                 _close(_chain.apply(what, steps, target, data), ref)
 
 
+def test_a_target_of_an_arrays_own_times_is_not_compared_again(monkeypatch):
+    # the target is the array's track or a slice of it (the overlap with the
+    # frames): its run is known without comparing the times
+    track = _time.as_track(np.arange(1000) * 0.01)
+    other = _time.as_track(np.arange(1000) * 0.01)  # equal, other memory
+
+    def compared(a, b):
+        raise AssertionError("times compared")
+
+    with monkeypatch.context() as m:
+        m.setattr(_chain.np, "array_equal", compared)
+        assert _chain._same_times(track, track) == slice(0, 1000)
+        assert _chain._same_times(track, track.slice(3, 900)) == slice(3, 900)
+        with pytest.raises(AssertionError, match="times compared"):
+            _chain._same_times(track, other.slice(3, 900))
+    assert _chain._same_times(track, other.slice(3, 900)) == slice(3, 900)
+    shifted = _time.as_track(np.arange(3, 900) * 0.01 + 1e-9)
+    assert _chain._same_times(track, shifted) is None
+
+
 def test_timestamped_arrays_match_like_the_engine():
     """The public transform with timestamps on another clock than the chain's."""
     rng = np.random.default_rng(7)

@@ -318,11 +318,9 @@ def test_unsorted_targets_beyond_the_samples(seed):
         numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]
 
 
-def test_prefill_fills_only_the_segments_read():
-    """A target range in the middle fills rows around it, not the whole table."""
-    rng = np.random.default_rng(9)
-    n = 20_000
-    ts = np.arange(n) * 0.01
+def _one_moving_frame(rng, ts, max_gap=None):
+    """The plan of frame "m" (random samples at ``ts``) in "world"."""
+    n = len(ts)
     rbm.register_frame("world")
     rbm.register_frame(
         "m",
@@ -330,10 +328,20 @@ def test_prefill_fills_only_the_segments_read():
         translation=rng.normal(size=(n, 3)),
         rotation=_rotations(rng, n, 0.05),
         timestamps=ts,
+        max_gap=max_gap,
     )
     steps = _chain.chain(_frames.resolve_frame("m"), _frames.resolve_frame("world"))
     plan = _fused.plan(steps, _chain._compose_static)
     assert plan is not None
+    return plan
+
+
+def test_prefill_fills_only_the_segments_read():
+    """A target range in the middle fills rows around it, not the whole table."""
+    rng = np.random.default_rng(9)
+    n = 20_000
+    ts = np.arange(n) * 0.01
+    plan = _one_moving_frame(rng, ts)
     table = plan.tables[0]
     assert table is not None
     args = _kernel_args(plan, np.zeros(kf.SLOTS), [False])
@@ -362,21 +370,10 @@ def test_prefill_of_increasing_times_searches_instead_of_walking():
     no time reads, is inside a short hole the walk's intervals fill too), and
     the same results as the serial kernel."""
     rng = np.random.default_rng(12)
-    n = 1000
-    ts = np.arange(n) * 0.01
+    ts = np.arange(1000) * 0.01
     ts[500:] += 1.0  # samples 499 and 500 are 1.01 s apart
-    rbm.register_frame("world")
-    rbm.register_frame(
-        "m",
-        parent="world",
-        translation=rng.normal(size=(n, 3)),
-        rotation=_rotations(rng, n, 0.05),
-        timestamps=ts,
-        max_gap=0.1,
-    )
-    steps = _chain.chain(_frames.resolve_frame("m"), _frames.resolve_frame("world"))
-    plan = _fused.plan(steps, _chain._compose_static)
-    assert plan is not None and plan.tables[0] is not None
+    plan = _one_moving_frame(rng, ts, max_gap=0.1)
+    assert plan.tables[0] is not None
     args = _kernel_args(plan, np.zeros(kf.SLOTS), [False])
     times = np.linspace(4.0, 6.495, 2000)  # segments 400 .. 499 (the gap) .. 549
     assert ((times > ts[499]) & (times < ts[500])).any()

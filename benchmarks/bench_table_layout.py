@@ -68,6 +68,12 @@ def _kernels():
         return i
 
     @njit(inline="always")
+    def segment(times, t, i):
+        """The segment of t (walking on from segment i) and squad's fraction τ."""
+        i = seek(times, t, i)
+        return i, (t - times[i]) / (times[i + 1] - times[i])
+
+    @njit(inline="always")
     def series_slerp(aw, ax, ay, az, bw, bx, by, bz, h):
         d = aw * bw + ax * bx + ay * by + az * bz
         ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
@@ -88,9 +94,7 @@ def _kernels():
         for j0 in range(0, m, BLOCK):
             nb = min(BLOCK, m - j0)
             for b in range(nb):
-                t = target[j0 + b]
-                i = seek(times, t, i)
-                w[b] = (t - times[i]) / (times[i + 1] - times[i])
+                i, w[b] = segment(times, target[j0 + b], i)
                 w[BLOCK + b] = c[i, 4]
                 w[2 * BLOCK + b] = c[i, 9]
                 for e in range(4):
@@ -129,9 +133,7 @@ def _kernels():
         for j0 in range(0, m, BLOCK):
             nb = min(BLOCK, m - j0)
             for b in range(nb):
-                t = target[j0 + b]
-                i = seek(times, t, i)
-                w[b] = (t - times[i]) / (times[i + 1] - times[i])
+                i, w[b] = segment(times, target[j0 + b], i)
                 for e in range(4):
                     w[(1 + e) * BLOCK + b] = r[i, e]
                     w[(5 + e) * BLOCK + b] = r[i + 1, e]

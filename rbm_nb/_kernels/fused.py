@@ -1547,14 +1547,15 @@ def _chunk_bounds(m, chunks):
 
 
 @helper
-def _segments_read(times, own, gap, off, target, j0, j1):
+def _segments_read(times, own, gap, off, target, j0, j1, increasing):
     """The squad table rows read by rows j0:j1, as (lo, hi, last), or more.
 
     Rows lo..hi (lo > hi: none), and whether row n-1 is read by a target
     before the first sample. The rules of ``_chain_block``: a sample time
-    of the frame's own times and a time inside a gap read no row; for
-    increasing times of a frame not evaluated at its own times, the range
-    also takes in the rows inside gaps.
+    of the frame's own times and a time inside a gap read no row. With
+    ``increasing`` target times (never decreasing from j0 to j1), for a
+    frame not evaluated at its own times, the range also takes in the rows
+    no time reads between the first and the last.
     """
     n = times.shape[0]
     if j1 <= j0:
@@ -1569,20 +1570,16 @@ def _segments_read(times, own, gap, off, target, j0, j1):
                 odd += np.int64(target[j0 + j] != times[i0 + j])
             if odd == 0:
                 return n, -1, False
-    else:
-        # increasing target times (the engine's always are): every row from
-        # the first time's segment to the last one's, found by two searches
-        # instead of a walk over the rows. A row inside a gap is filled too
-        # (rows hold the same values whoever fills them; one per gap).
-        decreasing = 0
-        for j in range(j0, j1 - 1):
-            decreasing += np.int64(target[j + 1] < target[j])
-        if decreasing == 0:
-            a = _seek(times, target[j0] + off, -1)
-            b = _seek(times, target[j1 - 1] + off, a)
-            if b < 0:
-                return n, -1, True  # every time before the first sample
-            return max(a, 0), b, a < 0
+    elif increasing:
+        # (the engine's targets always are) every row from the first time's
+        # segment to the last one's, found by two searches instead of a walk
+        # over the rows; rows no time reads (inside a gap, between two
+        # times) are filled too: rows hold the same values whoever fills them
+        a = _seek(times, target[j0] + off, -1)
+        b = _seek(times, target[j1 - 1] + off, a)
+        if b < 0:
+            return n, -1, True  # every time before the first sample
+        return max(a, 0), b, a < 0
     lo = n
     hi = -1
     last = False
@@ -1722,6 +1719,11 @@ def prefill_chain(
     # wait for the other threads (milliseconds when another process keeps
     # their core busy), and a first call already has two (fill, evaluate)
     for ch in range(nch):
+        # whether the chunk's times never decrease: one vectorised pass,
+        # shared by the chunk's frames
+        decreasing = 0
+        for j in range(bounds[ch], bounds[ch + 1] - 1):
+            decreasing += np.int64(target[j + 1] < target[j])
         for s in range(plan.shape[0] // 3):
             if plan[3 * s] != SQUAD:
                 continue
@@ -1734,7 +1736,7 @@ def prefill_chain(
                 times = times2
             a, b, before = _segments_read(
                 times, own[slot], gaps[slot], offsets[slot],
-                target, bounds[ch], bounds[ch + 1],
+                target, bounds[ch], bounds[ch + 1], decreasing == 0,
             )  # fmt: skip
             lo[slot, ch] = a
             hi[slot, ch] = b

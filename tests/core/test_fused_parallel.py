@@ -392,6 +392,15 @@ def test_prefill_of_increasing_times_searches_instead_of_walking():
     finally:
         numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]
     assert rows[0].tolist() == rows[1].tolist() == list(range(400, 550))
+    # a chunk that starts inside the gap: the searches take the gap's row in,
+    # the walk (any other order) leaves it out
+    times = np.concatenate([[5.5], np.linspace(6.005, 6.495, 50)])
+    for order, gap_row in ((slice(None), True), (slice(None, None, -1), False)):
+        _forget_tables()
+        kf.prefill_chain(*(*args, times[order].copy()))
+        filled_rows = np.flatnonzero(plan.tables[0].rows[:, -1])
+        assert (499 in filled_rows) == gap_row
+        assert filled_rows[-1] == 549
 
 
 # ---------------------------------------------------------------------------

@@ -358,8 +358,22 @@ def floor_kernels():
                     for e in range(4):
                         work[step + (3 + e) * block + q] = hq[e]
             wide = kf._squad_rows(work)
+            if wide >= kf._WIDE_ROWS:
+                wide = kf._wide_rows(work)
             if wide > 0:
-                kf._general_rows(work, nb, wide)
+                for q in range(nb):
+                    if work[kf._PATH + q] != kf._GENERAL:
+                        continue
+                    u = work[kf._TAU + q]
+                    hq = _qslerp_unit1(
+                        work[kf._P + q], work[kf._P + block + q],
+                        work[kf._P + 2 * block + q], work[kf._P + 3 * block + q],
+                        work[kf._Q + q], work[kf._Q + block + q],
+                        work[kf._Q + 2 * block + q], work[kf._Q + 3 * block + q],
+                        2.0 * u * (1.0 - u),
+                    )  # fmt: skip
+                    for e in range(4):
+                        work[step + (3 + e) * block + q] = hq[e]
             kf._compose_rows(work, False, False)
             static(work, s0)
             kf._store_lookup(work, t_out, r_out, k0, k0 + nb, False)

@@ -12,9 +12,7 @@ Kernels are compiled with one of two option sets, both typed:
   carries no ZeroDivisionError branch, which would block vectorisation) and
   ``fastmath={"contract"}`` (fused multiply-add only, measured harmless: the
   results stay within one ulp of the libm versions). Used by the branch-free
-  conversion and rotation loops and by the fused chain kernels' passes
-  (:mod:`rbm_nb._kernels.fused`; their squad table fill keeps the plain
-  arithmetic).
+  conversion loops.
 * :data:`PARALLEL_KERNEL`: :data:`KERNEL` with ``parallel=True``, for the
   ``prange`` twins of kernels over many rows. They are only ever launched
   through :func:`rbm_nb._parallel.launch`, which picks the serial twin for

@@ -70,7 +70,7 @@ import math
 import numpy as np
 from numba import prange
 
-from .._config import KERNEL, PARALLEL_KERNEL, VECTOR_KERNEL
+from .._config import KERNEL, PARALLEL_KERNEL
 from ._jit import F1, F2, F3, I1, B, I, helper, kernel  # noqa: E741
 from ._prefetch import prefetch, prefetch_for_write
 from .quaternion import (
@@ -137,12 +137,10 @@ _NOT_UNIT = 2.0
 # below this, exp(w) is 1 + w and log(1 + d) is d - d²/2 to within an ulp
 _TINY = 2.0**-27
 
-# The table fill's vectorised blocks divide without numba's
-# ZeroDivisionError check: it is a branch out of the loop, which stops LLVM
-# from vectorising it. Nothing else changes (no fastmath: the table's
-# control points amplify every rounding of a short sampling interval, so
-# the fill keeps the scalar code's arithmetic exactly). The chain's passes
-# take VECTOR_KERNEL instead (see "the chain over a block of rows").
+# The vectorised loops (the table fill's blocks, the chain's passes) divide
+# without numba's ZeroDivisionError check: it is a branch out of the loop,
+# which stops LLVM from vectorising it. Nothing else changes (no fastmath:
+# vector lanes round as scalar code does).
 _NO_DIVISION_CHECK = dataclasses.replace(KERNEL, error_model="numpy")
 
 
@@ -660,20 +658,11 @@ def squad_table(r, p, t):
 # the gathered rows (both inner great circles and the outer slerp's
 # small-arc series) and marks the rows whose outer slerp needs the general
 # branch, which :func:`_wide_rows` (another vector pass, for blocks with
-# many, else row by row with the same arithmetic) and then a scalar pass
-# (``_qslerp_unit1``) take; :func:`_compose_rows` composes the step into the
-# block's transforms.
-#
-# Every row gets the operations of the scalar code, in the same order, with
-# one licence: the passes are compiled with ``VECTOR_KERNEL``, whose
-# ``contract`` lets LLVM fuse a multiply and an add into one instruction
-# (FMA), rounded once instead of twice. The passes are chains of dependent
-# multiply-adds (polynomials, quaternion products), and on one thread the
-# lookups and transforms of the head/eye recording were 7-15 % faster for
-# it. Results move by a few ulp (up to 7e-14 m on translations of 100 m,
-# 6e-16 on rotations); the route a row takes depends only on the row, so
-# a row's result never depends on its neighbours, the call's first row or
-# the number of threads (tests/core/test_fused_rows.py).
+# many) and then a scalar pass (``_qslerp_unit1``) take;
+# :func:`_compose_rows` composes the step into the block's transforms.
+# Every row gets exactly the operations of the scalar code, in the same
+# order (no fastmath): results are bit for bit those of a row-by-row loop
+# (tests/core/test_fused_rows.py).
 #
 # 96 rows: the scratch (27 kB) and the rows streamed through stay in L1
 # (256 rows were 1.4x slower, 64 rows 1.05x, 128 rows 1-2 % faster but
@@ -709,11 +698,12 @@ WORK = 35
 _GATHERED = 1.0
 _GENERAL = 2.0
 
-# The chain's passes' quaternion helpers are the ones of :mod:`.quaternion`,
-# inlined, so that they take the passes' options (VECTOR_KERNEL).
-_rotate_rows = helper(inline=True, options=VECTOR_KERNEL)(_rotate1.py_func)
-_qmul_rows = helper(inline=True, options=VECTOR_KERNEL)(_qmul1.py_func)
-_is_unit_rows = helper(inline=True, options=VECTOR_KERNEL)(_is_unit.py_func)
+# The chain's vector passes use the table fill's options (_NO_DIVISION_CHECK);
+# their quaternion helpers are the ones of :mod:`.quaternion`, inlined with
+# those options.
+_rotate_rows = helper(inline=True, options=_NO_DIVISION_CHECK)(_rotate1.py_func)
+_qmul_rows = helper(inline=True, options=_NO_DIVISION_CHECK)(_qmul1.py_func)
+_is_unit_rows = helper(inline=True, options=_NO_DIVISION_CHECK)(_is_unit.py_func)
 
 
 @helper(inline=True)
@@ -746,7 +736,7 @@ def _seek(times, t, i):
     return lo
 
 
-@helper(inline=True, options=VECTOR_KERNEL)
+@helper(inline=True, options=_NO_DIVISION_CHECK)
 def _compose(ax, ay, az, aw, bx, by, bz, tx, ty, tz, qw, qx, qy, qz, inverse):
     """Accumulated transform followed by (t, q), as ``resample.chain_step``.
 
@@ -766,7 +756,7 @@ def _compose(ax, ay, az, aw, bx, by, bz, tx, ty, tz, qw, qx, qy, qz, inverse):
     return x, y, z, w, rx, ry, rz
 
 
-@helper(options=VECTOR_KERNEL)
+@helper(options=_NO_DIVISION_CHECK)
 def _compose_rows(work, inverse, first):
     """The step's transforms (rows _STEP) composed into the block's (rows _ACC).
 
@@ -798,7 +788,7 @@ def _compose_rows(work, inverse, first):
         work[a + 6 * BLOCK + b] = rz
 
 
-@helper(options=VECTOR_KERNEL)
+@helper(options=_NO_DIVISION_CHECK)
 def _compose_static_rows(work, statics, k, inverse, first, rotation_only):
     """Static transform ``statics[k]`` composed into the block's (rows _ACC).
 
@@ -831,7 +821,7 @@ def _compose_static_rows(work, statics, k, inverse, first, rotation_only):
         work[a + 6 * BLOCK + b] = rz
 
 
-@helper(inline=True, options=VECTOR_KERNEL)
+@helper(inline=True, options=_NO_DIVISION_CHECK)
 def _arc_rows(work, theta, start, u):
     """Rows ``start`` (4 quantities) moved along their great circles towards ``u``.
 
@@ -849,7 +839,7 @@ def _arc_rows(work, theta, start, u):
             )
 
 
-@helper(options=VECTOR_KERNEL)
+@helper(options=_NO_DIVISION_CHECK)
 def _squad_rows(work):
     """Squad at the gathered rows of the block, into their step rotations.
 
@@ -922,102 +912,59 @@ def _squad_rows(work):
 
 
 # A block with at least this many outer slerps off the small-arc series
-# takes them in a vector pass (:func:`_wide_rows`), fewer one by one with
-# the same arithmetic (:func:`_general_rows`).
+# takes them in a vector pass (:func:`_wide_rows`), fewer one by one.
 _WIDE_ROWS = 8
 
 
-@helper(inline=True, options=VECTOR_KERNEL)
-def _wide_row(work, b):
-    """Row b's outer slerp along its great circle, if it is marked ``_GENERAL``.
+@helper(options=_NO_DIVISION_CHECK)
+def _wide_rows(work):
+    """The outer slerps marked ``_GENERAL``, along their great circles.
 
     ``_qslerp_unit1``'s general branch (with ``_geodesic1``), without
-    branches, where the row's arguments (rows _P and _Q) are unit, not
-    equal and its angle is in ``sincos``'s range: its rotation goes into the
-    step's rows and its mark is lifted. Returns 1 if the row stays marked
-    (for the scalar route), else 0. Inlined both into the vector pass and
-    into the row-by-row loop, so that a row rounds alike in either.
+    branches, for the rows whose arguments (rows _P and _Q) are unit, not
+    equal and whose angle is in ``sincos``'s range; their rotations go into
+    the step's rows and their mark is lifted. Returns the number of rows
+    left marked (for the scalar route).
     """
-    aw, ax = work[_P + b], work[_P + BLOCK + b]
-    ay, az = work[_P + 2 * BLOCK + b], work[_P + 3 * BLOCK + b]
-    bw, bx = work[_Q + b], work[_Q + BLOCK + b]
-    by, bz = work[_Q + 2 * BLOCK + b], work[_Q + 3 * BLOCK + b]
-    unit = _is_unit_rows(aw, ax, ay, az) & _is_unit_rows(bw, bx, by, bz)
-    # the shorter way round, tested by _qslerp_unit1 and again by
-    # _geodesic1
-    for _ in range(2):
-        dw, dx, dy, dz = aw - bw, ax - bx, ay - by, az - bz
-        far = dw * dw + dx * dx + dy * dy + dz * dz > _SQRT2 * _SQRT2
-        bw = -bw if far else bw
-        bx = -bx if far else bx
-        by = -by if far else by
-        bz = -bz if far else bz
-    d = aw * bw + ax * bx + ay * by + az * bz
-    ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
-    so = math.sqrt(ow * ow + ox * ox + oy * oy + oz * oz)
-    k = 1.0 / so
-    theta = atan2(so, d)
-    tau = work[_TAU + b]
-    h = 2.0 * tau * (1.0 - tau)
-    y = h * theta
-    sn, cs = sincos(y if abs(y) < SINCOS_LIMIT else 0.0)  # (as in _arc_rows)
-    sign = -1.0 if work[_NEG + b] != 0.0 else 1.0
-    wide = work[_PATH + b] == _GENERAL
-    done = wide & unit & (so != 0.0) & (abs(y) < SINCOS_LIMIT)
-    for e, (a_e, o_e) in enumerate(((aw, ow), (ax, ox), (ay, oy), (az, oz))):
-        q = cs * a_e + sn * (o_e * k)
-        q = -q if sign < 0.0 else q
-        at = _STEP + (3 + e) * BLOCK + b
-        work[at] = q if done else work[at]
-    work[_PATH + b] = _GATHERED if done else work[_PATH + b]
-    return np.int64(wide & ~done)
-
-
-@helper(options=VECTOR_KERNEL)
-def _wide_rows(work):
-    """:func:`_wide_row` over the whole block, vectorised. Returns the rows left marked."""
     left = 0
     for b in range(BLOCK):
-        left += _wide_row(work, b)
+        aw, ax = work[_P + b], work[_P + BLOCK + b]
+        ay, az = work[_P + 2 * BLOCK + b], work[_P + 3 * BLOCK + b]
+        bw, bx = work[_Q + b], work[_Q + BLOCK + b]
+        by, bz = work[_Q + 2 * BLOCK + b], work[_Q + 3 * BLOCK + b]
+        unit = _is_unit_rows(aw, ax, ay, az) & _is_unit_rows(bw, bx, by, bz)
+        # the shorter way round, tested by _qslerp_unit1 and again by
+        # _geodesic1
+        for _ in range(2):
+            dw, dx, dy, dz = aw - bw, ax - bx, ay - by, az - bz
+            far = dw * dw + dx * dx + dy * dy + dz * dz > _SQRT2 * _SQRT2
+            bw = -bw if far else bw
+            bx = -bx if far else bx
+            by = -by if far else by
+            bz = -bz if far else bz
+        d = aw * bw + ax * bx + ay * by + az * bz
+        ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
+        so = math.sqrt(ow * ow + ox * ox + oy * oy + oz * oz)
+        k = 1.0 / so
+        theta = atan2(so, d)
+        tau = work[_TAU + b]
+        h = 2.0 * tau * (1.0 - tau)
+        y = h * theta
+        sn, cs = sincos(y if abs(y) < SINCOS_LIMIT else 0.0)  # (as in _arc_rows)
+        sign = -1.0 if work[_NEG + b] != 0.0 else 1.0
+        wide = work[_PATH + b] == _GENERAL
+        done = wide & unit & (so != 0.0) & (abs(y) < SINCOS_LIMIT)
+        left += wide & ~done
+        for e, (a_e, o_e) in enumerate(((aw, ow), (ax, ox), (ay, oy), (az, oz))):
+            q = cs * a_e + sn * (o_e * k)
+            q = -q if sign < 0.0 else q
+            at = _STEP + (3 + e) * BLOCK + b
+            work[at] = q if done else work[at]
+        work[_PATH + b] = _GATHERED if done else work[_PATH + b]
     return left
 
 
-@helper(options=VECTOR_KERNEL)
-def _general_rows(work, nb, marked):
-    """The ``marked`` outer slerps that ``_squad_rows`` marked ``_GENERAL``.
-
-    Along their great circles (:func:`_wide_rows`, or the same arithmetic
-    row by row when there are few), then what that cannot take (arguments
-    not unit, equal, or an angle beyond ``sincos``'s range) by the scalar
-    route, ``_qslerp_unit1``.
-    """
-    if marked >= _WIDE_ROWS:
-        left = _wide_rows(work)
-    else:
-        left = 0
-        for b in range(nb):
-            if work[_PATH + b] == _GENERAL:
-                left += _wide_row(work, b)
-    if left == 0:
-        return
-    for b in range(nb):
-        if work[_PATH + b] != _GENERAL:
-            continue
-        tau = work[_TAU + b]
-        qw, qx, qy, qz = _qslerp_unit1(
-            work[_P + b], work[_P + BLOCK + b], work[_P + 2 * BLOCK + b], work[_P + 3 * BLOCK + b],
-            work[_Q + b], work[_Q + BLOCK + b], work[_Q + 2 * BLOCK + b], work[_Q + 3 * BLOCK + b],
-            2.0 * tau * (1.0 - tau),
-        )  # fmt: skip
-        if work[_NEG + b] != 0.0:
-            qw, qx, qy, qz = -qw, -qx, -qy, -qz
-        work[_STEP + 3 * BLOCK + b] = qw
-        work[_STEP + 4 * BLOCK + b] = qx
-        work[_STEP + 5 * BLOCK + b] = qy
-        work[_STEP + 6 * BLOCK + b] = qz
-
-
-@helper(options=VECTOR_KERNEL)
+@helper(options=_NO_DIVISION_CHECK)
 def _own_rows(work, times, tr, rp, target, i0, j0, nb, rotation_only, into):
     """Rows j0 .. j0+nb at the frame's own samples i0 .., copied into the step.
 
@@ -1337,8 +1284,25 @@ def _chain_block(
         for b in range(nb, BLOCK):  # past the end of a short last block
             work[_PATH + b] = 0.0
         wide = _squad_rows(work) if gathered > 0 else 0
+        if wide >= _WIDE_ROWS:
+            wide = _wide_rows(work)
         if wide > 0:
-            _general_rows(work, nb, wide)
+            # the outer slerps left, by the scalar route
+            for b in range(nb):
+                if work[_PATH + b] != _GENERAL:
+                    continue
+                tau = work[_TAU + b]
+                qw, qx, qy, qz = _qslerp_unit1(
+                    work[_P + b], work[_P + BLOCK + b], work[_P + 2 * BLOCK + b], work[_P + 3 * BLOCK + b],
+                    work[_Q + b], work[_Q + BLOCK + b], work[_Q + 2 * BLOCK + b], work[_Q + 3 * BLOCK + b],
+                    2.0 * tau * (1.0 - tau),
+                )  # fmt: skip
+                if work[_NEG + b] != 0.0:
+                    qw, qx, qy, qz = -qw, -qx, -qy, -qz
+                work[_STEP + 3 * BLOCK + b] = qw
+                work[_STEP + 4 * BLOCK + b] = qx
+                work[_STEP + 5 * BLOCK + b] = qy
+                work[_STEP + 6 * BLOCK + b] = qz
         _compose_rows(work, inverse, s == 0 and not inverse)
     return computed
 
@@ -1370,7 +1334,7 @@ def _store_lookup(work, t_out, r_out, j0, j1, rotation_only):
             t[3 * b + 2] = work[_ACC + 2 * BLOCK + b]
 
 
-@helper(options=VECTOR_KERNEL)
+@helper(options=_NO_DIVISION_CHECK)
 def _apply_rows(work, d, out, nb, mode):
     """:func:`_apply_block` for one item per row: ``d`` and ``out`` (nb * c,) flat."""
     w, x, y, z = _ACC + 3 * BLOCK, _ACC + 4 * BLOCK, _ACC + 5 * BLOCK, _ACC + 6 * BLOCK
@@ -1399,14 +1363,11 @@ def _apply_rows(work, d, out, nb, mode):
         out[3 * b + 2] = pz
 
 
-@helper(options=VECTOR_KERNEL)
+@helper
 def _apply_block(work, data, out, j0, j1, mode):
     """Rows j0:j1 of ``data`` carried by the block's transforms in ``work``.
 
-    ``data`` (m|1, k, c) as for :func:`transform_chain`. Several items per
-    row, or one for every row, take the vector loop's arithmetic (its
-    inlined helpers and options) row by row: an item's result does not
-    depend on the shape it came in.
+    ``data`` (m|1, k, c) as for :func:`transform_chain`.
     """
     k = data.shape[1]
     # the next block's items (unless one is reused for every row) and results
@@ -1436,7 +1397,7 @@ def _apply_block(work, data, out, j0, j1, mode):
         )
         if mode == 2:
             for e in range(k):
-                ow, ox, oy, oz = _qmul_rows(
+                ow, ox, oy, oz = _qmul1(
                     w, qx, qy, qz, data[row, e, 0], data[row, e, 1],
                     data[row, e, 2], data[row, e, 3],
                 )  # fmt: skip
@@ -1446,7 +1407,7 @@ def _apply_block(work, data, out, j0, j1, mode):
                 out[j, e, 3] = oz
         else:
             for e in range(k):
-                px, py, pz = _rotate_rows(
+                px, py, pz = _rotate1(
                     w, qx, qy, qz, data[row, e, 0], data[row, e, 1], data[row, e, 2]
                 )
                 if mode == 0:

@@ -205,6 +205,30 @@ def test_transforms_equal_the_engine_on_random_trees(kind, seed, missing):
                 _close(_chain.apply(what, steps, target, data), ref)
 
 
+@pytest.mark.parametrize("missing", [False, True])
+def test_an_item_gets_the_same_bits_in_any_layout(missing):
+    # one item per row takes the vectorised loop; several per row, or one
+    # for every row, a loop over the items: the same bits either way
+    rng = np.random.default_rng(40)
+    _random_tree(rng, "float", missing)
+    for outof, into in PAIRS:
+        _, _, steps, target = _resolved(outof, into)
+        plan, own = _plan(steps, target)
+        m = len(target)
+        for what, size in (("points", 3), ("vectors", 3), ("quaternions", 4)):
+            pairs = rng.normal(size=(m, 2, size))
+            one = rng.normal(size=(1, 1, size))
+            if size == 4:
+                pairs /= np.linalg.norm(pairs, axis=-1, keepdims=True)
+                one /= np.linalg.norm(one)
+            each = _fused.transform(plan, target, own, pairs[:, :1].copy(), what)
+            both = _fused.transform(plan, target, own, pairs, what)
+            np.testing.assert_array_equal(both[:, :1], each)
+            shared = _fused.transform(plan, target, own, one, what)
+            tiled = _fused.transform(plan, target, own, np.repeat(one, m, axis=0), what)
+            np.testing.assert_array_equal(shared, tiled)
+
+
 def test_a_target_of_an_arrays_own_times_is_not_compared_again(monkeypatch):
     # the target is the array's track or a slice of it (the overlap with the
     # frames): its run is known without comparing the times

@@ -457,6 +457,24 @@ def fused_plan(steps, target: Target):
     return plan, [0 if run is None else run.start + 1 for run in runs]
 
 
+def rates_plan(frame, to_frame):
+    """(plan, own, target) for :func:`rbm_nb._engine.fused.body_rates`, or None.
+
+    None where the chain kernel does not apply and the lookup's own route
+    is taken: a static chain, fewer than 4 target times (the spline's
+    minimum), no fused plan, or target times that are every moving frame's
+    own samples (which the lookup composes without evaluating anything).
+    """
+    steps = chain(frame, to_frame)
+    target = match([f for f, _ in steps])
+    if target.track is None or len(target) < 4:
+        return None
+    plan, own = fused_plan(steps, target)
+    if plan is None or all(own):
+        return None
+    return plan, own, target
+
+
 def apply(kind: str, steps, target: Target, data: np.ndarray) -> np.ndarray:
     """Apply a chain's transform to (n|1, k, c) data at the target times.
 

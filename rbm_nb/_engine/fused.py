@@ -32,8 +32,9 @@ import numpy as np
 
 from .. import _memory, _parallel
 from .._kernels import fused as kf
+from .._kernels import velocity_chain as kv
 
-__all__ = ["Plan", "forget", "plan", "lookup", "transform"]
+__all__ = ["Plan", "forget", "plan", "lookup", "transform", "body_rates"]
 
 _NS_PER_S = 1e9
 _EMPTY_TIMES = np.zeros(1)
@@ -309,3 +310,31 @@ def transform(p: Plan, target, own, data: np.ndarray, kind: str) -> np.ndarray:
         p, kf.transform_chain, kf.transform_chain_parallel, args, target, offsets, own
     )
     return out
+
+
+def body_rates(p: Plan, target, own, in_reference: bool):
+    """Angular velocity (m, 3) of a planned chain at its target times, or None.
+
+    The spline estimate of :func:`rbm_nb._engine.velocity.angular_velocity`
+    (quaternion mode), in the moving frame's axes or, if ``in_reference``,
+    the reference's, computed without the chain's rotations in memory
+    (:func:`rbm_nb._kernels.velocity_chain.chain_body_rates`). None if a
+    row's rotation is missing or zero: the caller's step-by-step estimate
+    handles those. ``target`` has at least 4 strictly increasing times.
+    """
+    base = target.track.base
+    offsets = p.offsets(target)
+    axes = kv.REFERENCE if in_reference else kv.BODY
+    args: tuple[Any, ...] = (
+        (p.code, p.statics, offsets, p.gaps(), _own(own)) + p.slots() + (base, axes)
+    )
+    rates, bad, _ = _run(
+        p,
+        kv.chain_body_rates,
+        kv.chain_body_rates_parallel,
+        args,
+        target,
+        offsets,
+        own,
+    )
+    return None if bad else rates

@@ -25,6 +25,7 @@ from .._kernels import quaternion as kq
 from .._kernels import resample as kr
 from .._validation import check_mode, check_what
 from . import chain as _chain
+from . import fused as _fused
 from . import velocity as _velocity
 from .transform import Blocks, track_of, transform
 
@@ -166,6 +167,15 @@ def lookup_angular_velocity(
     """Angular velocity (n, 3) of ``frame`` wrt ``reference`` and its timestamps."""
     check_mode(mode)
     reference, represent_in = defaults(frame, reference, represent_in)
+    if (
+        mode == "quaternion"
+        and outlier_thresh is None
+        and cutoff is None
+        and (represent_in is frame or represent_in is reference)
+    ):
+        lean = _chain_rates(frame, reference, represent_in is reference)
+        if lean is not None:
+            return _result(lean[0], lean[1], as_track)
     # (the translations are not needed: not computed, not held in memory)
     looked_up = _moving_lookup(frame, reference, allow_static, rotation_only=True)
     if looked_up is None:
@@ -174,6 +184,25 @@ def lookup_angular_velocity(
         frame, reference, represent_in, looked_up, mode, outlier_thresh, cutoff
     )
     return _result(angular, track, as_track)
+
+
+def _chain_rates(frame, reference, in_reference):
+    """(angular velocity, Track) by the chain kernel, or None where it does not apply.
+
+    The same rates as the lookup followed by the estimate, without the
+    lookup's rotations in memory (:func:`rbm_nb._engine.fused.body_rates`).
+    It does not apply across a long gap (the estimate splits the series
+    there) nor where a rotation is missing: the caller's route handles both.
+    """
+    planned = _chain.rates_plan(frame, reference)
+    if planned is None:
+        return None
+    plan, own, target = planned
+    breaks = _breaks(frame, reference, target)
+    if breaks is not None and breaks.any():
+        return None
+    rates = _fused.body_rates(plan, target, own, in_reference)
+    return None if rates is None else (rates, target.track)
 
 
 def lookup_twist(

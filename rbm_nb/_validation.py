@@ -117,14 +117,16 @@ def check_unit_norms(q: np.ndarray, name: str) -> None:
         )
 
 
-def check_missing_rows(arr: np.ndarray, name: str) -> None:
+def check_missing_rows(arr: np.ndarray, name: str) -> bool:
     """Rows of (n, k) data are finite or entirely NaN (a missing sample).
 
     A partly NaN row or an infinity is a mistake, not missing data: raise
-    naming the first such row.
+    naming the first such row. Returns whether a row is missing.
     """
     if arr.ndim == 2 and _rows.first_bad_row(kernel_array(arr)) < 0:
-        return  # one pass when every row is fine; below: which one is not
+        # one pass when every row is fine (below: which one is not); a row
+        # is then all NaN or none, so its first column tells
+        return bool(np.isnan(arr[:, 0]).any())
     nan = np.isnan(arr)
     partial = nan.any(axis=-1) & ~nan.all(axis=-1)
     bad = partial | np.isinf(arr).any(axis=-1)
@@ -133,6 +135,7 @@ def check_missing_rows(arr: np.ndarray, name: str) -> None:
         raise ValueError(
             f"{name}{_index(row)} is not finite (a missing sample is a row of NaN only)"
         )
+    return bool(nan.any())
 
 
 def check_finite(arr: np.ndarray, name: str, row_axis: bool = True) -> None:

@@ -411,6 +411,9 @@ class ReferenceFrame:
         self._children: list[ReferenceFrame] = []
         self._coefficients: Any = None
         self._track: _time.Track | None = None
+        # a rotation sample is missing (a NaN row): estimates that need
+        # every rotation take the route that handles them first
+        self._missing_rotations = False
         # frames created as roots have no transform of their own (None)
         self._has_transform = parent is not None
         if parent is None:
@@ -478,7 +481,7 @@ class ReferenceFrame:
                     _shape_message(label, "rotation", stored.shape, r_shape)
                 )
             if self._track is not None:
-                check_missing_rows(stored, f"{label}rotation")
+                self._missing_rotations = check_missing_rows(stored, f"{label}rotation")
             r = normalize_quaternions(
                 stored, f"{label}rotation", allow_nan=self._track is not None
             )

@@ -462,15 +462,17 @@ def rates_plan(frame, to_frame):
 
     None where the chain kernel does not apply and the lookup's own route
     is taken: a static chain, fewer than 4 target times (the spline's
-    minimum), no fused plan, or target times that are every moving frame's
-    own samples (which the lookup composes without evaluating anything).
+    minimum), no fused plan, target times that are every moving frame's
+    own samples (which the lookup composes without evaluating anything), or
+    a frame with missing rotations (the kernel would stop at the first row
+    that reads one).
     """
     steps = chain(frame, to_frame)
     target = match([f for f, _ in steps])
     if target.track is None or len(target) < 4:
         return None
     plan, own = fused_plan(steps, target)
-    if plan is None or all(own):
+    if plan is None or all(own) or any(f._missing_rotations for f in plan.frames):
         return None
     return plan, own, target
 

@@ -162,12 +162,21 @@ def test_same_bits_as_the_lookup_then_the_estimate(
 
 
 @pytest.mark.parametrize("missing", ["nan", "gaps"])
-def test_missing_rotations_and_long_gaps_take_the_estimate(threads, routes, missing):
-    """NaN rows (the kernel stops and reports them) and gaps beyond max_gap
-    (the estimate splits the series there) are left to the other route."""
+def test_missing_rotations_and_long_gaps_take_the_estimate(
+    threads, routes, monkeypatch, missing
+):
+    """A frame with missing rotations (the kernel would stop at the first
+    row that reads one) and gaps beyond max_gap (the estimate splits the
+    series there) are left to the other route, without running the kernel."""
     rng = np.random.default_rng(7)
     _tree(rng, "float", missing)
     threads(1)
+
+    def not_called(*args):
+        raise AssertionError("the chain kernel ran")
+
+    monkeypatch.setattr(kv, "chain_body_rates", not_called)
+    monkeypatch.setattr(kv, "chain_body_rates_parallel", not_called)
     lean, full, used = routes(lambda: rbm.lookup_angular_velocity("c", "world"))
     assert used == [False]
     np.testing.assert_array_equal(lean, full)

@@ -535,6 +535,36 @@ def memory() -> None:
         print(
             f"{label:<46} peak {peak / 1e6:7.1f} MB  output {out / 1e6:6.1f} MB  {peak / out:5.2f}x"
         )
+    angular_velocity_routes(rbm)
+
+
+def angular_velocity_routes(rbm) -> None:
+    """The chain kernel of lookup_angular_velocity against the route it replaces
+    (the chain's rotations looked up, then estimated): memory and time."""
+    from rbm_nb._engine import twist
+
+    chain_rates = twist._chain_rates
+    call = lambda: rbm.lookup_angular_velocity("left_eye", "world")  # noqa: E731
+    print(
+        "lookup_angular_velocity left_eye wrt world: chain kernel vs lookup + estimate"
+    )
+    try:
+        for route, kernel in (
+            ("chain kernel", chain_rates),
+            ("lookup + estimate", None),
+        ):
+            twist._chain_rates = kernel or (lambda *args: None)
+            peak, out = peak_memory(call)
+            times = []
+            for n_threads in (1, 2):
+                with threads(n_threads):
+                    call()
+                    times.append(f"{n_threads}T {best(call) * 1e3:6.2f} ms")
+            print(
+                f"  {route:<20} peak {peak / out:5.2f}x output   " + "   ".join(times)
+            )
+    finally:
+        twist._chain_rates = chain_rates
 
 
 # ---------------------------------------------------------------------------

@@ -39,7 +39,7 @@ CHAIN_EDGE_TESTS = [
 
 # Both compile every kernel they reach under bounds checking into an empty cache
 # (shared between them: the second compiles only what the first did not reach).
-# On a 2-core machine at 2 GHz that took 120-250 s, hence the timeouts.
+# Here (2 cores, 2.4 GHz) that took 130-255 s per test; CI's 2 GHz cores are slower.
 @pytest.mark.slow
 @pytest.mark.timeout(900)
 def test_kernel_tests_pass_with_boundscheck(checked_env):
@@ -48,7 +48,7 @@ def test_kernel_tests_pass_with_boundscheck(checked_env):
     kernel_tests += CHAIN_EDGE_TESTS
     done = subprocess.run(
         [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
-         # the first test to reach the SQUAD walk compiles it (over 120 s at 2 GHz)
+         # the first test to reach the SQUAD walk compiles it (~120 s here)
          "-o", "addopts=", "-o", "timeout=600", *kernel_tests],
         cwd=REPO, env=checked_env, capture_output=True, text=True, timeout=1800,
     )  # fmt: skip

@@ -31,6 +31,7 @@ from ._validation import (
     check_finite,
     check_missing_rows,
     is_scalar,
+    moving_samples,
     normalize_quaternions,
 )
 from ._xarray import dataarray_coordinate, dataset_variable
@@ -460,26 +461,37 @@ class ReferenceFrame:
             self._track = None
             t_shape, r_shape = (3,), (4,)
 
-        if translation is None:
-            t: np.ndarray = np.zeros(t_shape)
-        else:
+        t: np.ndarray | None = None
+        if translation is not None:
             t = float_array(translation, f"{label}translation")
             if t.shape != t_shape:
                 raise ValueError(_shape_message(label, "translation", t.shape, t_shape))
             if self._track is None:
                 check_finite(t, f"{label}translation")
-            else:  # NaN rows: missing samples; anything else: mistakes
-                check_missing_rows(t, f"{label}translation")
-        if rotation is None:
-            r: np.ndarray = np.zeros(r_shape)
-            r[..., 0] = 1.0
-            stored = r
-        else:
+        stored: np.ndarray | None = None
+        if rotation is not None:
             stored = float_array(rotation, f"{label}rotation")
             if stored.shape != r_shape:
                 raise ValueError(
                     _shape_message(label, "rotation", stored.shape, r_shape)
                 )
+        moving = self._track is not None and r_shape[0] > 1
+        if moving and stored is not None and not inverse:
+            # the usual recording: every check and copy in one pass
+            fused = moving_samples(np.zeros(t_shape) if t is None else t, stored)
+            if fused is not None:
+                self._t, self._rotation_public, self._r, self._missing_rotations = fused
+                return
+        # one check at a time, each naming the row it finds
+        if t is None:
+            t = np.zeros(t_shape)
+        elif self._track is not None:  # NaN rows: missing samples; else mistakes
+            check_missing_rows(t, f"{label}translation")
+        if stored is None:
+            r: np.ndarray = np.zeros(r_shape)
+            r[..., 0] = 1.0
+            stored = r
+        else:
             if self._track is not None:
                 self._missing_rotations = check_missing_rows(stored, f"{label}rotation")
             r = normalize_quaternions(
@@ -488,7 +500,6 @@ class ReferenceFrame:
         # private copies: the caller's arrays may change later (a moving
         # frame's rotations are copied by unflip below, which makes a new array)
         t = np.array(t.reshape(-1, 3), dtype=np.float64, order="C")
-        moving = self._track is not None and len(r.reshape(-1, 4)) > 1
         r = kernel_array(r.reshape(-1, 4)) if moving else np.array(r.reshape(-1, 4))
         if inverse:
             r = kq.qconj(r)  # unit quaternions: the conjugate is the inverse

@@ -134,3 +134,88 @@ def unit_rows(q, tol, allow_nan):
         o[4 * i + 2] = y / d
         o[4 * i + 3] = z / d
     return out, -1 if count == 0 else _first_unacceptable(q, tol, allow_nan)
+
+
+# rows per block of moving_samples: its vectorised loop writes them, the
+# serial sign pass reads them back while they are still in L1 (256 rows of
+# the three outputs: 22 kB)
+_SAMPLES_BLOCK = 256
+
+
+@kernel(F2, F2, F, F2, F2, F2, options=_COUNTING)
+def moving_samples(t, q, tol, t_out, q_out, r_out):
+    """A moving frame's private arrays and every registration check, in one pass.
+
+    What ``first_bad_row`` on ``t`` and on ``q``, ``unit_rows(q, tol, True)``,
+    copies of ``t`` and ``q`` and ``quaternion.unflip`` of the unit rows give,
+    without their four temporaries and six passes: the copies go to
+    ``t_out`` (n, 3) and ``q_out`` (n, 4), the unit quaternions without sign
+    flips to ``r_out`` (n, 4), bit for bit as those functions make them.
+    Each block of rows is copied, checked and normalised in a loop LLVM
+    vectorises, then given unflip's signs in a serial loop (each row's sign
+    depends on the one before) while it is still in cache.
+
+    Returns
+    -------
+    bad : int
+        Nonzero if a row of ``t`` or ``q`` is partly NaN or holds an
+        infinity, or a row of ``q`` is finite but not of unit norm within
+        ``tol``: the outputs are then not meaningful, and the caller's
+        one-check-at-a-time route names the row.
+    missing : int
+        How many rows of ``q`` are all NaN (missing samples).
+    """
+    n = q.shape[0]
+    tf, qf = t.reshape(-1), q.reshape(-1)
+    to, qo, ro = t_out.reshape(-1), q_out.reshape(-1), r_out.reshape(-1)
+    # The block's unit quaternions. The loops that check and normalise write
+    # only this array of their own (outputs that might overlap the inputs as
+    # far as LLVM knows keep it from vectorising) and index views of the
+    # block from 0 (an index that numba cannot prove non-negative gets a
+    # wraparound select, which does too).
+    unit = np.empty(4 * _SAMPLES_BLOCK)
+    bad = 0
+    missing = 0
+    have = False  # a valid (non-NaN) row seen yet: its corrected values below
+    pw = px = py = pz = 0.0
+    for start in range(0, n, _SAMPLES_BLOCK):
+        m = min(_SAMPLES_BLOCK, n - start)
+        tb = tf[3 * start : 3 * (start + m)]
+        qb = qf[4 * start : 4 * (start + m)]
+        for i in range(m):
+            x, y, z = tb[3 * i], tb[3 * i + 1], tb[3 * i + 2]
+            nan = (x != x) + (y != y) + (z != z)
+            inf = (abs(x) == np.inf) + (abs(y) == np.inf) + (abs(z) == np.inf)
+            bad += ((nan != 0) & (nan != 3)) | (inf != 0)
+        for i in range(m):
+            w, x, y, z = qb[4 * i], qb[4 * i + 1], qb[4 * i + 2], qb[4 * i + 3]
+            nan = (w != w) + (x != x) + (y != y) + (z != z)
+            inf = (abs(w) == np.inf) + (abs(x) == np.inf) + (abs(y) == np.inf)
+            inf += abs(z) == np.inf
+            bad += ((nan != 0) & (nan != 4)) | (inf != 0)
+            missing += nan == 4
+            norm = math.sqrt(w * w + x * x + y * y + z * z)
+            # NaN rows pass (missing samples): NaN > tol is false
+            bad += abs(norm - 1.0) > tol
+            # unit_rows: rows of norm 1 and NaN rows as they are
+            d = 1.0 if (norm == 1.0) | (norm != norm) else norm
+            unit[4 * i], unit[4 * i + 1] = w / d, x / d
+            unit[4 * i + 2], unit[4 * i + 3] = y / d, z / d
+        to[3 * start : 3 * (start + m)] = tb
+        qo[4 * start : 4 * (start + m)] = qb
+        # unflip's signs (each row's depends on the row before): negated is a
+        # row whose dot product with the last valid row, as corrected, is
+        # negative; sign * v is v or -v exactly, as there
+        rb = ro[4 * start : 4 * (start + m)]
+        for i in range(m):
+            w, x, y, z = unit[4 * i], unit[4 * i + 1], unit[4 * i + 2], unit[4 * i + 3]
+            d = 0.0
+            if have:
+                d = pw * w + px * x + py * y + pz * z
+            sign = -1.0 if d < 0.0 else 1.0
+            w, x, y, z = sign * w, sign * x, sign * y, sign * z
+            rb[4 * i], rb[4 * i + 1], rb[4 * i + 2], rb[4 * i + 3] = w, x, y, z
+            if not math.isnan(w + x + y + z):
+                pw, px, py, pz = w, x, y, z
+                have = True
+    return bad, missing

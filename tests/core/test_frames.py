@@ -334,3 +334,72 @@ def test_a_moving_frame_keeps_its_own_copies(unit):
     for a, b in zip(before, after, strict=True):
         np.testing.assert_array_equal(a, b)
     rbm.clear_registry()
+
+
+def _recording(n, seed):
+    """Moving-frame arrays as trackers give them: 4 digits, sign flips, gaps."""
+    rng = np.random.default_rng(seed)
+    q = rng.normal(size=(n, 4))
+    q = np.round(q / np.linalg.norm(q, axis=1, keepdims=True), 4)
+    q[rng.random(n) < 0.2] *= -1.0
+    q[rng.random(n) < 0.05] = np.nan
+    t = rng.normal(size=(n, 3))
+    t[rng.random(n) < 0.05] = np.nan
+    return t, q, np.arange(n) / 200.0
+
+
+@pytest.mark.parametrize("n", [2, 300, 5000])
+@pytest.mark.parametrize("with_translation", [True, False])
+def test_one_pass_registration_stores_what_the_checks_one_at_a_time_do(
+    monkeypatch, n, with_translation
+):
+    t, q, ts = _recording(n, n)
+    t = t if with_translation else None
+    taken = []
+    one_pass = frames.moving_samples
+    monkeypatch.setattr(
+        frames, "moving_samples", lambda *a: taken.append(one_pass(*a)) or taken[-1]
+    )
+    fused = rbm.ReferenceFrame("f", parent=rbm.ReferenceFrame("w"), translation=t,
+                               rotation=q, timestamps=ts)  # fmt: skip
+    assert len(taken) == 1 and taken[0] is not None  # the one-pass route ran
+    monkeypatch.setattr(frames, "moving_samples", lambda t, q: None)
+    stepwise = rbm.ReferenceFrame("f", parent=rbm.ReferenceFrame("w"), translation=t,
+                                  rotation=q, timestamps=ts)  # fmt: skip
+    for name in ("_t", "_r", "_rotation_public"):
+        got, want = getattr(fused, name), getattr(stepwise, name)
+        assert got.flags.c_contiguous and got.dtype == np.float64
+        np.testing.assert_array_equal(got.view(np.int64), want.view(np.int64))
+    assert (
+        fused._missing_rotations
+        == stepwise._missing_rotations
+        == bool(np.isnan(q).any())
+    )
+    # private copies: changing the caller's arrays changes nothing
+    q[:] = 0.0
+    np.testing.assert_array_equal(
+        fused.rotation.view(np.int64), stepwise.rotation.view(np.int64)
+    )
+
+
+@pytest.mark.parametrize(
+    "which, row, value, match",
+    [
+        ("translation", 7, [np.nan, 0.0, 0.0], r"'f': translation\[7\] is not finite"),
+        ("translation", 0, [np.inf, 0.0, 0.0], r"'f': translation\[0\] is not finite"),
+        ("rotation", 299, [0.0, np.nan, 0.0, 1.0], r"rotation\[299\] is not finite"),
+        (
+            "rotation",
+            256,
+            [0.0, 0.0, 0.0, 0.0],
+            r"rotation\[256\] is a zero quaternion",
+        ),
+        ("rotation", 3, [0.9, 0.0, 0.0, 0.0], r"rotation\[3\] is of norm 0.9"),
+    ],
+)
+def test_one_pass_registration_names_the_bad_row(which, row, value, match):
+    t, q, ts = _recording(300, 1)
+    (t if which == "translation" else q)[row] = value
+    with pytest.raises(ValueError, match=match):
+        rbm.ReferenceFrame("f", parent=rbm.ReferenceFrame("w"), translation=t,
+                           rotation=q, timestamps=ts)  # fmt: skip

@@ -66,3 +66,57 @@ def test_unit_rows_normalise_like_division_and_name_the_first_bad_row(allow_nan)
             rows.unit_rows(broken, 1e-2, allow_nan)[1]
             == _unit_numpy(broken, 1e-2, allow_nan)[1]
         )
+
+
+def _samples(n, rng):
+    """Rotations as trackers record them: 4 digits, sign flips, blinks."""
+    q = rng.normal(size=(n, 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    q = np.round(q, 4)
+    q[rng.random(n) < 0.1] *= -1.0
+    t = rng.normal(size=(n, 3))
+    missing = rng.random(n) < 0.05
+    missing[:3] = True  # the first valid row comes after missing ones
+    q[missing] = np.nan
+    q[-1] = [-1.0, 0.0, 0.0, 0.0]  # norm exactly 1: kept as it is
+    t[rng.random(n) < 0.05] = np.nan
+    return t, q
+
+
+def _moving_samples(t, q, tol=1e-2):
+    n = len(q)
+    outs = np.full((n, 3), -1.0), np.full((n, 4), -1.0), np.full((n, 4), -1.0)
+    bad, missing = rows.moving_samples(t, q, tol, *outs)
+    return (bad, missing, *outs)
+
+
+@pytest.mark.parametrize("n", [1, 2, 255, 256, 257, 1000])
+def test_moving_samples_is_the_checks_copies_and_unflip_bit_for_bit(n):
+    from rbm_nb._kernels import quaternion as kq
+
+    t, q = _samples(n, np.random.default_rng(n))
+    bad, missing, t_out, q_out, r_out = _moving_samples(t, q)
+    unit, first = rows.unit_rows(q, 1e-2, True)
+    assert bad == 0 and first == -1
+    assert rows.first_bad_row(t) == rows.first_bad_row(q) == -1
+    assert missing == np.isnan(q[:, 0]).sum()
+    for got, want in ((t_out, t), (q_out, q), (r_out, kq.unflip(unit))):
+        np.testing.assert_array_equal(got.view(np.int64), want.view(np.int64))
+
+
+@pytest.mark.parametrize("where", [0, 255, 256, 999])
+@pytest.mark.parametrize(
+    "which, value",
+    [
+        ("t", [np.nan, 0.0, 0.0]),
+        ("t", [0.0, np.inf, 0.0]),
+        ("q", [np.nan, 0.0, 0.0, 1.0]),
+        ("q", [0.0, 0.0, 0.0, -np.inf]),
+        ("q", [0.0, 0.0, 0.0, 0.0]),
+        ("q", [1.02, 0.0, 0.0, 0.0]),
+    ],
+)
+def test_moving_samples_reports_every_bad_row(where, which, value):
+    t, q = _samples(1000, np.random.default_rng(3))
+    (t if which == "t" else q)[where] = value
+    assert _moving_samples(t, q)[0] != 0

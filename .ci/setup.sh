@@ -74,7 +74,7 @@ warm_up() {
     say "numba's cache is warm (no file of rbm_nb/ changed since the last warm-up)"
     return
   fi
-  say "compiling the numba kernels into their cache (a minute or two the first time)"
+  say "compiling the numba kernels into their cache, one process per core (about 5 minutes on 2 cores the first time)"
   rm -f "$warm_stamp"
   .venv/bin/python -m rbm_nb._warmup &
   warm_pid=$!

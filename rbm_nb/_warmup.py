@@ -8,8 +8,11 @@ of the public API: a new kernel is warmed up as soon as it is declared, and
 ``tests/test_zz_kernel_signatures.py`` fails if any call compiles something
 else.
 
-Binder's ``postBuild`` and ``.ci/setup.sh`` run ``python -P -m rbm_nb._warmup``
-once. Why the cache is found again: numba stores it next to the kernel
+Binder's ``postBuild`` and ``.ci/setup.sh`` run ``python -m rbm_nb._warmup``
+once. numba compiles on one core, so the command starts a helper process per
+further usable core (``--jobs``); each process claims kernels one at a time
+(a file created exclusively in a shared folder) until none are left, so a
+slow kernel does not hold up the others. Why the cache is found again: numba stores it next to the kernel
 sources (``rbm_nb/_kernels/__pycache__``, inside site-packages for a normal
 install, or under ``NUMBA_CACHE_DIR``) and keys it on each source file's path
 and modification time, the function's bytecode and the CPU. Run it from
@@ -18,12 +21,17 @@ compiles the installed package rather than the source tree.
 
 Usage::
 
-    python -m rbm_nb._warmup [-v]
+    python -m rbm_nb._warmup [-v] [--jobs N]
 """
 
 from __future__ import annotations
 
+import json
+import os
+import shutil
+import subprocess
 import sys
+import tempfile
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -73,20 +81,33 @@ def _compile(kernel: Declared) -> None:
     kernel.dispatcher.compile(tuple(args))
 
 
-def warm_up(verbose: bool = False) -> KernelStats:
+def warm_up(verbose: bool = False, jobs: int = 1) -> KernelStats:
     """Compile (or load from the cache) every declared kernel signature.
 
     Parameters
     ----------
     verbose : bool, default False
-        Print one line per kernel module (name, seconds, kernels).
+        Print one line per kernel module (name, seconds, kernels); with
+        several jobs, one line per kernel.
+    jobs : int, default 1
+        Processes that compile at the same time: this one and ``jobs - 1``
+        helpers (``python -m rbm_nb._warmup --claims DIR``, with this
+        interpreter, environment and working directory, so that they import
+        the same rbm_nb).
 
     Returns
     -------
     KernelStats
-        What this process compiled and loaded from the cache in total
+        What the processes compiled and loaded from the cache in total
         (``compiled == 0`` after a previous warm-up: the cache is effective).
+
+    Raises
+    ------
+    RuntimeError
+        If a helper process fails (its output is in the message).
     """
+    if jobs > 1:
+        return _warm_up_in_parallel(verbose, jobs)
     by_module: dict[str, list[Declared]] = {}
     for k in declared_kernels():
         by_module.setdefault(k.dispatcher.py_func.__module__, []).append(k)
@@ -103,15 +124,88 @@ def warm_up(verbose: bool = False) -> KernelStats:
     return kernel_stats()
 
 
+def _compile_claimed(claims: str, verbose: bool) -> None:
+    """Compile every kernel no other process has claimed yet, claiming each."""
+    for index, k in enumerate(declared_kernels()):
+        try:
+            os.close(os.open(os.path.join(claims, str(index)), os.O_CREAT | os.O_EXCL))
+        except FileExistsError:
+            continue  # another process has it
+        start = time.perf_counter()
+        _compile(k)
+        if verbose:
+            print(f"  {k.name}: {time.perf_counter() - start:.1f} s", flush=True)
+
+
+def _warm_up_in_parallel(verbose: bool, jobs: int) -> KernelStats:
+    claims = tempfile.mkdtemp(prefix="rbm_nb-warm-up-")
+    try:
+        # -P again if this process has it: the helpers must import this rbm_nb
+        flags = ["-P"] if getattr(sys.flags, "safe_path", False) else []
+        cmd = [sys.executable, *flags, "-m", "rbm_nb._warmup", "--claims", claims]
+        cmd += ["-v"] if verbose else []
+        helpers = [
+            subprocess.Popen(
+                cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
+            )
+            for _ in range(jobs - 1)
+        ]
+        try:
+            _compile_claimed(claims, verbose)
+        except BaseException:  # interrupted or failed: so are the helpers
+            for h in helpers:
+                h.kill()
+            raise
+        finally:
+            outputs = [h.communicate()[0] for h in helpers]
+        totals = kernel_stats()
+        compiled, loaded, dirs = totals.compiled, totals.loaded, set(totals.cache_dirs)
+        for helper, output in zip(helpers, outputs, strict=True):
+            *lines, last = output.rstrip("\n").split("\n")
+            if helper.returncode != 0 or not last.startswith("{"):
+                raise RuntimeError(
+                    f"a warm-up helper (pid {helper.pid}) failed with exit code "
+                    f"{helper.returncode}:\n{output[-5000:]}"
+                )
+            if lines:
+                print("\n".join(lines), flush=True)
+            stats = json.loads(last)
+            compiled += stats["compiled"]
+            loaded += stats["loaded"]
+            dirs.update(stats["cache_dirs"])
+        return KernelStats(totals.kernels, compiled, loaded, tuple(sorted(dirs)))
+    finally:
+        shutil.rmtree(claims, ignore_errors=True)
+
+
+def _usable_cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     verbose = "-v" in argv or "--verbose" in argv
+    if "--claims" in argv:  # a helper of a parallel warm-up
+        _compile_claimed(argv[argv.index("--claims") + 1], verbose)
+        print(json.dumps(kernel_stats().__dict__))
+        return 0
+    jobs = _usable_cores()
+    if "--jobs" in argv:
+        value = argv[argv.index("--jobs") + 1] if argv[-1] != "--jobs" else ""
+        if not value.isdigit() or int(value) < 1:
+            print(f"--jobs needs a positive number of processes, got {value!r}")
+            return 2
+        jobs = int(value)
     start = time.perf_counter()
-    stats = warm_up(verbose=verbose)
+    stats = warm_up(verbose=verbose, jobs=jobs)
     where = ", ".join(stats.cache_dirs) or "no cache directory"
     print(
         f"rbm_nb warm-up: {stats.compiled} kernel signatures compiled, "
-        f"{stats.loaded} loaded from the cache ({stats.kernels} kernels), "
+        f"{stats.loaded} loaded from the cache ({stats.kernels} kernels, "
+        f"{jobs} process{'es' if jobs > 1 else ''}), "
         f"{time.perf_counter() - start:.1f} s; cache: {where}"
     )
     return 0

@@ -971,7 +971,12 @@ def _outer(aw, ax, ay, az, bw, bx, by, bz, tau):
     return c * aw + k * ow, c * ax + k * ox, c * ay + k * oy, c * az + k * oz
 
 
-@helper(inline=True)
+# Not inlined: the three kernels below share one compiled walk (inlined into
+# each, it made them the slowest kernels to compile by far: 116, 201 and 98 s
+# of the warm-up's 746 s on the 2-core VM, the prange twin the worst, as
+# numba's parfor passes went over the whole walk). One call per kernel call
+# or prange chunk costs nothing measurable.
+@helper(options=_SERIAL)
 def _walk(q, sign, t_in, t_out, out, first, last, scalar):
     """Rows first..last-1 of :func:`squad_walk` (n >= 2), block by block;
     ``scalar``: every segment and row by the scalar code (see

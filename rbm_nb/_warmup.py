@@ -9,15 +9,17 @@ of the public API: a new kernel is warmed up as soon as it is declared, and
 else.
 
 Binder's ``postBuild`` and ``.ci/setup.sh`` run ``python -m rbm_nb._warmup``
-once. numba compiles on one core, so the command starts a helper process per
-further usable core (``--jobs``); each process claims kernels one at a time
-(a file created exclusively in a shared folder) until none are left, so a
-slow kernel does not hold up the others. Why the cache is found again: numba stores it next to the kernel
-sources (``rbm_nb/_kernels/__pycache__``, inside site-packages for a normal
-install, or under ``NUMBA_CACHE_DIR``) and keys it on each source file's path
-and modification time, the function's bytecode and the CPU. Run it from
-outside the repository (``-P`` or another working directory) so that it
-compiles the installed package rather than the source tree.
+once. numba compiles on one core, so the command starts a helper process for
+each further usable core (``--jobs N`` to choose); every process claims
+kernels one at a time (a file created exclusively in a shared folder) until
+none is left, so that a slow kernel does not hold up the others.
+
+Why the cache is found again: numba stores it next to the kernel sources
+(``rbm_nb/_kernels/__pycache__``, inside site-packages for a normal install,
+or under ``NUMBA_CACHE_DIR``) and keys it on each source file's path and
+modification time, the function's bytecode and the CPU. Run it with ``-P`` or
+from another working directory to compile an installed package rather than
+a source tree in the working directory.
 
 Usage::
 

@@ -136,9 +136,8 @@ def unit_rows(q, tol, allow_nan):
     return out, -1 if count == 0 else _first_unacceptable(q, tol, allow_nan)
 
 
-# rows per block of moving_samples: its vectorised loop writes them, the
-# serial sign pass reads them back while they are still in L1 (256 rows of
-# the three outputs: 22 kB)
+# rows per block of moving_samples: its vectorised loop normalises them into
+# a scratch array that the serial sign pass reads back from L1 (8 kB)
 _SAMPLES_BLOCK = 256
 
 

@@ -44,7 +44,7 @@ import time
 from collections.abc import Callable
 from typing import Any, Final, TypeVar
 
-__all__ = ["MIN_ROWS", "ENV_THREADS", "threads", "free_cores", "launch"]
+__all__ = ["MIN_ROWS", "ENV_THREADS", "threads", "usable_cores", "free_cores", "launch"]
 
 #: Rows from which a parallel twin is used. benchmarks/bench_parallel.py on
 #: the 2-core machine (fused lookup_transform and transform_points of the
@@ -140,6 +140,14 @@ def _own_runnable() -> int:
     return count
 
 
+def usable_cores() -> int:
+    """Cores in this process's affinity mask (all the machine's off Linux)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not on Linux
+        return os.cpu_count() or 1
+
+
 def free_cores() -> int | None:
     """Cores this process may use that no other process's thread wants now.
 
@@ -155,10 +163,7 @@ def free_cores() -> int | None:
     and then, rarely are. None where the counts are not available (not
     Linux): then the load is not taken into account.
     """
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - not on Linux
-        cores = os.cpu_count() or 1
+    cores = usable_cores()
     try:
         first = _runnable()
         if first <= 1:

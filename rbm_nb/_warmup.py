@@ -39,6 +39,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ._kernels._jit import Declared, declared_kernels
+from ._parallel import usable_cores
 
 __all__ = ["KernelStats", "kernel_dispatchers", "kernel_stats", "warm_up", "main"]
 
@@ -180,13 +181,6 @@ def _warm_up_in_parallel(verbose: bool, jobs: int) -> KernelStats:
         shutil.rmtree(claims, ignore_errors=True)
 
 
-def _usable_cores() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
-        return os.cpu_count() or 1
-
-
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     verbose = "-v" in argv or "--verbose" in argv
@@ -194,7 +188,7 @@ def main(argv: list[str] | None = None) -> int:
         _compile_claimed(argv[argv.index("--claims") + 1], verbose)
         print(json.dumps(kernel_stats().__dict__))
         return 0
-    jobs = _usable_cores()
+    jobs = usable_cores()
     if "--jobs" in argv:
         value = argv[argv.index("--jobs") + 1] if argv[-1] != "--jobs" else ""
         if not value.isdigit() or int(value) < 1:

@@ -8,6 +8,7 @@ checks that a first call and the explorer notebook compile nothing.
 from __future__ import annotations
 
 import os
+import time
 
 import pytest
 
@@ -38,3 +39,38 @@ def test_jobs_must_be_a_positive_number(capsys, value):
     argv = ["--jobs"] if value is None else ["--jobs", value]
     assert _warmup.main(argv) == 2
     assert "--jobs needs a positive number of processes" in capsys.readouterr().out
+
+
+def _fake_interpreter(tmp_path, monkeypatch, body):
+    """Helpers of a parallel warm-up start ``sys.executable``: make it a script."""
+    script = tmp_path / "python"
+    script.write_text(f"#!/bin/sh\n{body}\n")
+    script.chmod(0o755)
+    monkeypatch.setattr(_warmup.sys, "executable", str(script))
+
+
+def test_a_failed_helper_fails_the_warm_up_with_its_output(tmp_path, monkeypatch):
+    _fake_interpreter(tmp_path, monkeypatch, "echo 'no numba here'; exit 3")
+    monkeypatch.setattr(_warmup, "_compile", lambda k: None)
+    with pytest.raises(RuntimeError, match=r"exit code 3:\nno numba here"):
+        _warmup.warm_up(jobs=2)
+
+
+def test_an_interrupted_warm_up_stops_its_helpers(tmp_path, monkeypatch):
+    _fake_interpreter(
+        tmp_path, monkeypatch, f"echo $$ > {tmp_path}/pid; exec sleep 600"
+    )
+
+    def interrupted(kernel):
+        while not (tmp_path / "pid").exists():
+            time.sleep(0.01)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(_warmup, "_compile", interrupted)
+    start = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        _warmup.warm_up(jobs=2)
+    assert time.perf_counter() - start < 60  # not the helper's 600 s
+    pid = int((tmp_path / "pid").read_text())
+    with pytest.raises(ProcessLookupError):
+        os.kill(pid, 0)  # killed and reaped

@@ -1,4 +1,4 @@
-"""Build rbm_nb's wheel and sdist and make throw-away virtual environments."""
+"""Build rbm_nb's wheel and sdist, make throw-away virtual environments, seed caches."""
 
 from __future__ import annotations
 
@@ -91,3 +91,29 @@ def site_packages(python: Path) -> Path:
         timeout=60,
     )
     return Path(out.stdout.strip())
+
+
+def seed_numba_cache(tree: Path) -> int:
+    """Copy this checkout's compiled kernels into the rbm_nb source tree ``tree``.
+
+    For a copy of these sources (an unpacked sdist, the Binder simulation's
+    copy of the working tree) whose warm-up would otherwise compile every
+    kernel again: minutes that test nothing the set-up's own warm-up did not.
+    numba keys each cached kernel on its source file's size and modification
+    time (``shutil.copy2`` and tar keep both), and rbm_nb's stamp file (the
+    fingerprint of all kernel sources, ``rbm_nb._numba_cache``) comes along:
+    if any source differed, the first import would drop every copied file
+    and the warm-up compile as usual. Returns the number of cache files
+    copied (0 when this checkout caches elsewhere, under NUMBA_CACHE_DIR).
+    """
+    import rbm_nb
+
+    ours = Path(rbm_nb.__file__).parent / "_kernels" / "__pycache__"
+    theirs = tree / "rbm_nb" / "_kernels" / "__pycache__"
+    files = sorted(ours.glob("*.nb[ci]"))
+    if not files or not (ours / "rbm_nb-kernels.sha256").is_file():
+        return 0
+    theirs.mkdir(exist_ok=True)
+    for f in [*files, ours / "rbm_nb-kernels.sha256"]:
+        shutil.copy2(f, theirs / f.name)
+    return len(files)

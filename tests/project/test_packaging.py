@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import os
 import re
-import shutil
 import signal
 import subprocess
 import tarfile
@@ -21,7 +20,14 @@ from pathlib import Path
 
 import pytest
 from conftest import REPO, SHARED
-from packaging_support import build_dists, clean_env, make_venv, run, uv
+from packaging_support import (
+    build_dists,
+    clean_env,
+    make_venv,
+    run,
+    seed_numba_cache,
+    uv,
+)
 
 import rbm_nb
 
@@ -162,28 +168,9 @@ def test_demo_from_the_wheel_serves_a_writable_copy_of_the_explorer(venv, tmp_pa
         process.wait(timeout=30)
 
 
-def _seed_numba_cache(src: Path) -> int:
-    """Copy this checkout's compiled kernels into the unpacked sdist ``src``.
-
-    numba keys each cached kernel on its source's contents, which the sdist
-    shares with this checkout, and rbm_nb's stamp file (the fingerprint of
-    all kernel sources, ``rbm_nb._numba_cache``) comes along: if any source
-    differed, the first import would drop every copied file and the warm-up
-    compile as usual. Returns the number of cache files copied.
-    """
-    ours = Path(rbm_nb.__file__).parent / "_kernels" / "__pycache__"
-    theirs = src / "rbm_nb" / "_kernels" / "__pycache__"
-    files = sorted(ours.glob("*.nb[ci]"))
-    if not files or not (ours / "rbm_nb-kernels.sha256").is_file():
-        return 0  # this checkout caches elsewhere (NUMBA_CACHE_DIR)
-    theirs.mkdir(exist_ok=True)
-    for f in [*files, ours / "rbm_nb-kernels.sha256"]:
-        shutil.copy2(f, theirs / f.name)
-    return len(files)
-
-
 def test_sdist_fast_tests_pass_against_its_own_tree(dists, venv, tmp_path):
-    """Unpacked sdist + the venv: warm-up, then pytest -m "not slow and not browser"."""
+    """Unpacked sdist + the venv: warm-up, then pytest -m "not slow and not browser"
+    (in two processes at once)."""
     _, sdist = dists
     with tarfile.open(sdist) as tar:
         tar.extractall(tmp_path, filter="data")
@@ -192,26 +179,46 @@ def test_sdist_fast_tests_pass_against_its_own_tree(dists, venv, tmp_path):
     env["RBM_NB_SHARED"] = str(SHARED)  # the real recordings of this machine
     # as .ci/setup.sh does: fill numba's cache before the tests (from this
     # checkout's, which saves compiling every kernel a second time: 2.5 min)
-    seeded = _seed_numba_cache(src)
+    seeded = seed_numba_cache(src)
     warm = run([str(venv), "-m", "rbm_nb._warmup"], timeout=1800, env=env, cwd=src)
     print(f"sdist: {seeded} numba cache files seeded;", warm.stdout + warm.stderr)
-    result = subprocess.run(
-        [
-            str(venv),
-            "-m",
-            "pytest",
-            "-q",
-            "-p",
-            "no:cacheprovider",
-            "-m",
-            "not slow and not browser",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=1800,
-        env=env,
-        cwd=src,
+    # The fast selection in two processes side by side, one per core of CI's
+    # two: the frame core's tests, and every other layer with the docstring
+    # examples (about half the time each). The checks that run last in a
+    # session (tests/test_*.py: what numba compiled) run in both.
+    layers = sorted(
+        p.name for p in (src / "tests").iterdir() if any(p.glob("test_*.py"))
     )
-    summary = result.stdout.strip().splitlines()[-1] if result.stdout.strip() else ""
-    assert result.returncode == 0, result.stdout[-6000:] + result.stderr[-3000:]
-    assert " passed" in summary and "error" not in summary, summary
+    assert "core" in layers, layers
+    last = [str(p.relative_to(src)) for p in sorted(src.glob("tests/test_*.py"))]
+    halves = (
+        ["tests/core", *last],
+        [*(f"tests/{name}" for name in layers if name != "core"), "rbm_nb", *last],
+    )
+    command = [str(venv), "-m", "pytest", "-q", "-p", "no:cacheprovider"]
+    command += ["-m", "not slow and not browser"]
+    logs = [tmp_path / f"half{k}.log" for k in range(len(halves))]
+    runs = []
+    try:
+        for paths, log in zip(halves, logs, strict=True):
+            with log.open("w") as sink:  # the child keeps its own copy open
+                runs.append(
+                    subprocess.Popen(
+                        [*command, *paths],
+                        stdout=sink,
+                        stderr=subprocess.STDOUT,
+                        env=env,
+                        cwd=src,
+                    )
+                )
+        codes = [process.wait(timeout=1800) for process in runs]
+    finally:
+        for process in runs:
+            process.kill()
+            process.wait()
+    for paths, log, code in zip(halves, logs, codes, strict=True):
+        out = log.read_text()
+        summary = out.strip().splitlines()[-1] if out.strip() else ""
+        print(f"sdist: pytest {' '.join(paths)}: {summary}")
+        assert code == 0, f"pytest {' '.join(paths)}:\n{out[-6000:]}"
+        assert " passed" in summary and "error" not in summary, summary

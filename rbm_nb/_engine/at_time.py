@@ -82,7 +82,7 @@ def transform_at_times(outof, into, times):
     continuous, discrete = _moving(steps)
     _time.check_compatible([f._track for f in continuous + discrete] + [track])
     _check_range(continuous, track)
-    t, r = _chain.compose(steps, _chain.Target(track, None))
+    t, r = _chain.evaluate(steps, _chain.Target(track, None))
     t = np.broadcast_to(t, (len(track), 3))[inverse]
     r = np.broadcast_to(r, (len(track), 4))[inverse]
     return (t[0], r[0], None) if scalar else (t, r, values)

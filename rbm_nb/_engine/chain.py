@@ -497,6 +497,20 @@ def apply(kind: str, steps, target: Target, data: np.ndarray) -> np.ndarray:
     return kr.transform_blocks(r, t, data, kind == "points")
 
 
+def evaluate(steps, target: Target, rotation_only: bool = False):
+    """Translation (n|1, 3) and rotation (n|1, 4) of a chain at the target times.
+
+    The fused kernels where the chain has something to interpolate (squad
+    coefficients computed only for the segments read); at their own times
+    frames are slices, which :func:`compose` composes without evaluating
+    anything. ``rotation_only`` as for :func:`lookup`.
+    """
+    plan, own = fused_plan(steps, target)
+    if plan is not None and not all(own):
+        return _fused.lookup(plan, target, own, rotation_only)
+    return compose(steps, target)
+
+
 def lookup(frame, to_frame, rotation_only: bool = False):
     """Translation (n|1, 3), rotation (n|1, 4) and Target from frame to to_frame.
 
@@ -505,15 +519,11 @@ def lookup(frame, to_frame, rotation_only: bool = False):
     """
     steps = chain(frame, to_frame)
     target = match([f for f, _ in steps])
-    plan, own = fused_plan(steps, target)
-    if plan is not None and not all(own):
-        # something to interpolate; at their own times frames are slices,
-        # which the step-by-step path composes without evaluating anything
-        t, r = _fused.lookup(plan, target, own, rotation_only)
-        return t, r, target
-    t, r = compose(steps, target)
+    t, r = evaluate(steps, target, rotation_only)
     n = len(target)
-    if target.track is not None and t.shape[0] != n:
+    # composed rows of a chain that does not move here, once (r: the fused
+    # kernels' t has no rows when rotation_only)
+    if target.track is not None and r.shape[0] != n:
         t = np.repeat(t, n, axis=0)
         r = np.repeat(r, n, axis=0)
     return t, r, target

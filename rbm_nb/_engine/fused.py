@@ -233,13 +233,22 @@ def _build(steps, compose) -> Plan | None:
 def _run(p: Plan, serial, parallel, args: tuple[Any, ...], target, offsets, own):
     """``serial(*args)`` or its prange twin (``_parallel.launch``), tables kept safe.
 
-    A call that reads only table rows known to be computed runs without a
-    lock: nothing writes those rows again. Otherwise it holds the table
-    lock, and a parallel call first fills every table row it will read
+    A short call (serial) holds the table lock. A long one that reads only
+    table rows known to be computed runs without it: nothing writes those
+    rows again. Otherwise it holds the lock, and a parallel call first fills
+    every table row it will read
     (``prefill_chain``, also on all threads), so that the twin's threads
     only read the tables; the intervals it filled are recorded.
     """
     base = target.track.base
+    if len(base) < _parallel.MIN_ROWS:
+        # a serial call (launch's choice for so few rows): the lock costs less
+        # than finding out whether it is needed (unfilled: tens of µs, most
+        # of a one-row lookup). The tables are not rescanned for completeness
+        # (a pass over every row): rows computed here are found computed by
+        # any later call, and a long call's prefill records them.
+        with _TABLE_LOCK:
+            return serial(*args)
     unfilled = p.unfilled(base, offsets, own)
     if not unfilled:
         return _parallel.launch(serial, parallel, len(base), *args)

@@ -312,7 +312,7 @@ def chain_body_rates(
     n = target.shape[0]
     out, slope_w, flips, checkpoint, factors, st = _buffers(n)
     rows = np.empty((min(SUPER, n), 4))
-    work = np.empty(WORK * BLOCK)
+    work = np.zeros(WORK * BLOCK)  # zeros: see fused._ACC
     cur = np.full(SLOTS, -1, dtype=np.int64)
     computed = 0
     for s0 in range(0, n, SUPER):
@@ -372,7 +372,7 @@ def chain_body_rates_parallel(
                 a = s0 + item * piece
                 b = min(a + piece, s1)
                 if a < b:
-                    work_c = np.empty(WORK * BLOCK)
+                    work_c = np.zeros(WORK * BLOCK)  # zeros: see fused._ACC
                     cur_c = np.full(SLOTS, -1, dtype=np.int64)
                     computed += _evaluate(
                         plan, statics, offsets, gaps, own,

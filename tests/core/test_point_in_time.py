@@ -115,6 +115,41 @@ def test_any_order_repeats_and_scalars(tree):
     assert lookup_at("eye", "obj", np.float32(2.25))[0].shape == (3,)
 
 
+def test_times_are_evaluated_on_the_segments_they_read():
+    """The fused kernels: squad table rows around the requested times only,
+    not the spline coefficients of every sample (the step-by-step route),
+    with the step-by-step route's values."""
+    from rbm_nb._engine import chain
+    from rbm_nb._kernels import fused
+
+    n = 5000
+    ts = np.linspace(0.0, 50.0, n)
+    t, r = walk(n, 3, rot_scale=0.02)
+    rbm.clear_registry()
+    rbm.register_frame("world")
+    rbm.register_frame("head", parent="world", translation=t, rotation=r, timestamps=ts)
+    rbm.register_frame("eye", parent="head", translation=[0.03, 0, 0], rotation=EYE_R)
+    times = np.array([10.005, 10.012, 33.3, 0.0, 50.0])
+    got_t, got_r = lookup_at("eye", "world", times)
+    head = resolve_frame("head")
+    assert head._coefficients is None  # no coefficients for all 5000 samples
+    computed = int(np.count_nonzero(head._fused_table.rows[:, -1]))
+    assert 0 < computed <= 4 * fused.RUN, computed
+    steps = chain.chain(resolve_frame("eye"), resolve_frame("world"))
+    track, inverse, _, _ = rbm._time.requested_times(times)  # sorted, unique
+    want_t, want_r = chain.compose(steps, chain.Target(track))
+    np.testing.assert_allclose(got_t, want_t[inverse], rtol=0, atol=1e-12)
+    assert same_rotation(got_r, want_r[inverse], 1e-12)
+    # one time, as the tf2-style Transformer asks, many times over
+    for k, when in enumerate(np.linspace(0.01, 49.99, 40)):
+        one_t, one_r = lookup_at("eye", "world", when)
+        want_t, want_r = chain.compose(
+            steps, chain.Target(rbm._time.requested_times(when)[0])
+        )
+        np.testing.assert_allclose(one_t, want_t[0], rtol=0, atol=1e-12, err_msg=k)
+        assert same_rotation(one_r, want_r[0], 1e-12), k
+
+
 def test_sample_times_give_the_samples(tree):
     t, r = lookup_at("head", "world", HEAD_TS)
     np.testing.assert_array_equal(t, HEAD_T)

@@ -155,11 +155,12 @@ def _qexp_table(w, x, y, z):
 
     Below ``SERIES_ANGLE`` the truncated series of cos(v) and sin(v)/v are
     exact to under one rounding error (and need neither libm's sin/cos nor
-    a division); elsewhere the libm route. Within 4 ulp of ``_qexp1``
-    (tests/core/test_fused.py).
+    a division); elsewhere the libm route. A zero vector part (a control
+    point between repeated samples) takes the series too: cos and sin(v)/v
+    are then 1. Within 4 ulp of ``_qexp1`` (tests/core/test_fused.py).
     """
     v2 = x * x + y * y + z * z
-    if v2 < SERIES_ANGLE * SERIES_ANGLE and v2 > _EPS * _EPS:
+    if v2 < SERIES_ANGLE * SERIES_ANGLE and (v2 > _EPS * _EPS or v2 == 0.0):
         # w is a sum of log-norms of unit quaternions (~1e-16): then 1 + w
         # is exp(w) to within w²/2, below half an ulp of 1
         e = 1.0 + w if abs(w) < _TINY else math.exp(w)
@@ -174,11 +175,14 @@ def _qlog_table(w, x, y, z):
     """log of a quaternion as ``quaternion._qlog1``, with a short series for small arcs.
 
     For w > 0 and |v| < SERIES_RATIO w, atan2(|v|, w) / |v| is
-    atan_over_x((|v|/w)²) / w: no sqrt, no atan2. Within 4 ulp of
-    ``_qlog1`` (tests/core/test_fused.py).
+    atan_over_x((|v|/w)²) / w: no sqrt, no atan2. A zero vector part (the
+    step between repeated samples, 30 % of the real eye recording's) takes
+    it too: its vector part is then 0 and its real part the same series of
+    log |q|. Within 4 ulp of ``_qlog1`` for quaternions within a few ulp of
+    unit norm, as the steps between unit samples are (tests/core/test_fused.py).
     """
     b2 = x * x + y * y + z * z
-    if w > 0.0 and b2 < (SERIES_RATIO * w) ** 2 and b2 > (_EPS * w) ** 2:
+    if w > 0.0 and b2 < (SERIES_RATIO * w) ** 2 and (b2 > (_EPS * w) ** 2 or b2 == 0.0):
         inv_w = 1.0 / w
         f = atan_over_x_small(b2 * inv_w * inv_w) * inv_w
         b = math.sqrt(b2)  # the real part exactly as _qlog1 forms it
@@ -387,7 +391,8 @@ def _table_row(r, rp, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, 
 FILL_BLOCK = 64
 # scratch rows: samples (0:4), intervals and their inverses (4, 5), logs
 # (6:10), whether a log needs the exact route (10), the table row (11:26),
-# whether the row needs the exact route (26), the control point b (27:31)
+# whether the row needs the exact route (26), the control point b (27:31),
+# whether the row's own arc has a zero log and takes the geodesic instead (31)
 _S_Q = 0
 _S_DT = 4
 _S_IDT = 5
@@ -396,7 +401,8 @@ _S_LBAD = 10
 _S_OUT = 11
 _S_BAD = 26
 _S_B = 27
-_S_ROWS = 31
+_S_ZERO = 31
+_S_ROWS = 32
 
 
 @helper(inline=True)
@@ -409,7 +415,7 @@ def _control_point_series(rw, rx, ry, rz, ew, ex, ey, ez):
     w, x, y, z = _qmul1(rw, rx, ry, rz, e * cos_small(v2), k * ex, k * ey, k * ez)
     fast = (
         (v2 < SERIES_ANGLE * SERIES_ANGLE)
-        & (v2 > _EPS * _EPS)
+        & ((v2 > _EPS * _EPS) | (v2 == 0.0))
         & (abs(ew) < _TINY)
         & (abs(w * w + x * x + y * y + z * z - 1.0) <= 1e-12)
     )
@@ -450,7 +456,7 @@ def _fill_block(r, rp, t, c, i0, i1, s):
         fast = (
             (pw > 0.0)
             & (b2 < (SERIES_RATIO * pw) ** 2)
-            & (b2 > (_EPS * pw) ** 2)
+            & ((b2 > (_EPS * pw) ** 2) | (b2 == 0.0))
             & (abs(d) < _TINY)
         )
         s[_S_LBAD, k] = 0.0 if fast else 1.0
@@ -508,20 +514,40 @@ def _fill_block(r, rp, t, c, i0, i1, s):
         ow, ox, oy, oz = _qmul1(
             rw, rx, ry, rz, 0.0, lx * inv_theta, ly * inv_theta, lz * inv_theta
         )
+        units = (abs(rw * rw + rx * rx + ry * ry + rz * rz - 1.0) <= 1e-12) & (
+            abs(qw * qw + qx * qx + qy * qy + qz * qz - 1.0) <= 1e-12
+        )
         fast = (
-            (abs(rw * rw + rx * rx + ry * ry + rz * rz - 1.0) <= 1e-12)
-            & (abs(qw * qw + qx * qx + qy * qy + qz * qz - 1.0) <= 1e-12)
+            units
             & (theta2 > 0.0)
             & (abs(lw) < _TINY)
             & (rw * qw + rx * qx + ry * qy + rz * qz > 0.0)
         )
+        zero = units & (theta2 == 0.0)
         s[_S_OUT + 4, b] = theta
         s[_S_OUT + 5, b] = ow
         s[_S_OUT + 6, b] = ox
         s[_S_OUT + 7, b] = oy
         s[_S_OUT + 8, b] = oz
-        if not fast:
+        s[_S_ZERO, b] = 1.0 if zero else 0.0
+        if not (fast or zero):
             s[_S_BAD, b] = 1.0
+    for b in range(m):
+        # a zero log (a repeated sample, 30 % of the real eye recording's
+        # steps): the arc is _geodesic_table's, as the scalar code takes it
+        # (one branch per row here, rather than that route for every row in
+        # the vector loop above, which took 6 % more time on a recording without
+        # repeats)
+        if s[_S_ZERO, b] != 0.0:
+            g = _geodesic_table(
+                s[0, b + 1], s[1, b + 1], s[2, b + 1], s[3, b + 1],
+                s[0, b + 2], s[1, b + 2], s[2, b + 2], s[3, b + 2],
+            )  # fmt: skip
+            s[_S_OUT + 4, b] = g[0]
+            s[_S_OUT + 5, b] = g[1]
+            s[_S_OUT + 6, b] = g[2]
+            s[_S_OUT + 7, b] = g[3]
+            s[_S_OUT + 8, b] = g[4]
     for b in range(m):
         # the arc a -> b (_geodesic_table's series route, no flip)
         aw, ax, ay, az = (

@@ -322,6 +322,50 @@ def test_squad_table_equals_the_engine_coefficients():
     assert not_unit > 0
 
 
+def _repeated(rng, n, step):
+    """Unit rotations of an eye tracker: runs of 1-3 exact repeats of a sample
+    (30 % of the real eye recording's steps are zero)."""
+    r = kq.unflip(_rotations(rng, n, step))
+    repeat = rng.random(n) < 0.3
+    repeat[0] = False
+    for i in np.flatnonzero(repeat):
+        r[i] = r[i - 1]
+    return r
+
+
+def test_squad_table_of_repeated_samples():
+    """Zero steps take the vector route (zero logs, zero control-point arcs,
+    arcs of length 0): the same bits as the row-by-row scalar route, within
+    4 ulp of the engine's coefficients."""
+    rng = np.random.default_rng(21)
+    n = 700
+    r = _repeated(rng, n, 0.01)
+    steps = np.all(r[1:] == r[:-1], axis=1)
+    assert 0.25 < steps.mean() < 0.35 and np.any(steps[1:] & steps[:-1])
+    t = np.cumsum(rng.uniform(0.004, 0.006, n))
+    stored = np.where(rng.uniform(size=n) < 0.3, -1.0, 1.0)[:, None] * r
+    table = kf.squad_table(r, stored, t)
+    one_by_one = np.zeros_like(table)
+    for i in range(n):
+        kf._fill_row(r, stored, t, one_by_one, i)
+    np.testing.assert_array_equal(table.view(np.int64), one_by_one.view(np.int64))
+    a, b = kq.squad_coefficients(r, t)
+    seg = kq.squad_segments(r, a, b)
+    tol = 4 * np.finfo(float).eps
+    np.testing.assert_allclose(table[:, 0:4], a, rtol=0, atol=tol)
+    assert np.all(seg[:, 10] == 0.0)  # every segment unit
+    np.testing.assert_allclose(table[:, 4], seg[:, 0], rtol=0, atol=tol)
+    np.testing.assert_allclose(table[:, 9], seg[:, 5], rtol=0, atol=tol)
+    # and squad through the table gives the engine's values between samples
+    rbm.register_frame("world")
+    rbm.register_frame("m", parent="world", rotation=stored, timestamps=t)
+    between = t[:-1] + np.diff(t) * rng.uniform(0.05, 0.95, n - 1)
+    got = rbm.lookup_transform("m", "world", time=between)[1]
+    m = _frames.resolve_frame("m")
+    want = _chain.resample_frame(m, _chain.Target(_time.as_track(between)))[1]
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+
+
 def test_series_exp_and_log_are_within_4_ulp_of_libm():
     """The table's exp/log (short series below the thresholds) against libm's."""
     rng = np.random.default_rng(8)
@@ -367,6 +411,26 @@ def test_exp_and_log_near_the_identity_are_within_4_ulp_of_libm():
         np.testing.assert_array_max_ulp(got, want, maxulp=4)
         tiny += got[0] != 0.0
     assert tiny > n // 10  # norms not exactly 1 took the short series
+    # zero vector parts (repeated samples): the short series too, vector part 0.
+    # A unit sample times its own inverse is 1 to within a few ulp (the
+    # series' log of the norm is within 4 ulp of libm's there, not for norms
+    # further off, which no zero step of unit samples gives)
+    units = rng.normal(size=(2000, 4))
+    units /= np.linalg.norm(units, axis=1, keepdims=True)
+    ws = np.array([kf._log_step(np.array([q, q]), 0)[0] for q in units])
+    assert np.all(np.abs(ws) < 8 * 2.0**-52)  # log |q⁻¹ q|: zero to a few ulp
+    own = np.array([kq._qmul1(*kq._qinv1(*q), *q)[0] for q in units])
+    assert np.all(np.abs(own - 1.0) <= 4 * 2.0**-52)
+    ulps = np.arange(-8, 9)
+    for w in np.concatenate([1.0 + ulps * 2.0**-53, 1.0 + ulps[4:-4] * 2.0**-52]):
+        got = np.array(kf._qlog_table(w, 0.0, 0.0, 0.0))
+        want = np.array(kq._qlog1(w, 0.0, 0.0, 0.0))
+        np.testing.assert_array_max_ulp(got, want, maxulp=4)
+        assert np.all(got[1:] == 0.0)
+    for w in np.concatenate([ulps * 2.0**-60, rng.normal(scale=1e-9, size=50)]):
+        got = np.array(kf._qexp_table(w, 0.0, 0.0, 0.0))
+        want = np.array(kq._qexp1(w, 0.0, 0.0, 0.0))
+        np.testing.assert_array_max_ulp(got, want, maxulp=4)
 
 
 def test_squad_rows_are_computed_only_for_the_segments_used():

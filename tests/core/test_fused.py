@@ -334,9 +334,11 @@ def _repeated(rng, n, step):
 
 
 def test_squad_table_of_repeated_samples():
-    """Zero steps take the vector route (zero logs, zero control-point arcs,
-    arcs of length 0): the same bits as the row-by-row scalar route, within
-    4 ulp of the engine's coefficients."""
+    """A recording with runs of repeated samples, whose zero steps the table's
+    blocks compute in their vector loops (zero logs, zero control-point
+    vectors, arcs of length 0): the same bits as the row-by-row scalar
+    route, within 4 ulp of the engine's coefficients. (The speed-up is
+    measured, not tested: the eye recording's table, 7.5 ms from 10.1.)"""
     rng = np.random.default_rng(21)
     n = 700
     r = _repeated(rng, n, 0.01)

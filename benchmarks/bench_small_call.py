@@ -6,7 +6,9 @@ warm-up call so that numba compilation is not counted. Then the same kind of
 calls through a moving chain (a head of 66,000 samples at 200 Hz, as the
 example recording's): a lookup at one time, as the tf2-style Transformer and
 the widgets make them, the first one after registration, and one point at
-one time against rigid-body-motion when it is installed.
+one time against rigid-body-motion when it is installed; and, when
+RBM_NB_DATA_DIR holds the example recordings, one-time lookups through the
+real head/eye frames of ``bench_fused.py``.
 
 Run:  PYTHONPATH=. .venv/bin/python benchmarks/bench_small_call.py
 """
@@ -63,6 +65,7 @@ def main() -> None:
     for name, fn in cases.items():
         print(f"{_best(fn) * 1e6:8.1f} µs  {name}")
     moving()
+    recording()
 
 
 def _register_moving(lib, n: int) -> np.ndarray:
@@ -127,6 +130,37 @@ def moving(n: int = 66_000) -> None:
     print(
         f"{theirs * 1e6:8.1f} µs  the same in rigid-body-motion ({theirs / ours:.1f}x)"
     )
+
+
+def recording() -> None:
+    """One-time lookups left_eye -> world through the real recording's frames."""
+    from bench_fused import real_workload, register  # this folder, run as a script
+
+    real = real_workload()
+    if real is None:
+        return
+    frames, _, eye_ts = real[:3]
+    step = eye_ts[1] - eye_ts[0]
+    when = eye_ts[len(eye_ts) // 2] + step / 3
+    many = np.sort(eye_ts[100:-100][:: len(eye_ts) // 60][:60] + step / 3)
+    register(rbm, frames)
+    rbm.lookup_transform("left_eye", "world", time=many)  # kernels loaded
+    register(rbm, frames)
+    start = timeit.default_timer()
+    rbm.lookup_transform("left_eye", "world", time=when)
+    first = timeit.default_timer() - start
+    print(f"{first * 1e6:8.1f} µs  real recording: lookup_transform left_eye -> world "
+          "at one time, first call after registering")  # fmt: skip
+    cases = {
+        "real recording: the same, then": lambda: rbm.lookup_transform(
+            "left_eye", "world", time=when
+        ),
+        "real recording: at 60 times": lambda: rbm.lookup_transform(
+            "left_eye", "world", time=many
+        ),
+    }
+    for name, fn in cases.items():
+        print(f"{_best(fn, 500) * 1e6:8.1f} µs  {name}")
 
 
 if __name__ == "__main__":

@@ -202,21 +202,30 @@ player = scene.player()
 plot = explorer.explorer_plot(series, player)
 scene.widget.height = 420
 widgets.VBox([scene.widget, player] + ([plot] if plot is not None else []))""",
-    # 2: the kernel is busy
-    """import time
-time.sleep(5)
-print("slept")""",
+    # 2: the kernel is busy until the test releases it (a fixed sleep ended too
+    # early on a slow machine, before the controls had been pressed); it gives up
+    # after two minutes so that a failed test does not leave it running
+    """import time, pathlib
+release = pathlib.Path({release!r})
+deadline = time.monotonic() + 120
+while not release.exists() and time.monotonic() < deadline:
+    time.sleep(0.05)
+print("released" if release.exists() else "gave up")""",
     # 3: what the kernel learned, and its sockets
     """print("KERNEL", round(player.time, 3), player.playing, player.speed)
 print("NEW SOCKETS", sorted(listening() - before))""",
 ]
 
 
-def explorer_notebook(path: Path) -> Path:
+def explorer_notebook(path: Path, release: Path) -> Path:
+    """Write the explorer notebook; its busy cell waits for ``release`` to exist."""
     import nbformat
 
     nb = nbformat.v4.new_notebook()
-    nb.cells = [nbformat.v4.new_code_cell(source) for source in CELLS]
+    nb.cells = [
+        nbformat.v4.new_code_cell(source.replace("{release!r}", repr(str(release))))
+        for source in CELLS
+    ]
     nb.metadata["kernelspec"] = {
         "name": "python3",
         "display_name": "Python 3",
@@ -283,7 +292,8 @@ def test_explorer_plays_in_the_browser_while_the_kernel_is_busy(
 
     if REAL_DATA.is_dir():
         monkeypatch.setenv("RBM_NB_DATA_DIR", str(REAL_DATA))
-    notebook = explorer_notebook(tmp_path / "explorer_busy.ipynb")
+    release = tmp_path / "release_busy_cell"
+    notebook = explorer_notebook(tmp_path / "explorer_busy.ipynb", release)
     (tmp_path / "home").mkdir()
     server = JupyterLab(tmp_path / "home", [notebook], app=app, proxy=False)
     context = browser.new_context(viewport={"width": 1300, "height": 1400})
@@ -342,7 +352,7 @@ def test_explorer_plays_in_the_browser_while_the_kernel_is_busy(
         idle_kernel = page.evaluate(MEASURE_JS, 1500)
         measurements["kernel idle"] = idle_kernel
 
-        # another cell keeps the kernel busy for 5 s; the view keeps moving
+        # another cell keeps the kernel busy until released; the view keeps moving
         run_cell(page, 2)
         page.wait_for_function(
             """() => document.querySelectorAll('.jp-Notebook .jp-CodeCell')[2]
@@ -390,8 +400,9 @@ def test_explorer_plays_in_the_browser_while_the_kernel_is_busy(
         assert changed_pixels(before, after) > 50  # the head moved in the view
         assert still_busy, "the kernel finished before the controls were tested"
 
+        release.touch()
         wait_done(page, 2, timeout=60000)
-        assert "slept" in output_text(page, 2)
+        assert "released" in output_text(page, 2)
         # the kernel learned the paused time, speed and state
         run_cell(page, 3)
         wait_done(page, 3)

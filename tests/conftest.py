@@ -140,6 +140,32 @@ def recording_comm(monkeypatch):
     ipywidgets.Widget.close_all()
 
 
+@pytest.fixture(scope="session")
+def docs_build(tmp_path_factory):
+    """The documentation build, running in the background from first use."""
+    pytest.importorskip("sphinx", reason="the docs extra is not installed")
+    from docs_build import DocsBuild
+
+    build = DocsBuild(tmp_path_factory.mktemp("docs"))
+    yield build
+    build.stop()
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _docs_build_starts_with_the_project_tests(request):
+    """Start the docs build with the first project test when the docs test runs.
+
+    It then overlaps the Binder simulation (mostly pip, one core) instead of
+    adding its one and a half minutes after it.
+    """
+    if request.path.parent.name != "project" or request.path.name == "test_docs.py":
+        return
+    if importlib.util.find_spec("sphinx") is None:
+        return  # test_docs.py skips
+    if any(item.path.name == "test_docs.py" for item in request.session.items):
+        request.getfixturevalue("docs_build")
+
+
 @pytest.fixture(scope="module")
 def browser():
     """Debian's chromium driven by playwright (never a downloaded browser)."""

@@ -7,40 +7,17 @@ what changed (first build here: about 2 minutes, a rebuild: about 15 s).
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
-
 import pytest
 from conftest import REPO
 
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(1200)]
 
 
-def test_sphinx_builds_with_warnings_as_errors(tmp_path):
-    pytest.importorskip("sphinx", reason="the docs extra is not installed")
-    out = tmp_path / "html"
-    result = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "sphinx",
-            "-W",
-            "--keep-going",
-            "-q",
-            "-b",
-            "html",
-            "-d",
-            str(tmp_path / "doctrees"),
-            str(REPO / "docs"),
-            str(out),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=1100,
-        env={**os.environ, "MPLBACKEND": "Agg"},
-    )
-    assert result.returncode == 0, result.stderr[-5000:]
+def test_sphinx_builds_with_warnings_as_errors(docs_build):
+    # (the build started with the first project test: tests/docs_build.py)
+    returncode, output = docs_build.wait(timeout=1100)
+    assert returncode == 0, output[-5000:]
+    out = docs_build.out
     # the API reference is generated from the docstrings
     api = (out / "generated" / "rbm_nb.html").read_text()
     assert "transform_points" in api and "Parameters" in api

@@ -83,9 +83,14 @@ def transform_at_times(outof, into, times):
     _time.check_compatible([f._track for f in continuous + discrete] + [track])
     _check_range(continuous, track)
     t, r = _chain.evaluate(steps, _chain.Target(track, None))
-    t = np.broadcast_to(t, (len(track), 3))[inverse]
-    r = np.broadcast_to(r, (len(track), 4))[inverse]
-    return (t[0], r[0], None) if scalar else (t, r, values)
+    # (1, 3) and (1, 4) where the chain does not move; copies either way (a
+    # static chain's rows are the cached ones)
+    t, r = t.reshape(-1, 3), r.reshape(-1, 4)
+    if scalar:
+        return t[0].copy(), r[0].copy(), None
+    if t.shape[0] == 1:
+        t, r = np.repeat(t, len(track), axis=0), np.repeat(r, len(track), axis=0)
+    return t[inverse], r[inverse], values
 
 
 def latest_common_time(outof, into):

@@ -96,7 +96,7 @@ def _table(frame) -> _Table:
 class Plan:
     """A chain prepared for the fused kernels."""
 
-    __slots__ = ("steps", "code", "statics", "frames", "kinds", "tables")
+    __slots__ = ("steps", "code", "statics", "frames", "kinds", "tables", "_slots")
 
     def __init__(self, steps, code, statics, frames, kinds, tables) -> None:
         self.steps = steps  # the chain's step list (identity keys the cache)
@@ -105,6 +105,20 @@ class Plan:
         self.frames = frames
         self.kinds = kinds
         self.tables = tables
+        self._slots: tuple[np.ndarray, ...] | None = None
+
+    def arguments(self, offsets: np.ndarray, own) -> tuple[Any, ...]:
+        """The kernels' leading arguments: chain code, statics, offsets, gaps,
+        own runs and the slot arrays.
+
+        The slot arrays are the same at every call (a frame's data and its
+        table never change once registered): gathered once. The gaps are
+        read at each call, as ``max_gap`` is a plain attribute.
+        """
+        slots = self._slots
+        if slots is None:
+            slots = self._slots = self.slots()
+        return (self.code, self.statics, offsets, self.gaps(), _own(own)) + slots
 
     def slots(self) -> tuple[np.ndarray, ...]:
         """The 3 x 5 slot arrays for the kernels."""
@@ -290,11 +304,7 @@ def lookup(p: Plan, target, own, rotation_only: bool = False):
 
     offsets = p.offsets(target)
     # one tuple: the kernels take the 3 x 5 slot arrays as separate arguments
-    args: tuple[Any, ...] = (
-        (p.code, p.statics, offsets, p.gaps(), _own(own))
-        + p.slots()
-        + (base, rotation_only)
-    )
+    args: tuple[Any, ...] = p.arguments(offsets, own) + (base, rotation_only)
     t, r, _ = _run(
         p, kf.lookup_chain, kf.lookup_chain_parallel, args, target, offsets, own
     )
@@ -310,11 +320,7 @@ def transform(p: Plan, target, own, data: np.ndarray, kind: str) -> np.ndarray:
     base = target.track.base
 
     offsets = p.offsets(target)
-    args: tuple[Any, ...] = (
-        (p.code, p.statics, offsets, p.gaps(), _own(own))
-        + p.slots()
-        + (base, data, mode)
-    )
+    args: tuple[Any, ...] = p.arguments(offsets, own) + (base, data, mode)
     out, _ = _run(
         p, kf.transform_chain, kf.transform_chain_parallel, args, target, offsets, own
     )
@@ -334,9 +340,7 @@ def body_rates(p: Plan, target, own, in_reference: bool):
     base = target.track.base
     offsets = p.offsets(target)
     axes = kv.REFERENCE if in_reference else kv.BODY
-    args: tuple[Any, ...] = (
-        (p.code, p.statics, offsets, p.gaps(), _own(own)) + p.slots() + (base, axes)
-    )
+    args: tuple[Any, ...] = p.arguments(offsets, own) + (base, axes)
     rates, bad, _ = _run(
         p,
         kv.chain_body_rates,

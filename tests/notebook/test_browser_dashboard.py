@@ -6,9 +6,9 @@ values). Checked in the page: the panels render and the NaN run is a break in
 the line; dragging and the wheel zoom (the range reaches the kernel); a click
 in the plot seeks the Player (the kernel sees the new time) and moves the 3D
 view; the cursor follows the Player, also while it plays with the kernel
-asleep; selecting in the tree selects in the 3D view and a click on a frame
-in 3D selects it in the tree. Then the same plot in a
-``to_html`` export, offline. Screenshots go to test-artifacts/.
+busy (a button holds it until the test lets go); selecting in the tree
+selects in the 3D view and a click on a frame in 3D selects it in the tree.
+Then the same plot in a ``to_html`` export, offline. Screenshots go to test-artifacts/.
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ NAN_RUN = (8.0, 10.0)  # seconds with NaN values in the "wave" panel
 SETUP = f"""
 import numpy as np
 import ipywidgets as widgets
+import pathlib
 import time
 import rbm_nb as rbm
 from rbm_nb.scene import Scene
@@ -66,15 +67,22 @@ plot.observe(lambda c: setattr(kernel_range, "value", f"KERNEL-RANGE {{c.new}}")
 jump = widgets.Button(description="jump to 15 s")
 jump.on_click(lambda _: setattr(player, "time", 15.0))
 busy = widgets.Button(description="keep the kernel busy")
-busy.on_click(lambda _: time.sleep(4))
+release = pathlib.Path(RELEASE)
+def hold(_):  # until the test releases it (at most a minute)
+    deadline = time.monotonic() + 60
+    while not release.exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
+busy.on_click(hold)
 widgets.VBox([widgets.HBox([tree, scene.widget]), player, plot, kernel_time, kernel_range, jump, busy])
 """
 
 
-def _notebook(path):
+def _notebook(path, release):
+    """The dashboard notebook; its busy button holds the kernel until ``release``
+    exists."""
     nb = nbformat.v4.new_notebook()
     nb.cells = [
-        nbformat.v4.new_code_cell(SETUP),
+        nbformat.v4.new_code_cell(SETUP.replace("RELEASE", repr(str(release)))),
         nbformat.v4.new_code_cell('print("DASHBOARD-READY")'),
     ]
     nb.metadata["kernelspec"] = {
@@ -87,9 +95,15 @@ def _notebook(path):
 
 
 @pytest.fixture(scope="module")
-def lab(tmp_path_factory):
+def busy_release(tmp_path_factory):
+    """The file whose creation ends the busy button's hold on the kernel."""
+    return tmp_path_factory.mktemp("busy") / "release"
+
+
+@pytest.fixture(scope="module")
+def lab(tmp_path_factory, busy_release):
     tmp = tmp_path_factory.mktemp("dashboard")
-    notebook = _notebook(tmp / "dashboard.ipynb")
+    notebook = _notebook(tmp / "dashboard.ipynb", busy_release)
     (tmp / "lab").mkdir()
     server = JupyterLab(tmp / "lab", [notebook])
     try:
@@ -303,8 +317,9 @@ def cursor_left(page, i=0):
     )
 
 
-def test_cursor_follows_play_while_the_kernel_is_busy(dashboard):
+def test_cursor_follows_play_while_the_kernel_is_busy(dashboard, busy_release):
     page = dashboard
+    status = page.locator(".jp-Notebook-ExecutionIndicator")
     page.get_by_role("button", name="jump to 15 s").click()
     page.wait_for_function(
         "document.querySelector('.rbm-ts-time').textContent.startsWith('t = 15.000 s')",
@@ -313,7 +328,11 @@ def test_cursor_follows_play_while_the_kernel_is_busy(dashboard):
     page.locator(".rbm-player .rbm-big-back").click()  # back to 5 s
     page.wait_for_timeout(300)
     page.get_by_role("button", name="keep the kernel busy").click()
-    page.wait_for_timeout(300)  # the kernel now sleeps for 4 s
+    # the kernel now waits for busy_release (a fixed sleep could end before
+    # the checks on a slow machine)
+    page.wait_for_selector(
+        ".jp-Notebook-ExecutionIndicator[data-status='busy']", timeout=30000
+    )
     start = cursor_left(page)
     page.locator(".rbm-player .rbm-play").click()
     page.wait_for_timeout(1500)
@@ -328,6 +347,11 @@ def test_cursor_follows_play_while_the_kernel_is_busy(dashboard):
         page.locator(".jp-OutputArea-output").first.screenshot(),
     )
     page.locator(".rbm-player .rbm-play").click()  # pause
+    assert status.get_attribute("data-status") == "busy", "the kernel was not busy"
+    busy_release.touch()
+    page.wait_for_selector(
+        ".jp-Notebook-ExecutionIndicator[data-status='idle']", timeout=60000
+    )
     # the plot and the Player print the time the same way
     assert readout[len("t = ") :].split(" s")[0].replace(".", "").isdigit()
     assert " s" in player_readout

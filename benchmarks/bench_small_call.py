@@ -89,27 +89,40 @@ def _register_moving(lib, n: int) -> np.ndarray:
     return ts
 
 
-def moving(n: int = 66_000) -> None:
-    ts = _register_moving(rbm, n)
-    when = ts[n // 2] + 0.0013
-    many = np.sort(np.random.default_rng(2).uniform(ts[1], ts[-2], 60))
-    rbm.lookup_transform("eye", "world", time=many)  # kernels loaded
-    _register_moving(rbm, n)
+def _one_time_lookups(register, outof: str, when, many, label: str) -> None:
+    """Time lookups of ``outof`` -> world at one time (first after ``register()``,
+    then best of 500) and at the sorted times ``many``."""
+    register()
+    rbm.lookup_transform(outof, "world", time=many)  # kernels loaded
+    register()
     start = timeit.default_timer()
-    rbm.lookup_transform("eye", "world", time=when)
+    rbm.lookup_transform(outof, "world", time=when)
     first = timeit.default_timer() - start
-    print(f"{first * 1e6:8.1f} µs  lookup_transform at one time, moving chain, "
-          f"first call after registering {n} samples")  # fmt: skip
+    print(f"{first * 1e6:8.1f} µs  {label}: lookup_transform {outof} -> world "
+          "at one time, first call after registering")  # fmt: skip
     cases = {
-        "lookup_transform at one time, moving chain": lambda: rbm.lookup_transform(
-            "eye", "world", time=when
+        f"{label}: the same, then": lambda: rbm.lookup_transform(
+            outof, "world", time=when
         ),
-        "lookup_transform at 60 times, moving chain": lambda: rbm.lookup_transform(
-            "eye", "world", time=many
+        f"{label}: at {len(many)} times": lambda: rbm.lookup_transform(
+            outof, "world", time=many
         ),
     }
     for name, fn in cases.items():
         print(f"{_best(fn, 500) * 1e6:8.1f} µs  {name}")
+
+
+def moving(n: int = 66_000) -> None:
+    ts = _register_moving(rbm, n)
+    when = ts[n // 2] + 0.0013
+    many = np.sort(np.random.default_rng(2).uniform(ts[1], ts[-2], 60))
+    _one_time_lookups(
+        lambda: _register_moving(rbm, n),
+        "eye",
+        when,
+        many,
+        f"moving chain ({n} samples)",
+    )
     point, stamp = np.array([[0.0, 0.0, 1.0]]), np.array([when])
     ours = _best(
         lambda: rbm.transform_points(point, "eye", "world", timestamps=stamp), 500
@@ -143,24 +156,9 @@ def recording() -> None:
     step = eye_ts[1] - eye_ts[0]
     when = eye_ts[len(eye_ts) // 2] + step / 3
     many = np.sort(eye_ts[100:-100][:: len(eye_ts) // 60][:60] + step / 3)
-    register(rbm, frames)
-    rbm.lookup_transform("left_eye", "world", time=many)  # kernels loaded
-    register(rbm, frames)
-    start = timeit.default_timer()
-    rbm.lookup_transform("left_eye", "world", time=when)
-    first = timeit.default_timer() - start
-    print(f"{first * 1e6:8.1f} µs  real recording: lookup_transform left_eye -> world "
-          "at one time, first call after registering")  # fmt: skip
-    cases = {
-        "real recording: the same, then": lambda: rbm.lookup_transform(
-            "left_eye", "world", time=when
-        ),
-        "real recording: at 60 times": lambda: rbm.lookup_transform(
-            "left_eye", "world", time=many
-        ),
-    }
-    for name, fn in cases.items():
-        print(f"{_best(fn, 500) * 1e6:8.1f} µs  {name}")
+    _one_time_lookups(
+        lambda: register(rbm, frames), "left_eye", when, many, "real recording"
+    )
 
 
 if __name__ == "__main__":

@@ -81,9 +81,7 @@ def _forget_tables():
     for frame in _frames.registry.values():
         table = frame.__dict__.get("_fused_table")
         if table is not None:
-            table.rows[:] = 0.0
-            table.complete = False
-            table.filled = []
+            table.clear()
 
 
 def _identical(a, b):
@@ -507,6 +505,53 @@ def test_filled_intervals_merge_and_cover():
     table.add(0, 5)
     assert table.filled == [(0, 5), (10, 40)]
     assert not table.covers(0, 12)
+
+
+def test_a_table_is_complete_by_the_kernels_count_or_by_a_scan(monkeypatch):
+    """Long calls that may fill one table alone add the kernel's count of
+    new rows (no pass over the table); once a short call filled rows of an
+    unknown table, the next count is a scan. Either way ``complete`` says
+    exactly whether every row is computed."""
+    rng = np.random.default_rng(13)
+    n = 12_000
+    ts = np.arange(n) * 0.01
+    rbm.register_frame("world")
+    rbm.register_frame(
+        "m",
+        parent="world",
+        translation=rng.normal(size=(n, 3)),
+        rotation=_rotations(rng, n, 0.05),
+        timestamps=ts,
+    )
+    monkeypatch.setenv(_parallel.ENV_THREADS, "1")
+    scans = []
+    update = _fused._Table.update
+    monkeypatch.setattr(
+        _fused._Table, "update", lambda self: scans.append(1) or update(self)
+    )
+    long = max(_parallel.MIN_ROWS, 2 * n)
+
+    def lookup(lo, hi, rows):
+        points = np.zeros((rows, 3))
+        rbm.transform_points(points, "world", "m", timestamps=np.linspace(lo, hi, rows))
+        return _frames.resolve_frame("m")._fused_table
+
+    def scanned(table):
+        return int(np.count_nonzero(table.rows[:, -1]))
+
+    table = lookup(10.0, 50.0, long)  # segments 1000 .. 5000, and a run beyond
+    assert table.counted and table.computed == scanned(table) > 4000
+    assert not table.complete and scans == []
+    table = lookup(0.0, ts[-1], long)  # every segment
+    assert table.complete and table.computed == n == scanned(table)
+    assert scans == []
+
+    table.clear()
+    lookup(30.0, 30.5, 3)  # a short call: rows filled, not counted
+    assert not table.counted and scanned(table) > 0
+    lookup(0.0, ts[-1], long)
+    assert scans == [1]
+    assert table.complete and table.counted and table.computed == n
 
 
 def test_no_rows_and_fewer_rows_than_a_block():

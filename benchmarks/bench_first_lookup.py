@@ -163,14 +163,9 @@ def fill_loops() -> None:
         raise SystemExit("the staged copy no longer fills what squad_table fills")
 
     def best(stage: int) -> float:
-        out = []
-        for _ in range(REPEATS):
-            t0 = time.perf_counter()
-            fill(stage, r, rp, t, table)
-            out.append(time.perf_counter() - t0)
-        return min(out)
+        return bench_fused.best(lambda: fill(stage, r, rp, t, table), REPEATS)
 
-    t_whole = min(_timed(lambda: kf.squad_table(r, rp, t)) for _ in range(REPEATS))
+    t_whole = bench_fused.best(lambda: kf.squad_table(r, rp, t), REPEATS)
     print(
         f"\n== the head table's fill, loop by loop ({len(t)} segments, "
         f"table memory already touched, best of {REPEATS})"
@@ -185,12 +180,6 @@ def fill_loops() -> None:
         f"  {'all loops':<44} {_ms(previous)}  ({previous / len(t) * 1e9:.0f} ns/segment)"
     )
     print(f"  squad_table (its own fresh table included)   {_ms(t_whole)}")
-
-
-def _timed(call) -> float:
-    t0 = time.perf_counter()
-    call()
-    return time.perf_counter() - t0
 
 
 if __name__ == "__main__":

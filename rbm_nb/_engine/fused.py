@@ -50,23 +50,22 @@ _PREFILL_ARGS = 5 + 5 * kf.SLOTS + 1
 class _Table:
     """A frame's squad table, and what is known to be computed in it.
 
-    ``complete``: every row. ``filled``: disjoint, sorted row intervals
+    ``complete``: every row is computed. ``filled``: disjoint, sorted row intervals
     ``(start, stop)`` all computed (recorded by parallel calls, whose prefill
     reports them): a call that reads only rows inside them needs no lock.
-    ``computed``: the number of computed rows, exact while ``counted``. A
-    long call that could fill this table alone adds the kernel's count of
-    new rows; the kernels report one sum for all tables, so after a call
-    that may have filled several (a short call, or several tables
-    unfilled) the count comes from a scan instead.
+    ``computed``: the number of computed rows, exact while ``counted`` and
+    never more than the truth. A long call that could fill this table alone
+    adds the kernel's count of new rows; the kernels report one sum for all
+    tables, so after a call that may have filled several (a short call, or
+    several tables unfilled) the count comes from a scan instead.
     """
 
-    __slots__ = ("rows", "complete", "filled", "computed", "counted")
+    __slots__ = ("rows", "filled", "computed", "counted")
 
     def __init__(self, n: int) -> None:
         # (huge page aligned: a first lookup of the 66k-sample head recording
         # took 1,434 page faults in all, 608 once its table was aligned)
         self.rows = _memory.zeros((n, kf.TABLE_COLUMNS))
-        self.complete = False
         self.filled: list[tuple[int, int]] = []
         self.computed = 0
         self.counted = True
@@ -74,7 +73,6 @@ class _Table:
     def clear(self) -> None:
         """Forget every computed row (as if the frame were just registered)."""
         self.rows[:] = 0.0
-        self.complete = False
         self.filled = []
         self.computed = 0
         self.counted = True
@@ -83,7 +81,11 @@ class _Table:
         """Count the computed rows (a pass over the state column)."""
         self.computed = int(np.count_nonzero(self.rows[:, kf.TABLE_COLUMNS - 1]))
         self.counted = True
-        self.complete = self.computed == len(self.rows)
+
+    @property
+    def complete(self) -> bool:
+        # (an undercount never says complete wrongly)
+        return self.computed == len(self.rows)
 
     def add_computed(self, rows: int) -> None:
         """Record that a call computed ``rows`` more rows of this table alone.
@@ -95,7 +97,6 @@ class _Table:
             self.update()
             return
         self.computed += rows
-        self.complete = self.computed == len(self.rows)
 
     def add(self, start: int, stop: int) -> None:
         """Record rows start:stop as computed (merged with touching intervals)."""

@@ -512,17 +512,9 @@ def test_a_table_is_complete_by_the_kernels_count_or_by_a_scan(monkeypatch):
     new rows (no pass over the table); once a short call filled rows of an
     unknown table, the next count is a scan. Either way ``complete`` says
     exactly whether every row is computed."""
-    rng = np.random.default_rng(13)
     n = 12_000
     ts = np.arange(n) * 0.01
-    rbm.register_frame("world")
-    rbm.register_frame(
-        "m",
-        parent="world",
-        translation=rng.normal(size=(n, 3)),
-        rotation=_rotations(rng, n, 0.05),
-        timestamps=ts,
-    )
+    _one_moving_frame(np.random.default_rng(13), ts)
     monkeypatch.setenv(_parallel.ENV_THREADS, "1")
     scans = []
     update = _fused._Table.update

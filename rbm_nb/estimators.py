@@ -197,6 +197,17 @@ def estimate_linear_velocity(
     ndarray or DataArray
         Velocities, same shape (and coordinates) as ``arr``.
 
+    Notes
+    -----
+    The stencil is numpy's ``gradient``: at sample i the three-point
+    central difference of samples i-1, i, i+1, and at the ends of a series
+    one-sided first differences (i, i+1 or i-1, i). NaN rows (missing
+    samples) split the series, and each run of present samples is
+    differenced on its own, so that a velocity is missing only at a missing
+    sample and at a present one with no present neighbour; nothing is
+    differenced across a missing sample. (rigid-body-motion differences
+    across them and returns NaN on both sides of each missing sample.)
+
     Raises
     ------
     ValueError
@@ -252,7 +263,13 @@ def estimate_angular_velocity(
     mode : {"quaternion", "rotation_vector"}, default "quaternion"
         "quaternion": vector part of ``2 q⁻¹ dq/dt`` with ``dq/dt`` from the
         cubic spline through the samples (the angular velocity in the rotated
-        frame). "rotation_vector": numerical gradient of the rotation vectors.
+        frame); its stencil is the whole run of present samples the spline
+        passes through (not-a-knot; a parabola for three samples, a line for
+        two). "rotation_vector": numerical gradient of the rotation vectors,
+        with :func:`estimate_linear_velocity`'s stencil (i-1, i, i+1, one-sided
+        at the ends). In both modes NaN rows (missing samples) split the
+        series into runs estimated on their own: a velocity is missing only at
+        a missing sample and at a present one with no present neighbour.
     outlier_thresh : float, optional
         Reject samples where the norm of the second-order differences of the
         rotation vectors exceeds this, and interpolate the velocity there.

@@ -223,7 +223,8 @@ def lookup_twist(
     cutoff : float, optional
         Low-pass cutoff as a fraction of the Nyquist frequency.
     mode : {"quaternion", "rotation_vector"}
-        How the angular velocity is differentiated.
+        How the angular velocity is differentiated (the stencils of
+        :func:`~rbm_nb.estimate_angular_velocity`).
     as_dataset : bool, default False
     return_timestamps : bool, default False
 
@@ -232,6 +233,18 @@ def lookup_twist(
     linear, angular : ndarray, shape (n, 3)
     timestamps : ndarray, shape (n,), if ``return_timestamps``
     ds : xarray.Dataset, if ``as_dataset``
+
+    Notes
+    -----
+    The pose of ``frame`` in ``reference`` is looked up at the timestamps of
+    the chain's moving frames and differentiated as
+    :func:`~rbm_nb.estimate_linear_velocity` (numpy's gradient: samples
+    i-1, i, i+1, one-sided at the ends) and
+    :func:`~rbm_nb.estimate_angular_velocity` do. A missing sample of a
+    frame in the chain (a NaN row) splits the series there: the velocity is
+    missing at that sample and at a present one with no present neighbour,
+    nowhere else, and nothing is differenced across it (nor across a gap
+    longer than a frame's ``max_gap``).
     """
     frame, reference, represent_in = _public_frames(frame, reference, represent_in)
     linear, angular, timestamps = _twist.lookup_twist(

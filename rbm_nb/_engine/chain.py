@@ -271,16 +271,9 @@ def resample_frame(frame, target: Target):
         )
     same = _same_times(track, tt)
     if same is not None:
-        # the stored values, with their signs (the reference returns them)
-        t, r = frame._t[same], frame._rotation_public[same]
-        gaps = _unusable(frame)
-        if gaps is not None:
-            t_gaps, r_gaps = gaps[0][same], gaps[1][same]
-            if t_gaps.any() or r_gaps.any():
-                t, r = t.copy(), r.copy()
-                t[t_gaps] = np.nan
-                r[r_gaps] = np.nan
-        return t, r
+        # the stored values, with their signs (the reference returns them),
+        # NaN only where the sample itself is missing
+        return frame._t[same], frame._rotation_public[same]
     if frame.discrete:
         # float seconds on one origin keep the order of the exact keys
         t_out = tt.base_in(track.origin)
@@ -300,37 +293,6 @@ def resample_frame(frame, target: Target):
         trans[in_gap] = np.nan
         rot[in_gap] = np.nan
     return trans, rot
-
-
-def _unusable(frame):
-    """Rows of translation and of rotation whose interpolation reads a missing
-    sample, as two boolean arrays, or None if nothing is missing.
-
-    At a sample's own time the interpolation is the sample itself, but the
-    rotation's SQUAD segment reads samples i-1 .. i+2 and the translation's
-    linear segment samples i-1 and i; a missing rotation also makes the
-    translation unknown (the reference interpolates the two together when a
-    rotation is missing, and not when only a translation is). Marking those
-    rows keeps lookups at the frame's own timestamps consistent with lookups
-    between them, and with rigid-body-motion. Cached on the frame (its data
-    never changes).
-    """
-    cached = frame.__dict__.get("_unusable_rows", False)
-    if cached is not False:
-        return cached
-    missing_t = np.isnan(frame._t).any(axis=1)
-    missing_r = np.isnan(frame._r).any(axis=1)
-    out = None
-    if missing_t.any() or missing_r.any():
-        r_rows = missing_r.copy()
-        r_rows[:-1] |= missing_r[1:]  # i + 1
-        r_rows[:-2] |= missing_r[2:]  # i + 2
-        r_rows[1:] |= missing_r[:-1]  # i - 1
-        t_rows = missing_t | r_rows
-        t_rows[1:] |= missing_t[:-1]  # i - 1
-        out = (t_rows, r_rows)
-    frame._unusable_rows = out
-    return out
 
 
 def in_long_gap(t_in, t_out, max_gap: float) -> np.ndarray:

@@ -160,6 +160,23 @@ def _runs(valid: np.ndarray, breaks: np.ndarray | None = None) -> list[tuple[int
     return out
 
 
+def _gradient_by_runs(
+    values: np.ndarray, t: np.ndarray, breaks: np.ndarray | None
+) -> np.ndarray:
+    """:func:`_dk.gradient` of (n, k) values on each run of rows without NaN
+    (also split at ``breaks``): numpy's three-point rule inside a run and
+    one-sided first differences at its ends, so a missing sample makes only
+    itself NaN, and a present sample with no present neighbour (nothing to
+    difference it with). Nothing is differenced across a missing sample."""
+    out = np.full(values.shape, np.nan)
+    for start, stop in _runs(~_dk.nan_rows(kernel_array(values)), breaks):
+        if stop - start >= 2:
+            out[start:stop] = _dk.gradient(
+                kernel_array(values[start:stop]), kernel_array(t[start:stop])
+            )
+    return out
+
+
 def linear_series(
     x: np.ndarray,
     t: np.ndarray,
@@ -173,17 +190,15 @@ def linear_series(
             f"arr needs at least 2 samples to estimate a velocity, got {n}"
         )
     flat = kernel_array(x.reshape(n, -1))
-    if breaks is None or not breaks.any():
+    if (breaks is None or not breaks.any()) and not _dk.nan_rows(flat).any():
         v = _dk.gradient(flat, t).reshape(x.shape)
     else:
-        # no difference across a gap: each run between breaks on its own
-        out = np.full(flat.shape, np.nan)
-        for start, stop in _runs(np.ones(n, dtype=bool), breaks):
-            if stop - start >= 2:
-                out[start:stop] = _dk.gradient(
-                    kernel_array(flat[start:stop]), kernel_array(t[start:stop])
-                )
-        v = out.reshape(x.shape)
+        # each item's series on its own: its missing samples split it
+        width = x.shape[-1] if x.ndim > 1 else 1
+        v = np.empty(flat.shape)
+        for c in range(0, flat.shape[1], width):
+            v[:, c : c + width] = _gradient_by_runs(flat[:, c : c + width], t, breaks)
+        v = v.reshape(x.shape)
     if outlier_thresh is not None:
         score = _dk.second_difference_score(kernel_array(x))
         v = _reject_outliers(t, v, score, outlier_thresh)
@@ -239,7 +254,7 @@ def angular_series(
                 raise ValueError(
                     f"arr needs at least 2 samples to estimate a velocity, got {n}"
                 )
-            w[:, b, :] = _dk.gradient(kernel_array(rv[:, b, :]), t)
+            w[:, b, :] = _gradient_by_runs(rv[:, b, :], t, breaks)
             continue
         missing = _dk.nan_rows(qb)
         if not missing.any() and (breaks is None or not breaks.any()):

@@ -31,10 +31,10 @@ offsets : float64 (SLOTS,)
     Added to the target times to put them on each slot's time origin.
 own : int64 (SLOTS,)
     1 + i0 where the target times are the run of the slot's own sample
-    times from sample i0 (then every row is a sample: its stored value, or
-    NaN if its squad segment reads a missing sample), else 0 (a target time
-    that happens to equal a sample time is evaluated like any other: the
-    stored translation, squad's unit rotation). With a wrong i0 the
+    times from sample i0 (then every row is a sample: its stored value),
+    else 0 (a target time that happens to equal a sample time is evaluated
+    like any other: the stored translation, squad's unit rotation; the
+    stored sample where the segment after it misses its end). With a wrong i0 the
     results are the same, only slower (blocks are checked before they are
     copied).
 gaps : float64 (SLOTS,)
@@ -52,14 +52,14 @@ or a held event returns the stored sample (as ``chain.stored_signs``).
 
 Missing samples
 ---------------
-NaN rows in a frame's translations or rotations are missing samples. They
-make NaN exactly the output rows whose evaluation needs them, with the
-engine's rules: between samples i and i+1 of a continuous frame the
-rotation (squad) needs samples i-1 .. i+2 and the translation (linear) i
-and i+1; at a sample's own time the rotation is NaN if any rotation of
-samples i-1 .. i+2 is missing (its squad segment reads them), and the
-translation if that rotation is, or the translation of sample i-1 or i; a discrete frame
-needs its held event. Nothing else produces NaN.
+NaN rows in a frame's translations or rotations are missing samples. A
+result is NaN only where a sample it needs is missing: at a sample's own
+time the sample itself (NaN if it is the missing one), between samples i
+and i+1 of a continuous frame those two (linear translation; squad
+rotation, whose control points take the end rule of a series where
+sample i-1 or i+2 is missing: each run between missing samples is
+interpolated as a series of its own), and a discrete frame's held event.
+Nothing else produces NaN.
 """
 
 from __future__ import annotations
@@ -290,8 +290,9 @@ def _table_row(r, rp, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, 
     great circles) into every caller multiplied compile time.
     """
     n = r.shape[0]
-    # a[i]
-    if i == 0 or i == n - 1:
+    # a[i]; a missing sample i-1 (a NaN log p) starts a run: the end rule,
+    # as at the first sample (``quaternion.squad_coefficients``)
+    if i == 0 or i == n - 1 or math.isnan(pw):
         aw, ax, ay, az = r[i, 0], r[i, 1], r[i, 2], r[i, 3]
     else:
         ew, ex, ey, ez = _qexp_table(
@@ -301,8 +302,9 @@ def _table_row(r, rp, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, 
             (-lz + pz * ra) * 0.25,
         )
         aw, ax, ay, az = _qmul1(r[i, 0], r[i, 1], r[i, 2], r[i, 3], ew, ex, ey, ez)
-    # b[i], and the sample the segment ends at
-    if i < n - 2:
+    # b[i], and the sample the segment ends at; a missing sample i+2 (a
+    # NaN log n) ends the run at i+1
+    if i < n - 2 and not math.isnan(nw):
         ew, ex, ey, ez = _qexp_table(
             (nw * rb - lw) * -0.25,
             (nx * rb - lx) * -0.25,
@@ -312,8 +314,8 @@ def _table_row(r, rp, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, 
         bw, bx, by, bz = _qmul1(
             r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3], ew, ex, ey, ez
         )
-    elif i == n - 2:
-        bw, bx, by, bz = r[n - 1, 0], r[n - 1, 1], r[n - 1, 2], r[n - 1, 3]
+    elif i <= n - 2:
+        bw, bx, by, bz = r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3]
     else:
         # the virtual sample past the end: r[n-1] r[n-2]⁻¹ r[n-1]
         iw, ix, iy, iz = _qinv1(r[n - 2, 0], r[n - 2, 1], r[n - 2, 2], r[n - 2, 3])
@@ -1000,17 +1002,14 @@ def _own_rows(work, times, tr, rp, target, i0, j0, nb, rotation_only, into):
 
     The scalar pass's own-times rule for a whole block at once, in loops
     LLVM vectorises: taken when the block's target times are exactly
-    times[i0:i0+nb] and no sample the rule reads (rotations i-1 .. i+2,
-    translations i-1 and i) is missing, so that every row is its stored
-    sample. ``into``: the scratch's rows to write (_STEP, or _ACC for the
-    chain's first step). Returns False otherwise, and the scalar pass takes
+    times[i0:i0+nb], so that every row is its stored sample (a missing
+    sample's NaN included). ``into``: the scratch's rows to write (_STEP,
+    or _ACC for the chain's first step). Returns False otherwise, and the scalar pass takes
     the block (the rows written here are then all written again).
     """
     n = times.shape[0]
     if i0 < 0 or j0 < 0 or i0 + nb > n:
         return False
-    lo = max(i0 - 1, 0)
-    hi = min(i0 + nb + 2, n)
     rf = rp.reshape(-1)
     tf = tr.reshape(-1)
     # the next block's samples, on their way while this block is copied
@@ -1027,10 +1026,6 @@ def _own_rows(work, times, tr, rp, target, i0, j0, nb, rotation_only, into):
     odd = 0
     for b in range(nb):
         odd += np.int64(target[j0 + b] != times[i0 + b])
-    for q in range(4 * (hi - lo)):
-        odd += np.int64(rf[4 * lo + q] != rf[4 * lo + q])
-    for q in range(3 * (i0 + nb - lo)):
-        odd += np.int64(tf[3 * lo + q] != tf[3 * lo + q])
     if odd != 0:
         return False
     for b in range(nb):
@@ -1184,37 +1179,10 @@ def _chain_block(
                         tx, ty, tz = tr[k, 0], tr[k, 1], tr[k, 2]
                     qw, qx, qy, qz = rp[k, 0], rp[k, 1], rp[k, 2], rp[k, 3]
                 elif own[slot] != 0 and i >= 0 and t == times[i]:
-                    # the frame's own times: the stored sample, unless its
-                    # interpolation reads a missing one, as between samples:
-                    # the rotation's squad segment reads i-1 .. i+2, the
-                    # translation's linear one i-1 and i, and a missing
-                    # rotation spoils the translation too (as the reference)
-                    clean = False
-                    if 1 <= i and i + 3 <= n:
-                        # the usual case in one test: a NaN anywhere makes
-                        # the sum NaN
-                        st = tr[i - 1, 0] + tr[i - 1, 1] + tr[i - 1, 2]
-                        st += tr[i, 0] + tr[i, 1] + tr[i, 2]
-                        sr = 0.0
-                        for q in range(i - 1, i + 3):
-                            sr += rp[q, 0] + rp[q, 1] + rp[q, 2] + rp[q, 3]
-                        clean = not math.isnan(sr + st)
-                    missing_r = missing_t = False
-                    if not clean:
-                        for q in range(max(i - 1, 0), min(i + 3, n)):
-                            if math.isnan(rp[q, 0] + rp[q, 1] + rp[q, 2] + rp[q, 3]):
-                                missing_r = True
-                        missing_t = missing_r
-                        for q in range(max(i - 1, 0), i + 1):
-                            if math.isnan(tr[q, 0] + tr[q, 1] + tr[q, 2]):
-                                missing_t = True
-                    if missing_r:
-                        qw = qx = qy = qz = math.nan
-                    else:
-                        qw, qx, qy, qz = rp[i, 0], rp[i, 1], rp[i, 2], rp[i, 3]
-                    if missing_t:
-                        tx = ty = tz = math.nan
-                    elif not rotation_only:
+                    # the frame's own times: the stored sample (NaN where it
+                    # is missing), whatever its neighbours
+                    qw, qx, qy, qz = rp[i, 0], rp[i, 1], rp[i, 2], rp[i, 3]
+                    if not rotation_only:
                         tx, ty, tz = tr[i, 0], tr[i, 1], tr[i, 2]
                 elif (
                     0 <= i < n - 1
@@ -1302,6 +1270,10 @@ def _chain_block(
                     )  # fmt: skip
                     if neg:
                         qw, qx, qy, qz = -qw, -qx, -qy, -qz
+                    if i >= 0 and t == times[i] and math.isnan(qw):
+                        # at a sample whose next one is missing (no segment
+                        # to evaluate): the sample itself
+                        qw, qx, qy, qz = rp[i, 0], rp[i, 1], rp[i, 2], rp[i, 3]
             work[_PATH + b] = 0.0  # (evaluated here)
             work[_STEP + b] = tx
             work[_STEP + BLOCK + b] = ty

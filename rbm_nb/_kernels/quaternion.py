@@ -354,6 +354,12 @@ def slerp(q0, q1, tau):
     return out
 
 
+@helper(inline=True)
+def _missing1(r, i):
+    """Whether row i of ``r`` (n, 4) is a missing sample (any NaN)."""
+    return math.isnan(r[i, 0] + r[i, 1] + r[i, 2] + r[i, 3])
+
+
 @kernel(F2, F1)
 def squad_coefficients(r, t):
     """Control points of the squad spline, as numpy-quaternion builds them.
@@ -371,6 +377,13 @@ def squad_coefficients(r, t):
     a, b : ndarray, shape (n, 4)
         ``a[i]`` belongs to sample i, ``b[i]`` to the end of segment i; the
         last row of ``b`` is the virtual sample r[n-1] r[n-2]⁻¹ r[n-1].
+
+    Missing samples (NaN rows) split the series into runs, and each run
+    gets the control points it would get as a series of its own: a control
+    point whose outer neighbour is missing takes the end rule (``a[i] =
+    r[i]`` where sample i-1 is missing, ``b[i] = r[i+1]`` where sample i+2
+    is). So a segment between two present samples is finite, and the curve
+    is unchanged (and C¹) wherever samples i-1 .. i+2 are all present.
     """
     n = r.shape[0]
     a_coef = np.empty((n, 4))
@@ -392,6 +405,11 @@ def squad_coefficients(r, t):
         a_coef[0, k] = r[0, k]
         a_coef[n - 1, k] = r[n - 1, k]
     for i in range(1, n - 1):
+        if _missing1(r, i - 1):
+            # a run of samples starts at i: its end rule (see the docstring)
+            for k in range(4):
+                a_coef[i, k] = r[i, k]
+            continue
         # A[i] = r[i] exp((-L[i] + L[i-1] (t[i+1]-t[i]) / (t[i]-t[i-1])) / 4)
         ratio = (t[i + 1] - t[i]) / (t[i] - t[i - 1])
         ew, ex, ey, ez = _qexp1(
@@ -406,6 +424,11 @@ def squad_coefficients(r, t):
         a_coef[i, 2] = y
         a_coef[i, 3] = z
     for i in range(n - 2):
+        if _missing1(r, i + 2):
+            # a run of samples ends at i + 1
+            for k in range(4):
+                b_coef[i, k] = r[i + 1, k]
+            continue
         # B[i] = r[i+1] exp((L[i+1] (t[i+1]-t[i]) / (t[i+2]-t[i+1]) - L[i]) / -4)
         ratio = (t[i + 1] - t[i]) / (t[i + 2] - t[i + 1])
         ew, ex, ey, ez = _qexp1(
@@ -558,6 +581,9 @@ def squad_evaluate(q_in, t_in, a_coef, b_coef, seg, t_out):
             s1[0], s1[1], s1[2], s1[3], s2[0], s2[1], s2[2], s2[3],
             2.0 * tau * (1.0 - tau),
         )  # fmt: skip
+        if tau == 0.0 and math.isnan(w):
+            # at a sample whose next one is missing: the sample itself
+            w, x, y, z = q_in[i, 0], q_in[i, 1], q_in[i, 2], q_in[i, 3]
         out[j, 0] = w
         out[j, 1] = x
         out[j, 2] = y

@@ -307,7 +307,7 @@ _SMP = 0
 # log r[k]⁻¹ r[k+1] (vector part, 0:3), t[k+1] - t[k] (3) and its inverse (4)
 _LOG = 6 * _W
 # per segment: the end sample r[i+1] (0:4), A[i] (4:8), B[i] (8:12), their
-# ln scales (12:15), the number of missing samples among i-1..i+2 (15)
+# ln scales (12:15), the number of its own samples missing (15)
 _CTL = 11 * _W
 # per segment: the record of _N_REC quantities (see _prepare)
 _REC = 27 * _W
@@ -465,9 +465,10 @@ def _controls(ws, r0, count):
     slow = 0
     for r in range(min(count, _SPAN)):
         c = r + 1  # sample row of i
-        nan = ws[_SMP + 5 * _W + c] + ws[_SMP + 5 * _W + c - 1]
-        nan += ws[_SMP + 5 * _W + c + 1]
-        nan += ws[_SMP + 5 * _W + c + 2]
+        # the segment's own samples i and i+1; a missing outer neighbour
+        # (i-1 or i+2) sends it to _controls_exact for the end rule
+        nan = ws[_SMP + 5 * _W + c] + ws[_SMP + 5 * _W + c + 1]
+        edge = ws[_SMP + 5 * _W + c - 1] + ws[_SMP + 5 * _W + c + 2]
         ws[_CTL + 15 * _W + r] = nan
         rw, rx = ws[_SMP + c], ws[_SMP + _W + c]
         ry, rz = ws[_SMP + 2 * _W + c], ws[_SMP + 3 * _W + c]
@@ -507,7 +508,7 @@ def _controls(ws, r0, count):
         ws[_CTL + 11 * _W + r] = bz
         ws[_CTL + 14 * _W + r] = lb
         limit = SERIES_ANGLE * SERIES_ANGLE
-        redo = (nan == 0.0) & (not ((u2a < limit) & (u2b < limit)))
+        redo = (nan == 0.0) & ((edge != 0.0) | (not ((u2a < limit) & (u2b < limit))))
         ws[_REDO + r] = 1.0 if redo else 0.0
         slow += redo
     return slow
@@ -517,18 +518,24 @@ def _controls(ws, r0, count):
 def _controls_exact(ws, n, i, r, c):
     """End sample r[i+1] (the virtual one past the last), control points
     A[i] and B[i], their ln scales and the number of missing samples among
-    i-1..i+2, of segment i (slot r, sample i in row c)."""
-    # samples i-1..i+2 (those that exist) all present?
+    those the segment cannot do without, of segment i (slot r, sample i in
+    row c).
+
+    A segment needs its two samples (the last one, which extrapolates, the
+    sample before it instead of the next). A control point whose outer
+    neighbour (i-1 for A, i+2 for B) is missing takes the end rule, as at
+    the ends of the series: each run between missing samples is a series
+    of its own (``quaternion.squad_coefficients``)."""
     nan = ws[_SMP + 5 * _W + c]
-    if i >= 1:
-        nan += ws[_SMP + 5 * _W + c - 1]
     if i + 1 <= n - 1:
         nan += ws[_SMP + 5 * _W + c + 1]
-    if i + 2 <= n - 1:
-        nan += ws[_SMP + 5 * _W + c + 2]
+    else:
+        nan += ws[_SMP + 5 * _W + c - 1]  # the virtual sample reads i-1
     ws[_CTL + 15 * _W + r] = nan
     if nan > 0.0:
         return
+    before = i >= 1 and ws[_SMP + 5 * _W + c - 1] == 0.0
+    after = i + 2 <= n - 1 and ws[_SMP + 5 * _W + c + 2] == 0.0
     rw, rx = ws[_SMP + c], ws[_SMP + _W + c]
     ry, rz = ws[_SMP + 2 * _W + c], ws[_SMP + 3 * _W + c]
     lr = ws[_SMP + 4 * _W + c]
@@ -550,7 +557,7 @@ def _controls_exact(ws, n, i, r, c):
     ws[_CTL + 3 * _W + r] = nz
     ws[_CTL + 12 * _W + r] = ln_
     # A[i] = r[i] exp((-L[i] + L[i-1] (t[i+1]-t[i]) / (t[i]-t[i-1])) / 4)
-    if 1 <= i <= n - 2:
+    if before and i <= n - 2:
         ratio = ws[_LOG + 3 * _W + c] * ws[_LOG + 4 * _W + c - 1]
         aw, ax, ay, az = _control_point(
             rw, rx, ry, rz,
@@ -567,7 +574,7 @@ def _controls_exact(ws, n, i, r, c):
     ws[_CTL + 7 * _W + r] = az
     ws[_CTL + 13 * _W + r] = la
     # B[i] = r[i+1] exp((L[i+1] (t[i+1]-t[i]) / (t[i+2]-t[i+1]) - L[i]) / -4)
-    if i <= n - 3:
+    if after:
         ratio = ws[_LOG + 3 * _W + c] * ws[_LOG + 4 * _W + c + 1]
         bw, bx, by, bz = _control_point(
             nw, nx, ny, nz,
@@ -919,7 +926,8 @@ def _exact_row(q, sign, t_in, i, tau):
         iw, ix, iy, iz = _qinv1(r[c - 1, 0], r[c - 1, 1], r[c - 1, 2], r[c - 1, 3])
         pw, px, py, pz = _qmul1(rw, rx, ry, rz, iw, ix, iy, iz)
         nw, nx, ny, nz = _qmul1(pw, px, py, pz, rw, rx, ry, rz)
-    if 1 <= i <= n - 2:
+    # (a missing outer neighbour: the end rule, as in _controls_exact)
+    if 1 <= i <= n - 2 and not math.isnan(logs[c - 1, 0]):
         ratio = (t_in[i + 1] - t_in[i]) / (t_in[i] - t_in[i - 1])
         ew, ex, ey, ez = _qexp1(
             (-logs[c, 0] + logs[c - 1, 0] * ratio) * 0.25,
@@ -930,7 +938,7 @@ def _exact_row(q, sign, t_in, i, tau):
         aw, ax, ay, az = _qmul1(rw, rx, ry, rz, ew, ex, ey, ez)
     else:
         aw, ax, ay, az = rw, rx, ry, rz
-    if i <= n - 3:
+    if i <= n - 3 and not math.isnan(logs[c + 1, 0]):
         ratio = (t_in[i + 1] - t_in[i]) / (t_in[i + 2] - t_in[i + 1])
         ew, ex, ey, ez = _qexp1(
             (logs[c + 1, 0] * ratio - logs[c, 0]) * -0.25,
@@ -1103,7 +1111,14 @@ def _walk(q, sign, t_in, t_out, out, first, last, scalar):
             tau = wr[_TAU + jj]
             state = ws[_REC + 28 * _W + r]
             if state < 0.0:
-                out[j, 0] = out[j, 1] = out[j, 2] = out[j, 3] = np.nan
+                # a segment missing one of its samples: nothing, except at
+                # its first sample's own time (when that one is present)
+                i_j = found[jj]
+                if tau == 0.0 and i_j >= 0:
+                    out[j, 0], out[j, 1] = q[i_j, 0], q[i_j, 1]
+                    out[j, 2], out[j, 3] = q[i_j, 2], q[i_j, 3]
+                else:
+                    out[j, 0] = out[j, 1] = out[j, 2] = out[j, 3] = np.nan
                 continue
             if state > 0.0 and 0.0 <= tau <= 1.0:
                 aw, ax, ay, az = _along(

@@ -1,17 +1,22 @@
-"""Missing data in moving frames (issue 9, item 1), against rigid-body-motion.
+"""Missing data in moving frames (issues 9 and 28), against rigid-body-motion.
 
 NaN rows in a moving frame's translation or rotation mean "no data at that
 sample". They must be accepted by ``ReferenceFrame``, ``from_dataset`` and
-``register_frame``; lookups return NaN exactly on the rows the reference
-returns NaN (on the real left eye: a row is NaN when any of the samples its
-SQUAD interpolation uses, i-1..i+2, is missing) and the same values elsewhere;
-``max_gap`` (seconds) stops interpolation across longer gaps; velocities never
-take a difference across a gap.
+``register_frame``. A result is missing only where a sample it needs is
+missing (issue 28; the rule on every route: ``test_missing_runs.py``). The
+reference makes a row NaN whenever any sample its SQUAD segment reads,
+i-1..i+2, is missing -- also at a present sample's own time and between
+two present samples -- and a translation NaN wherever its rotation is;
+rbm_nb returns values there (a deliberate difference, docs/missing_data.md).
+So on the real left eye: rbm_nb's NaN rows are a subset of the reference's,
+and wherever the reference has a value rbm_nb has the same one. ``max_gap``
+(seconds) stops interpolation across longer gaps; velocities never take a
+difference across a gap.
 
 Tolerances on the real recording: the file stores quaternions rounded to
 1e-4 (|q| - 1 up to 8e-5), which the reference uses unnormalised when it
 rotates vectors (a documented difference), so positions 100 m away differ by
-up to ~2e-2 m and quaternions by ~1.2e-4; NaN rows must match exactly.
+up to ~2e-2 m and quaternions by ~1.2e-4.
 """
 
 from __future__ import annotations
@@ -164,7 +169,7 @@ def _ill_conditioned(out_times, eye_times, ratio=20.0):
     return (ill[seg] | ill[seg + 1]) & ~np.isin(out_times, eye_times)
 
 
-def test_real_left_eye_lookups_have_the_references_nan_rows(recordings):
+def test_real_left_eye_lookups_are_missing_only_where_the_reference_is(recordings):
     head, left_eye = recordings
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the reference warns about NaN in log()
@@ -180,8 +185,10 @@ def test_real_left_eye_lookups_have_the_references_nan_rows(recordings):
             for var in ("position", "orientation"):
                 exp_nan = np.isnan(expected[var].values).any(axis=1)
                 got_nan = np.isnan(got[var].values).any(axis=1)
-                assert exp_nan.any(), where  # the comparison has teeth
-                np.testing.assert_array_equal(got_nan, exp_nan, err_msg=where)
+                assert not (got_nan & ~exp_nan).any(), where
+                # the difference has teeth: thousands of the reference's NaN
+                # rows are values that the samples allow
+                assert got_nan.sum() + 1000 < exp_nan.sum(), (where, var)
 
 
 def test_real_left_eye_lookups_match_the_reference(recordings):
@@ -199,9 +206,7 @@ def test_real_left_eye_lookups_match_the_reference(recordings):
             times = expected.time.values
             np.testing.assert_array_equal(got.time.values, times, err_msg=where)
             exp_nan = np.isnan(expected.position.values).any(axis=1)
-            np.testing.assert_array_equal(
-                np.isnan(got.position.values).any(axis=1), exp_nan, err_msg=where
-            )
+            exp_nan |= np.isnan(expected.orientation.values).any(axis=1)
             ill = _ill_conditioned(times, eye_s.time.values)
             known = ~exp_nan
             p_exp = expected.position.values
@@ -293,8 +298,8 @@ def test_max_gap_on_the_real_left_eye(recordings):
         assert inside.any()
         assert np.isnan(out[0.1][inside]).all()
         # without max_gap the eye is interpolated straight across the gap,
-        # unless a sample its squad segment reads (i-1 .. i+2) is missing
-        around = slice(i - 1, i + 3)
+        # unless one of the two samples around it is missing
+        around = slice(i, i + 2)
         known = not (
             np.isnan(left_eye.position.values[around]).any()
             or np.isnan(left_eye.orientation.values[around]).any()
@@ -380,9 +385,12 @@ def test_velocities_do_not_difference_across_a_long_gap():
 
 @pytest.mark.parametrize("missing", ["translation", "rotation", "both"])
 @pytest.mark.parametrize("rows", [[5], [2, 3], [0], [11]])
-def test_missing_translation_and_rotation_rows_as_the_reference(missing, rows):
-    """A missing translation spoils only translations (linear: rows i, i+1); a
-    missing rotation spoils its squad neighbourhood in both (rows i-2 .. i+1)."""
+def test_missing_translation_and_rotation_rows_against_the_reference(missing, rows):
+    """Where the reference has a value rbm_nb has the same one; rbm_nb is NaN
+    only where the sample itself (at own times) or one of the two samples
+    around a time is missing. The reference also makes NaN the rows whose
+    squad segment reads a missing rotation (i-1 .. i+2), and a translation
+    wherever the rotation is missing."""
     n = 12
     t = np.arange(float(n))
     translation = np.column_stack([t, np.sin(t), 0 * t])
@@ -410,7 +418,19 @@ def test_missing_translation_and_rotation_rows_as_the_reference(missing, rows):
         p_got = rbm.transform_points(
             np.ones((n - 1, 3)), "f", "world", timestamps=between
         )
-    for e, g in ((expected[0], got[0]), (expected[1], got[1]), (p_exp, p_got)):
-        np.testing.assert_array_equal(np.isnan(g).any(axis=1), np.isnan(e).any(axis=1))
-        known = ~np.isnan(e).any(axis=1)
+    gone_t = np.isnan(translation).any(axis=1)
+    gone_r = np.isnan(rotation).any(axis=1)
+    seg = np.arange(n - 1)  # ``between`` lies inside segment k
+    rule = {
+        "own translation": gone_t,
+        "own rotation": gone_r,
+        "points between": gone_t[seg] | gone_t[seg + 1] | gone_r[seg] | gone_r[seg + 1],
+    }
+    pairs = ((expected[0], got[0]), (expected[1], got[1]), (p_exp, p_got))
+    for (what, want), (e, g) in zip(rule.items(), pairs, strict=True):
+        got_nan = np.isnan(g).any(axis=1)
+        exp_nan = np.isnan(e).any(axis=1)
+        np.testing.assert_array_equal(got_nan, want, err_msg=what)
+        assert not (got_nan & ~exp_nan).any(), what
+        known = ~exp_nan
         np.testing.assert_allclose(np.abs(g[known]), np.abs(e[known]), atol=1e-9)

@@ -437,6 +437,29 @@ def test_velocities_are_missing_only_without_two_samples(mode):
     np.testing.assert_array_equal(np.isnan(angular).any(axis=1), no_velocity)
 
 
+def test_transformed_velocities_are_missing_only_without_two_samples():
+    """Changing the reference frame to one with missing samples adds its
+    velocity terms, which are missing only where they are."""
+    t, translation, rotation = _register()
+    rbm.register_frame("c", parent="f", translation=(0.1, 0.0, 0.0))
+    missing = np.isnan(rotation).any(axis=1)
+    no_velocity = missing | _alone(~missing)
+    zeros = np.zeros((N, 3))
+    angular = rbm.transform_angular_velocity(
+        zeros, into="world", outof="f", what="reference_frame", timestamps=t
+    )
+    np.testing.assert_array_equal(np.isnan(angular).any(axis=1), no_velocity)
+    linear = rbm.transform_linear_velocity(
+        zeros,
+        into="world",
+        outof="f",
+        what="reference_frame",
+        moving_frame="c",
+        timestamps=t,
+    )
+    np.testing.assert_array_equal(np.isnan(linear).any(axis=1), no_velocity)
+
+
 # -- the real recording -------------------------------------------------------------
 
 

@@ -34,9 +34,9 @@ own : int64 (SLOTS,)
     times from sample i0 (then every row is a sample: its stored value),
     else 0 (a target time that happens to equal a sample time is evaluated
     like any other: the stored translation, squad's unit rotation; the
-    stored sample where the segment after it misses its end). With a wrong i0 the
-    results are the same, only slower (blocks are checked before they are
-    copied).
+    stored sample where the segment after it misses its end). With a wrong
+    i0 the results are the same, only slower (blocks are checked before
+    they are copied).
 gaps : float64 (SLOTS,)
     Each slot's ``max_gap`` (inf: none): target times strictly inside a
     longer gap between two samples get NaN.
@@ -1004,8 +1004,9 @@ def _own_rows(work, times, tr, rp, target, i0, j0, nb, rotation_only, into):
     LLVM vectorises: taken when the block's target times are exactly
     times[i0:i0+nb], so that every row is its stored sample (a missing
     sample's NaN included). ``into``: the scratch's rows to write (_STEP,
-    or _ACC for the chain's first step). Returns False otherwise, and the scalar pass takes
-    the block (the rows written here are then all written again).
+    or _ACC for the chain's first step). Returns False otherwise, and the
+    scalar pass takes the block (the rows written here are then all written
+    again).
     """
     n = times.shape[0]
     if i0 < 0 or j0 < 0 or i0 + nb > n:

@@ -203,6 +203,87 @@ def write_bag_in(folder, name, timestamps, **options):
         )
 
 
+# -- writers at a folder that is the user's (issue 31, item 1) -------------------
+
+THESIS = "\\documentclass{article} my thesis"
+
+
+def _small_bag(path):
+    from rbm_nb.ros import RosbagWriter
+
+    with RosbagWriter(path) as writer:
+        writer.write_transform_stamped(
+            [1.0, 2.0], np.zeros((2, 3)), np.tile([1.0, 0, 0, 0], (2, 1)), "/x", "a", "b"
+        )
+    return path
+
+
+def writer_at_user_folder(name, write, extra=None):
+    """Run ``write(target)`` where ``target`` is a folder holding the user's
+    ``thesis.tex`` (and ``extra`` files); afterwards the folder must be intact,
+    whatever ``write`` did (an AssertionError replaces the expected error)."""
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory() as root:
+        target = Path(root) / name
+        target.mkdir()
+        files = {"thesis.tex": THESIS, **(extra or {})}
+        for entry, text in files.items():
+            (target / entry).write_text(text)
+        try:
+            write(target)
+        finally:
+            assert target.is_dir(), f"{target} is gone"
+            found = {p.name: p.read_text() for p in target.iterdir()}
+            assert found == files, f"{target} changed: {sorted(found)}"
+
+
+def rosbag_export_to(target):
+    from rbm_nb.ros import RosbagReader
+
+    bag = _small_bag(target.parent / "small.bag")
+    RosbagReader(bag).export("/x", output_file=target)
+
+
+def rosbag_write_to(target):
+    _small_bag(target)
+
+
+def synthetic_rosbag_to(target):
+    rbm.data.write_synthetic_rosbag(target, duration=16.0)
+
+
+def study_to_netcdf_at(target):
+    from rbm_nb.data import synthetic_head_eye
+    from rbm_nb.study import open_study
+
+    recs = {target.stem: dict(synthetic_head_eye(duration=16.0, seed=0)._asdict())}
+    study = open_study(recs, streams=["head"])
+    study.to_netcdf(lambda recording: recording["head"], target.parent)
+
+
+def html_export_to(target):
+    from rbm_nb.scene import Scene
+
+    scene = Scene()
+    scene.add_frame("moving")  # of setup_tree
+    scene.to_html(target)
+
+
+def ros2_bag_over_file(name):
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory() as root:
+        target = Path(root) / name
+        target.write_text("my notes")
+        try:
+            _small_bag(target)
+        finally:
+            assert target.read_text() == "my notes"
+
+
 RF = "ReferenceFrame"
 Q1 = np.array([1.0, 0, 0, 0])
 PTS = np.random.default_rng(7).normal(size=(12, 3))
@@ -642,6 +723,31 @@ CASES: list[Case] = [
          "storage is for ROS2 bags"),
     Case("rosbag-writer-decreasing-stamps", in_temp_folder,
          (write_bag_in, "w.bag", [2.0, 1.0]), {}, ValueError, "timestamps"),
+    # -- writers never delete a folder they did not make (issue 31, item 1) -------
+    Case("export-netcdf-into-folder", writer_at_user_folder,
+         ("thesis", rosbag_export_to), {}, IsADirectoryError,
+         r"refusing to replace a folder .*thesis'$"),
+    Case("rosbag-writer-ros2-into-folder", writer_at_user_folder,
+         ("notes", rosbag_write_to), {}, IsADirectoryError,
+         r"not a ROS2 bag folder.*everything in it would be lost"),
+    Case("rosbag-writer-ros1-into-folder", writer_at_user_folder,
+         ("old.bag", rosbag_write_to), {}, IsADirectoryError,
+         r"refusing to replace a folder .*old.bag'$"),
+    Case("rosbag-writer-ros2-into-bag-with-notes", writer_at_user_folder,
+         ("run1", rosbag_write_to,
+          {"metadata.yaml": "rosbag2_bagfile_information:\n", "run1.db3": ""}),
+         {}, IsADirectoryError, "not a ROS2 bag folder holding only metadata.yaml"),
+    Case("rosbag-writer-ros2-over-file", ros2_bag_over_file, ("notes",), {},
+         NotADirectoryError, r"refusing to replace a file with a ROS2 bag folder"),
+    Case("synthetic-rosbag-into-folder", writer_at_user_folder,
+         ("synthetic.bag", synthetic_rosbag_to), {}, IsADirectoryError,
+         r"refusing to replace a folder .*synthetic.bag'$"),
+    Case("study-to-netcdf-into-folder", writer_at_user_folder,
+         ("s0.nc", study_to_netcdf_at), {}, IsADirectoryError,
+         r"refusing to replace a folder .*s0.nc'$"),
+    Case("to-html-into-folder", writer_at_user_folder,
+         ("scene.html", html_export_to), {}, IsADirectoryError,
+         r"scene.html.* is a directory|refusing to replace a folder"),
     # -- rosbags ---------------------------------------------------------------
     Case("rosbag-missing-file", rosbag_reader,
          ("/nonexistent/nope.bag", "get_topics_and_types"), {}, FileNotFoundError,

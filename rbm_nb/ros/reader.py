@@ -10,7 +10,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import TYPE_CHECKING
 
-from .._atomic import atomic_path
+from .._atomic import atomic_path, check_replaceable
 from .._progress import progress_bar
 from ..io._files import FileFormatError, load_netcdf
 from ..io._schema import motion_dataset
@@ -404,12 +404,18 @@ class RosbagReader:
         -------
         pathlib.Path
             The path written.
+
+        Raises
+        ------
+        IsADirectoryError
+            ``output_file`` is a folder (it is never replaced).
         """
         path = (
             self.bag_file.with_suffix(".nc")
             if output_file is None
             else Path(output_file)
         )
+        check_replaceable(path)  # a folder there is the user's: refuse before reading
         self._export(topic, path, None)
         return path
 

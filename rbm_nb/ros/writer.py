@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from .._atomic import atomic_path
+from .._atomic import FolderKind, atomic_path, check_replaceable
 from .._config import UNIT_QUATERNION_TOLERANCE
 from .._xarray import dataset_variable
 from ._messages import (
@@ -34,6 +34,39 @@ STORAGES = ("sqlite3", "mcap")
 _MAX_SEC = {False: 2**32, True: 2**31}  # ROS1 stamps are uint32 s, ROS2 int32 s
 
 
+# what rosbag2 (and the rosbags library) put in a bag folder
+_ROS2_STORAGE_SUFFIXES = (".db3", ".db3-shm", ".db3-wal", ".mcap", ".zstd")
+
+
+def is_ros2_bag_folder(path: Path) -> bool:
+    """Whether ``path`` is a ROS2 bag folder and nothing else.
+
+    It must hold a ``metadata.yaml`` that describes a bag and otherwise only
+    storage files: a folder with anything more (notes, a thesis) is the
+    user's, and a writer must not replace it.
+    """
+    try:
+        entries = list(os.scandir(path))
+        metadata = (path / "metadata.yaml").read_text(errors="replace")
+    except OSError:
+        return False
+    if "rosbag2_bagfile_information" not in metadata:
+        return False
+    return all(
+        entry.name == "metadata.yaml"
+        or (
+            entry.is_file(follow_symlinks=False)
+            and entry.name.endswith(_ROS2_STORAGE_SUFFIXES)
+        )
+        for entry in entries
+    )
+
+
+ROS2_BAG = FolderKind(
+    "a ROS2 bag folder holding only metadata.yaml and storage files", is_ros2_bag_folder
+)
+
+
 class RosbagWriter:
     """Writer for motion topics to a rosbag.
 
@@ -41,6 +74,10 @@ class RosbagWriter:
     the target, which replaces the target only when the ``with`` block ends
     without an error: a failure never leaves a half-written bag, and an
     existing bag at the target is untouched until then.
+
+    An existing ROS2 bag folder at the target is replaced (once the new one is
+    complete); any other folder, and a file where a ROS2 bag folder would go,
+    is refused with an error before anything is written.
 
     Parameters
     ----------
@@ -72,6 +109,8 @@ class RosbagWriter:
         if storage is not None and storage not in STORAGES:
             raise ValueError(f"storage must be one of {STORAGES}, got {storage!r}")
         self.storage = (storage or "sqlite3") if self.ros2 else None
+        # refuse a folder (or file) it must not replace now, not after the work
+        check_replaceable(self.bag_file, ROS2_BAG if self.ros2 else None)
         self._atomic: AbstractContextManager[Path] | None = None
         self._writer: Ros1Writer | Ros2Writer | None = None
         self._typestore: Typestore | None = None
@@ -90,7 +129,8 @@ class RosbagWriter:
             Stores.ROS2_HUMBLE if self.ros2 else Stores.ROS1_NOETIC
         )
         register_tf_message(self._typestore)
-        self._atomic = atomic = atomic_path(self.bag_file)
+        kind = ROS2_BAG if self.ros2 else None
+        self._atomic = atomic = atomic_path(self.bag_file, folder_kind=kind)
         tmp = atomic.__enter__()
         try:
             self._writer = writer = self._make_writer(tmp)

@@ -154,13 +154,17 @@ def _lab_demo(args) -> int:
         "--ServerApp.ip=127.0.0.1",
         f"--ServerApp.port={port}",
         "--ServerApp.port_retries=0",
-        f"--IdentityProvider.token={token}",
         f"--ServerApp.open_browser={not args.no_browser}",
         f"--LabApp.default_url=/lab/tree/{EXPLORER}",
     ]
     if hasattr(os, "geteuid") and os.geteuid() == 0:
         command.append("--allow-root")  # containers and CI machines run as root
-    os.execv(command[0], command)  # the server takes over this process (and Ctrl-C)
+    # the token goes through the environment: a command line is world-readable
+    # (/proc/<pid>/cmdline), an environment only by its owner
+    env = {k: v for k, v in os.environ.items() if k != "JUPYTER_TOKEN_FILE"}
+    env["JUPYTER_TOKEN"] = token
+    # the server takes over this process (and its signals: Ctrl-C, SIGTERM, SIGHUP)
+    os.execve(command[0], command, env)
     return 0  # pragma: no cover
 
 

@@ -27,7 +27,7 @@ class Case(NamedTuple):
     call: Any  # a dotted name under rbm_nb, or a callable
     args: tuple
     kwargs: dict
-    exc: type
+    exc: type | None  # None: the call succeeds and asserts its own right result
     match: str
     xfail: str | None = None
 
@@ -282,6 +282,63 @@ def ros2_bag_over_file(name):
             _small_bag(target)
         finally:
             assert target.read_text() == "my notes"
+
+
+# -- hostile strings in an HTML export (issue 31, item 3) --------------------------
+
+EXPORT_DATA = '<script id="rbm-export-data" type="application/json">'
+
+
+def export_with_hostile_string(text, where):
+    """Export a dashboard with ``text`` as the frame name, label, units or title;
+    the page's data element must hold all of the document and give ``text`` back."""
+    import json
+    import tempfile
+    from pathlib import Path
+
+    from rbm_nb.scene import Scene
+    from rbm_nb.widgets.timeseries import TimeSeries
+
+    frame = text if where == "frame" else "moving"
+    if where == "frame":
+        rbm.register_frame(
+            text, parent="world", translation=np.zeros((2, 3)), timestamps=[0.0, 1.0]
+        )
+    scene = Scene()
+    scene.add_frame(frame, label=text if where == "label" else None)
+    import xarray as xr
+
+    speed = xr.DataArray(
+        np.ones(4), dims="time", coords={"time": np.arange(4.0)},
+        attrs={"units": text if where == "units" else "m/s"},
+    )
+    plot = TimeSeries({text if where == "panel" else "speed": speed})
+    with tempfile.TemporaryDirectory() as folder:
+        path = scene.to_html(
+            Path(folder) / "page.html", series=[plot],
+            title=text if where == "title" else None,
+        )
+        page = path.read_text(encoding="utf-8")
+    head, rest = page.split(EXPORT_DATA, 1)
+    data, tail = rest.split("</script>", 1)
+    assert not any(mark in data for mark in ("<", ">", "\u2028", "\u2029"))
+    document = json.loads(data)  # the whole document, nothing cut off
+    assert tail.lstrip().startswith('<script type="module">')
+    if where == "title":
+        import html
+
+        assert f"<h1>{html.escape(text)}</h1>" in head
+    elif where != "label":  # labels become object names (slugs)
+        assert text in json.dumps(document, ensure_ascii=False)
+    return document
+
+
+HOSTILE_STRINGS = {
+    "comment-script": "<!--<script>",
+    "end-script": "</script><script>alert(1)</script>",
+    "line-separators": "a\u2028b\u2029c",
+    "ampersand-tags": "&amp; <b>x</b> &#60;",
+}
 
 
 RF = "ReferenceFrame"
@@ -748,6 +805,47 @@ CASES: list[Case] = [
     Case("to-html-into-folder", writer_at_user_folder,
          ("scene.html", html_export_to), {}, IsADirectoryError,
          r"scene.html.* is a directory|refusing to replace a folder"),
+    # -- hostile strings in every string an HTML export embeds (item 3) ---------
+    Case("export-comment-script-in-frame", export_with_hostile_string,
+         (HOSTILE_STRINGS["comment-script"], "frame"), {}, None, ""),
+    Case("export-comment-script-in-label", export_with_hostile_string,
+         (HOSTILE_STRINGS["comment-script"], "label"), {}, None, ""),
+    Case("export-comment-script-in-units", export_with_hostile_string,
+         (HOSTILE_STRINGS["comment-script"], "units"), {}, None, ""),
+    Case("export-comment-script-in-panel", export_with_hostile_string,
+         (HOSTILE_STRINGS["comment-script"], "panel"), {}, None, ""),
+    Case("export-comment-script-in-title", export_with_hostile_string,
+         (HOSTILE_STRINGS["comment-script"], "title"), {}, None, ""),
+    Case("export-end-script-in-frame", export_with_hostile_string,
+         (HOSTILE_STRINGS["end-script"], "frame"), {}, None, ""),
+    Case("export-end-script-in-label", export_with_hostile_string,
+         (HOSTILE_STRINGS["end-script"], "label"), {}, None, ""),
+    Case("export-end-script-in-units", export_with_hostile_string,
+         (HOSTILE_STRINGS["end-script"], "units"), {}, None, ""),
+    Case("export-end-script-in-panel", export_with_hostile_string,
+         (HOSTILE_STRINGS["end-script"], "panel"), {}, None, ""),
+    Case("export-end-script-in-title", export_with_hostile_string,
+         (HOSTILE_STRINGS["end-script"], "title"), {}, None, ""),
+    Case("export-line-separators-in-frame", export_with_hostile_string,
+         (HOSTILE_STRINGS["line-separators"], "frame"), {}, None, ""),
+    Case("export-line-separators-in-label", export_with_hostile_string,
+         (HOSTILE_STRINGS["line-separators"], "label"), {}, None, ""),
+    Case("export-line-separators-in-units", export_with_hostile_string,
+         (HOSTILE_STRINGS["line-separators"], "units"), {}, None, ""),
+    Case("export-line-separators-in-panel", export_with_hostile_string,
+         (HOSTILE_STRINGS["line-separators"], "panel"), {}, None, ""),
+    Case("export-line-separators-in-title", export_with_hostile_string,
+         (HOSTILE_STRINGS["line-separators"], "title"), {}, None, ""),
+    Case("export-ampersand-tags-in-frame", export_with_hostile_string,
+         (HOSTILE_STRINGS["ampersand-tags"], "frame"), {}, None, ""),
+    Case("export-ampersand-tags-in-label", export_with_hostile_string,
+         (HOSTILE_STRINGS["ampersand-tags"], "label"), {}, None, ""),
+    Case("export-ampersand-tags-in-units", export_with_hostile_string,
+         (HOSTILE_STRINGS["ampersand-tags"], "units"), {}, None, ""),
+    Case("export-ampersand-tags-in-panel", export_with_hostile_string,
+         (HOSTILE_STRINGS["ampersand-tags"], "panel"), {}, None, ""),
+    Case("export-ampersand-tags-in-title", export_with_hostile_string,
+         (HOSTILE_STRINGS["ampersand-tags"], "title"), {}, None, ""),
     # -- rosbags ---------------------------------------------------------------
     Case("rosbag-missing-file", rosbag_reader,
          ("/nonexistent/nope.bag", "get_topics_and_types"), {}, FileNotFoundError,

@@ -341,6 +341,76 @@ HOSTILE_STRINGS = {
 }
 
 
+# -- updates the browser sends through a widget's comm (issue 31, item 5) -------
+
+
+class recorded_comms:
+    """Widgets built inside open a RecordingComm (widget_support.py); closed after."""
+
+    def __enter__(self):
+        import comm
+        from widget_support import RecordingComm
+
+        self.comms = []
+        self._module, self._create = comm, comm.create_comm
+
+        def create_comm(**kwargs):
+            self.comms.append(RecordingComm(**kwargs))
+            return self.comms[-1]
+
+        comm.create_comm = create_comm
+        return self.comms
+
+    def __exit__(self, *exc):
+        import ipywidgets
+
+        self._module.create_comm = self._create
+        ipywidgets.Widget.close_all()
+
+
+def _widget(kind):
+    if kind == "player":
+        from rbm_nb.widgets.player import Player
+
+        return Player(np.arange(10.0))
+    if kind == "timeseries":
+        from rbm_nb.widgets.timeseries import TimeSeries
+
+        return TimeSeries({"speed": (np.arange(10.0), np.ones(10))})
+    from rbm_nb.scene import Scene
+
+    scene = Scene()
+    scene.add_frame("moving")
+    return scene.widget
+
+
+def browser_sets(kind, state, accepted=()):
+    """The browser sends ``state`` to a new widget of ``kind`` as an update.
+
+    Traits in ``accepted`` must take the value sent; every other one must keep
+    the kernel's value, which is sent back to the browser. Returns what the
+    widget refused."""
+    with recorded_comms():
+        widget = _widget(kind)
+        before = {name: getattr(widget, name) for name in state}
+        widget.comm.sent.clear()
+        widget.comm.receive_state(state)
+        restored = {}
+        for data, _ in widget.comm.sent:
+            if data.get("method") == "update":
+                restored.update(data["state"])
+        for name, value in state.items():
+            if name in accepted:
+                assert getattr(widget, name) == value, (name, getattr(widget, name))
+                continue
+            kept = getattr(widget, name)
+            assert kept == before[name] or (kept != kept and before[name] != before[name])
+            assert name in restored, f"{name} was not sent back to the browser"
+        refused = [name for name, _, _ in widget.refused] if hasattr(widget, "refused") else []
+        assert sorted(refused) == sorted(set(state) - set(accepted)), refused
+        return refused or ["nothing refused"]
+
+
 RF = "ReferenceFrame"
 Q1 = np.array([1.0, 0, 0, 0])
 PTS = np.random.default_rng(7).normal(size=(12, 3))
@@ -846,6 +916,38 @@ CASES: list[Case] = [
          (HOSTILE_STRINGS["ampersand-tags"], "panel"), {}, None, ""),
     Case("export-ampersand-tags-in-title", export_with_hostile_string,
          (HOSTILE_STRINGS["ampersand-tags"], "title"), {}, None, ""),
+    # -- the browser sets only what is its own, validated (item 5) -------------
+    Case("browser-player-duration-negative", browser_sets, ("player", {'duration': -1.0}), {}, None, ""),
+    Case("browser-player-duration-nan", browser_sets, ("player", {'duration': np.nan}), {}, None, ""),
+    Case("browser-player-origin-nan", browser_sets, ("player", {'origin': np.nan}), {}, None, ""),
+    Case("browser-player-t0-ns-year-39381", browser_sets, ("player", {'t0_ns': 1180591620717411303424}), {}, None, ""),
+    Case("browser-player-error-set", browser_sets, ("player", {'error': 'fake'}), {}, None, ""),
+    Case("browser-player-esm-replaced", browser_sets, ("player", {'_esm': 'alert(1)'}), {}, None, ""),
+    Case("browser-player-time-nan", browser_sets, ("player", {'time': np.nan}), {}, None, ""),
+    Case("browser-player-speed-negative", browser_sets, ("player", {'speed': -2.0}), {}, None, ""),
+    Case("browser-player-skip-from-browser", browser_sets, ("player", {'skip': 1000000000.0}), {}, None, ""),
+    Case("browser-scene-time-nan", browser_sets, ("scene", {'time': np.nan}), {}, None, ""),
+    Case("browser-scene-time-inf", browser_sets, ("scene", {'time': np.inf}), {}, None, ""),
+    Case("browser-scene-height-huge", browser_sets, ("scene", {'height': 1000000000}), {}, None, ""),
+    Case("browser-scene-selected-unknown", browser_sets, ("scene", {'selected': 'nope'}), {}, None, ""),
+    Case("browser-scene-follow-not-drawn", browser_sets, ("scene", {'follow': 'static'}), {}, None, ""),
+    Case("browser-scene-esm-replaced", browser_sets, ("scene", {'_esm': 'alert(1)'}), {}, None, ""),
+    Case("browser-scene-frames-replaced", browser_sets, ("scene", {'_frames': {}}), {}, None, ""),
+    Case("browser-timeseries-time-nan", browser_sets, ("timeseries", {'time': np.nan}), {}, None, ""),
+    Case("browser-timeseries-x-range-reversed", browser_sets, ("timeseries", {'x_range': [5.0, 1.0]}), {}, None, ""),
+    Case("browser-timeseries-x-range-three", browser_sets, ("timeseries", {'x_range': [1.0, 2.0, 3.0]}), {}, None, ""),
+    Case("browser-timeseries-panel-height-negative", browser_sets, ("timeseries", {'panel_height': -5}), {}, None, ""),
+    Case("browser-timeseries-panels-garbage", browser_sets, ("timeseries", {'panels': [{'label': 1}]}), {}, None, ""),
+    Case("browser-timeseries-data-garbage", browser_sets, ("timeseries", {'data': [{}]}), {}, None, ""),
+    Case("browser-timeseries-t0-ns", browser_sets, ("timeseries", {'t0_ns': 1180591620717411303424}), {}, None, ""),
+    Case("browser-timeseries-esm-replaced", browser_sets, ("timeseries", {'_esm': 'alert(1)'}), {}, None, ""),
+    Case("browser-player-time-kept-duration-refused", browser_sets,
+         ("player", {"time": 2.5, "duration": -1.0}, ("time",)), {}, None, ""),
+    Case("browser-scene-selected-known-frame", browser_sets,
+         ("scene", {"selected": "moving", "height": 10**9}, ("selected",)), {}, None, ""),
+    Case("browser-timeseries-zoom-accepted", browser_sets,
+         ("timeseries", {"x_range": [1.0, 5.0], "panels": []}, ("x_range",)), {}, None,
+         ""),
     # -- rosbags ---------------------------------------------------------------
     Case("rosbag-missing-file", rosbag_reader,
          ("/nonexistent/nope.bag", "get_topics_and_types"), {}, FileNotFoundError,

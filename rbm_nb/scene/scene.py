@@ -553,7 +553,10 @@ class Scene:
                 if self._camera is None:
                     self._camera = self._fitted_camera()
                     self._camera_is_auto = True
-                widget = SceneWidget(lambda: self._snapshot_message(self.max_samples))
+                widget = SceneWidget(
+                    lambda: self._snapshot_message(self.max_samples),
+                    check_frame=self._checked_frame_name,
+                )
                 self._widget = widget
                 for name in (
                     "_origin",
@@ -610,6 +613,18 @@ class Scene:
             self.highlight(None)
         else:
             self.highlight(name)
+
+    def _checked_frame_name(self, name: str, trait: str) -> str:
+        """What ``selected`` (a registered frame) and ``follow`` (a drawn one) accept."""
+        if not isinstance(name, str):
+            raise ValueError(f"Scene.{trait} must be a frame name, got {name!r}")
+        resolved = _resolve(name, f"Scene.{trait}").name
+        if trait == "follow" and resolved not in self._frame_paths():
+            raise ValueError(
+                f"Scene.follow: frame {resolved!r} is not drawn in this scene; "
+                f"add_frame({resolved!r}) first (drawn: {sorted(self._frame_paths())})"
+            )
+        return resolved
 
     def follow(self, frame=None) -> None:
         """Keep the camera on ``frame`` (drawn with ``add_frame``) as it moves; None stops."""

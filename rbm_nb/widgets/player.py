@@ -51,6 +51,7 @@ import anywidget
 import numpy as np
 import traitlets
 
+from ._frontend import FrontendGuard
 from ._time import (
     DATETIME,
     check_kinds,
@@ -166,7 +167,7 @@ def _resolve_timestamps(source) -> tuple[Any, str]:
     return source, "timestamps"
 
 
-class Player(anywidget.AnyWidget):
+class Player(FrontendGuard, anywidget.AnyWidget):
     """Play/pause, skips, slider, speed and loop over a time axis.
 
     Parameters
@@ -196,6 +197,9 @@ class Player(anywidget.AnyWidget):
     >>> player.skip_forward(); player.time  # 1 s later is past the end
     0.9
     """
+
+    # the browser's controls; duration, origin, t0_ns, error... are the kernel's
+    _frontend_settable = frozenset({"time", "playing", "speed", "loop"})
 
     _esm = traitlets.Unicode("").tag(sync=True)
     _uid = traitlets.Unicode("").tag(sync=True)

@@ -19,6 +19,7 @@ import numpy as np
 import traitlets
 from ipywidgets import Widget, widget_serialization
 
+from ._frontend import FrontendGuard
 from ._time import timestamps_as_seconds
 from ._timebase import TimeBase, format_time
 from .player import bundle
@@ -148,7 +149,28 @@ def _envelope(x: np.ndarray, y: np.ndarray, max_points: int | None):
     return x[keep], y[keep]
 
 
-class TimeSeries(anywidget.AnyWidget):
+#: bounds of a panel's height in pixels
+PANEL_HEIGHT = (40, 4000)
+
+
+def checked_panel_height(value) -> int:
+    """``value`` as a panel height in pixels, or a ValueError naming panel_height."""
+    low, high = PANEL_HEIGHT
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float, np.integer, np.floating))
+        or not np.isfinite(value)
+        or int(value) != value
+        or not low <= value <= high
+    ):
+        raise ValueError(
+            f"TimeSeries: panel_height must be a whole number of pixels in "
+            f"[{low}, {high}], got {value!r}"
+        )
+    return int(value)
+
+
+class TimeSeries(FrontendGuard, anywidget.AnyWidget):
     """Stacked time-series panels with zoom, hover values and click-to-seek.
 
     Parameters
@@ -185,6 +207,9 @@ class TimeSeries(anywidget.AnyWidget):
     >>> plot.readout()
     't = 5.000 s   speed: 1'
     """
+
+    # the browser seeks and zooms; the data, panels and time base are the kernel's
+    _frontend_settable = frozenset({"time", "x_range"})
 
     _esm = traitlets.Unicode("", help="The bundle js/src/timeseries.js.").tag(sync=True)
 
@@ -242,10 +267,7 @@ class TimeSeries(anywidget.AnyWidget):
                 f"TimeSeries: max_points must be an integer >= 10, got {max_points!r}"
             )
         self._max_points = None if max_points is None else int(max_points)
-        if int(panel_height) < 40:
-            raise ValueError(
-                f"TimeSeries: panel_height must be >= 40 pixels, got {panel_height}"
-            )
+        panel_height = checked_panel_height(panel_height)
         self._series = [_Series(str(k), v) for k, v in series.items()]
         kinds = {s.kind for s in self._series}
         if len(kinds) > 1:
@@ -304,6 +326,34 @@ class TimeSeries(anywidget.AnyWidget):
         with self.hold_sync():
             for name, value in state.items():
                 setattr(self, name, value)
+
+    @traitlets.validate("time")
+    def _valid_time(self, proposal):
+        value = float(proposal["value"])
+        if not np.isfinite(value):
+            raise traitlets.TraitError(f"TimeSeries.time must be finite, got {value}")
+        return value
+
+    @traitlets.validate("x_range")
+    def _valid_x_range(self, proposal):
+        value = list(proposal["value"])
+        if value and not (
+            len(value) == 2
+            and all(np.isfinite(v) for v in value)
+            and value[0] < value[1]
+        ):
+            raise traitlets.TraitError(
+                "TimeSeries.x_range must be [] or [start, end] with finite "
+                f"start < end (seconds), got {value}"
+            )
+        return value
+
+    @traitlets.validate("panel_height")
+    def _valid_panel_height(self, proposal):
+        try:
+            return checked_panel_height(proposal["value"])
+        except ValueError as err:
+            raise traitlets.TraitError(str(err)) from None
 
     @traitlets.validate("player")
     def _valid_player(self, proposal):

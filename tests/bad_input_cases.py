@@ -73,6 +73,12 @@ def setup_tree() -> None:
         timestamps=[5.01, 5.05, 5.09],
     )
     rbm.register_frame("other_root")
+    rbm.register_frame(
+        "huge",
+        parent="world",
+        translation=[[1e308, 0.0, 0.0], [-1e308, 0.0, 0.0]],
+        timestamps=[0.0, 1.0],
+    )
 
 
 def resolve(call):
@@ -409,6 +415,28 @@ def browser_sets(kind, state, accepted=()):
         refused = [name for name, _, _ in widget.refused] if hasattr(widget, "refused") else []
         assert sorted(refused) == sorted(set(state) - set(accepted)), refused
         return refused or ["nothing refused"]
+
+
+# -- a Scene refuses an object whole, and stays usable (issue 31, items 4, 14) ----
+
+
+def scene_refuses(method, *args, **kwargs):
+    """Call ``scene.<method>`` on a scene holding one frame; whatever it raises,
+    the scene must be unchanged and still take an add and a remove."""
+    from rbm_nb.scene import Scene
+
+    scene = Scene()
+    scene.add_frame("moving")
+    before = (len(scene), scene.camera if hasattr(scene, "camera") else None)
+    try:
+        getattr(scene, method)(*args, **kwargs)
+    finally:
+        assert (len(scene), getattr(scene, "camera", None)) == before
+        handle = scene.add_points(np.zeros((2, 3)))
+        handle.remove()
+        assert len(scene) == before[0]
+        camera = scene._camera or {}
+        assert np.all(np.isfinite(np.asarray(camera.get("position", [0.0]))))
 
 
 RF = "ReferenceFrame"
@@ -948,6 +976,19 @@ CASES: list[Case] = [
     Case("browser-timeseries-zoom-accepted", browser_sets,
          ("timeseries", {"x_range": [1.0, 5.0], "panels": []}, ("x_range",)), {}, None,
          ""),
+    # -- a Scene refuses what it cannot draw, whole (item 4) ----------------------
+    Case("scene-points-overflow", scene_refuses,
+         ("add_points", [[1e308, 1e308, 0.0], [-1e308, -1e308, 0.0]]), {}, ValueError,
+         r"add_points: 'points_world' reaches 1e\+308 m .*draws within 1e\+09 m"),
+    Case("scene-frame-scale-1e308", scene_refuses, ("add_frame", "static"),
+         {"scale": 1e308}, ValueError, r"add_frame: .* reaches 1e\+308 m"),
+    Case("scene-vectors-length-overflow", scene_refuses,
+         ("add_vectors", "world", [[1.0, 0.0, 0.0]]), {"length": 1e300}, ValueError,
+         r"add_vectors: .* reaches"),
+    Case("scene-path-huge-frame", scene_refuses, ("add_path", "huge"), {},
+         ValueError, r"add_path: .* reaches"),
+    Case("scene-mesh-huge", scene_refuses, ("add_mesh", "world", "box"),
+         {"size": [1e300, 1.0, 1.0]}, ValueError, r"add_mesh: .* reaches"),
     # -- rosbags ---------------------------------------------------------------
     Case("rosbag-missing-file", rosbag_reader,
          ("/nonexistent/nope.bag", "get_topics_and_types"), {}, FileNotFoundError,

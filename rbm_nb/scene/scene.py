@@ -62,6 +62,19 @@ def _resolve(frame, argument: str):
     return frames.resolve_frame(frame, argument)
 
 
+#: largest distance from the scene's origin (metres) an object may reach: far
+#: beyond any tracked volume, far inside float32 (the browser's numbers) and
+#: the grid's and camera's arithmetic
+MAX_COORDINATE = 1e9
+
+
+def _reach(points) -> float:
+    """Largest absolute coordinate of ``points`` (NaN rows, i.e. missing, aside)."""
+    values = np.abs(np.asarray(points, dtype=float))
+    values = values[~np.isnan(values)]
+    return float(values.max()) if values.size else 0.0
+
+
 def _slug(text: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.\-]+", "_", str(text)).strip("_") or "object"
 
@@ -886,6 +899,8 @@ class Scene:
         inner: Track | None = None,
         offset=None,
     ) -> None:
+        # before anything changes: an object the view cannot draw is refused whole
+        self._check_reach(handle, carrier, inner)
         with self._lock:
             kinds = [t.kind for t in (carrier, inner) if t is not None and not t.static]
             for kind in kinds:
@@ -909,6 +924,22 @@ class Scene:
             if added:
                 self._emit_tracks(added)
             self._content_changed()
+
+    def _check_reach(
+        self, handle: SceneHandle, carrier: Track, inner: Track | None
+    ) -> None:
+        """Refuse an object reaching beyond :data:`MAX_COORDINATE` from the origin."""
+        reach = _reach(handle._extent()) + _reach(carrier.positions())
+        if inner is not None:
+            reach += _reach(inner.positions())
+        if handle.base is not self.base:
+            reach += _reach(Track.lookup(handle.base, self.base).positions())
+        if not reach <= MAX_COORDINATE:
+            raise ValueError(
+                f"add_{handle.kind}: {handle.name!r} reaches {reach:.3g} m from the "
+                f"scene's origin; the 3D view draws within {MAX_COORDINATE:.0e} m "
+                "(check the values and their units)"
+            )
 
     def _object_messages(self, handle: SceneHandle) -> list[Message]:
         messages = []

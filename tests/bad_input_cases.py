@@ -439,6 +439,31 @@ def scene_refuses(method, *args, **kwargs):
         assert np.all(np.isfinite(np.asarray(camera.get("position", [0.0]))))
 
 
+def browser_sends_ready(times, content=None):
+    """A page sends ``times`` messages (``{"type": "ready"}`` by default) at once:
+    one snapshot at once, at most one more for all the others."""
+    with recorded_comms():
+        widget = _widget("scene")
+        comm = widget.comm
+        comm.sent.clear()
+        for _ in range(times):
+            comm.receive({"type": "ready"} if content is None else content)
+
+        def snapshots():
+            return sum(1 for data, _ in comm.sent if data.get("content", {}).get("type") == "snapshot")
+
+        at_once = snapshots()
+        timer = widget._ready_timer
+        if timer is not None:
+            timer.join()  # the interval ends: the others are answered together
+        total = snapshots()
+        if content is not None:
+            assert total == 0, total
+        else:
+            assert at_once == 1 and total == min(times, 2), (at_once, total)
+        return [at_once, total]
+
+
 RF = "ReferenceFrame"
 Q1 = np.array([1.0, 0, 0, 0])
 PTS = np.random.default_rng(7).normal(size=(12, 3))
@@ -989,6 +1014,13 @@ CASES: list[Case] = [
          ValueError, r"add_path: .* reaches"),
     Case("scene-mesh-huge", scene_refuses, ("add_mesh", "world", "box"),
          {"size": [1e300, 1.0, 1.0]}, ValueError, r"add_mesh: .* reaches"),
+    # -- "ready" messages answered at most twice per interval (item 6) ------------
+    Case("browser-ready-once", browser_sends_ready, (1,), {}, None, ""),
+    Case("browser-ready-flood-10", browser_sends_ready, (10,), {}, None, ""),
+    Case("browser-ready-flood-200", browser_sends_ready, (200,), {}, None, ""),
+    Case("browser-custom-not-a-dict", browser_sends_ready, (3, "ready"), {}, None, ""),
+    Case("browser-custom-unknown-type", browser_sends_ready, (3, {"type": "redy"}), {},
+         None, ""),
     # -- rosbags ---------------------------------------------------------------
     Case("rosbag-missing-file", rosbag_reader,
          ("/nonexistent/nope.bag", "get_topics_and_types"), {}, FileNotFoundError,

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import functools
 import math
+import threading
+import time
 import uuid
 from collections.abc import Callable
 
@@ -40,6 +42,9 @@ def scene_esm() -> str:
     )
     return loader + bundle("scene")
 
+
+#: seconds between two snapshots sent in answer to pages' "ready" messages
+READY_INTERVAL = 1.0
 
 #: bounds of the view's height in pixels
 HEIGHT = (50, 5000)
@@ -101,6 +106,9 @@ class SceneWidget(FrontendGuard, anywidget.AnyWidget):
         super().__init__(_esm=scene_esm(), _uid=uuid.uuid4().hex, **kwargs)
         self._snapshot = snapshot
         self.ready = False
+        self._ready_lock = threading.Lock()
+        self._ready_timer: threading.Timer | None = None
+        self._last_snapshot = -math.inf
         self.bytes_sent = 0
         self.on_msg(self._on_message)
 
@@ -133,8 +141,33 @@ class SceneWidget(FrontendGuard, anywidget.AnyWidget):
 
     def _on_message(self, _widget, content, _buffers) -> None:
         if isinstance(content, dict) and content.get("type") == "ready":
+            self._on_ready()
+
+    def _on_ready(self) -> None:
+        """Answer a page's ``ready`` with the whole scene, at most once per interval.
+
+        Every page showing this model receives a snapshot sent for any of
+        them, so readies arriving within :data:`READY_INTERVAL` of the last
+        snapshot are answered together by one more snapshot when the interval
+        ends: a page that asks always gets the scene, and a flood of readies
+        costs two snapshots per interval, not one each.
+        """
+        with self._ready_lock:
             self.ready = True
-            self.push(*self._snapshot())
+            wait = self._last_snapshot + READY_INTERVAL - time.monotonic()
+            if wait > 0:
+                if self._ready_timer is None:
+                    self._ready_timer = threading.Timer(wait, self._send_snapshot)
+                    self._ready_timer.daemon = True
+                    self._ready_timer.start()
+                return
+        self._send_snapshot()
+
+    def _send_snapshot(self) -> None:
+        with self._ready_lock:
+            self._ready_timer = None
+            self._last_snapshot = time.monotonic()
+        self.push(*self._snapshot())
 
     def push(self, content: dict, buffers: list) -> None:
         """Send one content message (only once a browser asked for the scene)."""

@@ -219,7 +219,12 @@ def _small_bag(path):
 
     with RosbagWriter(path) as writer:
         writer.write_transform_stamped(
-            [1.0, 2.0], np.zeros((2, 3)), np.tile([1.0, 0, 0, 0], (2, 1)), "/x", "a", "b"
+            [1.0, 2.0],
+            np.zeros((2, 3)),
+            np.tile([1.0, 0, 0, 0], (2, 1)),
+            "/x",
+            "a",
+            "b",
         )
     return path
 
@@ -315,13 +320,16 @@ def export_with_hostile_string(text, where):
     import xarray as xr
 
     speed = xr.DataArray(
-        np.ones(4), dims="time", coords={"time": np.arange(4.0)},
+        np.ones(4),
+        dims="time",
+        coords={"time": np.arange(4.0)},
         attrs={"units": text if where == "units" else "m/s"},
     )
     plot = TimeSeries({text if where == "panel" else "speed": speed})
     with tempfile.TemporaryDirectory() as folder:
         path = scene.to_html(
-            Path(folder) / "page.html", series=[plot],
+            Path(folder) / "page.html",
+            series=[plot],
             title=text if where == "title" else None,
         )
         page = path.read_text(encoding="utf-8")
@@ -410,9 +418,15 @@ def browser_sets(kind, state, accepted=()):
                 assert getattr(widget, name) == value, (name, getattr(widget, name))
                 continue
             kept = getattr(widget, name)
-            assert kept == before[name] or (kept != kept and before[name] != before[name])
+            assert kept == before[name] or (
+                kept != kept and before[name] != before[name]
+            )
             assert name in restored, f"{name} was not sent back to the browser"
-        refused = [name for name, _, _ in widget.refused] if hasattr(widget, "refused") else []
+        refused = (
+            [name for name, _, _ in widget.refused]
+            if hasattr(widget, "refused")
+            else []
+        )
         assert sorted(refused) == sorted(set(state) - set(accepted)), refused
         return refused or ["nothing refused"]
 
@@ -450,7 +464,11 @@ def browser_sends_ready(times, content=None):
             comm.receive({"type": "ready"} if content is None else content)
 
         def snapshots():
-            return sum(1 for data, _ in comm.sent if data.get("content", {}).get("type") == "snapshot")
+            return sum(
+                1
+                for data, _ in comm.sent
+                if data.get("content", {}).get("type") == "snapshot"
+            )
 
         at_once = snapshots()
         timer = widget._ready_timer

@@ -482,6 +482,47 @@ def browser_sends_ready(times, content=None):
         return [at_once, total]
 
 
+# -- the rbm-nb command: one-line refusals before any work (items 7, issue 29) -----
+
+
+class CommandRefused(Exception):
+    """``rbm-nb`` exited with status 2; the message is what it printed."""
+
+
+def rbm_nb_command(*argv):
+    """Run ``rbm-nb <argv>`` in this process; a refusal must be one line, exit 2,
+    and happen before anything is loaded or written."""
+    import contextlib
+    import io
+    from unittest import mock
+
+    from rbm_nb import cli
+
+    def work(*args, **kwargs):
+        raise AssertionError(f"rbm-nb {' '.join(argv)} started work")
+
+    err = io.StringIO()
+    out = io.StringIO()
+    try:
+        with (
+            contextlib.redirect_stderr(err),
+            contextlib.redirect_stdout(out),
+            # a server or an export here would be work done before the refusal
+            mock.patch.object(cli.os, "execv", work),
+            mock.patch.object(cli.os, "execve", work),
+            mock.patch.object(cli, "_html_demo", work),
+            mock.patch.object(cli, "_text_demo", work),
+            mock.patch("rbm_nb.app.serve", work),
+        ):
+            cli.main(list(argv))
+    except SystemExit as stop:
+        text = err.getvalue()
+        assert stop.code == 2, (stop.code, text)
+        assert text.count("\n") == 1 and out.getvalue() == "", (text, out.getvalue())
+        raise CommandRefused(text.strip()) from None
+    raise AssertionError(f"rbm-nb {' '.join(argv)} was not refused")
+
+
 RF = "ReferenceFrame"
 Q1 = np.array([1.0, 0, 0, 0])
 PTS = np.random.default_rng(7).normal(size=(12, 3))
@@ -1039,6 +1080,41 @@ CASES: list[Case] = [
     Case("browser-custom-not-a-dict", browser_sends_ready, (3, "ready"), {}, None, ""),
     Case("browser-custom-unknown-type", browser_sends_ready, (3, {"type": "redy"}), {},
          None, ""),
+    # -- the rbm-nb command refuses in one line, before any work (item 7) -------
+    Case("cli-html-empty", rbm_nb_command, ('demo', '--html', ''), {}, CommandRefused,
+         r"--html: give a file name"),
+    Case("cli-html-folder", rbm_nb_command, ('demo', '--html', '/tmp'), {}, CommandRefused,
+         r"--html: /tmp is a folder; give a file name"),
+    Case("cli-html-missing-folder", rbm_nb_command, ('demo', '--html', '/nonexistent-rbm/x.html'), {}, CommandRefused,
+         r"--html: the folder '/nonexistent-rbm' does not exist"),
+    Case("cli-port-70000", rbm_nb_command, ('demo', '--port', '70000'), {}, CommandRefused,
+         r"--port: 70000 is not a port \(0 to 65535"),
+    Case("cli-port-negative", rbm_nb_command, ('app', '--port', '-1'), {}, CommandRefused,
+         r"--port: -1 is not a port"),
+    Case("cli-port-text", rbm_nb_command, ('app', '--port', 'http'), {}, CommandRefused,
+         r"--port: not a port number: 'http'"),
+    Case("cli-max-frames-0", rbm_nb_command, ('demo', '--html', '/tmp/rbm-x.html', '--max-frames', '0'), {}, CommandRefused,
+         r"--max-frames: must be at least 2, got 0"),
+    Case("cli-max-frames-text", rbm_nb_command, ('demo', '--html', '/tmp/rbm-x.html', '--max-frames', 'all'), {}, CommandRefused,
+         r"--max-frames: not a whole number"),
+    Case("cli-source-synthetic-without-html", rbm_nb_command, ('demo', '--source', 'synthetic'), {}, CommandRefused,
+         r"--source does not apply to the JupyterLab demo \(add --html"),
+    Case("cli-max-frames-without-html", rbm_nb_command, ('demo', '--max-frames', '5'), {}, CommandRefused,
+         r"--max-frames does not apply to the JupyterLab demo"),
+    Case("cli-port-with-text", rbm_nb_command, ('demo', '--text', '--port', '9000'), {}, CommandRefused,
+         r"--port does not apply to demo --text"),
+    Case("cli-source-with-text", rbm_nb_command, ('demo', '--text', '--source=remote'), {}, CommandRefused,
+         r"--source does not apply to demo --text"),
+    Case("cli-port-with-html", rbm_nb_command, ('demo', '--html', '/tmp/rbm-x.html', '--port', '9000'), {}, CommandRefused,
+         r"--port does not apply to demo --html"),
+    Case("cli-notebook-dir-with-html", rbm_nb_command, ('demo', '--html', '/tmp/rbm-x.html', '--notebook-dir', '/tmp'), {}, CommandRefused,
+         r"--notebook-dir does not apply to demo --html"),
+    Case("cli-notebook-dir-missing", rbm_nb_command, ('demo', '--notebook-dir', '/nonexistent-rbm'), {}, CommandRefused,
+         r"--notebook-dir: '/nonexistent-rbm' is not a folder"),
+    Case("cli-html-and-text", rbm_nb_command, ('demo', '--html', '/tmp/rbm-x.html', '--text'), {}, CommandRefused,
+         r"not allowed with argument"),
+    Case("cli-unknown-option", rbm_nb_command, ('demo', '--bogus'), {}, CommandRefused,
+         r"unrecognized arguments: --bogus"),
     # -- rosbags ---------------------------------------------------------------
     Case("rosbag-missing-file", rosbag_reader,
          ("/nonexistent/nope.bag", "get_topics_and_types"), {}, FileNotFoundError,

@@ -523,6 +523,49 @@ def rbm_nb_command(*argv):
     raise AssertionError(f"rbm-nb {' '.join(argv)} was not refused")
 
 
+def bag_with_frame_id(child):
+    """Register the tf tree of a bag whose transform names ``child``; a refusal
+    must register nothing."""
+    import tempfile
+    from pathlib import Path
+
+    from rbm_nb.ros import RosbagWriter, register_frames_from_bag
+
+    with tempfile.TemporaryDirectory() as folder:
+        bag = Path(folder) / "tf.bag"
+        with RosbagWriter(bag) as writer:
+            for frame, name in (("map", "odom"), ("odom", child)):
+                writer.write_tf(
+                    [1.0, 2.0], np.zeros((2, 3)), np.tile([1.0, 0, 0, 0], (2, 1)),
+                    frame, name,
+                )  # fmt: skip
+        before = set(rbm.registry)
+        try:
+            register_frames_from_bag(bag)
+        finally:
+            assert set(rbm.registry) == before
+
+
+def player_with_callbacks():
+    """A raising on_time callback: the next still runs, the error is shown."""
+    from rbm_nb.widgets.player import Player
+
+    with recorded_comms():
+        player = Player(np.arange(10.0))
+        seen = []
+
+        @player.on_time
+        def broken(t):
+            raise RuntimeError("callback boom")
+
+        player.on_time(seen.append)
+        player.time = 3.0
+        assert seen == [3.0], seen
+        assert "broken" in player.error and "callback boom" in player.error
+        assert isinstance(player.error_object, RuntimeError)
+        return seen
+
+
 RF = "ReferenceFrame"
 Q1 = np.array([1.0, 0, 0, 0])
 PTS = np.random.default_rng(7).normal(size=(12, 3))
@@ -1115,6 +1158,20 @@ CASES: list[Case] = [
          r"not allowed with argument"),
     Case("cli-unknown-option", rbm_nb_command, ('demo', '--bogus'), {}, CommandRefused,
          r"unrecognized arguments: --bogus"),
+    # -- frame names with control characters (item 11) ---------------------------
+    Case("rf-name-escape", RF, ("head\x1b[2J",), {}, ValueError,
+         r"frame name 'head\\x1b\[2J' has the control character U\+001B at index 4"),
+    Case("rf-name-bell", "register_frame", ("bell\x07",), {"parent": "world"},
+         ValueError, r"control character U\+0007"),
+    Case("rf-name-nul", RF, ("a\x00b", "world"), {}, ValueError,
+         r"control character U\+0000 at index 1"),
+    Case("rf-name-c1-csi", RF, ("x\x9b31m",), {}, ValueError, r"U\+009B"),
+    Case("registry-set-escape-name", registry_set, ("x\x1b", rbm.ReferenceFrame("ok")),
+         {}, ValueError, r"control character U\+001B"),
+    Case("rosbag-frame-id-escape", bag_with_frame_id, ("cam\x1b]0;owned\x07",), {},
+         ValueError, r"tf.bag: frame name .* control character U\+001B"),
+    # -- a raising on_time callback stops nothing (item 12) ------------------------
+    Case("player-on-time-callback-raises", player_with_callbacks, (), {}, None, ""),
     # -- rosbags ---------------------------------------------------------------
     Case("rosbag-missing-file", rosbag_reader,
          ("/nonexistent/nope.bag", "get_topics_and_types"), {}, FileNotFoundError,

@@ -435,6 +435,9 @@ class Player(FrontendGuard, anywidget.AnyWidget):
     def on_time(self, callback: Callable[[float], Any]) -> Callable[[float], Any]:
         """Call ``callback(data_seconds)`` whenever the kernel learns a new time.
 
+        A callback that raises does not stop the others: its error is shown
+        in the widget (``error``, and the exception in ``error_object``).
+
         Returns the callback (usable as a decorator).
         """
         self._callbacks.append(callback)
@@ -459,7 +462,12 @@ class Player(FrontendGuard, anywidget.AnyWidget):
                 self.error_object = err
                 self.error = f"{type(err).__name__}: {err}"
         for callback in list(self._callbacks):
-            callback(seconds)
+            try:
+                callback(seconds)
+            except Exception as err:  # shown in the widget; the others still run
+                self.error_object = err
+                name = getattr(callback, "__qualname__", repr(callback))
+                self.error = f"on_time callback {name}: {type(err).__name__}: {err}"
 
     # -- display --------------------------------------------------------------------
     def readout(self) -> str:

@@ -566,6 +566,54 @@ def player_with_callbacks():
         return seen
 
 
+def plot_sends_exactly(values):
+    """What a TimeSeries sends for ``values`` is what the browser decodes
+    (``typed(v, Float64Array)`` in js/src/timeseries.js): the float64 values."""
+    from rbm_nb.widgets.timeseries import TimeSeries
+
+    values = np.asarray(values, dtype=float)
+    with recorded_comms():
+        plot = TimeSeries({"v": (np.arange(float(len(values))), values)})
+        sent = np.frombuffer(plot.data[0]["y"][0], dtype="<f8")
+        np.testing.assert_array_equal(sent, values)
+        return sent.tolist()
+
+
+def scene_time_clamped(t):
+    """set_time without a player keeps to the times the scene can show."""
+    from rbm_nb.scene import Scene
+
+    with recorded_comms():
+        scene = Scene()
+        scene.add_frame("moving")
+        widget = scene.widget
+        scene.set_time(t)
+        # 'moving' spans 0..9 s: kept between one span before and the end
+        assert scene.time in (-9.0, 9.0), scene.time
+        assert widget.time in (-9.0, 9.0), widget.time
+        return [scene.time]
+
+
+def mesh_file_in(folder, name, content):
+    from rbm_nb.scene import Scene
+
+    path = folder / name
+    path.write_bytes(content)
+    Scene().add_mesh("world", path)
+
+
+def player_of(timestamps):
+    from rbm_nb.widgets.player import Player
+
+    return Player(timestamps)
+
+
+def plot_with(**kwargs):
+    from rbm_nb.widgets.timeseries import TimeSeries
+
+    return TimeSeries({"v": (np.arange(20.0), np.ones(20))}, **kwargs)
+
+
 RF = "ReferenceFrame"
 Q1 = np.array([1.0, 0, 0, 0])
 PTS = np.random.default_rng(7).normal(size=(12, 3))
@@ -1172,6 +1220,50 @@ CASES: list[Case] = [
          ValueError, r"tf.bag: frame name .* control character U\+001B"),
     # -- a raising on_time callback stops nothing (item 12) ------------------------
     Case("player-on-time-callback-raises", player_with_callbacks, (), {}, None, ""),
+    # -- plotted values arrive as the kernel has them (item 13) --------------------
+    Case("plot-1e300-stays-finite", plot_sends_exactly, ([1e300, -1e300, 0.0, 1.0],),
+         {}, None, ""),
+    Case("plot-5e6-millimetre-steps", plot_sends_exactly,
+         (5e6 + 0.001 * np.arange(5),), {}, None, ""),
+    Case("plot-tiny-values", plot_sends_exactly, ([1e-300, 2e-300, 3e-300],), {},
+         None, ""),
+    # -- Scene and Player values (item 14) -----------------------------------------
+    Case("scene-focus-distance-nan", scene_refuses, ("focus", "moving"),
+         {"distance": np.nan}, ValueError,
+         r"Scene.focus: distance must be positive and at most 1e\+09 m, got nan"),
+    Case("scene-focus-distance-negative", scene_refuses, ("focus", "moving"),
+         {"distance": -2.0}, ValueError, r"Scene.focus: distance must be positive"),
+    Case("scene-focus-distance-text", scene_refuses, ("focus", "moving"),
+         {"distance": "far"}, ValueError, r"distance must be a number of metres"),
+    Case("scene-camera-position-is-target", scene_refuses,
+         ("set_camera", [1.0, 2.0, 3.0], [1.0, 2.0, 3.0]), {}, ValueError,
+         r"set_camera: position and target are the same point"),
+    Case("scene-camera-far", scene_refuses,
+         ("set_camera", [1e300, 0.0, 0.0], [0.0, 0.0, 0.0]), {}, ValueError,
+         r"set_camera: position .* beyond 1e\+09 m"),
+    Case("scene-set-time-inf", scene_refuses, ("set_time", np.inf), {}, ValueError,
+         r"t|finite"),
+    Case("scene-set-time-1e300-clamped", scene_time_clamped, (1e300,), {}, None, ""),
+    Case("scene-set-time-before-start-clamped", scene_time_clamped, (-1e300,), {},
+         None, ""),
+    Case("player-infinite-span", player_of, ([-1e308, 1e308],), {}, ValueError,
+         r"Player: the timestamps run from -1e\+308 to 1e\+308 s, a span too long"),
+    Case("mesh-stl-not-stl", in_temp_folder, (mesh_file_in, "part.stl", b"hello"), {},
+         ValueError, r"part.stl' is not a binary STL .* nor an ASCII STL"),
+    Case("mesh-dae-not-collada", in_temp_folder,
+         (mesh_file_in, "part.dae", b"<html></html>"), {}, ValueError,
+         r"part.dae' is not a COLLADA"),
+    Case("plot-max-points-nan", plot_with, (), {"max_points": np.nan}, ValueError,
+         r"TimeSeries: max_points must be an integer >= 10, got nan"),
+    Case("plot-panel-height-nan", plot_with, (), {"panel_height": np.nan}, ValueError,
+         r"TimeSeries: panel_height must be a whole number of pixels .* got nan"),
+    Case("plot-panel-height-huge", plot_with, (), {"panel_height": 10**9}, ValueError,
+         r"panel_height must be a whole number of pixels in \[40, 4000\]"),
+    Case("plot-gap-text", plot_with, (), {"gap": "wide"}, ValueError,
+         r"TimeSeries: gap must be a positive number of seconds"),
+    Case("scene-path-max-points-nan", scene_refuses, ("add_path", "moving"),
+         {"max_points": np.nan}, ValueError,
+         r"add_path: max_points must be a whole number, at least 2, got nan"),
     # -- rosbags ---------------------------------------------------------------
     Case("rosbag-missing-file", rosbag_reader,
          ("/nonexistent/nope.bag", "get_topics_and_types"), {}, FileNotFoundError,

@@ -68,6 +68,22 @@ def _resolve(frame, argument: str):
 MAX_COORDINATE = 1e9
 
 
+def _camera_distance(value) -> float:
+    """A camera distance in metres: positive, finite, within the drawable space."""
+    try:
+        distance = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"Scene.focus: distance must be a number of metres, got {value!r}"
+        ) from None
+    if not 0 < distance <= MAX_COORDINATE:
+        raise ValueError(
+            f"Scene.focus: distance must be positive and at most {MAX_COORDINATE:.0e} m, "
+            f"got {value!r}"
+        )
+    return distance
+
+
 def _reach(points) -> float:
     """Largest absolute coordinate of ``points`` (NaN rows, i.e. missing, aside)."""
     values = np.abs(np.asarray(points, dtype=float))
@@ -451,10 +467,21 @@ class Scene:
 
         ``t`` is float seconds (epoch seconds for datetime data) or a
         datetime64 value. With a linked player this moves the player (and so
-        every view following it).
+        every view following it). Without one, ``t`` is kept between one
+        span before the first sample (all moving objects hidden) and the last
+        sample (every object as it was last).
         """
         self._check_open()
         seconds = time_as_seconds(t, self.state.kind)
+        if not math.isfinite(seconds):
+            raise ValueError(f"Scene.set_time: t must be finite, got {t!r}")
+        timeline = self.state.timeline()
+        if timeline is not None and self._player is None:
+            # after the last sample every object stays as it was then, and
+            # before the first all moving ones are hidden: times beyond show
+            # nothing new, so 1e300 s is kept to the span (and one span before)
+            start, end = float(timeline[0][0]), float(timeline[0][-1])
+            seconds = min(max(seconds, start - max(end - start, 1.0)), end)
         with self._lock:
             self._time = seconds
             if self.state.pins:
@@ -667,6 +694,8 @@ class Scene:
             raise ValueError(
                 f"Scene.focus: frame {name!r} is not drawn in this scene; add_frame({name!r}) first"
             )
+        if distance is not None:
+            distance = _camera_distance(distance)
         t = self.time if self.time is not None else self.state.origin
         pose = self.state.world_pose(paths[name], t)
         if pose is None:  # not started yet or missing now: where it is last
@@ -711,6 +740,16 @@ class Scene:
         """Place the camera at ``position`` looking at ``target`` (scene base coordinates)."""
         p = _points_array(position, "position", "set_camera")[0]
         t = _points_array(target, "target", "set_camera")[0]
+        if not np.linalg.norm(p - t) > 0:
+            raise ValueError(
+                f"set_camera: position and target are the same point {p.tolist()}; "
+                "the camera needs a direction to look in"
+            )
+        if not max(_reach(p), _reach(t)) <= MAX_COORDINATE:
+            raise ValueError(
+                f"set_camera: position {p.tolist()} or target {t.tolist()} is beyond "
+                f"{MAX_COORDINATE:.0e} m from the origin"
+            )
         self._set_camera(p, t, auto=False)
 
     def _set_camera(self, position, target, auto: bool) -> None:

@@ -255,6 +255,11 @@ class Player(FrontendGuard, anywidget.AnyWidget):
         self._raw = np.asarray(getattr(raw, "values", raw))
         self._seconds = seconds
         self.playback = Playback(seconds, speed=speed, loop=loop)
+        if not np.isfinite(self.playback.duration):
+            raise ValueError(
+                f"Player: the timestamps run from {seconds[0]:.6g} to "
+                f"{seconds[-1]:.6g} s, a span too long to play (not finite)"
+            )
         self.step = int(step)
         self._links: list[_Link] = []
         self._callbacks: list[Callable[[float], Any]] = []

@@ -1,8 +1,9 @@
 """An interactive time-series plot (uPlot in the browser) sharing the Player's time.
 
 The samples go to the browser once, as binary buffers over the widget comm
-(x as float64 seconds from the recording's start, values as float32); zoom,
-pan, hover values, click-to-seek and the cursor all run in the browser
+(x as float64 seconds from the recording's start, values as float64, so the
+browser shows what the kernel reads out: 1e300 stays finite, millimetre steps
+on 5e6 stay apart); zoom, pan, hover values, click-to-seek and the cursor all run in the browser
 (``js/src/timeseries.js``). The cursor listens to the linked Player's ``time``
 in the browser, so it keeps following playback while the kernel is busy.
 
@@ -12,6 +13,7 @@ timestamps longer than ``gap`` (a NaN row is inserted there before sending).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 import anywidget
@@ -153,6 +155,14 @@ def _envelope(x: np.ndarray, y: np.ndarray, max_points: int | None):
 PANEL_HEIGHT = (40, 4000)
 
 
+def _number(value) -> float:
+    """``value`` as a float, or NaN when it is not a number (then refused by name)."""
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return math.nan
+
+
 def checked_panel_height(value) -> int:
     """``value`` as a panel height in pixels, or a ValueError naming panel_height."""
     low, high = PANEL_HEIGHT
@@ -218,7 +228,7 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
     ).tag(sync=True)
     data = traitlets.List(
         traitlets.Dict(),
-        help="Per panel: x (float64 bytes) and y (float32 bytes each).",
+        help="Per panel: x (float64 bytes) and y (float64 bytes each).",
     ).tag(sync=True)
     t0_ns = traitlets.Int(
         None,
@@ -254,12 +264,14 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
                 "TimeSeries: series must be a non-empty mapping of label -> "
                 f"DataArray or (timestamps, values), got {type(series).__name__}"
             )
-        if gap is not None and not (float(gap) > 0):
+        if gap is not None and not (_number(gap) > 0):
             raise ValueError(
                 f"TimeSeries: gap must be a positive number of seconds, got {gap}"
             )
         if max_points is not None and (
             isinstance(max_points, bool)
+            or not isinstance(max_points, (int, float, np.integer, np.floating))
+            or not np.isfinite(max_points)
             or int(max_points) != max_points
             or max_points < 10
         ):
@@ -313,7 +325,7 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
                 {
                     "x": np.ascontiguousarray(x, dtype=np.float64).tobytes(),
                     "y": [
-                        np.ascontiguousarray(y[:, k], dtype=np.float32).tobytes()
+                        np.ascontiguousarray(y[:, k], dtype=np.float64).tobytes()
                         for k in range(y.shape[1])
                     ],
                 }

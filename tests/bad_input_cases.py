@@ -614,6 +614,42 @@ def plot_with(**kwargs):
     return TimeSeries({"v": (np.arange(20.0), np.ones(20))}, **kwargs)
 
 
+def bag_keeps_quaternions_as_given(norm):
+    """Documented (RosbagWriter.write_transform_stamped): a rotation of norm
+    ``norm`` within the tolerance is written bit for bit; the transforms of
+    the frames read from the bag use it normalised."""
+    import tempfile
+    from pathlib import Path
+
+    from rbm_nb.ros import RosbagReader
+
+    q = np.array([[np.cos(0.3), 0.0, 0.0, np.sin(0.3)]] * 2) * norm
+    with tempfile.TemporaryDirectory() as folder:
+        bag = Path(folder) / "q.bag"
+        with rbm.ros.RosbagWriter(bag) as writer:
+            writer.write_transform_stamped(
+                [1.0, 2.0], np.zeros((2, 3)), q, "/x", "a", "b"
+            )
+        got = RosbagReader(bag).load_dataset("/x").orientation.values
+    np.testing.assert_array_equal(got, q)
+    rbm.register_frame("q", parent="world", rotation=q[0])
+    moved = rbm.transform_vectors([1.0, 0.0, 0.0], "world", "q")
+    np.testing.assert_allclose(np.linalg.norm(moved), 1.0, atol=1e-12)
+    return got.tolist()
+
+
+def moving_points_shape(n):
+    """Documented: without timestamps, the whole array at every sample of the
+    moving frame, under a new leading time axis."""
+    out = rbm.transform_points(np.ones((n, 3)), "world", "moving")
+    assert out.shape == (N, n, 3), out.shape
+    for k in range(N):  # 'moving' at T[k]: turned 0.1 T[k] about z, at x = T[k]
+        c, s_ = np.cos(0.1 * T[k]), np.sin(0.1 * T[k])
+        expected = np.array([c - s_ + T[k], s_ + c, 1.0])
+        np.testing.assert_allclose(out[k], np.tile(expected, (n, 1)), atol=1e-12)
+    return list(out.shape)
+
+
 RF = "ReferenceFrame"
 Q1 = np.array([1.0, 0, 0, 0])
 PTS = np.random.default_rng(7).normal(size=(12, 3))
@@ -1264,6 +1300,22 @@ CASES: list[Case] = [
     Case("scene-path-max-points-nan", scene_refuses, ("add_path", "moving"),
          {"max_points": np.nan}, ValueError,
          r"add_path: max_points must be a whole number, at least 2, got nan"),
+    # -- numerics (item 10) ----------------------------------------------------------
+    Case("points-partial-nan-row", "transform_points",
+         (np.array([[np.nan, 0.0, 0.0]]), "world", "static"), {}, ValueError,
+         r"arr\[0\] is not finite: \[nan  0\.  0\.\] \(a missing sample is a row of NaN"),
+    Case("points-partial-nan-row-3d", "transform_points",
+         (np.array([[[0.0, 0, 0], [1.0, np.nan, 1.0]]]), "world", "static"), {},
+         ValueError, r"arr\[0, 1\] is not finite"),
+    Case("vectors-partial-nan-moving", "transform_vectors",
+         (np.vstack([np.zeros((3, 3)), [0.0, 0.0, np.nan]]), "world", "moving"),
+         {"timestamps": np.arange(4.0)}, ValueError, r"arr\[3\] is not finite"),
+    Case("quaternions-partial-nan", "transform_quaternions",
+         (np.array([[1.0, np.nan, 0, 0]]), "world", "static"), {}, ValueError,
+         r"arr\[0\] is not finite"),
+    Case("rosbag-writer-norm-1.009-as-given", bag_keeps_quaternions_as_given,
+         (1.009,), {}, None, ""),
+    Case("points-cloud-through-moving-frame", moving_points_shape, (7,), {}, None, ""),
     # -- rosbags ---------------------------------------------------------------
     Case("rosbag-missing-file", rosbag_reader,
          ("/nonexistent/nope.bag", "get_topics_and_types"), {}, FileNotFoundError,

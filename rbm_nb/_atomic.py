@@ -186,6 +186,13 @@ def atomic_path(
     target = Path(target)
     check_replaceable(target, folder_kind)
     real = Path(os.path.realpath(target))
+    if os.path.islink(target) and not real.parent.is_dir():
+        # a dangling link: its destination's folders are not ours to create
+        raise FileNotFoundError(
+            errno.ENOENT,
+            f"the link points to {str(real)!r}, whose folder does not exist",
+            str(target),
+        )
     try:
         real.parent.mkdir(parents=True, exist_ok=True)
         clean_stale_scratch(real.parent)
@@ -396,8 +403,11 @@ def clean_stale_scratch(folder: str | os.PathLike) -> list[Path]:
         path = Path(entry.path)
         if not _looks_like_ours(path, name) or not _abandoned(entry, match, now):
             continue
+        full = _target_name(path, name)
+        if full is None:
+            continue  # a parked folder whose target's name was cut: keep it
         try:
-            _restore_parked(path, folder / name)
+            _restore_parked(path, folder / full)
         except OSError:
             continue  # keep it: the parked folder is the user's data
         shutil.rmtree(path, ignore_errors=True)
@@ -407,15 +417,62 @@ def clean_stale_scratch(folder: str | os.PathLike) -> list[Path]:
 
 
 def _looks_like_ours(path: Path, name: str) -> bool:
+    """Holds only the target (``name`` as in the scratch name) and/or a parked one."""
     try:
-        return set(os.listdir(path)) <= {name, PARKED}
+        entries = os.listdir(path)
     except OSError:
         return False
+    return all(e == PARKED or scratch_name(e) == name for e in entries)
+
+
+def _target_name(path: Path, name: str) -> str | None:
+    """The full name of the target of a scratch folder; None if it cannot be told."""
+    if scratch_name(name) == name:
+        return name  # not cut
+    try:
+        entries = [e for e in os.listdir(path) if e != PARKED]
+    except OSError:
+        return None
+    return entries[0] if entries else None
+
+
+#: bytes of the target's name kept in a scratch folder's name: the rest of
+#: it (pid, host, random part, dots) takes at most 36 more, far within the
+#: 255 bytes file systems allow, and the whole path stays short (sqlite
+#: refuses paths over 512 bytes)
+_NAME_BYTES = 32
+
+
+def scratch_name(name: str) -> str:
+    """``name`` as it appears in a scratch folder's name.
+
+    Names longer than :data:`_NAME_BYTES` bytes are cut and end in ``~`` and
+    8 hex digits of their hash, so a legal 255-byte name can still be written.
+    """
+    raw = os.fsencode(name)
+    if len(raw) <= _NAME_BYTES:
+        return name
+    import hashlib
+
+    digest = hashlib.sha1(raw).hexdigest()[:8]
+    cut = os.fsdecode(raw[: _NAME_BYTES - 9])
+    # a UTF-8 character cut in half decodes to surrogates: drop them
+    while cut and "\udc80" <= cut[-1] <= "\udcff":
+        cut = cut[:-1]
+    return f"{cut}~{digest}"
+
+
+def scratch_target(target: str | os.PathLike) -> Path:
+    """The longest path :func:`atomic_path` may write to for ``target``."""
+    real = Path(os.path.realpath(target))
+    pid = "9" * 7  # pids are at most 7 digits (pid_max <= 4194304)
+    folder = f".{scratch_name(real.name)}.{pid}-{host_tag()}_{'x' * 8}.tmp"
+    return real.parent / folder / real.name
 
 
 def scratch_prefix(name: str) -> str:
     """Start of the name of a scratch folder this process makes for ``name``."""
-    return f".{name}.{os.getpid()}-{host_tag()}_"
+    return f".{scratch_name(name)}.{os.getpid()}-{host_tag()}_"
 
 
 _HOST_TAG: list[str] = []  # cache: [tag]

@@ -650,6 +650,104 @@ def moving_points_shape(n):
     return list(out.shape)
 
 
+# -- paths (issue 31, item 9) -----------------------------------------------------
+
+
+def with_env(variables, func, *args, **kwargs):
+    """``func(*args)`` with environment ``variables`` set, restored after."""
+    import os
+
+    old = {k: os.environ.get(k) for k in variables}
+    os.environ.update(variables)
+    try:
+        return func(*args, **kwargs)
+    finally:
+        for k, v in old.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
+def write_long_name(folder, kind, length=255):
+    """A legal name of ``length`` bytes is written like any other."""
+    name = {"html": "h", "bag": "b", "nc": "n", "ros2": "r"}[kind] * (
+        length - len(kind) - 1
+    )
+    target = folder / f"{name}.{kind}" if kind != "ros2" else folder / ("r" * length)
+    assert len(target.name.encode()) == length
+    if kind == "html":
+        html_export_to(target)
+    elif kind in ("bag", "ros2"):
+        _small_bag(target)
+    else:
+        rosbag_export_to(target)
+    assert target.exists()
+    assert sorted(p.name for p in folder.iterdir() if p.name.startswith(".")) == []
+    return [len(target.name.encode())]
+
+
+def write_through_dangling_link(folder):
+    link = folder / "latest.html"
+    link.symlink_to(folder / "runs" / "today" / "scene.html")
+    try:
+        html_export_to(link)
+    finally:
+        assert not (folder / "runs").exists(), "the link's folders were created"
+
+
+def static_scene_export(folder):
+    from rbm_nb.scene import Scene
+
+    scene = Scene()
+    scene.add_frame("static")
+    scene.add_points(np.zeros((3, 3)))
+    path = scene.to_html(folder / "static.html")
+    assert path.stat().st_size > 0
+    return [path.name]
+
+
+def fetch_example(name="head"):
+    from rbm_nb.data.fetch import ExampleDataStore
+
+    return ExampleDataStore().fetch(name)
+
+
+def cache_folder():
+    from rbm_nb.data.fetch import cache_dir
+
+    return cache_dir()
+
+
+def failed_fetch_leaves_no_folder(folder):
+    from rbm_nb.data.fetch import ExampleDataStore
+
+    store = ExampleDataStore(
+        data_dir=folder / "new" / "data", base_url="http://127.0.0.1:9/", timeout=5
+    )
+    try:
+        store.fetch("head")
+    finally:
+        assert not (folder / "new").exists(), "a failed fetch created the folder"
+
+
+def bag_cache_in_a_file(folder):
+    """RBM_NB_CACHE_DIR names a file: the error says which variable to fix."""
+    from rbm_nb.ros import RosbagReader
+
+    data = folder / "data"
+    data.mkdir()
+    bag = _small_bag(data / "walk.bag")
+    (folder / "not-a-folder").write_text("x")
+    with_env(
+        {
+            "RBM_NB_DATA_DIR": str(data),
+            "RBM_NB_CACHE_DIR": str(folder / "not-a-folder"),
+        },
+        lambda: RosbagReader(bag).load_dataset("/x", cache=True),
+    )
+
+
 RF = "ReferenceFrame"
 Q1 = np.array([1.0, 0, 0, 0])
 PTS = np.random.default_rng(7).normal(size=(12, 3))
@@ -1316,6 +1414,38 @@ CASES: list[Case] = [
     Case("rosbag-writer-norm-1.009-as-given", bag_keeps_quaternions_as_given,
          (1.009,), {}, None, ""),
     Case("points-cloud-through-moving-frame", moving_points_shape, (7,), {}, None, ""),
+    # -- paths (item 9) ---------------------------------------------------------------
+    Case("path-255-byte-html", in_temp_folder, (write_long_name, "html"), {}, None, ""),
+    Case("path-255-byte-ros1-bag", in_temp_folder, (write_long_name, "bag"), {}, None,
+         ""),
+    Case("path-200-byte-ros2-bag", in_temp_folder, (write_long_name, "ros2", 200), {},
+         None, ""),
+    Case("path-255-byte-ros2-bag", in_temp_folder, (write_long_name, "ros2"), {},
+         ValueError, r"the ROS2 bag folder name 'r+' is too long \(255 bytes\): the sqlite3 "
+         r"file 'r+\.db3-journal' inside would be 267 bytes"),
+    Case("path-240-byte-ros2-bag-sqlite-path", in_temp_folder,
+         (write_long_name, "ros2", 240), {}, ValueError,
+         r"the path of the ROS2 bag .* is too long for sqlite3 storage: .* at most 512; "
+         r"use a shorter name or folder, or storage='mcap'"),
+    Case("path-255-byte-netcdf-export", in_temp_folder, (write_long_name, "nc"), {},
+         None, ""),
+    Case("path-230-byte-html", in_temp_folder, (write_long_name, "html", 230), {},
+         None, ""),
+    Case("path-dangling-link-folders", in_temp_folder, (write_through_dangling_link,),
+         {}, FileNotFoundError,
+         r"the link points to .*runs/today/scene.html', whose folder does not exist"),
+    Case("to-html-static-scene", in_temp_folder, (static_scene_export,), {}, None, ""),
+    Case("env-data-dir-unknown-user", with_env,
+         ({"RBM_NB_DATA_DIR": "~nouser-rbm/x"}, fetch_example), {}, ValueError,
+         r"RBM_NB_DATA_DIR='~nouser-rbm/x': ~nouser-rbm names no user"),
+    Case("env-cache-dir-unknown-user", with_env,
+         ({"RBM_NB_CACHE_DIR": "~nouser-rbm/c"}, cache_folder), {}, ValueError,
+         r"RBM_NB_CACHE_DIR='~nouser-rbm/c': ~nouser-rbm names no user"),
+    Case("fetch-failed-leaves-no-folder", in_temp_folder,
+         (failed_fetch_leaves_no_folder,), {}, rbm.data.fetch.ExampleDataUnavailable,
+         r"could not be downloaded"),
+    Case("env-cache-dir-is-a-file", in_temp_folder, (bag_cache_in_a_file,), {},
+         OSError, r"cannot write the cache of this bag in RBM_NB_CACHE_DIR="),
     # -- rosbags ---------------------------------------------------------------
     Case("rosbag-missing-file", rosbag_reader,
          ("/nonexistent/nope.bag", "get_topics_and_types"), {}, FileNotFoundError,

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from .._atomic import FolderKind, atomic_path, check_replaceable
+from .._atomic import FolderKind, atomic_path, check_replaceable, scratch_target
 from .._config import UNIT_QUATERNION_TOLERANCE
 from .._xarray import dataset_variable
 from ._messages import (
@@ -31,6 +31,8 @@ if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore
 
 STORAGES = ("sqlite3", "mcap")
+_MAX_NAME_BYTES = 255  # of one file name, on the usual file systems
+_SQLITE_MAX_PATH = 512  # SQLITE_MAX_PATHNAME, sqlite's limit on a file's path
 _MAX_SEC = {False: 2**32, True: 2**31}  # ROS1 stamps are uint32 s, ROS2 int32 s
 
 
@@ -109,12 +111,47 @@ class RosbagWriter:
         if storage is not None and storage not in STORAGES:
             raise ValueError(f"storage must be one of {STORAGES}, got {storage!r}")
         self.storage = (storage or "sqlite3") if self.ros2 else None
+        if self.ros2:
+            self._check_path_length()
         # refuse a folder (or file) it must not replace now, not after the work
         check_replaceable(self.bag_file, ROS2_BAG if self.ros2 else None)
         self._atomic: AbstractContextManager[Path] | None = None
         self._writer: Ros1Writer | Ros2Writer | None = None
         self._typestore: Typestore | None = None
         self._connections: dict[tuple[str, str], Any] = {}
+
+    def _check_path_length(self) -> None:
+        """Refuse a ROS2 bag whose storage file the storage cannot open.
+
+        The files inside are named after the folder (``<name>.mcap``, or
+        ``<name>.db3`` plus up to 12 bytes sqlite adds for its journal), and
+        sqlite opens no path longer than 512 bytes; while writing, the bag
+        sits in a scratch folder beside the target.
+        """
+        name = self.bag_file.name
+        inside = scratch_target(self.bag_file)
+        if self.storage == "mcap":
+            longest = [f"{name}.mcap"]
+        else:
+            longest = [f"{name}.db3-journal"]
+        for entry in longest:
+            size = len(os.fsencode(entry))
+            if size > _MAX_NAME_BYTES:
+                raise ValueError(
+                    f"the ROS2 bag folder name {name!r} is too long ({len(os.fsencode(name))} "
+                    f"bytes): the {self.storage} file {entry!r} inside would be {size} "
+                    f"bytes, file systems allow {_MAX_NAME_BYTES}"
+                )
+        if self.storage == "sqlite3":
+            path = len(os.fsencode(str(inside / longest[0])))
+            if path > _SQLITE_MAX_PATH:
+                raise ValueError(
+                    f"the path of the ROS2 bag {str(self.bag_file)!r} is too long for "
+                    f"sqlite3 storage: its database file would be at a path of "
+                    f"{path} bytes while writing, sqlite opens at most "
+                    f"{_SQLITE_MAX_PATH}; use a shorter name or folder, or "
+                    "storage='mcap'"
+                )
 
     def __repr__(self) -> str:
         state = "open" if self._writer is not None else "closed"

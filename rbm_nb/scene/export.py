@@ -79,7 +79,8 @@ def build_document(
     if player is None:
         player = scene._player
     if player is None:
-        player = Player(scene)
+        # a static scene still gets the page's player, on a single instant
+        player = Player(scene) if scene.timestamps_kind is not None else Player([0.0])
     if not isinstance(player, Player):
         raise ValueError(
             f"to_html: player must be a Player, got {type(player).__name__}"

@@ -748,6 +748,46 @@ def bag_cache_in_a_file(folder):
     )
 
 
+# -- OptiTrack exports (issue 31, item 8) ------------------------------------------
+
+
+def motive_csv(
+    names=("Body A", "Body B"), ids=("ID1", "ID2"), start=None, times=None, angle="10"
+):
+    """A small Motive CSV export: two rigid bodies (Euler XYZ, mm), 3 frames."""
+    start = start or "2020-06-16 07.51.41.245 PM"
+    times = times or ["0", "0.1", "0.2"]
+    cols = 2 + 6 * len(names)
+    lines = [
+        "Format Version,1.22,Take Name,T,Capture Frame Rate,10,Export Frame Rate,10,"
+        f"Capture Start Time,{start},Total Frames in Take,3,Total Exported Frames,3,"
+        "Rotation Type,XYZ,Length Units,Millimeters" + "," * (cols - 18),
+        "," * (cols - 1),
+        ",," + ",".join(["Rigid Body"] * 6 * len(names)),
+        ",," + ",".join(n for n in names for _ in range(6)),
+        ",," + ",".join(i for i in ids for _ in range(6)),
+        ",," + ",".join((["Rotation"] * 3 + ["Position"] * 3) * len(names)),
+        "Frame,Time (Seconds)," + ",".join(list("XYZXYZ") * len(names)),
+    ]
+    for k, t in enumerate(times):
+        lines.append(
+            f"{k},{t}," + ",".join([angle, "0", "0", "1", "2", "3"] * len(names))
+        )
+    return "\n".join(lines) + "\n"
+
+
+def load_motive(folder, **changes):
+    path = folder / "take.csv"
+    path.write_text(motive_csv(**changes))
+    return rbm.io.load_optitrack(path)
+
+
+def motive_loads(folder):
+    bodies = load_motive(folder)
+    assert sorted(bodies) == ["Body A", "Body B"], sorted(bodies)
+    return sorted(bodies)
+
+
 RF = "ReferenceFrame"
 Q1 = np.array([1.0, 0, 0, 0])
 PTS = np.random.default_rng(7).normal(size=(12, 3))
@@ -1446,6 +1486,26 @@ CASES: list[Case] = [
          r"could not be downloaded"),
     Case("env-cache-dir-is-a-file", in_temp_folder, (bag_cache_in_a_file,), {},
          OSError, r"cannot write the cache of this bag in RBM_NB_CACHE_DIR="),
+    # -- OptiTrack exports (item 8) ----------------------------------------------------
+    Case("optitrack-generated-export-loads", in_temp_folder, (motive_loads,), {}, None,
+         ""),
+    Case("optitrack-duplicate-body-names", in_temp_folder, (load_motive,),
+         {"names": ("Head", "Head")}, rbm.io.FileFormatError,
+         r"take.csv: two rigid bodies are named 'Head' \(ID ID1 from column 3, ID ID2 "
+         r"from column 9\)"),
+    Case("optitrack-time-out-of-range", in_temp_folder, (load_motive,),
+         {"times": ["0", "0.1", "1e12"]}, rbm.io.FileFormatError,
+         r"take.csv: line 10: time 1e\+12 s after the capture start .* beyond"),
+    Case("optitrack-start-year-9999", in_temp_folder, (load_motive,),
+         {"start": "9999-06-16 07.51.41.245 PM"}, rbm.io.FileFormatError,
+         r"take.csv: line 1: 'Capture Start Time' '9999-06-16 07.51.41.245 PM' is "
+         r"outside the years"),
+    Case("optitrack-start-year-1600", in_temp_folder, (load_motive,),
+         {"start": "1600-06-16 07.51.41.245 PM"}, rbm.io.FileFormatError,
+         r"line 1: 'Capture Start Time' .* outside the years"),
+    Case("optitrack-inf-euler-angle", in_temp_folder, (load_motive,),
+         {"angle": "inf"}, rbm.io.FileFormatError,
+         r"take.csv: line 8, field 3 is inf; values must be finite"),
     # -- rosbags ---------------------------------------------------------------
     Case("rosbag-missing-file", rosbag_reader,
          ("/nonexistent/nope.bag", "get_topics_and_types"), {}, FileNotFoundError,

@@ -219,10 +219,10 @@ def _numbers(path: Path, rows: list[str], width: int) -> np.ndarray:
         raise FileFormatError(f"{path}: line {line} has no frame number or time")
     inf = np.isinf(data)
     if inf.any():
-        row, column = (int(v) for v in np.argwhere(inf)[0])
+        at, field = (int(v) for v in np.argwhere(inf)[0])
         raise FileFormatError(
-            f"{path}: line {_N_HEADER_ROWS + 1 + row}, field {column + 1} is "
-            f"{data[row, column]}; values must be finite (an empty field is a "
+            f"{path}: line {_N_HEADER_ROWS + 1 + at}, field {field + 1} is "
+            f"{data[at, field]}; values must be finite (an empty field is a "
             "missing sample)"
         )
     return data

@@ -266,12 +266,22 @@ def synthetic_rosbag_to(target):
 
 
 def study_to_netcdf_at(target):
+    """Study.to_netcdf at a folder: refused before any recording is analysed."""
     from rbm_nb.data import synthetic_head_eye
     from rbm_nb.study import open_study
 
     recs = {target.stem: dict(synthetic_head_eye(duration=16.0, seed=0)._asdict())}
     study = open_study(recs, streams=["head"])
-    study.to_netcdf(lambda recording: recording["head"], target.parent)
+    analysed = []
+
+    def analysis(recording):
+        analysed.append(True)
+        return recording["head"]
+
+    try:
+        study.to_netcdf(analysis, target.parent, progress=False)
+    finally:
+        assert not analysed, "the analysis ran before the refusal"
 
 
 def html_export_to(target):

@@ -194,6 +194,16 @@ def _data_note(source: str) -> str:
     store = ExampleDataStore()
     names = ("head", "left_eye", "right_eye")
     missing = [store.path(n).name for n in names if not store.is_available(n)]
+    wrong = [store.path(n).name for n in names if store.path(n).is_file()]
+    wrong = [name for name in wrong if name in missing]
+    if wrong:
+        return (
+            f"rbm-nb demo: data: {', '.join(wrong)} in {store.data_dir}: not the "
+            "registered file(s) of the real head/eye recording (the sha256 differs), "
+            "so not used: the demo shows the synthetic recording. Replace them, or "
+            f"point {DATA_DIR_ENV} at a folder with the right head.nc, left_eye.nc "
+            "and right_eye.nc."
+        )
     if not missing:
         return (
             "rbm-nb demo: data: the real head/eye recording (rbm-data) from "

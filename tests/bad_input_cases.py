@@ -798,6 +798,19 @@ def motive_loads(folder):
     return sorted(bodies)
 
 
+def demo_data_note(folder, source, files, *expected):
+    """What ``rbm-nb demo`` says about its data, with RBM_NB_DATA_DIR=folder."""
+    from rbm_nb.cli import _data_note
+
+    for name, text in files.items():
+        (folder / name).write_text(text)
+    note = with_env({"RBM_NB_DATA_DIR": str(folder)}, _data_note, source)
+    assert note.count("\n") == 0, note
+    for text in expected:
+        assert text in note, (text, note)
+    return note
+
+
 RF = "ReferenceFrame"
 Q1 = np.array([1.0, 0, 0, 0])
 PTS = np.random.default_rng(7).normal(size=(12, 3))
@@ -1516,6 +1529,18 @@ CASES: list[Case] = [
     Case("optitrack-inf-euler-angle", in_temp_folder, (load_motive,),
          {"angle": "inf"}, rbm.io.FileFormatError,
          r"take.csv: line 8, field 3 is inf; values must be finite"),
+    # -- rbm-nb demo names its data and how to get the real one (issue 29) ----------
+    Case("demo-note-synthetic", in_temp_folder,
+         (demo_data_note, "synthetic", {}, "the synthetic head/eye recording",
+          "--source synthetic"), {}, None, ""),
+    Case("demo-note-real-missing", in_temp_folder,
+         (demo_data_note, "auto", {}, "head.nc, left_eye.nc, right_eye.nc",
+          "downloads the real recording, or the synthetic one if that fails",
+          "set RBM_NB_DATA_DIR to the folder"), {}, None, ""),
+    Case("demo-note-real-not-matching", in_temp_folder,
+         (demo_data_note, "auto", {"head.nc": "not the recording"},
+          "head.nc in", "sha256 differs", "shows the synthetic recording",
+          "point RBM_NB_DATA_DIR at a folder"), {}, None, ""),
     # -- rosbags ---------------------------------------------------------------
     Case("rosbag-missing-file", rosbag_reader,
          ("/nonexistent/nope.bag", "get_topics_and_types"), {}, FileNotFoundError,

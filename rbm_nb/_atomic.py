@@ -23,6 +23,11 @@ What this guarantees, even if the process is killed at any instant:
   may have been reused, or belong to another machine or container sharing the
   folder).
 * Errors name the target the user asked for, never the hidden scratch path.
+* A folder already at the target is replaced only if the writer says it is
+  one of its own kind (a ROS2 bag folder for the rosbag writer, see
+  :class:`FolderKind`); any other folder is refused before anything is
+  written, and again at the swap, so no writer ever deletes a folder it did
+  not make. A folder is never put in place of a file either.
 """
 
 from __future__ import annotations
@@ -35,10 +40,10 @@ import shutil
 import stat
 import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 #: seconds after which a scratch folder whose owner cannot be told apart from
 #: a live process (or with the older name without pid) counts as abandoned
@@ -72,8 +77,81 @@ _SCRATCH = re.compile(
 _LEGACY_SCRATCH = re.compile(r"^\.(?P<name>.+)\.[a-z0-9_]{8}\.tmp$")
 
 
+class FolderKind(NamedTuple):
+    """The kind of folder a writer makes, so it may replace one of its own.
+
+    Attributes
+    ----------
+    name : str
+        Said in errors: "a ROS2 bag folder (metadata.yaml and storage files)".
+    test : callable
+        ``test(path) -> bool``: is the existing folder at ``path`` of this kind?
+    """
+
+    name: str
+    test: Callable[[Path], bool]
+
+
+def check_replaceable(
+    target: str | os.PathLike, folder_kind: FolderKind | None = None
+) -> None:
+    """Raise unless what is at ``target`` may be replaced by this writer.
+
+    A file may be replaced by a file; a folder only by a writer whose
+    ``folder_kind`` recognises it. Writers call this before doing any work, so
+    that a refusal costs nothing; :func:`atomic_path` checks again at the swap.
+
+    Raises
+    ------
+    IsADirectoryError
+        ``target`` is a folder this writer did not make.
+    NotADirectoryError
+        ``target`` is a file and the writer makes a folder.
+    """
+    target = Path(target)
+    real = Path(os.path.realpath(target))
+    old = _stat(real)
+    if old is None:
+        return
+    if stat.S_ISDIR(old.st_mode):
+        if folder_kind is None:
+            raise IsADirectoryError(
+                errno.EISDIR,
+                "refusing to replace a folder (everything in it would be lost); "
+                "give a file name",
+                str(target),
+            )
+        if not folder_kind.test(real):
+            raise IsADirectoryError(
+                errno.EISDIR,
+                f"refusing to replace a folder that is not {folder_kind.name} "
+                "(everything in it would be lost); give another path, or remove "
+                "the folder yourself",
+                str(target),
+            )
+    elif folder_kind is not None:
+        raise NotADirectoryError(
+            errno.ENOTDIR,
+            f"refusing to replace a file with {folder_kind.name}; give another path",
+            str(target),
+        )
+
+
+# a folder written without a declared kind replaces nothing that exists
+_UNDECLARED_FOLDER = FolderKind("a folder this writer declared", lambda path: False)
+
+
+def _stat(path: Path):
+    try:
+        return os.stat(path)
+    except (FileNotFoundError, NotADirectoryError):
+        return None
+
+
 @contextmanager
-def atomic_path(target: str | os.PathLike) -> Iterator[Path]:
+def atomic_path(
+    target: str | os.PathLike, *, folder_kind: FolderKind | None = None
+) -> Iterator[Path]:
     """Yield a temporary path that replaces ``target`` only if the block succeeds.
 
     The temporary path has the name of the file finally written (``target``,
@@ -87,6 +165,9 @@ def atomic_path(target: str | os.PathLike) -> Iterator[Path]:
     target : str or os.PathLike
         The file or folder to create or replace. If it is a symbolic link,
         the link's destination is replaced and the link kept.
+    folder_kind : FolderKind, optional
+        For writers of folders: the kind of existing folder they may replace.
+        Without it, an existing folder at ``target`` is never replaced.
 
     Yields
     ------
@@ -95,12 +176,23 @@ def atomic_path(target: str | os.PathLike) -> Iterator[Path]:
 
     Raises
     ------
+    IsADirectoryError, NotADirectoryError
+        What is at ``target`` is not something this writer may replace (see
+        :func:`check_replaceable`); raised before the block runs.
     OSError
         From creating, writing or renaming, with ``filename`` and message
         naming ``target`` (not the hidden scratch path).
     """
     target = Path(target)
+    check_replaceable(target, folder_kind)
     real = Path(os.path.realpath(target))
+    if os.path.islink(target) and not real.parent.is_dir():
+        # a dangling link: its destination's folders are not ours to create
+        raise FileNotFoundError(
+            errno.ENOENT,
+            f"the link points to {str(real)!r}, whose folder does not exist",
+            str(target),
+        )
     try:
         real.parent.mkdir(parents=True, exist_ok=True)
         clean_stale_scratch(real.parent)
@@ -119,7 +211,7 @@ def atomic_path(target: str | os.PathLike) -> Iterator[Path]:
         except BaseException as err:
             _reraise(err, _renamed(err, target, scratch, new))
         try:
-            _commit(new, real, scratch, target)
+            _commit(new, real, scratch, target, folder_kind)
         except OSError as err:
             _reraise(err, _naming_target(err, target, scratch))
     finally:
@@ -138,9 +230,17 @@ def _reraise(err: BaseException, new: BaseException):
 # ---------------------------------------------------------------------------
 
 
-def _commit(new: Path, real: Path, scratch: Path, target: Path) -> None:
+def _commit(
+    new: Path, real: Path, scratch: Path, target: Path, folder_kind: FolderKind | None
+) -> None:
     if not os.path.lexists(new):
         raise FileNotFoundError(errno.ENOENT, "nothing was written", str(target))
+    # again: something may have appeared at the target while we wrote
+    made_folder = new.is_dir() and not new.is_symlink()
+    if made_folder:
+        check_replaceable(target, folder_kind or _UNDECLARED_FOLDER)
+    else:
+        check_replaceable(target, None)
     old = _lstat(real)
     if old is not None:
         _keep_mode(new, old)
@@ -303,8 +403,11 @@ def clean_stale_scratch(folder: str | os.PathLike) -> list[Path]:
         path = Path(entry.path)
         if not _looks_like_ours(path, name) or not _abandoned(entry, match, now):
             continue
+        full = _target_name(path, name)
+        if full is None:
+            continue  # a parked folder whose target's name was cut: keep it
         try:
-            _restore_parked(path, folder / name)
+            _restore_parked(path, folder / full)
         except OSError:
             continue  # keep it: the parked folder is the user's data
         shutil.rmtree(path, ignore_errors=True)
@@ -314,15 +417,62 @@ def clean_stale_scratch(folder: str | os.PathLike) -> list[Path]:
 
 
 def _looks_like_ours(path: Path, name: str) -> bool:
+    """Holds only the target (``name`` as in the scratch name) and/or a parked one."""
     try:
-        return set(os.listdir(path)) <= {name, PARKED}
+        entries = os.listdir(path)
     except OSError:
         return False
+    return all(e == PARKED or scratch_name(e) == name for e in entries)
+
+
+def _target_name(path: Path, name: str) -> str | None:
+    """The full name of the target of a scratch folder; None if it cannot be told."""
+    if scratch_name(name) == name:
+        return name  # not cut
+    try:
+        entries = [e for e in os.listdir(path) if e != PARKED]
+    except OSError:
+        return None
+    return entries[0] if entries else None
+
+
+#: bytes of the target's name kept in a scratch folder's name: the rest of
+#: it (pid, host, random part, dots) takes at most 36 more, far within the
+#: 255 bytes file systems allow, and the whole path stays short (sqlite
+#: refuses paths over 512 bytes)
+_NAME_BYTES = 32
+
+
+def scratch_name(name: str) -> str:
+    """``name`` as it appears in a scratch folder's name.
+
+    Names longer than :data:`_NAME_BYTES` bytes are cut and end in ``~`` and
+    8 hex digits of their hash, so a legal 255-byte name can still be written.
+    """
+    raw = os.fsencode(name)
+    if len(raw) <= _NAME_BYTES:
+        return name
+    import hashlib
+
+    digest = hashlib.sha1(raw).hexdigest()[:8]
+    cut = os.fsdecode(raw[: _NAME_BYTES - 9])
+    # a UTF-8 character cut in half decodes to surrogates: drop them
+    while cut and "\udc80" <= cut[-1] <= "\udcff":
+        cut = cut[:-1]
+    return f"{cut}~{digest}"
+
+
+def scratch_target(target: str | os.PathLike) -> Path:
+    """The longest path :func:`atomic_path` may write to for ``target``."""
+    real = Path(os.path.realpath(target))
+    pid = "9" * 7  # pids are at most 7 digits (pid_max <= 4194304)
+    folder = f".{scratch_name(real.name)}.{pid}-{host_tag()}_{'x' * 8}.tmp"
+    return real.parent / folder / real.name
 
 
 def scratch_prefix(name: str) -> str:
     """Start of the name of a scratch folder this process makes for ``name``."""
-    return f".{name}.{os.getpid()}-{host_tag()}_"
+    return f".{scratch_name(name)}.{os.getpid()}-{host_tag()}_"
 
 
 _HOST_TAG: list[str] = []  # cache: [tag]

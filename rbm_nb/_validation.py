@@ -24,6 +24,7 @@ __all__ = [
     "check_finite",
     "check_no_inf",
     "check_missing_rows",
+    "check_whole_rows",
     "moving_samples",
     "check_unit_norms",
     "check_what",
@@ -97,6 +98,29 @@ def check_no_inf(arr: np.ndarray, name: str, row_axis: bool = True) -> None:
         bad = np.argwhere(inf)[0]
         where = bad[:-1] if row_axis and arr.ndim > 1 else bad
         raise ValueError(f"{name}{_index(where)} is not finite")
+
+
+def check_whole_rows(arr: np.ndarray, name: str) -> None:
+    """Rows (components last, any leading shape) are finite or all NaN.
+
+    As :func:`check_missing_rows` for frames' data, for the arrays given to
+    the transforms: a row of NaN is a missing sample and passes, a row with
+    only some NaN (``[nan, 0, 0]``) or an infinity raises, naming the row by
+    its index in ``arr``.
+    """
+    if arr.ndim == 0 or arr.size == 0:
+        return
+    flat = arr.reshape(-1, arr.shape[-1])
+    try:
+        check_missing_rows(kernel_array(flat), name)
+    except ValueError:
+        nan = np.isnan(flat)
+        bad = (nan.any(axis=-1) & ~nan.all(axis=-1)) | np.isinf(flat).any(axis=-1)
+        row = np.unravel_index(int(np.argmax(bad)), arr.shape[:-1])
+        raise ValueError(
+            f"{name}{_index(row)} is not finite: {arr[row]} (a missing sample "
+            "is a row of NaN only)"
+        ) from None
 
 
 def check_unit_norms(q: np.ndarray, name: str) -> None:

@@ -6,6 +6,13 @@ time-series plot (the same widgets as notebook 06). ``rbm-nb app`` writes the
 app's one-cell notebook to a temporary folder and serves it on loopback with
 a random token; ``notebooks/explorer_app.ipynb`` is the same notebook for
 Binder (``?urlpath=voila/render/notebooks/explorer_app.ipynb``).
+
+The token reaches Voilà through its environment (``JUPYTER_TOKEN``), never its
+command line: ``/proc/<pid>/cmdline`` is readable by every user of the
+machine, a process's environment only by its owner. Voilà ends with
+``rbm-nb app`` whatever ends it: Ctrl-C reaches both, SIGTERM and SIGHUP (a
+closed terminal) are passed on, and Linux ends Voilà if its parent dies
+without a word (SIGKILL).
 """
 
 from __future__ import annotations
@@ -14,6 +21,7 @@ import json
 import os
 import secrets
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -127,18 +135,13 @@ def write_app_notebook(folder, source: str = "auto") -> Path:
     return path
 
 
-def voila_command(
-    notebook, *, port: int, token: str, open_browser: bool = False
-) -> list[str]:
-    """The Voilà command line serving ``notebook`` on 127.0.0.1 with ``token``.
+def voila_command(notebook, *, port: int, open_browser: bool = False) -> list[str]:
+    """The Voilà command line serving ``notebook`` on 127.0.0.1.
 
-    Raises
-    ------
-    ValueError
-        If ``token`` is empty (the app never listens without one).
+    It holds no token: Voilà reads it from ``JUPYTER_TOKEN`` in its
+    environment (see :func:`voila_environment`), and with none there makes up
+    a random one; it never serves without a token.
     """
-    if not token:
-        raise ValueError("voila_command: token must be a non-empty string")
     return [
         sys.executable,
         "-m",
@@ -147,13 +150,30 @@ def voila_command(
         "--Voila.ip=127.0.0.1",
         f"--Voila.port={int(port)}",
         "--Voila.port_retries=0",
-        f"--Voila.token={token}",
+        # a token from the environment (or a random one), never none
+        "--Voila.auto_token=True",
         f"--Voila.open_browser={bool(open_browser)}",
     ]
 
 
+def voila_environment(token: str, base: dict | None = None) -> dict[str, str]:
+    """The environment Voilà runs in: ``base`` (default: this process's) and the token.
+
+    Raises
+    ------
+    ValueError
+        If ``token`` is empty (the app never listens without one).
+    """
+    if not token:
+        raise ValueError("voila_environment: token must be a non-empty string")
+    env = dict(os.environ if base is None else base)
+    env.pop("JUPYTER_TOKEN_FILE", None)  # would be read instead of ours
+    env["JUPYTER_TOKEN"] = token
+    return env
+
+
 def serve(*, port: int, source: str = "auto", open_browser: bool = True) -> int:
-    """Serve the app with Voilà until Ctrl-C; returns Voilà's exit code."""
+    """Serve the app with Voilà until Ctrl-C, SIGTERM or SIGHUP; returns Voilà's exit code."""
     try:
         import voila  # noqa: F401
     except ImportError:
@@ -170,13 +190,71 @@ def serve(*, port: int, source: str = "auto", open_browser: bool = True) -> int:
             "Stop it with Ctrl-C.",
             flush=True,
         )
-        command = voila_command(
-            notebook, port=port, token=token, open_browser=open_browser
-        )
-        process = subprocess.Popen(command, cwd=folder, env=dict(os.environ))
-        try:
-            return process.wait()
-        except KeyboardInterrupt:  # Ctrl-C reaches Voilà too; let it stop
-            return process.wait()
+        command = voila_command(notebook, port=port, open_browser=open_browser)
+        return run_child(command, cwd=folder, env=voila_environment(token))
     finally:
         shutil.rmtree(folder, ignore_errors=True)
+
+
+#: signals that end ``rbm-nb app`` and are passed on to Voilà
+STOP_SIGNALS = (signal.SIGTERM, signal.SIGHUP)
+#: seconds Voilà has to stop its kernels after SIGTERM before it is killed
+STOP_GRACE = 20
+
+
+def run_child(command: list[str], *, cwd, env: dict[str, str]) -> int:
+    """Run ``command`` until it ends, and end it with this process.
+
+    Ctrl-C reaches the child directly (same process group). SIGTERM and
+    SIGHUP are passed on as SIGTERM (Voilà then stops its kernels), with a
+    SIGKILL after :data:`STOP_GRACE` seconds; if this process dies without
+    running a handler (SIGKILL), Linux sends the child SIGTERM
+    (``PR_SET_PDEATHSIG``). Returns the child's exit code, or 128 + the
+    signal that ended this process.
+    """
+    process = subprocess.Popen(command, cwd=cwd, env=env, preexec_fn=_end_with_parent)
+    received: list[int] = []
+
+    def pass_on(signum, frame):
+        received.append(signum)
+        if process.poll() is None:
+            process.send_signal(signal.SIGTERM)
+            signal.alarm(STOP_GRACE)
+
+    def kill(signum, frame):
+        if process.poll() is None:
+            process.kill()
+
+    previous = {sig: signal.signal(sig, pass_on) for sig in STOP_SIGNALS}
+    previous[signal.SIGALRM] = signal.signal(signal.SIGALRM, kill)
+    try:
+        while True:
+            try:
+                code = process.wait()
+                break
+            except KeyboardInterrupt:  # Ctrl-C reached Voilà too; let it stop
+                continue
+    finally:
+        signal.alarm(0)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        if process.poll() is None:  # an error of ours: do not leave it behind
+            process.kill()
+            process.wait()
+    return 128 + received[0] if received else code
+
+
+_PR_SET_PDEATHSIG = 1
+
+
+def _end_with_parent() -> None:  # pragma: no cover (runs in the child)
+    """In the child before exec: get SIGTERM when the parent dies (Linux)."""
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+    except (OSError, AttributeError):
+        return  # not Linux: SIGTERM and SIGHUP are still passed on
+    if os.getppid() == 1:  # the parent died before prctl: end now
+        os.kill(os.getpid(), signal.SIGTERM)

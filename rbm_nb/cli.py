@@ -154,19 +154,24 @@ def _lab_demo(args) -> int:
         "--ServerApp.ip=127.0.0.1",
         f"--ServerApp.port={port}",
         "--ServerApp.port_retries=0",
-        f"--IdentityProvider.token={token}",
         f"--ServerApp.open_browser={not args.no_browser}",
         f"--LabApp.default_url=/lab/tree/{EXPLORER}",
     ]
     if hasattr(os, "geteuid") and os.geteuid() == 0:
         command.append("--allow-root")  # containers and CI machines run as root
-    os.execv(command[0], command)  # the server takes over this process (and Ctrl-C)
+    # the token goes through the environment: a command line is world-readable
+    # (/proc/<pid>/cmdline), an environment only by its owner
+    env = {k: v for k, v in os.environ.items() if k != "JUPYTER_TOKEN_FILE"}
+    env["JUPYTER_TOKEN"] = token
+    # the server takes over this process (and its signals: Ctrl-C, SIGTERM, SIGHUP)
+    os.execve(command[0], command, env)
     return 0  # pragma: no cover
 
 
 def _html_demo(args) -> int:
     from .explorer import write_explorer_html
 
+    print(_data_note(args.source), flush=True)
     path = write_explorer_html(
         args.html, source=args.source, max_frames=args.max_frames, progress=True
     )
@@ -177,10 +182,124 @@ def _html_demo(args) -> int:
     return 0
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="rbm-nb", description="rbm_nb: rigid body motion in Jupyter."
+def _data_note(source: str) -> str:
+    """Which recording the demo shows, and how to get the real one if it is not here."""
+    if source == "synthetic":
+        return (
+            "rbm-nb demo: data: the synthetic head/eye recording (--source synthetic)"
+        )
+    from .data.fetch import ExampleDataStore
+    from .data.registry import DATA_DIR_ENV
+
+    store = ExampleDataStore()
+    names = ("head", "left_eye", "right_eye")
+    missing = [store.path(n).name for n in names if not store.is_available(n)]
+    wrong = [store.path(n).name for n in names if store.path(n).is_file()]
+    wrong = [name for name in wrong if name in missing]
+    if wrong:
+        return (
+            f"rbm-nb demo: data: {', '.join(wrong)} in {store.data_dir}: not the "
+            "registered file(s) of the real head/eye recording (the sha256 differs), "
+            "so not used: the demo shows the synthetic recording. Replace them, or "
+            f"point {DATA_DIR_ENV} at a folder with the right head.nc, left_eye.nc "
+            "and right_eye.nc."
+        )
+    if not missing:
+        return (
+            "rbm-nb demo: data: the real head/eye recording (rbm-data) from "
+            f"{store.data_dir}"
+        )
+    fallback = "" if source == "remote" else ", or the synthetic one if that fails"
+    return (
+        f"rbm-nb demo: data: {', '.join(missing)} of the real head/eye recording "
+        f"(rbm-data) are not in {store.data_dir}; the demo downloads the real "
+        f"recording{fallback}. "
+        f"To use a copy you have, set {DATA_DIR_ENV} to the folder holding "
+        "head.nc, left_eye.nc and right_eye.nc."
     )
+
+
+# -- argument types: checked while parsing, before any work ----------------------
+
+
+def _port(text: str) -> int:
+    try:
+        port = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a port number: {text!r}") from None
+    if not 0 <= port <= 65535:
+        raise argparse.ArgumentTypeError(
+            f"{port} is not a port (0 to 65535; 0 picks a free one)"
+        )
+    return port
+
+
+def _max_frames(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"must be at least 2, got {value}")
+    return value
+
+
+def _html_path(text: str) -> Path:
+    if not text.strip():
+        raise argparse.ArgumentTypeError("give a file name, e.g. explorer.html")
+    path = Path(text).expanduser()
+    if path.is_dir():
+        raise argparse.ArgumentTypeError(
+            f"{text} is a folder; give a file name, e.g. {path / 'explorer.html'}"
+        )
+    if not path.parent.is_dir():
+        raise argparse.ArgumentTypeError(
+            f"the folder {str(path.parent)!r} does not exist; create it first"
+        )
+    return path
+
+
+def _folder(text: str) -> str:
+    if not text.strip() or not Path(text).expanduser().is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is not a folder")
+    return text
+
+
+def _refuse_inapplicable(parser, args, given: set[str]) -> None:
+    """One-line error for options the chosen mode does not use (exit 2)."""
+    if args.command == "demo":
+        mode = "--text" if args.text else "--html" if args.html else "JupyterLab"
+        unused = {
+            "--text": {
+                "--source",
+                "--max-frames",
+                "--port",
+                "--no-browser",
+                "--notebook-dir",
+            },
+            "--html": {"--port", "--no-browser", "--notebook-dir"},
+            # the notebook picks its data itself (RBM_NB_DATA_DIR)
+            "JupyterLab": {"--source", "--max-frames"},
+        }[mode]
+        wrong = sorted(unused & given)
+        if wrong:
+            where = (
+                "the JupyterLab demo (add --html OUT.html to export)"
+                if mode == "JupyterLab"
+                else f"demo {mode}"
+            )
+            parser.error(f"{', '.join(wrong)} does not apply to {where}")
+
+
+class _Parser(argparse.ArgumentParser):
+    """Errors in one line (no usage block), exit status 2."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = _Parser(prog="rbm-nb", description="rbm_nb: rigid body motion in Jupyter.")
     parser.add_argument(
         "--version", action="version", version=f"%(prog)s {__version__}"
     )
@@ -192,6 +311,7 @@ def main(argv: list[str] | None = None) -> int:
     mode.add_argument(
         "--html",
         metavar="OUT.html",
+        type=_html_path,
         help="write the explorer's dashboard as one self-contained HTML file and exit",
     )
     mode.add_argument(
@@ -207,16 +327,18 @@ def main(argv: list[str] | None = None) -> int:
     )
     demo.add_argument(
         "--max-frames",
-        type=int,
+        type=_max_frames,
         default=10000,
-        help="samples per moving object and plotted series in --html (evenly spaced)",
+        help="samples per moving object and plotted series in --html (evenly "
+        "spaced, at least 2)",
     )
-    demo.add_argument("--port", type=int, default=8888, help="JupyterLab port")
+    demo.add_argument("--port", type=_port, default=8888, help="JupyterLab port")
     demo.add_argument(
         "--no-browser", action="store_true", help="do not open a browser window"
     )
     demo.add_argument(
         "--notebook-dir",
+        type=_folder,
         help="folder with the notebooks (default: the clone's, else a copy of "
         "the installed ones)",
     )
@@ -229,11 +351,12 @@ def main(argv: list[str] | None = None) -> int:
         default="auto",
         help="example data: the real recording, else synthetic (auto)",
     )
-    app.add_argument("--port", type=int, default=8866, help="Voila port")
+    app.add_argument("--port", type=_port, default=8866, help="Voila port")
     app.add_argument(
         "--no-browser", action="store_true", help="do not open a browser window"
     )
     args = parser.parse_args(argv)
+    _refuse_inapplicable(demo, args, _given_options(argv))
     if args.command == "app":
         from .app import serve
 
@@ -247,9 +370,16 @@ def main(argv: list[str] | None = None) -> int:
             return _text_demo()
         if args.html:
             return _html_demo(args)
+        print(_data_note("auto"), flush=True)
         return _lab_demo(args)
     parser.error(f"unknown command {args.command!r}")
     return 2
+
+
+def _given_options(argv: list[str] | None) -> set[str]:
+    """The long options on the command line (``--port=1`` counts as ``--port``)."""
+    words = sys.argv[1:] if argv is None else argv
+    return {w.split("=", 1)[0] for w in words if w.startswith("--")}
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -15,6 +15,7 @@ and never imports this module.
 from __future__ import annotations
 
 import difflib
+import unicodedata
 import warnings
 from collections.abc import Callable, Iterator, MutableMapping
 from typing import Any, TypeAlias
@@ -86,6 +87,7 @@ class FrameRegistry(MutableMapping):
             )
         if not isinstance(name, str):
             raise TypeError(f"registry keys are frame names (str), got {name!r}")
+        check_frame_name(name)
         self._frames[name] = frame
         _chain.invalidate()
         self._notify("register", name)
@@ -266,6 +268,20 @@ def clear_registry() -> None:
     registry._notify("clear", None)
 
 
+def check_frame_name(name: str) -> None:
+    """Refuse a frame name with control characters (ESC, BEL, NUL, ...).
+
+    Frame ids come from files (rosbags); printed by :func:`render_tree` or in
+    an error, an ESC could rewrite the user's terminal.
+    """
+    for index, char in enumerate(name):
+        if unicodedata.category(char) == "Cc":
+            raise ValueError(
+                f"frame name {name!r} has the control character U+{ord(char):04X} "
+                f"at index {index}; frame names must be printable"
+            )
+
+
 def render_tree(root: FrameLike) -> None:
     """Print the tree below ``root`` (a frame or a registered name).
 
@@ -407,6 +423,8 @@ class ReferenceFrame:
     ) -> None:
         if name is not None and not isinstance(name, str):
             raise ValueError(f"name must be a string, got {type(name).__name__}")
+        if name is not None:
+            check_frame_name(name)
         self.name = name
         self._parent: ReferenceFrame | None = None
         self._children: list[ReferenceFrame] = []

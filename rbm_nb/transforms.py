@@ -168,6 +168,17 @@ def transform_vectors(
     arr_transformed : ndarray or DataArray
     ts : ndarray, optional
         The timestamps after matching with the frames' timestamps.
+
+    Notes
+    -----
+    Without ``timestamps``, through frames that move, the *whole* array is
+    transformed at every sample time of the frames and the result gets a
+    new leading time axis: a (7, 3) cloud through a frame of 10 samples
+    gives (10, 7, 3), and so does a (10, 3) array (its rows are not taken as
+    samples). A row of NaN is a missing sample and stays NaN; a row with
+    only some NaN raises. To transform one sample per row, pass
+    ``timestamps`` (one per row). The reference implementation raises for
+    a (n, 3) array in this case instead.
     """
     return _transform(
         _vectors, arr, into, outof, dim, axis, timestamps, time_axis,

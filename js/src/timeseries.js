@@ -157,7 +157,7 @@ async function render({ model, el }) {
 
   panels.forEach((panel, i) => {
     const x = typed(data[i].x, Float64Array);
-    const ys = data[i].y.map((v) => withNulls(typed(v, Float32Array)));
+    const ys = data[i].y.map((v) => withNulls(typed(v, Float64Array)));
     const last = i === panels.length - 1;
     const series = [
       { label: "time", value: (u, v) => (v === null ? "\u2014" : formatTime(v, t0Ns())) },

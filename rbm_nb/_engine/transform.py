@@ -13,7 +13,7 @@ from .. import _time
 from .._door import float_array, kernel_array
 from .._kernels import resample as kr
 from .._validation import (
-    check_no_inf,
+    check_whole_rows,
     normalize_quaternions,
     resolve_axis,
 )
@@ -58,8 +58,9 @@ class Blocks:
                 f"arr must have length {size} along axis {axis} (the {kind}' "
                 f"coordinates), got shape {arr.shape}"
             )
-        # NaN rows are missing samples and pass through; infinities are mistakes
-        check_no_inf(_moveaxis(arr, self.axis, -1), "arr")
+        # NaN rows are missing samples and pass through; infinities and
+        # partly NaN rows are mistakes
+        check_whole_rows(_moveaxis(arr, self.axis, -1), "arr")
         if size == 4:
             arr = normalize_quaternions(
                 _moveaxis(arr, self.axis, -1), "arr", allow_nan=True

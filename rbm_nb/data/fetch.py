@@ -95,7 +95,7 @@ class ExampleDataStore(Mapping):
         if self._data_dir is not None:
             return self._data_dir
         if os.environ.get(DATA_DIR_ENV):
-            return Path(os.environ[DATA_DIR_ENV]).expanduser()
+            return env_folder(DATA_DIR_ENV)
         return Path(_pooch().os_cache("rbm_nb"))
 
     @property
@@ -157,6 +157,7 @@ class ExampleDataStore(Mapping):
         logger = pooch.get_logger()
         level = logger.level
         logger.setLevel("WARNING")
+        made = _first_missing(folder)  # pooch creates the folder: undone on failure
         try:
             fetched = pooch.retrieve(
                 url,
@@ -166,16 +167,19 @@ class ExampleDataStore(Mapping):
                 downloader=downloader,
             )
         except requests.RequestException as err:
+            _remove_made_folders(folder, made)
             raise ExampleDataUnavailable(
                 f"The example file {filename!r} is not in {folder} and could not be downloaded "
                 f"from {url} ({_reason(err)}). {_what_to_do(name, filename, expected)}"
             ) from err
         except ValueError as err:  # pooch's hash check of the download
+            _remove_made_folders(folder, made)
             raise ExampleDataUnavailable(
                 f"The download of {url} does not have the registered sha256 {expected}, so it "
                 f"was discarded. {_what_to_do(name, filename, expected)}"
             ) from err
         except OSError as err:
+            _remove_made_folders(folder, made)
             raise ExampleDataUnavailable(
                 f"Could not store {filename!r} in {folder} ({err}). Set {DATA_DIR_ENV} to a "
                 "writable folder."
@@ -197,7 +201,7 @@ def cache_dir() -> Path:
     the registry's files are ever written into ``RBM_NB_DATA_DIR``.
     """
     if os.environ.get(CACHE_DIR_ENV):
-        return Path(os.environ[CACHE_DIR_ENV]).expanduser()
+        return env_folder(CACHE_DIR_ENV)
     try:
         base = Path(_pooch().os_cache("rbm_nb"))
     except ImportError:
@@ -215,8 +219,52 @@ def example_data_dirs() -> tuple:
     except ImportError:  # no pooch: no default folder either
         pass
     if os.environ.get(DATA_DIR_ENV):
-        folders.add(Path(os.environ[DATA_DIR_ENV]).expanduser().resolve())
+        folders.add(env_folder(DATA_DIR_ENV).resolve())
     return tuple(folders)
+
+
+def env_folder(variable: str) -> Path:
+    """The folder an environment variable names, ``~`` expanded.
+
+    Raises
+    ------
+    ValueError
+        Naming the variable, if ``~user`` names no user here (the path would
+        otherwise be taken as a folder called ``~user`` in the working folder).
+    """
+    value = os.environ[variable]
+    # os.path.expanduser leaves an unknown ~user as it is (Path's raises)
+    path = Path(os.path.expanduser(value))
+    if str(path).startswith("~"):
+        user = str(path).split(os.sep, 1)[0]
+        raise ValueError(
+            f"{variable}={value!r}: {user} names no user on this machine; set "
+            f"{variable} to an absolute path"
+        )
+    return path
+
+
+def _first_missing(folder: Path) -> Path | None:
+    """The outermost folder of ``folder``'s path that does not exist yet, if any."""
+    missing = None
+    for candidate in (folder, *folder.parents):
+        if candidate.exists():
+            break
+        missing = candidate
+    return missing
+
+
+def _remove_made_folders(folder: Path, outermost: Path | None) -> None:
+    """Remove the (empty) folders a failed download made, up to ``outermost``."""
+    if outermost is None:
+        return
+    for candidate in (folder, *folder.parents):
+        try:
+            candidate.rmdir()  # only if empty: never anything with a file in it
+        except OSError:
+            return
+        if candidate == outermost:
+            return
 
 
 def sha256(path: Path) -> str:

@@ -142,14 +142,29 @@ def _metadata(path: Path, header: list[list[str]]) -> dict:
 
 def _rigid_body_columns(path: Path, header: list[list[str]]) -> dict:
     """name -> {"position": [x, y, z] columns, "rotation": columns, "rotation_axes": labels}."""
-    types, names, _, motions, axes = header[2:7]
+    types, names, ids, motions, axes = header[2:7]
     bodies: dict[str, dict] = {}
-    for col, (kind, name, motion, axis) in enumerate(
-        zip(types, names, motions, axes, strict=True)
+    first_id: dict[str, tuple[str, int]] = {}
+    for col, (kind, name, body_id, motion, axis) in enumerate(
+        zip(types, names, ids, motions, axes, strict=True)
     ):
         if kind != "Rigid Body" or motion not in ("Position", "Rotation"):
             continue
+        # two bodies of one name (Motive allows it) would overwrite each
+        # other's columns: refuse, naming both
+        seen_id, seen_col = first_id.setdefault(name, (body_id, col))
+        if seen_id != body_id:
+            raise FileFormatError(
+                f"{path}: two rigid bodies are named {name!r} (ID {seen_id} from "
+                f"column {seen_col + 1}, ID {body_id} from column {col + 1}); "
+                "rename one in Motive and export again"
+            )
         body = bodies.setdefault(name, {"position": {}, "rotation": {}})
+        if axis.upper() in body[motion.lower()]:
+            raise FileFormatError(
+                f"{path}: rigid body {name!r} has two {motion} {axis} columns "
+                f"({body[motion.lower()][axis.upper()] + 1} and {col + 1})"
+            )
         body[motion.lower()][axis.upper()] = col
     out = {}
     for name, body in bodies.items():
@@ -202,6 +217,14 @@ def _numbers(path: Path, rows: list[str], width: int) -> np.ndarray:
             + int(np.flatnonzero(np.isnan(data[:, :2]).any(axis=1))[0])
         )
         raise FileFormatError(f"{path}: line {line} has no frame number or time")
+    inf = np.isinf(data)
+    if inf.any():
+        at, field = (int(v) for v in np.argwhere(inf)[0])
+        raise FileFormatError(
+            f"{path}: line {_N_HEADER_ROWS + 1 + at}, field {field + 1} is "
+            f"{data[at, field]}; values must be finite (an empty field is a "
+            "missing sample)"
+        )
     return data
 
 
@@ -236,14 +259,39 @@ def _check_frames(path: Path, meta: dict, data: np.ndarray) -> None:
 def _timestamps(path: Path, meta: dict, seconds: np.ndarray) -> np.ndarray:
     import pandas as pd
 
+    text = meta["Capture Start Time"]
     try:
-        start = pd.to_datetime(meta["Capture Start Time"], format=_START_TIME_FORMAT)
+        start = pd.to_datetime(text, format=_START_TIME_FORMAT)
+        # pandas may hold it at a coarser unit; rbm_nb's timestamps are ns
+        if not pd.Timestamp.min <= start <= pd.Timestamp.max:
+            raise pd.errors.OutOfBoundsDatetime(text)
+    except pd.errors.OutOfBoundsDatetime:
+        raise FileFormatError(
+            f"{path}: line 1: 'Capture Start Time' {text!r} is outside the years "
+            f"{pd.Timestamp.min.year + 1}-{pd.Timestamp.max.year - 1} that nanosecond "
+            "timestamps can hold"
+        ) from None
     except ValueError:
         raise FileFormatError(
-            f"{path}: 'Capture Start Time' {meta['Capture Start Time']!r} is not in Motive's "
+            f"{path}: line 1: 'Capture Start Time' {text!r} is not in Motive's "
             "format (e.g. '2020-06-16 07.51.41.245 PM')"
         ) from None
-    return (start + pd.to_timedelta(seconds, unit="s")).to_numpy(dtype="datetime64[ns]")
+    # the largest time first: a time the ns clock cannot hold names its line
+    latest = int(np.argmax(np.abs(seconds))) if seconds.size else 0
+    try:
+        return (start + pd.to_timedelta(seconds, unit="s")).to_numpy(
+            dtype="datetime64[ns]"
+        )
+    except (
+        pd.errors.OutOfBoundsDatetime,
+        pd.errors.OutOfBoundsTimedelta,
+        OverflowError,
+    ):
+        raise FileFormatError(
+            f"{path}: line {_N_HEADER_ROWS + 1 + latest}: time {seconds[latest]:g} s "
+            f"after the capture start {text!r} is beyond what nanosecond timestamps "
+            f"can hold (up to {pd.Timestamp.max})"
+        ) from None
 
 
 def _length_scale(path: Path, meta: dict) -> float:

@@ -10,7 +10,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import TYPE_CHECKING
 
-from .._atomic import atomic_path
+from .._atomic import atomic_path, check_replaceable
 from .._progress import progress_bar
 from ..io._files import FileFormatError, load_netcdf
 from ..io._schema import motion_dataset
@@ -366,7 +366,10 @@ class RosbagReader:
             ds = load_netcdf(path, hint="delete it and it will be rebuilt from the bag")
             if ds.attrs.get("bag_fingerprint") == self._fingerprint():
                 return ds
-        return self._export(topic, path, progress)
+        try:
+            return self._export(topic, path, progress)
+        except OSError as err:
+            raise _cache_error(err, path) from None
 
     def cache_file(self, topic: str) -> Path:
         """Where :meth:`load_dataset` caches ``topic``.
@@ -404,12 +407,18 @@ class RosbagReader:
         -------
         pathlib.Path
             The path written.
+
+        Raises
+        ------
+        IsADirectoryError
+            ``output_file`` is a folder (it is never replaced).
         """
         path = (
             self.bag_file.with_suffix(".nc")
             if output_file is None
             else Path(output_file)
         )
+        check_replaceable(path)  # a folder there is the user's: refuse before reading
         self._export(topic, path, None)
         return path
 
@@ -470,3 +479,22 @@ def _merge(a, b):
         np.concatenate([a.orientation, b.orientation])[keep],
         np.concatenate([a.message_index, b.message_index])[keep],
     )  # fmt: skip
+
+
+def _cache_error(err: OSError, path: Path) -> OSError:
+    """``err`` from writing a cache file, saying which setting chose the folder."""
+    from ..data.fetch import cache_dir
+    from ..data.registry import CACHE_DIR_ENV
+
+    if err.errno is None or not os.environ.get(CACHE_DIR_ENV):
+        return err
+    folder = cache_dir()
+    if folder != path and folder not in path.parents:
+        return err
+    return type(err)(
+        err.errno,
+        f"cannot write the cache of this bag in {CACHE_DIR_ENV}={str(folder)!r} "
+        f"({err.strerror or err}); set {CACHE_DIR_ENV} to a writable folder, or "
+        "pass cache=False",
+        str(path),
+    )

@@ -109,9 +109,15 @@ def register_frames_from_bag(
         See :func:`load_tf_tree`; also if a frame exists and ``update`` is
         False.
     """
-    from ..frames import ReferenceFrame, register_frame, registry
+    from ..frames import ReferenceFrame, check_frame_name, register_frame, registry
 
     tree = load_tf_tree(bag_file, topics)
+    for child, pair in tree.items():
+        for name in (pair.frame_id, child):
+            try:
+                check_frame_name(name)
+            except ValueError as err:  # before any is registered
+                raise ValueError(f"{bag_file}: {err}") from None
     taken = sorted(name for name in tree if name in registry)
     if taken and not update:
         # checked first, so that a refused call registers nothing

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from .._atomic import atomic_path
+from .._atomic import FolderKind, atomic_path, check_replaceable, scratch_target
 from .._config import UNIT_QUATERNION_TOLERANCE
 from .._xarray import dataset_variable
 from ._messages import (
@@ -31,7 +31,42 @@ if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore
 
 STORAGES = ("sqlite3", "mcap")
+_MAX_NAME_BYTES = 255  # of one file name, on the usual file systems
+_SQLITE_MAX_PATH = 512  # SQLITE_MAX_PATHNAME, sqlite's limit on a file's path
 _MAX_SEC = {False: 2**32, True: 2**31}  # ROS1 stamps are uint32 s, ROS2 int32 s
+
+
+# what rosbag2 (and the rosbags library) put in a bag folder
+_ROS2_STORAGE_SUFFIXES = (".db3", ".db3-shm", ".db3-wal", ".mcap", ".zstd")
+
+
+def is_ros2_bag_folder(path: Path) -> bool:
+    """Whether ``path`` is a ROS2 bag folder and nothing else.
+
+    It must hold a ``metadata.yaml`` that describes a bag and otherwise only
+    storage files: a folder with anything more (notes, a thesis) is the
+    user's, and a writer must not replace it.
+    """
+    try:
+        entries = list(os.scandir(path))
+        metadata = (path / "metadata.yaml").read_text(errors="replace")
+    except OSError:
+        return False
+    if "rosbag2_bagfile_information" not in metadata:
+        return False
+    return all(
+        entry.name == "metadata.yaml"
+        or (
+            entry.is_file(follow_symlinks=False)
+            and entry.name.endswith(_ROS2_STORAGE_SUFFIXES)
+        )
+        for entry in entries
+    )
+
+
+ROS2_BAG = FolderKind(
+    "a ROS2 bag folder holding only metadata.yaml and storage files", is_ros2_bag_folder
+)
 
 
 class RosbagWriter:
@@ -41,6 +76,10 @@ class RosbagWriter:
     the target, which replaces the target only when the ``with`` block ends
     without an error: a failure never leaves a half-written bag, and an
     existing bag at the target is untouched until then.
+
+    An existing ROS2 bag folder at the target is replaced (once the new one is
+    complete); any other folder, and a file where a ROS2 bag folder would go,
+    is refused with an error before anything is written.
 
     Parameters
     ----------
@@ -72,10 +111,47 @@ class RosbagWriter:
         if storage is not None and storage not in STORAGES:
             raise ValueError(f"storage must be one of {STORAGES}, got {storage!r}")
         self.storage = (storage or "sqlite3") if self.ros2 else None
+        if self.ros2:
+            self._check_path_length()
+        # refuse a folder (or file) it must not replace now, not after the work
+        check_replaceable(self.bag_file, ROS2_BAG if self.ros2 else None)
         self._atomic: AbstractContextManager[Path] | None = None
         self._writer: Ros1Writer | Ros2Writer | None = None
         self._typestore: Typestore | None = None
         self._connections: dict[tuple[str, str], Any] = {}
+
+    def _check_path_length(self) -> None:
+        """Refuse a ROS2 bag whose storage file the storage cannot open.
+
+        The files inside are named after the folder (``<name>.mcap``, or
+        ``<name>.db3`` plus up to 12 bytes sqlite adds for its journal), and
+        sqlite opens no path longer than 512 bytes; while writing, the bag
+        sits in a scratch folder beside the target.
+        """
+        name = self.bag_file.name
+        inside = scratch_target(self.bag_file)
+        if self.storage == "mcap":
+            longest = [f"{name}.mcap"]
+        else:
+            longest = [f"{name}.db3-journal"]
+        for entry in longest:
+            size = len(os.fsencode(entry))
+            if size > _MAX_NAME_BYTES:
+                raise ValueError(
+                    f"the ROS2 bag folder name {name!r} is too long ({len(os.fsencode(name))} "
+                    f"bytes): the {self.storage} file {entry!r} inside would be {size} "
+                    f"bytes, file systems allow {_MAX_NAME_BYTES}"
+                )
+        if self.storage == "sqlite3":
+            path = len(os.fsencode(str(inside / longest[0])))
+            if path > _SQLITE_MAX_PATH:
+                raise ValueError(
+                    f"the path of the ROS2 bag {str(self.bag_file)!r} is too long for "
+                    f"sqlite3 storage: its database file would be at a path of "
+                    f"{path} bytes while writing, sqlite opens at most "
+                    f"{_SQLITE_MAX_PATH}; use a shorter name or folder, or "
+                    "storage='mcap'"
+                )
 
     def __repr__(self) -> str:
         state = "open" if self._writer is not None else "closed"
@@ -90,7 +166,8 @@ class RosbagWriter:
             Stores.ROS2_HUMBLE if self.ros2 else Stores.ROS1_NOETIC
         )
         register_tf_message(self._typestore)
-        self._atomic = atomic = atomic_path(self.bag_file)
+        kind = ROS2_BAG if self.ros2 else None
+        self._atomic = atomic = atomic_path(self.bag_file, folder_kind=kind)
         tmp = atomic.__enter__()
         try:
             self._writer = writer = self._make_writer(tmp)
@@ -183,6 +260,14 @@ class RosbagWriter:
             beyond what the bag format can hold, or a rotation is not a unit
             quaternion (within ``UNIT_QUATERNION_TOLERANCE``). The message
             names the topic and the row.
+
+        Notes
+        -----
+        Rotations within the tolerance are written as given, bit for bit, so
+        that a bag written from a recording reads back identical (recorded
+        quaternions are often unit only to float32 precision); rbm_nb's
+        transforms, lookups of the frames read from it and ROS's tf normalise
+        them when they use them.
         RuntimeError
             If called outside the ``with`` block.
         """

@@ -79,7 +79,8 @@ def build_document(
     if player is None:
         player = scene._player
     if player is None:
-        player = Player(scene)
+        # a static scene still gets the page's player, on a single instant
+        player = Player(scene) if scene.timestamps_kind is not None else Player([0.0])
     if not isinstance(player, Player):
         raise ValueError(
             f"to_html: player must be a Player, got {type(player).__name__}"
@@ -120,10 +121,26 @@ def build_document(
     }
 
 
+# inside a <script> element, "</script", "<!--" and "<script" change how the
+# HTML parser reads the rest of the page; JSON allows these escapes in strings
+# (and the characters occur nowhere else in JSON). U+2028/2029 are escaped by
+# json.dumps already (ensure_ascii).
+_SCRIPT_SAFE = str.maketrans({"<": "\\u003c", ">": "\\u003e", "&": "\\u0026"})
+
+
+def embeddable_json(value) -> str:
+    """``value`` as JSON that can sit inside a ``<script>`` element of any page.
+
+    Whatever the strings hold (frame ids from a rosbag, labels, units),
+    nothing in the result can end the element or open a comment or script.
+    """
+    text = json.dumps(value, separators=(",", ":"), ensure_ascii=True)
+    return text.translate(_SCRIPT_SAFE)
+
+
 def render_html(document: dict, title: str) -> str:
     runtime = document.pop("runtime")
-    # "</" inside the JSON would end the script element early
-    data = json.dumps(document, separators=(",", ":")).replace("</", "<\\/")
+    data = embeddable_json(document)
     return _TEMPLATE.format(title=html.escape(title), data=data, runtime=runtime)
 
 

@@ -158,11 +158,18 @@ class PathHandle(SceneHandle):
 
     def _validate_style(self, style):
         color_int(style["color"], "add_path: color")
-        if int(style["max_points"]) < 2:
+        value = style["max_points"]
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, (int, float, np.integer, np.floating))
+            or not np.isfinite(value)
+            or int(value) != value
+            or value < 2
+        ):
             raise ValueError(
-                f"add_path: max_points must be at least 2, got {style['max_points']}"
+                f"add_path: max_points must be a whole number, at least 2, got {value!r}"
             )
-        style["max_points"] = int(style["max_points"])
+        style["max_points"] = int(value)
 
     def shown_positions(self) -> np.ndarray:
         """The positions drawn: subsampled to at most ``max_points``."""
@@ -314,6 +321,34 @@ class MeshHandle(SceneHandle):
         return np.array([[-half, -half, -half], [half, half, half]])
 
 
+def _check_mesh_file(path: Path, fmt: str) -> None:
+    """Refuse a file whose content is not the format its name says.
+
+    The browser parses meshes; a wrong file would fail there, silently. Only
+    the framing is checked here: a binary STL's size matches its triangle
+    count, an ASCII STL starts with ``solid`` and has facets, an OBJ has
+    vertices, a DAE is COLLADA XML.
+    """
+    with open(path, "rb") as f:
+        head = f.read(4096)
+    size = path.stat().st_size
+    if fmt == "stl":
+        binary = size >= 84 and size == 84 + 50 * int.from_bytes(head[80:84], "little")
+        ascii_ = head.lstrip().startswith(b"solid") and b"facet" in head
+        ok = binary or ascii_
+        what = "a binary STL (84 + 50 bytes per triangle) nor an ASCII STL"
+    elif fmt == "obj":
+        ok = any(line.split()[:1] == [b"v"] for line in head.splitlines()) or (
+            size > len(head) and b"\0" not in head
+        )
+        what = "an OBJ file (no vertex lines 'v x y z')"
+    else:
+        ok = b"COLLADA" in head
+        what = "a COLLADA (.dae) file"
+    if not ok:
+        raise ValueError(f"add_mesh: {str(path)!r} is not {what}; check the file")
+
+
 def _mesh_geometry(mesh, size):
     g = _geometry()
     if isinstance(mesh, g.Geometry):
@@ -354,6 +389,7 @@ def _mesh_geometry(mesh, size):
             )
         if not path.is_file():
             raise ValueError(f"add_mesh: mesh file {str(path)!r} does not exist")
+        _check_mesh_file(path, fmt)
         if fmt == "stl":
             return g.StlMeshGeometry.from_file(str(path))
         if fmt == "obj":

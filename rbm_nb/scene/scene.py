@@ -62,6 +62,35 @@ def _resolve(frame, argument: str):
     return frames.resolve_frame(frame, argument)
 
 
+#: largest distance from the scene's origin (metres) an object may reach: far
+#: beyond any tracked volume, far inside float32 (the browser's numbers) and
+#: the grid's and camera's arithmetic
+MAX_COORDINATE = 1e9
+
+
+def _camera_distance(value) -> float:
+    """A camera distance in metres: positive, finite, within the drawable space."""
+    try:
+        distance = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"Scene.focus: distance must be a number of metres, got {value!r}"
+        ) from None
+    if not 0 < distance <= MAX_COORDINATE:
+        raise ValueError(
+            f"Scene.focus: distance must be positive and at most {MAX_COORDINATE:.0e} m, "
+            f"got {value!r}"
+        )
+    return distance
+
+
+def _reach(points) -> float:
+    """Largest absolute coordinate of ``points`` (NaN rows, i.e. missing, aside)."""
+    values = np.abs(np.asarray(points, dtype=float))
+    values = values[~np.isnan(values)]
+    return float(values.max()) if values.size else 0.0
+
+
 def _slug(text: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.\-]+", "_", str(text)).strip("_") or "object"
 
@@ -438,10 +467,21 @@ class Scene:
 
         ``t`` is float seconds (epoch seconds for datetime data) or a
         datetime64 value. With a linked player this moves the player (and so
-        every view following it).
+        every view following it). Without one, ``t`` is kept between one
+        span before the first sample (all moving objects hidden) and the last
+        sample (every object as it was last).
         """
         self._check_open()
         seconds = time_as_seconds(t, self.state.kind)
+        if not math.isfinite(seconds):
+            raise ValueError(f"Scene.set_time: t must be finite, got {t!r}")
+        timeline = self.state.timeline()
+        if timeline is not None and self._player is None:
+            # after the last sample every object stays as it was then, and
+            # before the first all moving ones are hidden: times beyond show
+            # nothing new, so 1e300 s is kept to the span (and one span before)
+            start, end = float(timeline[0][0]), float(timeline[0][-1])
+            seconds = min(max(seconds, start - max(end - start, 1.0)), end)
         with self._lock:
             self._time = seconds
             if self.state.pins:
@@ -553,7 +593,10 @@ class Scene:
                 if self._camera is None:
                     self._camera = self._fitted_camera()
                     self._camera_is_auto = True
-                widget = SceneWidget(lambda: self._snapshot_message(self.max_samples))
+                widget = SceneWidget(
+                    lambda: self._snapshot_message(self.max_samples),
+                    check_frame=self._checked_frame_name,
+                )
                 self._widget = widget
                 for name in (
                     "_origin",
@@ -611,6 +654,18 @@ class Scene:
         else:
             self.highlight(name)
 
+    def _checked_frame_name(self, name: str, trait: str) -> str:
+        """What ``selected`` (a registered frame) and ``follow`` (a drawn one) accept."""
+        if not isinstance(name, str):
+            raise ValueError(f"Scene.{trait} must be a frame name, got {name!r}")
+        resolved = _resolve(name, f"Scene.{trait}").name
+        if trait == "follow" and resolved not in self._frame_paths():
+            raise ValueError(
+                f"Scene.follow: frame {resolved!r} is not drawn in this scene; "
+                f"add_frame({resolved!r}) first (drawn: {sorted(self._frame_paths())})"
+            )
+        return resolved
+
     def follow(self, frame=None) -> None:
         """Keep the camera on ``frame`` (drawn with ``add_frame``) as it moves; None stops."""
         name = None
@@ -639,6 +694,8 @@ class Scene:
             raise ValueError(
                 f"Scene.focus: frame {name!r} is not drawn in this scene; add_frame({name!r}) first"
             )
+        if distance is not None:
+            distance = _camera_distance(distance)
         t = self.time if self.time is not None else self.state.origin
         pose = self.state.world_pose(paths[name], t)
         if pose is None:  # not started yet or missing now: where it is last
@@ -683,6 +740,16 @@ class Scene:
         """Place the camera at ``position`` looking at ``target`` (scene base coordinates)."""
         p = _points_array(position, "position", "set_camera")[0]
         t = _points_array(target, "target", "set_camera")[0]
+        if not np.linalg.norm(p - t) > 0:
+            raise ValueError(
+                f"set_camera: position and target are the same point {p.tolist()}; "
+                "the camera needs a direction to look in"
+            )
+        if not max(_reach(p), _reach(t)) <= MAX_COORDINATE:
+            raise ValueError(
+                f"set_camera: position {p.tolist()} or target {t.tolist()} is beyond "
+                f"{MAX_COORDINATE:.0e} m from the origin"
+            )
         self._set_camera(p, t, auto=False)
 
     def _set_camera(self, position, target, auto: bool) -> None:
@@ -871,6 +938,8 @@ class Scene:
         inner: Track | None = None,
         offset=None,
     ) -> None:
+        # before anything changes: an object the view cannot draw is refused whole
+        self._check_reach(handle, carrier, inner)
         with self._lock:
             kinds = [t.kind for t in (carrier, inner) if t is not None and not t.static]
             for kind in kinds:
@@ -894,6 +963,22 @@ class Scene:
             if added:
                 self._emit_tracks(added)
             self._content_changed()
+
+    def _check_reach(
+        self, handle: SceneHandle, carrier: Track, inner: Track | None
+    ) -> None:
+        """Refuse an object reaching beyond :data:`MAX_COORDINATE` from the origin."""
+        reach = _reach(handle._extent()) + _reach(carrier.positions())
+        if inner is not None:
+            reach += _reach(inner.positions())
+        if handle.base is not self.base:
+            reach += _reach(Track.lookup(handle.base, self.base).positions())
+        if not reach <= MAX_COORDINATE:
+            raise ValueError(
+                f"add_{handle.kind}: {handle.name!r} reaches {reach:.3g} m from the "
+                f"scene's origin; the 3D view draws within {MAX_COORDINATE:.0e} m "
+                "(check the values and their units)"
+            )
 
     def _object_messages(self, handle: SceneHandle) -> list[Message]:
         messages = []

@@ -12,6 +12,9 @@ No port is opened: this works wherever Jupyter widgets work.
 from __future__ import annotations
 
 import functools
+import math
+import threading
+import time
 import uuid
 from collections.abc import Callable
 
@@ -19,6 +22,7 @@ import anywidget
 import traitlets
 from ipywidgets import widget_serialization
 
+from ..widgets._frontend import FrontendGuard
 from ..widgets.player import Player, bundle
 from .commands import meshcat_js_path
 
@@ -39,7 +43,14 @@ def scene_esm() -> str:
     return loader + bundle("scene")
 
 
-class SceneWidget(anywidget.AnyWidget):
+#: seconds between two snapshots sent in answer to pages' "ready" messages
+READY_INTERVAL = 1.0
+
+#: bounds of the view's height in pixels
+HEIGHT = (50, 5000)
+
+
+class SceneWidget(FrontendGuard, anywidget.AnyWidget):
     """The DOM widget of a :class:`~rbm_nb.scene.Scene` (``scene.widget``).
 
     It composes in ``HBox``/``VBox``/``GridBox`` like any ipywidget.
@@ -61,6 +72,10 @@ class SceneWidget(anywidget.AnyWidget):
         Height in pixels.
     """
 
+    # a click selects a frame or follows it; the content, camera, time and
+    # height are the kernel's
+    _frontend_settable = frozenset({"selected", "follow"})
+
     _esm = traitlets.Unicode("").tag(sync=True)
     _uid = traitlets.Unicode("").tag(sync=True)
     player = traitlets.Instance(Player, allow_none=True).tag(
@@ -78,26 +93,81 @@ class SceneWidget(anywidget.AnyWidget):
     _legend: traitlets.List[dict] = traitlets.List().tag(sync=True)
     _pins = traitlets.Dict().tag(sync=True)
 
-    def __init__(self, snapshot: Callable[[], tuple[dict, list]], **kwargs):
+    def __init__(
+        self,
+        snapshot: Callable[[], tuple[dict, list]],
+        *,
+        check_frame: Callable[[str, str], str] | None = None,
+        **kwargs,
+    ):
+        # check_frame(name, trait) -> the name, or ValueError: what the scene
+        # accepts as `selected` and `follow`, from Python and from the browser
+        self._check_frame = check_frame
         super().__init__(_esm=scene_esm(), _uid=uuid.uuid4().hex, **kwargs)
         self._snapshot = snapshot
         self.ready = False
+        self._ready_lock = threading.Lock()
+        self._ready_timer: threading.Timer | None = None
+        self._last_snapshot = -math.inf
         self.bytes_sent = 0
         self.on_msg(self._on_message)
 
     @traitlets.validate("height")
     def _valid_height(self, proposal):
         value = int(proposal["value"])
-        if value < 50:
+        low, high = HEIGHT
+        if not low <= value <= high:
             raise traitlets.TraitError(
-                f"height must be at least 50 pixels, got {value}"
+                f"height must be in [{low}, {high}] pixels, got {value}"
             )
         return value
 
+    @traitlets.validate("time")
+    def _valid_time(self, proposal):
+        value = proposal["value"]
+        if value is not None and not math.isfinite(value):
+            raise traitlets.TraitError(f"time must be finite or None, got {value}")
+        return value
+
+    @traitlets.validate("selected", "follow")
+    def _valid_frame(self, proposal):
+        name = proposal["value"]
+        if name is None or self._check_frame is None:
+            return name
+        try:
+            return self._check_frame(name, proposal["trait"].name)
+        except ValueError as err:
+            raise traitlets.TraitError(str(err)) from None
+
     def _on_message(self, _widget, content, _buffers) -> None:
         if isinstance(content, dict) and content.get("type") == "ready":
+            self._on_ready()
+
+    def _on_ready(self) -> None:
+        """Answer a page's ``ready`` with the whole scene, at most once per interval.
+
+        Every page showing this model receives a snapshot sent for any of
+        them, so readies arriving within :data:`READY_INTERVAL` of the last
+        snapshot are answered together by one more snapshot when the interval
+        ends: a page that asks always gets the scene, and a flood of readies
+        costs two snapshots per interval, not one each.
+        """
+        with self._ready_lock:
             self.ready = True
-            self.push(*self._snapshot())
+            wait = self._last_snapshot + READY_INTERVAL - time.monotonic()
+            if wait > 0:
+                if self._ready_timer is None:
+                    self._ready_timer = threading.Timer(wait, self._send_snapshot)
+                    self._ready_timer.daemon = True
+                    self._ready_timer.start()
+                return
+        self._send_snapshot()
+
+    def _send_snapshot(self) -> None:
+        with self._ready_lock:
+            self._ready_timer = None
+            self._last_snapshot = time.monotonic()
+        self.push(*self._snapshot())
 
     def push(self, content: dict, buffers: list) -> None:
         """Send one content message (only once a browser asked for the scene)."""

@@ -213,7 +213,11 @@ class Study:
         """
         import dask
 
+        from .._atomic import check_replaceable
+
         folder = Path(folder)
+        for name in self.names:  # a folder at a target is refused before the work
+            check_replaceable(folder / f"{name}.nc")
         folder.mkdir(parents=True, exist_ok=True)
         results = self.delayed(analysis, frames=frames, window=window, margin=margin)
         write = dask.delayed(_write_netcdf)

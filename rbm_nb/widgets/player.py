@@ -51,6 +51,7 @@ import anywidget
 import numpy as np
 import traitlets
 
+from ._frontend import FrontendGuard
 from ._time import (
     DATETIME,
     check_kinds,
@@ -166,7 +167,7 @@ def _resolve_timestamps(source) -> tuple[Any, str]:
     return source, "timestamps"
 
 
-class Player(anywidget.AnyWidget):
+class Player(FrontendGuard, anywidget.AnyWidget):
     """Play/pause, skips, slider, speed and loop over a time axis.
 
     Parameters
@@ -196,6 +197,9 @@ class Player(anywidget.AnyWidget):
     >>> player.skip_forward(); player.time  # 1 s later is past the end
     0.9
     """
+
+    # the browser's controls; duration, origin, t0_ns, error... are the kernel's
+    _frontend_settable = frozenset({"time", "playing", "speed", "loop"})
 
     _esm = traitlets.Unicode("").tag(sync=True)
     _uid = traitlets.Unicode("").tag(sync=True)
@@ -251,6 +255,11 @@ class Player(anywidget.AnyWidget):
         self._raw = np.asarray(getattr(raw, "values", raw))
         self._seconds = seconds
         self.playback = Playback(seconds, speed=speed, loop=loop)
+        if not np.isfinite(self.playback.duration):
+            raise ValueError(
+                f"Player: the timestamps run from {seconds[0]:.6g} to "
+                f"{seconds[-1]:.6g} s, a span too long to play (not finite)"
+            )
         self.step = int(step)
         self._links: list[_Link] = []
         self._callbacks: list[Callable[[float], Any]] = []
@@ -431,6 +440,9 @@ class Player(anywidget.AnyWidget):
     def on_time(self, callback: Callable[[float], Any]) -> Callable[[float], Any]:
         """Call ``callback(data_seconds)`` whenever the kernel learns a new time.
 
+        A callback that raises does not stop the others: its error is shown
+        in the widget (``error``, and the exception in ``error_object``).
+
         Returns the callback (usable as a decorator).
         """
         self._callbacks.append(callback)
@@ -455,7 +467,12 @@ class Player(anywidget.AnyWidget):
                 self.error_object = err
                 self.error = f"{type(err).__name__}: {err}"
         for callback in list(self._callbacks):
-            callback(seconds)
+            try:
+                callback(seconds)
+            except Exception as err:  # shown in the widget; the others still run
+                self.error_object = err
+                name = getattr(callback, "__qualname__", repr(callback))
+                self.error = f"on_time callback {name}: {type(err).__name__}: {err}"
 
     # -- display --------------------------------------------------------------------
     def readout(self) -> str:

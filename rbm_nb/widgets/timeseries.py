@@ -1,8 +1,9 @@
 """An interactive time-series plot (uPlot in the browser) sharing the Player's time.
 
 The samples go to the browser once, as binary buffers over the widget comm
-(x as float64 seconds from the recording's start, values as float32); zoom,
-pan, hover values, click-to-seek and the cursor all run in the browser
+(x as float64 seconds from the recording's start, values as float64, so the
+browser shows what the kernel reads out: 1e300 stays finite, millimetre steps
+on 5e6 stay apart); zoom, pan, hover values, click-to-seek and the cursor all run in the browser
 (``js/src/timeseries.js``). The cursor listens to the linked Player's ``time``
 in the browser, so it keeps following playback while the kernel is busy.
 
@@ -12,6 +13,7 @@ timestamps longer than ``gap`` (a NaN row is inserted there before sending).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 import anywidget
@@ -19,6 +21,7 @@ import numpy as np
 import traitlets
 from ipywidgets import Widget, widget_serialization
 
+from ._frontend import FrontendGuard
 from ._time import timestamps_as_seconds
 from ._timebase import TimeBase, format_time
 from .player import bundle
@@ -148,7 +151,36 @@ def _envelope(x: np.ndarray, y: np.ndarray, max_points: int | None):
     return x[keep], y[keep]
 
 
-class TimeSeries(anywidget.AnyWidget):
+#: bounds of a panel's height in pixels
+PANEL_HEIGHT = (40, 4000)
+
+
+def _number(value) -> float:
+    """``value`` as a float, or NaN when it is not a number (then refused by name)."""
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def checked_panel_height(value) -> int:
+    """``value`` as a panel height in pixels, or a ValueError naming panel_height."""
+    low, high = PANEL_HEIGHT
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float, np.integer, np.floating))
+        or not np.isfinite(value)
+        or int(value) != value
+        or not low <= value <= high
+    ):
+        raise ValueError(
+            f"TimeSeries: panel_height must be a whole number of pixels in "
+            f"[{low}, {high}], got {value!r}"
+        )
+    return int(value)
+
+
+class TimeSeries(FrontendGuard, anywidget.AnyWidget):
     """Stacked time-series panels with zoom, hover values and click-to-seek.
 
     Parameters
@@ -186,6 +218,9 @@ class TimeSeries(anywidget.AnyWidget):
     't = 5.000 s   speed: 1'
     """
 
+    # the browser seeks and zooms; the data, panels and time base are the kernel's
+    _frontend_settable = frozenset({"time", "x_range"})
+
     _esm = traitlets.Unicode("", help="The bundle js/src/timeseries.js.").tag(sync=True)
 
     panels = traitlets.List(
@@ -193,7 +228,7 @@ class TimeSeries(anywidget.AnyWidget):
     ).tag(sync=True)
     data = traitlets.List(
         traitlets.Dict(),
-        help="Per panel: x (float64 bytes) and y (float32 bytes each).",
+        help="Per panel: x (float64 bytes) and y (float64 bytes each).",
     ).tag(sync=True)
     t0_ns = traitlets.Int(
         None,
@@ -229,12 +264,14 @@ class TimeSeries(anywidget.AnyWidget):
                 "TimeSeries: series must be a non-empty mapping of label -> "
                 f"DataArray or (timestamps, values), got {type(series).__name__}"
             )
-        if gap is not None and not (float(gap) > 0):
+        if gap is not None and not (_number(gap) > 0):
             raise ValueError(
                 f"TimeSeries: gap must be a positive number of seconds, got {gap}"
             )
         if max_points is not None and (
             isinstance(max_points, bool)
+            or not isinstance(max_points, (int, float, np.integer, np.floating))
+            or not np.isfinite(max_points)
             or int(max_points) != max_points
             or max_points < 10
         ):
@@ -242,10 +279,7 @@ class TimeSeries(anywidget.AnyWidget):
                 f"TimeSeries: max_points must be an integer >= 10, got {max_points!r}"
             )
         self._max_points = None if max_points is None else int(max_points)
-        if int(panel_height) < 40:
-            raise ValueError(
-                f"TimeSeries: panel_height must be >= 40 pixels, got {panel_height}"
-            )
+        panel_height = checked_panel_height(panel_height)
         self._series = [_Series(str(k), v) for k, v in series.items()]
         kinds = {s.kind for s in self._series}
         if len(kinds) > 1:
@@ -291,7 +325,7 @@ class TimeSeries(anywidget.AnyWidget):
                 {
                     "x": np.ascontiguousarray(x, dtype=np.float64).tobytes(),
                     "y": [
-                        np.ascontiguousarray(y[:, k], dtype=np.float32).tobytes()
+                        np.ascontiguousarray(y[:, k], dtype=np.float64).tobytes()
                         for k in range(y.shape[1])
                     ],
                 }
@@ -304,6 +338,34 @@ class TimeSeries(anywidget.AnyWidget):
         with self.hold_sync():
             for name, value in state.items():
                 setattr(self, name, value)
+
+    @traitlets.validate("time")
+    def _valid_time(self, proposal):
+        value = float(proposal["value"])
+        if not np.isfinite(value):
+            raise traitlets.TraitError(f"TimeSeries.time must be finite, got {value}")
+        return value
+
+    @traitlets.validate("x_range")
+    def _valid_x_range(self, proposal):
+        value = list(proposal["value"])
+        if value and not (
+            len(value) == 2
+            and all(np.isfinite(v) for v in value)
+            and value[0] < value[1]
+        ):
+            raise traitlets.TraitError(
+                "TimeSeries.x_range must be [] or [start, end] with finite "
+                f"start < end (seconds), got {value}"
+            )
+        return value
+
+    @traitlets.validate("panel_height")
+    def _valid_panel_height(self, proposal):
+        try:
+            return checked_panel_height(proposal["value"])
+        except ValueError as err:
+            raise traitlets.TraitError(str(err)) from None
 
     @traitlets.validate("player")
     def _valid_player(self, proposal):

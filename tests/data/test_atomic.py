@@ -27,7 +27,13 @@ import pytest
 from conftest import REPO
 
 from rbm_nb import _atomic
-from rbm_nb._atomic import atomic_path, clean_stale_scratch
+from rbm_nb._atomic import FolderKind, atomic_path, clean_stale_scratch
+
+# the kind of folder these tests write: only part<k>.txt files
+PARTS = FolderKind(
+    "a folder of part files",
+    lambda path: all(p.name.startswith("part") for p in path.iterdir()),
+)
 
 
 def _env():
@@ -70,7 +76,7 @@ def test_folder_replace(tmp_path, monkeypatch, exchange):
         monkeypatch.setattr(_atomic, "_RENAMEAT2", [None])
     target = tmp_path / "bag"
     for version in range(3):
-        with atomic_path(target) as tmp:
+        with atomic_path(target, folder_kind=PARTS) as tmp:
             _write_folder(tmp, version)
         assert _folder_version(target) == version
         assert sorted(p.name for p in tmp_path.iterdir()) == ["bag"]
@@ -78,10 +84,10 @@ def test_folder_replace(tmp_path, monkeypatch, exchange):
 
 def test_failure_leaves_folder_and_nothing_else(tmp_path):
     target = tmp_path / "bag"
-    with atomic_path(target) as tmp:
+    with atomic_path(target, folder_kind=PARTS) as tmp:
         _write_folder(tmp, 1)
     with pytest.raises(RuntimeError, match="boom"):
-        with atomic_path(target) as tmp:
+        with atomic_path(target, folder_kind=PARTS) as tmp:
             _write_folder(tmp, 2)
             raise RuntimeError("boom")
     assert _folder_version(target) == 1
@@ -120,7 +126,7 @@ def test_write_through_chain_of_links_to_a_folder(tmp_path):
     _write_folder(real, 3)
     (tmp_path / "latest").symlink_to(real)
     (tmp_path / "bag").symlink_to(tmp_path / "latest")
-    with atomic_path(tmp_path / "bag") as tmp:
+    with atomic_path(tmp_path / "bag", folder_kind=PARTS) as tmp:
         _write_folder(tmp, 4)
     assert (tmp_path / "bag").is_symlink() and (tmp_path / "latest").is_symlink()
     assert _folder_version(real) == 4
@@ -151,7 +157,7 @@ def test_folder_mode_is_kept(tmp_path):
     target = tmp_path / "bag"
     _write_folder(target, 0)
     os.chmod(target, 0o700)
-    with atomic_path(target) as tmp:
+    with atomic_path(target, folder_kind=PARTS) as tmp:
         _write_folder(tmp, 1)
     assert stat.S_IMODE(os.stat(target).st_mode) == 0o700
 
@@ -217,7 +223,7 @@ def test_folder_tree_is_synced(tmp_path, monkeypatch):
     target = tmp_path / "bag"
     _write_folder(target, 0)
     events = _record_fsyncs(monkeypatch)
-    with atomic_path(target) as tmp:
+    with atomic_path(target, folder_kind=PARTS) as tmp:
         _write_folder(tmp, 1)
         (tmp / "sub").mkdir()
         (tmp / "sub" / "meta.yaml").write_text("x")
@@ -365,7 +371,9 @@ WRITER = textwrap.dedent(
     version = int(sys.argv[4])
     while True:
         version += 1
-        with _atomic.atomic_path(target) as tmp:
+        parts = _atomic.FolderKind("parts", lambda path: True)
+        folder_kind = parts if kind == "folder" else None
+        with _atomic.atomic_path(target, folder_kind=folder_kind) as tmp:
             if kind == "folder":
                 tmp.mkdir()
                 for k in range(5):
@@ -447,7 +455,8 @@ def test_kill_between_park_and_rename_is_repaired(tmp_path):
             if Path(dst).name == _atomic.PARKED:
                 os.kill(os.getpid(), signal.SIGKILL)
         os.replace = replace
-        with _atomic.atomic_path(Path(sys.argv[1])) as tmp:
+        parts = _atomic.FolderKind("parts", lambda path: True)
+        with _atomic.atomic_path(Path(sys.argv[1]), folder_kind=parts) as tmp:
             tmp.mkdir()
             for k in range(5):
                 (tmp / f"part{k}.txt").write_text("6\\n" + "x" * 2000)
@@ -726,3 +735,83 @@ def test_kill_during_rosbag_writes_keeps_a_readable_bag(tmp_path, name):
         assert found >= max(version, 1)
         version = found
     assert left_scratch > 0, "no kill landed inside a write: the test has no teeth"
+
+
+# -- no writer deletes a folder it did not make (issue 31, item 1) ----------------
+
+WRITERS_AT_A_FOLDER = {
+    "netcdf-export": "rosbag_export_to",
+    "rosbag-ros2": "rosbag_write_to",
+    "synthetic-rosbag": "synthetic_rosbag_to",
+    "study-netcdf": "study_to_netcdf_at",
+    "html-export": "html_export_to",
+}
+
+
+_AT_A_FOLDER = [
+    (writer, name)
+    for writer in WRITERS_AT_A_FOLDER
+    for name in ["thesis", "old.bag", "s0.nc", "scene.html"]
+    # Study.to_netcdf writes only <recording>.nc
+    if writer != "study-netcdf" or name.endswith(".nc")
+]
+
+
+@pytest.mark.parametrize("writer, name", _AT_A_FOLDER)
+def test_no_writer_deletes_a_folder_that_is_not_its_kind_of_bag(writer, name):
+    """Every writer of rbm_nb, at every kind of name, refuses a user's folder."""
+    import bad_input_cases as cases
+
+    cases.setup_tree()
+    write = getattr(cases, WRITERS_AT_A_FOLDER[writer])
+    # the helper asserts afterwards that the folder and thesis.tex are intact
+    with pytest.raises(IsADirectoryError, match="folder|directory"):
+        cases.writer_at_user_folder(name, write)
+
+
+def test_a_folder_that_appears_while_writing_is_not_replaced(tmp_path):
+    target = tmp_path / "out.nc"
+    with pytest.raises(IsADirectoryError, match="refusing to replace a folder"):
+        with atomic_path(target) as tmp:
+            tmp.write_text("netcdf")
+            target.mkdir()  # someone else, meanwhile
+            (target / "thesis.tex").write_text("mine")
+    assert (target / "thesis.tex").read_text() == "mine"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.nc"]
+
+
+def test_a_folder_without_a_declared_kind_replaces_nothing(tmp_path):
+    target = tmp_path / "data"
+    target.write_text("a file of the user's")
+    with pytest.raises(NotADirectoryError, match="refusing to replace a file"):
+        with atomic_path(target) as tmp:
+            _write_folder(tmp, 1)
+    assert target.read_text() == "a file of the user's"
+
+
+def test_a_ros2_bag_is_replaced_only_once_the_new_one_is_complete(tmp_path):
+    from rbm_nb.ros import RosbagReader, RosbagWriter
+
+    bag = tmp_path / "run"
+
+    def write(stamps, fail=False):
+        with RosbagWriter(bag) as writer:
+            n = len(stamps)
+            writer.write_transform_stamped(
+                stamps,
+                np.zeros((n, 3)),
+                np.tile([1.0, 0, 0, 0], (n, 1)),
+                "/x",
+                "a",
+                "b",
+            )
+            if fail:
+                raise RuntimeError("interrupted")
+
+    write([1.0, 2.0])
+    with pytest.raises(RuntimeError, match="interrupted"):
+        write([1.0, 2.0, 3.0], fail=True)
+    assert len(RosbagReader(bag).load_dataset("/x").time) == 2
+    write([1.0, 2.0, 3.0])  # a bag of its own kind: replaced
+    assert len(RosbagReader(bag).load_dataset("/x").time) == 3
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]

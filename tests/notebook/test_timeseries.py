@@ -32,7 +32,7 @@ def speed():
 def _decoded(plot, panel):
     d = plot.data[panel]
     x = np.frombuffer(d["x"], dtype=np.float64)
-    y = np.column_stack([np.frombuffer(b, dtype=np.float32) for b in d["y"]])
+    y = np.column_stack([np.frombuffer(b, dtype=np.float64) for b in d["y"]])
     return x, y
 
 
@@ -41,10 +41,10 @@ def test_samples_go_once_as_binary_buffers(speed):
     opened_state, buffers = plot.comm.opened
     # every array travels as a buffer, none as JSON numbers
     assert len(buffers) == 2
-    assert sorted(len(b) for b in buffers) == [100 * 4, 100 * 8]
+    assert sorted(len(b) for b in buffers) == [100 * 8, 100 * 8]
     x, y = _decoded(plot, 0)
     np.testing.assert_array_equal(x, speed.time.values)
-    np.testing.assert_array_equal(y[:, 0], speed.values.astype(np.float32))
+    np.testing.assert_array_equal(y[:, 0], speed.values)
     assert plot.panels == [
         {
             "label": "head speed",
@@ -77,7 +77,7 @@ def test_components_of_a_dataarray_are_lines_of_one_panel():
     ]
     assert plot.panels[0]["units"] == "deg"
     x, y = _decoded(plot, 0)
-    np.testing.assert_array_equal(y, np.c_[t, -t].astype(np.float32))
+    np.testing.assert_array_equal(y, np.c_[t, -t])
 
 
 def test_datetime_data_is_rebased_exactly_to_seconds_from_start():
@@ -227,6 +227,6 @@ def test_max_points_keeps_peaks_and_gaps():
     assert gap.size >= 1 and 70.0 <= x[gap[0]] < 70.01
     index = np.round(x * 1000).astype(int)
     np.testing.assert_array_equal(x, t[index])  # only real samples are sent
-    np.testing.assert_array_equal(y[:, 0], v[index].astype(np.float32))
+    np.testing.assert_array_equal(y[:, 0], v[index])
     with pytest.raises(ValueError, match="max_points"):
         TimeSeries({"v": (t, v)}, max_points=3)

@@ -36,10 +36,11 @@ def test_app_notebook_in_the_repo_is_the_generated_one():
 
 
 def test_voila_command_listens_on_loopback_with_a_token(tmp_path):
-    command = app.voila_command(tmp_path / "x.ipynb", port=1234, token="abc")
-    assert "--Voila.ip=127.0.0.1" in command and "--Voila.token=abc" in command
+    command = app.voila_command(tmp_path / "x.ipynb", port=1234)
+    assert "--Voila.ip=127.0.0.1" in command and "--Voila.auto_token=True" in command
+    assert app.voila_environment("abc", {})["JUPYTER_TOKEN"] == "abc"
     with pytest.raises(ValueError, match="token"):
-        app.voila_command(tmp_path / "x.ipynb", port=1234, token="")
+        app.voila_environment("")
     with pytest.raises(ValueError, match="source must be one of"):
         app.app_notebook("nope")
 
@@ -66,9 +67,9 @@ class Voila:
         self.log_path = tmp / "voila.log"
         self.log = open(self.log_path, "wb")
         self.process = subprocess.Popen(
-            app.voila_command(notebook, port=self.port, token=self.token),
+            app.voila_command(notebook, port=self.port),
             cwd=tmp,
-            env=env,
+            env=app.voila_environment(self.token, env),
             stdout=self.log,
             stderr=subprocess.STDOUT,
             start_new_session=True,  # its own process group, stopped as a whole

@@ -22,6 +22,7 @@ __all__ = [
     "check_last_axis",
     "normalize_quaternions",
     "check_finite",
+    "check_coordinates",
     "check_no_inf",
     "check_missing_rows",
     "check_whole_rows",
@@ -116,6 +117,8 @@ def check_whole_rows(arr: np.ndarray, name: str) -> None:
     except ValueError:
         nan = np.isnan(flat)
         bad = (nan.any(axis=-1) & ~nan.all(axis=-1)) | np.isinf(flat).any(axis=-1)
+        if not bad.any():
+            check_coordinates(arr, name)  # finite, but too large
         row = np.unravel_index(int(np.argmax(bad)), arr.shape[:-1])
         raise ValueError(
             f"{name}{_index(row)} is not finite: {arr[row]} (a missing sample "
@@ -161,7 +164,26 @@ def check_missing_rows(arr: np.ndarray, name: str) -> bool:
         raise ValueError(
             f"{name}{_index(row)} is not finite (a missing sample is a row of NaN only)"
         )
+    check_coordinates(arr, name)
     return bool(nan.any())
+
+
+def check_coordinates(arr: np.ndarray, name: str, row_axis: bool = True) -> None:
+    """Refuse finite values beyond ``MAX_COORDINATE`` (1e150), naming the first.
+
+    No position comes near it, and composing frames adds and multiplies
+    coordinates: beyond it the results overflow to inf.
+    """
+    with np.errstate(invalid="ignore"):
+        huge = np.abs(arr) > _rows.MAX_COORDINATE
+    if huge.any():
+        bad = np.argwhere(huge)[0]
+        where = bad[:-1] if row_axis and arr.ndim > 1 else bad
+        raise ValueError(
+            f"{name}{_index(where)} holds {arr[tuple(bad)]:g}, beyond "
+            f"±{_rows.MAX_COORDINATE:g}: coordinates that large overflow when "
+            "frames are composed"
+        )
 
 
 def moving_samples(

@@ -29,6 +29,7 @@ from ._engine import transform as _transform
 from ._engine import twist as _twist
 from ._kernels import quaternion as kq
 from ._validation import (
+    check_coordinates,
     check_finite,
     check_missing_rows,
     is_scalar,
@@ -486,6 +487,7 @@ class ReferenceFrame:
                 raise ValueError(_shape_message(label, "translation", t.shape, t_shape))
             if self._track is None:
                 check_finite(t, f"{label}translation")
+                check_coordinates(t, f"{label}translation")
         stored: np.ndarray | None = None
         if rotation is not None:
             stored = float_array(rotation, f"{label}rotation")

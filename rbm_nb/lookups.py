@@ -75,6 +75,16 @@ def lookup_transform(
     matrices : ndarray, shape (4, 4) or (n, 4, 4), if ``as_matrix``
     transform : Transform, if ``as_transform``
 
+    Notes
+    -----
+    Missing samples (NaN rows) make a row NaN only where a sample it needs
+    is missing (docs/missing_data.md). A single frame looked up against its
+    parent at its own timestamps returns its samples as stored, as
+    rigid-body-motion does: a quaternion stored with a norm slightly off 1
+    (within the tolerance frames accept, 1e-2; recordings round to 4-7
+    digits) comes back bit for bit, not normalised, while transforms and
+    interpolated lookups rotate by the unit quaternion.
+
     Examples
     --------
     >>> import numpy as np

@@ -76,7 +76,8 @@ def setup_tree() -> None:
     rbm.register_frame(
         "huge",
         parent="world",
-        translation=[[1e308, 0.0, 0.0], [-1e308, 0.0, 0.0]],
+        # (beyond what a scene draws, within what the frame core composes)
+        translation=[[1e100, 0.0, 0.0], [-1e100, 0.0, 0.0]],
         timestamps=[0.0, 1.0],
     )
 
@@ -658,6 +659,33 @@ def moving_points_shape(n):
         expected = np.array([c - s_ + T[k], s_ + c, 1.0])
         np.testing.assert_allclose(out[k], np.tile(expected, (n, 1)), atol=1e-12)
     return list(out.shape)
+
+
+def lookup_keeps_quaternions_as_given(norm):
+    """Documented (lookup_transform, Notes): a frame against its parent at
+    its own times gives its samples as stored, bit for bit, as the reference
+    does; transforms rotate by the unit quaternion."""
+    q = np.array([[np.cos(0.3), 0.0, 0.0, np.sin(0.3)]] * 3) * norm
+    rbm.register_frame("q", parent="world", rotation=q, timestamps=[0.0, 1.0, 2.0])
+    _, got = rbm.lookup_transform("q", "world")
+    np.testing.assert_array_equal(got, q)
+    moved = rbm.transform_vectors(
+        np.tile([1.0, 0.0, 0.0], (3, 1)), "world", "q", timestamps=[0.0, 1.0, 2.0]
+    )
+    np.testing.assert_allclose(np.linalg.norm(moved, axis=1), 1.0, atol=1e-12)
+    return got.tolist()
+
+
+def velocity_of_frame_sampled_every(step):
+    """A moving frame sampled ``step`` seconds apart, then its twist."""
+    t = np.arange(5) * step
+    rbm.register_frame(
+        "fine",
+        parent="world",
+        timestamps=t,
+        translation=np.column_stack([np.arange(5.0), np.zeros(5), np.zeros(5)]),
+    )
+    return rbm.lookup_twist("fine", "world")
 
 
 # -- paths (issue 31, item 9) -----------------------------------------------------
@@ -1476,6 +1504,31 @@ CASES: list[Case] = [
          r"arr\[0\] is not finite"),
     Case("rosbag-writer-norm-1.009-as-given", bag_keeps_quaternions_as_given,
          (1.009,), {}, None, ""),
+    Case("lookup-norm-1.009-as-given", lookup_keeps_quaternions_as_given,
+         (1.009,), {}, None, ""),
+    Case("velocity-1e-300-s-steps", "estimate_linear_velocity",
+         (np.column_stack([np.arange(5.0), np.zeros(5), np.zeros(5)]),),
+         {"timestamps": np.arange(5) * 1e-300}, ValueError,
+         r"timestamps: samples \d and \d are 1e-300 s apart; a velocity needs "
+         r"sampling intervals of at least 1e-90 s"),
+    Case("angular-velocity-1e-300-s-steps", "estimate_angular_velocity",
+         (np.tile([1.0, 0.0, 0.0, 0.0], (5, 1)),),
+         {"timestamps": np.arange(5) * 1e-300}, ValueError,
+         r"samples \d and \d are 1e-300 s apart"),
+    Case("twist-of-frame-1e-300-s-steps", velocity_of_frame_sampled_every,
+         (1e-300,), {}, ValueError,
+         r"timestamps of 'fine' wrt 'world': samples \d and \d are 1e-300 s apart"),
+    Case("static-translation-1e308", "register_frame", ("far",),
+         {"parent": "world", "translation": (1e308, 0.0, 0.0)}, ValueError,
+         r"frame 'far': translation\[0\] holds 1e\+308, beyond ±1e\+150: coordinates "
+         r"that large overflow when frames are composed"),
+    Case("moving-translation-1e200", "register_frame", ("far",),
+         {"parent": "world", "timestamps": [0.0, 1.0],
+          "translation": [[0.0, 0.0, 0.0], [0.0, -1e200, 0.0]]}, ValueError,
+         r"frame 'far': translation\[1\] holds -1e\+200, beyond ±1e\+150"),
+    Case("points-1e308", "transform_points",
+         (np.array([[0.0, 0, 0], [1e308, 0.0, 0.0]]), "world", "static"), {},
+         ValueError, r"arr\[1\] holds 1e\+308, beyond ±1e\+150"),
     Case("points-cloud-through-moving-frame", moving_points_shape, (7,), {}, None, ""),
     # -- paths (item 9) ---------------------------------------------------------------
     Case("path-255-byte-html", in_temp_folder, (write_long_name, "html"), {}, None, ""),

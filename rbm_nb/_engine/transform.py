@@ -12,6 +12,7 @@ import numpy as np
 from .. import _time
 from .._door import float_array, kernel_array
 from .._kernels import resample as kr
+from .._kernels.rows import MAX_COORDINATE
 from .._validation import (
     check_whole_rows,
     normalize_quaternions,
@@ -179,7 +180,11 @@ def _static_rows(frame, kind, arr, to_frame, axis):
         return None
     t, r = static
     data = kernel_array(arr).reshape(1, -1, 3)
-    if not np.isfinite(data).all():  # the general path names the bad value
+    # NaN, infinities and values beyond MAX_COORDINATE fail the comparison:
+    # the general path names them (two reductions, nothing allocated)
+    if data.size and not (
+        -MAX_COORDINATE <= data.min() and data.max() <= MAX_COORDINATE
+    ):
         return None
     out = kr.transform_blocks(r, t, data, kind == "points")
     return out.reshape(arr.shape)

@@ -111,12 +111,17 @@ def _result(values, track, as_track):
     return values, (track if as_track else (None if track is None else track.values))
 
 
+def _whose_times(frame, reference) -> str:
+    """How velocity errors name the timestamps of a lookup."""
+    return f"timestamps of {frame.name!r} wrt {reference.name!r}"
+
+
 def _linear_part(frame, reference, represent_in, looked_up, outlier_thresh, cutoff):
     """Linear velocity of ``frame`` wrt ``reference``, represented in ``represent_in``."""
     t, r, target, breaks = looked_up
-    linear = _velocity.linear_velocity(
-        t, target.track.seconds(), outlier_thresh, cutoff, breaks
-    )
+    seconds = target.track.seconds()
+    _velocity.check_intervals(seconds, _whose_times(frame, reference))
+    linear = _velocity.linear_velocity(t, seconds, outlier_thresh, cutoff, breaks)
     return _represent(
         linear, target.track, reference, represent_in, (frame, reference, r)
     )
@@ -127,8 +132,10 @@ def _angular_part(
 ):
     """Angular velocity of ``frame`` wrt ``reference``, represented in ``represent_in``."""
     _, r, target, breaks = looked_up
+    seconds = target.track.seconds()
+    _velocity.check_intervals(seconds, _whose_times(frame, reference))
     angular = _velocity.angular_velocity(
-        r, target.track.seconds(), mode, outlier_thresh, cutoff, breaks
+        r, seconds, mode, outlier_thresh, cutoff, breaks
     )
     # the estimate is in the moving frame's axes (2 q^-1 dq/dt)
     return _represent(angular, target.track, frame, represent_in, (frame, reference, r))
@@ -198,6 +205,7 @@ def _chain_rates(frame, reference, in_reference):
     if planned is None:
         return None
     plan, own, target = planned
+    _velocity.check_intervals(target.track.base, _whose_times(frame, reference))
     breaks = _breaks(frame, reference, target)
     if breaks is not None and breaks.any():
         return None

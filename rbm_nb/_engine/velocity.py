@@ -85,6 +85,27 @@ def check_options(
             )
 
 
+# Velocities divide by sampling intervals and by their products (numpy's
+# three-point weights use h0 h1 (h0 + h1), the spline's system h²): below
+# this interval those underflow and the results are silently wrong (at
+# 1e-300 s: NaN rows and slopes off by 1e3). No clock samples this finely.
+MIN_INTERVAL = 1e-90
+
+
+def check_intervals(t: np.ndarray, what: str = "timestamps") -> None:
+    """Refuse sampling intervals a velocity cannot be computed from."""
+    if len(t) < 2:
+        return
+    steps = np.diff(t)
+    k = int(np.argmin(steps))
+    if steps[k] < MIN_INTERVAL:
+        raise ValueError(
+            f"{what}: samples {k} and {k + 1} are {steps[k]:.3g} s apart; a velocity "
+            f"needs sampling intervals of at least {MIN_INTERVAL:g} s (its formulas "
+            f"multiply intervals, which underflows below that)"
+        )
+
+
 # ---------------------------------------------------------------------------
 # numerics on (n, b, k) arrays: time first, b independent series
 # ---------------------------------------------------------------------------
@@ -189,6 +210,7 @@ def linear_series(
         raise ValueError(
             f"arr needs at least 2 samples to estimate a velocity, got {n}"
         )
+    check_intervals(t)
     flat = kernel_array(x.reshape(n, -1))
     if (breaks is None or not breaks.any()) and not _dk.nan_rows(flat).any():
         v = _dk.gradient(flat, t).reshape(x.shape)
@@ -222,6 +244,7 @@ def angular_series(
         raise ValueError(
             f"arr needs at least 2 samples to estimate a velocity, got {n}"
         )
+    check_intervals(t)
     zero = _rk.first_zero_row(kernel_array(q.reshape(-1, 4)))
     if zero >= 0:
         raise ValueError(f"arr contains a zero quaternion (row {zero} when flattened)")

@@ -18,6 +18,11 @@ import numpy as np
 from .._config import KERNEL
 from ._jit import F1, F2, B, F, helper, kernel
 
+# Coordinates beyond this are refused with the infinities: no physical
+# position comes near (the observable universe is ~1e27 m), and sums and
+# products of larger ones overflow to inf when frames are composed.
+MAX_COORDINATE = 1e150
+
 # Branch-free passes that LLVM vectorises (division without a
 # ZeroDivisionError branch; no fused multiply-add, so that results stay those
 # of the plain arithmetic bit for bit).
@@ -42,7 +47,7 @@ def _first_bad_row_scalar(a):
             v = a[i, j]
             if math.isnan(v):
                 nan += 1
-            elif math.isinf(v):
+            elif abs(v) > MAX_COORDINATE:  # an infinity too
                 return i
         if nan != 0 and nan != k:
             return i
@@ -51,7 +56,8 @@ def _first_bad_row_scalar(a):
 
 @kernel(F2, options=_COUNTING)
 def first_bad_row(a):
-    """The first row of (n, k) ``a`` that is partly NaN or holds an infinity.
+    """The first row of (n, k) ``a`` that is partly NaN or holds an infinity
+    (or a value beyond :data:`MAX_COORDINATE`).
 
     Rows entirely NaN (missing samples) and finite rows are fine. For k of 3
     or 4 a vectorised pass counts the bad rows first (flat, constant-stride
@@ -71,14 +77,15 @@ def first_bad_row(a):
         for i in range(n):
             x, y, z = f[3 * i], f[3 * i + 1], f[3 * i + 2]
             nan = (x != x) + (y != y) + (z != z)
-            inf = (abs(x) == np.inf) + (abs(y) == np.inf) + (abs(z) == np.inf)
+            inf = (abs(x) > MAX_COORDINATE) + (abs(y) > MAX_COORDINATE)
+            inf += abs(z) > MAX_COORDINATE
             bad += ((nan != 0) & (nan != 3)) | (inf != 0)
     else:
         for i in range(n):
             w, x, y, z = f[4 * i], f[4 * i + 1], f[4 * i + 2], f[4 * i + 3]
             nan = (w != w) + (x != x) + (y != y) + (z != z)
-            inf = (abs(w) == np.inf) + (abs(x) == np.inf) + (abs(y) == np.inf)
-            inf += abs(z) == np.inf
+            inf = (abs(w) > MAX_COORDINATE) + (abs(x) > MAX_COORDINATE)
+            inf += (abs(y) > MAX_COORDINATE) + (abs(z) > MAX_COORDINATE)
             bad += ((nan != 0) & (nan != 4)) | (inf != 0)
     return -1 if bad == 0 else _first_bad_row_scalar(a)
 
@@ -184,13 +191,14 @@ def moving_samples(t, q, tol, t_out, q_out, r_out):
         for i in range(m):
             x, y, z = tb[3 * i], tb[3 * i + 1], tb[3 * i + 2]
             nan = (x != x) + (y != y) + (z != z)
-            inf = (abs(x) == np.inf) + (abs(y) == np.inf) + (abs(z) == np.inf)
+            inf = (abs(x) > MAX_COORDINATE) + (abs(y) > MAX_COORDINATE)
+            inf += abs(z) > MAX_COORDINATE
             bad += ((nan != 0) & (nan != 3)) | (inf != 0)
         for i in range(m):
             w, x, y, z = qb[4 * i], qb[4 * i + 1], qb[4 * i + 2], qb[4 * i + 3]
             nan = (w != w) + (x != x) + (y != y) + (z != z)
-            inf = (abs(w) == np.inf) + (abs(x) == np.inf) + (abs(y) == np.inf)
-            inf += abs(z) == np.inf
+            inf = (abs(w) > MAX_COORDINATE) + (abs(x) > MAX_COORDINATE)
+            inf += (abs(y) > MAX_COORDINATE) + (abs(z) > MAX_COORDINATE)
             bad += ((nan != 0) & (nan != 4)) | (inf != 0)
             missing += nan == 4
             norm = math.sqrt(w * w + x * x + y * y + z * z)

@@ -24,9 +24,22 @@ R_T265_ROS = np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 # rotation between the Pupil Core's camera axes (x right, y down, z forward)
 # and ROS axes (guide 1.6)
 R_PUPIL_ROS = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]])
-# pose of the Pupil Core scene camera on the T265, from the study's calibration
+# pose of the Pupil Core scene camera on the T265, from the study's calibration.
+# The calibration's quaternion is printed in (x, y, z, w) order, as scipy and
+# ROS write them; guide 1.6 of rigid-body-motion passes the same four numbers
+# as (w, x, y, z), which turns the camera 180 deg about its line of sight
+# (about the T265's x axis instead of its y axis). Read that way, the eyes of
+# the real recording move *with* the head at 40 ms (gain +0.6 to +0.7 against
+# the head's yaw and pitch rates) and look away from every turn; read as
+# (x, y, z, w) they counter-rotate as the vestibulo-ocular reflex does (gain
+# -0.6 to -0.7), look into turns, and still converge (+2 deg): see
+# tests/data/test_eye_frames.py, which measures all of this.
 SCENE_CAM_TRANSLATION = (24.5e-3, -29e-3, 0.0)
-SCENE_CAM_ROTATION = (-0.00125, -1.0, 6.3463e-05, 3.977e-06)
+SCENE_CAM_ROTATION_XYZW = (-0.00125, -1.0, 6.3463e-05, 3.977e-06)
+SCENE_CAM_ROTATION = (
+    SCENE_CAM_ROTATION_XYZW[3],
+    *SCENE_CAM_ROTATION_XYZW[:3],
+)
 EYES = ("left_eye", "right_eye")
 # Pupil Core's usual threshold: below it the pupil detection is not trusted
 MIN_CONFIDENCE = 0.6
@@ -149,15 +162,23 @@ def register_head_eye_frames(
             ).register(update=True)
 
 
-def gaze_angles(eye, name: str | None = None, *, min_confidence: float = 0.6):
+def gaze_angles(
+    eye,
+    name: str | None = None,
+    *,
+    min_confidence: float = MIN_CONFIDENCE,
+    max_angle: float | None = None,
+):
     """Azimuth (right) and elevation (up) of an eye's line of sight, in degrees.
 
-    The line of sight is the eye frame's z axis expressed in the scene camera
-    (x right, y down, z forward). With ``name`` (``"left_eye"`` or
-    ``"right_eye"``) and the explorer's frames registered, the angles come
-    from :mod:`rbm_nb.gaze`: samples below ``min_confidence`` and missing
-    ones are NaN, so plots show them as gaps. Without it they are computed
-    from the dataset's orientations alone (no confidence masking).
+    With ``name`` (``"left_eye"`` or ``"right_eye"``) and the explorer's
+    frames registered, the angles are measured in the head's axes (x
+    forward, y left, z up) by :mod:`rbm_nb.gaze`: samples below
+    ``min_confidence``, beyond ``max_angle`` degrees from the scene camera's
+    straight-ahead (see :data:`rbm_nb.gaze.OCULOMOTOR_RANGE`) and missing
+    ones are NaN, so plots show them as gaps. Without ``name`` they are
+    computed from the dataset's orientations alone, in the eye tracker's
+    image axes (x right, y down, z forward in the image; no masking).
 
     Returns
     -------
@@ -172,12 +193,13 @@ def gaze_angles(eye, name: str | None = None, *, min_confidence: float = 0.6):
 
         sight = gaze.directions(
             f"pupil/{name}",
-            "pupil/scene_cam",
+            "head",
             confidence=eye.confidence if "confidence" in eye else None,
             min_confidence=min_confidence,
-            max_gap=0.1,
+            max_gap=MAX_EYE_GAP,
+            max_angle=max_angle,
         )
-        out = gaze.angles(sight, "pupil/scene_cam")
+        out = gaze.angles(sight, "head", forward="x", up="z")
         out.attrs = {"long_name": "Gaze angles", "units": "deg"}
         return out
 
@@ -204,17 +226,103 @@ def head_speed(head):
     return speed
 
 
-def explorer_series(head, left_eye, right_eye) -> dict:
-    """The explorer's time series: head speed and both eyes' gaze angles.
+def head_yaw_rate(*, world: str = "world"):
+    """Head angular velocity about its own vertical axis, deg/s, positive left.
 
-    Register the frames first (:func:`register_head_eye_frames`) for gaze
-    angles with low-confidence samples masked.
+    The z component of the angular velocity of ``head`` relative to
+    ``world`` represented in the head's axes (x forward, y left, z up), so
+    a turn to the left is positive, as the gaze yaw of
+    :func:`gaze_yaw`. Register the frames first.
     """
+    from .lookups import lookup_angular_velocity
+
+    omega = lookup_angular_velocity(
+        "head", world, represent_in="head", as_dataarray=True
+    )
+    rate = np.degrees(omega.sel(cartesian_axis="z", drop=True))
+    rate.attrs = {"long_name": "Head yaw rate (+ left)", "units": "deg/s"}
+    return rate
+
+
+def gaze_yaw(left_eye, right_eye, *, max_angle: float | None = None):
+    """Horizontal gaze angle of both eyes in the head's axes, deg, positive left.
+
+    Dims (time, eye) with eyes ``"left eye"`` and ``"right eye"``; NaN where
+    an eye has no trusted sample (see :func:`gaze_angles`). The two eyes
+    share one clock in the example data; otherwise each keeps its own times
+    and the other's column is NaN there.
+    """
+    import xarray as xr
+
+    columns = []
+    for name, eye in zip(EYES, (left_eye, right_eye), strict=True):
+        azimuth = gaze_angles(eye, name, max_angle=max_angle).sel(
+            angle="azimuth", drop=True
+        )
+        columns.append(-azimuth.expand_dims(eye=[name.replace("_", " ")], axis=1))
+    out = xr.concat(columns, dim="eye", join="outer")
+    out.attrs = {"long_name": "Gaze yaw in head (+ left)", "units": "deg"}
+    return out
+
+
+def explorer_series(
+    head, left_eye, right_eye, *, max_angle: float | None = None
+) -> dict:
+    """The explorer's time series, for the questions notebook 06 asks.
+
+    ``"head yaw rate"`` (deg/s, in the head's axes), ``"gaze yaw"`` (deg,
+    both eyes, in the head's axes) and ``"gaze yaw rate"`` (deg/s, both
+    eyes, see :func:`rbm_nb.gaze.rates`); all positive to the left. The
+    vestibulo-ocular reflex shows as the eyes' rate opposite in sign to the
+    head's; saccades as spikes of several hundred deg/s in the eyes' rate.
+    Register the frames first (:func:`register_head_eye_frames`).
+    ``max_angle`` (degrees) flags impossible gaze, default
+    :data:`rbm_nb.gaze.OCULOMOTOR_RANGE`.
+    """
+    from . import gaze
+
+    if max_angle is None:
+        max_angle = gaze.OCULOMOTOR_RANGE
+    yaw = gaze_yaw(left_eye, right_eye, max_angle=max_angle)
     return {
-        "head speed": head_speed(head),
-        "left gaze": gaze_angles(left_eye, "left_eye"),
-        "right gaze": gaze_angles(right_eye, "right_eye"),
+        "head yaw rate": head_yaw_rate(),
+        "gaze yaw": yaw,
+        "gaze yaw rate": gaze.rates(yaw),
     }
+
+
+def vor_gain(series: dict, *, max_rate: float = 60.0) -> dict:
+    """Least-squares gain of each eye's yaw rate against the head's.
+
+    Slow phases only: samples whose eye rate is above ``max_rate`` deg/s
+    (saccades) are left out. The vestibulo-ocular reflex gives a negative
+    gain, about -1 for a far target; a positive one means the eyes turn
+    with the head, which no healthy eye does while fixating.
+
+    Returns
+    -------
+    dict
+        Eye name -> gain.
+    """
+    head = series["head yaw rate"]
+    eyes = series["gaze yaw rate"]
+    t_head = _seconds(head["time"].values)
+    t_eye = _seconds(eyes["time"].values)
+    head_at_eye = np.interp(t_eye, t_head, np.nan_to_num(head.values))
+    out = {}
+    for eye in eyes["eye"].values:
+        rate = eyes.sel(eye=eye).values
+        ok = np.isfinite(rate) & (np.abs(rate) < max_rate)
+        h = head_at_eye[ok]
+        out[str(eye)] = float(np.dot(h, rate[ok]) / np.dot(h, h))
+    return out
+
+
+def _seconds(times) -> np.ndarray:
+    times = np.asarray(times)
+    if np.issubdtype(times.dtype, np.datetime64):
+        return times.astype("datetime64[ns]").astype(np.int64) / 1e9
+    return times.astype(float)
 
 
 def explorer_scene(

@@ -20,7 +20,7 @@ if TYPE_CHECKING:
 SOURCES = ("auto", "remote", "synthetic")
 DATASETS = ("head", "left_eye", "right_eye")
 # bump when the generator's output changes, so that cached bags are rebuilt
-SYNTHETIC_VERSION = 3
+SYNTHETIC_VERSION = 4
 
 # topic -> (recording part, frame, child frame), as in the real example bag
 ROSBAG_TOPICS = {

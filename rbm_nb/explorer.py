@@ -54,27 +54,50 @@ def load_head_eye(source: str = "auto"):
     Parameters
     ----------
     source : {"auto", "remote", "synthetic"}
-        As for :func:`rbm_nb.data.load_example`. With "auto" the fallback to
-        synthetic data is reported in ``note`` instead of as a warning.
+        As for :func:`rbm_nb.data.load_example`. With "auto", what was
+        loaded and why (the real files, your own files in
+        ``RBM_NB_DATA_DIR``, or the synthetic recording because the real one
+        is unavailable, with the reason and the fix) is said once, in
+        ``note``, instead of three warnings. The three parts are always of
+        one kind: if one part would be synthetic, all are.
 
     Returns
     -------
     head, left_eye, right_eye : xarray.Dataset
     note : str
-        Which data this is, in a sentence.
+        Which data this is and why, in a sentence or two.
     """
-    from .data import load_example
+    from .data.load import last_choice, load_example
 
+    names = ("head", *EYES)
     with warnings.catch_warnings():
+        # said once, in the note
         warnings.simplefilter("ignore", UserWarning)
-        head, left_eye, right_eye = (
-            load_example(name, source=source) for name in ("head", *EYES)
-        )
-    if is_synthetic(head):
-        note = "synthetic head/eye recording (the real one could not be had here)"
-    else:
-        note = "real head/eye recording (rbm-data)"
-    return head, left_eye, right_eye, note
+        parts = [load_example(name, source=source) for name in names]
+        choices = [last_choice(name) for name in names]
+        kinds = {c.kind for c in choices if c is not None}
+        if len(kinds) > 1 and "synthetic" in kinds:
+            # a real head with synthetic eyes would be nonsense
+            parts = [load_example(name, source="synthetic") for name in names]
+            choices = [
+                c if c is not None and c.kind == "synthetic" else None for c in choices
+            ]
+    return (*parts, _data_note(choices))
+
+
+def _data_note(choices) -> str:
+    kinds = {c.kind for c in choices if c is not None}
+    if kinds == {"real"}:
+        folder = choices[0].path.parent
+        return f"real head/eye recording (the rbm-data example files in {folder})"
+    if kinds == {"own"} or kinds == {"own", "real"}:
+        files = ", ".join(str(c.path) for c in choices)
+        return f"your own head/eye recording ({files})"
+    reasons = [c.reason for c in choices if c is not None and c.kind == "synthetic"]
+    reason = reasons[0] if reasons else "one part of the real recording is unavailable"
+    if reason == "the synthetic recording was asked for":
+        return "synthetic head/eye recording (asked for)"
+    return f"synthetic head/eye recording. {reason}"
 
 
 def is_synthetic(ds) -> bool:
@@ -325,26 +348,93 @@ def _seconds(times) -> np.ndarray:
     return times.astype(float)
 
 
+# the head model's parts, in the head's axes (x forward, y left, z up), from
+# the eyes' centre: a head of adult size (half-axes 10 x 7.8 x 11.5 cm) whose
+# front is just ahead of the eyeballs, and a nose below and between them
+HEAD_RADII = (0.1, 0.078, 0.115)
+HEAD_FROM_EYES = (-0.09, 0.0, 0.03)
+NOSE_SIZE = (0.03, 0.02, 0.04)
+NOSE_FROM_EYES = (0.012, 0.0, -0.035)
+EYEBALL_RADIUS = 0.012
+HEAD_COLOR = "#d9b38c"
+
+
+def eye_centres(*, head: str = "head") -> dict:
+    """Median centre of each eye in the head's axes (m), over its valid samples."""
+    from .lookups import lookup_transform
+
+    out = {}
+    for eye in EYES:
+        translation, _ = lookup_transform(f"pupil/{eye}", head)
+        out[eye] = np.nanmedian(np.atleast_2d(translation), axis=0)
+    return out
+
+
 def explorer_scene(
-    *, world: str = "world", name: str | None = None, head_scale=3.0, gaze_length=12.0
+    *,
+    world: str = "world",
+    name: str | None = None,
+    gaze_length: float = 2.0,
+    head_model: bool = True,
 ):
-    """A Scene with the world axes, the head's triad and path, and both gaze rays.
+    """A Scene with the world axes, a head model and path, and both gaze rays.
 
     The frames must be registered first (:func:`register_head_eye_frames`).
-    The default sizes are for the walk around a building (tens of metres):
-    a 3 m head triad and 12 m gaze rays stay visible when the whole path is in
-    view.
+    The head model (head, nose, one eyeball per eye at its median centre) is
+    drawn at real size at the tracked head pose, with the head's triad and
+    each eye's gaze ray, ``gaze_length`` metres long and coloured per eye
+    (:data:`GAZE_COLORS`), hidden where the eye has no sample. Far from the
+    camera the whole model (rays included) is magnified about the head until
+    it spans about 70 pixels, and the world's triad about 40, so the view of
+    the whole walk still shows where the head is and where it looks; close
+    up, everything is at its real size. Click the model or its label to
+    select the head.
     """
     from .scene import Scene
 
     scene = Scene(world, name=name)
-    scene.add_frame(world, scale=2.0)
-    scene.add_frame("head", scale=head_scale, label="head")
+    scene.add_frame(world, scale=1.0)
+    # everything with base="head" hangs below one node that moves with the
+    # head: the browser magnifies that node as one model
+    if head_model:
+        centres = eye_centres()
+        middle = (centres["left_eye"] + centres["right_eye"]) / 2
+        scene.add_mesh(
+            "head",
+            "ellipsoid",
+            base="head",
+            size=HEAD_RADII,
+            offset=middle + np.array(HEAD_FROM_EYES),
+            color=HEAD_COLOR,
+            opacity=0.9,
+            label="head model",
+        )
+        scene.add_mesh(
+            "head",
+            "box",
+            base="head",
+            size=NOSE_SIZE,
+            offset=middle + np.array(NOSE_FROM_EYES),
+            color=HEAD_COLOR,
+            label="nose",
+        )
+        for eye in EYES:
+            scene.add_mesh(
+                "head",
+                "sphere",
+                base="head",
+                size=EYEBALL_RADIUS,
+                offset=centres[eye],
+                color=GAZE_COLORS[eye],
+                label=f"{eye.replace('_', ' ')}ball",
+            )
+    scene.add_frame("head", base="head", scale=0.12, label="head")
     scene.add_path("head", color="#ffffff", max_points=2000)
     for eye in EYES:
         scene.add_vectors(
             f"pupil/{eye}",
             (0.0, 0.0, 1.0),
+            base="head",
             length=gaze_length,
             color=GAZE_COLORS[eye],
             label=f"{eye.replace('_', ' ')} gaze",

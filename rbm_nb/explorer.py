@@ -14,6 +14,7 @@ the synthetic one). Its frame tree follows guide 1.6 of rigid-body-motion::
 
 from __future__ import annotations
 
+import html
 import warnings
 from pathlib import Path
 
@@ -46,6 +47,10 @@ MIN_CONFIDENCE = 0.6
 # the eye tracker's gaps longer than this are not bridged by interpolation
 MAX_EYE_GAP = 0.1
 GAZE_COLORS = {"left_eye": "#ffd700", "right_eye": "#00bfff"}
+# samples per plotted panel and per moving object in exports: 10000 over the
+# 5.5 minutes is 30 per second, with every stretch's extremes kept; the page
+# stays under 5 MB
+PLOT_MAX_POINTS = 10000
 
 
 def load_head_eye(source: str = "auto"):
@@ -442,29 +447,192 @@ def explorer_scene(
     return scene
 
 
-def explorer_plot(series: dict, player, *, max_points: int | None = None):
+def explorer_plot(series: dict, player, *, max_points: int | None = PLOT_MAX_POINTS):
     """The time-series plot of the dashboard, following ``player``.
 
     None when :class:`~rbm_nb.widgets.TimeSeries` is not a widget that can
     follow a player in the browser (then the export has no plot).
-    ``max_points`` (per panel) keeps each stretch's extremes and gaps only.
+    ``max_points`` (per panel) keeps each stretch's extremes and gaps only,
+    so saccade peaks survive; the default keeps the exported page under
+    5 MB and the notebook's plot the same as the export's.
     """
     from .widgets import TimeSeries
 
     if not hasattr(TimeSeries, "_esm"):
         return None
-    return TimeSeries(series, player=player, max_points=max_points)
+    return TimeSeries(series, player=player, max_points=max_points, panel_height=140)
+
+
+def first_full_instant(head, left_eye, right_eye, *, min_confidence=MIN_CONFIDENCE):
+    """The first eye timestamp, from the head's first sample on, where both eyes
+    have a trusted sample: where the explorer starts, with everything drawn."""
+    ok = left_eye.time.values >= head.time.values[0]
+    for eye in (left_eye, right_eye):
+        ok &= np.isfinite(eye.orientation.values).all(axis=1)
+        if "confidence" in eye:
+            ok &= eye.confidence.values >= min_confidence
+    index = int(np.argmax(ok)) if ok.any() else 0
+    return left_eye.time.values[index]
+
+
+EYE_MISSING_REASON = (
+    "the eye tracker has no trusted sample of this eye here: a row of the other "
+    "eye only, a blink or lost pupil, or confidence below {min_confidence}"
+)
+
+
+def _as_dataset(value, name: str):
+    if hasattr(value, "data_vars"):
+        return value
+    from .io._files import load_netcdf
+
+    try:
+        path = Path(value)
+    except TypeError:
+        raise ValueError(
+            f"dashboard: {name} must be an xarray.Dataset or the path of a netCDF "
+            f"file, got {type(value).__name__}"
+        ) from None
+    return load_netcdf(path)
+
+
+def dashboard(
+    head=None,
+    left_eye=None,
+    right_eye=None,
+    *,
+    source: str = "auto",
+    note: str | None = None,
+    min_confidence: float | None = MIN_CONFIDENCE,
+    max_angle: float | None = None,
+    gaze_length: float = 2.0,
+    height: int = 440,
+):
+    """The head/eye explorer for any recording: tree, 3D view, Player, plots.
+
+    Give your own recording as three datasets (or netCDF files) in the
+    example's schema: ``head`` with ``position`` and ``orientation`` of the
+    head tracker (T265 axes) along ``time``, and each eye with
+    ``orientation`` (and ``position``, ``confidence``) in the scene camera,
+    as Pupil Core reports them. Without them the example recording is
+    loaded (:func:`load_head_eye` with ``source``). The frames are
+    registered (:func:`register_head_eye_frames`, replacing frames of the
+    same names) and the Player starts at the first instant where both eyes
+    have a sample.
+
+    Parameters
+    ----------
+    head, left_eye, right_eye : xarray.Dataset or path, optional
+    source : {"auto", "remote", "synthetic"}
+        Which example data, when no datasets are given.
+    note : str, optional
+        What the data is, shown above the dashboard (default: the file names
+        or :func:`load_head_eye`'s note).
+    min_confidence, max_angle : float, optional
+        Samples below ``min_confidence`` are missing; gaze further than
+        ``max_angle`` degrees from straight ahead is impossible and missing
+        (default :data:`rbm_nb.gaze.OCULOMOTOR_RANGE`).
+    gaze_length : float, default 2.0
+        Length of the gaze rays in metres.
+    height : int, default 440
+        Height of the 3D view in pixels.
+
+    Returns
+    -------
+    ipywidgets.VBox
+        The dashboard; its ``scene``, ``player``, ``tree``, ``plot``,
+        ``series`` and ``note`` attributes are the parts.
+    """
+    import ipywidgets as widgets
+
+    from .widgets.frame_tree import FrameTree
+
+    given = [head, left_eye, right_eye]
+    if all(part is None for part in given):
+        head, left_eye, right_eye, loaded = load_head_eye(source)
+        note = note or loaded
+    elif any(part is None for part in given):
+        raise ValueError("dashboard: give all of head, left_eye and right_eye, or none")
+    else:
+        if note is None:
+            note = "your recording" + "".join(
+                f", {p}" for p in given if not hasattr(p, "data_vars")
+            )
+        head, left_eye, right_eye = (
+            _as_dataset(part, name)
+            for part, name in zip(given, ("head", *EYES), strict=True)
+        )
+    register_head_eye_frames(head, left_eye, right_eye, min_confidence=min_confidence)
+    series = explorer_series(head, left_eye, right_eye, max_angle=max_angle)
+    scene = explorer_scene(gaze_length=gaze_length)
+    player = scene.player(speed=1.0)
+    player.seek_time(first_full_instant(head, left_eye, right_eye))
+    reason = EYE_MISSING_REASON.format(min_confidence=min_confidence)
+    tree = FrameTree(
+        "world",
+        scene=scene,
+        player=player,
+        missing_reasons={f"pupil/{eye}": reason for eye in EYES},
+    )
+    plot = explorer_plot(series, player)
+    scene.widget.height = height
+    # min_width 0: flex items may shrink below their content, so nothing
+    # spills sideways in a 1280 px window
+    scene.widget.layout.flex = "1 1 60%"
+    scene.widget.layout.min_width = "0"
+    tree.layout.flex = "0 0 38%"
+    tree.layout.min_width = "0"
+    header = widgets.HTML(f"<i>data: {html.escape(note)}</i>")
+    parts = [header, widgets.HBox([tree, scene.widget]), player]
+    out = widgets.VBox(
+        parts + ([plot] if plot is not None else []),
+        layout=widgets.Layout(width="100%", overflow="hidden"),
+    )
+    out.add_class("rbm-explorer")
+    out.scene, out.player, out.tree, out.plot = scene, player, tree, plot
+    out.series, out.note = series, note
+    return out
+
+
+def export_html(board, path, *, max_frames: int | None = PLOT_MAX_POINTS) -> Path:
+    """Write a :func:`dashboard` (3D view, plots, Player) as one offline HTML page.
+
+    The page names the data in its title and plays in any browser with no
+    Python and no network. Moving objects keep at most ``max_frames``
+    samples each; the plots keep what the dashboard's plot has (at most
+    :data:`PLOT_MAX_POINTS` per panel), so the notebook's export and
+    ``rbm-nb demo --html`` write the same content, under 5 MB for the
+    example recording.
+    """
+    return board.scene.to_html(
+        Path(path),
+        series=[] if board.plot is None else [board.plot],
+        player=board.player,
+        max_frames=max_frames,
+        title=f"rbm_nb head/eye explorer: {board.note}",
+    )
+
+
+def close_dashboard(board) -> None:
+    """Close the widgets of a :func:`dashboard` (the frames stay registered)."""
+    for widget in (board.plot, board.tree, board.player):
+        if widget is not None:
+            widget.close()
+    board.scene.close()
+    board.close()
 
 
 def write_explorer_html(
-    path, *, source: str = "auto", max_frames: int | None = 10000, progress: bool = True
+    path,
+    *,
+    source: str = "auto",
+    max_frames: int | None = PLOT_MAX_POINTS,
+    progress: bool = True,
 ) -> Path:
     """Build the explorer's dashboard from the example data and write it as HTML.
 
-    The page (3D view, time series, player) plays offline in any browser
-    (see :meth:`Scene.to_html`). Moving objects and plotted series keep at
-    most ``max_frames`` samples each (10000 over the 5.5 minutes is 30 per
-    second), which keeps the file under 5 MB.
+    The same page as :func:`export_html` of :func:`dashboard` in notebook 06.
+    The registry is left as the caller had it.
 
     Returns
     -------
@@ -474,49 +642,21 @@ def write_explorer_html(
     from . import frames
     from ._progress import make_bar
 
-    steps = [
-        "loading the recording",
-        "building the frame tree",
-        "building the scene",
-        "writing the HTML",
-    ]
+    steps = ["building the dashboard", "writing the HTML"]
     bar = make_bar(len(steps), "rbm-nb demo --html", progress=progress)
     previous = dict(frames.registry)
-    scene = player = plot = None
+    board = None
     try:
         bar.set_postfix_str(steps[0])
-        head, left_eye, right_eye, note = load_head_eye(source)
+        board = dashboard(source=source)
         bar.update()
         bar.set_postfix_str(steps[1])
-        register_head_eye_frames(head, left_eye, right_eye)
-        bar.update()
-        bar.set_postfix_str(steps[2])
-        scene = explorer_scene()
-        player = scene.player()
-        # each panel: every stretch's extremes and first gap (saccade peaks
-        # and gaps survive), at most ~max_frames samples
-        plot = explorer_plot(
-            explorer_series(head, left_eye, right_eye),
-            player,
-            max_points=None if max_frames is None else max(int(max_frames), 10),
-        )
-        bar.update()
-        bar.set_postfix_str(steps[3])
-        out = scene.to_html(
-            Path(path),
-            series=[] if plot is None else [plot],
-            player=player,
-            max_frames=max_frames,
-            title=f"rbm_nb head/eye explorer: {note}",
-        )
+        out = export_html(board, path, max_frames=max_frames)
         bar.update()
     finally:
         bar.close()
-        for widget in (plot, player):
-            if widget is not None:
-                widget.close()
-        if scene is not None:
-            scene.close()
+        if board is not None:
+            close_dashboard(board)
         # leave the registry as the caller had it
         frames.clear_registry()
         for frame in previous.values():

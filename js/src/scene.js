@@ -170,6 +170,9 @@ function cssColor(value) {
 // close up, both are drawn at their real size.
 const GLYPH_PX = 72;
 const TRIAD_PX = 40;
+// a long line in a magnified group (a gaze ray) is drawn at its real length,
+// or this long on screen when that is shorter, never magnified further
+const RAY_PX = 160;
 const ANCHOR_PREFIX = "anchor_";
 
 class View {
@@ -358,7 +361,18 @@ class View {
       if (!name.startsWith(ANCHOR_PREFIX)) continue;
       const object = root.children[name].object;
       const size = this.naturalSize(object);
-      if (size > 0) glyphs.push({ path: `/rbm/${name}`, object, size, scale: 1 });
+      if (size <= 0) continue;
+      // the group's long lines: the geometry nodes of parts larger than the model
+      const rays = [];
+      const parts = root.children[name].children || {};
+      for (const part of Object.keys(parts)) {
+        const length = this.naturalSize(parts[part].object);
+        if (length <= 2 * size) continue;
+        parts[part].object.traverse((o) => {
+          if (o.name === "geom") rays.push({ object: o, length });
+        });
+      }
+      glyphs.push({ path: `/rbm/${name}`, object, size, scale: 1, rays });
     }
     this.glyphs = glyphs;
     const frames = this.model.get("_frames") || {};
@@ -385,7 +399,17 @@ class View {
         changed = true;
       }
     };
-    for (const glyph of this.glyphs) resize(glyph, GLYPH_PX);
+    for (const glyph of this.glyphs) {
+      resize(glyph, GLYPH_PX);
+      const ppm = this.pixelsPerMetre(glyph.object.getWorldPosition(new this.THREE.Vector3()));
+      for (const ray of glyph.rays) {
+        const wanted = Math.max(ray.length, RAY_PX / ppm) / (glyph.scale * ray.length);
+        if (Math.abs(ray.object.scale.x - wanted) > 1e-3 * wanted) {
+          ray.object.scale.setScalar(wanted);
+          changed = true;
+        }
+      }
+    }
     for (const triad of this.triads) resize(triad, TRIAD_PX);
     if (changed) this.viewer.set_dirty();
   }

@@ -217,7 +217,8 @@ async function render({ model, el }) {
         stroke: panel.colors[k],
         width: 1.25,
         spanGaps: false,
-        value: (u, v) => formatValue(v, panel.units),
+        // no cursor: a dash; a cursor on a sample with no value: "missing"
+        value: (u, v, si, idx) => (idx === null || idx === undefined ? "\u2014" : formatValue(v, panel.units)),
       })),
     ];
     let panStart = null;

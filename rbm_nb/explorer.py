@@ -346,6 +346,49 @@ def vor_gain(series: dict, *, max_rate: float = 60.0) -> dict:
     return out
 
 
+def guided_instants(series: dict, *, window: float = 2.0) -> dict:
+    """Instants worth a look in the explorer's series, found in the data.
+
+    ``"vor"``: the middle of the ``window``-second stretch where the head
+    turns fastest (mean absolute yaw rate) while both eyes have samples and
+    counter-rotate (a negative :func:`vor_gain` there). ``"saccade"``: the
+    fastest gaze shift both eyes make together (over 200 deg/s, same sign
+    within 20 ms: a real saccade is conjugate, a tracker glitch is in one
+    eye). Times are the series' own (datetime64 for the example data).
+    """
+    head = series["head yaw rate"]
+    eyes = series["gaze yaw rate"]
+    t_head, t_eye = _seconds(head["time"].values), _seconds(eyes["time"].values)
+    rates = eyes.transpose("time", "eye").values
+    head_at_eye = np.interp(t_eye, t_head, np.nan_to_num(head.values))
+    slow = np.isfinite(rates).all(axis=1) & (np.abs(rates) < 60.0).all(axis=1)
+    best, best_score = None, -np.inf
+    starts = np.arange(t_eye[0], t_eye[-1] - window, window / 4)
+    lo = np.searchsorted(t_eye, starts)
+    hi = np.searchsorted(t_eye, starts + window)
+    for a, b in zip(lo, hi, strict=True):
+        ok = slow[a:b]
+        if ok.sum() < 20:
+            continue
+        h = head_at_eye[a:b][ok]
+        gain = np.dot(h, rates[a:b][ok].mean(axis=1)) / max(np.dot(h, h), 1e-12)
+        score = np.abs(h).mean()
+        if gain < -0.3 and score > best_score:
+            # the row nearest the middle where both eyes have a sample
+            rows = a + np.flatnonzero(ok)
+            best, best_score = rows[np.argmin(np.abs(rows - (a + b) // 2))], score
+    both_fast = np.isfinite(rates).all(axis=1) & (np.abs(rates) > 200.0).all(axis=1)
+    both_fast &= np.sign(rates[:, 0]) == np.sign(rates[:, 1])
+    speed = np.where(both_fast, np.abs(rates).min(axis=1), -np.inf)
+    times = eyes["time"].values
+    out = {}
+    if best is not None:
+        out["vor"] = times[best]
+    if np.isfinite(speed).any():
+        out["saccade"] = times[int(np.argmax(speed))]
+    return out
+
+
 def _seconds(times) -> np.ndarray:
     times = np.asarray(times)
     if np.issubdtype(times.dtype, np.datetime64):

@@ -91,9 +91,9 @@ def directions(
         Degrees. Samples whose line of sight is further than this from the z
         axis of the eye frame's parent (the straight-ahead of the scene
         camera it is measured in) are physiologically impossible and set to
-        NaN. :data:`OCULOMOTOR_RANGE` (50) is the usual choice; the real
-        example recording has 7 such samples up to 88 deg after confidence
-        masking. Default: no sample is flagged for its angle.
+        NaN. :data:`OCULOMOTOR_RANGE` (50) is the usual choice; on the real
+        example recording it flags 92 of the left eye's 53184 confident
+        samples and 25 of the right eye's 52197 (up to 81 and 88 deg). Default: no sample is flagged for its angle.
 
     Returns
     -------

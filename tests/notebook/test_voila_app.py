@@ -168,7 +168,7 @@ def test_the_app_renders_tree_plot_and_3d_view(browser, voila):
         assert {"world", "t265/tracker", "head", "pupil/left_eye"} <= set(nodes)
         legends = page.locator(".rbm-ts .u-legend").all_inner_texts()
         assert any("azimuth" in text for text in legends)
-        assert any("head speed" in text for text in legends)
+        assert any("head yaw rate" in text for text in legends)
         # the 3D view draws something: not one flat colour
         pixels = png_pixels(canvas.screenshot())
         assert pixels.reshape(-1, 3).std(axis=0).max() > 10

@@ -46,7 +46,8 @@ EYES = ("left_eye", "right_eye")
 MIN_CONFIDENCE = 0.6
 # the eye tracker's gaps longer than this are not bridged by interpolation
 MAX_EYE_GAP = 0.1
-GAZE_COLORS = {"left_eye": "#ffd700", "right_eye": "#00bfff"}
+# per eye, the same in the 3D view and the plots (legible on both)
+GAZE_COLORS = {"left_eye": "#e69f00", "right_eye": "#0094d6"}
 # samples per plotted panel and per moving object in exports: 10000 over the
 # 5.5 minutes is 30 per second, with every stretch's extremes kept; the page
 # stays under 5 MB
@@ -289,7 +290,11 @@ def gaze_yaw(left_eye, right_eye, *, max_angle: float | None = None):
         )
         columns.append(-azimuth.expand_dims(eye=[name.replace("_", " ")], axis=1))
     out = xr.concat(columns, dim="eye", join="outer")
-    out.attrs = {"long_name": "Gaze yaw in head (+ left)", "units": "deg"}
+    out.attrs = {
+        "long_name": "Gaze yaw in head (+ left)",
+        "units": "deg",
+        "colors": [GAZE_COLORS[eye] for eye in EYES],
+    }
     return out
 
 
@@ -312,10 +317,12 @@ def explorer_series(
     if max_angle is None:
         max_angle = gaze.OCULOMOTOR_RANGE
     yaw = gaze_yaw(left_eye, right_eye, max_angle=max_angle)
+    rate = gaze.rates(yaw)
+    rate.attrs["colors"] = yaw.attrs["colors"]
     return {
         "head yaw rate": head_yaw_rate(),
         "gaze yaw": yaw,
-        "gaze yaw rate": gaze.rates(yaw),
+        "gaze yaw rate": rate,
     }
 
 
@@ -518,6 +525,22 @@ def first_full_instant(head, left_eye, right_eye, *, min_confidence=MIN_CONFIDEN
     return left_eye.time.values[index]
 
 
+def seek_to(player, instant) -> None:
+    """Seek ``player`` to its first sample at or after ``instant``.
+
+    The Player snaps to its own samples; one just before ``instant`` would
+    show the eyes' previous row, which may have no sample (a row of the
+    other eye): use this to show an instant found in the eye data."""
+    player.seek_time(instant)
+    target = _seconds(np.asarray([instant]))[0]
+    last = len(player.seconds) - 1
+    while (
+        _seconds(np.asarray([player.timestamp]))[0] < target - 1e-6
+        and player.index < last
+    ):
+        player.seek(player.index + 1)
+
+
 EYE_MISSING_REASON = (
     "the eye tracker has no trusted sample of this eye here: a row of the other "
     "eye only, a blink or lost pupil, or confidence below {min_confidence}"
@@ -609,7 +632,7 @@ def dashboard(
     series = explorer_series(head, left_eye, right_eye, max_angle=max_angle)
     scene = explorer_scene(gaze_length=gaze_length)
     player = scene.player(speed=1.0)
-    player.seek_time(first_full_instant(head, left_eye, right_eye))
+    seek_to(player, first_full_instant(head, left_eye, right_eye))
     reason = EYE_MISSING_REASON.format(min_confidence=min_confidence)
     tree = FrameTree(
         "world",

@@ -229,7 +229,7 @@ class FrameTree(widgets.VBox):
 
     def row_text(self, name: str) -> str:
         """The description shown in the row of ``name``."""
-        return self._rows[name]["label"].value
+        return html.unescape(self._rows[name]["label"].value)
 
     @property
     def details(self) -> Details:
@@ -475,10 +475,10 @@ class FrameTree(widgets.VBox):
         )
         button.add_class("rbm-frame-node")
         # a Label never wraps: in a narrow tree its end was hidden under the
-        # 3D view. This text wraps and elides instead.
-        label = widgets.Label(
-            value=_describe(info),
-            layout=widgets.Layout(flex="1 1 0", min_width="0", overflow="hidden"),
+        # 3D view. HTML text wraps within the room left beside the name.
+        label = widgets.HTML(
+            value=html.escape(_describe(info)),
+            layout=widgets.Layout(flex="1 1 0", min_width="0"),
         )
         label.add_class("rbm-frame-row-text")
         box = widgets.HBox(

@@ -521,7 +521,12 @@ def first_full_instant(head, left_eye, right_eye, *, min_confidence=MIN_CONFIDEN
         ok &= np.isfinite(eye.orientation.values).all(axis=1)
         if "confidence" in eye:
             ok &= eye.confidence.values >= min_confidence
-    index = int(np.argmax(ok)) if ok.any() else 0
+    # and the rows around it too: an interpolation needs its neighbours,
+    # so the rays are drawn there whatever the frame core does next to a gap
+    run = ok.copy()
+    for shift in (-1, 1, 2):
+        run &= np.roll(ok, -shift)
+    index = int(np.argmax(run)) if run.any() else int(np.argmax(ok))
     return left_eye.time.values[index]
 
 

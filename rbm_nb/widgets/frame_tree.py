@@ -33,6 +33,14 @@ from .frame_details import (
     pose_at,
 )
 
+ROW_CSS = (
+    "<style>.rbm-frame-tree .rbm-frame-row-text {height: auto}"
+    ".rbm-frame-tree .rbm-frame-row-text .widget-html-content "
+    "{height: auto; min-height: var(--jp-widgets-inline-height, 28px); "
+    "line-height: 16px; white-space: normal; padding: 6px 0; overflow-wrap: anywhere}"
+    "</style>"
+)
+
 
 def frame_kind(frame) -> str:
     """``root``, ``static``, ``moving`` or ``discrete``."""
@@ -175,7 +183,7 @@ class FrameTree(widgets.VBox):
         self._scene_widget: Any = None  # the linked Scene's widget
         self._message = widgets.HTML(value="")
         self._rows_box = widgets.VBox(
-            [], layout=widgets.Layout(overflow="auto", max_height="360px")
+            [], layout=widgets.Layout(overflow="auto", max_height="400px")
         )
         self._missing_reasons = {
             str(k): str(v) for k, v in (missing_reasons or {}).items()
@@ -194,7 +202,10 @@ class FrameTree(widgets.VBox):
         )
         self._refresh_button.on_click(lambda _: self.refresh())
         self._title = widgets.HTML(value="")
-        header = widgets.HBox([self._refresh_button, self._title])
+        # ipywidgets gives HTML text one line of fixed height; the rows'
+        # descriptions wrap instead (a style element, as no widget sets CSS)
+        self._style = widgets.HTML(value=ROW_CSS, layout=widgets.Layout(display="none"))
+        header = widgets.HBox([self._refresh_button, self._title, self._style])
         super().__init__(
             children=[header, self._message, self._rows_box, self._details]
         )
@@ -475,7 +486,8 @@ class FrameTree(widgets.VBox):
         )
         button.add_class("rbm-frame-node")
         # a Label never wraps: in a narrow tree its end was hidden under the
-        # 3D view. HTML text wraps within the room left beside the name.
+        # 3D view. This text wraps in the room beside the name (ROW_CSS lets
+        # it grow in height).
         label = widgets.HTML(
             value=html.escape(_describe(info)),
             layout=widgets.Layout(flex="1 1 0", min_width="0"),
@@ -483,9 +495,7 @@ class FrameTree(widgets.VBox):
         label.add_class("rbm-frame-row-text")
         box = widgets.HBox(
             [toggle, button, label],
-            layout=widgets.Layout(
-                margin=f"0 0 0 {18 * depth}px", overflow="hidden", width="auto"
-            ),
+            layout=widgets.Layout(margin=f"0 0 0 {18 * depth}px", width="auto"),
         )
         name = frame.name
         toggle.on_click(lambda _: self._toggle_collapse(name))

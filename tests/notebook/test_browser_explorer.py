@@ -1,13 +1,13 @@
 """The head/eye explorer a researcher keeps open, in chromium (issue 29).
 
 JupyterLab and Notebook 7 each run ``explorer.dashboard`` on the real
-recording and on the synthetic one, in a 1400 px window. Checked in the page:
+recording in a 1400 px window and on the synthetic one in a 1280 px window. Checked in the page:
 
 * the head model is at least 40 px tall at the default view, and both gaze
   rays are drawn (the dashboard opens at an instant where both eyes have a
   sample);
 * a click on the head's label selects the head;
-* the dashboard fits 1400 px with nothing overflowing sideways, the frame
+* the dashboard fits the window with nothing overflowing sideways, the frame
   tree's rows included; selecting two frames does not move the Player;
 * every gesture of the plot's hint line: drag and wheel zoom, shift+drag
   pans (the range moves, its width stays), a double-click shows everything
@@ -28,7 +28,6 @@ from browser_support import JupyterLab, block_other_ports, save  # noqa: E402
 from conftest import REPO  # noqa: E402
 
 REAL_DATA = REPO.parent / "shared" / "data" / "rbm-data"
-WIDTH = 1400
 
 CELL = """
 from rbm_nb import explorer
@@ -113,9 +112,16 @@ def _plot_box(page):
     return box["x"], box["y"], box["width"], box["height"]
 
 
+# the real recording in a 1400 px window, the synthetic one in 1280 px: the
+# issue's range of window widths
+WIDTHS = {"real": 1400, "synthetic": 1280}
+
+
 @pytest.mark.parametrize("source", ["real", "synthetic"])
 @pytest.mark.parametrize("app", ["lab", "notebook"])
-def test_explorer_in_a_1400_px_window(app, source, browser, tmp_path, monkeypatch):
+def test_explorer_in_a_1280_to_1400_px_window(
+    app, source, browser, tmp_path, monkeypatch
+):
     from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
     if source == "real":
@@ -128,7 +134,7 @@ def test_explorer_in_a_1400_px_window(app, source, browser, tmp_path, monkeypatc
     notebook = _notebook(tmp_path / "explorer.ipynb")
     (tmp_path / "home").mkdir()
     server = JupyterLab(tmp_path / "home", [notebook], app=app, proxy=False)
-    context = browser.new_context(viewport={"width": WIDTH, "height": 1500})
+    context = browser.new_context(viewport={"width": WIDTHS[source], "height": 1500})
     block_other_ports(context, server.port)
     page = context.new_page()
     errors = []
@@ -175,9 +181,13 @@ def test_explorer_in_a_1400_px_window(app, source, browser, tmp_path, monkeypatc
                  const board = document.querySelector('.rbm-explorer');
                  out.board = board.scrollWidth - board.clientWidth;
                  out.page = document.documentElement.scrollWidth - window.innerWidth;
+                 const right = document.querySelector('.rbm-frame-tree')
+                     .getBoundingClientRect().right;
+                 // every row's description is whole: not clipped, not past the tree
                  out.rows = Math.max(...[...document.querySelectorAll(
-                     '.rbm-frame-tree .widget-hbox')].map(
-                     (r) => r.scrollWidth - r.clientWidth));
+                     '.rbm-frame-row-text .widget-html-content')].map((r) => Math.max(
+                     r.scrollWidth - r.clientWidth, r.scrollHeight - r.clientHeight,
+                     r.getBoundingClientRect().right - right)));
                  const tree = document.querySelector('.rbm-frame-tree').getBoundingClientRect();
                  const scene = document.querySelector('.rbm-scene').getBoundingClientRect();
                  out.treeUnderScene = tree.right - scene.left;

@@ -52,8 +52,13 @@ MEASURE_SCENE = """() => {
   const head = root.children['head_model'].object;
   const box = new THREE.Box3().setFromObject(head);
   const ys = [];
+  const xs = [];
   for (const x of [box.min.x, box.max.x]) for (const y of [box.min.y, box.max.y])
-    for (const z of [box.min.z, box.max.z]) ys.push(project(new THREE.Vector3(x, y, z))[1]);
+    for (const z of [box.min.z, box.max.z]) {
+      const p = project(new THREE.Vector3(x, y, z));
+      xs.push(p[0]);
+      ys.push(p[1]);
+    }
   const rays = {};
   for (const name of ['left_eye_gaze', 'right_eye_gaze']) {
     const node = root.children[name].object;
@@ -66,7 +71,9 @@ MEASURE_SCENE = """() => {
     rays[name] = { shown: shown(line), length: Math.hypot(a[0] - b[0], a[1] - b[1]),
                    inside: inside(a) };
   }
-  return { headShown: shown(head), headHeight: Math.max(...ys) - Math.min(...ys), rays };
+  const centre = project(box.getCenter(new THREE.Vector3()));
+  return { headShown: shown(head), headHeight: Math.max(...ys) - Math.min(...ys), rays,
+           headCentre: [pane.left + centre[0], pane.top + centre[1]] };
 }"""
 
 PLOT_RANGE = """() => { const u = document.querySelector('.rbm-ts').rbmCharts[0];
@@ -170,10 +177,24 @@ def test_explorer_in_a_1280_to_1400_px_window(
         for ray in scene["rays"].values():
             assert ray["shown"] and ray["inside"] and ray["length"] >= 40, scene
 
-        # -- a click on a label selects its frame -------------------------------
+        # -- a click on a label, or on the head model, selects its frame ----------
+        selected = ".rbm-scene .rbm-label.rbm-selected"
+        page.locator(".rbm-scene .rbm-label", has_text="world").first.click()
+        page.wait_for_function(
+            f"() => (document.querySelector('{selected}') || {{}}).innerText === 'world'",
+            timeout=20000,
+        )
+        page.mouse.click(*scene["headCentre"])
+        page.wait_for_function(
+            f"() => (document.querySelector('{selected}') || {{}}).innerText === 'head'",
+            timeout=20000,
+        )
+        page.locator(".rbm-scene .rbm-label", has_text="world").first.click()
         page.locator(".rbm-scene .rbm-label", has_text="head").first.click()
-        page.wait_for_selector(".rbm-scene .rbm-label.rbm-selected", timeout=20000)
-        assert page.locator(".rbm-scene .rbm-label.rbm-selected").inner_text() == "head"
+        page.wait_for_function(
+            f"() => (document.querySelector('{selected}') || {{}}).innerText === 'head'",
+            timeout=20000,
+        )
 
         # -- fits 1400 px ---------------------------------------------------------
         overflow = page.evaluate(

@@ -256,7 +256,8 @@ def rates(angles: xr.DataArray, *, window: float = 0.02) -> xr.DataArray:
     arr = angles.transpose("time", ...)
     keys = _keys(arr["time"].values)
     scale = 1e9 if np.issubdtype(arr["time"].dtype, np.datetime64) else 1.0
-    t = keys / scale
+    # from the first time: epoch seconds as floats would round to 0.2 us
+    t = (keys - keys[0]) / scale if len(keys) else keys / scale
     values = np.asarray(arr.values, dtype=float).reshape(len(t), -1)
     out = np.full(values.shape, np.nan)
     for k in range(values.shape[1]):
@@ -277,7 +278,8 @@ def _windowed_slope(t, y, window):
     first = np.clip(first, 0, tv.size - 1)
     last = np.clip(last, 0, tv.size - 1)
     span = tv[last] - tv[first]
-    ok = np.isfinite(y) & (last > first) & (span >= window / 2)
+    # (half the window, less a rounding error of the times)
+    ok = np.isfinite(y) & (last > first) & (span >= window / 2 * (1 - 1e-9))
     out[ok] = (yv[last[ok]] - yv[first[ok]]) / span[ok]
     return out
 

@@ -84,6 +84,39 @@ def test_eyes_counter_rotate_against_the_head_and_converge(load):
     assert 0.0 < _vergence(series) < 10.0
 
 
+def _pitch_gains(left, right) -> dict:
+    """Gain of each eye's elevation rate against the head's nose-up rate (slow phases)."""
+    from rbm_nb import gaze
+
+    omega = rbm.lookup_angular_velocity(
+        "head", "world", represent_in="head", as_dataarray=True
+    )
+    # about y (left): positive turns x (forward) down, so nose-up is minus
+    nose_up = -np.degrees(omega.sel(cartesian_axis="y").values)
+    t_head = explorer._seconds(omega["time"].values)
+    out = {}
+    for name, eye in zip(explorer.EYES, (left, right), strict=True):
+        up = explorer.gaze_angles(eye, name).sel(angle="elevation", drop=True)
+        rate = gaze.rates(up)
+        t = explorer._seconds(rate["time"].values)
+        head = np.interp(t, t_head, nose_up)
+        ok = np.isfinite(rate.values) & (np.abs(rate.values) < 60.0)
+        out[name] = float(
+            np.dot(head[ok], rate.values[ok]) / np.dot(head[ok], head[ok])
+        )
+    return out
+
+
+@pytest.mark.parametrize("load", _recordings())
+def test_eyes_counter_rotate_against_the_heads_pitch_too(load):
+    """Half a turn about the line of sight flips pitch as well as yaw: both must fit."""
+    head, left, right = load()[:3]
+    explorer.register_head_eye_frames(head, left, right)
+    gains = _pitch_gains(left, right)
+    print("vertical VOR gain", gains)
+    assert all(gain < -0.2 for gain in gains.values()), gains
+
+
 def test_the_calibration_read_as_wxyz_makes_the_real_eyes_turn_with_the_head():
     """The old reading fails the VOR test: this is what the frame fix changes."""
     real = real_recording()
@@ -94,6 +127,9 @@ def test_the_calibration_read_as_wxyz_makes_the_real_eyes_turn_with_the_head():
     gains = explorer.vor_gain(series)
     print("VOR gain with the (w, x, y, z) reading", gains)
     assert all(gain > 0.4 for gain in gains.values()), gains
+    pitch = _pitch_gains(*real[1:])
+    print("vertical VOR gain with the (w, x, y, z) reading", pitch)
+    assert all(gain > 0.2 for gain in pitch.values()), pitch
     # the vergence does not tell the two readings apart: half a turn about
     # the line of sight moves the eyes and their lines of sight together
     assert 0.0 < _vergence(series) < 10.0

@@ -62,6 +62,8 @@ install() {  # install rbm_nb[$1] (editable) at the exact pins
 # two uv runs cost more than the overlap saved.)
 cache_dir=${NUMBA_CACHE_DIR:-rbm_nb/_kernels/__pycache__}
 warm_stamp=".venv/.rbm_nb-warm"
+# the warm-up keeps this file saying "N M": N of its M kernel signatures ready
+warm_status=".venv/.rbm_nb-warm-status"
 warm_pid=""
 # a failed install must not leave the warm-up running behind the script
 trap 'if [ -n "$warm_pid" ]; then kill "$warm_pid" 2>/dev/null || true; fi' EXIT
@@ -76,7 +78,8 @@ warm_up() {
   fi
   say "compiling the numba kernels into their cache, one process per core (about 5 minutes on 2 cores the first time)"
   rm -f "$warm_stamp"
-  .venv/bin/python -m rbm_nb._warmup &
+  rm -f "$warm_status"
+  .venv/bin/python -m rbm_nb._warmup --status "$warm_status" &
   warm_pid=$!
   warm_sources=$sources
 }
@@ -102,8 +105,8 @@ if [ -n "$warm_pid" ]; then
     sleep 1
     ticks=$((ticks + 1))
     if [ $((ticks % 15)) = 0 ] && kill -0 "$warm_pid" 2>/dev/null; then
-      n=$(find "$cache_dir" -name '*.nbc' 2>/dev/null | wc -l)
-      say "  still compiling: $n kernel signatures in the cache so far"
+      read -r n m < "$warm_status" 2>/dev/null || { n="?"; m="?"; }
+      say "  still compiling: $n of $m kernel signatures ready"
     fi
   done
   pid=$warm_pid

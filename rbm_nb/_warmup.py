@@ -21,9 +21,13 @@ modification time, the function's bytecode and the CPU. Run it with ``-P`` or
 from another working directory to compile an installed package rather than
 a source tree in the working directory.
 
+With ``--status FILE`` the processes keep ``FILE`` saying ``N M``: N of the
+M declared kernel signatures are ready (compiled or loaded), for a caller
+that shows progress (``.ci/setup.sh`` prints "N of M").
+
 Usage::
 
-    python -m rbm_nb._warmup [-v] [--jobs N]
+    python -m rbm_nb._warmup [-v] [--jobs N] [--status FILE]
 """
 
 from __future__ import annotations
@@ -84,7 +88,9 @@ def _compile(kernel: Declared) -> None:
     kernel.dispatcher.compile(tuple(args))
 
 
-def warm_up(verbose: bool = False, jobs: int = 1) -> KernelStats:
+def warm_up(
+    verbose: bool = False, jobs: int = 1, status: str | None = None
+) -> KernelStats:
     """Compile (or load from the cache) every declared kernel signature.
 
     Parameters
@@ -97,6 +103,8 @@ def warm_up(verbose: bool = False, jobs: int = 1) -> KernelStats:
         helpers (``python -m rbm_nb._warmup --claims DIR``, with this
         interpreter, environment and working directory, so that they import
         the same rbm_nb).
+    status : str, optional
+        A file kept saying ``"N M"``: N of the M declared signatures ready.
 
     Returns
     -------
@@ -110,14 +118,19 @@ def warm_up(verbose: bool = False, jobs: int = 1) -> KernelStats:
         If a helper process fails (its output is in the message).
     """
     if jobs > 1:
-        return _warm_up_in_parallel(verbose, jobs)
+        return _warm_up_in_parallel(verbose, jobs, status)
     by_module: dict[str, list[Declared]] = {}
+    total = len(declared_kernels())
+    done = 0
+    _write_status(status, done, total)
     for k in declared_kernels():
         by_module.setdefault(k.dispatcher.py_func.__module__, []).append(k)
     for module, kernels in by_module.items():
         start = time.perf_counter()
         for k in kernels:
             _compile(k)
+            done += 1
+            _write_status(status, done, total)
         if verbose:
             print(
                 f"  {module}: {len(kernels)} kernels, "
@@ -127,26 +140,48 @@ def warm_up(verbose: bool = False, jobs: int = 1) -> KernelStats:
     return kernel_stats()
 
 
-def _compile_claimed(claims: str, verbose: bool) -> None:
-    """Compile every kernel no other process has claimed yet, claiming each."""
-    for index, k in enumerate(declared_kernels()):
+def _write_status(status: str | None, done: int, total: int) -> None:
+    """``status`` says "done total", replaced whole (a reader never sees half)."""
+    if not status:
+        return
+    partial = f"{status}.{os.getpid()}"
+    with open(partial, "w") as f:
+        f.write(f"{done} {total}\n")
+    os.replace(partial, status)
+
+
+def _compile_claimed(claims: str, verbose: bool, status: str | None = None) -> None:
+    """Compile every kernel no other process has claimed yet, claiming each.
+
+    A claimed kernel's file gets a ``.done`` twin once it is ready, so the
+    processes can count what all of them have done.
+    """
+    kernels = declared_kernels()
+    for index, k in enumerate(kernels):
         try:
             os.close(os.open(os.path.join(claims, str(index)), os.O_CREAT | os.O_EXCL))
         except FileExistsError:
             continue  # another process has it
         start = time.perf_counter()
         _compile(k)
+        os.close(os.open(os.path.join(claims, f"{index}.done"), os.O_CREAT))
+        done = sum(name.endswith(".done") for name in os.listdir(claims))
+        _write_status(status, done, len(kernels))
         if verbose:
             print(f"  {k.name}: {time.perf_counter() - start:.1f} s", flush=True)
 
 
-def _warm_up_in_parallel(verbose: bool, jobs: int) -> KernelStats:
+def _warm_up_in_parallel(
+    verbose: bool, jobs: int, status: str | None = None
+) -> KernelStats:
     claims = tempfile.mkdtemp(prefix="rbm_nb-warm-up-")
     try:
+        _write_status(status, 0, len(declared_kernels()))
         # -P again if this process has it: the helpers must import this rbm_nb
         flags = ["-P"] if getattr(sys.flags, "safe_path", False) else []
         cmd = [sys.executable, *flags, "-m", "rbm_nb._warmup", "--claims", claims]
         cmd += ["-v"] if verbose else []
+        cmd += ["--status", status] if status else []
         helpers = [
             subprocess.Popen(
                 cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
@@ -154,7 +189,7 @@ def _warm_up_in_parallel(verbose: bool, jobs: int) -> KernelStats:
             for _ in range(jobs - 1)
         ]
         try:
-            _compile_claimed(claims, verbose)
+            _compile_claimed(claims, verbose, status)
         except BaseException:  # interrupted or failed: so are the helpers
             for h in helpers:
                 h.kill()
@@ -184,8 +219,14 @@ def _warm_up_in_parallel(verbose: bool, jobs: int) -> KernelStats:
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     verbose = "-v" in argv or "--verbose" in argv
+    status = None
+    if "--status" in argv:
+        status = argv[argv.index("--status") + 1] if argv[-1] != "--status" else ""
+        if not status:
+            print("--status needs a file name")
+            return 2
     if "--claims" in argv:  # a helper of a parallel warm-up
-        _compile_claimed(argv[argv.index("--claims") + 1], verbose)
+        _compile_claimed(argv[argv.index("--claims") + 1], verbose, status)
         print(json.dumps(kernel_stats().__dict__))
         return 0
     jobs = usable_cores()
@@ -196,11 +237,12 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         jobs = int(value)
     start = time.perf_counter()
-    stats = warm_up(verbose=verbose, jobs=jobs)
+    stats = warm_up(verbose=verbose, jobs=jobs, status=status)
     where = ", ".join(stats.cache_dirs) or "no cache directory"
+    # "M of M": the same total as the progress, whatever numba recompiled
     print(
-        f"rbm_nb warm-up: {stats.compiled} kernel signatures compiled, "
-        f"{stats.loaded} loaded from the cache ({stats.kernels} kernels, "
+        f"rbm_nb warm-up: {stats.kernels} of {stats.kernels} kernel signatures "
+        f"ready ({stats.compiled} compiled, {stats.loaded} loaded from the cache; "
         f"{jobs} process{'es' if jobs > 1 else ''}), "
         f"{time.perf_counter() - start:.1f} s; cache: {where}"
     )

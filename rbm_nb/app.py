@@ -62,27 +62,11 @@ def explorer_dashboard(source: str = "auto", *, height: int = 460):
         raise ValueError(
             f"explorer_dashboard: source must be one of {SOURCES}, got {source!r}"
         )
-    import ipywidgets as widgets
-
     from . import explorer
-    from .widgets.frame_tree import FrameTree
-    from .widgets.timeseries import TimeSeries
 
-    head, left_eye, right_eye, note = explorer.load_head_eye(source)
-    explorer.register_head_eye_frames(head, left_eye, right_eye)
-    series = explorer.explorer_series(head, left_eye, right_eye)
-    scene = explorer.explorer_scene()
-    player = scene.player(speed=1.0)
-    tree = FrameTree("world", scene=scene, player=player)
-    plot = TimeSeries(series, player=player, panel_height=120)
-    scene.widget.height = height
-    scene.widget.layout.flex = "1 1 60%"
-    tree.layout.flex = "0 0 38%"
-    header = widgets.HTML(f"<i>data: {note}</i>")
-    dashboard = widgets.VBox([header, widgets.HBox([tree, scene.widget]), player, plot])
+    # the same dashboard as notebook 06 (explorer.dashboard), with the app's class
+    dashboard = explorer.dashboard(source=source, height=height)
     dashboard.add_class("rbm-explorer-app")
-    dashboard.scene, dashboard.player = scene, player
-    dashboard.tree, dashboard.plot = tree, plot
     return dashboard
 
 

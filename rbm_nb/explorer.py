@@ -14,6 +14,7 @@ the synthetic one). Its frame tree follows guide 1.6 of rigid-body-motion::
 
 from __future__ import annotations
 
+import html
 import warnings
 from pathlib import Path
 
@@ -24,15 +25,33 @@ R_T265_ROS = np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 # rotation between the Pupil Core's camera axes (x right, y down, z forward)
 # and ROS axes (guide 1.6)
 R_PUPIL_ROS = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]])
-# pose of the Pupil Core scene camera on the T265, from the study's calibration
+# pose of the Pupil Core scene camera on the T265, from the study's calibration.
+# The calibration's quaternion is printed in (x, y, z, w) order, as scipy and
+# ROS write them; guide 1.6 of rigid-body-motion passes the same four numbers
+# as (w, x, y, z), which turns the camera 180 deg about its line of sight
+# (about the T265's x axis instead of its y axis). Read that way, the eyes of
+# the real recording move *with* the head at 40 ms (gain +0.6 to +0.7 against
+# the head's yaw and pitch rates) and look away from every turn; read as
+# (x, y, z, w) they counter-rotate as the vestibulo-ocular reflex does (gain
+# -0.6 to -0.7), look into turns, and still converge (+2 deg): see
+# tests/data/test_eye_frames.py, which measures all of this.
 SCENE_CAM_TRANSLATION = (24.5e-3, -29e-3, 0.0)
-SCENE_CAM_ROTATION = (-0.00125, -1.0, 6.3463e-05, 3.977e-06)
+SCENE_CAM_ROTATION_XYZW = (-0.00125, -1.0, 6.3463e-05, 3.977e-06)
+SCENE_CAM_ROTATION = (
+    SCENE_CAM_ROTATION_XYZW[3],
+    *SCENE_CAM_ROTATION_XYZW[:3],
+)
 EYES = ("left_eye", "right_eye")
 # Pupil Core's usual threshold: below it the pupil detection is not trusted
 MIN_CONFIDENCE = 0.6
 # the eye tracker's gaps longer than this are not bridged by interpolation
 MAX_EYE_GAP = 0.1
-GAZE_COLORS = {"left_eye": "#ffd700", "right_eye": "#00bfff"}
+# per eye, the same in the 3D view and the plots (legible on both)
+GAZE_COLORS = {"left_eye": "#e69f00", "right_eye": "#0094d6"}
+# samples per plotted panel and per moving object in exports: 10000 over the
+# 5.5 minutes is 30 per second, with every stretch's extremes kept; the page
+# stays under 5 MB
+PLOT_MAX_POINTS = 10000
 
 
 def load_head_eye(source: str = "auto"):
@@ -41,27 +60,50 @@ def load_head_eye(source: str = "auto"):
     Parameters
     ----------
     source : {"auto", "remote", "synthetic"}
-        As for :func:`rbm_nb.data.load_example`. With "auto" the fallback to
-        synthetic data is reported in ``note`` instead of as a warning.
+        As for :func:`rbm_nb.data.load_example`. With "auto", what was
+        loaded and why (the real files, your own files in
+        ``RBM_NB_DATA_DIR``, or the synthetic recording because the real one
+        is unavailable, with the reason and the fix) is said once, in
+        ``note``, instead of three warnings. The three parts are always of
+        one kind: if one part would be synthetic, all are.
 
     Returns
     -------
     head, left_eye, right_eye : xarray.Dataset
     note : str
-        Which data this is, in a sentence.
+        Which data this is and why, in a sentence or two.
     """
-    from .data import load_example
+    from .data.load import last_choice, load_example
 
+    names = ("head", *EYES)
     with warnings.catch_warnings():
+        # said once, in the note
         warnings.simplefilter("ignore", UserWarning)
-        head, left_eye, right_eye = (
-            load_example(name, source=source) for name in ("head", *EYES)
-        )
-    if is_synthetic(head):
-        note = "synthetic head/eye recording (the real one could not be had here)"
-    else:
-        note = "real head/eye recording (rbm-data)"
-    return head, left_eye, right_eye, note
+        parts = [load_example(name, source=source) for name in names]
+        choices = [last_choice(name) for name in names]
+        kinds = {c.kind for c in choices if c is not None}
+        if len(kinds) > 1 and "synthetic" in kinds:
+            # a real head with synthetic eyes would be nonsense
+            parts = [load_example(name, source="synthetic") for name in names]
+            choices = [
+                c if c is not None and c.kind == "synthetic" else None for c in choices
+            ]
+    return (*parts, _data_note(choices))
+
+
+def _data_note(choices) -> str:
+    kinds = {c.kind for c in choices if c is not None}
+    if kinds == {"real"}:
+        folder = choices[0].path.parent
+        return f"real head/eye recording (the rbm-data example files in {folder})"
+    if kinds == {"own"} or kinds == {"own", "real"}:
+        files = ", ".join(str(c.path) for c in choices)
+        return f"your own head/eye recording ({files})"
+    reasons = [c.reason for c in choices if c is not None and c.kind == "synthetic"]
+    reason = reasons[0] if reasons else "one part of the real recording is unavailable"
+    if reason == "the synthetic recording was asked for":
+        return "synthetic head/eye recording (asked for)"
+    return f"synthetic head/eye recording. {reason}"
 
 
 def is_synthetic(ds) -> bool:
@@ -149,15 +191,23 @@ def register_head_eye_frames(
             ).register(update=True)
 
 
-def gaze_angles(eye, name: str | None = None, *, min_confidence: float = 0.6):
+def gaze_angles(
+    eye,
+    name: str | None = None,
+    *,
+    min_confidence: float = MIN_CONFIDENCE,
+    max_angle: float | None = None,
+):
     """Azimuth (right) and elevation (up) of an eye's line of sight, in degrees.
 
-    The line of sight is the eye frame's z axis expressed in the scene camera
-    (x right, y down, z forward). With ``name`` (``"left_eye"`` or
-    ``"right_eye"``) and the explorer's frames registered, the angles come
-    from :mod:`rbm_nb.gaze`: samples below ``min_confidence`` and missing
-    ones are NaN, so plots show them as gaps. Without it they are computed
-    from the dataset's orientations alone (no confidence masking).
+    With ``name`` (``"left_eye"`` or ``"right_eye"``) and the explorer's
+    frames registered, the angles are measured in the head's axes (x
+    forward, y left, z up) by :mod:`rbm_nb.gaze`: samples below
+    ``min_confidence``, beyond ``max_angle`` degrees from the scene camera's
+    straight-ahead (see :data:`rbm_nb.gaze.OCULOMOTOR_RANGE`) and missing
+    ones are NaN, so plots show them as gaps. Without ``name`` they are
+    computed from the dataset's orientations alone, in the eye tracker's
+    image axes (x right, y down, z forward in the image; no masking).
 
     Returns
     -------
@@ -172,12 +222,13 @@ def gaze_angles(eye, name: str | None = None, *, min_confidence: float = 0.6):
 
         sight = gaze.directions(
             f"pupil/{name}",
-            "pupil/scene_cam",
+            "head",
             confidence=eye.confidence if "confidence" in eye else None,
             min_confidence=min_confidence,
-            max_gap=0.1,
+            max_gap=MAX_EYE_GAP,
+            max_angle=max_angle,
         )
-        out = gaze.angles(sight, "pupil/scene_cam")
+        out = gaze.angles(sight, "head", forward="x", up="z")
         out.attrs = {"long_name": "Gaze angles", "units": "deg"}
         return out
 
@@ -204,39 +255,241 @@ def head_speed(head):
     return speed
 
 
-def explorer_series(head, left_eye, right_eye) -> dict:
-    """The explorer's time series: head speed and both eyes' gaze angles.
+def head_yaw_rate(*, world: str = "world"):
+    """Head angular velocity about its own vertical axis, deg/s, positive left.
 
-    Register the frames first (:func:`register_head_eye_frames`) for gaze
-    angles with low-confidence samples masked.
+    The z component of the angular velocity of ``head`` relative to
+    ``world`` represented in the head's axes (x forward, y left, z up), so
+    a turn to the left is positive, as the gaze yaw of
+    :func:`gaze_yaw`. Register the frames first.
     """
+    from .lookups import lookup_angular_velocity
+
+    omega = lookup_angular_velocity(
+        "head", world, represent_in="head", as_dataarray=True
+    )
+    rate = np.degrees(omega.sel(cartesian_axis="z", drop=True))
+    rate.attrs = {"long_name": "Head yaw rate (+ left)", "units": "deg/s"}
+    return rate
+
+
+def gaze_yaw(left_eye, right_eye, *, max_angle: float | None = None):
+    """Horizontal gaze angle of both eyes in the head's axes, deg, positive left.
+
+    Dims (time, eye) with eyes ``"left eye"`` and ``"right eye"``; NaN where
+    an eye has no trusted sample (see :func:`gaze_angles`). The two eyes
+    share one clock in the example data; otherwise each keeps its own times
+    and the other's column is NaN there.
+    """
+    import xarray as xr
+
+    columns = []
+    for name, eye in zip(EYES, (left_eye, right_eye), strict=True):
+        azimuth = gaze_angles(eye, name, max_angle=max_angle).sel(
+            angle="azimuth", drop=True
+        )
+        columns.append(-azimuth.expand_dims(eye=[name.replace("_", " ")], axis=1))
+    out = xr.concat(columns, dim="eye", join="outer")
+    out.attrs = {
+        "long_name": "Gaze yaw in head (+ left)",
+        "units": "deg",
+        "colors": [GAZE_COLORS[eye] for eye in EYES],
+    }
+    return out
+
+
+def explorer_series(
+    head, left_eye, right_eye, *, max_angle: float | None = None
+) -> dict:
+    """The explorer's time series, for the questions notebook 06 asks.
+
+    ``"head yaw rate"`` (deg/s, in the head's axes), ``"gaze yaw"`` (deg,
+    both eyes, in the head's axes) and ``"gaze yaw rate"`` (deg/s, both
+    eyes, see :func:`rbm_nb.gaze.rates`); all positive to the left. The
+    vestibulo-ocular reflex shows as the eyes' rate opposite in sign to the
+    head's; saccades as spikes of several hundred deg/s in the eyes' rate.
+    Register the frames first (:func:`register_head_eye_frames`).
+    ``max_angle`` (degrees) flags impossible gaze, default
+    :data:`rbm_nb.gaze.OCULOMOTOR_RANGE`.
+    """
+    from . import gaze
+
+    if max_angle is None:
+        max_angle = gaze.OCULOMOTOR_RANGE
+    yaw = gaze_yaw(left_eye, right_eye, max_angle=max_angle)
+    rate = gaze.rates(yaw)
+    rate.attrs["colors"] = yaw.attrs["colors"]
     return {
-        "head speed": head_speed(head),
-        "left gaze": gaze_angles(left_eye, "left_eye"),
-        "right gaze": gaze_angles(right_eye, "right_eye"),
+        "head yaw rate": head_yaw_rate(),
+        "gaze yaw": yaw,
+        "gaze yaw rate": rate,
     }
 
 
+def vor_gain(series: dict, *, max_rate: float = 60.0) -> dict:
+    """Least-squares gain of each eye's yaw rate against the head's.
+
+    Slow phases only: samples whose eye rate is above ``max_rate`` deg/s
+    (saccades) are left out. The vestibulo-ocular reflex gives a negative
+    gain, about -1 for a far target; a positive one means the eyes turn
+    with the head, which no healthy eye does while fixating.
+
+    Returns
+    -------
+    dict
+        Eye name -> gain.
+    """
+    head = series["head yaw rate"]
+    eyes = series["gaze yaw rate"]
+    t_head = _seconds(head["time"].values)
+    t_eye = _seconds(eyes["time"].values)
+    head_at_eye = np.interp(t_eye, t_head, np.nan_to_num(head.values))
+    out = {}
+    for eye in eyes["eye"].values:
+        rate = eyes.sel(eye=eye).values
+        ok = np.isfinite(rate) & (np.abs(rate) < max_rate)
+        h = head_at_eye[ok]
+        out[str(eye)] = float(np.dot(h, rate[ok]) / np.dot(h, h))
+    return out
+
+
+def guided_instants(series: dict, *, window: float = 2.0) -> dict:
+    """Instants worth a look in the explorer's series, found in the data.
+
+    ``"vor"``: the middle of the ``window``-second stretch where the head
+    turns fastest (mean absolute yaw rate) while both eyes have samples and
+    counter-rotate (a negative :func:`vor_gain` there). ``"saccade"``: the
+    fastest gaze shift both eyes make together (over 200 deg/s, same sign
+    within 20 ms: a real saccade is conjugate, a tracker glitch is in one
+    eye). Times are the series' own (datetime64 for the example data).
+    """
+    head = series["head yaw rate"]
+    eyes = series["gaze yaw rate"]
+    t_head, t_eye = _seconds(head["time"].values), _seconds(eyes["time"].values)
+    rates = eyes.transpose("time", "eye").values
+    head_at_eye = np.interp(t_eye, t_head, np.nan_to_num(head.values))
+    slow = np.isfinite(rates).all(axis=1) & (np.abs(rates) < 60.0).all(axis=1)
+    best, best_score = None, -np.inf
+    starts = np.arange(t_eye[0], t_eye[-1] - window, window / 4)
+    lo = np.searchsorted(t_eye, starts)
+    hi = np.searchsorted(t_eye, starts + window)
+    for a, b in zip(lo, hi, strict=True):
+        ok = slow[a:b]
+        if ok.sum() < 20:
+            continue
+        h = head_at_eye[a:b][ok]
+        gain = np.dot(h, rates[a:b][ok].mean(axis=1)) / max(np.dot(h, h), 1e-12)
+        score = np.abs(h).mean()
+        if gain < -0.3 and score > best_score:
+            # the row nearest the middle where both eyes have a sample
+            rows = a + np.flatnonzero(ok)
+            best, best_score = rows[np.argmin(np.abs(rows - (a + b) // 2))], score
+    both_fast = np.isfinite(rates).all(axis=1) & (np.abs(rates) > 200.0).all(axis=1)
+    both_fast &= np.sign(rates[:, 0]) == np.sign(rates[:, 1])
+    speed = np.where(both_fast, np.abs(rates).min(axis=1), -np.inf)
+    times = eyes["time"].values
+    out = {}
+    if best is not None:
+        out["vor"] = times[best]
+    if np.isfinite(speed).any():
+        out["saccade"] = times[int(np.argmax(speed))]
+    return out
+
+
+def _seconds(times) -> np.ndarray:
+    times = np.asarray(times)
+    if np.issubdtype(times.dtype, np.datetime64):
+        return times.astype("datetime64[ns]").astype(np.int64) / 1e9
+    return times.astype(float)
+
+
+# the head model's parts, in the head's axes (x forward, y left, z up), from
+# the eyes' centre: a head of adult size (half-axes 10 x 7.8 x 11.5 cm) whose
+# front is just ahead of the eyeballs, and a nose below and between them
+HEAD_RADII = (0.1, 0.078, 0.115)
+HEAD_FROM_EYES = (-0.09, 0.0, 0.03)
+NOSE_SIZE = (0.03, 0.02, 0.04)
+NOSE_FROM_EYES = (0.012, 0.0, -0.035)
+EYEBALL_RADIUS = 0.012
+HEAD_COLOR = "#d9b38c"
+
+
+def eye_centres(*, head: str = "head") -> dict:
+    """Median centre of each eye in the head's axes (m), over its valid samples."""
+    from .lookups import lookup_transform
+
+    out = {}
+    for eye in EYES:
+        translation, _ = lookup_transform(f"pupil/{eye}", head)
+        out[eye] = np.nanmedian(np.atleast_2d(translation), axis=0)
+    return out
+
+
 def explorer_scene(
-    *, world: str = "world", name: str | None = None, head_scale=3.0, gaze_length=12.0
+    *,
+    world: str = "world",
+    name: str | None = None,
+    gaze_length: float = 2.0,
+    head_model: bool = True,
 ):
-    """A Scene with the world axes, the head's triad and path, and both gaze rays.
+    """A Scene with the world axes, a head model and path, and both gaze rays.
 
     The frames must be registered first (:func:`register_head_eye_frames`).
-    The default sizes are for the walk around a building (tens of metres):
-    a 3 m head triad and 12 m gaze rays stay visible when the whole path is in
-    view.
+    The head model (head, nose, one eyeball per eye at its median centre) is
+    drawn at real size at the tracked head pose, with the head's triad and
+    each eye's gaze ray, ``gaze_length`` metres long and coloured per eye
+    (:data:`GAZE_COLORS`), hidden where the eye has no sample. Far from the
+    camera the whole model (rays included) is magnified about the head until
+    it spans about 70 pixels, and the world's triad about 40, so the view of
+    the whole walk still shows where the head is and where it looks; close
+    up, everything is at its real size. Click the model or its label to
+    select the head.
     """
     from .scene import Scene
 
     scene = Scene(world, name=name)
-    scene.add_frame(world, scale=2.0)
-    scene.add_frame("head", scale=head_scale, label="head")
+    scene.add_frame(world, scale=1.0)
+    # everything with base="head" hangs below one node that moves with the
+    # head: the browser magnifies that node as one model
+    if head_model:
+        centres = eye_centres()
+        middle = (centres["left_eye"] + centres["right_eye"]) / 2
+        scene.add_mesh(
+            "head",
+            "ellipsoid",
+            base="head",
+            size=HEAD_RADII,
+            offset=middle + np.array(HEAD_FROM_EYES),
+            color=HEAD_COLOR,
+            opacity=0.9,
+            label="head model",
+        )
+        scene.add_mesh(
+            "head",
+            "box",
+            base="head",
+            size=NOSE_SIZE,
+            offset=middle + np.array(NOSE_FROM_EYES),
+            color=HEAD_COLOR,
+            label="nose",
+        )
+        for eye in EYES:
+            scene.add_mesh(
+                "head",
+                "sphere",
+                base="head",
+                size=EYEBALL_RADIUS,
+                offset=centres[eye],
+                color=GAZE_COLORS[eye],
+                label=f"{eye.replace('_', ' ')}ball",
+            )
+    scene.add_frame("head", base="head", scale=0.12, label="head")
     scene.add_path("head", color="#ffffff", max_points=2000)
     for eye in EYES:
         scene.add_vectors(
             f"pupil/{eye}",
             (0.0, 0.0, 1.0),
+            base="head",
             length=gaze_length,
             color=GAZE_COLORS[eye],
             label=f"{eye.replace('_', ' ')} gaze",
@@ -244,29 +497,213 @@ def explorer_scene(
     return scene
 
 
-def explorer_plot(series: dict, player, *, max_points: int | None = None):
+def explorer_plot(series: dict, player, *, max_points: int | None = PLOT_MAX_POINTS):
     """The time-series plot of the dashboard, following ``player``.
 
     None when :class:`~rbm_nb.widgets.TimeSeries` is not a widget that can
     follow a player in the browser (then the export has no plot).
-    ``max_points`` (per panel) keeps each stretch's extremes and gaps only.
+    ``max_points`` (per panel) keeps each stretch's extremes and gaps only,
+    so saccade peaks survive; the default keeps the exported page under
+    5 MB and the notebook's plot the same as the export's.
     """
     from .widgets import TimeSeries
 
     if not hasattr(TimeSeries, "_esm"):
         return None
-    return TimeSeries(series, player=player, max_points=max_points)
+    return TimeSeries(series, player=player, max_points=max_points, panel_height=140)
+
+
+def first_full_instant(head, left_eye, right_eye, *, min_confidence=MIN_CONFIDENCE):
+    """The first eye timestamp, from the head's first sample on, where both eyes
+    have a trusted sample: where the explorer starts, with everything drawn."""
+    ok = left_eye.time.values >= head.time.values[0]
+    for eye in (left_eye, right_eye):
+        ok &= np.isfinite(eye.orientation.values).all(axis=1)
+        if "confidence" in eye:
+            ok &= eye.confidence.values >= min_confidence
+    # and the rows around it too: an interpolation needs its neighbours,
+    # so the rays are drawn there whatever the frame core does next to a gap
+    run = ok.copy()
+    for shift in (-1, 1, 2):
+        run &= np.roll(ok, -shift)
+    index = int(np.argmax(run)) if run.any() else int(np.argmax(ok))
+    return left_eye.time.values[index]
+
+
+def seek_to(player, instant) -> None:
+    """Seek ``player`` to its first sample at or after ``instant``.
+
+    The Player snaps to its own samples; one just before ``instant`` would
+    show the eyes' previous row, which may have no sample (a row of the
+    other eye): use this to show an instant found in the eye data."""
+    player.seek_time(instant)
+    target = _seconds(np.asarray([instant]))[0]
+    last = len(player.seconds) - 1
+    while (
+        _seconds(np.asarray([player.timestamp]))[0] < target - 1e-6
+        and player.index < last
+    ):
+        player.seek(player.index + 1)
+
+
+EYE_MISSING_REASON = (
+    "the eye tracker has no trusted sample of this eye here: a row of the other "
+    "eye only, a blink or lost pupil, or confidence below {min_confidence}"
+)
+
+
+def _as_dataset(value, name: str):
+    if hasattr(value, "data_vars"):
+        return value
+    from .io._files import load_netcdf
+
+    try:
+        path = Path(value)
+    except TypeError:
+        raise ValueError(
+            f"dashboard: {name} must be an xarray.Dataset or the path of a netCDF "
+            f"file, got {type(value).__name__}"
+        ) from None
+    return load_netcdf(path)
+
+
+def dashboard(
+    head=None,
+    left_eye=None,
+    right_eye=None,
+    *,
+    source: str = "auto",
+    note: str | None = None,
+    min_confidence: float | None = MIN_CONFIDENCE,
+    max_angle: float | None = None,
+    gaze_length: float = 2.0,
+    height: int = 440,
+):
+    """The head/eye explorer for any recording: tree, 3D view, Player, plots.
+
+    Give your own recording as three datasets (or netCDF files) in the
+    example's schema: ``head`` with ``position`` and ``orientation`` of the
+    head tracker (T265 axes) along ``time``, and each eye with
+    ``orientation`` (and ``position``, ``confidence``) in the scene camera,
+    as Pupil Core reports them. Without them the example recording is
+    loaded (:func:`load_head_eye` with ``source``). The frames are
+    registered (:func:`register_head_eye_frames`, replacing frames of the
+    same names) and the Player starts at the first instant where both eyes
+    have a sample.
+
+    Parameters
+    ----------
+    head, left_eye, right_eye : xarray.Dataset or path, optional
+    source : {"auto", "remote", "synthetic"}
+        Which example data, when no datasets are given.
+    note : str, optional
+        What the data is, shown above the dashboard (default: the file names
+        or :func:`load_head_eye`'s note).
+    min_confidence, max_angle : float, optional
+        Samples below ``min_confidence`` are missing; gaze further than
+        ``max_angle`` degrees from straight ahead is impossible and missing
+        (default :data:`rbm_nb.gaze.OCULOMOTOR_RANGE`).
+    gaze_length : float, default 2.0
+        Length of the gaze rays in metres.
+    height : int, default 440
+        Height of the 3D view in pixels.
+
+    Returns
+    -------
+    ipywidgets.VBox
+        The dashboard; its ``scene``, ``player``, ``tree``, ``plot``,
+        ``series`` and ``note`` attributes are the parts.
+    """
+    import ipywidgets as widgets
+
+    from .widgets.frame_tree import FrameTree
+
+    given = [head, left_eye, right_eye]
+    if all(part is None for part in given):
+        head, left_eye, right_eye, loaded = load_head_eye(source)
+        note = note or loaded
+    elif any(part is None for part in given):
+        raise ValueError("dashboard: give all of head, left_eye and right_eye, or none")
+    else:
+        if note is None:
+            note = "your recording" + "".join(
+                f", {p}" for p in given if not hasattr(p, "data_vars")
+            )
+        head, left_eye, right_eye = (
+            _as_dataset(part, name)
+            for part, name in zip(given, ("head", *EYES), strict=True)
+        )
+    register_head_eye_frames(head, left_eye, right_eye, min_confidence=min_confidence)
+    series = explorer_series(head, left_eye, right_eye, max_angle=max_angle)
+    scene = explorer_scene(gaze_length=gaze_length)
+    player = scene.player(speed=1.0)
+    seek_to(player, first_full_instant(head, left_eye, right_eye))
+    reason = EYE_MISSING_REASON.format(min_confidence=min_confidence)
+    tree = FrameTree(
+        "world",
+        scene=scene,
+        player=player,
+        missing_reasons={f"pupil/{eye}": reason for eye in EYES},
+    )
+    plot = explorer_plot(series, player)
+    scene.widget.height = height
+    # min_width 0: flex items may shrink below their content, so nothing
+    # spills sideways in a 1280 px window
+    scene.widget.layout.flex = "1 1 60%"
+    scene.widget.layout.min_width = "0"
+    tree.layout.flex = "0 0 38%"
+    tree.layout.min_width = "0"
+    header = widgets.HTML(f"<i>data: {html.escape(note)}</i>")
+    parts = [header, widgets.HBox([tree, scene.widget]), player]
+    out = widgets.VBox(
+        parts + ([plot] if plot is not None else []),
+        layout=widgets.Layout(width="100%", overflow="hidden"),
+    )
+    out.add_class("rbm-explorer")
+    out.scene, out.player, out.tree, out.plot = scene, player, tree, plot
+    out.series, out.note = series, note
+    return out
+
+
+def export_html(board, path, *, max_frames: int | None = PLOT_MAX_POINTS) -> Path:
+    """Write a :func:`dashboard` (3D view, plots, Player) as one offline HTML page.
+
+    The page names the data in its title and plays in any browser with no
+    Python and no network. Moving objects keep at most ``max_frames``
+    samples each; the plots keep what the dashboard's plot has (at most
+    :data:`PLOT_MAX_POINTS` per panel), so the notebook's export and
+    ``rbm-nb demo --html`` write the same content, under 5 MB for the
+    example recording.
+    """
+    return board.scene.to_html(
+        Path(path),
+        series=[] if board.plot is None else [board.plot],
+        player=board.player,
+        max_frames=max_frames,
+        title=f"rbm_nb head/eye explorer: {board.note}",
+    )
+
+
+def close_dashboard(board) -> None:
+    """Close the widgets of a :func:`dashboard` (the frames stay registered)."""
+    for widget in (board.plot, board.tree, board.player):
+        if widget is not None:
+            widget.close()
+    board.scene.close()
+    board.close()
 
 
 def write_explorer_html(
-    path, *, source: str = "auto", max_frames: int | None = 10000, progress: bool = True
+    path,
+    *,
+    source: str = "auto",
+    max_frames: int | None = PLOT_MAX_POINTS,
+    progress: bool = True,
 ) -> Path:
     """Build the explorer's dashboard from the example data and write it as HTML.
 
-    The page (3D view, time series, player) plays offline in any browser
-    (see :meth:`Scene.to_html`). Moving objects and plotted series keep at
-    most ``max_frames`` samples each (10000 over the 5.5 minutes is 30 per
-    second), which keeps the file under 5 MB.
+    The same page as :func:`export_html` of :func:`dashboard` in notebook 06.
+    The registry is left as the caller had it.
 
     Returns
     -------
@@ -276,49 +713,21 @@ def write_explorer_html(
     from . import frames
     from ._progress import make_bar
 
-    steps = [
-        "loading the recording",
-        "building the frame tree",
-        "building the scene",
-        "writing the HTML",
-    ]
+    steps = ["building the dashboard", "writing the HTML"]
     bar = make_bar(len(steps), "rbm-nb demo --html", progress=progress)
     previous = dict(frames.registry)
-    scene = player = plot = None
+    board = None
     try:
         bar.set_postfix_str(steps[0])
-        head, left_eye, right_eye, note = load_head_eye(source)
+        board = dashboard(source=source)
         bar.update()
         bar.set_postfix_str(steps[1])
-        register_head_eye_frames(head, left_eye, right_eye)
-        bar.update()
-        bar.set_postfix_str(steps[2])
-        scene = explorer_scene()
-        player = scene.player()
-        # each panel: every stretch's extremes and first gap (saccade peaks
-        # and gaps survive), at most ~max_frames samples
-        plot = explorer_plot(
-            explorer_series(head, left_eye, right_eye),
-            player,
-            max_points=None if max_frames is None else max(int(max_frames), 10),
-        )
-        bar.update()
-        bar.set_postfix_str(steps[3])
-        out = scene.to_html(
-            Path(path),
-            series=[] if plot is None else [plot],
-            player=player,
-            max_frames=max_frames,
-            title=f"rbm_nb head/eye explorer: {note}",
-        )
+        out = export_html(board, path, max_frames=max_frames)
         bar.update()
     finally:
         bar.close()
-        for widget in (plot, player):
-            if widget is not None:
-                widget.close()
-        if scene is not None:
-            scene.close()
+        if board is not None:
+            close_dashboard(board)
         # leave the registry as the caller had it
         frames.clear_registry()
         for frame in previous.values():

@@ -37,8 +37,14 @@ if TYPE_CHECKING:
 
     from .frames import FrameLike
 
-__all__ = ["directions", "angles"]
+__all__ = ["directions", "angles", "rates", "OCULOMOTOR_RANGE"]
 
+# Degrees. The eyes turn at most about this far from straight ahead in the
+# head: the oculomotor range is 45-55 deg horizontally and less vertically
+# (Guitton & Volle 1987, J Neurophysiol 58:427); beyond it people turn the
+# head. An eye tracker's sample further out than this from the line-of-sight
+# axis of the eye's parent frame is a mis-detection, not an eye position.
+OCULOMOTOR_RANGE = 50.0
 # the eye frame's axis that is the line of sight (camera convention)
 _LINE_OF_SIGHT = np.array([0.0, 0.0, 1.0])
 _AXES = {"x": 0, "y": 1, "z": 2}
@@ -51,6 +57,7 @@ def directions(
     confidence: npt.ArrayLike | xr.DataArray | None = None,
     min_confidence: float = 0.6,
     max_gap: float | None = None,
+    max_angle: float | None = None,
 ) -> xr.DataArray:
     """Unit line-of-sight vectors of an eye, represented in another frame.
 
@@ -80,12 +87,19 @@ def directions(
         ``max_gap`` apart (the tracker recorded nothing in between), a NaN row
         is inserted halfway, so that plots and players show the gap instead
         of drawing across it. Default: no rows inserted.
+    max_angle : float, optional
+        Degrees. Samples whose line of sight is further than this from the z
+        axis of the eye frame's parent (the straight-ahead of the scene
+        camera it is measured in) are physiologically impossible and set to
+        NaN. :data:`OCULOMOTOR_RANGE` (50) is the usual choice; on the real
+        example recording it flags 92 of the left eye's 53184 confident
+        samples and 25 of the right eye's 52197 (up to 81 and 88 deg). Default: no sample is flagged for its angle.
 
     Returns
     -------
     xarray.DataArray, dims (time, cartesian_axis), shape (m, 3)
         Unit vectors, NaN where the sample is missing, below
-        ``min_confidence``, inserted in a gap, or outside the time range of
+        ``min_confidence``, beyond ``max_angle``, inserted in a gap, or outside the time range of
         the frames between the eye and ``into``. ``attrs`` has
         ``representation_frame`` (the name of ``into``), which
         :func:`angles` and the ``transform_*`` functions read.
@@ -96,7 +110,7 @@ def directions(
         If a frame is not registered, the eye frame is static and no
         confidence DataArray gives the times, ``confidence`` has the wrong
         shape, or ``min_confidence``/``max_gap`` is not a finite number
-        (``max_gap`` positive).
+        (``max_gap`` positive, ``max_angle`` in (0, 180]).
     """
     from .frames import ReferenceFrame, resolve_frame
 
@@ -109,6 +123,8 @@ def directions(
     min_confidence = _finite_number(min_confidence, "min_confidence")
     if max_gap is not None and _finite_number(max_gap, "max_gap") <= 0:
         raise ValueError(f"max_gap must be positive (seconds), got {max_gap!r}")
+    if max_angle is not None and not 0 < _finite_number(max_angle, "max_angle") <= 180:
+        raise ValueError(f"max_angle must be in (0, 180] degrees, got {max_angle!r}")
 
     times, rotation = _eye_samples(eye, confidence)
     valid = np.isfinite(rotation).all(axis=1)
@@ -122,6 +138,10 @@ def directions(
         q = rotation[valid]
         q = q / np.linalg.norm(q, axis=1, keepdims=True)
         sight = rotate_vectors(q, _LINE_OF_SIGHT, one_to_one=False)
+        if max_angle is not None:
+            # the angle from the parent's z axis, where the eye looks ahead
+            possible = sight[:, 2] >= np.cos(np.radians(float(max_angle)))
+            sight[~possible] = np.nan
         out[valid] = _represent(sight, times[valid], eye.parent, target)
     if max_gap is not None:
         times, out = _insert_gap_rows(times, out, float(max_gap))
@@ -200,6 +220,68 @@ def angles(
         coords={"time": times, "angle": ["azimuth", "elevation"]},
         attrs={"long_name": "Gaze angles", "units": "deg", "reference_frame": ref.name},
     )
+
+
+def rates(angles: xr.DataArray, *, window: float = 0.02) -> xr.DataArray:
+    """Angular velocity (deg/s) of gaze angles, from valid samples only.
+
+    Each sample's rate is the slope between the first and the last valid
+    sample within ``window`` seconds centred on it, so one missing
+    neighbour does not remove a rate and noise is averaged over the
+    window; a saccade (30-100 ms) keeps most of its peak with the default
+    20 ms. Where the valid samples in the window span less than half of it,
+    the rate is NaN, as it is at missing samples.
+
+    Parameters
+    ----------
+    angles : DataArray, dims (time, ...), numeric or datetime64 ``time``
+        Angles in degrees, e.g. from :func:`angles`; NaN rows are missing.
+    window : float, default 0.02
+        Seconds.
+
+    Returns
+    -------
+    xarray.DataArray
+        Same dims and coordinates, ``units`` "deg/s".
+
+    Raises
+    ------
+    ValueError
+        If ``angles`` has no ``time`` dimension or ``window`` is not positive.
+    """
+    if not _is_dataarray(angles) or "time" not in angles.dims:
+        raise ValueError("angles must be a DataArray with a 'time' dimension")
+    if _finite_number(window, "window") <= 0:
+        raise ValueError(f"window must be positive (seconds), got {window!r}")
+    arr = angles.transpose("time", ...)
+    keys = _keys(arr["time"].values)
+    scale = 1e9 if np.issubdtype(arr["time"].dtype, np.datetime64) else 1.0
+    # from the first time: epoch seconds as floats would round to 0.2 us
+    t = (keys - keys[0]) / scale if len(keys) else keys / scale
+    values = np.asarray(arr.values, dtype=float).reshape(len(t), -1)
+    out = np.full(values.shape, np.nan)
+    for k in range(values.shape[1]):
+        out[:, k] = _windowed_slope(t, values[:, k], float(window))
+    result = arr.copy(data=out.reshape(arr.shape))
+    result.attrs = {"long_name": "Gaze angular velocity", "units": "deg/s"}
+    return result.transpose(*angles.dims)
+
+
+def _windowed_slope(t, y, window):
+    valid = np.flatnonzero(np.isfinite(y))
+    out = np.full(t.shape, np.nan)
+    if valid.size < 2:
+        return out
+    tv, yv = t[valid], y[valid]
+    first = np.searchsorted(tv, t - window / 2, side="left")
+    last = np.searchsorted(tv, t + window / 2, side="right") - 1
+    first = np.clip(first, 0, tv.size - 1)
+    last = np.clip(last, 0, tv.size - 1)
+    span = tv[last] - tv[first]
+    # (half the window, less a rounding error of the times)
+    ok = np.isfinite(y) & (last > first) & (span >= window / 2 * (1 - 1e-9))
+    out[ok] = (yv[last[ok]] - yv[first[ok]]) / span[ok]
+    return out
 
 
 # -- helpers ----------------------------------------------------------------

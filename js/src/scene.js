@@ -19,7 +19,8 @@ const CSS = `
 .rbm-scene .rbm-pane { position: absolute; inset: 0; }
 .rbm-scene .rbm-overlay { position: absolute; inset: 0; pointer-events: none; overflow: hidden; }
 .rbm-scene .rbm-label { position: absolute; transform: translate(6px, -50%); font: 12px sans-serif;
-  color: #fff; background: rgba(0,0,0,.55); padding: 1px 5px; border-radius: 3px; white-space: nowrap; }
+  color: #fff; background: rgba(0,0,0,.55); padding: 1px 5px; border-radius: 3px; white-space: nowrap;
+  pointer-events: auto; cursor: pointer; }
 .rbm-scene .rbm-label.rbm-selected { background: #d9a400; color: #000; font-weight: bold; }
 .rbm-scene .rbm-legend { position: absolute; left: 6px; bottom: 6px; font: 12px sans-serif; color: #fff;
   background: rgba(0,0,0,.5); padding: 4px 8px; border-radius: 4px; pointer-events: none; line-height: 1.5; }
@@ -161,6 +162,19 @@ function cssColor(value) {
   return typeof value === "number" ? `#${value.toString(16).padStart(6, "0")}` : String(value);
 }
 
+// Screen-space sizing. Far from the camera, real sizes vanish: a 20 cm head
+// on a 100 m walk is one pixel. Every group drawn relative to a moving frame
+// (meshcat node /rbm/anchor_<frame>: a head model, its eyes and gaze rays) is
+// magnified about that frame's origin until its largest mesh dimension spans
+// GLYPH_PX pixels, and every other frame triad until its axes span TRIAD_PX;
+// close up, both are drawn at their real size.
+const GLYPH_PX = 72;
+const TRIAD_PX = 40;
+// a long line in a magnified group (a gaze ray) is drawn at its real length,
+// or this long on screen when that is shorter, never magnified further
+const RAY_PX = 160;
+const ANCHOR_PREFIX = "anchor_";
+
 class View {
   constructor(model, el, store) {
     const MeshCat = globalThis.MeshCat;
@@ -236,6 +250,7 @@ class View {
     this.labels = new Map();
     this.frames = 0;
     this.nodes = new Map();
+    this.glyphs = null; // [{object, size}] of the anchors, found after each change
     this.rebuild();
     this.applyCamera();
     this.showLegend();
@@ -244,6 +259,9 @@ class View {
     model.on("change:_camera", () => this.applyCamera());
     model.on("change:_legend", () => this.showLegend());
     model.on("change:_labels", () => this.showLabels());
+    model.on("change:_frames", () => {
+      this.glyphs = null;
+    });
     model.on("change:labels", () => this.showLabels());
     model.on("change:selected", () => this.showLabels());
     model.on("change:height", () => {
@@ -301,8 +319,108 @@ class View {
       this.viewer.handle_command_bytearray(bytes);
     }
     this.nodes.clear();
+    this.glyphs = null;
+    this.triads = null;
     this.posesDirty = true;
     this.viewer.set_dirty();
+  }
+
+  /** Pixels per metre at a world position (perspective camera). */
+  pixelsPerMetre(position) {
+    const camera = this.viewer.camera;
+    const distance = camera.getWorldPosition(new this.THREE.Vector3()).distanceTo(position);
+    const height = this.pane.clientHeight || 1;
+    const fov = ((camera.fov || 75) * Math.PI) / 180;
+    return height / (2 * Math.max(distance, 1e-9) * Math.tan(fov / 2));
+  }
+
+  /** Largest dimension (m) of the meshes below ``object`` at scale 1 (lines if none). */
+  naturalSize(object) {
+    const THREE = this.THREE;
+    const saved = object.scale.clone();
+    object.scale.setScalar(1);
+    object.updateMatrixWorld(true);
+    const meshes = new THREE.Box3();
+    const all = new THREE.Box3();
+    object.traverse((o) => {
+      if (o === object || !o.geometry) return;
+      (o.isMesh ? meshes : all).expandByObject(o);
+    });
+    object.scale.copy(saved);
+    object.updateMatrixWorld(true);
+    const box = meshes.isEmpty() ? all : meshes;
+    if (box.isEmpty()) return 0;
+    const size = box.getSize(new THREE.Vector3());
+    return Math.max(size.x, size.y, size.z);
+  }
+
+  findGlyphs() {
+    const root = this.viewer.scene_tree.find(["rbm"]);
+    const glyphs = [];
+    for (const name of Object.keys(root.children || {})) {
+      if (!name.startsWith(ANCHOR_PREFIX)) continue;
+      const object = root.children[name].object;
+      const size = this.naturalSize(object);
+      if (size <= 0) continue;
+      // the group's long lines: the geometry nodes of parts larger than the model
+      const rays = [];
+      const parts = root.children[name].children || {};
+      for (const part of Object.keys(parts)) {
+        const length = this.naturalSize(parts[part].object);
+        if (length <= 2 * size) continue;
+        parts[part].object.traverse((o) => {
+          if (o.name === "geom") rays.push({ object: o, length });
+        });
+      }
+      glyphs.push({ path: `/rbm/${name}`, object, size, scale: 1, rays });
+    }
+    this.glyphs = glyphs;
+    const frames = this.model.get("_frames") || {};
+    this.triads = [];
+    for (const path of Object.values(frames)) {
+      if (glyphs.some((g) => path.startsWith(`${g.path}/`))) continue;
+      const geom = this.node(`${path}/geom`);
+      if (!geom) continue;
+      const size = this.naturalSize(geom);
+      if (size > 0) this.triads.push({ path, object: geom, size, scale: 1 });
+    }
+  }
+
+  /** Magnify glyphs and triads that would be smaller than their minimum on screen. */
+  keepVisible() {
+    if (this.glyphs === null) this.findGlyphs();
+    let changed = false;
+    const resize = (item, pixels) => {
+      const position = item.object.getWorldPosition(new this.THREE.Vector3());
+      const scale = Math.max(1, pixels / (item.size * this.pixelsPerMetre(position)));
+      if (Math.abs(scale - item.scale) > 1e-3 * item.scale) {
+        item.scale = scale;
+        item.object.scale.setScalar(scale);
+        changed = true;
+      }
+    };
+    for (const glyph of this.glyphs) {
+      resize(glyph, GLYPH_PX);
+      const ppm = this.pixelsPerMetre(glyph.object.getWorldPosition(new this.THREE.Vector3()));
+      for (const ray of glyph.rays) {
+        const wanted = Math.max(ray.length, RAY_PX / ppm) / (glyph.scale * ray.length);
+        if (Math.abs(ray.object.scale.x - wanted) > 1e-3 * wanted) {
+          ray.object.scale.setScalar(wanted);
+          changed = true;
+        }
+      }
+    }
+    for (const triad of this.triads) resize(triad, TRIAD_PX);
+    if (changed) this.viewer.set_dirty();
+  }
+
+  /** Screen radius (px) of the glyph or triad drawn at ``path``, 0 if none. */
+  screenRadius(path) {
+    const items = [...(this.glyphs || []), ...(this.triads || [])];
+    const item = items.find((g) => path === g.path || path.startsWith(`${g.path}/`));
+    if (!item) return 0;
+    const position = item.object.getWorldPosition(new this.THREE.Vector3());
+    return (item.scale * item.size * this.pixelsPerMetre(position)) / 2;
   }
 
   node(path) {
@@ -460,6 +578,13 @@ class View {
       }
       div.textContent = text;
       div.classList.toggle("rbm-selected", path === selectedPath);
+      div.onclick = () => {
+        const name = Object.keys(frames).find((n) => frames[n] === path);
+        if (name && name !== this.model.get("selected")) {
+          this.model.set("selected", name);
+          this.model.save_changes();
+        }
+      };
     }
   }
 
@@ -490,9 +615,11 @@ class View {
       if (xy === null) {
         div.style.display = "none";
       } else {
+        // beside the drawn glyph or triad, never over it
+        const r = this.screenRadius(path);
         div.style.display = "";
-        div.style.left = `${xy[0]}px`;
-        div.style.top = `${xy[1]}px`;
+        div.style.left = `${xy[0] + r}px`;
+        div.style.top = `${xy[1] - r}px`;
       }
     }
   }
@@ -507,7 +634,8 @@ class View {
       if (xy === null) {
         continue;
       }
-      const d = Math.hypot(xy[0] - x, xy[1] - y);
+      // anywhere on a magnified model selects its frame
+      const d = Math.hypot(xy[0] - x, xy[1] - y) - Math.max(0, this.screenRadius(path) - 24);
       if (d < bestDistance) {
         bestDistance = d;
         best = name;
@@ -544,6 +672,7 @@ class View {
       this.applyPoses(t);
     }
     this.follow();
+    this.keepVisible();
     if (this.viewer.needs_render) {
       this.viewer.render();
       this.frames += 1;

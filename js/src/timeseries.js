@@ -51,7 +51,7 @@ function withNulls(values) {
 }
 
 function formatValue(v, units) {
-  if (v === null || v === undefined || Number.isNaN(v)) return "\u2014";
+  if (v === null || v === undefined || Number.isNaN(v)) return "missing";
   const text = Math.abs(v) >= 1e4 || (Math.abs(v) < 1e-3 && v !== 0)
     ? v.toExponential(3) : v.toPrecision(4).replace(/(\.\d*?)0+$/, "$1").replace(/\.$/, "");
   return units ? `${text} ${units}` : text;
@@ -62,6 +62,57 @@ function axisLabel(t0Ns) {
   if (t0Ns === null || t0Ns === undefined) return "seconds since start";
   return `seconds since ${formatTime(0, t0Ns).split(" \u00b7 ")[1]}`;
 }
+
+// Robust y range of the samples shown: the 0.5th to 99.5th percentiles, with
+// room for values up to half that span beyond them. A handful of impossible
+// samples (a mis-detected pupil at 88 deg, a glitch of 4000 deg/s) no longer
+// sets the scale, while saccade peaks and everything near the bulk stay in view.
+const ROBUST_LOW = 0.005;
+const ROBUST_HIGH = 0.995;
+const ROBUST_ROOM = 0.5;
+const ROBUST_SAMPLES = 20000;
+
+function robustRange(u, dataMin, dataMax) {
+  const [i0, i1] = u.series[0].idxs || [0, u.data[0].length - 1];
+  const values = [];
+  const step = Math.max(1, Math.floor(((i1 - i0 + 1) * (u.data.length - 1)) / ROBUST_SAMPLES));
+  for (let k = 1; k < u.data.length; k++) {
+    const ys = u.data[k];
+    for (let i = i0; i <= i1; i += step) {
+      const v = ys[i];
+      if (v !== null && v !== undefined && Number.isFinite(v)) values.push(v);
+    }
+  }
+  if (values.length < 2 || !(dataMax > dataMin)) {
+    const mid = Number.isFinite(dataMin) ? dataMin : 0;
+    return [mid - 1, mid + 1];
+  }
+  values.sort((a, b) => a - b);
+  const at = (p) => values[Math.min(values.length - 1, Math.floor(p * (values.length - 1)))];
+  const lo = at(ROBUST_LOW);
+  const hi = at(ROBUST_HIGH);
+  const room = ROBUST_ROOM * Math.max(hi - lo, 1e-9);
+  const min = Math.max(dataMin, lo - room);
+  const max = Math.min(dataMax, hi + room);
+  const pad = 0.05 * Math.max(max - min, 1e-9);
+  return [min - pad, max + pad];
+}
+
+// Listen on the window in the capture phase: JupyterLab's notebook handles a
+// shift+mousedown as a cell selection and stops the mousemove/mouseup events
+// that follow at the document, so listeners there never heard the pan.
+function onDrag(move, up) {
+  const done = (ev) => {
+    window.removeEventListener("mousemove", move, true);
+    window.removeEventListener("mouseup", done, true);
+    up(ev);
+  };
+  window.addEventListener("mousemove", move, true);
+  window.addEventListener("mouseup", done, true);
+}
+
+// a click seeks only once it is clear it is not the first half of a double-click
+const DOUBLE_CLICK_MS = 300;
 
 async function render({ model, el }) {
   injectCss();
@@ -166,16 +217,18 @@ async function render({ model, el }) {
         stroke: panel.colors[k],
         width: 1.25,
         spanGaps: false,
-        value: (u, v) => formatValue(v, panel.units),
+        // no cursor: a dash; a cursor on a sample with no value: "missing"
+        value: (u, v, si, idx) => (idx === null || idx === undefined ? "\u2014" : formatValue(v, panel.units)),
       })),
     ];
     let panStart = null;
     let downAt = null;
+    let pendingSeek = null;
     let scrubbing = false;
     const opts = {
       width: width(),
       height: height + (last ? 40 : 0),
-      scales: { x: { time: false } },
+      scales: { x: { time: false }, y: { range: robustRange } },
       series,
       axes: [
         {
@@ -205,34 +258,33 @@ async function render({ model, el }) {
             if (nearCursor(u, e)) {
               // drag the red line: scrub the player (and every view it drives)
               scrubbing = true;
+              e.stopPropagation();
               const move = (ev) => {
                 const rect = u.over.getBoundingClientRect();
                 seek(u.posToVal(Math.min(Math.max(ev.clientX - rect.left, 0), rect.width), "x"));
               };
-              const up = () => {
-                document.removeEventListener("mousemove", move);
-                document.removeEventListener("mouseup", up);
+              onDrag(move, () => {
                 scrubbing = false;
                 downAt = null;
-              };
-              document.addEventListener("mousemove", move);
-              document.addEventListener("mouseup", up);
+              });
               return;
             }
             if (e.shiftKey) {
+              // ours, not the notebook's (shift+click there selects cells)
+              e.stopPropagation();
+              e.preventDefault();
               const { min, max } = u.scales.x;
               panStart = { x: e.clientX, min, max, perPx: (max - min) / u.over.clientWidth };
               const move = (ev) => {
+                ev.stopPropagation();
                 const shift = (ev.clientX - panStart.x) * panStart.perPx;
                 u.setScale("x", { min: panStart.min - shift, max: panStart.max - shift });
               };
-              const up = () => {
-                document.removeEventListener("mousemove", move);
-                document.removeEventListener("mouseup", up);
+              onDrag(move, (ev) => {
+                ev.stopPropagation();
                 panStart = null;
-              };
-              document.addEventListener("mousemove", move);
-              document.addEventListener("mouseup", up);
+                downAt = null;
+              });
               return;
             }
             handler(e);
@@ -243,7 +295,16 @@ async function render({ model, el }) {
               const moved = Math.hypot(e.clientX - downAt[0], e.clientY - downAt[1]);
               if (moved < 4 && !e.shiftKey) {
                 const rect = u.over.getBoundingClientRect();
-                seek(u.posToVal(e.clientX - rect.left, "x"));
+                const t = u.posToVal(e.clientX - rect.left, "x");
+                clearTimeout(pendingSeek);
+                pendingSeek = null;
+                // the second click of a double-click: no seek, the zoom resets
+                if (e.detail < 2) {
+                  pendingSeek = setTimeout(() => {
+                    pendingSeek = null;
+                    seek(t);
+                  }, DOUBLE_CLICK_MS);
+                }
               }
             }
             downAt = null;
@@ -251,6 +312,8 @@ async function render({ model, el }) {
           },
           dblclick: (u, targ, handler) => (e) => {
             if (e.button !== 0 || e.target !== targ) return;
+            clearTimeout(pendingSeek);
+            pendingSeek = null;
             u.setScale("x", { min: dataMin, max: dataMax });
           },
         },

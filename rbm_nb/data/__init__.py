@@ -16,6 +16,8 @@ from .fetch import ExampleDataStore, ExampleDataUnavailable, example_data
 
 _LAZY = {
     "load_example": "load",
+    "last_choice": "load",
+    "DataChoice": "load",
     "write_synthetic_rosbag": "load",
     "synthetic_head_eye": "synthetic",
     "HeadEyeRecording": "synthetic",
@@ -27,5 +29,10 @@ __all__ = ["ExampleDataStore", "ExampleDataUnavailable", "example_data", *_LAZY]
 __getattr__, __dir__ = lazy_attributes(__name__, _LAZY)
 
 if TYPE_CHECKING:  # pragma: no cover - static analysers see the real names
-    from .load import load_example, write_synthetic_rosbag  # noqa: F401
+    from .load import (  # noqa: F401
+        DataChoice,
+        last_choice,
+        load_example,
+        write_synthetic_rosbag,
+    )
     from .synthetic import HeadEyeRecording, synthetic_head_eye  # noqa: F401

@@ -22,18 +22,20 @@ from .._kernels.quaternion import qconj, rotate_vectors
 from ._profiles import bump, smootherstep
 from ._walking import HeadMotion
 
-# scene camera (x right, y down, z forward) in the head frame (x right, y up,
-# z back): the calibration of the real head/eye recording (the values guide 1.6
-# of rigid-body-motion hard-codes), so that one tree serves real and synthetic
-# data alike. It is turned ~180 deg about x: the camera looks forward, image y
-# pointing down.
+# scene camera (x right, y down, z forward in its image) in the head tracker's
+# frame (x right, y up, z back): the calibration of the real head/eye
+# recording, whose quaternion is in (x, y, z, w) order (see
+# rbm_nb.explorer.SCENE_CAM_ROTATION): turned 180 deg about the tracker's y
+# axis, so the camera looks forward with its image upside down (image x to
+# the wearer's left, image y up). One tree serves real and synthetic data.
 SCENE_CAMERA_TRANSLATION = np.array([24.5e-3, -29e-3, 0.0])
-SCENE_CAMERA_ROTATION = np.array([-0.00125, -1.0, 6.3463e-05, 3.977e-06])
+SCENE_CAMERA_ROTATION = np.array([3.977e-06, -0.00125, -1.0, 6.3463e-05])
 SCENE_CAMERA_ROTATION = SCENE_CAMERA_ROTATION / np.linalg.norm(SCENE_CAMERA_ROTATION)
-# eyeball centres in the scene camera frame
+# eyeball centres in the scene camera frame: the left eye on the wearer's
+# left (image +x), both below the camera (image -y) and behind it
 EYE_CENTERS = {
-    "left_eye": np.array([-0.031, 0.03, -0.02]),
-    "right_eye": np.array([0.031, 0.03, -0.02]),
+    "left_eye": np.array([0.031, -0.03, -0.02]),
+    "right_eye": np.array([-0.031, -0.03, -0.02]),
 }
 GROUND = -1.65  # m below the head's starting height
 MAX_ECCENTRICITY = np.deg2rad(35.0)  # beyond this people turn the head instead

@@ -6,7 +6,7 @@ import functools
 import os
 import warnings
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from ..io._files import load_netcdf
 from .fetch import ExampleDataStore, ExampleDataUnavailable, cache_dir, example_data
@@ -20,7 +20,7 @@ if TYPE_CHECKING:
 SOURCES = ("auto", "remote", "synthetic")
 DATASETS = ("head", "left_eye", "right_eye")
 # bump when the generator's output changes, so that cached bags are rebuilt
-SYNTHETIC_VERSION = 3
+SYNTHETIC_VERSION = 4
 
 # topic -> (recording part, frame, child frame), as in the real example bag
 ROSBAG_TOPICS = {
@@ -32,6 +32,48 @@ ROSBAG_TOPICS = {
         "pupil/right_eye",
     ),
 }
+
+
+class DataChoice(NamedTuple):
+    """Which data :func:`load_example` gave for a name, and why.
+
+    Attributes
+    ----------
+    name : str
+        The dataset asked for ("head", "left_eye", ...).
+    kind : {"real", "own", "synthetic"}
+        The registered example file; a file of the same name in
+        ``RBM_NB_DATA_DIR`` that is not the example (your own recording, same
+        schema); or the synthetic stand-in.
+    path : pathlib.Path or None
+        The file read (None for synthetic data).
+    reason : str
+        One sentence: why this data and, for synthetic data, how to get the
+        real one.
+    """
+
+    name: str
+    kind: str
+    path: Path | None
+    reason: str
+
+
+_CHOICES: dict[str, DataChoice] = {}
+# what a recording of each name must have to be opened as your own
+_SCHEMA = {
+    "head": ("position", "orientation"),
+    "left_eye": ("orientation",),
+    "right_eye": ("orientation",),
+}
+
+
+def last_choice(name: str) -> DataChoice | None:
+    """What the latest :func:`load_example` call for ``name`` gave, and why.
+
+    None before the first call. The CLI and the explorer use it to say which
+    data they show.
+    """
+    return _CHOICES.get(name)
 
 
 def load_example(
@@ -51,7 +93,11 @@ def load_example(
         "remote": the real file (downloaded if needed, see
         :data:`rbm_nb.example_data`); "synthetic": the synthetic stand-in
         (:func:`synthetic_head_eye`, 5.5 minutes); "auto": the real file if
-        it can be had, else the synthetic one with a ``UserWarning`` saying so.
+        it can be had; else a file of the same name in ``RBM_NB_DATA_DIR``
+        whose sha256 differs from the example's but that has the example's
+        schema (your own recording: it is opened, and a ``UserWarning`` says
+        so); else the synthetic one with a ``UserWarning`` naming the file
+        that did not do and why. :func:`last_choice` tells which it was.
     store : ExampleDataStore, optional
         Where real files come from (default :data:`rbm_nb.example_data`).
         Nothing is written into its folder but the registry's files: the
@@ -78,19 +124,63 @@ def load_example(
         raise ValueError(f"source must be one of {SOURCES}, got {source!r}")
     store = example_data if store is None else store
     if source == "synthetic":
+        _CHOICES[name] = DataChoice(
+            name, "synthetic", None, "the synthetic recording was asked for"
+        )
         return _synthetic(name, store, seed)
     try:
         path = store[name]
     except (ExampleDataUnavailable, ImportError) as err:
         if source == "remote":
             raise
-        warnings.warn(
-            f"The real {name} recording is unavailable, using the synthetic one instead. {err}",
-            UserWarning,
-            stacklevel=2,
-        )
+        own = _own_recording(name, store)
+        if isinstance(own, tuple):
+            path, dataset = own
+            reason = (
+                f"{path} is not the example file (its sha256 differs) but has its "
+                "schema, so it is opened as your own recording"
+            )
+            _CHOICES[name] = DataChoice(name, "own", path, reason)
+            warnings.warn(f"{name}: {reason}.", UserWarning, stacklevel=2)
+            return dataset
+        reason = f"The real {name} recording is unavailable, using the synthetic one instead. "
+        reason += f"{own} " if own else ""
+        reason += str(err)
+        _CHOICES[name] = DataChoice(name, "synthetic", None, reason)
+        warnings.warn(reason, UserWarning, stacklevel=2)
         return _synthetic(name, store, seed)
+    _CHOICES[name] = DataChoice(name, "real", Path(path), "the registered example file")
     return path if name == "rosbag" else load_netcdf(path)
+
+
+def _own_recording(name: str, store: ExampleDataStore):
+    """(path, dataset) of a user's file standing in for ``name``, or why there is none.
+
+    Only a file in the folder the store reads (``RBM_NB_DATA_DIR``) counts:
+    the store has refused it as the example file, so it is the user's own.
+    Returns "" when there is no such file, else a sentence naming it and
+    saying why it cannot be opened.
+    """
+    if name not in _SCHEMA:
+        return ""
+    try:
+        path = store.path(name)
+    except (KeyError, ImportError):
+        return ""
+    if not path.is_file():
+        return ""
+    try:
+        dataset = load_netcdf(path)
+    except Exception as err:  # any reader error: say it, use synthetic data
+        return f"{path} could not be read as netCDF ({err})."
+    wanted = _SCHEMA[name]
+    lacking = [v for v in wanted if v not in dataset or "time" not in dataset[v].dims]
+    if lacking:
+        return (
+            f"{path} is not the example file and lacks the example's schema: "
+            f"no {', '.join(repr(v) for v in lacking)} along 'time'."
+        )
+    return path, dataset
 
 
 def _synthetic(name: str, store: ExampleDataStore, seed: int):

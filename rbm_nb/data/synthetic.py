@@ -14,6 +14,7 @@ import numpy as np
 
 from ..io._schema import motion_dataset
 from ._eye_tracker import (
+    both_lost_rows,
     draw_dropouts,
     eye_clock,
     eyeball_centres,
@@ -176,7 +177,10 @@ def synthetic_head_eye(
     closed = lid_closure(t_eye, blinks)
     confidence = mapper_confidence(rng, t_eye, closed)
     eye_time = origin + eye_ns.astype("timedelta64[ns]")
-    missing = {eye: missing_rows(rng, clock, eye, closed) for eye in EYE_CENTERS}
+    both_lost = both_lost_rows(rng, t_eye.size)
+    missing = {
+        eye: missing_rows(rng, clock, eye, closed, both_lost) for eye in EYE_CENTERS
+    }
     # the binocular mapper reports 0 when it lost either pupil
     for no_orientation, no_position in missing.values():
         confidence[no_orientation & ~no_position] = 0.0

@@ -110,7 +110,10 @@ def build_document(
             )
         specs.append(_model_spec(view, esm_index, esm, overrides))
         layout.append(view.model_id)
-    specs.append(_model_spec(player, esm_index, esm, {"time": 0.0, "playing": False}))
+    # the page opens where the player stands (a dashboard may start at an
+    # instant with data), paused
+    start = float(player.time) if player.time is not None else 0.0
+    specs.append(_model_spec(player, esm_index, esm, {"time": start, "playing": False}))
     layout.append(player.model_id)
     return {
         "esm": esm,

@@ -91,8 +91,10 @@ class Pose:
         Metres; None when the pose is not defined at the shown time.
     attitude : Attitude or None
     when : str
-        ``"static"``, the time of the sample shown (the shared readout), or
-        ``"not defined before <time>"``.
+        ``"static"``, the time of the sample shown (the shared readout),
+        ``"not defined before <time>"``, or, where a sample the pose needs
+        is missing (a NaN row: a blink, a lost pupil), ``"no sample of
+        <frame> at <time> (missing: <why>)"``.
     """
 
     what: str
@@ -143,6 +145,7 @@ def pose_at(
     seconds: np.ndarray | None,
     time: float | None,
     fmt: Callable[[float], str],
+    missing: Callable[[float], str] | None = None,
 ) -> Pose:
     """The pose at the latest sample at or before ``time``.
 
@@ -156,18 +159,24 @@ def pose_at(
         Data seconds to show; None shows the first sample.
     fmt : callable
         Data seconds -> the shared time readout.
+    missing : callable, optional
+        Data seconds of a sample with no value (NaN) -> what to say instead
+        of the pose, e.g. ``"no sample of pupil/left_eye at 72.969 s
+        (missing: ...)"``. Default: ``"no sample at <time> (missing)"``.
     """
     if seconds is None:
         return Pose.sample(what, translation, rotation, "static")
     index = 0 if time is None else int(np.searchsorted(seconds, time, side="right")) - 1
     if index < 0:
         return Pose(what, None, None, f"not defined before {fmt(float(seconds[0]))}")
-    return Pose.sample(
-        what,
-        np.asarray(translation)[index],
-        np.asarray(rotation)[index],
-        f"at {fmt(float(seconds[index]))}",
-    )
+    t, r = np.asarray(translation)[index], np.asarray(rotation)[index]
+    if not (np.isfinite(t).all() and np.isfinite(r).all()):
+        at = float(seconds[index])
+        text = (
+            missing(at) if missing is not None else f"no sample at {fmt(at)} (missing)"
+        )
+        return Pose(what, None, None, text)
+    return Pose.sample(what, t, r, f"at {fmt(float(seconds[index]))}")
 
 
 # -- rendering ------------------------------------------------------------------

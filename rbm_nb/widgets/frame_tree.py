@@ -33,6 +33,14 @@ from .frame_details import (
     pose_at,
 )
 
+ROW_CSS = (
+    "<style>.rbm-frame-tree .rbm-frame-row-text {height: auto}"
+    ".rbm-frame-tree .rbm-frame-row-text .widget-html-content "
+    "{height: auto; min-height: var(--jp-widgets-inline-height, 28px); "
+    "line-height: 16px; white-space: normal; padding: 6px 0; overflow-wrap: anywhere}"
+    "</style>"
+)
+
 
 def frame_kind(frame) -> str:
     """``root``, ``static``, ``moving`` or ``discrete``."""
@@ -120,6 +128,10 @@ class FrameTree(widgets.VBox):
     player : rbm_nb.widgets.Player, optional
         Link to this player: poses are shown at its current time, and times
         are printed from its start (``12.345 s · 2020-02-02 00:27:26.345``).
+    missing_reasons : dict, optional
+        Frame name -> why its recording has samples with no value (NaN rows),
+        said in the details where such a sample is the one shown: "no sample
+        of pupil/left_eye at 72.969 s (missing: <reason>)".
 
     Examples
     --------
@@ -146,7 +158,14 @@ class FrameTree(widgets.VBox):
         help="Time shown, in data seconds (epoch seconds for datetime frames); None: first sample.",
     )
 
-    def __init__(self, root: str = "world", *, scene=None, player=None):
+    def __init__(
+        self,
+        root: str = "world",
+        *,
+        scene=None,
+        player=None,
+        missing_reasons: dict[str, str] | None = None,
+    ):
         if not isinstance(root, str):
             root = getattr(root, "name", None)
             if root is None:
@@ -164,16 +183,29 @@ class FrameTree(widgets.VBox):
         self._scene_widget: Any = None  # the linked Scene's widget
         self._message = widgets.HTML(value="")
         self._rows_box = widgets.VBox(
-            [], layout=widgets.Layout(overflow="auto", max_height="360px")
+            [], layout=widgets.Layout(overflow="auto", max_height="400px")
         )
-        self._details = widgets.HTML(value="", layout=widgets.Layout(padding="4px 8px"))
+        self._missing_reasons = {
+            str(k): str(v) for k, v in (missing_reasons or {}).items()
+        }
+        # a fixed height with its own scroll bar: selecting frames never moves
+        # what is below the tree (the Player, the plots)
+        self._details = widgets.HTML(
+            value="",
+            layout=widgets.Layout(
+                padding="4px 8px", height="10.5em", overflow="auto", flex="0 0 auto"
+            ),
+        )
         self._details.add_class("rbm-frame-details")
         self._refresh_button = widgets.Button(
             icon="refresh", tooltip="Refresh", layout=widgets.Layout(width="40px")
         )
         self._refresh_button.on_click(lambda _: self.refresh())
         self._title = widgets.HTML(value="")
-        header = widgets.HBox([self._refresh_button, self._title])
+        # ipywidgets gives HTML text one line of fixed height; the rows'
+        # descriptions wrap instead (a style element, as no widget sets CSS)
+        self._style = widgets.HTML(value=ROW_CSS, layout=widgets.Layout(display="none"))
+        header = widgets.HBox([self._refresh_button, self._title, self._style])
         super().__init__(
             children=[header, self._message, self._rows_box, self._details]
         )
@@ -208,7 +240,7 @@ class FrameTree(widgets.VBox):
 
     def row_text(self, name: str) -> str:
         """The description shown in the row of ``name``."""
-        return self._rows[name]["label"].value
+        return html.unescape(self._rows[name]["label"].value)
 
     @property
     def details(self) -> Details:
@@ -453,10 +485,17 @@ class FrameTree(widgets.VBox):
             layout=widgets.Layout(width="auto", min_width="90px", flex="0 0 auto"),
         )
         button.add_class("rbm-frame-node")
-        label = widgets.Label(value=_describe(info))
+        # a Label never wraps: in a narrow tree its end was hidden under the
+        # 3D view. This text wraps in the room beside the name (ROW_CSS lets
+        # it grow in height).
+        label = widgets.HTML(
+            value=html.escape(_describe(info)),
+            layout=widgets.Layout(flex="1 1 0", min_width="0"),
+        )
+        label.add_class("rbm-frame-row-text")
         box = widgets.HBox(
             [toggle, button, label],
-            layout=widgets.Layout(margin=f"0 0 0 {18 * depth}px"),
+            layout=widgets.Layout(margin=f"0 0 0 {18 * depth}px", width="auto"),
         )
         name = frame.name
         toggle.on_click(lambda _: self._toggle_collapse(name))
@@ -571,6 +610,7 @@ class FrameTree(widgets.VBox):
                 seconds,
                 self.time,
                 self.format_time,
+                lambda at: self._missing_text([frame], at),
             )
         return FrameDetails(
             name=frame.name,
@@ -595,10 +635,35 @@ class FrameTree(widgets.VBox):
             )
             self._lookup_cache[key] = (np.asarray(t), np.asarray(r), seconds)
         t, r, seconds = self._lookup_cache[key]
+        frames = [f for f in a.frames_between(b) if f.timestamps is not None]
         pose = pose_at(
-            f"of {a.name} in {b.name}", t, r, seconds, self.time, self.format_time
+            f"of {a.name} in {b.name}",
+            t,
+            r,
+            seconds,
+            self.time,
+            self.format_time,
+            lambda at: self._missing_text(frames, at),
         )
         return PairDetails(outof=a.name, into=b.name, chain=chain, pose=pose)
+
+    def _missing_text(self, frames, at: float) -> str:
+        """ "no sample of <frame> at <time> (missing: <why>)" for a NaN result at ``at``.
+
+        Names the moving frames of ``frames`` whose own sample at or next to
+        ``at`` has no value (the samples an interpolation there needs).
+        """
+        culprits = [f for f in frames if _missing_near(f, at)]
+        if not culprits:
+            return f"no sample at {self.format_time(at)} (missing)"
+        names = ", ".join(f.name for f in culprits)
+        reasons = [
+            self._missing_reasons[f.name]
+            for f in culprits
+            if f.name in self._missing_reasons
+        ]
+        why = "; ".join(dict.fromkeys(reasons)) or "the recording has no value there"
+        return f"no sample of {names} at {self.format_time(at)} (missing: {why})"
 
     def __repr__(self) -> str:
         return f"<FrameTree root={self.root!r} frames={len(self._order)} selected={self.selected}>"
@@ -609,3 +674,20 @@ def _path_to_root(frame) -> list:
     while out[-1].parent is not None:
         out.append(out[-1].parent)
     return out
+
+
+def _missing_near(frame, at: float) -> bool:
+    """Whether ``frame``'s sample at or before ``at``, or the next one, is NaN."""
+    if frame.timestamps is None:
+        return False
+    seconds, _ = timestamps_as_seconds(
+        frame.timestamps, f"timestamps of {frame.name!r}"
+    )
+    i = int(np.searchsorted(seconds, at, side="right")) - 1
+    rows = [j for j in (i, i + 1) if 0 <= j < len(seconds)]
+    for values in (frame.translation, frame.rotation):
+        values = np.asarray(values, dtype=float)
+        picked = values[rows] if values.ndim == 2 else values
+        if not np.isfinite(picked).all():
+            return True
+    return False

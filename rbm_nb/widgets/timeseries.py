@@ -101,6 +101,14 @@ class _Series:
             )
         self.values = values
         self.components = components or [label]
+        # a DataArray may name its components' colours (attrs["colors"], one
+        # CSS colour per component), so a plot matches the 3D view's
+        colors = getattr(source, "attrs", {}).get("colors")
+        self.colors = (
+            [str(c) for c in colors]
+            if isinstance(colors, (list, tuple)) and len(colors) == values.shape[1]
+            else None
+        )
 
 
 def _with_gaps(x: np.ndarray, y: np.ndarray, gap: float | None):
@@ -316,9 +324,8 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
                     "label": s.label,
                     "units": s.units,
                     "components": s.components,
-                    "colors": [
-                        COLORS[i % len(COLORS)] for i in range(len(s.components))
-                    ],
+                    "colors": s.colors
+                    or [COLORS[i % len(COLORS)] for i in range(len(s.components))],
                 }
             )
             data.append(

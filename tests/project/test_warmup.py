@@ -25,9 +25,8 @@ def test_a_claimed_kernel_is_left_to_the_process_that_claimed_it(tmp_path, monke
         (tmp_path / str(index)).touch()
     _warmup._compile_claimed(str(tmp_path), verbose=False)
     assert compiled == [k.name for i, k in enumerate(kernels) if i not in taken]
-    assert sorted(os.listdir(tmp_path), key=int) == [
-        str(i) for i in range(len(kernels))
-    ]
+    claimed = [n for n in os.listdir(tmp_path) if not n.endswith(".done")]
+    assert sorted(claimed, key=int) == [str(i) for i in range(len(kernels))]
     # a second process finds everything claimed
     compiled.clear()
     _warmup._compile_claimed(str(tmp_path), verbose=False)
@@ -74,3 +73,33 @@ def test_an_interrupted_warm_up_stops_its_helpers(tmp_path, monkeypatch):
     pid = int((tmp_path / "pid").read_text())
     with pytest.raises(ProcessLookupError):
         os.kill(pid, 0)  # killed and reaped
+
+
+def test_the_status_file_counts_n_of_m_and_ends_at_m(tmp_path, monkeypatch):
+    """What .ci/setup.sh prints: "N of M", the same M to the end (issue 29)."""
+    seen = []
+    status = tmp_path / "status"
+
+    def compile_and_look(kernel):
+        seen.append(status.read_text().split() if status.exists() else None)
+
+    monkeypatch.setattr(_warmup, "_compile", compile_and_look)
+    total = len(declared_kernels())
+    _warmup.warm_up(jobs=1, status=str(status))
+    assert seen[0] == ["0", str(total)]
+    assert [int(s[0]) for s in seen] == list(range(total))
+    assert status.read_text().split() == [str(total), str(total)]
+    # the claims of a parallel warm-up count what every process has done
+    claims = tmp_path / "claims"
+    claims.mkdir()
+    (claims / "0").touch()
+    (claims / "0.done").touch()  # another process's
+    _warmup._compile_claimed(str(claims), False, str(status))
+    assert status.read_text().split() == [str(total), str(total)]
+
+
+def test_the_last_line_says_m_of_m(capsys, monkeypatch):
+    monkeypatch.setattr(_warmup, "_compile", lambda k: None)
+    assert _warmup.main(["--jobs", "1"]) == 0
+    total = len(declared_kernels())
+    assert f"{total} of {total} kernel signatures ready" in capsys.readouterr().out

@@ -1,0 +1,110 @@
+"""The explorer's dashboard without a browser: parts, colours, exports (issue 29)."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+import rbm_nb as rbm
+from rbm_nb import explorer
+from tests.recordings import real_recording
+
+MAX_EXPORT_BYTES = 5_000_000
+
+
+def _sources():
+    marks = [] if real_recording() is not None else [pytest.mark.skip("no real data")]
+    return [pytest.param("real", marks=marks), "synthetic"]
+
+
+@pytest.fixture
+def data_dir(monkeypatch, tmp_path):
+    def choose(source):
+        if source == "real":
+            from tests.recordings import REAL_DIR
+
+            monkeypatch.setenv("RBM_NB_DATA_DIR", str(REAL_DIR))
+        else:
+            (tmp_path / "no-data").mkdir(exist_ok=True)
+            monkeypatch.setenv("RBM_NB_DATA_DIR", str(tmp_path / "no-data"))
+
+    yield choose
+    rbm.clear_registry()
+
+
+def _content(html: str) -> str:
+    # widget model ids and the scene's random uids (also inside the base64 of
+    # meshcat's commands) differ between two builds; the rest must not
+    html = re.sub(r"[A-Za-z0-9+/=]{200,}", "BLOB", html)
+    return re.sub(r"[0-9a-f]{32}", "ID", html)
+
+
+@pytest.mark.parametrize("source", _sources())
+def test_notebook_and_cli_exports_are_the_same_and_under_5_mb(
+    source, data_dir, tmp_path
+):
+    data_dir(source)
+    board = explorer.dashboard()
+    try:
+        notebook = explorer.export_html(board, tmp_path / "notebook.html")
+    finally:
+        explorer.close_dashboard(board)
+    cli = explorer.write_explorer_html(tmp_path / "cli.html", progress=False)
+    sizes = {p.name: p.stat().st_size for p in (notebook, cli)}
+    print(f"{source} export sizes (bytes):", sizes)
+    assert all(size <= MAX_EXPORT_BYTES for size in sizes.values()), sizes
+    a, b = notebook.read_text(), cli.read_text()
+    assert len(a) == len(b)  # the blobs hold the same amount of data
+    assert _content(a) == _content(b)
+    assert (
+        "head/eye recording" in a
+        and source in a.split("<title>")[1].split("</title>")[0]
+    )
+
+
+def test_the_plot_colours_each_eye_as_the_scene_does(data_dir):
+    data_dir("synthetic")
+    board = explorer.dashboard()
+    try:
+        panels = {p["label"]: p for p in board.plot.panels}
+        for name in ("gaze yaw", "gaze yaw rate"):
+            assert panels[name]["components"] == ["left eye", "right eye"]
+            assert panels[name]["colors"] == [
+                explorer.GAZE_COLORS["left_eye"],
+                explorer.GAZE_COLORS["right_eye"],
+            ]
+        rays = {h.name: h.style.get("color") for h in board.scene.handles.values()}
+        assert rays["left_eye_gaze"] == explorer.GAZE_COLORS["left_eye"]
+        assert rays["right_eye_gaze"] == explorer.GAZE_COLORS["right_eye"]
+        # the Player starts where head and both eyes have samples
+        sight = explorer.gaze_yaw(*explorer.load_head_eye("synthetic")[1:3])
+        at = sight.sel(time=board.player.timestamp, method="nearest")
+        assert np.isfinite(at.values).all()
+    finally:
+        explorer.close_dashboard(board)
+
+
+def test_a_users_own_files_open_in_the_explorer(tmp_path, monkeypatch):
+    """Files in RBM_NB_DATA_DIR that are not the example's, same schema: opened, said."""
+    from rbm_nb.data.synthetic import synthetic_head_eye
+
+    recording = synthetic_head_eye(duration=20.0, seed=3)
+    for name in ("head", "left_eye", "right_eye"):
+        getattr(recording, name).to_netcdf(tmp_path / f"{name}.nc")
+    monkeypatch.setenv("RBM_NB_DATA_DIR", str(tmp_path))
+    head, left, right, note = explorer.load_head_eye()
+    assert note.startswith("your own head/eye recording") and str(tmp_path) in note
+    assert head.sizes["time"] == recording.head.sizes["time"]
+    from rbm_nb.data import last_choice
+
+    assert last_choice("left_eye").kind == "own"
+    # a file without the schema: synthetic data, and the note says which file and why
+    import xarray as xr
+
+    xr.Dataset({"x": ("t", np.arange(3.0))}).to_netcdf(tmp_path / "head.nc")
+    *_, note = explorer.load_head_eye()
+    assert note.startswith("synthetic head/eye recording")
+    assert str(tmp_path / "head.nc") in note and "'position'" in note
+    rbm.clear_registry()

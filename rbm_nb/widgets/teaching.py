@@ -1,0 +1,271 @@
+"""Teaching aids for the notebooks: a self-check for exercises and frame sliders.
+
+``check_answer`` compares a student's prediction with the value the notebook
+computed and says right or wrong, and why. ``FrameSliders`` binds yaw, pitch,
+roll and translation sliders to a *static* frame of the registry: every move
+re-registers the frame, redraws it in a Scene and reprints whatever lookup the
+notebook asked for, so "where is the point for the observer?" can be turned
+and watched instead of recomputed by hand. The sliders run Python callbacks:
+they need a live kernel (a saved page shows their last state).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+_NO_PREDICTION = (
+    "No prediction yet: write yours in place of None in the cell above this one, "
+    "then run both again."
+)
+
+
+def check_answer(
+    prediction: Any,
+    expected: Any,
+    *,
+    why: str,
+    atol: float = 1e-6,
+    rtol: float = 0.0,
+) -> bool | None:
+    """Print whether ``prediction`` matches ``expected``, and why.
+
+    Parameters
+    ----------
+    prediction : object
+        The student's answer; ``None`` means "not answered yet".
+    expected : object
+        The value the notebook computed. Numbers and arrays are compared
+        with ``atol``/``rtol``, anything else with ``==``.
+    why : str
+        The explanation printed with the verdict.
+    atol, rtol : float
+        Tolerances for numeric answers.
+
+    Returns
+    -------
+    bool or None
+        True/False for right/wrong, None when there is no prediction.
+
+    Examples
+    --------
+    >>> check_answer(4, 4.0, why="five samples make four steps")
+    Right. five samples make four steps
+    True
+    """
+    if not why or not isinstance(why, str):
+        raise ValueError("check_answer: why must be a non-empty explanation")
+    if prediction is None:
+        print(_NO_PREDICTION)
+        return None
+    right = _matches(prediction, expected, atol, rtol)
+    if right:
+        print(f"Right. {why}")
+    else:
+        print(
+            f"Not quite: you said {prediction!r}, the answer is {_show(expected)}. {why}"
+        )
+    return right
+
+
+def _matches(prediction: Any, expected: Any, atol: float, rtol: float) -> bool:
+    if isinstance(expected, str) or isinstance(prediction, str):
+        return str(prediction).strip().lower() == str(expected).strip().lower()
+    try:
+        got = np.asarray(prediction, dtype=float)
+        want = np.asarray(expected, dtype=float)
+    except (TypeError, ValueError):
+        return bool(prediction == expected)
+    if got.shape != want.shape:
+        return False
+    return bool(np.allclose(got, want, atol=atol, rtol=rtol))
+
+
+def _show(value: Any) -> str:
+    if isinstance(value, np.ndarray):
+        return np.array2string(np.round(value, 4), separator=", ")
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    return repr(value)
+
+
+def quaternion_from_ypr_degrees(yaw: float, pitch: float, roll: float) -> np.ndarray:
+    """``R = Rz(yaw) Ry(pitch) Rx(roll)`` as a (w, x, y, z) quaternion.
+
+    The aerospace/ROS convention: turn by yaw about z, then pitch about the
+    new y, then roll about the newest x.
+    """
+    from ..quaternions import from_euler_angles
+
+    return np.asarray(
+        from_euler_angles(
+            roll=np.deg2rad(roll),
+            pitch=np.deg2rad(pitch),
+            yaw=np.deg2rad(yaw),
+            order="ypr",
+        ),
+        dtype=float,
+    )
+
+
+class FrameSliders:
+    """Sliders for the pose of one static frame relative to its parent.
+
+    Parameters
+    ----------
+    name : str
+        The frame to (re-)register; it must have no children that are moving
+        frames registered before it, and is registered at once.
+    parent : str
+        Its parent in the registry.
+    translation : sequence of 3 float, default (0, 0, 0)
+        Starting translation in the parent's axes (metres).
+    angles : sequence of 3 float, default (0, 0, 0)
+        Starting yaw, pitch and roll in degrees (``R = Rz Ry Rx``).
+    scene : rbm_nb.scene.Scene, optional
+        Scene in which the frame is drawn as a triad and kept up to date.
+    report : callable, optional
+        Called after every change; what it returns is printed below the
+        sliders (e.g. a lookup or a transformed point).
+    draw : callable, optional
+        ``draw(scene) -> list of handles`` for extra objects that depend on
+        the frame (arrows, points); the handles are removed before the next
+        redraw.
+    reach : float, default 5.0
+        Translation sliders run from ``-reach`` to ``reach`` metres.
+    sliders : sequence of str, optional
+        Which sliders to show, among "yaw", "pitch", "roll", "x", "y", "z"
+        (all six by default).
+    scale : float, default 0.5
+        Length of the triad's axes in the scene.
+    """
+
+    NAMES = ("yaw", "pitch", "roll", "x", "y", "z")
+
+    def __init__(
+        self,
+        name: str,
+        parent: str,
+        *,
+        translation: Sequence[float] = (0.0, 0.0, 0.0),
+        angles: Sequence[float] = (0.0, 0.0, 0.0),
+        scene=None,
+        report: Callable[[], Any] | None = None,
+        draw: Callable[[Any], list] | None = None,
+        reach: float = 5.0,
+        sliders: Sequence[str] | None = None,
+        scale: float = 0.5,
+    ) -> None:
+        import ipywidgets as widgets
+
+        from ..frames import registry
+
+        if not isinstance(name, str) or not name:
+            raise ValueError(f"FrameSliders: name must be a frame name, got {name!r}")
+        if parent not in registry:
+            raise ValueError(f"FrameSliders: parent {parent!r} is not registered")
+        start = _three(translation, "translation") + _three(angles, "angles")
+        wanted = tuple(self.NAMES if sliders is None else sliders)
+        unknown = [s for s in wanted if s not in self.NAMES]
+        if unknown or not wanted:
+            raise ValueError(
+                f"FrameSliders: sliders must be among {self.NAMES}, got {list(wanted)}"
+            )
+        if not reach > 0:
+            raise ValueError(f"FrameSliders: reach must be positive, got {reach!r}")
+        self.name, self.parent = name, parent
+        self._scene, self._report, self._draw, self._scale = scene, report, draw, scale
+        self._handles: list = []
+        values = dict(zip(("x", "y", "z", "yaw", "pitch", "roll"), start, strict=True))
+        self.sliders = {}
+        for key in self.NAMES:
+            angle = key in ("yaw", "pitch", "roll")
+            self.sliders[key] = widgets.FloatSlider(
+                value=values[key],
+                min=-180.0 if angle else -reach,
+                max=180.0 if angle else reach,
+                step=1.0 if angle else 0.05,
+                description=f"{key} ({'°' if angle else 'm'})",
+                continuous_update=True,
+                layout=widgets.Layout(width="420px"),
+                style={"description_width": "70px"},
+            )
+        self.output = widgets.Output()
+        shown = [self.sliders[k] for k in wanted]
+        parts: list = [widgets.VBox(shown), self.output]
+        if scene is not None:
+            parts.append(scene.widget)
+        self.box = widgets.VBox(parts)
+        for slider in self.sliders.values():
+            slider.observe(self._changed, "value")
+        self.apply()
+
+    # -- the pose -------------------------------------------------------------
+    @property
+    def translation(self) -> np.ndarray:
+        return np.array([self.sliders[k].value for k in ("x", "y", "z")], dtype=float)
+
+    @property
+    def rotation(self) -> np.ndarray:
+        return quaternion_from_ypr_degrees(
+            *(self.sliders[k].value for k in ("yaw", "pitch", "roll"))
+        )
+
+    def set(self, **values: float) -> None:
+        """Move sliders from code, e.g. ``set(yaw=90, x=1)``; one redraw."""
+        unknown = [k for k in values if k not in self.NAMES]
+        if unknown:
+            raise ValueError(f"FrameSliders.set: unknown sliders {unknown}")
+        for slider in self.sliders.values():
+            slider.unobserve(self._changed, "value")
+        try:
+            for key, value in values.items():
+                self.sliders[key].value = float(value)
+        finally:
+            for slider in self.sliders.values():
+                slider.observe(self._changed, "value")
+        self.apply()
+
+    def apply(self) -> None:
+        """Register the frame at the sliders' pose, redraw and report."""
+        from ..frames import register_frame
+
+        register_frame(
+            self.name,
+            parent=self.parent,
+            translation=self.translation,
+            rotation=self.rotation,
+            update=True,
+        )
+        if self._scene is not None:
+            self._redraw()
+        self.output.clear_output(wait=True)
+        if self._report is not None:
+            with self.output:
+                result = self._report()
+                if result is not None:
+                    print(result)
+
+    def _redraw(self) -> None:
+        for handle in self._handles:
+            handle.remove()
+        self._handles = [self._scene.add_frame(self.name, scale=self._scale)]
+        if self._draw is not None:
+            self._handles += list(self._draw(self._scene))
+
+    def _changed(self, change) -> None:
+        self.apply()
+
+    def _repr_mimebundle_(self, **kwargs):
+        return self.box._repr_mimebundle_(**kwargs)
+
+
+def _three(values: Sequence[float], argument: str) -> tuple[float, ...]:
+    arr = np.asarray(values, dtype=float)
+    if arr.shape != (3,) or not np.isfinite(arr).all():
+        raise ValueError(
+            f"FrameSliders: {argument} must be three finite numbers, got {values!r}"
+        )
+    return tuple(float(v) for v in arr)

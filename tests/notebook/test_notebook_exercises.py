@@ -57,7 +57,9 @@ def _with_answers(path, which: int):
     for cell in notebook.cells:
         if cell.cell_type == "code" and EXERCISE.search(cell.source):
             answer = next(answers)[which]
-            cell.source = EXERCISE.sub(lambda m: f"{m.group(1)} = {answer}", cell.source, 1)
+            cell.source = EXERCISE.sub(
+                lambda m, a=answer: f"{m.group(1)} = {a}", cell.source, 1
+            )
             count += 1
     assert count == len(ANSWERS[path.name]), f"{path.name}: {count} exercises"
     return notebook

@@ -269,3 +269,47 @@ def _three(values: Sequence[float], argument: str) -> tuple[float, ...]:
             f"FrameSliders: {argument} must be three finite numbers, got {values!r}"
         )
     return tuple(float(v) for v in arr)
+
+
+def show_file(path, *, height: int = 480):
+    """Show an HTML file the notebook wrote (e.g. ``Scene.to_html``) inline.
+
+    The page is embedded in the output as an iframe's ``srcdoc``, so the saved
+    notebook, its nbconvert HTML and the docs show it without a kernel and
+    without the file beside them. (A ``src=`` link would break as soon as the
+    output is viewed anywhere but next to the file.)
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        An HTML file.
+    height : int, default 480
+        Height of the frame in pixels.
+
+    Returns
+    -------
+    IPython.display.HTML
+    """
+    import html
+    import warnings
+    from pathlib import Path
+
+    from IPython.display import HTML
+
+    file = Path(path)
+    if file.suffix.lower() not in (".html", ".htm") or not file.is_file():
+        raise ValueError(
+            f"show_file: path must be an existing .html file, got {str(path)!r}"
+        )
+    if isinstance(height, bool) or not isinstance(height, int) or height < 50:
+        raise ValueError(
+            f"show_file: height must be an integer >= 50 pixels, got {height!r}"
+        )
+    page = html.escape(file.read_text(encoding="utf-8"), quote=True)
+    with warnings.catch_warnings():
+        # IPython suggests IFrame for any <iframe>; IFrame can only link (src=)
+        warnings.filterwarnings("ignore", "Consider using IPython.display.IFrame")
+        return HTML(
+            f'<iframe srcdoc="{page}" style="width: 100%; height: {height}px; border: 0" '
+            f'title="{html.escape(file.name)}"></iframe>'
+        )

@@ -44,6 +44,11 @@ ANSWERS = {
             "-1",
         ),
     ],
+    "09_velocity_tools_and_evaluation.ipynb": [
+        ("True", "False"),
+        ('"z"', '"y"'),
+        ("np.radians(1.0) / heading_rate", "1.0 / heading_rate"),
+    ],
 }
 EXERCISE = re.compile(r"^(prediction|my_\w+) = None\b", re.MULTILINE)
 

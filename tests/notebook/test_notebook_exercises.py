@@ -44,6 +44,15 @@ ANSWERS = {
             "-1",
         ),
     ],
+    "05_rosbag_and_3d.ipynb": [
+        ("(-1, 0, 0)", "(0, 0, -1)"),
+        ('rbm.lookup_pose("head", "world")[0][player.index]', "(0, 0, 0)"),
+    ],
+    "08_sdf_and_pose_algebra.ipynb": [
+        ("0.03", "0.13"),
+        ("1.04", "1.0"),
+        ("np.degrees(0.25)", "0.25"),
+    ],
     "09_velocity_tools_and_evaluation.ipynb": [
         ("True", "False"),
         ('"z"', '"y"'),

@@ -553,7 +553,11 @@ class Scene:
                 if self._camera is None:
                     self._camera = self._fitted_camera()
                     self._camera_is_auto = True
-                widget = SceneWidget(lambda: self._snapshot_message(self.max_samples))
+                widget = SceneWidget(
+                    lambda cap=None: self._snapshot_message(
+                        self.max_samples if cap is None else min(cap, self.max_samples or cap)
+                    )
+                )
                 self._widget = widget
                 for name in (
                     "_origin",

@@ -113,11 +113,16 @@ def quaternion_from_ypr_degrees(yaw: float, pitch: float, roll: float) -> np.nda
 class FrameSliders:
     """Sliders for the pose of one static frame relative to its parent.
 
+    The sliders are drawn by the browser (``js/src/teaching.js``): moving one
+    turns the frame's triad in the scene and prints ``point`` in the frame's
+    axes at once, with or without a kernel. With a kernel, every move also
+    re-registers the frame, redraws it (and whatever ``draw`` adds) and prints
+    what ``report`` returns.
+
     Parameters
     ----------
     name : str
-        The frame to (re-)register; it must have no children that are moving
-        frames registered before it, and is registered at once.
+        The frame to (re-)register; registered at once.
     parent : str
         Its parent in the registry.
     translation : sequence of 3 float, default (0, 0, 0)
@@ -133,6 +138,8 @@ class FrameSliders:
         ``draw(scene) -> list of handles`` for extra objects that depend on
         the frame (arrows, points); the handles are removed before the next
         redraw.
+    point : sequence of 3 float, optional
+        A point of the parent that the browser prints in the frame's axes.
     reach : float, default 5.0
         Translation sliders run from ``-reach`` to ``reach`` metres.
     sliders : sequence of str, optional
@@ -154,6 +161,7 @@ class FrameSliders:
         scene=None,
         report: Callable[[], Any] | None = None,
         draw: Callable[[Any], list] | None = None,
+        point: Sequence[float] | None = None,
         reach: float = 5.0,
         sliders: Sequence[str] | None = None,
         scale: float = 0.5,
@@ -161,6 +169,7 @@ class FrameSliders:
         import ipywidgets as widgets
 
         from ..frames import registry
+        from .slider_panel import SliderPanel
 
         if not isinstance(name, str) or not name:
             raise ValueError(f"FrameSliders: name must be a frame name, got {name!r}")
@@ -179,54 +188,47 @@ class FrameSliders:
         self._scene, self._report, self._draw, self._scale = scene, report, draw, scale
         self._handles: list = []
         values = dict(zip(("x", "y", "z", "yaw", "pitch", "roll"), start, strict=True))
-        self.sliders = {}
-        for key in self.NAMES:
-            angle = key in ("yaw", "pitch", "roll")
-            self.sliders[key] = widgets.FloatSlider(
-                value=values[key],
-                min=-180.0 if angle else -reach,
-                max=180.0 if angle else reach,
-                step=1.0 if angle else 0.05,
-                description=f"{key} ({'°' if angle else 'm'})",
-                continuous_update=True,
-                layout=widgets.Layout(width="420px"),
-                style={"description_width": "70px"},
-            )
-        self.output = widgets.Output()
-        shown = [self.sliders[k] for k in wanted]
-        parts: list = [widgets.VBox(shown), self.output]
+        self.panel = SliderPanel(
+            values=values,
+            shown=list(wanted),
+            reach=float(reach),
+            frame=name,
+            parent=parent,
+            point=None if point is None else list(_three(point, "point")),
+            scene=None if scene is None else scene.widget,
+        )
+        parts: list = [self.panel]
         if scene is not None:
             parts.append(scene.widget)
         self.box = widgets.VBox(parts)
-        for slider in self.sliders.values():
-            slider.observe(self._changed, "value")
         self.apply()
+        self.panel.observe(self._changed, "values")
 
     # -- the pose -------------------------------------------------------------
     @property
+    def values(self) -> dict:
+        """The sliders' values: yaw, pitch, roll in degrees, x, y, z in metres."""
+        return dict(self.panel.values)
+
+    @property
     def translation(self) -> np.ndarray:
-        return np.array([self.sliders[k].value for k in ("x", "y", "z")], dtype=float)
+        v = self.panel.values
+        return np.array([v["x"], v["y"], v["z"]], dtype=float)
 
     @property
     def rotation(self) -> np.ndarray:
-        return quaternion_from_ypr_degrees(
-            *(self.sliders[k].value for k in ("yaw", "pitch", "roll"))
-        )
+        v = self.panel.values
+        return quaternion_from_ypr_degrees(v["yaw"], v["pitch"], v["roll"])
 
     def set(self, **values: float) -> None:
         """Move sliders from code, e.g. ``set(yaw=90, x=1)``; one redraw."""
         unknown = [k for k in values if k not in self.NAMES]
         if unknown:
             raise ValueError(f"FrameSliders.set: unknown sliders {unknown}")
-        for slider in self.sliders.values():
-            slider.unobserve(self._changed, "value")
-        try:
-            for key, value in values.items():
-                self.sliders[key].value = float(value)
-        finally:
-            for slider in self.sliders.values():
-                slider.observe(self._changed, "value")
-        self.apply()
+        self.panel.values = {
+            **self.panel.values,
+            **{k: float(v) for k, v in values.items()},
+        }
 
     def apply(self) -> None:
         """Register the frame at the sliders' pose, redraw and report."""
@@ -241,17 +243,20 @@ class FrameSliders:
         )
         if self._scene is not None:
             self._redraw()
-        self.output.clear_output(wait=True)
-        if self._report is not None:
-            with self.output:
-                result = self._report()
-                if result is not None:
-                    print(result)
+        result = None if self._report is None else self._report()
+        self.panel.report = "" if result is None else str(result)
 
     def _redraw(self) -> None:
         for handle in self._handles:
             handle.remove()
-        self._handles = [self._scene.add_frame(self.name, scale=self._scale)]
+        # the same label each time: the triad keeps its scene path, which the
+        # browser turns on its own while a slider moves
+        triad = self._scene.add_frame(
+            self.name, scale=self._scale, label=f"sliders {self.name}"
+        )
+        self._handles = [triad]
+        if self.parent == self._scene.base.name:
+            self.panel.node = triad.pose_path
         if self._draw is not None:
             self._handles += list(self._draw(self._scene))
 

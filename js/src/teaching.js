@@ -152,12 +152,16 @@ function render({ model, el }) {
       values[name] = Number(input.value);
       show(values);
       place(values, true);
+      // the kernel's printout is for the old pose until it answers (never, on
+      // a page without a kernel)
+      report.style.opacity = "0.45";
       model.set("values", values);
       model.save_changes();
     });
   }
   const showReport = () => {
     report.textContent = model.get("report") || "";
+    report.style.opacity = "1";
   };
   model.on("change:values", () => show(current()));
   model.on("change:report", showReport);

@@ -30,7 +30,9 @@ def _saved_html(tmp_path):
     import nbformat
     from nbconvert import HTMLExporter
 
-    notebook = nbformat.read(REPO / "notebooks" / "01_reference_frames.ipynb", as_version=4)
+    notebook = nbformat.read(
+        REPO / "notebooks" / "01_reference_frames.ipynb", as_version=4
+    )
     nbclient.NotebookClient(
         notebook, timeout=300, kernel_name="python3",
         resources={"metadata": {"path": str(tmp_path)}},
@@ -62,7 +64,9 @@ def test_the_slider_turns_the_frame_in_saved_html(tmp_path, monkeypatch):
         before = page.evaluate(NODE_MATRIX_JS, TRIAD)
         page.screenshot(path=str(ARTIFACTS / "saved-01-sliders-before.png"))
         yaw = sliders.locator("input.rbm-slider-yaw")
-        yaw.evaluate("(el) => { el.value = '180'; el.dispatchEvent(new Event('input')); }")
+        yaw.evaluate(
+            "(el) => { el.value = '180'; el.dispatchEvent(new Event('input')); }"
+        )
         page.wait_for_timeout(500)
         after = page.evaluate(NODE_MATRIX_JS, TRIAD)
         page.screenshot(path=str(ARTIFACTS / "saved-01-sliders-yaw-180.png"))

@@ -7,6 +7,8 @@ what changed (first build here: about 2 minutes, a rebuild: about 15 s).
 
 from __future__ import annotations
 
+import os
+
 import pytest
 from conftest import REPO
 
@@ -26,6 +28,27 @@ def test_sphinx_builds_with_warnings_as_errors(docs_build):
     for notebook in sorted((REPO / "notebooks").glob("*.ipynb")):
         page = (out / "notebooks" / notebook.with_suffix(".html").name).read_text()
         assert "cell_output" in page, f"{notebook.name} rendered without outputs"
+    # the pages built from the example recording say which one they used: the
+    # real one whenever the build could have it
+    from docs_build import real_data_env
+
+    real = bool(real_data_env()) or bool(os.environ.get("RBM_NB_DATA_DIR"))
+    for name, said in (
+        ("04_xarray", "data source: real recording"),
+        ("06_head_eye_explorer", "data: real head/eye recording"),
+        ("09_velocity_tools_and_evaluation", "data: real recording"),
+    ):
+        page = (out / "notebooks" / f"{name}.html").read_text()
+        if real:
+            assert said in page, f"{name} was not built with the real recording"
+        else:
+            assert "synthetic" in page, (
+                f"{name} does not say it used the synthetic data"
+            )
+    # the widget manager is the site's own, from no CDN
+    page = (out / "notebooks" / "05_rosbag_and_3d.html").read_text()
+    assert "_static/widgets/embed.js" in page
+    assert "cdn.jsdelivr.net" not in page and "cdnjs.cloudflare.com" not in page
 
 
 @pytest.mark.browser

@@ -5,7 +5,7 @@
 //
 // Versions are pinned by package-lock.json; esbuild's output depends only on
 // them and the sources, so a rebuild equals the committed files byte for byte
-// (tests/project/test_docs.py checks this).
+// (tests/notebook/test_js_bundle.py checks this).
 import { build } from "esbuild";
 import { readFile } from "node:fs/promises";
 import { dirname, join, resolve } from "node:path";

@@ -555,7 +555,9 @@ class Scene:
                     self._camera_is_auto = True
                 widget = SceneWidget(
                     lambda cap=None: self._snapshot_message(
-                        self.max_samples if cap is None else min(cap, self.max_samples or cap)
+                        self.max_samples
+                        if cap is None
+                        else min(cap, self.max_samples or cap)
                     )
                 )
                 self._widget = widget

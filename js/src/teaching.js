@@ -12,6 +12,9 @@
 // prints the point in the frame's axes at once, here in the browser: a page
 // without a kernel (nbconvert HTML, the docs) still teaches. With a kernel,
 // Python re-registers the frame and its `report` replaces the local one.
+// The "grab" button puts three.js's transform gizmo on the frame in the 3D
+// view (turn, then move, then off): dragging it sets the sliders.
+import { makeTransformControls } from "three/examples/jsm/controls/TransformControls.js";
 import { modelId } from "./timeline.js";
 
 const NAMES = ["yaw", "pitch", "roll", "x", "y", "z"];
@@ -22,7 +25,29 @@ const CSS = `
 .rbm-sliders input[type=range] { width: 300px; }
 .rbm-sliders .rbm-value { width: 70px; font-variant-numeric: tabular-nums; }
 .rbm-sliders pre { margin: 6px 0 0 0; white-space: pre-wrap; font-size: 12px; }
+.rbm-sliders button.rbm-grab { margin: 4px 0 0 78px; font: 12px sans-serif; }
 `;
+
+let TransformControls = null;
+
+/** three's TransformControls on meshcat's three.js (loaded with the scene view). */
+function gizmoClass() {
+  if (TransformControls === null) {
+    TransformControls = makeTransformControls(globalThis.MeshCat.THREE).TransformControls;
+  }
+  return TransformControls;
+}
+
+/** Yaw, pitch, roll (degrees) of a row-major rotation matrix, R = Rz Ry Rx. */
+export function yawPitchRoll(R) {
+  const d = 180 / Math.PI;
+  const pitch = Math.asin(Math.max(-1, Math.min(1, -R[2][0])));
+  if (Math.abs(R[2][0]) > 1 - 1e-9) {
+    // gimbal lock: only yaw - roll (or yaw + roll) is defined; put it all in yaw
+    return [Math.atan2(-R[0][1], R[1][1]) * d, pitch * d, 0];
+  }
+  return [Math.atan2(R[1][0], R[0][0]) * d, pitch * d, Math.atan2(R[2][1], R[2][2]) * d];
+}
 
 function injectStyle() {
   if (document.getElementById("rbm-sliders-style")) {
@@ -109,6 +134,11 @@ function render({ model, el }) {
     root.appendChild(row);
     inputs[name] = { input, value };
   }
+  const grab = document.createElement("button");
+  grab.type = "button";
+  grab.className = "rbm-grab";
+  grab.title = "Turn or move the frame with a gizmo in the 3D view";
+  root.appendChild(grab);
   const local = document.createElement("pre");
   local.className = "rbm-local";
   const report = document.createElement("pre");
@@ -146,6 +176,109 @@ function render({ model, el }) {
     }
   }
 
+  function changed(values) {
+    show(values);
+    place(values, true);
+    model.set("values", values);
+    model.save_changes();
+  }
+
+  // -- the gizmo: one TransformControls per view of the scene
+  const MODES = [null, "rotate", "translate"];
+  let mode = 0;
+  let gizmos = [];
+  let frameLoop = 0;
+
+  function nodeOf(view) {
+    const path = (model.get("node") || "").split("/").filter((p) => p.length > 0);
+    return path.length ? view.viewer.scene_tree.find(path).object : null;
+  }
+
+  function fromNode(object) {
+    const e = object.matrix.elements; // column-major
+    const R = [
+      [e[0], e[4], e[8]],
+      [e[1], e[5], e[9]],
+      [e[2], e[6], e[10]],
+    ];
+    const [yaw, pitch, roll] = yawPitchRoll(R);
+    const round = (v, step) => Math.round(v / step) * step;
+    return {
+      yaw: round(yaw, 0.1), pitch: round(pitch, 0.1), roll: round(roll, 0.1),
+      x: round(e[12], 0.001), y: round(e[13], 0.001), z: round(e[14], 0.001),
+    }; // prettier-ignore
+  }
+
+  function dropGizmos() {
+    cancelAnimationFrame(frameLoop);
+    for (const { view, controls } of gizmos) {
+      controls.detach();
+      view.viewer.scene.remove(controls);
+      controls.dispose();
+      view.viewer.controls.enabled = true;
+      view.viewer.set_dirty();
+    }
+    gizmos = [];
+  }
+
+  async function showGizmos() {
+    dropGizmos();
+    if (MODES[mode] === null) {
+      return;
+    }
+    const Gizmo = gizmoClass();
+    for (const view of await sceneViews(model)) {
+      const object = nodeOf(view);
+      if (!object) {
+        continue;
+      }
+      const controls = new Gizmo(view.viewer.camera, view.viewer.renderer.domElement);
+      controls.setMode(MODES[mode]);
+      controls.setSpace("local");
+      controls.attach(object);
+      // meshcat turns its Scene by -90 deg about x (three is y-up); the gizmo
+      // places its handles in world coordinates, so undo the turn for it
+      controls.quaternion.copy(view.viewer.scene.quaternion).invert();
+      view.viewer.scene.add(controls);
+      controls.addEventListener("dragging-changed", (event) => {
+        view.viewer.controls.enabled = !event.value; // no orbiting while dragging
+      });
+      controls.addEventListener("change", () => view.viewer.set_dirty());
+      controls.addEventListener("objectChange", () => {
+        object.updateMatrix();
+        changed({ ...current(), ...fromNode(object) });
+      });
+      gizmos.push({ view, controls });
+    }
+    // the kernel redraws the frame under the same path: follow the new node
+    const follow = () => {
+      for (const gizmo of gizmos) {
+        const object = nodeOf(gizmo.view);
+        if (object && gizmo.controls.object !== object && !gizmo.controls.dragging) {
+          gizmo.controls.attach(object);
+        }
+      }
+      frameLoop = requestAnimationFrame(follow);
+    };
+    frameLoop = requestAnimationFrame(follow);
+  }
+
+  function showMode() {
+    grab.textContent = ["grab in 3D: off", "grab in 3D: turn", "grab in 3D: move"][mode];
+  }
+  grab.addEventListener("click", () => {
+    mode = (mode + 1) % MODES.length;
+    showMode();
+    showGizmos();
+  });
+  grab.style.display = model.get("node") ? "" : "none";
+  model.on("change:node", () => {
+    grab.style.display = model.get("node") ? "" : "none";
+  });
+  showMode();
+  // for tests and the curious: the gizmos of this panel
+  root.rbmGizmos = () => gizmos.map((g) => g.controls);
+
   for (const [name, { input }] of Object.entries(inputs)) {
     input.addEventListener("input", () => {
       const values = current();
@@ -167,7 +300,10 @@ function render({ model, el }) {
   model.on("change:report", showReport);
   show(current());
   showReport();
-  return () => root.remove();
+  return () => {
+    dropGizmos();
+    root.remove();
+  };
 }
 
 export default { render };

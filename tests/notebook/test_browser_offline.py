@@ -5,7 +5,9 @@ widget state" does), exported by nbconvert with the docs' own widget manager
 (``docs/_static/widgets``, built by ``js/embed/build.mjs``) in place of the
 CDN, and opened from disk in chromium with every other request refused.
 Moving the yaw slider must turn the observer's triad in the 3D view and
-print the body's coordinates in the observer's axes, computed in the page.
+print the body's coordinates in the observer's axes, computed in the page;
+dragging the transform gizmo (three.js's TransformControls on meshcat's
+three.js) must move the triad and set the sliders.
 """
 
 from __future__ import annotations
@@ -23,6 +25,17 @@ NODE_MATRIX_JS = """(path) => {
   const view = document.querySelector('.rbm-scene').rbmView;
   return view.viewer.scene_tree.find(path.split('/').filter((p) => p)).object.matrix.toArray();
 }"""
+
+
+@pytest.fixture(scope="module")
+def saved_01(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("saved01")
+    mp = pytest.MonkeyPatch()
+    mp.setenv("MPLCONFIGDIR", str(tmp / "mpl"))
+    try:
+        yield _saved_html(tmp)
+    finally:
+        mp.undo()
 
 
 def _saved_html(tmp_path):
@@ -50,12 +63,11 @@ def _saved_html(tmp_path):
     return page
 
 
-def test_the_slider_turns_the_frame_in_saved_html(tmp_path, monkeypatch):
+def test_the_slider_turns_the_frame_in_saved_html(saved_01):
     from browser_support import ARTIFACTS
     from offline_pages import offline_page, wait_for_scene
 
-    monkeypatch.setenv("MPLCONFIGDIR", str(tmp_path / "mpl"))
-    page_file = _saved_html(tmp_path)
+    page_file = saved_01
     ARTIFACTS.mkdir(exist_ok=True)
     with offline_page(page_file) as (page, refused, errors):
         wait_for_scene(page)
@@ -79,3 +91,53 @@ def test_the_slider_turns_the_frame_in_saved_html(tmp_path, monkeypatch):
     assert "(3.000, 0.000, 0.000)" in printed, printed
     assert not errors, errors
     assert not [u for u in refused if "widget" in u or "require" in u], refused
+
+
+ORIGIN_ON_SCREEN_JS = """(path) => {
+  const view = document.querySelector('.rbm-scene').rbmView;
+  const object = view.viewer.scene_tree.find(path.split('/').filter((p) => p)).object;
+  const p = new globalThis.MeshCat.THREE.Vector3();
+  object.getWorldPosition(p);
+  p.project(view.viewer.camera);
+  const r = view.viewer.renderer.domElement.getBoundingClientRect();
+  return [r.left + ((p.x + 1) / 2) * r.width, r.top + ((1 - p.y) / 2) * r.height];
+}"""
+
+
+def test_dragging_the_gizmo_moves_the_frame_in_saved_html(saved_01):
+    from browser_support import ARTIFACTS
+    from offline_pages import offline_page, wait_for_scene
+
+    with offline_page(saved_01) as (page, refused, errors):
+        wait_for_scene(page)
+        sliders = page.locator(".rbm-sliders").first
+        page.locator(".rbm-scene").first.scroll_into_view_if_needed()
+        page.wait_for_timeout(500)
+        grab = sliders.locator("button.rbm-grab")
+        assert grab.inner_text() == "grab in 3D: off"
+        grab.click()
+        grab.click()
+        assert grab.inner_text() == "grab in 3D: move"
+        page.wait_for_timeout(300)
+        x, y = page.evaluate(ORIGIN_ON_SCREEN_JS, TRIAD)
+        # the gizmo's centre handle drags the frame in the plane of the screen
+        page.mouse.move(x, y)
+        page.mouse.down()
+        page.mouse.move(x - 40, y + 10, steps=8)
+        page.mouse.move(x - 80, y + 20, steps=8)
+        page.mouse.up()
+        page.wait_for_timeout(500)
+        moved = [
+            float(sliders.locator(f"input.rbm-slider-{n}").input_value()) for n in "xyz"
+        ]
+        matrix = page.evaluate(NODE_MATRIX_JS, TRIAD)
+        printed = sliders.locator(".rbm-local").inner_text()
+        page.screenshot(path=str(ARTIFACTS / "saved-01-gizmo-moved.png"))
+    assert moved != pytest.approx([5, 0, 0], abs=0.05), (
+        "the drag did not move the frame"
+    )
+    # the sliders show the pose the triad has (sliders round to their steps)
+    assert matrix[12:15] == pytest.approx(moved, abs=0.03)
+    assert matrix[0:3] == pytest.approx([0, 1, 0], abs=1e-6)  # moved, not turned
+    assert "in observer's axes" in printed
+    assert not errors, errors

@@ -51,7 +51,13 @@ nb_merge_streams = True
 
 html_theme = "pydata_sphinx_theme"
 html_title = f"rbm_nb {release}"
-html_static_path: list[str] = []
+html_static_path = ["_static"]
+# Jupyter's widget manager + anywidget, built from npm by js/embed/build.mjs
+# into _static/widgets: notebook pages render their saved widgets (3D views
+# included: the scene's snapshot is in the saved state) with no kernel and no
+# CDN. myst-nb's default loads require.js and the manager from two CDNs.
+nb_ipywidgets_js = {"widgets/embed.js": {}}
+html_css_files = ["widgets/embed.css"]
 html_theme_options = {
     "navigation_with_keys": False,
     "show_toc_level": 2,

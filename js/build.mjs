@@ -9,6 +9,7 @@
 // must equal the committed files byte for byte.
 import { build } from "esbuild";
 import { readdirSync } from "node:fs";
+import { readFile } from "node:fs/promises";
 import { dirname, join, resolve } from "node:path";
 import { fileURLToPath } from "node:url";
 
@@ -25,8 +26,32 @@ const entries = readdirSync(srcdir)
   .sort()
   .map((name) => join(srcdir, name));
 
+// three's TransformControls (the gizmo of teaching.js) imports from "three";
+// the page's three.js is the one inside meshcat's viewer (globalThis.MeshCat.THREE,
+// r132), so the module becomes a factory taking that namespace: one three.js
+// on the page, and nothing evaluated before meshcat has loaded
+const transformControlsFactory = {
+  name: "transform-controls-factory",
+  setup(b) {
+    b.onLoad({ filter: /TransformControls\.js$/ }, async (args) => {
+      const text = await readFile(args.path, "utf8");
+      const imports = /^import \{([^}]*)\} from 'three';$/m.exec(text);
+      const exports = /^export \{([^}]*)\};$/m.exec(text);
+      if (!imports || !exports) {
+        throw new Error(`${args.path}: not the TransformControls module this build expects`);
+      }
+      const body = text.replace(imports[0], "").replace(exports[0], "");
+      return {
+        contents: `export function makeTransformControls(THREE) {\nconst {${imports[1]}} = THREE;\n${body}\nreturn {${exports[1]}};\n}\n`,
+        loader: "js",
+      };
+    });
+  },
+};
+
 await build({
   entryPoints: entries,
+  plugins: [transformControlsFactory],
   outdir,
   bundle: true,
   format: "esm",

@@ -15,6 +15,21 @@ from pathlib import Path
 
 from conftest import REPO
 
+REAL_DATA = REPO.parent / "shared" / "data" / "rbm-data"
+
+
+def real_data_env() -> dict[str, str]:
+    """RBM_NB_DATA_DIR for the build: as set, else the real recording beside the clone.
+
+    The site is built with the real recording wherever it can be had (CI has
+    ../shared); each notebook page prints which one it used.
+    """
+    if os.environ.get("RBM_NB_DATA_DIR"):
+        return {}
+    if (REAL_DATA / "head.nc").is_file():
+        return {"RBM_NB_DATA_DIR": str(REAL_DATA)}
+    return {}
+
 
 class DocsBuild:
     """``sphinx -W -b html docs`` into ``folder / "html"``, started at once."""
@@ -28,7 +43,7 @@ class DocsBuild:
                  "-b", "html", "-d", str(folder / "doctrees"),
                  str(REPO / "docs"), str(self.out)],
                 stdout=log, stderr=subprocess.STDOUT, text=True,
-                env={**os.environ, "MPLBACKEND": "Agg"},
+                env={**os.environ, "MPLBACKEND": "Agg", **real_data_env()},
             )  # fmt: skip
 
     def wait(self, timeout: float) -> tuple[int, str]:

@@ -692,10 +692,34 @@ class View {
   }
 }
 
+/** The snapshot saved with the widget state (widget.py pack_snapshot), or null. */
+function savedSnapshot(value) {
+  if (!value || !value.byteLength) {
+    return null;
+  }
+  const bytes = bytesOf(value);
+  const data = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
+  let at = 4 + data.getUint32(0, true);
+  const content = JSON.parse(new TextDecoder().decode(bytes.subarray(4, at)));
+  const buffers = [];
+  while (at < bytes.byteLength) {
+    const n = data.getUint32(at, true);
+    buffers.push(bytes.subarray(at + 4, at + 4 + n));
+    at += 4 + n;
+  }
+  return { content, buffers };
+}
+
 function initialize({ model }) {
   const store = storeFor(model);
   const onMessage = (msg, buffers) => store.handle(msg, buffers || []);
   model.on("msg:custom", onMessage);
+  // a page without a kernel (saved notebook, nbconvert HTML, docs) draws the
+  // saved snapshot; a kernel's answer to "ready" below replaces it
+  const saved = store.commands.length === 0 ? savedSnapshot(model.get("_saved")) : null;
+  if (saved) {
+    store.handle(saved.content, saved.buffers);
+  }
   // ask the kernel for the content (also after a page reload)
   model.send({ type: "ready" });
   return () => {

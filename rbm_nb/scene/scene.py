@@ -594,7 +594,11 @@ class Scene:
                     self._camera = self._fitted_camera()
                     self._camera_is_auto = True
                 widget = SceneWidget(
-                    lambda: self._snapshot_message(self.max_samples),
+                    lambda cap=None: self._snapshot_message(
+                        self.max_samples
+                        if cap is None
+                        else min(cap, self.max_samples or cap)
+                    ),
                     check_frame=self._checked_frame_name,
                 )
                 self._widget = widget

@@ -12,7 +12,9 @@ No port is opened: this works wherever Jupyter widgets work.
 from __future__ import annotations
 
 import functools
+import json
 import math
+import struct
 import threading
 import time
 import uuid
@@ -92,10 +94,16 @@ class SceneWidget(FrontendGuard, anywidget.AnyWidget):
     _labels = traitlets.Dict().tag(sync=True)
     _legend: traitlets.List[dict] = traitlets.List().tag(sync=True)
     _pins = traitlets.Dict().tag(sync=True)
+    # The content as of the last change, packed (see pack_snapshot): saved with
+    # the notebook's widget state, so a page with no kernel (nbconvert HTML,
+    # the docs) draws the scene; a kernel's answer to "ready" replaces it.
+    _saved = traitlets.Bytes(b"").tag(sync=True)
+    SAVED_SAMPLES = 5000  # per moving object: keeps saved notebooks small
+    SAVED_EVERY = 2.0  # seconds between refreshes while a browser is listening
 
     def __init__(
         self,
-        snapshot: Callable[[], tuple[dict, list]],
+        snapshot: Callable[..., tuple[dict, list]],
         *,
         check_frame: Callable[[str, str], str] | None = None,
         **kwargs,
@@ -110,7 +118,10 @@ class SceneWidget(FrontendGuard, anywidget.AnyWidget):
         self._ready_timer: threading.Timer | None = None
         self._last_snapshot = -math.inf
         self.bytes_sent = 0
+        self._saved_at = -float("inf")
+        self._saved_timer: threading.Timer | None = None
         self.on_msg(self._on_message)
+        self._save()
 
     @traitlets.validate("height")
     def _valid_height(self, proposal):
@@ -171,7 +182,39 @@ class SceneWidget(FrontendGuard, anywidget.AnyWidget):
 
     def push(self, content: dict, buffers: list) -> None:
         """Send one content message (only once a browser asked for the scene)."""
+        self._refresh_saved()
         if not self.ready or self.comm is None:
             return
         self.bytes_sent += sum(len(b) for b in buffers)
         self.send(content, buffers=buffers)
+
+    # -- the snapshot saved with the widget state --------------------------------
+    def _save(self) -> None:
+        self._saved_at = time.monotonic()
+        self._saved = pack_snapshot(*self._snapshot(self.SAVED_SAMPLES))
+
+    def _refresh_saved(self) -> None:
+        """Keep ``_saved`` current; at most every SAVED_EVERY s while a browser listens.
+
+        Without a browser (nbclient, a docs build) every change refreshes it at
+        once, so the state saved after the last cell is complete. With one,
+        each refresh re-sends the whole scene, so changes are gathered.
+        """
+        wait = self._saved_at + self.SAVED_EVERY - time.monotonic()
+        if not self.ready or wait <= 0:
+            self._save()
+        elif self._saved_timer is None or not self._saved_timer.is_alive():
+            self._saved_timer = threading.Timer(wait, self._save)
+            self._saved_timer.daemon = True
+            self._saved_timer.start()
+
+
+def pack_snapshot(content: dict, buffers: list) -> bytes:
+    """One snapshot message as bytes: u32 header length, JSON header, then
+    each buffer as u32 length + bytes (little endian; read by scene.js)."""
+    header = json.dumps(content, separators=(",", ":")).encode()
+    parts = [struct.pack("<I", len(header)), header]
+    for buffer in buffers:
+        data = bytes(buffer)
+        parts += [struct.pack("<I", len(data)), data]
+    return b"".join(parts)

@@ -14,6 +14,8 @@ _EXPORTS = {
     "Player": "player",
     "FrameTree": "frame_tree",
     "TimeSeries": "timeseries",
+    "FrameSliders": "teaching",
+    "check_answer": "teaching",
 }
 
 __all__ = sorted(_EXPORTS)
@@ -24,4 +26,5 @@ __getattr__, __dir__ = lazy_attributes(__name__, _EXPORTS)
 if TYPE_CHECKING:  # pragma: no cover - static analysers see the real names
     from .frame_tree import FrameTree  # noqa: F401
     from .player import Player  # noqa: F401
+    from .teaching import FrameSliders, check_answer  # noqa: F401
     from .timeseries import TimeSeries  # noqa: F401

@@ -16,8 +16,20 @@ equals the eager result on the whole array:
   once, lazily, before they are cut (the eager estimators make them
   sign-continuous from the first sample on, which a chunk cannot see).
 
-Frames stay in memory. Nothing is computed until the caller computes the
-result; dask is imported only when dask-backed data arrives.
+Frames are resolved once, when the graph is built, on the client: the
+graph holds their values (:mod:`rbm_nb._frame_snapshot`), not their names,
+so the tasks run on any scheduler -- threads, worker processes, workers on
+other machines, whose registries are empty. **A graph is a snapshot of the
+registry**: a frame registered, replaced or removed after a lazy call does
+not change its result (call the function again to use the new frames).
+Each task carries only the samples of each moving frame that its chunk's
+time window needs (:data:`MARGIN` more on each side), so a task's size
+grows with its chunk, not with the recording, and every sample of a frame
+travels about once, whatever the number of tasks. The per-block function
+calls the engine directly, on frames built from those values.
+
+Nothing is computed until the caller computes the result; dask is imported
+only when dask-backed data arrives.
 """
 
 from __future__ import annotations
@@ -391,7 +403,7 @@ class _TimeSeries:
             comp_dim = arr.dims[-1 if axis is None else axis % arr.ndim]
             return cls(arr, True, "time", comp_dim)
         time_dim = time_dim_of(arr, timestamps, time_axis)
-        if time_dim not in arr.coords:
+        if time_dim is None or time_dim not in arr.coords:
             raise ValueError(
                 f"the dask-backed DataArray needs a coordinate for its time "
                 f"dimension {time_dim!r} to be transformed lazily"

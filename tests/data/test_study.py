@@ -243,7 +243,13 @@ def _listening() -> set[tuple[int, str, int]]:
 
 
 # what distributed serves over plain HTTP when it is allowed to
-HTTP_ROUTES = ("/json/identity.json", "/metrics", "/health", "/status", "/info/main/workers.html")
+HTTP_ROUTES = (
+    "/json/identity.json",
+    "/metrics",
+    "/health",
+    "/status",
+    "/info/main/workers.html",
+)
 
 
 def _answered(port: int) -> list[str]:

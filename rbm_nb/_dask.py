@@ -328,6 +328,7 @@ def transform(
         dim=series.comp_dim,
         time_dim=series.time_dim,
         attr=attr,
+        origin=_origin(series.arr[series.time_dim].values),
     )
     span = frame_time_range(source, to_frame)
     return series.run(
@@ -339,8 +340,14 @@ def transform(
     )
 
 
-def _transform_block(block, frames, method, dim, time_dim, attr):
-    """The eager transform of one block, on frames built from their values."""
+def _transform_block(block, frames, method, dim, time_dim, attr, origin):
+    """The eager transform of one block, on frames built from their values.
+
+    The block's times count from the whole array's first (``origin``), as
+    in one eager call: from the block's own first they would round
+    differently, and times that equal a frame's samples in the eager call
+    could fall a few ulps beside them.
+    """
     from ._door import unpack
     from ._xarray import wrap
 
@@ -352,7 +359,7 @@ def _transform_block(block, frames, method, dim, time_dim, attr):
         into,
         axis=unpacked.axis,
         time_axis=unpacked.time_axis,
-        timestamps=unpacked.timestamps,
+        timestamps=_track_from(unpacked.timestamps, origin),
         timestamps_out=True,
     )
     attrs = dict(unpacked.attrs)

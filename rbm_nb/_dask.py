@@ -351,17 +351,17 @@ def _transform_block(block, frames, method, dim, time_dim, attr, origin):
     from ._door import unpack
     from ._xarray import wrap
 
-    outof, into = frames.build()
     unpacked = unpack(block, dim=dim, timestamps=time_dim)
-    out, ts_out = method(
-        outof,
-        unpacked.data,
-        into,
-        axis=unpacked.axis,
-        time_axis=unpacked.time_axis,
-        timestamps=_track_from(unpacked.timestamps, origin),
-        timestamps_out=True,
-    )
+    with frames.built() as (outof, into):
+        out, ts_out = method(
+            outof,
+            unpacked.data,
+            into,
+            axis=unpacked.axis,
+            time_axis=unpacked.time_axis,
+            timestamps=_track_from(unpacked.timestamps, origin),
+            timestamps_out=True,
+        )
     attrs = dict(unpacked.attrs)
     attrs[attr] = attrs["representation_frame"] = into.name
     return wrap(unpacked, out, ts_out, attrs)
@@ -993,15 +993,15 @@ def _velocity_block(block, context, what, dim, time_dim, origin):
     from ._engine.transform import Blocks
     from ._xarray import wrap
 
-    frame, to_frame = context.frames.build()
     unpacked = unpack(block, dim=dim, timestamps=time_dim)
     blocks = Blocks(
         unpacked.data, 3, unpacked.axis, unpacked.time_axis,
         _track_from(unpacked.timestamps, origin), "vectors",
     )  # fmt: skip
-    rotated, matched, final = _velocity_parts(
-        blocks, frame, to_frame, context.extras, context.interpolated
-    )
+    with context.frames.built() as (frame, to_frame):
+        rotated, matched, final = _velocity_parts(
+            blocks, frame, to_frame, context.extras, context.interpolated
+        )
     out = blocks.restore(_combine(rotated, matched), final)
     attrs = dict(unpacked.attrs)
     attrs[what] = attrs["representation_frame"] = to_frame.name

@@ -23,7 +23,8 @@ the whole ones, and the margin keeps the window's edges out of reach.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -165,13 +166,27 @@ class FrameTree:
             self, frames=tuple(f.window(first, last, margin) for f in self.frames)
         )
 
-    def build(self) -> list[ReferenceFrame]:
+    @contextmanager
+    def built(self) -> Iterator[list[ReferenceFrame]]:
         """Fresh ReferenceFrame objects (unregistered), the named ones in order.
 
         Built with the public constructor, so the frames are validated and
         prepared (sign continuity, missing samples) exactly as the user's
-        frames were: the engine cannot tell them from the originals.
+        frames were: the engine cannot tell them from the originals. On
+        leaving, the frames are detached from each other: a tree is a
+        reference cycle (parents list their children) and the engine caches
+        the chains of the frames last used, so without this a worker would
+        keep every finished task's window -- its samples and the engine's
+        tables -- until a full pass of the garbage collector.
         """
+        frames = self._build()
+        try:
+            yield [frames[k] for k in self.named]
+        finally:
+            for frame in reversed(frames[1:]):
+                frame.parent = None
+
+    def _build(self) -> list[ReferenceFrame]:
         built: list[ReferenceFrame] = []
         for value in self.frames:
             if value.parent < 0:
@@ -188,4 +203,4 @@ class FrameTree:
                     max_gap=value.max_gap,
                 )
             )
-        return [built[k] for k in self.named]
+        return built

@@ -537,3 +537,32 @@ def test_long_recordings_count_times_from_the_first_sample():
     eager = rbm.transform_points(points, outof=frame, into=world)
     lazy = rbm.transform_points(points.chunk(time=150_000), outof=frame, into=world)
     np.testing.assert_array_equal(lazy.values, eager.values)
+
+
+def test_a_tasks_frames_are_freed_when_it_ends(recording, tree, monkeypatch):
+    """Without a pass of the cycle collector: a built tree is a reference cycle,
+    and the engine caches the chains of the frames last used, so a worker
+    would otherwise keep every finished window until a full collection."""
+    import gc
+    import weakref
+
+    from rbm_nb._frame_snapshot import FrameTree
+
+    built = []
+    build = FrameTree._build
+
+    def recording_build(self):
+        frames = build(self)
+        built.extend(weakref.ref(f) for f in frames)
+        return frames
+
+    monkeypatch.setattr(FrameTree, "_build", recording_build)
+    pos = _eye(recording, "position").chunk(time=CHUNK)
+    lazy = rbm.transform_points(pos, outof="head", into="world", dim="cartesian_axis")
+    gc.disable()
+    try:
+        lazy.compute(scheduler="sync")
+        assert built
+        assert [r for r in built if r() is not None] == []
+    finally:
+        gc.enable()

@@ -383,7 +383,7 @@ def _source_frame(resolve: Callable, outof, attrs, attr: str):
         warnings.warn(
             f"transforming the {attr!r} of the array out of {frame.name!r}, but "
             f"its attrs say its {attr} is {attrs[attr]!r}",
-            stacklevel=5,
+            stacklevel=6,  # the user's call of the public function
         )
     return frame
 

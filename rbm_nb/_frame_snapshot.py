@@ -41,8 +41,8 @@ class FrameValue:
     """One frame's data as a value: what :class:`~rbm_nb.ReferenceFrame` takes.
 
     ``parent`` is the index of the parent in the :class:`FrameTree` (-1 for
-    its root). Arrays are the frame's public, read-only ones (or slices of
-    them), never copies made per task.
+    its root). Arrays are the frame's public, read-only ones (no copy), or
+    for a window the rows it keeps.
     """
 
     name: str | None

@@ -21,7 +21,7 @@ Printed per workload and worker count: wall time (the median of
 ``--repeats`` runs, after a warm-up run), the 1-worker / 2-worker ratio,
 bytes shipped per task (the pickled graph each task needs, read from the
 graph as the client sends it, and the largest), and each worker's peak
-resident memory (``ru_maxrss``, warm-up included).
+resident memory (``VmHWM``, warm-up included).
 
     python benchmarks/bench_distributed.py
     python benchmarks/bench_distributed.py --recordings 16 --samples 1e6 --repeats 1
@@ -195,9 +195,21 @@ def run_transform(client, points, world, head, eager) -> float:
 # ---------------------------------------------------------------------------
 
 
+def _high_water_mb() -> float:
+    """This process's peak resident memory (MB), from ``/proc/self/status``.
+
+    Not ``ru_maxrss``: Linux keeps it across ``fork`` + ``exec``, so a worker
+    that the nanny forked from this (client) process would report this
+    process's peak, not its own.
+    """
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) / 1024
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
 def peak_mb(client) -> list[float]:
-    rss = client.run(lambda: resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
-    return [v / 1024 for v in rss.values()]
+    return list(client.run(_high_water_mb).values())
 
 
 def timed(workers: int, repeats: int, run) -> tuple[float, list[float]]:

@@ -16,12 +16,25 @@ equals the eager result on the whole array:
   once, lazily, before they are cut (the eager estimators make them
   sign-continuous from the first sample on, which a chunk cannot see).
 
-Frames stay in memory. Nothing is computed until the caller computes the
-result; dask is imported only when dask-backed data arrives.
+Frames are resolved once, when the graph is built, on the client: the
+graph holds their values (:mod:`rbm_nb._frame_snapshot`), not their names,
+so the tasks run on any scheduler -- threads, worker processes, workers on
+other machines, whose registries are empty. **A graph is a snapshot of the
+registry**: a frame registered, replaced or removed after a lazy call does
+not change its result (call the function again to use the new frames).
+Each task carries only the samples of each moving frame that its chunk's
+time window needs (:data:`MARGIN` more on each side), so a task's size
+grows with its chunk, not with the recording, and every sample of a frame
+travels about once, whatever the number of tasks. The per-block function
+calls the engine directly, on frames built from those values.
+
+Nothing is computed until the caller computes the result; dask is imported
+only when dask-backed data arrives.
 """
 
 from __future__ import annotations
 
+import functools
 import sys
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -36,6 +49,11 @@ SPLINE_HALO = 32
 GRADIENT_HALO = 2
 # samples of squad neighbours (q[i-1] .. q[i+2]) plus one for safety
 SQUAD_HALO = 3
+# samples of a frame (or a looked-up term) kept beyond those bracketing a
+# task's time window, on each side: SQUAD reads samples i-1 .. i+2, so 4
+# leaves two samples between any sample the window's interpolation -- or a
+# rule about missing samples next to it -- reads and the cut
+MARGIN = 4
 
 
 def is_dask(obj: Any) -> bool:
@@ -68,6 +86,7 @@ def over_time(
     stop: int | None = None,
     fill: Any = 0.0,
     global_seconds: bool = False,
+    context: Any = None,
 ):
     """Apply an eager DataArray function lazily, one time chunk at a time.
 
@@ -94,6 +113,12 @@ def over_time(
         compute them, so that time differences -- and what is divided by
         them -- are the same to the bit as in one eager call (for functions
         that need no other timestamps, e.g. the velocity estimators).
+    context : object with ``window(first, last)``, optional
+        What the function needs besides the block, cut to each block's time
+        window: ``func(block, context.window(first, last))`` is called with
+        the first and last time the block reads. Frames travel this way
+        (:class:`rbm_nb._frame_snapshot.FrameTree`): each task carries the
+        samples of its window, not the frames' whole recordings.
 
     Returns
     -------
@@ -108,7 +133,9 @@ def over_time(
     stop = n if stop is None else stop
     arr = arr.chunk({d: -1 for d in arr.dims if d != time_dim})
     t_axis = arr.dims.index(time_dim)
-    layout = func(_stand_in(arr, time_dim, start, stop, fill))
+    times = arr[time_dim].values
+    stand_in = _stand_in(arr, time_dim, start, stop, fill)
+    layout = _apply(func, stand_in, _window(context, stand_in[time_dim].values))
     out_axis = layout.dims.index(time_dim)
 
     source = arr
@@ -132,6 +159,7 @@ def over_time(
             layout.dims,
             lo - read_lo,
             hi - read_lo,
+            _window(context, times[read_lo:read_hi]),
         )
         shape = list(layout.shape)
         shape[out_axis] = hi - lo
@@ -192,11 +220,24 @@ def _stand_in(arr, time_dim: str, start: int, stop: int, fill):
     return xr.DataArray(data, coords, part.dims, part.name, part.attrs)
 
 
-def _run_block(func, data, coords, dims, name, attrs, time_dim, out_dims, lo, hi):
+def _window(context, times: np.ndarray):
+    """The context of a block reading ``times`` (None without a context)."""
+    if context is None or not len(times):
+        return context
+    return context.window(times[0], times[-1])
+
+
+def _apply(func, block, context):
+    return func(block) if context is None else func(block, context)
+
+
+def _run_block(
+    func, data, coords, dims, name, attrs, time_dim, out_dims, lo, hi, context=None
+):
     import xarray as xr
 
     block = xr.DataArray(np.asarray(data), coords, dims, name, attrs)
-    out = func(block).transpose(*out_dims)
+    out = _apply(func, block, context).transpose(*out_dims)
     return np.asarray(out.isel({time_dim: slice(lo, hi)}).data)
 
 
@@ -252,7 +293,7 @@ def frame_time_range(outof, into):
 
 
 def transform(
-    eager: Callable,
+    method: Callable,
     arr,
     into,
     outof,
@@ -262,67 +303,149 @@ def transform(
     time_axis,
     return_timestamps: bool,
     resolve: Callable,
+    snapshot: Callable,
     attr: str,
     quaternions: bool,
-    spans: Sequence[tuple[Any, Any]] = (),
 ):
-    """A transform of dask-backed data: the frames looked up at each chunk's times.
+    """A transform of dask-backed data, one task per time chunk.
 
-    ``spans`` are further (first, last) time ranges the result is cropped to,
-    as the eager matching crops it to those of the arrays taking part.
+    The frames are resolved here, once, and the graph carries their values
+    (``snapshot``, :meth:`rbm_nb._frame_snapshot.FrameTree.of`), each task
+    only the samples its chunk's times need: tasks run wherever dask sends
+    them, with or without the client's registry, and a frame registered
+    after this call does not change the result.
+
+    ``method(outof, data, into, axis=, time_axis=, timestamps=,
+    timestamps_out=)`` is the engine call of the eager transform;
+    ``resolve(frame, argument)`` turns names into frames.
     """
-    plain = not hasattr(arr, "dims")
-    if plain:
-        if timestamps is None:
-            raise ValueError(
-                "a dask array needs timestamps= to be transformed lazily "
-                "(without them the result would follow the frames' own times)"
-            )
-        arr = as_dataarray(arr, time_axis, timestamps)
-        spatial = arr.dims[-1 if axis is None else axis % arr.ndim]
-        time_dim, dim, axis = "time", spatial, None
-    else:
-        time_dim = (
-            timestamps
-            if isinstance(timestamps, str)
-            else arr.dims[0 if time_axis is None else time_axis]
+    series = _TimeSeries.of(arr, dim, axis, timestamps, time_axis)
+    source = _source_frame(resolve, outof, getattr(arr, "attrs", {}), attr)
+    to_frame = resolve(into, "into")
+    block = functools.partial(
+        _transform_block,
+        method=method,
+        dim=series.comp_dim,
+        time_dim=series.time_dim,
+        attr=attr,
+        origin=_origin(series.arr[series.time_dim].values),
+    )
+    span = frame_time_range(source, to_frame)
+    return series.run(
+        block,
+        snapshot([source, to_frame]),
+        [] if span is None else [span],
+        quaternions,
+        return_timestamps,
+    )
+
+
+def _transform_block(block, frames, method, dim, time_dim, attr, origin):
+    """The eager transform of one block, on frames built from their values.
+
+    The block's times count from the whole array's first (``origin``), as
+    in one eager call: from the block's own first they would round
+    differently, and times that equal a frame's samples in the eager call
+    could fall a few ulps beside them.
+    """
+    from ._door import unpack
+    from ._xarray import wrap
+
+    unpacked = unpack(block, dim=dim, timestamps=time_dim)
+    with frames.built() as (outof, into):
+        out, ts_out = method(
+            outof,
+            unpacked.data,
+            into,
+            axis=unpacked.axis,
+            time_axis=unpacked.time_axis,
+            timestamps=_track_from(unpacked.timestamps, origin),
+            timestamps_out=True,
         )
-        if time_dim not in arr.coords:
+    attrs = dict(unpacked.attrs)
+    attrs[attr] = attrs["representation_frame"] = into.name
+    return wrap(unpacked, out, ts_out, attrs)
+
+
+def _source_frame(resolve: Callable, outof, attrs, attr: str):
+    """``outof``, or the frame a DataArray's attrs name, as the eager call finds it."""
+    import warnings
+
+    if outof is None:
+        if attr not in attrs:
+            raise ValueError(
+                f"outof must be given unless arr is a DataArray whose attrs name a "
+                f"registered frame under {attr!r}"
+            )
+        return resolve(attrs[attr], f"the DataArray's {attr} attribute")
+    frame = resolve(outof, "outof")
+    if attr in attrs and attrs[attr] != frame.name:
+        warnings.warn(
+            f"transforming the {attr!r} of the array out of {frame.name!r}, but "
+            f"its attrs say its {attr} is {attrs[attr]!r}",
+            stacklevel=6,  # the user's call of the public function
+        )
+    return frame
+
+
+class _TimeSeries:
+    """A dask-backed argument of a transform as a DataArray along time."""
+
+    def __init__(self, arr, plain: bool, time_dim: str, comp_dim: str):
+        self.arr = arr
+        self.plain = plain
+        self.time_dim = time_dim
+        self.comp_dim = comp_dim
+
+    @classmethod
+    def of(cls, arr, dim, axis, timestamps, time_axis) -> _TimeSeries:
+        plain = not hasattr(arr, "dims")
+        if plain:
+            if timestamps is None:
+                raise ValueError(
+                    "a dask array needs timestamps= to be transformed lazily "
+                    "(without them the result would follow the frames' own times)"
+                )
+            arr = as_dataarray(arr, time_axis, timestamps)
+            comp_dim = arr.dims[-1 if axis is None else axis % arr.ndim]
+            return cls(arr, True, "time", comp_dim)
+        time_dim = time_dim_of(arr, timestamps, time_axis)
+        if time_dim is None or time_dim not in arr.coords:
             raise ValueError(
                 f"the dask-backed DataArray needs a coordinate for its time "
                 f"dimension {time_dim!r} to be transformed lazily"
             )
-    source = outof if outof is not None else arr.attrs.get(attr)
-    span = (
-        None
-        if source is None
-        else frame_time_range(resolve(source, "outof"), resolve(into, "into"))
-    )
-    for first, last in spans:
-        span = (
-            (first, last) if span is None else (max(span[0], first), min(span[1], last))
+        comp_dim = dim if dim is not None else arr.dims[-1 if axis is None else axis]
+        return cls(arr, False, time_dim, comp_dim)
+
+    def run(self, block, frames, spans, quaternions: bool, return_timestamps: bool):
+        """``block`` over the chunks, cropped to the (first, last) ``spans``."""
+        times = self.arr[self.time_dim].values
+        start, stop = 0, len(times)
+        if spans:
+            first = max(s[0] for s in spans)
+            last = min(s[1] for s in spans)
+            start = int(np.searchsorted(times, first, side="left"))
+            stop = int(np.searchsorted(times, last, side="right"))
+            if stop <= start:
+                raise ValueError(
+                    f"the array's times ({times[0]} to {times[-1]}) and the frames' "
+                    f"({first} to {last}) do not overlap"
+                )
+        fill = {self.comp_dim: (1.0, 0.0, 0.0, 0.0) if quaternions else 0.0}
+        out = over_time(
+            block,
+            self.arr,
+            self.time_dim,
+            start=start,
+            stop=stop,
+            fill=fill,
+            context=frames,
         )
-    times = arr[time_dim].values
-    start, stop = 0, len(times)
-    if span is not None:
-        start = int(np.searchsorted(times, span[0], side="left"))
-        stop = int(np.searchsorted(times, span[1], side="right"))
-        if stop <= start:
-            raise ValueError(
-                f"the array's times ({times[0]} to {times[-1]}) and the frames' "
-                f"({span[0]} to {span[1]}) do not overlap"
-            )
-
-    def block(b):
-        return eager(b, into, outof=outof, dim=dim, axis=axis, timestamps=time_dim)
-
-    comp_dim = dim if dim is not None else arr.dims[-1 if axis is None else axis]
-    fill = {comp_dim: (1.0, 0.0, 0.0, 0.0) if quaternions else 0.0}
-    out = over_time(block, arr, time_dim, start=start, stop=stop, fill=fill)
-    if plain:
-        data = out.data
-        return (data, times[start:stop]) if return_timestamps else data
-    return out
+        if self.plain:
+            data = out.data
+            return (data, times[start:stop]) if return_timestamps else data
+        return out
 
 
 def estimate(
@@ -723,8 +846,8 @@ def velocity_terms(linear: bool, frame, to_frame, what: str, options: dict):
     Returns
     -------
     extras : list of (ndarray (n|1, 3), Track or None)
-    combine : callable
-        ``combine(rotated, extras_matched)``: the transformed velocities.
+        One term for angular velocities (added), three for linear ones
+        (``rotated + ext[0] + ext[1] x ext[2]``, see :func:`_combine`).
     """
     from ._engine import chain as ch
     from ._engine import twist as tw
@@ -740,7 +863,7 @@ def velocity_terms(linear: bool, frame, to_frame, what: str, options: dict):
         angular, ang_ts = tw.lookup_angular_velocity(
             moving, reference, to_frame, None, cutoff, "quaternion", True, True
         )
-        return [(angular, ang_ts)], lambda rotated, ext: rotated + ext[0]
+        return [(angular, ang_ts)]
     thresh = options.get("outlier_thresh")
     if what == "reference_frame":
         # v_M/R' = v_M/R + v_R/R' + w_R/R' x t_M/R
@@ -773,8 +896,14 @@ def velocity_terms(linear: bool, frame, to_frame, what: str, options: dict):
         frame, "vectors", translation, to_frame, -1, 0, trans_target.track
     )
     lever_track = None if lever_ts is None else track_of(trans_target.track, lever_ts)
-    extras = [(lin, lin_ts), (ang, ang_ts), (lever, lever_track)]
-    return extras, lambda rotated, ext: rotated + ext[0] + np.cross(ext[1], ext[2])
+    return [(lin, lin_ts), (ang, ang_ts), (lever, lever_track)]
+
+
+def _combine(rotated, matched):
+    """The transformed velocities from the rotated input and the matched terms."""
+    if len(matched) == 1:
+        return rotated + matched[0]
+    return rotated + matched[0] + np.cross(matched[1], matched[2])
 
 
 def velocity_transform(
@@ -789,6 +918,7 @@ def velocity_transform(
     time_axis,
     return_timestamps: bool,
     resolve: Callable,
+    snapshot: Callable,
     **options,
 ):
     """A change of frame of dask-backed velocities, lazily per time chunk.
@@ -796,65 +926,86 @@ def velocity_transform(
     ``what`` is "reference_frame" or "moving_frame" ("representation_frame"
     is a vector transform). ``options`` are those of the public function
     (``cutoff``, and for linear velocities ``moving_frame``,
-    ``reference_frame``, ``outlier_thresh``).
+    ``reference_frame``, ``outlier_thresh``). The frames are resolved and
+    their velocities estimated here, once; each task carries the frames'
+    samples and the velocities' values around its chunk's times (see
+    :func:`transform`).
     """
-    import warnings
-
-    from ._door import unpack
-    from ._engine.transform import Blocks
-    from ._xarray import wrap
-
-    attrs = getattr(arr, "attrs", {})
-    if outof is None:
-        if what not in attrs:
-            raise ValueError(
-                f"outof must be given unless arr is a DataArray whose attrs name a "
-                f"registered frame under {what!r}"
-            )
-        frame = resolve(attrs[what], f"the DataArray's {what} attribute")
-    else:
-        frame = resolve(outof, "outof")
-        if what in attrs and attrs[what] != frame.name:
-            warnings.warn(
-                f"transforming the {what!r} of the array out of {frame.name!r}, but "
-                f"its attrs say its {what} is {attrs[what]!r}",
-                stacklevel=4,
-            )
+    series = _TimeSeries.of(arr, dim, axis, timestamps, time_axis)
+    frame = _source_frame(resolve, outof, getattr(arr, "attrs", {}), what)
     to_frame = resolve(into, "into")
     for key in ("moving_frame", "reference_frame"):
         if options.get(key) is not None:
             options[key] = resolve(options[key], key)
-    extras, combine = velocity_terms(linear, frame, to_frame, what, options)
+    extras = velocity_terms(linear, frame, to_frame, what, options)
+    whole = series.arr[series.time_dim].values
+    context = _VelocityContext(
+        snapshot([frame, to_frame]),
+        tuple(extras),
+        tuple(_interpolated_terms(frame, to_frame, whole, extras)),
+    )
+    block = functools.partial(
+        _velocity_block,
+        what=what,
+        dim=series.comp_dim,
+        time_dim=series.time_dim,
+        origin=_origin(whole),
+    )
     spans = [(t.values[0], t.values[-1]) for _, t in extras if t is not None]
+    span = frame_time_range(frame, to_frame)
+    return series.run(
+        block,
+        context,
+        spans + ([] if span is None else [span]),
+        False,
+        return_timestamps,
+    )
 
-    time_dim = time_dim_of(arr, timestamps, time_axis)
-    whole = arr[time_dim].values if time_dim is not None else timestamps
-    if whole is None:
-        raise ValueError(
-            "a dask array needs timestamps= to be transformed lazily "
-            "(without them the result would follow the frames' own times)"
+
+class _VelocityContext:
+    """What a block of a velocity transform needs: frames and the looked-up terms."""
+
+    def __init__(self, frames, extras, interpolated):
+        self.frames = frames
+        self.extras = extras
+        self.interpolated = interpolated
+
+    def window(self, first, last) -> _VelocityContext:
+        extras = []
+        for values, track in self.extras:
+            if track is None:
+                extras.append((values, track))
+                continue
+            n = len(track)
+            lo = int(np.searchsorted(track.values, first, side="right")) - 1 - MARGIN
+            hi = int(np.searchsorted(track.values, last, side="left")) + 1 + MARGIN
+            lo, hi = max(0, lo), min(n, hi)
+            # the same origin: the block interpolates in the eager call's seconds
+            extras.append((values[lo:hi], track.slice(lo, hi)))
+        return _VelocityContext(
+            self.frames.window(first, last), tuple(extras), self.interpolated
         )
-    origin = _origin(whole)
-    interpolated = _interpolated_terms(frame, to_frame, whole, extras)
 
-    def eager(block, into, outof, dim, axis, timestamps):
-        unpacked = unpack(block, dim=dim, axis=axis, timestamps=timestamps)
-        blocks = Blocks(
-            unpacked.data, 3, unpacked.axis, unpacked.time_axis,
-            _track_from(unpacked.timestamps, origin), "vectors",
-        )  # fmt: skip
-        rotated, matched, final = _velocity_parts(
-            blocks, frame, to_frame, extras, interpolated
-        )
-        out = blocks.restore(combine(rotated, matched), final)
-        new_attrs = dict(unpacked.attrs)
-        new_attrs[what] = new_attrs["representation_frame"] = to_frame.name
-        return wrap(unpacked, out, final.timestamps, new_attrs)
 
-    return transform(
-        eager, arr, to_frame, frame, dim, axis, timestamps, time_axis,
-        return_timestamps, resolve, what, False, spans,
+def _velocity_block(block, context, what, dim, time_dim, origin):
+    """The velocity transform of one block (the terms at the block's times)."""
+    from ._door import unpack
+    from ._engine.transform import Blocks
+    from ._xarray import wrap
+
+    unpacked = unpack(block, dim=dim, timestamps=time_dim)
+    blocks = Blocks(
+        unpacked.data, 3, unpacked.axis, unpacked.time_axis,
+        _track_from(unpacked.timestamps, origin), "vectors",
     )  # fmt: skip
+    with context.frames.built() as (frame, to_frame):
+        rotated, matched, final = _velocity_parts(
+            blocks, frame, to_frame, context.extras, context.interpolated
+        )
+    out = blocks.restore(_combine(rotated, matched), final)
+    attrs = dict(unpacked.attrs)
+    attrs[what] = attrs["representation_frame"] = to_frame.name
+    return wrap(unpacked, out, final.timestamps, attrs)
 
 
 def time_dim_of(arr, timestamps, time_axis) -> str | None:

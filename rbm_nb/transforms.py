@@ -18,6 +18,7 @@ from . import _dask
 from ._door import ArrayInput
 from ._engine import transform as _engine_transform
 from ._engine import twist as _twist
+from ._frame_snapshot import FrameTree
 from ._validation import check_what
 from ._xarray import unpack, wrap
 from .frames import FrameLike, resolve_frame
@@ -97,24 +98,22 @@ def _lazy_transform(
     method, arr, into, outof, dim, axis, timestamps, time_axis, attr,
     return_timestamps, **kwargs,
 ):  # fmt: skip
-    """The transform of dask-backed data, one task per time chunk (see _dask)."""
+    """The transform of dask-backed data, one task per time chunk (see _dask):
+    the frames are resolved here, once, and the graph carries their values."""
     if kwargs.get("what", "representation_frame") != "representation_frame":
         # the frames' velocities are estimated once, not per chunk
         return _dask.velocity_transform(
             method is _frame_transform_linear_velocity_kw, arr, into, outof,
             dim=dim, axis=axis, timestamps=timestamps, time_axis=time_axis,
-            return_timestamps=return_timestamps, resolve=resolve_frame, **kwargs,
+            return_timestamps=return_timestamps, resolve=resolve_frame,
+            snapshot=FrameTree.of, **kwargs,
         )  # fmt: skip
-
-    def eager(block, into, outof, dim, axis, timestamps):
-        return _transform(
-            method, block, into, outof, dim, axis, timestamps, None, attr, False,
-            **kwargs,
-        )  # fmt: skip
-
+    if method not in (_points, _vectors, _quaternions):
+        # a velocity's representation frame changes as a vector's does
+        method = _vectors
     return _dask.transform(
-        eager, arr, into, outof, dim, axis, timestamps, time_axis,
-        return_timestamps, resolve_frame, attr, method is _quaternions,
+        method, arr, into, outof, dim, axis, timestamps, time_axis,
+        return_timestamps, resolve_frame, FrameTree.of, attr, method is _quaternions,
     )  # fmt: skip
 
 

@@ -19,7 +19,16 @@ rbm_nb's analyses, and one makes it less private than it should be:
 * the scheduler and workers listen on local ports; :func:`local_cluster`
   secures them with a throw-away TLS certificate (distributed's
   ``Security.temporary()``), so only this process's clients can connect:
-  the certificate is the token. No dashboard is served unless asked.
+  the certificate is the token.
+* distributed serves plain HTTP beside its protocol -- the dashboard, and
+  on every scheduler and worker routes such as ``/metrics``,
+  ``/json/identity.json``, ``/health`` and the workers' logs and call
+  stacks -- without credentials, on 8787 or a free port. Unless the
+  dashboard is asked for, :func:`local_cluster` gives those servers no
+  route at all (every request is answered 404) and binds them to
+  127.0.0.1; asked for, the dashboard and the routes are served on a free
+  port of 127.0.0.1 only (``cluster.dashboard_link``), never on another
+  interface.
 
 For an existing cluster, give its workers the same environment variables
 (e.g. in the worker's job script, or ``distributed.nanny.pre-spawn-environ``
@@ -44,6 +53,16 @@ WORKER_SETTINGS: Final[dict[str, Any]] = {
 }
 
 
+# a free port on the loopback interface
+_LOOPBACK_ANY_PORT: Final = "127.0.0.1:0"
+# no plain-HTTP route on the scheduler or the workers (the nanny passes its
+# configuration on to the worker processes it starts)
+_NO_HTTP_ROUTES: Final[dict[str, Any]] = {
+    "distributed.scheduler.http.routes": [],
+    "distributed.worker.http.routes": [],
+}
+
+
 def local_cluster(
     n_workers: int | None = None,
     *,
@@ -62,7 +81,9 @@ def local_cluster(
         Threads per worker. 1 by default: rbm_nb's kernels already use the
         core they run on, and netCDF reads in one process take one lock.
     dashboard : bool
-        Serve distributed's dashboard (on a free local port) if True.
+        Serve distributed's dashboard and its HTTP routes (on a free port of
+        127.0.0.1, without credentials: anyone with an account on this
+        machine can read them) if True. False serves no HTTP route at all.
     secure : bool
         Connect scheduler, workers and clients over TLS with a temporary
         certificate (needs the ``cryptography`` package, part of the
@@ -101,8 +122,12 @@ def local_cluster(
         "threads_per_worker": threads_per_worker,
         "processes": True,
         "host": "127.0.0.1",
-        "dashboard_address": ":0" if dashboard else None,
+        # LocalCluster turns the dashboard on for any address; without one
+        # the scheduler still serves its routes, on 8787 (see the module doc)
+        "dashboard_address": _LOOPBACK_ANY_PORT if dashboard else None,
     }
+    if not dashboard:
+        options["scheduler_kwargs"] = {"dashboard_address": _LOOPBACK_ANY_PORT}
     if n_workers is not None:
         options["n_workers"] = n_workers
     cores = os.cpu_count() or 1
@@ -112,6 +137,8 @@ def local_cluster(
     # the cores left to each of a worker's threads for rbm_nb's parallel kernels
     share = max(1, cores // (workers * threads_per_worker))
     settings = dict(WORKER_SETTINGS)
+    if not dashboard:
+        settings.update(_NO_HTTP_ROUTES)
     settings["distributed.nanny.environ." + ENV_THREADS] = str(share)
     if secure:
         try:
@@ -124,7 +151,13 @@ def local_cluster(
                 "pip install 'rbm_nb[dask]' (or pass secure=False)"
             ) from err
         options["protocol"] = "tls://"
+    scheduler_kwargs = {
+        **options.get("scheduler_kwargs", {}),
+        **(kwargs.pop("scheduler_kwargs", None) or {}),
+    }
     options.update(kwargs)
+    if scheduler_kwargs:
+        options["scheduler_kwargs"] = scheduler_kwargs
     # the nanny reads pre-spawn-environ when it starts each worker
     with dask.config.set(settings):
         return LocalCluster(**options)

@@ -71,6 +71,11 @@ class Study:
     Frame trees are per task: ``frames`` should return the frames as
     :class:`~rbm_nb.ReferenceFrame` objects linked by ``parent=`` objects,
     not register them by name, since tasks on threads share the registry.
+
+    To run on an existing cluster, connect a ``distributed.Client(address)``
+    first; its workers need rbm_nb (``rbm_nb[dask]``, the client's version),
+    what the analysis imports, and the study's files at the same paths (see
+    :mod:`rbm_nb.study`).
     """
 
     def __init__(self, sources: list[RecordingSource], *, chunks: Any = None):

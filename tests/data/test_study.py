@@ -230,6 +230,68 @@ def test_the_study_cluster_is_private_and_tuned(cluster):
         distributed.Client(address, security=Security.temporary(), timeout=5)
 
 
+def _listening() -> set[tuple[int, str, int]]:
+    """(pid, address, port) of every socket this process and its children listen on."""
+    psutil = pytest.importorskip("psutil")
+    me = psutil.Process()
+    found = set()
+    for process in [me, *me.children(recursive=True)]:
+        for conn in process.net_connections(kind="inet"):
+            if conn.status == psutil.CONN_LISTEN:
+                found.add((process.pid, conn.laddr.ip, conn.laddr.port))
+    return found
+
+
+# what distributed serves over plain HTTP when it is allowed to
+HTTP_ROUTES = (
+    "/json/identity.json",
+    "/metrics",
+    "/health",
+    "/status",
+    "/info/main/workers.html",
+)
+
+
+def _answered(port: int) -> list[str]:
+    """The routes a plain-HTTP request to 127.0.0.1:port gets an answer (2xx) to."""
+    import urllib.error
+    import urllib.request
+
+    answered = []
+    for route in HTTP_ROUTES:
+        try:
+            with urllib.request.urlopen(f"http://127.0.0.1:{port}{route}", timeout=5):
+                answered.append(route)
+        except (urllib.error.URLError, ConnectionError, OSError):
+            pass  # 404, or a TLS port hanging up on plain HTTP
+    return answered
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("dashboard", [False, True])
+def test_nothing_listens_beyond_loopback_and_no_http_unless_asked(dashboard):
+    """Scheduler, nannies and workers listen on 127.0.0.1 only; without the
+    dashboard no port answers an HTTP request, with it the dashboard does."""
+    pytest.importorskip("distributed")
+    before = _listening()
+    cluster = local_cluster(2, dashboard=dashboard, silence_logs=50)
+    try:
+        started = _listening() - before
+        # scheduler (comm + HTTP), 2 nannies, 2 workers (comm + HTTP)
+        assert len(started) >= 7, started
+        assert {address for _, address, _ in started} == {"127.0.0.1"}, started
+        answers = {port: _answered(port) for _, _, port in started}
+        if dashboard:
+            link = cluster.dashboard_link
+            assert link.startswith("http://127.0.0.1:"), link
+            port = int(link.split(":")[2].split("/")[0])
+            assert answers[port] == list(HTTP_ROUTES)
+        else:
+            assert not any(answers.values()), answers
+    finally:
+        cluster.close()
+
+
 def test_local_cluster_names_a_bad_argument():
     pytest.importorskip("distributed")
     with pytest.raises(ValueError, match="n_workers must be a positive integer"):

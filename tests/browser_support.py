@@ -104,6 +104,9 @@ class JupyterLab:
             (tmp / sub).mkdir()
             env[var] = str(tmp / sub)
         env["JUPYTER_PLATFORM_DIRS"] = "1"
+        # the token through the environment: a command line is world-readable
+        # (/proc/<pid>/cmdline)
+        env["JUPYTER_TOKEN"] = self.token
         # no "official Jupyter news?" toast over the screenshots, no requests out
         settings = tmp / "config" / "lab" / "user-settings" / "@jupyterlab"
         (settings / "apputils-extension").mkdir(parents=True)
@@ -133,7 +136,6 @@ class JupyterLab:
                 f"--ServerApp.port={self.port}",
                 "--ServerApp.port_retries=0",
                 f"--ServerApp.base_url={base_url}",
-                f"--IdentityProvider.token={self.token}",
                 f"--ServerApp.root_dir={self.root}",
             ]
             + (
@@ -153,6 +155,8 @@ class JupyterLab:
             start_new_session=True,  # its own process group, stopped as a whole
         )
         self.wait_ready()
+        cmdline = Path(f"/proc/{self.process.pid}/cmdline").read_bytes()
+        assert self.token.encode() not in cmdline, "the token is on the command line"
 
     def api(self, path: str, method: str = "GET"):
         request = urllib.request.Request(

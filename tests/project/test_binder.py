@@ -561,7 +561,6 @@ def jupyter(binder, timings):
         "--ip=127.0.0.1",
         f"--port={port}",
         "--ServerApp.port_retries=0",
-        f"--IdentityProvider.token={token}",
         f"--ServerApp.root_dir={binder.repo}",
     ]
     if os.geteuid() == 0:  # CI containers run as root; Binder's user is not
@@ -570,7 +569,8 @@ def jupyter(binder, timings):
         proc = binder.procs.start(
             cmd,
             cwd=binder.repo,
-            env=binder.env,
+            # the token through the environment, never on a command line
+            env={**binder.env, "JUPYTER_TOKEN": token},
             stdout=log_file,
             stderr=subprocess.STDOUT,
         )

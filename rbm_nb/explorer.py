@@ -17,6 +17,7 @@ from __future__ import annotations
 import html
 import warnings
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -42,6 +43,29 @@ SCENE_CAM_ROTATION = (
     *SCENE_CAM_ROTATION_XYZW[:3],
 )
 EYES = ("left_eye", "right_eye")
+
+
+class HeadEyeFrames(NamedTuple):
+    """The registered frames the explorer draws and plots, by name.
+
+    ``head`` has robotics axes (x forward, y left, z up: yaw is about z,
+    gaze yaw is positive to the left); each eye frame's z axis is its line
+    of sight. Give your own names to :func:`dashboard` (``frames=``) to
+    explore any tree registered with those conventions.
+    """
+
+    world: str = "world"
+    head: str = "head"
+    left_eye: str = "pupil/left_eye"
+    right_eye: str = "pupil/right_eye"
+
+    def eye(self, name: str) -> str:
+        """The frame of ``"left_eye"`` or ``"right_eye"``."""
+        return self.left_eye if name == "left_eye" else self.right_eye
+
+
+#: the names :func:`register_head_eye_frames` registers
+EXAMPLE_FRAMES = HeadEyeFrames()
 # Pupil Core's usual threshold: below it the pupil detection is not trusted
 MIN_CONFIDENCE = 0.6
 # the eye tracker's gaps longer than this are not bridged by interpolation
@@ -197,6 +221,7 @@ def gaze_angles(
     *,
     min_confidence: float = MIN_CONFIDENCE,
     max_angle: float | None = None,
+    frames: HeadEyeFrames = EXAMPLE_FRAMES,
 ):
     """Azimuth (right) and elevation (up) of an eye's line of sight, in degrees.
 
@@ -215,20 +240,21 @@ def gaze_angles(
     """
     import xarray as xr
 
-    from . import frames
+    from . import frames as registry
 
-    if name is not None and f"pupil/{name}" in frames.registry:
+    if name is not None and frames.eye(name) in registry.registry:
         from . import gaze
 
+        confident = eye is not None and "confidence" in eye
         sight = gaze.directions(
-            f"pupil/{name}",
-            "head",
-            confidence=eye.confidence if "confidence" in eye else None,
+            frames.eye(name),
+            frames.head,
+            confidence=eye.confidence if confident else None,
             min_confidence=min_confidence,
             max_gap=MAX_EYE_GAP,
             max_angle=max_angle,
         )
-        out = gaze.angles(sight, "head", forward="x", up="z")
+        out = gaze.angles(sight, frames.head, forward="x", up="z")
         out.attrs = {"long_name": "Gaze angles", "units": "deg"}
         return out
 
@@ -255,7 +281,7 @@ def head_speed(head):
     return speed
 
 
-def head_yaw_rate(*, world: str = "world"):
+def head_yaw_rate(*, world: str | None = None, frames: HeadEyeFrames = EXAMPLE_FRAMES):
     """Head angular velocity about its own vertical axis, deg/s, positive left.
 
     The z component of the angular velocity of ``head`` relative to
@@ -266,14 +292,20 @@ def head_yaw_rate(*, world: str = "world"):
     from .lookups import lookup_angular_velocity
 
     omega = lookup_angular_velocity(
-        "head", world, represent_in="head", as_dataarray=True
+        frames.head, world or frames.world, represent_in=frames.head, as_dataarray=True
     )
     rate = np.degrees(omega.sel(cartesian_axis="z", drop=True))
     rate.attrs = {"long_name": "Head yaw rate (+ left)", "units": "deg/s"}
     return rate
 
 
-def gaze_yaw(left_eye, right_eye, *, max_angle: float | None = None):
+def gaze_yaw(
+    left_eye,
+    right_eye,
+    *,
+    max_angle: float | None = None,
+    frames: HeadEyeFrames = EXAMPLE_FRAMES,
+):
     """Horizontal gaze angle of both eyes in the head's axes, deg, positive left.
 
     Dims (time, eye) with eyes ``"left eye"`` and ``"right eye"``; NaN where
@@ -285,7 +317,7 @@ def gaze_yaw(left_eye, right_eye, *, max_angle: float | None = None):
 
     columns = []
     for name, eye in zip(EYES, (left_eye, right_eye), strict=True):
-        azimuth = gaze_angles(eye, name, max_angle=max_angle).sel(
+        azimuth = gaze_angles(eye, name, max_angle=max_angle, frames=frames).sel(
             angle="azimuth", drop=True
         )
         columns.append(-azimuth.expand_dims(eye=[name.replace("_", " ")], axis=1))
@@ -299,7 +331,12 @@ def gaze_yaw(left_eye, right_eye, *, max_angle: float | None = None):
 
 
 def explorer_series(
-    head, left_eye, right_eye, *, max_angle: float | None = None
+    head,
+    left_eye,
+    right_eye,
+    *,
+    max_angle: float | None = None,
+    frames: HeadEyeFrames = EXAMPLE_FRAMES,
 ) -> dict:
     """The explorer's time series, for the questions notebook 06 asks.
 
@@ -310,17 +347,19 @@ def explorer_series(
     head's; saccades as spikes of several hundred deg/s in the eyes' rate.
     Register the frames first (:func:`register_head_eye_frames`).
     ``max_angle`` (degrees) flags impossible gaze, default
-    :data:`rbm_nb.gaze.OCULOMOTOR_RANGE`.
+    :data:`rbm_nb.gaze.OCULOMOTOR_RANGE`. The eye datasets give the
+    confidence of each sample (None: the frames' samples are all trusted);
+    ``frames`` names the registered frames.
     """
     from . import gaze
 
     if max_angle is None:
         max_angle = gaze.OCULOMOTOR_RANGE
-    yaw = gaze_yaw(left_eye, right_eye, max_angle=max_angle)
+    yaw = gaze_yaw(left_eye, right_eye, max_angle=max_angle, frames=frames)
     rate = gaze.rates(yaw)
     rate.attrs["colors"] = yaw.attrs["colors"]
     return {
-        "head yaw rate": head_yaw_rate(),
+        "head yaw rate": head_yaw_rate(frames=frames),
         "gaze yaw": yaw,
         "gaze yaw rate": rate,
     }
@@ -414,23 +453,26 @@ EYEBALL_RADIUS = 0.012
 HEAD_COLOR = "#d9b38c"
 
 
-def eye_centres(*, head: str = "head") -> dict:
+def eye_centres(
+    *, head: str | None = None, frames: HeadEyeFrames = EXAMPLE_FRAMES
+) -> dict:
     """Median centre of each eye in the head's axes (m), over its valid samples."""
     from .lookups import lookup_transform
 
     out = {}
     for eye in EYES:
-        translation, _ = lookup_transform(f"pupil/{eye}", head)
+        translation, _ = lookup_transform(frames.eye(eye), head or frames.head)
         out[eye] = np.nanmedian(np.atleast_2d(translation), axis=0)
     return out
 
 
 def explorer_scene(
     *,
-    world: str = "world",
+    world: str | None = None,
     name: str | None = None,
     gaze_length: float = 2.0,
     head_model: bool = True,
+    frames: HeadEyeFrames = EXAMPLE_FRAMES,
 ):
     """A Scene with the world axes, a head model and path, and both gaze rays.
 
@@ -447,17 +489,19 @@ def explorer_scene(
     """
     from .scene import Scene
 
+    world = world or frames.world
+    head = frames.head
     scene = Scene(world, name=name)
     scene.add_frame(world, scale=1.0)
     # everything with base="head" hangs below one node that moves with the
     # head: the browser magnifies that node as one model
     if head_model:
-        centres = eye_centres()
+        centres = eye_centres(frames=frames)
         middle = (centres["left_eye"] + centres["right_eye"]) / 2
         scene.add_mesh(
-            "head",
+            head,
             "ellipsoid",
-            base="head",
+            base=head,
             size=HEAD_RADII,
             offset=middle + np.array(HEAD_FROM_EYES),
             color=HEAD_COLOR,
@@ -465,9 +509,9 @@ def explorer_scene(
             label="head model",
         )
         scene.add_mesh(
-            "head",
+            head,
             "box",
-            base="head",
+            base=head,
             size=NOSE_SIZE,
             offset=middle + np.array(NOSE_FROM_EYES),
             color=HEAD_COLOR,
@@ -475,21 +519,21 @@ def explorer_scene(
         )
         for eye in EYES:
             scene.add_mesh(
-                "head",
+                head,
                 "sphere",
-                base="head",
+                base=head,
                 size=EYEBALL_RADIUS,
                 offset=centres[eye],
                 color=GAZE_COLORS[eye],
                 label=f"{eye.replace('_', ' ')}ball",
             )
-    scene.add_frame("head", base="head", scale=0.12, label="head")
-    scene.add_path("head", color="#ffffff", max_points=2000)
+    scene.add_frame(head, base=head, scale=0.12, label="head")
+    scene.add_path(head, color="#ffffff", max_points=2000)
     for eye in EYES:
         scene.add_vectors(
-            f"pupil/{eye}",
+            frames.eye(eye),
             (0.0, 0.0, 1.0),
-            base="head",
+            base=head,
             length=gaze_length,
             color=GAZE_COLORS[eye],
             label=f"{eye.replace('_', ' ')} gaze",
@@ -521,13 +565,9 @@ def first_full_instant(head, left_eye, right_eye, *, min_confidence=MIN_CONFIDEN
         ok &= np.isfinite(eye.orientation.values).all(axis=1)
         if "confidence" in eye:
             ok &= eye.confidence.values >= min_confidence
-    # and the rows around it too: an interpolation needs its neighbours,
-    # so the rays are drawn there whatever the frame core does next to a gap
-    run = ok.copy()
-    for shift in (-1, 1, 2):
-        run &= np.roll(ok, -shift)
-    index = int(np.argmax(run)) if run.any() else int(np.argmax(ok))
-    return left_eye.time.values[index]
+    # (at its own timestamps an eye frame gives its sample whatever its
+    # neighbours: docs/missing_data.md)
+    return left_eye.time.values[int(np.argmax(ok))]
 
 
 def seek_to(player, instant) -> None:
@@ -567,12 +607,64 @@ def _as_dataset(value, name: str):
     return load_netcdf(path)
 
 
+def _registered(frames) -> HeadEyeFrames:
+    """``frames`` as HeadEyeFrames: every name a registered frame, the head
+    moving in the world and the eyes relative to the head."""
+    from . import frames as registry
+
+    if isinstance(frames, dict):
+        frames = HeadEyeFrames(**frames)
+    if not isinstance(frames, HeadEyeFrames):
+        raise ValueError(
+            "dashboard: frames must be a HeadEyeFrames (world, head, left_eye, "
+            f"right_eye names), got {type(frames).__name__}"
+        )
+    for role, name in frames._asdict().items():
+        if name not in registry.registry:
+            raise ValueError(
+                f"dashboard: frames.{role} is {name!r}, which is not a registered "
+                "frame (register it first)"
+            )
+    moving = [("head", frames.world)] + [(eye, frames.head) for eye in EYES]
+    for role, reference in moving:
+        if _motion(getattr(frames, role), reference) is None:
+            raise ValueError(
+                f"dashboard: frames.{role} {getattr(frames, role)!r} does not move "
+                f"relative to {reference!r}; the explorer draws and plots a head "
+                "moving in the world and eyes moving in the head"
+            )
+    return frames
+
+
+def _motion(frame: str, reference: str):
+    """(timestamps, rotations) of ``frame`` wrt ``reference``, or None if static."""
+    from .lookups import lookup_transform
+
+    _, rotation, times = lookup_transform(frame, reference, return_timestamps=True)
+    return None if times is None else (np.asarray(times), np.asarray(rotation))
+
+
+def _first_instant_of_frames(frames: HeadEyeFrames):
+    """The first time of the left eye, from the head's first sample on, where
+    both eyes have a sample (the right eye's at the same time or, on another
+    clock, its last one before)."""
+    head_times = _motion(frames.head, frames.world)[0]
+    times, left = _motion(frames.left_eye, frames.head)
+    other, right = _motion(frames.right_eye, frames.head)
+    ok = ~np.isnan(left).any(axis=1) & (times >= head_times[0])
+    present = ~np.isnan(right).any(axis=1)
+    at = np.clip(np.searchsorted(other, times, side="right") - 1, 0, len(other) - 1)
+    ok &= present[at] & (other[at] <= times)
+    return times[int(np.argmax(ok))] if ok.any() else times[0]
+
+
 def dashboard(
     head=None,
     left_eye=None,
     right_eye=None,
     *,
     source: str = "auto",
+    frames: HeadEyeFrames | None = None,
     note: str | None = None,
     min_confidence: float | None = MIN_CONFIDENCE,
     max_angle: float | None = None,
@@ -591,11 +683,20 @@ def dashboard(
     same names) and the Player starts at the first instant where both eyes
     have a sample.
 
+    Or explore frames you registered yourself: ``frames`` names the world,
+    the head (robotics axes: x forward, y left, z up) and the two eye
+    frames (z along the line of sight), e.g.
+    ``dashboard(frames=HeadEyeFrames("map", "base_head", "eye_l", "eye_r"))``;
+    nothing is registered then, and every sample of the eye frames counts
+    as trusted.
+
     Parameters
     ----------
     head, left_eye, right_eye : xarray.Dataset or path, optional
     source : {"auto", "remote", "synthetic"}
         Which example data, when no datasets are given.
+    frames : HeadEyeFrames, optional
+        Registered frames to explore instead of a recording's datasets.
     note : str, optional
         What the data is, shown above the dashboard (default: the file names
         or :func:`load_head_eye`'s note).
@@ -619,31 +720,51 @@ def dashboard(
     from .widgets.frame_tree import FrameTree
 
     given = [head, left_eye, right_eye]
-    if all(part is None for part in given):
-        head, left_eye, right_eye, loaded = load_head_eye(source)
-        note = note or loaded
-    elif any(part is None for part in given):
-        raise ValueError("dashboard: give all of head, left_eye and right_eye, or none")
-    else:
-        if note is None:
-            note = "your recording" + "".join(
-                f", {p}" for p in given if not hasattr(p, "data_vars")
+    if frames is not None:
+        if any(part is not None for part in given):
+            raise ValueError(
+                "dashboard: give the recording's datasets or frames=, not both"
             )
-        head, left_eye, right_eye = (
-            _as_dataset(part, name)
-            for part, name in zip(given, ("head", *EYES), strict=True)
+        frames = _registered(frames)
+        note = note or (
+            f"registered frames: head {frames.head!r} and eyes {frames.left_eye!r}, "
+            f"{frames.right_eye!r} in {frames.world!r}"
         )
-    register_head_eye_frames(head, left_eye, right_eye, min_confidence=min_confidence)
-    series = explorer_series(head, left_eye, right_eye, max_angle=max_angle)
-    scene = explorer_scene(gaze_length=gaze_length)
+        series = explorer_series(None, None, None, max_angle=max_angle, frames=frames)
+        start = _first_instant_of_frames(frames)
+        reason = "the frame has no sample here (a missing row)"
+    else:
+        if all(part is None for part in given):
+            head, left_eye, right_eye, loaded = load_head_eye(source)
+            note = note or loaded
+        elif any(part is None for part in given):
+            raise ValueError(
+                "dashboard: give all of head, left_eye and right_eye, or none"
+            )
+        else:
+            if note is None:
+                note = "your recording" + "".join(
+                    f", {p}" for p in given if not hasattr(p, "data_vars")
+                )
+            head, left_eye, right_eye = (
+                _as_dataset(part, name)
+                for part, name in zip(given, ("head", *EYES), strict=True)
+            )
+        frames = EXAMPLE_FRAMES
+        register_head_eye_frames(
+            head, left_eye, right_eye, min_confidence=min_confidence
+        )
+        series = explorer_series(head, left_eye, right_eye, max_angle=max_angle)
+        start = first_full_instant(head, left_eye, right_eye)
+        reason = EYE_MISSING_REASON.format(min_confidence=min_confidence)
+    scene = explorer_scene(gaze_length=gaze_length, frames=frames)
     player = scene.player(speed=1.0)
-    seek_to(player, first_full_instant(head, left_eye, right_eye))
-    reason = EYE_MISSING_REASON.format(min_confidence=min_confidence)
+    seek_to(player, start)
     tree = FrameTree(
-        "world",
+        frames.world,
         scene=scene,
         player=player,
-        missing_reasons={f"pupil/{eye}": reason for eye in EYES},
+        missing_reasons={frames.eye(eye): reason for eye in EYES},
     )
     plot = explorer_plot(series, player)
     scene.widget.height = height

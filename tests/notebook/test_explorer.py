@@ -108,3 +108,78 @@ def test_a_users_own_files_open_in_the_explorer(tmp_path, monkeypatch):
     assert note.startswith("synthetic head/eye recording")
     assert str(tmp_path / "head.nc") in note and "'position'" in note
     rbm.clear_registry()
+
+
+# the example tree under other names, as a user's own registration would be
+_RENAMED = {
+    "world": "map",
+    "t265/world": "odom",
+    "t265/tracker": "tracker",
+    "head": "base_head",
+    "pupil/scene_cam": "cam",
+    "pupil/left_eye": "eye_l",
+    "pupil/right_eye": "eye_r",
+}
+
+
+def _register_renamed():
+    """Copy the registered example tree under _RENAMED's names (public API only)."""
+    from rbm_nb import frames
+
+    for old, new in _RENAMED.items():
+        frame = frames.registry[old]
+        parent = None if frame.parent is None else _RENAMED[frame.parent.name]
+        if parent is None:
+            rbm.register_frame(new)
+            continue
+        rbm.register_frame(
+            new,
+            parent=parent,
+            translation=frame.translation,
+            rotation=frame.rotation,
+            timestamps=frame.timestamps,
+            max_gap=frame.max_gap,
+        )
+
+
+def test_the_explorer_of_frames_registered_under_any_names(data_dir):
+    """dashboard(frames=...) explores a tree the user registered, by name: the
+    same series, rays and start as the example's registration of the same data."""
+    data_dir("synthetic")
+    example = explorer.dashboard()
+    try:
+        _register_renamed()
+        names = explorer.HeadEyeFrames("map", "base_head", "eye_l", "eye_r")
+        mine = explorer.dashboard(frames=names)
+        try:
+            assert "registered frames" in mine.note and "'eye_l'" in mine.note
+            for key, values in example.series.items():
+                np.testing.assert_allclose(
+                    mine.series[key].values, values.values, atol=1e-9, err_msg=key
+                )
+            assert mine.tree.root == "map"
+            assert mine.player.timestamp == example.player.timestamp
+            rays = {h.name: h.frame.name for h in mine.scene.handles.values()}
+            assert rays["left_eye_gaze"] == "eye_l"
+            assert rays["right_eye_gaze"] == "eye_r"
+        finally:
+            explorer.close_dashboard(mine)
+    finally:
+        explorer.close_dashboard(example)
+
+
+def test_the_explorer_of_frames_names_what_is_wrong():
+    rbm.register_frame("map")
+    with pytest.raises(ValueError, match=r"frames.head is 'nohead', which is not a"):
+        explorer.dashboard(frames=explorer.HeadEyeFrames("map", "nohead", "a", "b"))
+    rbm.register_frame(
+        "h", parent="map", timestamps=[0.0, 1.0], translation=np.zeros((2, 3))
+    )
+    rbm.register_frame("a", parent="h")
+    rbm.register_frame("b", parent="h")
+    with pytest.raises(
+        ValueError, match=r"frames.left_eye .a. does not move relative to .h."
+    ):
+        explorer.dashboard(frames=explorer.HeadEyeFrames("map", "h", "a", "b"))
+    with pytest.raises(ValueError, match="datasets or frames=, not both"):
+        explorer.dashboard(1, 2, 3, frames=explorer.EXAMPLE_FRAMES)

@@ -37,7 +37,9 @@ in its dask configuration).
 
 from __future__ import annotations
 
+import contextlib
 import os
+from collections.abc import Iterator
 from typing import Any, Final
 
 from .._parallel import ENV_THREADS
@@ -159,5 +161,33 @@ def local_cluster(
     if scheduler_kwargs:
         options["scheduler_kwargs"] = scheduler_kwargs
     # the nanny reads pre-spawn-environ when it starts each worker
-    with dask.config.set(settings):
+    with dask.config.set(settings), _client_environ(settings):
         return LocalCluster(**options)
+
+
+_PRE_SPAWN = "distributed.nanny.pre-spawn-environ."
+
+
+@contextlib.contextmanager
+def _client_environ(settings: dict[str, Any]) -> Iterator[None]:
+    """The workers' pre-spawn variables in this process's environment while
+    the cluster starts, and the environment as it was afterwards.
+
+    A nanny lets the client's environment override pre-spawn-environ, and
+    writes its own values there when it spawns a worker: after any stock
+    LocalCluster of processes this process holds MALLOC_TRIM_THRESHOLD_=65536,
+    which the next cluster's workers would get instead of ours.
+    """
+    ours = {
+        k[len(_PRE_SPAWN) :]: v for k, v in settings.items() if k.startswith(_PRE_SPAWN)
+    }
+    before = {k: os.environ.get(k) for k in ours}
+    os.environ.update(ours)
+    try:
+        yield
+    finally:
+        for key, value in before.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value

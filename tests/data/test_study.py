@@ -206,6 +206,36 @@ def test_local_cluster_gives_the_sequential_numbers(cluster, study_folder, expec
 
 
 @pytest.mark.slow
+def test_a_stock_cluster_started_before_does_not_change_the_settings(monkeypatch):
+    """A stock LocalCluster's nanny writes MALLOC_TRIM_THRESHOLD_=65536 into
+    this process's environment, and a nanny lets that environment override
+    its pre-spawn settings: local_cluster's workers still get the study's
+    values, and the environment is left as the stock cluster left it."""
+    distributed = pytest.importorskip("distributed")
+    monkeypatch.delenv("MALLOC_TRIM_THRESHOLD_", raising=False)
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None
+    ):
+        pass
+    left = os.environ.get("MALLOC_TRIM_THRESHOLD_")
+    assert (
+        left is not None
+        and left
+        != WORKER_SETTINGS["distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_"]
+    )
+    with (
+        local_cluster(n_workers=1, secure=False) as study_cluster,
+        distributed.Client(study_cluster) as client,
+    ):
+        env = next(iter(client.run(lambda: dict(os.environ)).values()))
+    prefix = "distributed.nanny.pre-spawn-environ."
+    for key, value in WORKER_SETTINGS.items():
+        if key.startswith(prefix):
+            assert env.get(key[len(prefix) :]) == value, key
+    assert os.environ.get("MALLOC_TRIM_THRESHOLD_") == left
+
+
+@pytest.mark.slow
 def test_the_study_cluster_is_private_and_tuned(cluster):
     distributed = pytest.importorskip("distributed")
     address = cluster.scheduler.address

@@ -8,6 +8,8 @@ or before the player's time with a binary search.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..widgets._time import check_kinds, timestamps_as_seconds
@@ -98,6 +100,9 @@ class Track:
         t, r = np.asarray(t), np.asarray(r)
         if ts is None:
             return cls(t.reshape(3), r.reshape(4), name=label)
+        gap = _max_gap(frame, base)
+        if gap is not None:
+            t, r, ts = _hidden_across_gaps(t, r, np.asarray(ts), gap)
         return cls(t, r, ts, name=label)
 
     @property
@@ -151,3 +156,38 @@ class Track:
 
     def check_kind(self, kind: str | None, what: str) -> None:
         check_kinds(kind, self.kind, what)
+
+
+def _max_gap(frame, base) -> float | None:
+    """The smallest ``max_gap`` of ``frame`` and its ancestors below ``base``."""
+    gaps = []
+    node = frame
+    while node is not None and node is not base:
+        if getattr(node, "max_gap", None) is not None:
+            gaps.append(node.max_gap)
+        node = node.parent
+    return min(gaps) if gaps else None
+
+
+def _hidden_across_gaps(t, r, ts, gap: float):
+    """A missing row ``gap`` seconds after each sample followed by a longer gap.
+
+    A scene holds each pose until the next sample; across a gap the frame
+    core does not interpolate (``max_gap``), the object must not stay drawn
+    at its last pose either: it is hidden from ``gap`` after that sample on.
+    """
+    step: Any
+    if ts.dtype.kind == "M":
+        step = np.timedelta64(int(round(gap * 1e9)), "ns")
+        seconds = (ts - ts[0]) / np.timedelta64(1, "s")
+    else:
+        step = gap
+        seconds = ts.astype(np.float64)
+    after = np.flatnonzero(np.diff(seconds) > gap)
+    if len(after) == 0:
+        return t, r, ts
+    at = after + 1  # np.insert puts the new rows before these
+    ts = np.insert(ts, at, ts[after] + step)
+    t = np.insert(t, at, np.nan, axis=0)
+    r = np.insert(r, at, np.nan, axis=0)
+    return t, r, ts

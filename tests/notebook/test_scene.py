@@ -839,3 +839,32 @@ def test_explorer_gaze_rays_are_hidden_where_the_eye_was_not_seen():
             checked += 1
     assert checked > 0.9 * unseen.sum()
     assert not hidden.all()
+
+
+def test_a_track_is_hidden_across_a_gap_longer_than_max_gap():
+    """A scene holds each pose until the next sample; across a gap the frame
+    core does not bridge (max_gap), the object is hidden from max_gap after
+    the last sample on, and shown again at the next sample."""
+    import numpy as np
+
+    import rbm_nb as rbm
+    from rbm_nb import frames
+    from rbm_nb.scene.tracks import Track
+
+    t = np.array([0.0, 0.1, 0.2, 2.0, 2.1])
+    rbm.register_frame("world")
+    rbm.register_frame(
+        "eye", parent="world", timestamps=t, translation=np.ones((5, 3)), max_gap=0.5
+    )
+    rbm.register_frame(
+        "free", parent="world", timestamps=t, translation=np.ones((5, 3))
+    )
+    world = frames.registry["world"]
+    track = Track.lookup(frames.registry["eye"], world)
+    assert len(track) == 6
+    assert not track.missing(track.index_at(0.6))  # within max_gap of 0.2 s
+    assert track.missing(track.index_at(0.71))  # beyond it, until the next sample
+    assert track.missing(track.index_at(1.99))
+    assert not track.missing(track.index_at(2.0))
+    free = Track.lookup(frames.registry["free"], world)
+    assert len(free) == 5 and not free.missing(free.index_at(1.5))

@@ -260,16 +260,17 @@ class RosbagWriter:
             beyond what the bag format can hold, or a rotation is not a unit
             quaternion (within ``UNIT_QUATERNION_TOLERANCE``). The message
             names the topic and the row.
+        RuntimeError
+            If called outside the ``with`` block.
 
         Notes
         -----
         Rotations within the tolerance are written as given, bit for bit, so
         that a bag written from a recording reads back identical (recorded
         quaternions are often unit only to float32 precision); rbm_nb's
-        transforms, lookups of the frames read from it and ROS's tf normalise
-        them when they use them.
-        RuntimeError
-            If called outside the ``with`` block.
+        transforms and interpolated lookups and ROS's tf normalise them when
+        they use them, and a lookup at a frame's own times returns them as
+        stored (as rigid-body-motion does).
         """
         self._check_open()
         if not isinstance(topic, str):

@@ -20,6 +20,8 @@ const CSS = `
 .rbm-ts-hint { color: #777; margin-left: auto; font-size: 11px; }
 .rbm-ts .u-legend { font-size: 11px; text-align: left; margin-left: 50px; }
 .rbm-ts .u-legend .u-value { font-variant-numeric: tabular-nums; }
+.rbm-ts-error { color: #a00; background: #fee; border: 1px solid #d99;
+  padding: 2px 6px; margin: 2px 0 2px 50px; }
 .rbm-ts-cursor { position: absolute; top: 0; bottom: 0; width: 0;
   border-left: 2px solid #d62728; pointer-events: none; }
 `;
@@ -41,13 +43,46 @@ function typed(view, Kind) {
   return new Kind(buffer.slice(byteOffset, byteOffset + byteLength));
 }
 
-// uPlot draws a gap at null, not at NaN.
-function withNulls(values) {
+// A missing sample (NaN) becomes undefined, not null: uPlot collects the runs
+// of nulls with \`gaps.push(...findGaps(...))\`, one argument per run, which
+// overflows the call stack past ~125k runs (1.4 h of eye data) and leaves the
+// panel empty. For undefined it collects nothing and asks the series' \`gaps\`
+// option instead: gapSpans below, which makes the same clip without spreading.
+function withMissing(values) {
   const out = new Array(values.length);
   for (let i = 0; i < values.length; i++) {
-    out[i] = Number.isNaN(values[i]) ? null : values[i];
+    out[i] = Number.isNaN(values[i]) ? undefined : values[i];
   }
   return out;
+}
+
+// The pixel spans [from, to] that uPlot clips out of a line: from the sample
+// before each run of missing samples to the one after it (uPlot draws straight
+// through undefined; the clip removes that bridge). Spans that touch are merged,
+// so there are never more than about one per pixel column. A break narrower
+// than MIN_GAP_PX cannot be seen at this zoom, and clipping it would erase the
+// samples on both sides (at 1.5 h of eye data nearly every pixel column holds a
+// short run of missing samples): those are left bridged until the user zooms in.
+const MIN_GAP_PX = 2;
+
+function gapSpans(u, sidx, idx0, idx1) {
+  const xs = u.data[0];
+  const ys = u.data[sidx];
+  const last = xs.length - 1;
+  const px = (v) => Math.round(u.valToPos(v, "x", true));
+  const spans = [];
+  for (let i = idx0; i <= idx1; i++) {
+    if (ys[i] !== undefined) continue;
+    const from = i;
+    while (i < idx1 && ys[i + 1] === undefined) i++;
+    const a = px(xs[Math.max(from - 1, 0)]);
+    const b = px(xs[Math.min(i + 1, last)]);
+    if (!(b - a >= MIN_GAP_PX)) continue;
+    const prev = spans[spans.length - 1];
+    if (prev && a <= prev[1]) prev[1] = Math.max(prev[1], b);
+    else spans.push([a, b]);
+  }
+  return spans;
 }
 
 function formatValue(v, units) {
@@ -203,12 +238,34 @@ async function render({ model, el }) {
   });
   if (!(dataMax > dataMin)) dataMax = dataMin + 1;
 
+  // A panel that cannot draw says so in the widget, not only in the console.
+  const errors = [];
+  function reportFailure(i, err) {
+    const text = `${panels[i].label}: this panel could not be drawn (${err && err.name ? `${err.name}: ${err.message}` : err})`;
+    if (errors.includes(text)) return;
+    errors.push(text);
+    console.error(`rbm_nb TimeSeries: ${text}`, err);
+    const note = document.createElement("div");
+    note.className = "rbm-ts-error";
+    note.textContent = text;
+    body.insertBefore(note, body.firstChild);
+  }
+  const linearPaths = uPlot.paths.linear();
+  const guardedPaths = (i) => (u, sidx, idx0, idx1) => {
+    try {
+      return linearPaths(u, sidx, idx0, idx1);
+    } catch (err) {
+      reportFailure(i, err);
+      return null; // uPlot skips a series without paths; the others still draw
+    }
+  };
+
   const width = () => Math.max(200, (body.clientWidth || el.clientWidth || 800) - 4);
   const height = model.get("panel_height");
 
   panels.forEach((panel, i) => {
     const x = typed(data[i].x, Float64Array);
-    const ys = data[i].y.map((v) => withNulls(typed(v, Float64Array)));
+    const ys = data[i].y.map((v) => withMissing(typed(v, Float64Array)));
     const last = i === panels.length - 1;
     const series = [
       { label: "time", value: (u, v) => (v === null ? "\u2014" : formatTime(v, t0Ns())) },
@@ -217,6 +274,8 @@ async function render({ model, el }) {
         stroke: panel.colors[k],
         width: 1.25,
         spanGaps: false,
+        gaps: gapSpans,
+        paths: guardedPaths(i),
         // no cursor: a dash; a cursor on a sample with no value: "missing"
         value: (u, v, si, idx) => (idx === null || idx === undefined ? "\u2014" : formatValue(v, panel.units)),
       })),
@@ -331,7 +390,13 @@ async function render({ model, el }) {
         ],
       },
     };
-    const u = new uPlot(opts, [x, ...ys], body);
+    let u;
+    try {
+      u = new uPlot(opts, [x, ...ys], body);
+    } catch (err) {
+      reportFailure(i, err);
+      return;
+    }
     const cursor = document.createElement("div");
     cursor.className = "rbm-ts-cursor";
     u.over.appendChild(cursor);
@@ -394,6 +459,7 @@ async function render({ model, el }) {
 
   // for tests and debugging: the uPlot instances of this view
   root.rbmCharts = charts;
+  root.rbmErrors = errors;
 
   return () => {
     resize.disconnect();

@@ -1,8 +1,9 @@
 // TimeSeries widget: stacked uPlot panels over one time axis.
 //
 // The kernel sends each panel's samples once, as binary buffers (x: float64
-// seconds from the recording's start, y: float32 per component, NaN where there
-// is no value or a time gap). Everything interactive happens here: drag to
+// seconds from the recording's start, y: float64 per component, NaN where there
+// is no value or a time gap). When the time base changes afterwards (a Player
+// linked later), the kernel sends only `x_shift`, added here to the x it sent. Everything interactive happens here: drag to
 // zoom, wheel to zoom, shift+drag to pan, double-click to see everything,
 // hover for the values, click to seek. The cursor follows the linked Player's
 // `time` as the browser's clock moves it, so it keeps up while the kernel is
@@ -227,16 +228,29 @@ async function render({ model, el }) {
     }
   }
 
+  // x as sent (in the data's time base) and as shown (plus x_shift)
+  const sentX = data.map((d) => typed(d.x, Float64Array));
+  const shownX = (raw, shift) => {
+    if (!shift) return raw;
+    const out = new Float64Array(raw.length);
+    for (let k = 0; k < raw.length; k++) out[k] = raw[k] + shift;
+    return out;
+  };
+  let shift = model.get("x_shift") || 0;
   let dataMin = Infinity;
   let dataMax = -Infinity;
-  data.forEach((d) => {
-    const x = typed(d.x, Float64Array);
-    if (x.length) {
-      dataMin = Math.min(dataMin, x[0]);
-      dataMax = Math.max(dataMax, x[x.length - 1]);
-    }
-  });
-  if (!(dataMax > dataMin)) dataMax = dataMin + 1;
+  function findExtent() {
+    dataMin = Infinity;
+    dataMax = -Infinity;
+    sentX.forEach((x) => {
+      if (x.length) {
+        dataMin = Math.min(dataMin, x[0] + shift);
+        dataMax = Math.max(dataMax, x[x.length - 1] + shift);
+      }
+    });
+    if (!(dataMax > dataMin)) dataMax = dataMin + 1;
+  }
+  findExtent();
 
   // A panel that cannot draw says so in the widget, not only in the console.
   const errors = [];
@@ -264,7 +278,7 @@ async function render({ model, el }) {
   const height = model.get("panel_height");
 
   panels.forEach((panel, i) => {
-    const x = typed(data[i].x, Float64Array);
+    const x = shownX(sentX[i], shift);
     const ys = data[i].y.map((v) => withMissing(typed(v, Float64Array)));
     const last = i === panels.length - 1;
     const series = [
@@ -397,6 +411,7 @@ async function render({ model, el }) {
       reportFailure(i, err);
       return;
     }
+    u.rbmPanel = i;
     const cursor = document.createElement("div");
     cursor.className = "rbm-ts-cursor";
     u.over.appendChild(cursor);
@@ -437,6 +452,20 @@ async function render({ model, el }) {
   };
   model.on("change:x_range", onRange);
 
+  // a new time base: shift the x already here (nothing is sent again); the
+  // view keeps showing the same samples
+  const onShift = () => {
+    const next = model.get("x_shift") || 0;
+    const delta = next - shift;
+    if (!delta) return;
+    shift = next;
+    findExtent();
+    const { min, max } = first ? first.scales.x : {};
+    charts.forEach((u) => u.setData([shownX(sentX[u.rbmPanel], shift), ...u.data.slice(1)], false));
+    if (first) first.setScale("x", { min: min + delta, max: max + delta });
+  };
+  model.on("change:x_shift", onShift);
+
   const onTime = () => placeCursors();
   model.on("change:time", onTime);
   model.on("change:t0_ns", onTime);
@@ -464,6 +493,7 @@ async function render({ model, el }) {
   return () => {
     resize.disconnect();
     model.off("change:x_range", onRange);
+    model.off("change:x_shift", onShift);
     model.off("change:time", onTime);
     model.off("change:t0_ns", onTime);
     stopFollowing();

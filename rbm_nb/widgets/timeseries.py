@@ -9,6 +9,11 @@ in the browser, so it keeps following playback while the kernel is busy.
 
 Gaps are drawn as gaps: NaN values break the line, and so does a pause in the
 timestamps longer than ``gap`` (a NaN row is inserted there before sending).
+
+Each sample is sent once. Linking a Player later (or any change of time base:
+the eye clock of the example starts 0.7 ms before the head's) sends only the
+new second 0 and ``x_shift``, the seconds the browser adds to the x it already
+holds, never the samples again.
 """
 
 from __future__ import annotations
@@ -243,6 +248,11 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         allow_none=True,
         help="Absolute ns of second 0 (datetime64 data), or None.",
     ).tag(sync=True)
+    x_shift = traitlets.Float(
+        0.0,
+        help="Seconds the browser adds to the sent x: the data went in one time "
+        "base, the axis shows another (a Player linked later).",
+    ).tag(sync=True)
     time = traitlets.Float(
         0.0, help="Cursor time in seconds from the start, when no player is linked."
     ).tag(sync=True)
@@ -300,7 +310,13 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         self.gaps: list[float | None] = []
         first = min((s.timestamps[:1] for s in self._series), key=lambda a: a[0])
         self._own_base = self._base = TimeBase.of(first)
-        # the samples go in the comm's open message, not in an update after it
+        if player is not None:
+            # checked here, before the samples are encoded in its time base
+            self._valid_player({"value": player})
+            self._base = self._base_of(player)
+        # the samples go in the comm's open message, in the player's time base,
+        # so linking the player below changes nothing that was sent
+        self._data_base = self._base
         super().__init__(
             _esm=bundle("timeseries"),
             panel_height=int(panel_height),
@@ -312,10 +328,12 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
 
     # -- data to the browser ---------------------------------------------------
     def _encoded(self) -> dict:
-        """``t0_ns``, ``panels`` and ``data`` in the current time base."""
+        """``t0_ns``, ``panels`` and ``data`` in the data's time base."""
         panels, data, self.gaps = [], [], []
         for s in self._series:
-            x = self._base.seconds(s.timestamps, f"timestamps of series {s.label!r}")
+            x = self._data_base.seconds(
+                s.timestamps, f"timestamps of series {s.label!r}"
+            )
             x, y, used = _with_gaps(x, s.values, self._gap)
             x, y = _envelope(x, y, self._max_points)
             self.gaps.append(used)
@@ -337,14 +355,15 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
                     ],
                 }
             )
-        return {"t0_ns": self._base.t0_ns, "panels": panels, "data": data}
+        return {"t0_ns": self._data_base.t0_ns, "panels": panels, "data": data}
 
-    def _encode(self) -> None:
-        """Resend every panel's samples (after the time base changed)."""
-        state = self._encoded()
-        with self.hold_sync():
-            for name, value in state.items():
-                setattr(self, name, value)
+    def _shift_to(self, base: TimeBase) -> float:
+        """Seconds from ``base``'s second 0 to the data's: what the browser adds."""
+        data = self._data_base
+        if data.t0_ns is not None and base.t0_ns is not None:
+            # int64 ns first: no epoch-sized float rounding
+            return (data.t0_ns - base.t0_ns) / 1e9
+        return float(data.t0_s) - float(base.t0_s)
 
     @traitlets.validate("time")
     def _valid_time(self, proposal):
@@ -393,21 +412,26 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
             )
         return player
 
+    def _base_of(self, player) -> TimeBase:
+        """Second 0 of the axis when following ``player`` (None: the series')."""
+        if player is None:
+            return self._own_base
+        if player.t0_ns is not None:
+            return TimeBase(t0_ns=int(player.t0_ns))
+        # a Player on float seconds starts at its first timestamp; the player
+        # tells which when it can, else the series' own start
+        t0_s = getattr(player, "t0_s", None)
+        return TimeBase(t0_s=float(t0_s)) if t0_s is not None else self._own_base
+
     @traitlets.observe("player")
     def _on_player(self, change) -> None:
-        base = self._own_base
-        player = change["new"]
-        if player is not None:
-            if player.t0_ns is not None:
-                base = TimeBase(t0_ns=int(player.t0_ns))
-            else:
-                # a Player on float seconds starts at its first timestamp; the
-                # player tells which when it can, else the series' own start
-                t0_s = getattr(player, "t0_s", None)
-                base = TimeBase(t0_s=float(t0_s)) if t0_s is not None else base
+        base = self._base_of(change["new"])
         if base != self._base:
             self._base = base
-            self._encode()
+            # the browser shifts the x it holds: the samples are not sent again
+            with self.hold_sync():
+                self.x_shift = self._shift_to(base)
+                self.t0_ns = base.t0_ns
 
     # -- time ----------------------------------------------------------------
     @property

@@ -28,7 +28,8 @@ UPLOT_SPREAD_LIMIT = 125_000
 SETUP = f"""
 import numpy as np
 from rbm_nb.explorer import load_head_eye, MIN_CONFIDENCE
-from rbm_nb.widgets import TimeSeries
+import ipywidgets as widgets
+from rbm_nb.widgets import Player, TimeSeries
 
 _, eye, _, note = load_head_eye()
 t = (eye.time.values - eye.time.values[0]).astype("timedelta64[ns]").astype(float) / 1e9
@@ -43,7 +44,11 @@ runs = int(np.count_nonzero(missing[1:] & ~missing[:-1]) + missing[0])
 plot = TimeSeries({{"left eye x": (t_long, x_long)}}, title="long recording")
 sent = np.frombuffer(plot.data[0]["x"], dtype=np.float64).size  # samples + a NaN row per pause
 print(f"LONG-READY samples={{t_long.size}} sent={{sent}} runs={{runs}} hours={{t_long[-1] / 3600:.2f}}")
-plot
+# a player whose clock starts 0.7 ms before the plot's (as the eyes' before the head's)
+player = Player(np.r_[-0.0007, t_long[::10000], t_long[-1]])
+attach = widgets.Button(description="attach the player")
+attach.on_click(lambda _: setattr(plot, "player", player))
+widgets.VBox([plot, attach])
 """
 
 
@@ -86,6 +91,20 @@ def long_plot(browser, lab):
     page.errors = []
     page.console_errors = []
     page.on("pageerror", lambda err: page.errors.append(str(err)))
+    # bytes the kernel sends to the page over its websockets
+    page.received = [0]
+
+    def count(ws):
+        ws.on(
+            "framereceived",
+            lambda frame: page.received.__setitem__(
+                0,
+                page.received[0]
+                + len(frame if isinstance(frame, bytes) else frame.encode()),
+            ),
+        )
+
+    page.on("websocket", count)
     page.on(
         "console",
         lambda msg: msg.type == "error" and page.console_errors.append(msg.text),
@@ -193,3 +212,25 @@ def test_a_panel_that_cannot_draw_says_so_in_the_widget(long_plot):
     assert "left eye x" in text and "could not be drawn" in text
     assert "broken on purpose by the test" in text
     page.evaluate("window.rbmBreakPaths = false")
+
+
+def test_attaching_a_player_shifts_the_axis_without_resending(long_plot):
+    page = long_plot
+    first_x = _chart(page, "u.data[0][0]")
+    last_x = _chart(page, "u.data[0][u.data[0].length - 1]")
+    before = page.received[0]
+    assert before > 8 * 2_000_000  # the samples came over this websocket
+    page.get_by_role("button", name="attach the player").click()
+    page.wait_for_function(
+        f"document.querySelector('.rbm-ts').rbmCharts[0].data[0][0] > {first_x}",
+        timeout=30000,
+    )
+    page.wait_for_timeout(1000)
+    # the view shifted what it holds by the 0.7 ms ...
+    assert _chart(page, "u.data[0][0]") == pytest.approx(first_x + 0.0007, abs=1e-9)
+    assert _chart(page, "u.data[0][u.data[0].length - 1]") == pytest.approx(
+        last_x + 0.0007, abs=1e-9
+    )
+    # ... and the kernel sent a few kB of state, not the 30 MB of samples again
+    assert page.received[0] - before < 20_000
+    assert not page.errors

@@ -35,9 +35,9 @@ function injectCss() {
   document.head.appendChild(style);
 }
 
-// A DataView from the comm as a typed array (copied when misaligned).
+// A DataView (or ArrayBuffer) from the comm as a typed array (copied when misaligned).
 function typed(view, Kind) {
-  const { buffer, byteOffset, byteLength } = view;
+  const { buffer, byteOffset, byteLength } = view instanceof ArrayBuffer ? new DataView(view) : view;
   if (byteOffset % Kind.BYTES_PER_ELEMENT === 0) {
     return new Kind(buffer, byteOffset, byteLength / Kind.BYTES_PER_ELEMENT);
   }
@@ -461,7 +461,8 @@ async function render({ model, el }) {
     shift = next;
     findExtent();
     const { min, max } = first ? first.scales.x : {};
-    charts.forEach((u) => u.setData([shownX(sentX[u.rbmPanel], shift), ...u.data.slice(1)], false));
+    charts.forEach((u) => u.setData([shownX(sentX[u.rbmPanel], shift), ...overview[charts.indexOf(u)]], false));
+    shownKey = "";
     if (first) first.setScale("x", { min: min + delta, max: max + delta });
   };
   model.on("change:x_shift", onShift);
@@ -469,6 +470,99 @@ async function render({ model, el }) {
   const onTime = () => placeCursors();
   model.on("change:time", onTime);
   model.on("change:t0_ns", onTime);
+
+  // -- detail on zoom: the kernel sent an envelope (max_points); a zoom asks it
+  // for the samples in view, at full resolution when they are few enough.
+  // Answers are kept (a few ranges); an answer to a superseded request is dropped.
+  const detail = model.get("detail");
+  const overview = charts.map((u) => u.data.slice(1));
+  const cache = new Map();
+  const CACHED_WINDOWS = 8;
+  const WINDOW_DELAY_MS = 60;
+  let latest = 0;
+  let askTimer = null;
+  let applying = false;
+  let shownKey = "";
+
+  // x of the window's rows are in the data's time base, as the overview's
+  function splice(u, w) {
+    // the overview outside the window, the window's own rows inside it
+    const p = u.rbmPanel;
+    const ox = shownX(sentX[p], shift);
+    const ys = overview[charts.indexOf(u)];
+    const wx = w.x[p];
+    const count = wx.length;
+    if (!count) return [ox, ...ys];
+    const lo = wx[0] + shift;
+    const hi = wx[count - 1] + shift;
+    let a = 0;
+    while (a < ox.length && ox[a] < lo) a++;
+    let b = a;
+    while (b < ox.length && ox[b] <= hi) b++;
+    const x = new Float64Array(a + count + (ox.length - b));
+    x.set(ox.subarray(0, a), 0);
+    for (let k = 0; k < count; k++) x[a + k] = wx[k] + shift;
+    x.set(ox.subarray(b), a + count);
+    return [x, ...ys.map((oy, c) => oy.slice(0, a).concat(w.y[p][c], oy.slice(b)))];
+  }
+
+  function showWindow(key, w) {
+    shownKey = key;
+    applying = true;
+    syncing = true; // the range stays; only the rows in it change
+    try {
+      charts.forEach((u) => {
+        const { min, max } = u.scales.x;
+        u.setData(w ? splice(u, w) : [shownX(sentX[u.rbmPanel], shift), ...overview[charts.indexOf(u)]], false);
+        u.setScale("x", { min, max }); // uPlot redraws on a scale change, not on setData(_, false)
+      });
+    } finally {
+      applying = false;
+      syncing = false;
+    }
+    root.rbmWindow = w ? { start: w.start, end: w.end, rows: w.rows } : null;
+  }
+
+  function askWindow() {
+    if (!detail || !first) return;
+    const { min, max } = first.scales.x;
+    const key = `${min}:${max}:${shift}`;
+    if (key === shownKey) return;
+    if (min <= dataMin && max >= dataMax) {
+      showWindow(key, null); // everything in view: the overview is the picture
+      return;
+    }
+    if (cache.has(key)) {
+      showWindow(key, cache.get(key));
+      return;
+    }
+    latest += 1;
+    model.send({ type: "window", id: latest, start: min, end: max });
+  }
+
+  const onMessage = (msg, buffers) => {
+    if (!msg || msg.type !== "window") return;
+    if (msg.id !== latest) return; // superseded by a later zoom
+    const w = { start: msg.start, end: msg.end, rows: msg.rows, x: [], y: [] };
+    let at = 0;
+    panels.forEach((panel, p) => {
+      w.x.push(typed(buffers[at++], Float64Array));
+      w.y.push(panel.components.map(() => withMissing(typed(buffers[at++], Float64Array))));
+    });
+    const key = `${msg.start}:${msg.end}:${shift}`;
+    cache.set(key, w);
+    if (cache.size > CACHED_WINDOWS) cache.delete(cache.keys().next().value);
+    showWindow(key, w);
+  };
+  model.on("msg:custom", onMessage);
+  if (detail && first) {
+    first.hooks.setScale.push((u, key) => {
+      if (key !== "x" || applying) return;
+      clearTimeout(askTimer);
+      askTimer = setTimeout(askWindow, WINDOW_DELAY_MS);
+    });
+    askWindow();
+  }
 
   const stopFollowing = followPlayer(model, () => placeCursors(), {
     onPlayer: (p) => {
@@ -494,6 +588,8 @@ async function render({ model, el }) {
     resize.disconnect();
     model.off("change:x_range", onRange);
     model.off("change:x_shift", onShift);
+    model.off("msg:custom", onMessage);
+    clearTimeout(askTimer);
     model.off("change:time", onTime);
     model.off("change:t0_ns", onTime);
     stopFollowing();

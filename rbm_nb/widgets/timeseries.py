@@ -10,6 +10,12 @@ in the browser, so it keeps following playback while the kernel is busy.
 Gaps are drawn as gaps: NaN values break the line, and so does a pause in the
 timestamps longer than ``gap`` (a NaN row is inserted there before sending).
 
+With ``max_points``, the whole range goes as a min/max envelope and a zoom
+asks the kernel for the samples in view (a custom comm message answered with
+binary buffers): at full resolution when there are at most ``WINDOW_POINTS``
+of them, else their own envelope. The browser keeps the latest answers and drops
+answers to requests a newer zoom superseded.
+
 Each sample is sent once. Linking a Player later (or any change of time base:
 the eye clock of the example starts 0.7 ms before the head's) sends only the
 new second 0 and ``x_shift``, the seconds the browser adds to the x it already
@@ -46,6 +52,10 @@ COLORS = (
 )
 #: A pause longer than this many median sample intervals is drawn as a gap.
 GAP_FACTOR = 10.0
+#: A zoomed view gets the samples in view at full resolution when a panel has
+#: at most this many there (or ``max_points``, if larger): a minute of 340 Hz
+#: eye data, 0.5 MB per component; more than that comes as their envelope.
+WINDOW_POINTS = 20_000
 
 
 class _Series:
@@ -266,6 +276,11 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         sync=True
     )
     title = traitlets.Unicode("", help="Title above the panels.").tag(sync=True)
+    detail = traitlets.Bool(
+        False,
+        help="Whether a zoom fetches the samples in view from the kernel "
+        "(the data is an envelope: max_points was given).",
+    ).tag(sync=True)
 
     def __init__(
         self,
@@ -317,12 +332,15 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         # the samples go in the comm's open message, in the player's time base,
         # so linking the player below changes nothing that was sent
         self._data_base = self._base
+        self._full: list[tuple[np.ndarray, np.ndarray]] = []
         super().__init__(
             _esm=bundle("timeseries"),
             panel_height=int(panel_height),
             title=title or "",
+            detail=self._max_points is not None,
             **self._encoded(),
         )
+        self.on_msg(self._on_message)
         if player is not None:
             self.player = player
 
@@ -335,6 +353,8 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
                 s.timestamps, f"timestamps of series {s.label!r}"
             )
             x, y, used = _with_gaps(x, s.values, self._gap)
+            if self._max_points is not None:
+                self._full.append((x, y))  # what a zoomed view asks for
             x, y = _envelope(x, y, self._max_points)
             self.gaps.append(used)
             panels.append(
@@ -356,6 +376,59 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
                 }
             )
         return {"t0_ns": self._data_base.t0_ns, "panels": panels, "data": data}
+
+    def window(self, start: float, end: float) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Each panel's rows shown in ``[start, end]`` seconds of the axis.
+
+        The rows in the window and one on each side (so the line runs to the
+        edges), at full resolution when they are at most ``WINDOW_POINTS`` (or
+        ``max_points``, if larger), else their envelope of that many rows; x in the data's time base (as the overview was sent).
+        Needs ``max_points`` (without it every sample is in the browser).
+        """
+        if not self._full:
+            raise ValueError(
+                "TimeSeries.window: this plot sent every sample (no max_points)"
+            )
+        start, end = float(start), float(end)
+        if not (np.isfinite(start) and np.isfinite(end) and start < end):
+            raise ValueError(
+                f"TimeSeries.window: need finite start < end in seconds, got {start}, {end}"
+            )
+        lo, hi = start - self.x_shift, end - self.x_shift
+        limit = max(WINDOW_POINTS, self._max_points or 0)
+        out = []
+        for x, y in self._full:
+            i0 = max(int(np.searchsorted(x, lo, side="left")) - 1, 0)
+            i1 = min(int(np.searchsorted(x, hi, side="right")) + 1, x.size)
+            out.append(_envelope(x[i0:i1], y[i0:i1], limit))
+        return out
+
+    def _on_message(self, _widget, content, _buffers) -> None:
+        """Answer a browser's request for the samples in view (binary buffers)."""
+        if not isinstance(content, dict) or content.get("type") != "window":
+            return
+        try:
+            rows = self.window(
+                _number(content.get("start")), _number(content.get("end"))
+            )
+        except (TypeError, ValueError):
+            return  # a malformed request from the page: nothing to draw, no reply
+        buffers: list[bytes] = []
+        for x, y in rows:
+            buffers.append(np.ascontiguousarray(x, dtype=np.float64).tobytes())
+            buffers.extend(
+                np.ascontiguousarray(y[:, k], dtype=np.float64).tobytes()
+                for k in range(y.shape[1])
+            )
+        reply = {
+            "type": "window",
+            "id": content.get("id"),
+            "start": float(content["start"]),
+            "end": float(content["end"]),
+            "shift": self.x_shift,
+            "rows": [int(x.size) for x, _ in rows],
+        }
+        self.send(reply, buffers=buffers)
 
     def _shift_to(self, base: TimeBase) -> float:
         """Seconds from ``base``'s second 0 to the data's: what the browser adds."""

@@ -48,7 +48,10 @@ print(f"LONG-READY samples={{t_long.size}} sent={{sent}} runs={{runs}} hours={{t
 player = Player(np.r_[-0.0007, t_long[::10000], t_long[-1]])
 attach = widgets.Button(description="attach the player")
 attach.on_click(lambda _: setattr(plot, "player", player))
-widgets.VBox([plot, attach])
+# the same recording as an envelope of 2000 rows; a zoom fetches the samples in view
+overview = TimeSeries({{"left eye x": (t_long, x_long)}}, title="overview", max_points=2000)
+np.save(EXPECTED, np.c_[t_long, x_long])
+widgets.VBox([plot, attach, overview])
 """
 
 
@@ -56,7 +59,11 @@ widgets.VBox([plot, attach])
 def lab(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("long_plot")
     nb = nbformat.v4.new_notebook()
-    nb.cells = [nbformat.v4.new_code_cell(SETUP)]
+    nb.cells = [
+        nbformat.v4.new_code_cell(
+            SETUP.replace("EXPECTED", repr(str(tmp / "expected.npy")))
+        )
+    ]
     nb.metadata["kernelspec"] = {
         "name": "python3",
         "display_name": "Python 3",
@@ -65,6 +72,7 @@ def lab(tmp_path_factory):
     nbformat.write(nb, tmp / "long.ipynb")
     (tmp / "lab").mkdir()
     server = JupyterLab(tmp / "lab", [tmp / "long.ipynb"])
+    server.expected = tmp / "expected.npy"
     try:
         yield server
     finally:
@@ -126,9 +134,11 @@ def long_plot(browser, lab):
         ready = page.locator(".jp-OutputArea-output", has_text="LONG-READY")
         ready.wait_for(timeout=300000)
         page.ready_text = ready.inner_text()
+        page.expected = lab.expected
         page.wait_for_function(
             "document.querySelector('.rbm-ts') && document.querySelector('.rbm-ts').rbmCharts"
-            " && document.querySelector('.rbm-ts').rbmCharts.length === 1",
+            " && document.querySelector('.rbm-ts').rbmCharts.length === 1"
+            " && document.querySelectorAll('.rbm-ts').length === 2",
             timeout=180000,
         )
         page.wait_for_timeout(1500)
@@ -165,7 +175,7 @@ def test_a_long_recording_with_many_gaps_draws_every_sample(long_plot):
     assert samples <= sent < samples + 1000
     assert float(fields["hours"]) >= 1.5
     assert runs > UPLOT_SPREAD_LIMIT  # what used to leave the panel empty
-    save("long_plot.png", page.locator(".rbm-ts").screenshot())
+    save("long_plot.png", page.locator(".rbm-ts").first.screenshot())
     # every sample is in the chart, and the line was built (not thrown away)
     assert _chart(page, "u.data[0].length") == sent
     assert _chart(
@@ -181,7 +191,7 @@ def test_a_long_recording_with_many_gaps_draws_every_sample(long_plot):
     # zoomed in, the runs of missing samples are breaks in the line again
     _chart(page, "u.setScale('x', {min: 100, max: 130})")
     page.wait_for_timeout(300)
-    save("long_plot_zoom.png", page.locator(".rbm-ts").screenshot())
+    save("long_plot_zoom.png", page.locator(".rbm-ts").first.screenshot())
     spans = _chart(page, "u.series[1]._paths.gaps.length")
     assert 0 < spans <= width + 1
     missing_in_view = _chart(
@@ -207,8 +217,8 @@ def test_a_panel_that_cannot_draw_says_so_in_the_widget(long_plot):
     # zoom in: uPlot rebuilds the line, and the canvas now refuses it
     _chart(page, "u.setScale('x', {min: 100, max: 200})")
     page.wait_for_selector(".rbm-ts-error", timeout=10000)
-    text = page.locator(".rbm-ts-error").inner_text()
-    save("long_plot_error.png", page.locator(".rbm-ts").screenshot())
+    text = page.locator(".rbm-ts-error").first.inner_text()
+    save("long_plot_error.png", page.locator(".rbm-ts").first.screenshot())
     assert "left eye x" in text and "could not be drawn" in text
     assert "broken on purpose by the test" in text
     page.evaluate("window.rbmBreakPaths = false")
@@ -233,4 +243,55 @@ def test_attaching_a_player_shifts_the_axis_without_resending(long_plot):
     )
     # ... and the kernel sent a few kB of state, not the 30 MB of samples again
     assert page.received[0] - before < 20_000
+    assert not page.errors
+
+
+def _overview(page, expr):
+    return page.evaluate(
+        "(() => { const root = document.querySelectorAll('.rbm-ts')[1];"
+        f" const u = root.rbmCharts[0]; return {expr}; }})()"
+    )
+
+
+def test_zooming_into_10_s_fetches_the_samples_there_at_full_resolution(long_plot):
+    page = long_plot
+    t, x = np.load(page.expected).T
+    rows = _overview(page, "u.data[0].length")
+    assert rows <= 2100  # the whole 1.6 h as an envelope
+    start, end = 1000.0, 1010.0
+    _overview(page, f"u.setScale('x', {{min: {start}, max: {end}}})")
+    page.wait_for_function(
+        "(() => { const w = document.querySelectorAll('.rbm-ts')[1].rbmWindow;"
+        f" return w && w.start === {start} && w.end === {end}; }})()",
+        timeout=30000,
+    )
+    page.wait_for_timeout(300)
+    save("long_plot_overview_zoom.png", page.locator(".rbm-ts").nth(1).screenshot())
+    shown_x, shown_y = _overview(
+        page,
+        f"(() => {{ const xs = [], ys = []; for (let i = 0; i < u.data[0].length; i++)"
+        f" if (u.data[0][i] >= {start} && u.data[0][i] <= {end})"
+        " { xs.push(u.data[0][i]); ys.push(u.data[1][i] === undefined ? null : u.data[1][i]); }"
+        " return [xs, ys]; })()",
+    )
+    shown_x = np.asarray(shown_x)
+    shown_y = np.array([np.nan if v is None else v for v in shown_y])
+    inside = (t >= start) & (t <= end)
+    assert inside.sum() > 2500  # ~340 samples a second, a few pauses
+    real = np.isin(shown_x, t[inside])
+    # every sample of the recording there, with its own value (NaN where missing) ...
+    np.testing.assert_array_equal(shown_x[real], t[inside])
+    np.testing.assert_array_equal(shown_y[real], x[inside])
+    # ... and nothing else but the NaN rows that mark a pause in the timestamps
+    assert np.isnan(shown_y[~real]).all()
+    # the line is drawn there, and a double-click goes back to the envelope
+    assert _overview(page, "u.series[1]._paths !== null")
+    _overview(
+        page,
+        "u.setScale('x', {min: u.data[0][0], max: u.data[0][u.data[0].length - 1]})",
+    )
+    page.wait_for_function(
+        "document.querySelectorAll('.rbm-ts')[1].rbmWindow === null", timeout=30000
+    )
+    assert _overview(page, "u.data[0].length") == rows
     assert not page.errors

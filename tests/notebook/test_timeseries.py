@@ -278,3 +278,50 @@ def test_a_player_given_at_construction_sends_the_samples_once(speed):
     x, _ = _decoded(plot, 0)
     np.testing.assert_allclose(x, later.time.values, atol=1e-12)
     assert plot.x_shift == 0.0
+
+
+def test_a_zoomed_view_gets_the_samples_in_view_at_full_resolution():
+    t = np.arange(0.0, 600.0, 0.003)  # 200k samples
+    v = np.sin(t)
+    v[1000:1010] = np.nan
+    plot = TimeSeries({"v": (t, v)}, max_points=1000)
+    assert plot.detail and plot.comm.opened[1] and len(_decoded(plot, 0)[0]) <= 1000
+    plot.comm.sent.clear()
+    plot.comm.receive({"type": "window", "id": 7, "start": 2.0, "end": 12.0})
+    ((message, buffers),) = plot.comm.sent
+    reply = message["content"]  # a custom message
+    assert reply["type"] == "window" and reply["id"] == 7
+    x, y = (np.frombuffer(b, dtype=np.float64) for b in buffers)
+    inside = np.flatnonzero((t >= 2.0) & (t <= 12.0))
+    rows = np.r_[inside[0] - 1, inside, inside[-1] + 1]  # and one on each side
+    np.testing.assert_array_equal(x, t[rows])
+    np.testing.assert_array_equal(y, v[rows])  # the NaN run too
+    assert reply["rows"] == [rows.size]
+    # a window with more samples than WINDOW_POINTS comes as their envelope
+    from rbm_nb.widgets.timeseries import WINDOW_POINTS
+
+    plot.comm.sent.clear()
+    plot.comm.receive({"type": "window", "id": 8, "start": 0.0, "end": 300.0})
+    ((message, buffers),) = plot.comm.sent
+    assert message["content"]["rows"][0] <= WINDOW_POINTS < 100_000
+    # a request the page got wrong is not answered
+    plot.comm.sent.clear()
+    for bad in ({"type": "window", "start": 5.0, "end": 1.0}, {"type": "window"}, "x"):
+        plot.comm.receive(bad)
+    assert plot.comm.sent == []
+
+
+def test_a_window_follows_a_player_linked_later(speed):
+    player = Player(np.r_[-1.0, speed.time.values])  # second 0 one second earlier
+    plot = TimeSeries({"speed": speed}, max_points=20)
+    plot.player = player
+    assert plot.x_shift == 1.0
+    ((x, _),) = plot.window(3.0, 4.0)  # axis seconds; x as sent (the data's seconds)
+    np.testing.assert_allclose(x, speed.time.values[19:32])
+
+
+def test_without_max_points_there_is_nothing_to_fetch(speed):
+    plot = TimeSeries({"speed": speed})
+    assert not plot.detail
+    with pytest.raises(ValueError, match="no max_points"):
+        plot.window(1.0, 2.0)

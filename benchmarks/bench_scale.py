@@ -11,7 +11,8 @@ clock starts 0.7 ms before the head's, so linking changes the time base), in
 two ways: the player given at construction ("player=") and linked afterwards
 ("linked later"). Printed: the bytes of the comm's open message and of every
 message after it (JSON and binary buffers), at full resolution and at the
-explorer's ``max_points``. Only the widget's own comm is counted (not the
+explorer's ``max_points``, and, with ``max_points``, the answer to a zoom into
+100-110 s (the samples there at full resolution; not in the total). Only the widget's own comm is counted (not the
 Player's, nor the 3D scene's).
 
 ``--compare TREE`` runs the same measurement on another checkout (e.g. the
@@ -112,6 +113,17 @@ def measure(hours_list) -> list[dict]:
                     plot = TimeSeries(series, max_points=max_points)
                     plot.player = player
                 own = plot.comm
+                zoom = None
+                if max_points is not None and hasattr(plot, "window"):
+                    # what a zoom into 10 s costs: the answer to the page's request
+                    before = own.after
+                    plot._on_message(
+                        plot,
+                        {"type": "window", "id": 1, "start": 100.0, "end": 110.0},
+                        [],
+                    )
+                    zoom = (own.after - before) / 1e6
+                    own.after = before
                 rows.append(
                     {
                         "length": f"{span / 60:.1f} min"
@@ -121,6 +133,7 @@ def measure(hours_list) -> list[dict]:
                         "how": how,
                         "open_MB": own.opened / 1e6,
                         "after_MB": own.after / 1e6,
+                        "zoom_MB": zoom,
                     }
                 )
                 plot.close()
@@ -138,16 +151,15 @@ def table(columns: dict[str, list[dict]]) -> None:
     first = columns[names[0]]
     head = f"{'recording':>10} {'max_points':>10} {'player':>13}"
     for n in names:
-        head += f" | {n + ': open + after = total MB':>40}"
+        head += f" | {n + ': open + after = total MB, 10 s zoom':>46}"
     print(head)
     for i, row in enumerate(first):
         line = f"{row['length']:>10} {row['max_points']:>10} {row['how']:>13}"
         for n in names:
             r = columns[n][i]
             total = r["open_MB"] + r["after_MB"]
-            line += (
-                f" | {r['open_MB']:12.2f} + {r['after_MB']:8.2f} = {total:8.2f}      "
-            )
+            zoom = "-" if r.get("zoom_MB") is None else f"{r['zoom_MB']:.3f}"
+            line += f" | {r['open_MB']:12.2f} + {r['after_MB']:8.2f} = {total:8.2f} {zoom:>6}"
         print(line)
     if len(names) == 2:
         a, b = (sum(r["open_MB"] + r["after_MB"] for r in columns[n]) for n in names)

@@ -1,8 +1,9 @@
 // TimeSeries widget: stacked uPlot panels over one time axis.
 //
 // The kernel sends each panel's samples once, as binary buffers (x: float64
-// seconds from the recording's start, y: float32 per component, NaN where there
-// is no value or a time gap). Everything interactive happens here: drag to
+// seconds from the recording's start, y: float64 per component, NaN where there
+// is no value or a time gap). When the time base changes afterwards (a Player
+// linked later), the kernel sends only `x_shift`, added here to the x it sent. Everything interactive happens here: drag to
 // zoom, wheel to zoom, shift+drag to pan, double-click to see everything,
 // hover for the values, click to seek. The cursor follows the linked Player's
 // `time` as the browser's clock moves it, so it keeps up while the kernel is
@@ -20,6 +21,8 @@ const CSS = `
 .rbm-ts-hint { color: #777; margin-left: auto; font-size: 11px; }
 .rbm-ts .u-legend { font-size: 11px; text-align: left; margin-left: 50px; }
 .rbm-ts .u-legend .u-value { font-variant-numeric: tabular-nums; }
+.rbm-ts-error { color: #a00; background: #fee; border: 1px solid #d99;
+  padding: 2px 6px; margin: 2px 0 2px 50px; }
 .rbm-ts-cursor { position: absolute; top: 0; bottom: 0; width: 0;
   border-left: 2px solid #d62728; pointer-events: none; }
 `;
@@ -32,22 +35,55 @@ function injectCss() {
   document.head.appendChild(style);
 }
 
-// A DataView from the comm as a typed array (copied when misaligned).
+// A DataView (or ArrayBuffer) from the comm as a typed array (copied when misaligned).
 function typed(view, Kind) {
-  const { buffer, byteOffset, byteLength } = view;
+  const { buffer, byteOffset, byteLength } = view instanceof ArrayBuffer ? new DataView(view) : view;
   if (byteOffset % Kind.BYTES_PER_ELEMENT === 0) {
     return new Kind(buffer, byteOffset, byteLength / Kind.BYTES_PER_ELEMENT);
   }
   return new Kind(buffer.slice(byteOffset, byteOffset + byteLength));
 }
 
-// uPlot draws a gap at null, not at NaN.
-function withNulls(values) {
+// A missing sample (NaN) becomes undefined, not null: uPlot collects the runs
+// of nulls with \`gaps.push(...findGaps(...))\`, one argument per run, which
+// overflows the call stack past ~125k runs (1.4 h of eye data) and leaves the
+// panel empty. For undefined it collects nothing and asks the series' \`gaps\`
+// option instead: gapSpans below, which makes the same clip without spreading.
+function withMissing(values) {
   const out = new Array(values.length);
   for (let i = 0; i < values.length; i++) {
-    out[i] = Number.isNaN(values[i]) ? null : values[i];
+    out[i] = Number.isNaN(values[i]) ? undefined : values[i];
   }
   return out;
+}
+
+// The pixel spans [from, to] that uPlot clips out of a line: from the sample
+// before each run of missing samples to the one after it (uPlot draws straight
+// through undefined; the clip removes that bridge). Spans that touch are merged,
+// so there are never more than about one per pixel column. A break narrower
+// than MIN_GAP_PX cannot be seen at this zoom, and clipping it would erase the
+// samples on both sides (at 1.5 h of eye data nearly every pixel column holds a
+// short run of missing samples): those are left bridged until the user zooms in.
+const MIN_GAP_PX = 2;
+
+function gapSpans(u, sidx, idx0, idx1) {
+  const xs = u.data[0];
+  const ys = u.data[sidx];
+  const last = xs.length - 1;
+  const px = (v) => Math.round(u.valToPos(v, "x", true));
+  const spans = [];
+  for (let i = idx0; i <= idx1; i++) {
+    if (ys[i] !== undefined) continue;
+    const from = i;
+    while (i < idx1 && ys[i + 1] === undefined) i++;
+    const a = px(xs[Math.max(from - 1, 0)]);
+    const b = px(xs[Math.min(i + 1, last)]);
+    if (!(b - a >= MIN_GAP_PX)) continue;
+    const prev = spans[spans.length - 1];
+    if (prev && a <= prev[1]) prev[1] = Math.max(prev[1], b);
+    else spans.push([a, b]);
+  }
+  return spans;
 }
 
 function formatValue(v, units) {
@@ -192,23 +228,58 @@ async function render({ model, el }) {
     }
   }
 
+  // x as sent (in the data's time base) and as shown (plus x_shift)
+  const sentX = data.map((d) => typed(d.x, Float64Array));
+  const shownX = (raw, shift) => {
+    if (!shift) return raw;
+    const out = new Float64Array(raw.length);
+    for (let k = 0; k < raw.length; k++) out[k] = raw[k] + shift;
+    return out;
+  };
+  let shift = model.get("x_shift") || 0;
   let dataMin = Infinity;
   let dataMax = -Infinity;
-  data.forEach((d) => {
-    const x = typed(d.x, Float64Array);
-    if (x.length) {
-      dataMin = Math.min(dataMin, x[0]);
-      dataMax = Math.max(dataMax, x[x.length - 1]);
+  function findExtent() {
+    dataMin = Infinity;
+    dataMax = -Infinity;
+    sentX.forEach((x) => {
+      if (x.length) {
+        dataMin = Math.min(dataMin, x[0] + shift);
+        dataMax = Math.max(dataMax, x[x.length - 1] + shift);
+      }
+    });
+    if (!(dataMax > dataMin)) dataMax = dataMin + 1;
+  }
+  findExtent();
+
+  // A panel that cannot draw says so in the widget, not only in the console.
+  const errors = [];
+  function reportFailure(i, err) {
+    const text = `${panels[i].label}: this panel could not be drawn (${err && err.name ? `${err.name}: ${err.message}` : err})`;
+    if (errors.includes(text)) return;
+    errors.push(text);
+    console.error(`rbm_nb TimeSeries: ${text}`, err);
+    const note = document.createElement("div");
+    note.className = "rbm-ts-error";
+    note.textContent = text;
+    body.insertBefore(note, body.firstChild);
+  }
+  const linearPaths = uPlot.paths.linear();
+  const guardedPaths = (i) => (u, sidx, idx0, idx1) => {
+    try {
+      return linearPaths(u, sidx, idx0, idx1);
+    } catch (err) {
+      reportFailure(i, err);
+      return null; // uPlot skips a series without paths; the others still draw
     }
-  });
-  if (!(dataMax > dataMin)) dataMax = dataMin + 1;
+  };
 
   const width = () => Math.max(200, (body.clientWidth || el.clientWidth || 800) - 4);
   const height = model.get("panel_height");
 
   panels.forEach((panel, i) => {
-    const x = typed(data[i].x, Float64Array);
-    const ys = data[i].y.map((v) => withNulls(typed(v, Float64Array)));
+    const x = shownX(sentX[i], shift);
+    const ys = data[i].y.map((v) => withMissing(typed(v, Float64Array)));
     const last = i === panels.length - 1;
     const series = [
       { label: "time", value: (u, v) => (v === null ? "\u2014" : formatTime(v, t0Ns())) },
@@ -217,6 +288,8 @@ async function render({ model, el }) {
         stroke: panel.colors[k],
         width: 1.25,
         spanGaps: false,
+        gaps: gapSpans,
+        paths: guardedPaths(i),
         // no cursor: a dash; a cursor on a sample with no value: "missing"
         value: (u, v, si, idx) => (idx === null || idx === undefined ? "\u2014" : formatValue(v, panel.units)),
       })),
@@ -331,7 +404,14 @@ async function render({ model, el }) {
         ],
       },
     };
-    const u = new uPlot(opts, [x, ...ys], body);
+    let u;
+    try {
+      u = new uPlot(opts, [x, ...ys], body);
+    } catch (err) {
+      reportFailure(i, err);
+      return;
+    }
+    u.rbmPanel = i;
     const cursor = document.createElement("div");
     cursor.className = "rbm-ts-cursor";
     u.over.appendChild(cursor);
@@ -372,9 +452,117 @@ async function render({ model, el }) {
   };
   model.on("change:x_range", onRange);
 
+  // a new time base: shift the x already here (nothing is sent again); the
+  // view keeps showing the same samples
+  const onShift = () => {
+    const next = model.get("x_shift") || 0;
+    const delta = next - shift;
+    if (!delta) return;
+    shift = next;
+    findExtent();
+    const { min, max } = first ? first.scales.x : {};
+    charts.forEach((u) => u.setData([shownX(sentX[u.rbmPanel], shift), ...overview[charts.indexOf(u)]], false));
+    shownKey = "";
+    if (first) first.setScale("x", { min: min + delta, max: max + delta });
+  };
+  model.on("change:x_shift", onShift);
+
   const onTime = () => placeCursors();
   model.on("change:time", onTime);
   model.on("change:t0_ns", onTime);
+
+  // -- detail on zoom: the kernel sent an envelope (max_points); a zoom asks it
+  // for the samples in view, at full resolution when they are few enough.
+  // Answers are kept (a few ranges); an answer to a superseded request is dropped.
+  const detail = model.get("detail");
+  const overview = charts.map((u) => u.data.slice(1));
+  const cache = new Map();
+  const CACHED_WINDOWS = 8;
+  const WINDOW_DELAY_MS = 60;
+  let latest = 0;
+  let askTimer = null;
+  let applying = false;
+  let shownKey = "";
+
+  // x of the window's rows are in the data's time base, as the overview's
+  function splice(u, w) {
+    // the overview outside the window, the window's own rows inside it
+    const p = u.rbmPanel;
+    const ox = shownX(sentX[p], shift);
+    const ys = overview[charts.indexOf(u)];
+    const wx = w.x[p];
+    const count = wx.length;
+    if (!count) return [ox, ...ys];
+    const lo = wx[0] + shift;
+    const hi = wx[count - 1] + shift;
+    let a = 0;
+    while (a < ox.length && ox[a] < lo) a++;
+    let b = a;
+    while (b < ox.length && ox[b] <= hi) b++;
+    const x = new Float64Array(a + count + (ox.length - b));
+    x.set(ox.subarray(0, a), 0);
+    for (let k = 0; k < count; k++) x[a + k] = wx[k] + shift;
+    x.set(ox.subarray(b), a + count);
+    return [x, ...ys.map((oy, c) => oy.slice(0, a).concat(w.y[p][c], oy.slice(b)))];
+  }
+
+  function showWindow(key, w) {
+    shownKey = key;
+    applying = true;
+    syncing = true; // the range stays; only the rows in it change
+    try {
+      charts.forEach((u) => {
+        const { min, max } = u.scales.x;
+        u.setData(w ? splice(u, w) : [shownX(sentX[u.rbmPanel], shift), ...overview[charts.indexOf(u)]], false);
+        u.setScale("x", { min, max }); // uPlot redraws on a scale change, not on setData(_, false)
+      });
+    } finally {
+      applying = false;
+      syncing = false;
+    }
+    root.rbmWindow = w ? { start: w.start, end: w.end, rows: w.rows } : null;
+  }
+
+  function askWindow() {
+    if (!detail || !first) return;
+    const { min, max } = first.scales.x;
+    const key = `${min}:${max}:${shift}`;
+    if (key === shownKey) return;
+    if (min <= dataMin && max >= dataMax) {
+      showWindow(key, null); // everything in view: the overview is the picture
+      return;
+    }
+    if (cache.has(key)) {
+      showWindow(key, cache.get(key));
+      return;
+    }
+    latest += 1;
+    model.send({ type: "window", id: latest, start: min, end: max });
+  }
+
+  const onMessage = (msg, buffers) => {
+    if (!msg || msg.type !== "window") return;
+    if (msg.id !== latest) return; // superseded by a later zoom
+    const w = { start: msg.start, end: msg.end, rows: msg.rows, x: [], y: [] };
+    let at = 0;
+    panels.forEach((panel, p) => {
+      w.x.push(typed(buffers[at++], Float64Array));
+      w.y.push(panel.components.map(() => withMissing(typed(buffers[at++], Float64Array))));
+    });
+    const key = `${msg.start}:${msg.end}:${shift}`;
+    cache.set(key, w);
+    if (cache.size > CACHED_WINDOWS) cache.delete(cache.keys().next().value);
+    showWindow(key, w);
+  };
+  model.on("msg:custom", onMessage);
+  if (detail && first) {
+    first.hooks.setScale.push((u, key) => {
+      if (key !== "x" || applying) return;
+      clearTimeout(askTimer);
+      askTimer = setTimeout(askWindow, WINDOW_DELAY_MS);
+    });
+    askWindow();
+  }
 
   const stopFollowing = followPlayer(model, () => placeCursors(), {
     onPlayer: (p) => {
@@ -394,10 +582,14 @@ async function render({ model, el }) {
 
   // for tests and debugging: the uPlot instances of this view
   root.rbmCharts = charts;
+  root.rbmErrors = errors;
 
   return () => {
     resize.disconnect();
     model.off("change:x_range", onRange);
+    model.off("change:x_shift", onShift);
+    model.off("msg:custom", onMessage);
+    clearTimeout(askTimer);
     model.off("change:time", onTime);
     model.off("change:t0_ns", onTime);
     stopFollowing();

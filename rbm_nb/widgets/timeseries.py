@@ -9,6 +9,17 @@ in the browser, so it keeps following playback while the kernel is busy.
 
 Gaps are drawn as gaps: NaN values break the line, and so does a pause in the
 timestamps longer than ``gap`` (a NaN row is inserted there before sending).
+
+With ``max_points``, the whole range goes as a min/max envelope and a zoom
+asks the kernel for the samples in view (a custom comm message answered with
+binary buffers): at full resolution when there are at most ``WINDOW_POINTS``
+of them, else their own envelope. The browser keeps the latest answers and drops
+answers to requests a newer zoom superseded.
+
+Each sample is sent once. Linking a Player later (or any change of time base:
+the eye clock of the example starts 0.7 ms before the head's) sends only the
+new second 0 and ``x_shift``, the seconds the browser adds to the x it already
+holds, never the samples again.
 """
 
 from __future__ import annotations
@@ -41,6 +52,10 @@ COLORS = (
 )
 #: A pause longer than this many median sample intervals is drawn as a gap.
 GAP_FACTOR = 10.0
+#: A zoomed view gets the samples in view at full resolution when a panel has
+#: at most this many there (or ``max_points``, if larger): a minute of 340 Hz
+#: eye data, 0.5 MB per component; more than that comes as their envelope.
+WINDOW_POINTS = 20_000
 
 
 class _Series:
@@ -243,6 +258,11 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         allow_none=True,
         help="Absolute ns of second 0 (datetime64 data), or None.",
     ).tag(sync=True)
+    x_shift = traitlets.Float(
+        0.0,
+        help="Seconds the browser adds to the sent x: the data went in one time "
+        "base, the axis shows another (a Player linked later).",
+    ).tag(sync=True)
     time = traitlets.Float(
         0.0, help="Cursor time in seconds from the start, when no player is linked."
     ).tag(sync=True)
@@ -256,6 +276,11 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         sync=True
     )
     title = traitlets.Unicode("", help="Title above the panels.").tag(sync=True)
+    detail = traitlets.Bool(
+        False,
+        help="Whether a zoom fetches the samples in view from the kernel "
+        "(the data is an envelope: max_points was given).",
+    ).tag(sync=True)
 
     def __init__(
         self,
@@ -300,23 +325,36 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         self.gaps: list[float | None] = []
         first = min((s.timestamps[:1] for s in self._series), key=lambda a: a[0])
         self._own_base = self._base = TimeBase.of(first)
-        # the samples go in the comm's open message, not in an update after it
+        if player is not None:
+            # checked here, before the samples are encoded in its time base
+            self._valid_player({"value": player})
+            self._base = self._base_of(player)
+        # the samples go in the comm's open message, in the player's time base,
+        # so linking the player below changes nothing that was sent
+        self._data_base = self._base
+        self._full: list[tuple[np.ndarray, np.ndarray]] = []
         super().__init__(
             _esm=bundle("timeseries"),
             panel_height=int(panel_height),
             title=title or "",
+            detail=self._max_points is not None,
             **self._encoded(),
         )
+        self.on_msg(self._on_message)
         if player is not None:
             self.player = player
 
     # -- data to the browser ---------------------------------------------------
     def _encoded(self) -> dict:
-        """``t0_ns``, ``panels`` and ``data`` in the current time base."""
+        """``t0_ns``, ``panels`` and ``data`` in the data's time base."""
         panels, data, self.gaps = [], [], []
         for s in self._series:
-            x = self._base.seconds(s.timestamps, f"timestamps of series {s.label!r}")
+            x = self._data_base.seconds(
+                s.timestamps, f"timestamps of series {s.label!r}"
+            )
             x, y, used = _with_gaps(x, s.values, self._gap)
+            if self._max_points is not None:
+                self._full.append((x, y))  # what a zoomed view asks for
             x, y = _envelope(x, y, self._max_points)
             self.gaps.append(used)
             panels.append(
@@ -337,14 +375,68 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
                     ],
                 }
             )
-        return {"t0_ns": self._base.t0_ns, "panels": panels, "data": data}
+        return {"t0_ns": self._data_base.t0_ns, "panels": panels, "data": data}
 
-    def _encode(self) -> None:
-        """Resend every panel's samples (after the time base changed)."""
-        state = self._encoded()
-        with self.hold_sync():
-            for name, value in state.items():
-                setattr(self, name, value)
+    def window(self, start: float, end: float) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Each panel's rows shown in ``[start, end]`` seconds of the axis.
+
+        The rows in the window and one on each side (so the line runs to the
+        edges), at full resolution when they are at most ``WINDOW_POINTS`` (or
+        ``max_points``, if larger), else their envelope of that many rows; x in the data's time base (as the overview was sent).
+        Needs ``max_points`` (without it every sample is in the browser).
+        """
+        if not self._full:
+            raise ValueError(
+                "TimeSeries.window: this plot sent every sample (no max_points)"
+            )
+        start, end = float(start), float(end)
+        if not (np.isfinite(start) and np.isfinite(end) and start < end):
+            raise ValueError(
+                f"TimeSeries.window: need finite start < end in seconds, got {start}, {end}"
+            )
+        lo, hi = start - self.x_shift, end - self.x_shift
+        limit = max(WINDOW_POINTS, self._max_points or 0)
+        out = []
+        for x, y in self._full:
+            i0 = max(int(np.searchsorted(x, lo, side="left")) - 1, 0)
+            i1 = min(int(np.searchsorted(x, hi, side="right")) + 1, x.size)
+            out.append(_envelope(x[i0:i1], y[i0:i1], limit))
+        return out
+
+    def _on_message(self, _widget, content, _buffers) -> None:
+        """Answer a browser's request for the samples in view (binary buffers)."""
+        if not isinstance(content, dict) or content.get("type") != "window":
+            return
+        try:
+            rows = self.window(
+                _number(content.get("start")), _number(content.get("end"))
+            )
+        except (TypeError, ValueError):
+            return  # a malformed request from the page: nothing to draw, no reply
+        buffers: list[bytes] = []
+        for x, y in rows:
+            buffers.append(np.ascontiguousarray(x, dtype=np.float64).tobytes())
+            buffers.extend(
+                np.ascontiguousarray(y[:, k], dtype=np.float64).tobytes()
+                for k in range(y.shape[1])
+            )
+        reply = {
+            "type": "window",
+            "id": content.get("id"),
+            "start": float(content["start"]),
+            "end": float(content["end"]),
+            "shift": self.x_shift,
+            "rows": [int(x.size) for x, _ in rows],
+        }
+        self.send(reply, buffers=buffers)
+
+    def _shift_to(self, base: TimeBase) -> float:
+        """Seconds from ``base``'s second 0 to the data's: what the browser adds."""
+        data = self._data_base
+        if data.t0_ns is not None and base.t0_ns is not None:
+            # int64 ns first: no epoch-sized float rounding
+            return (data.t0_ns - base.t0_ns) / 1e9
+        return float(data.t0_s) - float(base.t0_s)
 
     @traitlets.validate("time")
     def _valid_time(self, proposal):
@@ -393,21 +485,26 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
             )
         return player
 
+    def _base_of(self, player) -> TimeBase:
+        """Second 0 of the axis when following ``player`` (None: the series')."""
+        if player is None:
+            return self._own_base
+        if player.t0_ns is not None:
+            return TimeBase(t0_ns=int(player.t0_ns))
+        # a Player on float seconds starts at its first timestamp; the player
+        # tells which when it can, else the series' own start
+        t0_s = getattr(player, "t0_s", None)
+        return TimeBase(t0_s=float(t0_s)) if t0_s is not None else self._own_base
+
     @traitlets.observe("player")
     def _on_player(self, change) -> None:
-        base = self._own_base
-        player = change["new"]
-        if player is not None:
-            if player.t0_ns is not None:
-                base = TimeBase(t0_ns=int(player.t0_ns))
-            else:
-                # a Player on float seconds starts at its first timestamp; the
-                # player tells which when it can, else the series' own start
-                t0_s = getattr(player, "t0_s", None)
-                base = TimeBase(t0_s=float(t0_s)) if t0_s is not None else base
+        base = self._base_of(change["new"])
         if base != self._base:
             self._base = base
-            self._encode()
+            # the browser shifts the x it holds: the samples are not sent again
+            with self.hold_sync():
+                self.x_shift = self._shift_to(base)
+                self.t0_ns = base.t0_ns
 
     # -- time ----------------------------------------------------------------
     @property

@@ -230,3 +230,98 @@ def test_max_points_keeps_peaks_and_gaps():
     np.testing.assert_array_equal(y[:, 0], v[index])
     with pytest.raises(ValueError, match="max_points"):
         TimeSeries({"v": (t, v)}, max_points=3)
+
+
+def _bytes_sent(plot) -> int:
+    """Bytes of every message after the comm opened: JSON and buffers."""
+    import json
+
+    return sum(
+        len(json.dumps(data)) + sum(len(b) for b in buffers)
+        for data, buffers in plot.comm.sent
+    )
+
+
+def test_linking_a_player_later_sends_a_shift_not_the_samples_again():
+    stamps = START + (np.arange(5000) * 5_000_001).astype("timedelta64[ns]")
+    da = xr.DataArray(np.arange(5000.0), dims="time", coords={"time": stamps})
+    plot = TimeSeries({"count": da})
+    sent_x, _ = _decoded(plot, 0)
+    plot.comm.sent.clear()
+    earlier = int(START.astype(np.int64)) - 700_000  # the eye clock: 0.7 ms earlier
+    player = Player(np.r_[np.datetime64(earlier, "ns"), stamps])
+    plot.player = player
+    # a few hundred bytes of state, no buffer: the 5000 samples are not resent
+    assert all(not buffers for _, buffers in plot.comm.sent)
+    assert _bytes_sent(plot) < 500
+    assert plot.t0_ns == earlier and plot.x_shift == pytest.approx(0.0007, abs=1e-15)
+    # what the browser shows: the sent x plus the shift, in the player's seconds
+    np.testing.assert_allclose(
+        sent_x + plot.x_shift, np.arange(5000) * 5_000_001 / 1e9 + 0.0007, atol=1e-12
+    )
+    player.time = 0.0007 + 10 * 0.005000001
+    assert plot.values_at()["count"] == [10.0]
+    # and back to the series' own start: again only the shift
+    plot.player = None
+    assert plot.x_shift == 0.0 and plot.t0_ns == int(START.astype(np.int64))
+    assert all(not buffers for _, buffers in plot.comm.sent)
+
+
+def test_a_player_given_at_construction_sends_the_samples_once(speed):
+    later = speed.sel(time=slice(3.0, None))  # starts 3 s after the player
+    player = Player(speed.time.values)
+    plot = TimeSeries({"later": later}, player=player)
+    # in the open message, already in the player's seconds; nothing after it
+    _, opened_buffers = plot.comm.opened
+    assert sum(len(b) for b in opened_buffers) == 2 * later.size * 8
+    assert all(not buffers for _, buffers in plot.comm.sent)
+    x, _ = _decoded(plot, 0)
+    np.testing.assert_allclose(x, later.time.values, atol=1e-12)
+    assert plot.x_shift == 0.0
+
+
+def test_a_zoomed_view_gets_the_samples_in_view_at_full_resolution():
+    t = np.arange(0.0, 600.0, 0.003)  # 200k samples
+    v = np.sin(t)
+    v[1000:1010] = np.nan
+    plot = TimeSeries({"v": (t, v)}, max_points=1000)
+    assert plot.detail and plot.comm.opened[1] and len(_decoded(plot, 0)[0]) <= 1000
+    plot.comm.sent.clear()
+    plot.comm.receive({"type": "window", "id": 7, "start": 2.0, "end": 12.0})
+    ((message, buffers),) = plot.comm.sent
+    reply = message["content"]  # a custom message
+    assert reply["type"] == "window" and reply["id"] == 7
+    x, y = (np.frombuffer(b, dtype=np.float64) for b in buffers)
+    inside = np.flatnonzero((t >= 2.0) & (t <= 12.0))
+    rows = np.r_[inside[0] - 1, inside, inside[-1] + 1]  # and one on each side
+    np.testing.assert_array_equal(x, t[rows])
+    np.testing.assert_array_equal(y, v[rows])  # the NaN run too
+    assert reply["rows"] == [rows.size]
+    # a window with more samples than WINDOW_POINTS comes as their envelope
+    from rbm_nb.widgets.timeseries import WINDOW_POINTS
+
+    plot.comm.sent.clear()
+    plot.comm.receive({"type": "window", "id": 8, "start": 0.0, "end": 300.0})
+    ((message, buffers),) = plot.comm.sent
+    assert message["content"]["rows"][0] <= WINDOW_POINTS < 100_000
+    # a request the page got wrong is not answered
+    plot.comm.sent.clear()
+    for bad in ({"type": "window", "start": 5.0, "end": 1.0}, {"type": "window"}, "x"):
+        plot.comm.receive(bad)
+    assert plot.comm.sent == []
+
+
+def test_a_window_follows_a_player_linked_later(speed):
+    player = Player(np.r_[-1.0, speed.time.values])  # second 0 one second earlier
+    plot = TimeSeries({"speed": speed}, max_points=20)
+    plot.player = player
+    assert plot.x_shift == 1.0
+    ((x, _),) = plot.window(3.0, 4.0)  # axis seconds; x as sent (the data's seconds)
+    np.testing.assert_allclose(x, speed.time.values[19:32])
+
+
+def test_without_max_points_there_is_nothing_to_fetch(speed):
+    plot = TimeSeries({"speed": speed})
+    assert not plot.detail
+    with pytest.raises(ValueError, match="no max_points"):
+        plot.window(1.0, 2.0)

@@ -12,6 +12,8 @@ from typing import TYPE_CHECKING
 
 from .._atomic import atomic_path, check_replaceable
 from .._progress import progress_bar
+from ..data.fetch import cache_dir, example_data_dirs
+from ..data.registry import CACHE_DIR_ENV
 from ..io._files import FileFormatError, load_netcdf
 from ..io._schema import motion_dataset
 from ._messages import (
@@ -19,6 +21,7 @@ from ._messages import (
     SUPPORTED_TYPES,
     TF_TYPES,
     Messages,
+    TfPair,
     check_messages,
     check_tf,
     decode_objects,
@@ -381,7 +384,6 @@ class RosbagReader:
         """
         name = f"{topic.replace('/', '_')}.nc"
         folder = self.bag_file.parent.resolve()
-        from ..data.fetch import cache_dir, example_data_dirs
 
         if any(folder == d or d in folder.parents for d in example_data_dirs()):
             import hashlib
@@ -467,8 +469,6 @@ def _merge(a, b):
     """One moving pair from two tf topics: sorted by stamp, later topic wins."""
     import numpy as np
 
-    from ._messages import TfPair
-
     stamps = np.concatenate([a.stamps_ns, b.stamps_ns])
     order = np.argsort(stamps, kind="stable")
     _, last = np.unique(stamps[order][::-1], return_index=True)
@@ -483,9 +483,6 @@ def _merge(a, b):
 
 def _cache_error(err: OSError, path: Path) -> OSError:
     """``err`` from writing a cache file, saying which setting chose the folder."""
-    from ..data.fetch import cache_dir
-    from ..data.registry import CACHE_DIR_ENV
-
     if err.errno is None or not os.environ.get(CACHE_DIR_ENV):
         return err
     folder = cache_dir()

@@ -41,7 +41,19 @@ from typing import Any
 
 import numpy as np
 
+from ._door import kernel_array, unpack
+from ._engine import chain as ch
+from ._engine import twist as tw
 from ._engine.chain import chain
+from ._engine.transform import Blocks, track_of
+from ._engine.transform import transform as engine_transform
+from ._engine.velocity import _lowpass, lowpass_reach
+from ._kernels import differences as dk
+from ._kernels import quaternion as qk
+from ._kernels import resample as kr
+from ._kernels import rotations as rk
+from ._time import Track, as_track, seconds
+from ._xarray import wrap
 
 # samples of not-a-knot spline influence kept on each side: 0.268**32 < 1e-18
 SPLINE_HALO = 32
@@ -188,8 +200,6 @@ def _one_block(data):
 
 def _seconds_from_first(times: np.ndarray) -> np.ndarray:
     """datetime64 times as float seconds from the first, as rbm_nb._time does."""
-    from ._time import seconds
-
     return seconds(times, len(times), "time")
 
 
@@ -348,9 +358,6 @@ def _transform_block(block, frames, method, dim, time_dim, attr, origin):
     differently, and times that equal a frame's samples in the eager call
     could fall a few ulps beside them.
     """
-    from ._door import unpack
-    from ._xarray import wrap
-
     unpacked = unpack(block, dim=dim, timestamps=time_dim)
     with frames.built() as (outof, into):
         out, ts_out = method(
@@ -518,11 +525,6 @@ def _outlier_score(block, time_dim: str, comp_dim: str, quaternions: bool):
     """
     import xarray as xr
 
-    from ._door import kernel_array
-    from ._kernels import differences as dk
-    from ._kernels import quaternion as qk
-    from ._kernels import rotations as rk
-
     moved = block.transpose(time_dim, ..., comp_dim)
     data = np.asarray(moved.values, dtype=np.float64)
     n, k = data.shape[0], data.shape[-1]
@@ -646,8 +648,6 @@ def _check_kept(first: np.ndarray, last: np.ndarray, n: int, thresh: float) -> b
 
 def lowpass(v, time_dim: str, cutoff: float):
     """The estimators' forward-backward low-pass of dask-backed ``v``, per chunk."""
-    from ._engine.velocity import _lowpass, lowpass_reach
-
     axis = v.dims.index(time_dim)
 
     def block(b):
@@ -849,11 +849,6 @@ def velocity_terms(linear: bool, frame, to_frame, what: str, options: dict):
         One term for angular velocities (added), three for linear ones
         (``rotated + ext[0] + ext[1] x ext[2]``, see :func:`_combine`).
     """
-    from ._engine import chain as ch
-    from ._engine import twist as tw
-    from ._engine.transform import track_of
-    from ._engine.transform import transform as engine_transform
-
     cutoff = options.get("cutoff")
     if not linear:
         # w_M/R' = w_M/R + w_R/R'  or  w_M'/R = w_M/R + w_M'/M
@@ -989,10 +984,6 @@ class _VelocityContext:
 
 def _velocity_block(block, context, what, dim, time_dim, origin):
     """The velocity transform of one block (the terms at the block's times)."""
-    from ._door import unpack
-    from ._engine.transform import Blocks
-    from ._xarray import wrap
-
     unpacked = unpack(block, dim=dim, timestamps=time_dim)
     blocks = Blocks(
         unpacked.data, 3, unpacked.axis, unpacked.time_axis,
@@ -1019,8 +1010,6 @@ def time_dim_of(arr, timestamps, time_axis) -> str | None:
 
 def _origin(times) -> int | None:
     """Nanoseconds of the first of datetime64 ``times`` (None for numbers)."""
-    from ._time import as_track
-
     first = as_track(np.asarray(times)[:1])
     return first.origin if first.is_datetime else None
 
@@ -1032,8 +1021,6 @@ def _track_from(timestamps, origin: int | None):
     chunk's own first sample as origin they would differ from the eager
     call's by rounding, which fast-changing velocities turn into ~1e-10.
     """
-    from ._time import Track, as_track
-
     track = as_track(timestamps, copy=False)
     if origin is None or not track.is_datetime:
         return track
@@ -1051,9 +1038,6 @@ def _interpolated_terms(frame, to_frame, times, extras) -> list[bool]:
     origins. A chunk's times may be a run of the term's times where the whole
     array's are not, so each chunk follows the whole array's choice.
     """
-    from ._engine import chain as ch
-    from ._time import as_track
-
     track = as_track(np.asarray(times))
     target = ch.match([f for f, _ in ch.chain(frame, to_frame)], [track])
     final = ch.match([], [target.track] + [t for _, t in extras])
@@ -1067,10 +1051,6 @@ def _velocity_parts(blocks, frame, to_frame, extras, interpolated):
     interpolated where the eager call on the whole array interpolates it
     (``interpolated``), so that chunks give the eager numbers.
     """
-    from ._door import kernel_array
-    from ._engine import chain as ch
-    from ._kernels import resample as kr
-
     steps = ch.chain(frame, to_frame)
     target = ch.match([f for f, _ in steps], [blocks.track])
     data = ch.resample_array(blocks.data, blocks.track, target, False)

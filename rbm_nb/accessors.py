@@ -61,6 +61,7 @@ class DataArrayAccessor:
         >>> da.rbm.qinterp(time=[0.5]).values.round(6)
         array([[0.707107, 0.      , 0.      , 0.707107]])
         """
+        # lazy (import time): registered at xarray's import; numba (~0.5 s) on use
         from .quaternions import _qinterp_dataarray
 
         if coords is not None and coords_kwargs:
@@ -104,6 +105,7 @@ class DataArrayAccessor:
         >>> da.rbm.qinv().values
         array([ 0., -0., -0., -1.])
         """
+        # lazy (import time): as above, numba loads on first use
         from .quaternions import qinv
 
         if qdim not in self._obj.dims:

@@ -62,6 +62,7 @@ def explorer_dashboard(source: str = "auto", *, height: int = 460):
         raise ValueError(
             f"explorer_dashboard: source must be one of {SOURCES}, got {source!r}"
         )
+    # lazy (import time): the explorer (~0.6 s) loads with the first dashboard
     from . import explorer
 
     # the same dashboard as notebook 06 (explorer.dashboard), with the app's class

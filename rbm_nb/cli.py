@@ -25,7 +25,11 @@ import sys
 import tempfile
 from pathlib import Path
 
+import rbm_nb as rbm
+
 from . import __version__
+from .data.fetch import ExampleDataStore
+from .data.registry import DATA_DIR_ENV
 
 EXPLORER = "06_head_eye_explorer.ipynb"
 CLONE_NOTEBOOKS = Path(__file__).resolve().parents[1] / "notebooks"
@@ -34,8 +38,6 @@ PACKAGED_NOTEBOOKS = Path(__file__).resolve().parent / "_notebooks"
 
 def _text_demo() -> int:
     import numpy as np
-
-    import rbm_nb as rbm
 
     rbm.clear_registry()
     rbm.register_frame("world")
@@ -169,6 +171,7 @@ def _lab_demo(args) -> int:
 
 
 def _html_demo(args) -> int:
+    # lazy (import time): the explorer loads numba and xarray (~0.6 s)
     from .explorer import write_explorer_html
 
     print(_data_note(args.source), flush=True)
@@ -188,8 +191,6 @@ def _data_note(source: str) -> str:
         return (
             "rbm-nb demo: data: the synthetic head/eye recording (--source synthetic)"
         )
-    from .data.fetch import ExampleDataStore
-    from .data.registry import DATA_DIR_ENV
 
     store = ExampleDataStore()
     names = ("head", "left_eye", "right_eye")
@@ -358,6 +359,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     _refuse_inapplicable(demo, args, _given_options(argv))
     if args.command == "app":
+        # lazy (import time): the app loads the explorer (~0.6 s)
         from .app import serve
 
         return serve(

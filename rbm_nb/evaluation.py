@@ -51,7 +51,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ._door import float_array, kernel_array
+from ._kernels import evaluation as k
+from ._kernels.evaluation import absolute_pose_errors, relative_pose_errors
 from ._validation import normalize_quaternions
+from ._xarray import transform_dataset
+from .conversions import quaternion_from_matrix
+from .frames import ReferenceFrame, register_frame, resolve_frame
+from .lookups import lookup_pose, lookup_transform
+from .quaternions import qmul
 
 if TYPE_CHECKING:  # xarray is imported where a DataArray is made
     import xarray as xr
@@ -126,8 +133,6 @@ class Trajectory:
 
     def to_dataset(self, frame_name: str | None = None):
         """The trajectory as an rbm-style Dataset (position, orientation, time)."""
-        from ._xarray import transform_dataset
-
         return transform_dataset(
             self.positions, self.orientations, frame_name, self.timestamps, pose=True
         )
@@ -144,9 +149,6 @@ def _unit(q) -> np.ndarray:
 
 
 def _from_frame(value, name: str, frame) -> Trajectory:
-    from .frames import ReferenceFrame, resolve_frame
-    from .lookups import lookup_pose
-
     moving = resolve_frame(value, name)
     if moving.timestamps is None:
         raise ValueError(
@@ -166,8 +168,6 @@ def _from_frame(value, name: str, frame) -> Trajectory:
 
 
 def _from_arrays(t, p, q, name: str) -> Trajectory:
-    from .frames import ReferenceFrame
-
     t = np.asarray(getattr(t, "values", t))
     if t.ndim != 1 or t.dtype.kind not in "iufM":
         raise ValueError(
@@ -186,8 +186,6 @@ def _from_arrays(t, p, q, name: str) -> Trajectory:
 
 
 def _trajectory(value, name: str, frame) -> Trajectory:
-    from .frames import ReferenceFrame
-
     if isinstance(value, Trajectory):
         return _from_arrays(value.timestamps, value.positions, value.orientations, name)
     if isinstance(value, (str, ReferenceFrame)):
@@ -225,8 +223,6 @@ def _trajectory(value, name: str, frame) -> Trajectory:
 
 def _match(ref: Trajectory, est: Trajectory) -> tuple[Trajectory, Trajectory]:
     """Reference poses inside the estimate's time span, and the estimate there."""
-    from .lookups import lookup_transform
-
     if (ref.timestamps.dtype.kind == "M") != (est.timestamps.dtype.kind == "M"):
         raise ValueError(
             "reference and estimate timestamps must both be datetime64 or both "
@@ -320,9 +316,6 @@ def umeyama_alignment(source, target, *, with_scale: bool = False):
 
 
 def _apply(traj: Trajectory, rotation, translation, scale) -> Trajectory:
-    from .conversions import quaternion_from_matrix
-    from .quaternions import qmul
-
     # column by column: numpy's matmul of an (n, 3) stack by a 3 x 3 matrix
     # goes through BLAS, whose threads make it erratic on a loaded machine
     pos = traj.positions
@@ -508,8 +501,6 @@ class TrajectoryError:
         ReferenceFrame
             The registered frame: all estimate samples, alignment applied.
         """
-        from .frames import register_frame, resolve_frame
-
         traj = self.aligned_estimate
         register_frame(
             name, parent=parent, translation=traj.positions,
@@ -604,16 +595,12 @@ def ape(
         d = est.positions - ref.positions
         values = np.sqrt(np.einsum("ij,ij->i", d, d))
     else:
-        from ._kernels.evaluation import absolute_pose_errors
-
         trans, angle = absolute_pose_errors(*_contiguous(ref), *_contiguous(est))
         values = _from_parts(rel, trans, angle)
     return _result("APE", rel, values, ref.timestamps, ref, est, alignment, est_full)
 
 
 def _pairs(traj: Trajectory, delta, delta_unit, rel_delta_tol, all_pairs) -> np.ndarray:
-    from ._kernels import evaluation as k
-
     n = len(traj)
     if delta_unit == "frames":
         if isinstance(delta, bool) or not float(delta).is_integer() or delta < 1:
@@ -749,8 +736,6 @@ def rpe(
             keep = d_ref != 0
             pairs, values = pairs[keep], values[keep] / d_ref[keep] * 100
     else:
-        from ._kernels.evaluation import relative_pose_errors
-
         # the kernel takes writeable C-contiguous int64 pairs
         index = np.require(pairs, np.int64, ["C", "W"])
         trans, angle = relative_pose_errors(*_contiguous(ref), *_contiguous(est), index)

@@ -21,6 +21,15 @@ from typing import NamedTuple
 
 import numpy as np
 
+from . import frames, gaze
+from . import frames as registry
+from ._progress import make_bar
+from .data.load import last_choice, load_example
+from .frames import ReferenceFrame
+from .io._files import load_netcdf
+from .lookups import lookup_angular_velocity, lookup_transform
+from .quaternions import rotate_vectors
+
 # rotation between the T265's VR axes and ROS axes (guide 1.6)
 R_T265_ROS = np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 # rotation between the Pupil Core's camera axes (x right, y down, z forward)
@@ -97,8 +106,6 @@ def load_head_eye(source: str = "auto"):
     note : str
         Which data this is and why, in a sentence or two.
     """
-    from .data.load import last_choice, load_example
-
     names = ("head", *EYES)
     with warnings.catch_warnings():
         # said once, in the note
@@ -173,9 +180,6 @@ def register_head_eye_frames(
     gaps. So a gaze ray is drawn only where the eye tracker saw the pupil.
     ``min_confidence=None`` keeps every sample that has data.
     """
-    from . import frames
-    from .frames import ReferenceFrame
-
     if world not in frames.registry:
         frames.register_frame(world)
     ReferenceFrame.from_rotation_matrix(
@@ -240,11 +244,7 @@ def gaze_angles(
     """
     import xarray as xr
 
-    from . import frames as registry
-
     if name is not None and frames.eye(name) in registry.registry:
-        from . import gaze
-
         confident = eye is not None and "confidence" in eye
         sight = gaze.directions(
             frames.eye(name),
@@ -257,8 +257,6 @@ def gaze_angles(
         out = gaze.angles(sight, frames.head, forward="x", up="z")
         out.attrs = {"long_name": "Gaze angles", "units": "deg"}
         return out
-
-    from .quaternions import rotate_vectors
 
     eye = eye.dropna("time")
     sight = rotate_vectors(
@@ -289,8 +287,6 @@ def head_yaw_rate(*, world: str | None = None, frames: HeadEyeFrames = EXAMPLE_F
     a turn to the left is positive, as the gaze yaw of
     :func:`gaze_yaw`. Register the frames first.
     """
-    from .lookups import lookup_angular_velocity
-
     omega = lookup_angular_velocity(
         frames.head, world or frames.world, represent_in=frames.head, as_dataarray=True
     )
@@ -351,8 +347,6 @@ def explorer_series(
     confidence of each sample (None: the frames' samples are all trusted);
     ``frames`` names the registered frames.
     """
-    from . import gaze
-
     if max_angle is None:
         max_angle = gaze.OCULOMOTOR_RANGE
     yaw = gaze_yaw(left_eye, right_eye, max_angle=max_angle, frames=frames)
@@ -457,8 +451,6 @@ def eye_centres(
     *, head: str | None = None, frames: HeadEyeFrames = EXAMPLE_FRAMES
 ) -> dict:
     """Median centre of each eye in the head's axes (m), over its valid samples."""
-    from .lookups import lookup_transform
-
     out = {}
     for eye in EYES:
         translation, _ = lookup_transform(frames.eye(eye), head or frames.head)
@@ -487,6 +479,7 @@ def explorer_scene(
     up, everything is at its real size. Click the model or its label to
     select the head.
     """
+    # lazy (optional dependency): notebook extras; write_explorer_html needs none
     from .scene import Scene
 
     world = world or frames.world
@@ -550,6 +543,7 @@ def explorer_plot(series: dict, player, *, max_points: int | None = PLOT_MAX_POI
     so saccade peaks survive; the default keeps the exported page under
     5 MB and the notebook's plot the same as the export's.
     """
+    # lazy (optional dependency): anywidget, only for the dashboard
     from .widgets import TimeSeries
 
     if not hasattr(TimeSeries, "_esm"):
@@ -595,7 +589,6 @@ EYE_MISSING_REASON = (
 def _as_dataset(value, name: str):
     if hasattr(value, "data_vars"):
         return value
-    from .io._files import load_netcdf
 
     try:
         path = Path(value)
@@ -610,8 +603,6 @@ def _as_dataset(value, name: str):
 def _registered(frames) -> HeadEyeFrames:
     """``frames`` as HeadEyeFrames: every name a registered frame, the head
     moving in the world and the eyes relative to the head."""
-    from . import frames as registry
-
     if isinstance(frames, dict):
         frames = HeadEyeFrames(**frames)
     if not isinstance(frames, HeadEyeFrames):
@@ -638,8 +629,6 @@ def _registered(frames) -> HeadEyeFrames:
 
 def _motion(frame: str, reference: str):
     """(timestamps, rotations) of ``frame`` wrt ``reference``, or None if static."""
-    from .lookups import lookup_transform
-
     _, rotation, times = lookup_transform(frame, reference, return_timestamps=True)
     return None if times is None else (np.asarray(times), np.asarray(rotation))
 
@@ -717,6 +706,7 @@ def dashboard(
     """
     import ipywidgets as widgets
 
+    # lazy (optional dependency): ipywidgets, only for the dashboard
     from .widgets.frame_tree import FrameTree
 
     given = [head, left_eye, right_eye]
@@ -831,9 +821,6 @@ def write_explorer_html(
     pathlib.Path
         The file written.
     """
-    from . import frames
-    from ._progress import make_bar
-
     steps = ["building the dashboard", "writing the HTML"]
     bar = make_bar(len(steps), "rbm-nb demo --html", progress=progress)
     previous = dict(frames.registry)

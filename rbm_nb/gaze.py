@@ -32,6 +32,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
+from .frames import ReferenceFrame, resolve_frame
+from .quaternions import rotate_vectors
+from .transforms import transform_vectors
+
 if TYPE_CHECKING:
     import xarray as xr
 
@@ -112,8 +116,6 @@ def directions(
         shape, or ``min_confidence``/``max_gap`` is not a finite number
         (``max_gap`` positive, ``max_angle`` in (0, 180]).
     """
-    from .frames import ReferenceFrame, resolve_frame
-
     eye = resolve_frame(eye_frame, "eye_frame")
     target = resolve_frame(into, "into")
     if eye.parent is None:
@@ -130,8 +132,6 @@ def directions(
     valid = np.isfinite(rotation).all(axis=1)
     if confidence is not None:
         valid &= _confidence_values(confidence, times, eye) >= min_confidence
-
-    from .quaternions import rotate_vectors
 
     out = np.full((len(times), 3), np.nan)
     if valid.any():
@@ -185,8 +185,6 @@ def angles(
         If ``directions`` lacks the dims or frame attribute, ``forward`` and
         ``up`` are not two different axes, or a frame is not registered.
     """
-    from .frames import resolve_frame
-
     _check_directions(directions)
     f_axis, f_sign = _signed_axis(forward, "forward")
     u_axis, u_sign = _signed_axis(up, "up")
@@ -383,8 +381,6 @@ def _represent(vectors, times, outof, into) -> np.ndarray:
     if outof is into:
         return vectors
     import xarray as xr
-
-    from .transforms import transform_vectors
 
     arr = xr.DataArray(vectors, dims=("time", "cartesian_axis"), coords={"time": times})
     moved = transform_vectors(arr, into=into, outof=outof, timestamps="time")

@@ -49,6 +49,7 @@ import numpy as np
 
 from . import conversions
 from ._door import float_array, kernel_array
+from ._kernels import se3
 
 __all__ = [
     "REPRESENTATIONS",
@@ -92,8 +93,6 @@ class SingularityError(ValueError):
 
 
 def _kernels():
-    from ._kernels import se3
-
     return se3
 
 

@@ -14,6 +14,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._kernels.quaternion import qconj, qmul, rotate_vectors
+from ..estimators import estimate_angular_velocity, estimate_linear_velocity
+from ..frames import ReferenceFrame
+from ..transforms import transform_linear_velocity
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -42,13 +45,11 @@ def mean_walking_speed(head: xr.Dataset) -> float:
 
 def head_frame_velocity(head: xr.Dataset) -> np.ndarray:
     """Mean head velocity (m/s) represented in the head frame, through rbm's frames."""
-    import rbm_nb as rbm
-
-    world = rbm.ReferenceFrame("world")
-    head_frame = rbm.ReferenceFrame.from_dataset(
+    world = ReferenceFrame("world")
+    head_frame = ReferenceFrame.from_dataset(
         head, "position", "orientation", "time", parent=world, name="head"
     )
-    v = rbm.transform_linear_velocity(
+    v = transform_linear_velocity(
         head.linear_velocity, outof=world, into=head_frame, what="representation_frame"
     )
     return np.asarray(v).mean(axis=0)
@@ -198,12 +199,8 @@ def estimator_consistency(head: xr.Dataset) -> tuple[float, float]:
     The angular estimate (head frame) is rotated into world, where the
     dataset represents it. Returns (linear m/s, angular rad/s).
     """
-    import rbm_nb as rbm
-
-    v = rbm.estimate_linear_velocity(
-        head.position, dim="cartesian_axis", timestamps="time"
-    )
-    w_body = rbm.estimate_angular_velocity(
+    v = estimate_linear_velocity(head.position, dim="cartesian_axis", timestamps="time")
+    w_body = estimate_angular_velocity(
         head.orientation, dim="quaternion_axis", timestamps="time"
     )
     w = rotate_vectors(

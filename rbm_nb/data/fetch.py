@@ -8,8 +8,14 @@ import re
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 
+# the folder rules, shared with rbm_nb.ros; also importable from here
+from .._folders import CACHE_DIR_ENV as CACHE_DIR_ENV
+from .._folders import DATA_DIR_ENV, env_folder
+from .._folders import cache_dir as cache_dir
+from .._folders import example_data_dirs as example_data_dirs
+from .._folders import pooch_module as _pooch
 from .._progress import download_bar
-from .registry import BASE_URL, CACHE_DIR_ENV, DATA_DIR_ENV, REGISTRY
+from .registry import BASE_URL, REGISTRY
 
 # connect fast or give up: offline, an answer within seconds beats a long hang
 DEFAULT_TIMEOUT = (3.05, 60.0)  # (connect, read) seconds
@@ -191,59 +197,6 @@ class ExampleDataStore(Mapping):
         return Path(fetched)
 
 
-def cache_dir() -> Path:
-    """The folder for files rbm_nb derives; never the example-data folder.
-
-    ``RBM_NB_CACHE_DIR`` if set (read at each call), else ``derived`` in the
-    user's cache folder for rbm_nb (pooch's ``os_cache("rbm_nb")``, or
-    ``~/.cache/rbm_nb`` without pooch). The synthetic example bag and the
-    rosbag caches of bags in the example-data folder go here, so that only
-    the registry's files are ever written into ``RBM_NB_DATA_DIR``.
-    """
-    if os.environ.get(CACHE_DIR_ENV):
-        return env_folder(CACHE_DIR_ENV)
-    try:
-        base = Path(_pooch().os_cache("rbm_nb"))
-    except ImportError:
-        base = (
-            Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "rbm_nb"
-        )
-    return base / "derived"
-
-
-def example_data_dirs() -> tuple:
-    """Folders that hold example data: ``RBM_NB_DATA_DIR`` and the default store's."""
-    folders = set()
-    try:
-        folders.add(example_data.data_dir.resolve())
-    except ImportError:  # no pooch: no default folder either
-        pass
-    if os.environ.get(DATA_DIR_ENV):
-        folders.add(env_folder(DATA_DIR_ENV).resolve())
-    return tuple(folders)
-
-
-def env_folder(variable: str) -> Path:
-    """The folder an environment variable names, ``~`` expanded.
-
-    Raises
-    ------
-    ValueError
-        Naming the variable, if ``~user`` names no user here (the path would
-        otherwise be taken as a folder called ``~user`` in the working folder).
-    """
-    value = os.environ[variable]
-    # os.path.expanduser leaves an unknown ~user as it is (Path's raises)
-    path = Path(os.path.expanduser(value))
-    if str(path).startswith("~"):
-        user = str(path).split(os.sep, 1)[0]
-        raise ValueError(
-            f"{variable}={value!r}: {user} names no user on this machine; set "
-            f"{variable} to an absolute path"
-        )
-    return path
-
-
 def _first_missing(folder: Path) -> Path | None:
     """The outermost folder of ``folder``'s path that does not exist yet, if any."""
     missing = None
@@ -274,16 +227,6 @@ def sha256(path: Path) -> str:
         for block in iter(lambda: f.read(1 << 20), b""):
             digest.update(block)
     return digest.hexdigest()
-
-
-def _pooch():
-    try:
-        import pooch
-    except ImportError:
-        raise ImportError(
-            "the example data are downloaded with pooch: pip install 'rbm_nb[data]'"
-        ) from None
-    return pooch
 
 
 def _reason(err) -> str:

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 from ..io._files import load_netcdf
+from ..ros.writer import RosbagWriter
 from .fetch import ExampleDataStore, ExampleDataUnavailable, cache_dir, example_data
 from .synthetic import synthetic_head_eye
 
@@ -222,8 +223,6 @@ def write_synthetic_rosbag(
     pathlib.Path
         ``path``.
     """
-    from ..ros.writer import RosbagWriter
-
     recording = synthetic_head_eye(duration, seed, **kwargs)
     with RosbagWriter(path) as writer:
         for topic, (part, frame, child) in ROSBAG_TOPICS.items():

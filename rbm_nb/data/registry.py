@@ -7,6 +7,12 @@ Pupil Core eye tracker.
 
 from __future__ import annotations
 
+# the folders' environment variables, here for the registry's readers; the
+# rules are in rbm_nb._folders
+from .._folders import CACHE_DIR_ENV, DATA_DIR_ENV
+
+__all__ = ["BASE_URL", "CACHE_DIR_ENV", "DATA_DIR_ENV", "REGISTRY"]
+
 BASE_URL = "https://github.com/phausamann/rbm-data/raw/main/"
 
 # name -> (file name under BASE_URL, sha256)
@@ -28,9 +34,3 @@ REGISTRY: dict[str, tuple[str, str]] = {
         "8d27f5e554f5a0e02e0bec59b60424e582f6104380f96c3f226b4d85c107f2bc",
     ),
 }
-
-# a folder holding the files (or where they should be downloaded to)
-DATA_DIR_ENV = "RBM_NB_DATA_DIR"
-# a folder for files rbm_nb derives (synthetic bag, rosbag caches of example
-# bags); default: a "derived" folder in the user's cache folder for rbm_nb
-CACHE_DIR_ENV = "RBM_NB_CACHE_DIR"

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..quaternions import from_euler_angles
 from ._files import FileFormatError
 from ._schema import motion_dataset
 
@@ -314,7 +315,6 @@ def _orientation(path: Path, meta: dict, data: np.ndarray, cols: dict) -> np.nda
         raise FileFormatError(
             f"{path}: 'Rotation Type' {order!r} is not an order of the axes X, Y, Z"
         )
-    from ..quaternions import from_euler_angles
 
     # the columns hold the angles about X, Y and Z (degrees); Rotation Type
     # says in which order they are applied

@@ -17,6 +17,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
+from .._config import UNIT_QUATERNION_TOLERANCE
+from ..io._files import FileFormatError
+
 if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore
 
@@ -243,8 +246,6 @@ def check_messages(
     names the bag and topic in the message, which also gives the index of
     the first bad message (row ``i`` is message ``index[i]`` if given).
     """
-    from .._config import UNIT_QUATERNION_TOLERANCE
-    from ..io._files import FileFormatError
 
     def number(i):
         return int(i if index is None else index[i])
@@ -366,8 +367,6 @@ def split_tf(msgs: list, static: bool) -> dict:
 
 def check_tf(pair: TfPair, nsec: np.ndarray, index: np.ndarray, where: str) -> None:
     """:func:`check_messages` for one tf pair; errors name the tf message index."""
-    from ..io._files import FileFormatError
-
     bad = np.flatnonzero((nsec < 0) | (nsec >= 1_000_000_000))
     if bad.size:
         raise FileFormatError(

@@ -47,6 +47,7 @@ def play_publisher(
         If no timestamps are given and the publisher has none (a static
         transform has nothing to play).
     """
+    # lazy (optional dependency): the Player needs anywidget
     from ..widgets.player import Player
 
     if timestamps is None:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from ..scene import scene as scene_module
 from ..scene.publishers import FramePublisher, PathPublisher
 
 if TYPE_CHECKING:
@@ -120,8 +121,6 @@ class NodeHandle:
 
     def shutdown(self) -> None:
         """Close the shared default scene, if any (idempotent)."""
-        from ..scene import scene as scene_module
-
         if scene_module._default is not None:
             scene_module._default.close()
 

@@ -11,6 +11,7 @@ from types import TracebackType
 from typing import TYPE_CHECKING
 
 from .._atomic import atomic_path, check_replaceable
+from .._folders import CACHE_DIR_ENV, cache_dir, example_data_dirs
 from .._progress import progress_bar
 from ..io._files import FileFormatError, load_netcdf
 from ..io._schema import motion_dataset
@@ -19,6 +20,7 @@ from ._messages import (
     SUPPORTED_TYPES,
     TF_TYPES,
     Messages,
+    TfPair,
     check_messages,
     check_tf,
     decode_objects,
@@ -377,11 +379,10 @@ class RosbagReader:
         ``cache/<topic>.nc`` beside the bag, as rigid-body-motion does; but
         never in the example-data folder, which holds only the registry's
         files: a bag there is cached under ``rosbag/<bag name>-<path hash>/``
-        in :func:`rbm_nb.data.fetch.cache_dir` (``RBM_NB_CACHE_DIR``).
+        in :func:`rbm_nb._folders.cache_dir` (``RBM_NB_CACHE_DIR``).
         """
         name = f"{topic.replace('/', '_')}.nc"
         folder = self.bag_file.parent.resolve()
-        from ..data.fetch import cache_dir, example_data_dirs
 
         if any(folder == d or d in folder.parents for d in example_data_dirs()):
             import hashlib
@@ -467,8 +468,6 @@ def _merge(a, b):
     """One moving pair from two tf topics: sorted by stamp, later topic wins."""
     import numpy as np
 
-    from ._messages import TfPair
-
     stamps = np.concatenate([a.stamps_ns, b.stamps_ns])
     order = np.argsort(stamps, kind="stable")
     _, last = np.unique(stamps[order][::-1], return_index=True)
@@ -483,9 +482,6 @@ def _merge(a, b):
 
 def _cache_error(err: OSError, path: Path) -> OSError:
     """``err`` from writing a cache file, saying which setting chose the folder."""
-    from ..data.fetch import cache_dir
-    from ..data.registry import CACHE_DIR_ENV
-
     if err.errno is None or not os.environ.get(CACHE_DIR_ENV):
         return err
     folder = cache_dir()

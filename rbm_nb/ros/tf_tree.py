@@ -4,19 +4,19 @@ Most ROS bags keep their frames on ``/tf`` and ``/tf_static``
 (``tf2_msgs/TFMessage``). :func:`register_frames_from_bag` registers every
 parent/child pair as a reference frame (static pairs as static frames, the
 others as moving frames with datetime64 timestamps);
-:meth:`rbm_nb.ros.Transformer.from_bag` fills a tf2-style buffer.
+:meth:`rbm_nb.ros.Transformer.from_bag` fills a tf2-style buffer from
+:func:`load_tf_tree` (this module does not know the Transformer).
 """
 
 from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from .transformer import Transformer
+from ..frames import ReferenceFrame, check_frame_name, register_frame, registry
+from .reader import RosbagReader
 
 __all__ = ["load_tf_tree", "register_frames_from_bag"]
 
@@ -45,8 +45,6 @@ def load_tf_tree(
         If a frame has two parents or the transforms form a loop (both
         named), or the bag has no tf topic.
     """
-    from .reader import RosbagReader
-
     with RosbagReader(bag_file) as reader:
         pairs = reader.load_tf(topics)
     by_child: dict = {}
@@ -109,8 +107,6 @@ def register_frames_from_bag(
         See :func:`load_tf_tree`; also if a frame exists and ``update`` is
         False.
     """
-    from ..frames import ReferenceFrame, check_frame_name, register_frame, registry
-
     tree = load_tf_tree(bag_file, topics)
     for child, pair in tree.items():
         for name in (pair.frame_id, child):
@@ -146,23 +142,6 @@ def register_frames_from_bag(
         frame.register(update=update)
         names.append(child)
     return names
-
-
-def fill_transformer(transformer: Transformer, tree: dict) -> None:
-    """Add every pair of ``tree`` (from :func:`load_tf_tree`) to a Transformer."""
-    for child, pair in tree.items():
-        if pair.static:
-            transformer.set_transform(
-                pair.position[-1], pair.orientation[-1], pair.frame_id, child
-            )
-        else:
-            transformer.set_transform(
-                pair.position,
-                pair.orientation,
-                pair.frame_id,
-                child,
-                time=pair.timestamps,
-            )
 
 
 def time_span(tree: dict) -> float:

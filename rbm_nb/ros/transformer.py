@@ -46,9 +46,11 @@ import numpy.typing as npt
 
 from .._door import float_array
 from .._engine import at_time as _at_time
+from .._kernels import quaternion as kq
 from .._validation import check_finite, normalize_quaternions
 from ..errors import ExtrapolationError
 from ..frames import ReferenceFrame, resolve_frame
+from .tf_tree import load_tf_tree, time_span
 
 __all__ = [
     "ConnectivityError",
@@ -243,13 +245,11 @@ class Transformer:
         rbm_nb.io.FileFormatError
             If the bag is damaged.
         """
-        from .tf_tree import fill_transformer, load_tf_tree, time_span
-
         tree = load_tf_tree(bag_file, topics)
         if cache_time is None:
             cache_time = max(DEFAULT_CACHE_TIME, time_span(tree))
         transformer = Transformer(cache_time=cache_time)
-        fill_transformer(transformer, tree)
+        _fill_transformer(transformer, tree)
         return transformer
 
     def set_transform_static(self, reference_frame: ReferenceFrame | str) -> None:
@@ -554,8 +554,6 @@ class Transformer:
         return tuple(map(float, t)), tuple(map(float, r))
 
     def _rotate(self, r, v):
-        from .._kernels import quaternion as kq
-
         return kq.rotate_vectors(
             np.ascontiguousarray(r[None]), np.ascontiguousarray(v[None])
         )[0]
@@ -634,9 +632,24 @@ class Transformer:
         )
 
 
-def _qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    from .._kernels import quaternion as kq
+def _fill_transformer(transformer: Transformer, tree: dict) -> None:
+    """Add every pair of ``tree`` (from :func:`load_tf_tree`) to a Transformer."""
+    for child, pair in tree.items():
+        if pair.static:
+            transformer.set_transform(
+                pair.position[-1], pair.orientation[-1], pair.frame_id, child
+            )
+        else:
+            transformer.set_transform(
+                pair.position,
+                pair.orientation,
+                pair.frame_id,
+                child,
+                time=pair.timestamps,
+            )
 
+
+def _qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return kq.qmul(np.ascontiguousarray(a[None]), np.ascontiguousarray(b[None]))[0]
 
 

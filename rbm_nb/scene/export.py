@@ -18,6 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .._atomic import atomic_path
+
 _TEMPLATE = """<!DOCTYPE html>
 <html>
 <head>
@@ -74,6 +76,7 @@ def build_document(
     scene, *, series=(), player=None, max_frames=None, autoplay=False
 ) -> dict:
     """The JSON document an export page runs (see ``js/src/export.js``)."""
+    # lazy (optional dependency): the Player needs anywidget; static exports do not
     from ..widgets.player import Player, bundle
 
     if player is None:
@@ -152,8 +155,6 @@ def write_atomic(path: Path, text: str, what: str = "to_html") -> None:
 
     Errors name ``what`` was writing and the path.
     """
-    from .._atomic import atomic_path
-
     if path.is_dir():
         raise IsADirectoryError(
             21, f"{what}: {str(path)!r} is a directory, give a file name"

@@ -14,7 +14,9 @@ import weakref
 
 import numpy as np
 
+from ..widgets._time import time_as_seconds
 from .scene import Scene, _resolve, default_scene
+from .tracks import Track
 
 # frame name -> publishers listening for it (``subscribe=``), per scene
 _listeners: dict[tuple[int, str], list] = {}
@@ -89,8 +91,6 @@ class FramePublisher:
             )
         self._track = self.scene._track(self.handle.pose_path)
         if self._track is None:
-            from .tracks import Track
-
             track = Track.lookup(self.frame, self.base)
             self.translation, self.rotation, self.timestamps = (
                 track.translation,
@@ -143,7 +143,6 @@ class FramePublisher:
         if self._track is None:
             self.publish()
             return
-        from ..widgets._time import time_as_seconds
 
         idx = self._track.index_at(time_as_seconds(t, self.timestamps_kind))
         if idx >= 0:

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .. import frames
 from ..widgets._time import (
     DATETIME,
     check_kinds,
@@ -35,6 +36,7 @@ from ..widgets._time import (
 )
 from . import commands
 from .commands import Message, color_int
+from .export import write_html
 from .handles import (
     FrameHandle,
     MeshHandle,
@@ -57,8 +59,6 @@ AXIS_COLORS = ["#ff0000", "#00ff00", "#0000ff"]
 
 
 def _resolve(frame, argument: str):
-    from .. import frames
-
     return frames.resolve_frame(frame, argument)
 
 
@@ -554,6 +554,7 @@ class Scene:
                 f"Scene {self.name!r} has no moving objects, there is nothing to play; "
                 "add a moving frame first"
             )
+        # lazy (optional dependency): the Player needs anywidget
         from ..widgets.player import Player
 
         player = Player(self, step=step, speed=speed, skip=skip, loop=loop)
@@ -588,6 +589,7 @@ class Scene:
         self._check_open()
         with self._lock:
             if self._widget is None:
+                # lazy (optional dependency): the widget needs anywidget
                 from .widget import SceneWidget
 
                 if self._camera is None:
@@ -838,8 +840,6 @@ class Scene:
         OSError
             If the file cannot be written (the message names the path).
         """
-        from .export import write_html
-
         self._check_open()
         return write_html(
             self,

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import lookups
 from ..widgets._time import check_kinds, timestamps_as_seconds
 from .commands import pose_matrix
 
@@ -89,8 +90,6 @@ class Track:
     @classmethod
     def lookup(cls, frame, base, name: str | None = None) -> Track:
         """The transform of ``frame`` into ``base`` (points in frame -> base)."""
-        from .. import lookups
-
         label = name or f"pose of {frame.name!r} in {base.name!r}"
         if frame is base:
             return cls(np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0]), name=label)

@@ -8,16 +8,17 @@ from typing import NamedTuple
 import numpy as np
 
 from .._door import float_array, kernel_array
+from .._kernels import sdf
 from .._validation import check_finite, check_last_axis
+from ..frames import ReferenceFrame, resolve_frame
 from ..rigid_transform import Transform
+from ..transforms import transform_points, transform_quaternions
 from . import _mesh
 
 _IDENTITY_Q = np.array([[1.0, 0.0, 0.0, 0.0]])
 
 
 def _kernels():
-    from .._kernels import sdf
-
     return sdf
 
 
@@ -149,8 +150,6 @@ class GridSDF:
         if np.isnan(fill_value):
             raise ValueError("fill_value must not be nan (use inf or a number)")
         if frame is not None:
-            from ..frames import ReferenceFrame
-
             if not isinstance(frame, (str, ReferenceFrame)):
                 raise TypeError(
                     "frame must be a ReferenceFrame, the name of a registered frame "
@@ -233,7 +232,6 @@ class GridSDF:
                     "points are in the grid's own frame, which needs no lookup)"
                 )
             return None
-        from ..frames import resolve_frame
 
         query = resolve_frame(frame, f"{what}: frame")
         if self._frame is None:
@@ -245,7 +243,6 @@ class GridSDF:
         grid = resolve_frame(self._frame, "the GridSDF's frame")
         if query is grid:
             return None
-        from ..transforms import transform_points, transform_quaternions
 
         if timestamps is None:
             t, ts = transform_points(

@@ -12,6 +12,7 @@ import tempfile
 import numpy as np
 
 from .._door import float_array, kernel_array
+from .._kernels import sdf
 from .._validation import check_finite, check_last_axis
 
 # more nodes than this is almost certainly a resolution given in the wrong unit
@@ -19,8 +20,6 @@ MAX_GRID_NODES = 50_000_000
 
 
 def _kernels():
-    from .._kernels import sdf
-
     return sdf
 
 

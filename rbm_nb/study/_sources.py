@@ -19,6 +19,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from ..ros import RosbagReader
+
 STREAM_SUFFIXES = (".nc", ".bag")
 # the message types a bag's topic must have to become a stream of a recording
 POSE_MESSAGE_TYPES = frozenset(
@@ -259,8 +261,6 @@ def _read_rows(path: Path, rows: tuple[int, int]) -> xr.Dataset:
 
 def _load_path(stream: str, path: Path, span: slice) -> dict[str, xr.Dataset]:
     if _is_bag(path):
-        from ..ros import RosbagReader
-
         reader = RosbagReader(path)
         with _NETCDF_LOCK:
             datasets = {

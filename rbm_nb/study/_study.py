@@ -10,6 +10,7 @@ from typing import Any
 
 import xarray as xr
 
+from .._atomic import atomic_path, check_replaceable
 from .._engine import chain as _engine_chain
 from . import _windows
 from ._sources import _NETCDF_LOCK, Recording, RecordingSource, find_sources
@@ -218,8 +219,6 @@ class Study:
         """
         import dask
 
-        from .._atomic import check_replaceable
-
         folder = Path(folder)
         for name in self.names:  # a folder at a target is refused before the work
             check_replaceable(folder / f"{name}.nc")
@@ -346,8 +345,6 @@ def _concat_recordings(results: Mapping[str, Any]):
 
 
 def _write_netcdf(result, path: Path) -> Path:
-    from .._atomic import atomic_path
-
     # writing goes through HDF5 too: under the lock that keeps the tasks on
     # threads from reaching it at once (see _sources)
     with _NETCDF_LOCK, atomic_path(path) as tmp:

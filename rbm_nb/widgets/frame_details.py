@@ -20,6 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..conversions import euler_from_quaternion
+
 #: Euler sequence of the details: intrinsic z-y'-x'' (yaw, pitch, roll).
 EULER_ORDER = "zyx"
 EULER_NAMES = ("yaw", "pitch", "roll")
@@ -50,8 +52,6 @@ class Attitude:
         ValueError
             If ``q`` is not a finite 4-vector of nonzero norm.
         """
-        from ..conversions import euler_from_quaternion
-
         q = np.asarray(q, dtype=float)
         norm = float(np.linalg.norm(q)) if q.shape == (4,) else 0.0
         if q.shape != (4,) or not np.isfinite(q).all() or norm == 0.0:

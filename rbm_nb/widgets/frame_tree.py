@@ -22,6 +22,7 @@ import ipywidgets as widgets
 import numpy as np
 import traitlets
 
+from .. import frames, lookups
 from ._time import time_as_seconds, timestamps_as_seconds
 from ._timebase import format_time
 from .frame_details import (
@@ -103,8 +104,6 @@ def _registry_listener(tree_ref):
     def callback(event, name):
         tree = tree_ref()
         if tree is None:
-            from .. import frames
-
             try:
                 frames.remove_registry_callback(callback)
             except ValueError:
@@ -216,7 +215,6 @@ class FrameTree(widgets.VBox):
             self._scene_widget = scene.widget
             self._scene_widget.observe(self._on_scene_selected, "selected")
         self.root = root
-        from .. import frames
 
         self._listener = None
         if hasattr(frames, "on_registry_change"):
@@ -405,8 +403,6 @@ class FrameTree(widgets.VBox):
             self._message.value = f"<span style='color:#b00'>refresh failed: {html.escape(str(err))}</span>"
 
     def _poll_registry(self) -> None:
-        from .. import frames
-
         signature = tuple((n, id(f)) for n, f in frames.registry.items())
         if signature != getattr(self, "_signature", None):
             self._signature = signature
@@ -426,8 +422,6 @@ class FrameTree(widgets.VBox):
                 self._walk(child, depth + 1, out)
 
     def _registered(self) -> dict:
-        from .. import frames
-
         return dict(frames.registry.items())
 
     def _build(self) -> None:
@@ -625,8 +619,6 @@ class FrameTree(widgets.VBox):
         chain = tuple(f.name for f in a.frames_between(b))
         key = (a.name, b.name, id(a), id(b))
         if key not in self._lookup_cache:
-            from .. import lookups
-
             t, r, ts = lookups.lookup_transform(outof=a, into=b, return_timestamps=True)
             seconds = (
                 None

@@ -51,6 +51,7 @@ import anywidget
 import numpy as np
 import traitlets
 
+from .. import frames
 from ._frontend import FrontendGuard
 from ._time import (
     DATETIME,
@@ -144,8 +145,6 @@ def _positive(value, name: str) -> float:
 def _resolve_timestamps(source) -> tuple[Any, str]:
     """Timestamps from an array, a frame (or its name) or an object having them."""
     if isinstance(source, str):
-        from .. import frames
-
         if source not in frames.registry:
             raise ValueError(f"Player: no frame named {source!r} is registered")
         source = frames.registry[source]

@@ -16,6 +16,9 @@ from typing import Any
 
 import numpy as np
 
+from ..frames import register_frame, registry
+from ..quaternions import from_euler_angles
+
 _NO_PREDICTION = (
     "No prediction yet: write yours in place of None in the cell above this one, "
     "then run both again."
@@ -97,8 +100,6 @@ def quaternion_from_ypr_degrees(yaw: float, pitch: float, roll: float) -> np.nda
     The aerospace/ROS convention: turn by yaw about z, then pitch about the
     new y, then roll about the newest x.
     """
-    from ..quaternions import from_euler_angles
-
     return np.asarray(
         from_euler_angles(
             roll=np.deg2rad(roll),
@@ -168,7 +169,7 @@ class FrameSliders:
     ) -> None:
         import ipywidgets as widgets
 
-        from ..frames import registry
+        # lazy (optional dependency): the panel needs anywidget; the plots do not
         from .slider_panel import SliderPanel
 
         if not isinstance(name, str) or not name:
@@ -232,8 +233,6 @@ class FrameSliders:
 
     def apply(self) -> None:
         """Register the frame at the sliders' pose, redraw and report."""
-        from ..frames import register_frame
-
         register_frame(
             self.name,
             parent=self.parent,

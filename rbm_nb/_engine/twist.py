@@ -119,9 +119,14 @@ def _whose_times(frame, reference) -> str:
 def _linear_part(frame, reference, represent_in, looked_up, outlier_thresh, cutoff):
     """Linear velocity of ``frame`` wrt ``reference``, represented in ``represent_in``."""
     t, r, target, breaks = looked_up
-    seconds = target.track.seconds()
-    _velocity.check_intervals(seconds, _whose_times(frame, reference))
-    linear = _velocity.linear_velocity(t, seconds, outlier_thresh, cutoff, breaks)
+    linear = _velocity.linear_velocity(
+        t,
+        target.track.seconds(),
+        outlier_thresh,
+        cutoff,
+        breaks,
+        _whose_times(frame, reference),
+    )
     return _represent(
         linear, target.track, reference, represent_in, (frame, reference, r)
     )
@@ -132,10 +137,14 @@ def _angular_part(
 ):
     """Angular velocity of ``frame`` wrt ``reference``, represented in ``represent_in``."""
     _, r, target, breaks = looked_up
-    seconds = target.track.seconds()
-    _velocity.check_intervals(seconds, _whose_times(frame, reference))
     angular = _velocity.angular_velocity(
-        r, seconds, mode, outlier_thresh, cutoff, breaks
+        r,
+        target.track.seconds(),
+        mode,
+        outlier_thresh,
+        cutoff,
+        breaks,
+        _whose_times(frame, reference),
     )
     # the estimate is in the moving frame's axes (2 q^-1 dq/dt)
     return _represent(angular, target.track, frame, represent_in, (frame, reference, r))

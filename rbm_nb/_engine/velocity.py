@@ -96,7 +96,9 @@ def check_intervals(t: np.ndarray, what: str = "timestamps") -> None:
     """Refuse sampling intervals a velocity cannot be computed from."""
     if len(t) < 2:
         return
-    steps = np.diff(t)
+    steps = np.subtract(t[1:], t[:-1])
+    if steps.min() >= MIN_INTERVAL:
+        return  # (one pass when it is fine; below: where it is not)
     k = int(np.argmin(steps))
     if steps[k] < MIN_INTERVAL:
         raise ValueError(
@@ -204,13 +206,14 @@ def linear_series(
     outlier_thresh,
     cutoff,
     breaks: np.ndarray | None = None,
+    what: str = "timestamps",
 ) -> np.ndarray:
     n = x.shape[0]
     if n < 2:
         raise ValueError(
             f"arr needs at least 2 samples to estimate a velocity, got {n}"
         )
-    check_intervals(t)
+    check_intervals(t, what)
     flat = kernel_array(x.reshape(n, -1))
     if (breaks is None or not breaks.any()) and not _dk.nan_rows(flat).any():
         v = _dk.gradient(flat, t).reshape(x.shape)
@@ -236,6 +239,7 @@ def angular_series(
     outlier_thresh,
     cutoff,
     breaks: np.ndarray | None = None,
+    what: str = "timestamps",
 ) -> np.ndarray:
     n, nb, _ = q.shape
     if n < 2:
@@ -244,7 +248,7 @@ def angular_series(
         raise ValueError(
             f"arr needs at least 2 samples to estimate a velocity, got {n}"
         )
-    check_intervals(t)
+    check_intervals(t, what)
     zero = _rk.first_zero_row(kernel_array(q.reshape(-1, 4)))
     if zero >= 0:
         raise ValueError(f"arr contains a zero quaternion (row {zero} when flattened)")
@@ -310,7 +314,7 @@ def angular_series(
 
 
 def linear_velocity(
-    arr, timestamps, outlier_thresh=None, cutoff=None, breaks=None
+    arr, timestamps, outlier_thresh=None, cutoff=None, breaks=None, what="timestamps"
 ) -> np.ndarray:
     """Linear velocity of positions sampled in time (array level).
 
@@ -322,6 +326,8 @@ def linear_velocity(
         Strictly increasing times in seconds (float64).
     outlier_thresh, cutoff : float, optional
         As in :func:`estimate_linear_velocity`.
+    what : str
+        How errors name the timestamps.
 
     Returns
     -------
@@ -331,12 +337,18 @@ def linear_velocity(
     t = _time.seconds(timestamps, x.shape[0])
     check_options(outlier_thresh, cutoff, x.shape[0])
     return linear_series(
-        x.reshape(x.shape[0], 1, -1), t, outlier_thresh, cutoff, breaks
+        x.reshape(x.shape[0], 1, -1), t, outlier_thresh, cutoff, breaks, what
     ).reshape(x.shape)
 
 
 def angular_velocity(
-    q, timestamps, mode="quaternion", outlier_thresh=None, cutoff=None, breaks=None
+    q,
+    timestamps,
+    mode="quaternion",
+    outlier_thresh=None,
+    cutoff=None,
+    breaks=None,
+    what="timestamps",
 ) -> np.ndarray:
     """Angular velocity of orientations sampled in time (array level).
 
@@ -360,6 +372,6 @@ def angular_velocity(
         raise ValueError(f"q must have shape (n, 4), got {qa.shape}")
     t = _time.seconds(timestamps, qa.shape[0])
     check_options(outlier_thresh, cutoff, qa.shape[0], mode)
-    return angular_series(qa[:, None, :], t, mode, outlier_thresh, cutoff, breaks)[
-        :, 0, :
-    ]
+    return angular_series(
+        qa[:, None, :], t, mode, outlier_thresh, cutoff, breaks, what
+    )[:, 0, :]

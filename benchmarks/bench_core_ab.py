@@ -1,0 +1,84 @@
+"""rbm_nb against another checkout of itself on bench_core.py's workload.
+
+Times the frame-core calls of ``bench_core.py`` (rbm_nb only, one thread) in
+two source trees, in alternating fresh processes, and prints the best time of
+each and their ratio: what a change to the kernels cost on NaN-free data.
+
+Run:  .venv/bin/python benchmarks/bench_core_ab.py OTHER_TREE [--rounds 4]
+
+``OTHER_TREE`` is another checkout of the repository (e.g. ``git worktree add
+../before HEAD~5``); each tree's own numba cache is used, so warm both first.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+
+CHILD = """
+import os, sys, time
+os.environ["RBM_NB_NUM_THREADS"] = "1"
+sys.path.insert(0, {benchmarks!r})
+import bench_core
+import rbm_nb as rbm
+frames, head_ts, eye_ts, head_rot, gaze = bench_core.build_workload()
+rbm.clear_registry()
+for name, kwargs in frames:
+    rbm.register_frame(name, **kwargs)
+ops = {{
+    "lookup_transform left_eye->world": lambda: rbm.lookup_transform("left_eye", "world"),
+    "lookup_pose left_eye wrt world": lambda: rbm.lookup_pose("left_eye", "world"),
+    "transform_points (eye times)": lambda: rbm.transform_points(
+        gaze, "world", "left_eye", timestamps=eye_ts),
+    "transform_vectors (head times)": lambda: rbm.transform_vectors(
+        gaze[:66_629], "world", "left_eye", timestamps=head_ts),
+    "lookup_twist head wrt world": lambda: rbm.lookup_twist("head", "world"),
+    "lookup_angular_velocity left_eye": lambda: rbm.lookup_angular_velocity(
+        "left_eye", "world"),
+}}
+for label, call in ops.items():
+    call()
+    times = []
+    for _ in range(15):
+        t0 = time.perf_counter()
+        call()
+        times.append(time.perf_counter() - t0)
+    print(f"{{label}}\\t{{min(times) * 1e3:.4f}}")
+"""
+
+
+def run(tree: Path) -> dict[str, float]:
+    env = dict(os.environ, PYTHONPATH=str(tree))
+    code = CHILD.format(benchmarks=str(REPO / "benchmarks"))
+    out = subprocess.run(
+        [sys.executable, "-c", code], cwd=tree, env=env, capture_output=True,
+        text=True, check=True,
+    ).stdout  # fmt: skip
+    return {k: float(v) for k, v in (line.split("\t") for line in out.splitlines())}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("other", type=Path, help="another checkout of the repository")
+    parser.add_argument("--rounds", type=int, default=4)
+    args = parser.parse_args()
+    best: dict[str, dict[str, float]] = collections.defaultdict(dict)
+    for _ in range(args.rounds):
+        for name, tree in (("other", args.other.resolve()), ("this", REPO)):
+            for label, ms in run(tree).items():
+                best[label][name] = min(best[label].get(name, float("inf")), ms)
+    print(f"{'call':36s} {'other':>10s} {'this':>10s}  this/other")
+    for label, d in best.items():
+        print(
+            f"{label:36s} {d['other']:8.2f} ms {d['this']:8.2f} ms  {d['this'] / d['other']:.3f}"
+        )
+
+
+if __name__ == "__main__":
+    main()

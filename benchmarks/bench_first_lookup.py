@@ -25,9 +25,11 @@ Run:  RBM_NB_DATA_DIR=../shared/data/rbm-data RBM_NB_NUM_THREADS=1 \
 
 from __future__ import annotations
 
+import ast
 import inspect
 import re
 import sys
+import textwrap
 import time
 from pathlib import Path
 
@@ -113,10 +115,20 @@ def _staged_fill():
     a driver running it over a whole recording."""
     import numba
 
-    from rbm_nb._kernels import fused as kf
+    from rbm_nb._kernels import squad_table as kst
 
-    source = inspect.getsource(kf._fill_block.py_func).split("\n", 1)[1]
-    source = source.replace("def _fill_block(", "def staged_block(stage, ")
+    # the fill's block is its stages, inlined: their loops, in order
+    stages = (
+        kst._block_logs,
+        kst._block_control_points,
+        kst._block_arcs,
+        kst._block_store,
+    )
+    source = "def staged_block(stage, r, rp, t, c, i0, i1, s):\n    m = i1 - i0\n"
+    for stage_helper in stages:
+        fn = ast.parse(textwrap.dedent(inspect.getsource(stage_helper.py_func))).body[0]
+        body = fn.body[1:] if isinstance(fn.body[0], ast.Expr) else fn.body
+        source += textwrap.indent("\n".join(ast.unparse(b) for b in body), "    ") + "\n"
     lines, k = [], 0
     for line in source.splitlines():
         if re.match(r"    for ", line):
@@ -128,10 +140,10 @@ def _staged_fill():
             f"_fill_block has {k} top-level loops, this script names {len(FILL_LOOPS)}: "
             "update FILL_LOOPS"
         )
-    namespace = dict(vars(kf))
+    namespace = dict(vars(kst))
     exec("\n".join(lines), namespace)  # noqa: S102 - the kernel's own source
     block = numba.njit(error_model="numpy", nogil=True)(namespace["staged_block"])
-    rows, width = kf._S_ROWS, kf.FILL_BLOCK
+    rows, width = kst._S_ROWS, kst.FILL_BLOCK
 
     @numba.njit(error_model="numpy", nogil=True)
     def fill(stage, r, rp, t, c):

@@ -279,17 +279,17 @@ def floor_kernels():
     """
     from numba import njit, prange
 
-    from rbm_nb._kernels import fused as kf
+    from rbm_nb._kernels import chain_rows as kr
     from rbm_nb._kernels._prefetch import prefetch
     from rbm_nb._kernels.quaternion import _qslerp1, _qslerp_unit1
 
-    block = kf.BLOCK
-    ahead = kf.AHEAD
-    acc, step = kf._ACC, kf._STEP
+    block = kr.BLOCK
+    ahead = kr.AHEAD
+    acc, step = kr._ACC, kr._STEP
 
     @njit(cache=False, nogil=True)
     def static(work, s):
-        kf._compose_static_rows(work, s.reshape(1, 7), 0, False, False, False)
+        kr._compose_static_rows(work, s.reshape(1, 7), 0, False, False, False)
 
     @njit(cache=False, nogil=True)
     def rows(s1, s0, h_times, h_t, h_r, a, b, seg, e_t, e_r, target, off, j0, j1,
@@ -317,7 +317,7 @@ def floor_kernels():
             static(work, s1)
             # the head at the eye's time: walk and gather, then the passes
             for q in range(block):
-                work[kf._PATH + q] = 0.0
+                work[kr._PATH + q] = 0.0
             for q in range(nb):
                 t = target[k0 + q] + off
                 while i < n - 2 and h_times[i + 1] <= t:
@@ -334,16 +334,16 @@ def floor_kernels():
                 work[step + block + q] = h_t[i, 1] + u * (h_t[i + 1, 1] - h_t[i, 1])
                 work[step + 2 * block + q] = h_t[i, 2] + u * (h_t[i + 1, 2] - h_t[i, 2])
                 if seg[i, 10] == 0.0:
-                    work[kf._PATH + q] = kf._GATHERED
-                    work[kf._NEG + q] = 0.0
-                    work[kf._TAU + q] = u
-                    work[kf._TH1 + q] = seg[i, 0]
-                    work[kf._TH2 + q] = seg[i, 5]
+                    work[kr._PATH + q] = kr._GATHERED
+                    work[kr._NEG + q] = 0.0
+                    work[kr._TAU + q] = u
+                    work[kr._TH1 + q] = seg[i, 0]
+                    work[kr._TH2 + q] = seg[i, 5]
                     for e in range(4):
-                        work[kf._P + e * block + q] = h_r[i, e]
-                        work[kf._U1 + e * block + q] = seg[i, 1 + e]
-                        work[kf._Q + e * block + q] = a[i, e]
-                        work[kf._U2 + e * block + q] = seg[i, 6 + e]
+                        work[kr._P + e * block + q] = h_r[i, e]
+                        work[kr._U1 + e * block + q] = seg[i, 1 + e]
+                        work[kr._Q + e * block + q] = a[i, e]
+                        work[kr._U2 + e * block + q] = seg[i, 6 + e]
                 else:
                     p0, p1, p2, p3 = _qslerp1(
                         h_r[i, 0], h_r[i, 1], h_r[i, 2], h_r[i, 3],
@@ -357,33 +357,33 @@ def floor_kernels():
                     )
                     for e in range(4):
                         work[step + (3 + e) * block + q] = hq[e]
-            wide = kf._squad_rows(work)
-            if wide >= kf._WIDE_ROWS:
-                wide = kf._wide_rows(work)
+            wide = kr._squad_rows(work)
+            if wide >= kr._WIDE_ROWS:
+                wide = kr._wide_rows(work)
             if wide > 0:
                 for q in range(nb):
-                    if work[kf._PATH + q] != kf._GENERAL:
+                    if work[kr._PATH + q] != kr._GENERAL:
                         continue
-                    u = work[kf._TAU + q]
+                    u = work[kr._TAU + q]
                     hq = _qslerp_unit1(
-                        work[kf._P + q], work[kf._P + block + q],
-                        work[kf._P + 2 * block + q], work[kf._P + 3 * block + q],
-                        work[kf._Q + q], work[kf._Q + block + q],
-                        work[kf._Q + 2 * block + q], work[kf._Q + 3 * block + q],
+                        work[kr._P + q], work[kr._P + block + q],
+                        work[kr._P + 2 * block + q], work[kr._P + 3 * block + q],
+                        work[kr._Q + q], work[kr._Q + block + q],
+                        work[kr._Q + 2 * block + q], work[kr._Q + 3 * block + q],
                         2.0 * u * (1.0 - u),
                     )  # fmt: skip
                     for e in range(4):
                         work[step + (3 + e) * block + q] = hq[e]
-            kf._compose_rows(work, False, False)
+            kr._compose_rows(work, False, False)
             static(work, s0)
-            kf._store_lookup(work, t_out, r_out, k0, k0 + nb, False)
+            kr._store_lookup(work, t_out, r_out, k0, k0 + nb, False)
 
     @njit(cache=False, nogil=True)
     def lookup(s1, s0, h_times, h_t, h_r, a, b, seg, e_t, e_r, target, off):
         m = target.shape[0]
         t_out = np.empty((m, 3))
         r_out = np.empty((m, 4))
-        work = np.zeros(kf.WORK * block)
+        work = np.zeros(kr.WORK * block)
         rows(s1, s0, h_times, h_t, h_r, a, b, seg, e_t, e_r, target, off, 0, m,
              t_out, r_out, work)  # fmt: skip
         return t_out, r_out
@@ -396,7 +396,7 @@ def floor_kernels():
         chunks = 64
         per = ((m + chunks - 1) // chunks + block - 1) // block * block
         for c in prange(chunks):
-            work = np.zeros(kf.WORK * block)
+            work = np.zeros(kr.WORK * block)
             j0 = min(c * per, m)
             j1 = min(j0 + per, m)
             if j1 > j0:

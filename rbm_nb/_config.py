@@ -1,6 +1,6 @@
 """Options shared by every numba kernel, and the core's numeric tolerances.
 
-Kernels are compiled with one of two option sets, both typed:
+Kernels are compiled with one of these option sets, all typed:
 
 * :data:`KERNEL`: ``cache=True`` writes compiled kernels next to the sources
   (or to ``NUMBA_CACHE_DIR``) so that only the very first call in a fresh
@@ -13,6 +13,12 @@ Kernels are compiled with one of two option sets, both typed:
   ``fastmath={"contract"}`` (fused multiply-add only, measured harmless: the
   results stay within one ulp of the libm versions). Used by the branch-free
   conversion loops.
+* :data:`EXACT_VECTOR_KERNEL`: :data:`KERNEL` with ``error_model="numpy"``
+  alone: loops LLVM must vectorise (counting passes, row passes, the fused
+  chain's block passes) lose the ZeroDivisionError branch that would stop
+  it, and keep their arithmetic exactly that of scalar code (no fused
+  multiply-add: the fused chain's vector passes equal its scalar route bit
+  for bit).
 * :data:`PARALLEL_KERNEL`: :data:`KERNEL` with ``parallel=True``, for the
   ``prange`` twins of kernels over many rows. They are only ever launched
   through :func:`rbm_nb._parallel.launch`, which picks the serial twin for
@@ -76,6 +82,7 @@ class JitOptions:
 
 KERNEL: Final = JitOptions()
 VECTOR_KERNEL: Final = JitOptions(fastmath=frozenset({"contract"}), error_model="numpy")
+EXACT_VECTOR_KERNEL: Final = JitOptions(error_model="numpy")
 PARALLEL_KERNEL: Final = JitOptions(parallel=True)
 
 

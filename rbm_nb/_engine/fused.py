@@ -44,7 +44,7 @@ _EMPTY_TABLE = np.ones((1, kf.TABLE_COLUMNS))
 _EMPTY_SLOT = (_EMPTY_TIMES, _EMPTY_T, _EMPTY_R, _EMPTY_R, _EMPTY_TABLE)
 _TABLE_LOCK = threading.Lock()
 # prefill_chain takes the chain kernels' arguments up to the target times
-_PREFILL_ARGS = 5 + 5 * kf.SLOTS + 1
+_PREFILL_ARGS = len(kf.CHAIN) + 1
 
 
 class _Table:
@@ -151,15 +151,16 @@ class Plan:
             slots = self._slots = self.slots()
         return (self.code, self.statics, offsets, self.gaps(), _own(own)) + slots
 
-    def slots(self) -> tuple[np.ndarray, ...]:
-        """The 3 x 5 slot arrays for the kernels."""
+    def slots(self) -> tuple[Any, ...]:
+        """The 5 slot arguments for the kernels (``kf.pack_slots``)."""
         out: list[Any] = []
         for frame, table in zip(self.frames, self.tables, strict=True):
             c = table.rows if table is not None else _EMPTY_TABLE
-            out += (frame._track.base, frame._t, frame._r, frame._rotation_public, c)
-        for _ in range(kf.SLOTS - len(self.frames)):
-            out += _EMPTY_SLOT
-        return tuple(out)
+            out.append(
+                (frame._track.base, frame._t, frame._r, frame._rotation_public, c)
+            )
+        out += [_EMPTY_SLOT] * (kf.SLOTS - len(self.frames))
+        return kf.pack_slots(out)
 
     def offsets(self, target) -> np.ndarray:
         """Per slot, what to add to the target's base times (``Track.base_in``)."""
@@ -345,7 +346,6 @@ def lookup(p: Plan, target, own, rotation_only: bool = False):
     base = target.track.base
 
     offsets = p.offsets(target)
-    # one tuple: the kernels take the 3 x 5 slot arrays as separate arguments
     args: tuple[Any, ...] = p.arguments(offsets, own) + (base, rotation_only)
     t, r, _ = _run(
         p, kf.lookup_chain, kf.lookup_chain_parallel, args, target, offsets, own

@@ -6,11 +6,26 @@ time either: kernels compile on first call, or in the warm-up
 (``python -m rbm_nb._warmup``), both from numba's on-disk cache when it is
 there.
 
-Modules: ``scalar`` (sin/cos/atan2 and short series, inlined), ``quaternion``
-(quaternion algebra, slerp/squad), ``resample`` (interpolation, holding,
-chain composition, applying transforms to blocks), ``rotations`` (checked
-rotations, rotation vectors), ``differences`` (finite differences, splines,
-outliers), ``conversions`` (rotation representations, vectorised).
+Modules, by role:
+
+* arithmetic inlined everywhere: ``scalar`` (sin/cos/atan2 and short
+  series), ``search`` (the one galloping search of sorted times);
+* arrays of rotations and transforms: ``quaternion`` (quaternion algebra,
+  slerp/squad), ``conversions`` (rotation representations, vectorised;
+  ``euler`` and ``conversion_rows`` beside it), ``rotations`` (checked
+  rotations, rotation vectors), ``se3``, ``evaluation``, ``sdf``;
+* time series: ``resample`` (interpolation, holding, chain composition,
+  applying transforms to blocks), ``differences`` (finite differences,
+  splines, outliers), ``times``, ``rows`` (the door's counting passes);
+* squad over a stored series in one pass: ``squad_walk`` (the kernels and
+  the walk), ``squad_segments`` (setting a block's segments up),
+  ``squad_rows`` (evaluating its rows);
+* the fused chain: ``fused`` (the kernels called from Python, each serial
+  and prange pair from one body), ``chain_block`` (a block of rows through
+  every step; the slot arguments), ``chain_rows`` (the block's scratch and
+  its vector passes), ``squad_table`` (the lazily filled squad table),
+  ``chain_prefill`` (the table rows a parallel call reads, filled first);
+  ``velocity_chain`` and ``velocity_fused`` (angular velocity of a chain).
 
 Adding a kernel module
 ----------------------
@@ -39,8 +54,16 @@ Every numba function is made with one of the decorators of
   the module is declared and that the test suite compiled no other
   signature.
 * Options come from :mod:`rbm_nb._config` (``KERNEL`` by default,
-  ``options=VECTOR_KERNEL`` for loops that must vectorise); scalar math comes
-  from :mod:`rbm_nb._kernels.scalar` (one implementation of each function).
+  ``EXACT_VECTOR_KERNEL`` for loops that must vectorise and keep scalar
+  rounding, ``VECTOR_KERNEL`` where fused multiply-adds are measured
+  harmless, ``PARALLEL_KERNEL`` for prange twins); scalar math comes from
+  :mod:`rbm_nb._kernels.scalar` (one implementation of each function), the
+  search of sorted times from :mod:`rbm_nb._kernels.search`.
+* A kernel with a prange twin is written once, as a body whose prange loop
+  runs over chunks of rows (``fused._lookup_body``): compiled without
+  ``parallel`` with one chunk it is the serial kernel, with ``parallel`` and
+  many chunks the twin (each compilation under its own name, so that numba's
+  cache files do not collide).
 """
 
 from .._numba_cache import configure as _configure_numba_cache

@@ -17,21 +17,15 @@ evaluates through FITPACK, used for quaternions).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
 
-from .._config import KERNEL
+from .._config import EXACT_VECTOR_KERNEL
 from ._jit import B2, F1, F2, F3, helper, kernel
 
-# Strictly increasing times never divide by zero, and without numba's
-# ZeroDivisionError branches (error_model="numpy") the row loops vectorise;
-# the arithmetic is unchanged (no fastmath).
-_ROWS = dataclasses.replace(KERNEL, error_model="numpy")
 
-
-@helper(inline=True, options=_ROWS)
+@helper(inline=True, options=EXACT_VECTOR_KERNEL)
 def _weights(t0, t1, t2):
     """numpy.gradient's three-point weights at t1, between t0 and t2."""
     h1 = t1 - t0
@@ -42,7 +36,7 @@ def _weights(t0, t1, t2):
     return a, b, c
 
 
-@kernel(F2, F1, options=_ROWS)
+@kernel(F2, F1, options=EXACT_VECTOR_KERNEL)
 def gradient(f, t):
     """First derivative by central differences on uneven spacing (numpy's).
 

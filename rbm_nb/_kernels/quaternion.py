@@ -30,6 +30,7 @@ from .scalar import (
     sinc_series,
     sincos,
 )
+from .search import gallop
 
 # Below this relative size the vector part of a quaternion counts as zero in
 # exp/log, as in numpy-quaternion (whose results squad must reproduce).
@@ -212,32 +213,11 @@ def search_right(t_in, t_out):
     the previous result, so sorted ``t_out`` costs O(m log(gap)) instead of
     m full binary searches; unsorted input is still answered correctly.
     """
-    n = t_in.shape[0]
     m = t_out.shape[0]
     out = np.empty(m, dtype=np.int64)
     i = -1
     for j in range(m):
-        t = t_out[j]
-        if i >= 0 and t < t_in[i]:
-            i = -1  # went back in time: restart from the beginning
-        # gallop: find hi with t < t_in[hi] (or hi == n)
-        lo = i
-        step = 1
-        hi = i + 1
-        while hi < n and t_in[hi] <= t:
-            lo = hi
-            hi = i + 1 + step
-            step *= 2
-        if hi > n:
-            hi = n
-        # invariant: t_in[lo] <= t (or lo == -1) and t < t_in[hi] (or hi == n)
-        while hi - lo > 1:
-            mid = (lo + hi) // 2
-            if t_in[mid] <= t:
-                lo = mid
-            else:
-                hi = mid
-        i = lo
+        i = gallop(t_in, t_out[j], i)
         out[j] = i
     return out
 

@@ -10,12 +10,11 @@ version, which names the offending row in its error.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
 
-from .._config import KERNEL
+from .._config import EXACT_VECTOR_KERNEL
 from ._jit import F1, F2, B, F, helper, kernel
 
 # Coordinates beyond this are refused with the infinities: no physical
@@ -23,13 +22,8 @@ from ._jit import F1, F2, B, F, helper, kernel
 # products of larger ones overflow to inf when frames are composed.
 MAX_COORDINATE = 1e150
 
-# Branch-free passes that LLVM vectorises (division without a
-# ZeroDivisionError branch; no fused multiply-add, so that results stay those
-# of the plain arithmetic bit for bit).
-_COUNTING = dataclasses.replace(KERNEL, error_model="numpy")
 
-
-@kernel(F1, options=_COUNTING)
+@kernel(F1, options=EXACT_VECTOR_KERNEL)
 def infinities(f):
     """How many values of ``f`` are infinite (one vectorised pass)."""
     count = 0
@@ -54,7 +48,7 @@ def _first_bad_row_scalar(a):
     return -1
 
 
-@kernel(F2, options=_COUNTING)
+@kernel(F2, options=EXACT_VECTOR_KERNEL)
 def first_bad_row(a):
     """The first row of (n, k) ``a`` that is partly NaN or holds an infinity
     (or a value beyond :data:`MAX_COORDINATE`).
@@ -105,7 +99,7 @@ def _first_unacceptable(q, tol, allow_nan):
     return -1
 
 
-@kernel(F2, F, B, options=_COUNTING)
+@kernel(F2, F, B, options=EXACT_VECTOR_KERNEL)
 def unit_rows(q, tol, allow_nan):
     """Quaternions (n, 4) divided by their norms, if every row is acceptable.
 
@@ -148,7 +142,7 @@ def unit_rows(q, tol, allow_nan):
 _SAMPLES_BLOCK = 256
 
 
-@kernel(F2, F2, F, F2, F2, F2, options=_COUNTING)
+@kernel(F2, F2, F, F2, F2, F2, options=EXACT_VECTOR_KERNEL)
 def moving_samples(t, q, tol, t_out, q_out, r_out):
     """A moving frame's private arrays and every registration check, in one pass.
 

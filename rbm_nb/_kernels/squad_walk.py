@@ -42,30 +42,25 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from numba import prange, types
-from numba.extending import intrinsic
+from numba import prange
 
 from .._config import KERNEL, PARALLEL_KERNEL
 from ._jit import F1, F2, F, helper, kernel
-from .quaternion import (
-    _qexp1,
-    _qinv1,
-    _qlog1,
-    _qmul1,
-    _qslerp1,
-    _qslerp_unit1,
-    _sincos,
-)
-from .scalar import (
-    SERIES_ANGLE,
-    SERIES_RATIO,
-    TINY_SQUARE,
-    atan_over_x_small,
-    cos_small,
-    sinc_small,
+from .search import gallop
+from .squad_rows import _WR, _gather_records, _rows, _scalar_rows
+from .squad_segments import (
+    _BLOCK,
+    _SPAN,
+    _WS,
+    _controls_exact,
+    _logs,
+    _prepare,
+    _records_exact,
+    _samples,
 )
 
 __all__ = [
@@ -80,67 +75,9 @@ __all__ = [
 # an ulp at most, far inside the 1e-12 the tests hold them to)
 _SERIAL = dataclasses.replace(KERNEL, fastmath=frozenset({"contract"}))
 _PARALLEL = dataclasses.replace(PARALLEL_KERNEL, fastmath=frozenset({"contract"}))
-# the vector loops: the same, and no ZeroDivisionError branch (it would keep
-# LLVM from vectorising them; nothing else changes)
-_VECTOR = dataclasses.replace(_SERIAL, error_model="numpy")
 
-# Scales |q| whose log is beyond this take the exact route (the bounds used
-# to decide a slerp's direction assume scales near 1).
-_LOG_SCALE_LIMIT = 0.05
-# Margin around a slerp's direction decision within which the exact route
-# decides instead (the scaled decision is right to ~1e-15).
-_DECISION_MARGIN = 1e-9
-# Below this, exp and log1p are evaluated by their Taylor series.
-_SMALL = 1e-3
-
-# a segment's record (see _prepare)
-_N_REC = 29
-# output rows per block, and the most segments a block sets up at once
-_BLOCK = 96
-_SPAN = 2 * _BLOCK
 # chunks of output rows the parallel twin hands to numba's threads
 _CHUNKS = 64
-
-
-# fast-math flags of the arithmetic of _qmul_plain: numba adds a function's
-# flags ("contract") only to operations that carry none, and "arcp"
-# concerns divisions, of which there are none
-_PLAIN = ("arcp",)
-
-
-def _qmul_plain_ir(typingctx, aw, ax, ay, az, bw, bx, by, bz):
-    """:func:`_qmul1` emitted in place, with its rounding (``_qmul_plain``).
-
-    A call of the helper _qmul1 keeps a loop from vectorising; inlined by
-    numba it would take the caller's "contract" flag and round differently
-    (fused multiply-adds), whereas _qmul1 is compiled without it.
-    """
-    f8 = types.float64
-    signature = types.UniTuple(f8, 4)(f8, f8, f8, f8, f8, f8, f8, f8)
-
-    def codegen(context, builder, sig, args):
-        pw, px, py, pz, qw, qx, qy, qz = args
-
-        def mul(a, b):
-            return builder.fmul(a, b, flags=_PLAIN)
-
-        def add(a, b):
-            return builder.fadd(a, b, flags=_PLAIN)
-
-        def sub(a, b):
-            return builder.fsub(a, b, flags=_PLAIN)
-
-        w = sub(sub(sub(mul(pw, qw), mul(px, qx)), mul(py, qy)), mul(pz, qz))
-        x = sub(add(add(mul(pw, qx), mul(px, qw)), mul(py, qz)), mul(pz, qy))
-        y = add(add(sub(mul(pw, qy), mul(px, qz)), mul(py, qw)), mul(pz, qx))
-        z = add(sub(add(mul(pw, qz), mul(px, qy)), mul(py, qx)), mul(pz, qw))
-        return context.make_tuple(builder, sig.return_type, (w, x, y, z))
-
-    return signature, codegen
-
-
-# called from kernels with the eight components (typing context aside)
-_qmul_plain: Any = intrinsic(_qmul_plain_ir)
 
 
 @kernel(F2)
@@ -167,816 +104,59 @@ def unflip_signs(q):
 
 
 @helper(inline=True)
-def _exp_small(x):
-    """exp(x), by its series near 0 (the scales of near-unit quaternions)."""
-    if abs(x) < TINY_SQUARE:
-        return 1.0 + x * (1.0 + x * 0.5 * (1.0 + x / 3.0))  # next term < 4.2e-18
-    if abs(x) < _SMALL:
-        return 1.0 + x * (
-            1.0
-            + x
-            * 0.5
-            * (1.0 + x / 3.0 * (1.0 + x * 0.25 * (1.0 + x * 0.2 * (1.0 + x / 6.0))))
-        )
-    return math.exp(x)
+def _find_segments(t_in, t_out, start, stop, i, found):
+    """Each row's sample index into ``found`` (the last sample at or before
+    its time, -1 before the first), galloping forward from the previous
+    row's ``i`` (sorted t_out) or by bisection when a time went back.
 
-
-@helper(inline=True)
-def _unit(w, x, y, z):
-    """(unit w, x, y, z, ln |q|, NaN?) of a quaternion."""
-    n2 = w * w + x * x + y * y + z * z
-    nan = math.isnan(n2)
-    e = n2 - 1.0
-    if abs(e) < _SMALL:
-        # ln |q| = log1p(e) / 2
-        lam = (
-            0.5
-            * e
-            * (1.0 - e * (0.5 - e * (1.0 / 3.0 - e * (0.25 - e * (0.2 - e / 6.0)))))
-        )
-    else:
-        lam = 0.5 * math.log(n2)
-    if n2 == 1.0:
-        return w, x, y, z, 0.0, nan
-    inv = 1.0 / math.sqrt(n2)
-    return w * inv, x * inv, y * inv, z * inv, lam, nan
-
-
-@helper(inline=True)
-def _log_vec(aw, ax, ay, az, bw, bx, by, bz):
-    """Vector part of log(a⁻¹ b) for unit a and b (its scalar part is 0)."""
-    pw, px, py, pz = _qmul1(aw, -ax, -ay, -az, bw, bx, by, bz)
-    b2 = px * px + py * py + pz * pz
-    if pw > 0.0 and b2 < (SERIES_RATIO * pw) ** 2:
-        f = atan_over_x_small(b2 / (pw * pw)) / pw
-        return f * px, f * py, f * pz
-    b = math.sqrt(b2)
-    if b <= 1e-14 * abs(pw):
-        if pw < 0.0:
-            return math.pi, 0.0, 0.0  # numpy-quaternion's choice (_qlog1)
-        return 0.0, 0.0, 0.0
-    f = math.atan2(b, pw) / b
-    return f * px, f * py, f * pz
-
-
-@helper(inline=True)
-def _exp_vec(ux, uy, uz):
-    """exp of the pure quaternion (0, u): (cos|u|, sin|u| u/|u|)."""
-    u2 = ux * ux + uy * uy + uz * uz
-    if u2 < SERIES_ANGLE * SERIES_ANGLE:
-        c = cos_small(u2)
-        s = sinc_small(u2)
-    else:
-        un = math.sqrt(u2)
-        c = math.cos(un)
-        s = math.sin(un) / un
-    return c, s * ux, s * uy, s * uz
-
-
-@helper(inline=True)
-def _great_circle(aw, ax, ay, az, bw, bx, by, bz):
-    """The arc from unit a to unit b as (o, θ², θ, g).
-
-    o = b - (a·b) a and g = θ / |o|, so that
-    slerp(a, b, τ) = cos(τθ) a + sin(τθ)/(τθ) τ g o (:func:`_along`).
+    Returns the last row's index and whether the block's times never went
+    back.
     """
-    d = aw * bw + ax * bx + ay * by + az * bz
-    ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
-    o2 = ow * ow + ox * ox + oy * oy + oz * oz
-    if d > 0.0 and o2 < (SERIES_RATIO * d) ** 2:
-        # x = tan θ = |o| / d is small: θ / |o| = atan(x) / x / d
-        g = atan_over_x_small(o2 / (d * d)) / d
-        theta2 = o2 * g * g
-        return ow, ox, oy, oz, theta2, math.sqrt(theta2), g
-    so = math.sqrt(o2)
-    theta = math.atan2(so, d)
-    return ow, ox, oy, oz, theta * theta, theta, theta / so if so > 0.0 else 0.0
+    ordered = True
+    for j in range(start, stop):
+        t = t_out[j]
+        if i >= 0 and t < t_in[i]:
+            i = -1
+            ordered = False
+        i = gallop(t_in, t, i)
+        found[j - start] = i
+    return i, ordered
 
 
 @helper(inline=True)
-def _along(aw, ax, ay, az, ow, ox, oy, oz, theta2, theta, g, tau):
-    """The point at τ of the arc (a, o, θ², θ, g) of :func:`_great_circle`."""
-    y2 = tau * tau * theta2
-    if y2 < SERIES_ANGLE * SERIES_ANGLE:
-        c = cos_small(y2)
-        k = sinc_small(y2) * tau * g
-    else:
-        s, c = _sincos(tau * theta)
-        k = s * g / theta
-    return c * aw + k * ow, c * ax + k * ox, c * ay + k * oy, c * az + k * oz
+def _set_up_segments(qf, sign, t_in, n, start, stop, found, ordered, scalar, ws, slot):
+    """The block's segments in the scratch ``ws``, and each row's record slot.
 
-
-@helper(inline=True)
-def _flip_bound(la, lb):
-    """A bound on |δ|, where |a - b|² > 2 ⇔ â·b̂ < δ for |a| = e^la, |b| = e^lb.
-
-    δ = cosh(la - lb) - exp(-(la + lb)) = (la + lb) + O(la² + lb²), so
-    |δ| <= 2 (|la| + |lb|) while |la|, |lb| <= _LOG_SCALE_LIMIT.
+    Dense (sorted times, few segments): every segment from the first to the
+    last at once, in vector loops; else each new segment in the next free
+    record, by the scalar code.
     """
-    return 2.0 * (abs(la) + abs(lb))
-
-
-@helper(inline=True)
-def _decide(d, bound):
-    """+1 no flip, -1 flip, 0 too close to call (|δ| <= bound, see _flip_bound)."""
-    if d > bound + _DECISION_MARGIN:
-        return 1.0
-    if d < -bound - _DECISION_MARGIN:
-        return -1.0
-    return 0.0
-
-
-@helper(inline=True)
-def _control_point(bw, bx, by, bz, ux, uy, uz):
-    """base exp((0, u)): a squad control point from its sample (unit parts)."""
-    ew, ex, ey, ez = _exp_vec(ux, uy, uz)
-    return _qmul1(bw, bx, by, bz, ew, ex, ey, ez)
-
-
-# The scratch of a block (one flat array, :data:`_WS` float64): quantity k
-# of item a at ``k * _W + a``. Fixed offsets in one array let LLVM see that
-# the quantities do not overlap, so that the loops over a block's samples and
-# segments vectorise without runtime checks. Samples are stored from the
-# sample before the block's first segment: with s0 the first segment, row a
-# holds sample s0 - 1 + a, and the log row a the step from sample
-# s0 - 1 + a to the next; segment s0 + r has slot r (row r + 1 holds its
-# first sample).
-_W = _SPAN + 8
-# samples: unit parts w, x, y, z (0:4), ln of the scale (4), 1.0 if NaN (5)
-_SMP = 0
-# log r[k]⁻¹ r[k+1] (vector part, 0:3), t[k+1] - t[k] (3) and its inverse (4)
-_LOG = 6 * _W
-# per segment: the end sample r[i+1] (0:4), A[i] (4:8), B[i] (8:12), their
-# ln scales (12:15), the number of its own samples missing (15)
-_CTL = 11 * _W
-# per segment: the record of _N_REC quantities (see _prepare)
-_REC = 27 * _W
-# per segment: 1.0 where a vector stage's branch does not apply
-_REDO = (27 + _N_REC) * _W
-_WS = _REDO + _W
-# The rows' scratch (a second flat array, :data:`_WR` float64, quantity k of
-# row b at ``k * _R + b``): each row's segment record (_N_REC quantities),
-# its τ, the sign of its stored sample, its two inner slerps (8), and 1.0
-# where it takes the scalar route. Together the two take 124,480 bytes,
-# below 128 KiB, glibc's default thresholds for mmap and for trimming the heap:
-# allocated for every chunk of the parallel twin, they come from the heap
-# and cost no page faults (a 400 KB scratch cost 230 more per call when
-# big arrays are fresh mmap pages, MALLOC_MMAP_THRESHOLD_=131072).
-_R = _BLOCK + 8
-_ROW = 0
-_TAU = _ROW + _N_REC * _R
-_SGN = _TAU + _R
-_INN = _SGN + _R
-_EXACT = _INN + 8 * _R
-_WR = _EXACT + _R
-
-
-@helper(options=_VECTOR)
-def _samples(qf, sign, ws, k0, k1, a0, scalar):
-    """Samples k0..k1 of ``qf`` (n * 4, flat), sign-corrected, as unit parts,
-    ln scale and NaN flag into rows a0.. (as :func:`_unit`; a0 is 0 or 1).
-
-    A vector loop takes _unit's series branch for ln |q|; the samples off
-    it (all of them if ``scalar``) are then redone by _unit itself.
-    """
-    base = max(k0, 0)
-    row = min(max(a0, 0), 1)
-    # views from the first item, and a count LLVM can bound, so that every
-    # index is provably within the arrays (no negative-index wraparound)
-    src = qf[4 * base :]
-    sg = sign[base:]
-    dst = ws[row:]
-    slow = 0
-    for b in range(min(k1 - k0 + 1, _W - 1)):
-        s = sg[b]
-        w, x, y, z = (
-            s * src[4 * b],
-            s * src[4 * b + 1],
-            s * src[4 * b + 2],
-            s * src[4 * b + 3],
-        )
-        n2 = w * w + x * x + y * y + z * z
-        e = n2 - 1.0
-        # _unit's series branch for ln |q| (the others are redone below)
-        lam = (
-            0.5
-            * e
-            * (1.0 - e * (0.5 - e * (1.0 / 3.0 - e * (0.25 - e * (0.2 - e / 6.0)))))
-        )
-        one = n2 == 1.0
-        inv = 1.0 / math.sqrt(n2)
-        dst[_SMP + b] = w if one else w * inv
-        dst[_SMP + _W + b] = x if one else x * inv
-        dst[_SMP + 2 * _W + b] = y if one else y * inv
-        dst[_SMP + 3 * _W + b] = z if one else z * inv
-        dst[_SMP + 4 * _W + b] = 0.0 if one else lam
-        dst[_SMP + 5 * _W + b] = 1.0 if math.isnan(n2) else 0.0
-        # (a missing sample's values are never used: it makes NaN every
-        # segment that reads it)
-        slow += abs(e) >= _SMALL
-    if slow or scalar:
-        for b in range(k1 - k0 + 1):
-            k = base + b
-            s = sign[k]
-            w, x, y, z = (
-                s * qf[4 * k],
-                s * qf[4 * k + 1],
-                s * qf[4 * k + 2],
-                s * qf[4 * k + 3],
-            )
-            # (the vector loop's test, on the same values)
-            if not scalar and not abs((w * w + x * x + y * y + z * z) - 1.0) >= _SMALL:
-                continue
-            w, x, y, z, lam, bad = _unit(w, x, y, z)
-            a = row + b
-            ws[_SMP + a] = w
-            ws[_SMP + _W + a] = x
-            ws[_SMP + 2 * _W + a] = y
-            ws[_SMP + 3 * _W + a] = z
-            ws[_SMP + 4 * _W + a] = lam
-            ws[_SMP + 5 * _W + a] = 1.0 if bad else 0.0
-
-
-@helper(options=_VECTOR)
-def _logs(t_in, ws, k0, k1, a0, scalar):
-    """Log rows a0.. of the steps between samples k0..k1 (rows a0.. of the
-    samples), with the sampling intervals and their inverses (as
-    :func:`_log_vec`; a0 is 0 or 1).
-
-    A vector loop takes _log_vec's series branch; the steps off it (all of
-    them if ``scalar``) are then redone by _log_vec itself.
-    """
-    base = max(k0, 0)
-    row = min(max(a0, 0), 1)
-    tt = t_in[base:]
-    dst = ws[row:]
-    slow = 0
-    for b in range(min(k1 - k0, _W - 2)):
-        pw, px, py, pz = _qmul_plain(
-            dst[_SMP + b], -dst[_SMP + _W + b], -dst[_SMP + 2 * _W + b],
-            -dst[_SMP + 3 * _W + b], dst[_SMP + b + 1], dst[_SMP + _W + b + 1],
-            dst[_SMP + 2 * _W + b + 1], dst[_SMP + 3 * _W + b + 1],
-        )  # fmt: skip
-        b2 = px * px + py * py + pz * pz
-        # _log_vec's series branch (the others are redone below)
-        f = atan_over_x_small(b2 / (pw * pw)) / pw
-        dst[_LOG + b] = f * px
-        dst[_LOG + _W + b] = f * py
-        dst[_LOG + 2 * _W + b] = f * pz
-        dt = tt[b + 1] - tt[b]
-        dst[_LOG + 3 * _W + b] = dt
-        dst[_LOG + 4 * _W + b] = 1.0 / dt
-        # (a step from or to a missing sample, pw NaN, is never used)
-        slow += (not ((pw > 0.0) & (b2 < (SERIES_RATIO * pw) ** 2))) & (pw == pw)
-    if slow or scalar:
-        for b in range(k1 - k0):
-            a = row + b
-            aw, ax = ws[_SMP + a], ws[_SMP + _W + a]
-            ay, az = ws[_SMP + 2 * _W + a], ws[_SMP + 3 * _W + a]
-            bw, bx = ws[_SMP + a + 1], ws[_SMP + _W + a + 1]
-            by, bz = ws[_SMP + 2 * _W + a + 1], ws[_SMP + 3 * _W + a + 1]
-            if not scalar:
-                # (the vector loop's test, on the same values)
-                pw, px, py, pz = _qmul_plain(aw, -ax, -ay, -az, bw, bx, by, bz)
-                b2 = px * px + py * py + pz * pz
-                if (pw > 0.0) & (b2 < (SERIES_RATIO * pw) ** 2) or pw != pw:
-                    continue
-            v = _log_vec(aw, ax, ay, az, bw, bx, by, bz)
-            ws[_LOG + a] = v[0]
-            ws[_LOG + _W + a] = v[1]
-            ws[_LOG + 2 * _W + a] = v[2]
-
-
-@helper(inline=True)
-def _exp_vec_series(ux, uy, uz, u2):
-    """:func:`_exp_vec`'s branch for u² < SERIES_ANGLE²."""
-    c = cos_small(u2)
-    s = sinc_small(u2)
-    return c, s * ux, s * uy, s * uz
-
-
-@helper(options=_VECTOR)
-def _controls(ws, r0, count):
-    """End sample, control points and missing-sample count of the segments
-    at slots r0..r0+count-1, all with 1 <= i <= n-3 (as
-    :func:`_controls_exact`); returns how many need that function (a
-    control point's angle beyond the series) and marks them in _REDO."""
-    ws = ws[min(max(r0, 0), 1) :]  # (r0 is 0 or 1; see _samples)
-    slow = 0
-    for r in range(min(count, _SPAN)):
-        c = r + 1  # sample row of i
-        # the segment's own samples i and i+1; a missing outer neighbour
-        # (i-1 or i+2) sends it to _controls_exact for the end rule
-        nan = ws[_SMP + 5 * _W + c] + ws[_SMP + 5 * _W + c + 1]
-        edge = ws[_SMP + 5 * _W + c - 1] + ws[_SMP + 5 * _W + c + 2]
-        ws[_CTL + 15 * _W + r] = nan
-        rw, rx = ws[_SMP + c], ws[_SMP + _W + c]
-        ry, rz = ws[_SMP + 2 * _W + c], ws[_SMP + 3 * _W + c]
-        lr = ws[_SMP + 4 * _W + c]
-        nw, nx = ws[_SMP + c + 1], ws[_SMP + _W + c + 1]
-        ny, nz = ws[_SMP + 2 * _W + c + 1], ws[_SMP + 3 * _W + c + 1]
-        ln_ = ws[_SMP + 4 * _W + c + 1]
-        ws[_CTL + r] = nw
-        ws[_CTL + _W + r] = nx
-        ws[_CTL + 2 * _W + r] = ny
-        ws[_CTL + 3 * _W + r] = nz
-        ws[_CTL + 12 * _W + r] = ln_
-        ratio = ws[_LOG + 3 * _W + c] * ws[_LOG + 4 * _W + c - 1]
-        ux = (-ws[_LOG + c] + ws[_LOG + c - 1] * ratio) * 0.25
-        uy = (-ws[_LOG + _W + c] + ws[_LOG + _W + c - 1] * ratio) * 0.25
-        uz = (-ws[_LOG + 2 * _W + c] + ws[_LOG + 2 * _W + c - 1] * ratio) * 0.25
-        u2a = ux * ux + uy * uy + uz * uz
-        ew, ex, ey, ez = _exp_vec_series(ux, uy, uz, u2a)
-        aw, ax, ay, az = _qmul_plain(rw, rx, ry, rz, ew, ex, ey, ez)
-        la = lr + (-(ln_ - lr) + (lr - ws[_SMP + 4 * _W + c - 1]) * ratio) * 0.25
-        ws[_CTL + 4 * _W + r] = aw
-        ws[_CTL + 5 * _W + r] = ax
-        ws[_CTL + 6 * _W + r] = ay
-        ws[_CTL + 7 * _W + r] = az
-        ws[_CTL + 13 * _W + r] = la
-        ratio = ws[_LOG + 3 * _W + c] * ws[_LOG + 4 * _W + c + 1]
-        ux = (ws[_LOG + c + 1] * ratio - ws[_LOG + c]) * -0.25
-        uy = (ws[_LOG + _W + c + 1] * ratio - ws[_LOG + _W + c]) * -0.25
-        uz = (ws[_LOG + 2 * _W + c + 1] * ratio - ws[_LOG + 2 * _W + c]) * -0.25
-        u2b = ux * ux + uy * uy + uz * uz
-        ew, ex, ey, ez = _exp_vec_series(ux, uy, uz, u2b)
-        bw, bx, by, bz = _qmul_plain(nw, nx, ny, nz, ew, ex, ey, ez)
-        lb = ln_ + ((ws[_SMP + 4 * _W + c + 2] - ln_) * ratio - (ln_ - lr)) * -0.25
-        ws[_CTL + 8 * _W + r] = bw
-        ws[_CTL + 9 * _W + r] = bx
-        ws[_CTL + 10 * _W + r] = by
-        ws[_CTL + 11 * _W + r] = bz
-        ws[_CTL + 14 * _W + r] = lb
-        limit = SERIES_ANGLE * SERIES_ANGLE
-        redo = (nan == 0.0) & ((edge != 0.0) | (not ((u2a < limit) & (u2b < limit))))
-        ws[_REDO + r] = 1.0 if redo else 0.0
-        slow += redo
-    return slow
-
-
-@helper(inline=True)
-def _controls_exact(ws, n, i, r, c):
-    """End sample r[i+1] (the virtual one past the last), control points
-    A[i] and B[i], their ln scales and the number of missing samples among
-    those the segment cannot do without, of segment i (slot r, sample i in
-    row c).
-
-    A segment needs its two samples (the last one, which extrapolates, the
-    sample before it instead of the next). A control point whose outer
-    neighbour (i-1 for A, i+2 for B) is missing takes the end rule, as at
-    the ends of the series: each run between missing samples is a series
-    of its own (``quaternion.squad_coefficients``)."""
-    nan = ws[_SMP + 5 * _W + c]
-    if i + 1 <= n - 1:
-        nan += ws[_SMP + 5 * _W + c + 1]
+    s0 = found[0]
+    s1 = found[stop - start - 1]
+    if ordered and s0 >= 0 and s1 - s0 < _SPAN and not scalar:
+        # dense: every segment from the first to the last at once
+        _prepare(qf, sign, t_in, n, s0, s1, ws)
+        for j in range(start, stop):
+            slot[j - start] = found[j - start] - s0
     else:
-        nan += ws[_SMP + 5 * _W + c - 1]  # the virtual sample reads i-1
-    ws[_CTL + 15 * _W + r] = nan
-    if nan > 0.0:
-        return
-    before = i >= 1 and ws[_SMP + 5 * _W + c - 1] == 0.0
-    after = i + 2 <= n - 1 and ws[_SMP + 5 * _W + c + 2] == 0.0
-    rw, rx = ws[_SMP + c], ws[_SMP + _W + c]
-    ry, rz = ws[_SMP + 2 * _W + c], ws[_SMP + 3 * _W + c]
-    lr = ws[_SMP + 4 * _W + c]
-    if i < n - 1:
-        nw, nx = ws[_SMP + c + 1], ws[_SMP + _W + c + 1]
-        ny, nz = ws[_SMP + 2 * _W + c + 1], ws[_SMP + 3 * _W + c + 1]
-        ln_ = ws[_SMP + 4 * _W + c + 1]
-    else:
-        # r[n-1] r[n-2]⁻¹ r[n-1], of scale |r[n-1]|² / |r[n-2]|
-        pw, px, py, pz = _qmul1(
-            rw, rx, ry, rz, ws[_SMP + c - 1], -ws[_SMP + _W + c - 1],
-            -ws[_SMP + 2 * _W + c - 1], -ws[_SMP + 3 * _W + c - 1],
-        )  # fmt: skip
-        nw, nx, ny, nz = _qmul1(pw, px, py, pz, rw, rx, ry, rz)
-        ln_ = 2.0 * lr - ws[_SMP + 4 * _W + c - 1]
-    ws[_CTL + r] = nw
-    ws[_CTL + _W + r] = nx
-    ws[_CTL + 2 * _W + r] = ny
-    ws[_CTL + 3 * _W + r] = nz
-    ws[_CTL + 12 * _W + r] = ln_
-    # A[i] = r[i] exp((-L[i] + L[i-1] (t[i+1]-t[i]) / (t[i]-t[i-1])) / 4)
-    if before and i <= n - 2:
-        ratio = ws[_LOG + 3 * _W + c] * ws[_LOG + 4 * _W + c - 1]
-        aw, ax, ay, az = _control_point(
-            rw, rx, ry, rz,
-            (-ws[_LOG + c] + ws[_LOG + c - 1] * ratio) * 0.25,
-            (-ws[_LOG + _W + c] + ws[_LOG + _W + c - 1] * ratio) * 0.25,
-            (-ws[_LOG + 2 * _W + c] + ws[_LOG + 2 * _W + c - 1] * ratio) * 0.25,
-        )  # fmt: skip
-        la = lr + (-(ln_ - lr) + (lr - ws[_SMP + 4 * _W + c - 1]) * ratio) * 0.25
-    else:
-        aw, ax, ay, az, la = rw, rx, ry, rz, lr
-    ws[_CTL + 4 * _W + r] = aw
-    ws[_CTL + 5 * _W + r] = ax
-    ws[_CTL + 6 * _W + r] = ay
-    ws[_CTL + 7 * _W + r] = az
-    ws[_CTL + 13 * _W + r] = la
-    # B[i] = r[i+1] exp((L[i+1] (t[i+1]-t[i]) / (t[i+2]-t[i+1]) - L[i]) / -4)
-    if after:
-        ratio = ws[_LOG + 3 * _W + c] * ws[_LOG + 4 * _W + c + 1]
-        bw, bx, by, bz = _control_point(
-            nw, nx, ny, nz,
-            (ws[_LOG + c + 1] * ratio - ws[_LOG + c]) * -0.25,
-            (ws[_LOG + _W + c + 1] * ratio - ws[_LOG + _W + c]) * -0.25,
-            (ws[_LOG + 2 * _W + c + 1] * ratio - ws[_LOG + 2 * _W + c]) * -0.25,
-        )  # fmt: skip
-        lb = ln_ + ((ws[_SMP + 4 * _W + c + 2] - ln_) * ratio - (ln_ - lr)) * -0.25
-    else:
-        bw, bx, by, bz, lb = nw, nx, ny, nz, ln_
-    ws[_CTL + 8 * _W + r] = bw
-    ws[_CTL + 9 * _W + r] = bx
-    ws[_CTL + 10 * _W + r] = by
-    ws[_CTL + 11 * _W + r] = bz
-    ws[_CTL + 14 * _W + r] = lb
-
-
-@helper(options=_VECTOR)
-def _records(ws, n, s0, count):
-    """Records of the segments at slots 0..count-1 (segment s0 + r) from
-    their samples, logs and control points, as :func:`_records_exact` where
-    both arcs are short (the arc r[i] -> r[i+1] then is r[i] exp(τ L[i]));
-    marks the others in _REDO (those whose state would be 1) and returns
-    how many it marked, with the earlier marks of :func:`_controls`."""
-    slow = 0
-    for r in range(min(count, _SPAN)):
-        c = r + 1
-        nan = ws[_CTL + 15 * _W + r]
-        rw, rx = ws[_SMP + c], ws[_SMP + _W + c]
-        ry, rz = ws[_SMP + 2 * _W + c], ws[_SMP + 3 * _W + c]
-        lr = ws[_SMP + 4 * _W + c]
-        nw, nx = ws[_CTL + r], ws[_CTL + _W + r]
-        ny, nz = ws[_CTL + 2 * _W + r], ws[_CTL + 3 * _W + r]
-        ln_ = ws[_CTL + 12 * _W + r]
-        f1 = _decide(rw * nw + rx * nx + ry * ny + rz * nz, _flip_bound(lr, ln_))
-        ws[_REC + r] = rw
-        ws[_REC + _W + r] = rx
-        ws[_REC + 2 * _W + r] = ry
-        ws[_REC + 3 * _W + r] = rz
-        lx, ly, lz = ws[_LOG + c], ws[_LOG + _W + c], ws[_LOG + 2 * _W + c]
-        ow, ox, oy, oz = _qmul_plain(rw, rx, ry, rz, 0.0, lx, ly, lz)
-        theta2 = lx * lx + ly * ly + lz * lz
-        ws[_REC + 4 * _W + r] = ow
-        ws[_REC + 5 * _W + r] = ox
-        ws[_REC + 6 * _W + r] = oy
-        ws[_REC + 7 * _W + r] = oz
-        ws[_REC + 8 * _W + r] = theta2
-        ws[_REC + 9 * _W + r] = math.sqrt(theta2)
-        ws[_REC + 10 * _W + r] = 1.0
-        ws[_REC + 22 * _W + r] = lr
-        ws[_REC + 23 * _W + r] = ln_
-        aw, ax = ws[_CTL + 4 * _W + r], ws[_CTL + 5 * _W + r]
-        ay, az = ws[_CTL + 6 * _W + r], ws[_CTL + 7 * _W + r]
-        la = ws[_CTL + 13 * _W + r]
-        bw, bx = ws[_CTL + 8 * _W + r], ws[_CTL + 9 * _W + r]
-        by, bz = ws[_CTL + 10 * _W + r], ws[_CTL + 11 * _W + r]
-        lb = ws[_CTL + 14 * _W + r]
-        f2 = _decide(aw * bw + ax * bx + ay * by + az * bz, _flip_bound(la, lb))
-        bw, bx, by, bz = f2 * bw, f2 * bx, f2 * by, f2 * bz
-        # _great_circle's series branch
-        d = aw * bw + ax * bx + ay * by + az * bz
-        ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
-        o2 = ow * ow + ox * ox + oy * oy + oz * oz
-        g = atan_over_x_small(o2 / (d * d)) / d
-        theta2 = o2 * g * g
-        ws[_REC + 11 * _W + r] = aw
-        ws[_REC + 12 * _W + r] = ax
-        ws[_REC + 13 * _W + r] = ay
-        ws[_REC + 14 * _W + r] = az
-        ws[_REC + 15 * _W + r] = ow
-        ws[_REC + 16 * _W + r] = ox
-        ws[_REC + 17 * _W + r] = oy
-        ws[_REC + 18 * _W + r] = oz
-        ws[_REC + 19 * _W + r] = theta2
-        # (θ² >= 0: abs lets LLVM use the sqrt instruction, not libm's call)
-        ws[_REC + 20 * _W + r] = math.sqrt(abs(theta2))
-        ws[_REC + 21 * _W + r] = g
-        ws[_REC + 24 * _W + r] = la
-        ws[_REC + 25 * _W + r] = lb
-        ws[_REC + 26 * _W + r] = _flip_bound(
-            max(abs(lr), abs(ln_)), max(abs(la), abs(lb))
-        )
-        wide1 = max(abs(lr), abs(ln_)) > _LOG_SCALE_LIMIT
-        wide2 = max(abs(la), abs(lb)) > _LOG_SCALE_LIMIT
-        fast = (f1 != 0.0) & (not wide1) & (f2 != 0.0) & (not wide2)
-        state = -1.0 if nan > 0.0 else (1.0 if fast else 0.0)
-        ws[_REC + 28 * _W + r] = state
-        short = (d > 0.0) & (o2 < (SERIES_RATIO * d) ** 2)
-        redo = (state > 0.0) & ((f1 != 1.0) | (s0 + r >= n - 1) | (not short))
-        redo |= ws[_REDO + r] != 0.0
-        ws[_REDO + r] = 1.0 if redo else 0.0
-        slow += redo
-    return slow
-
-
-@helper(inline=True)
-def _records_exact(ws, n, i, r, c):
-    """The record of segment i (slot r, sample i in row c), see _prepare."""
-    if ws[_CTL + 15 * _W + r] > 0.0:
-        ws[_REC + 28 * _W + r] = -1.0
-        return
-    rw, rx = ws[_SMP + c], ws[_SMP + _W + c]
-    ry, rz = ws[_SMP + 2 * _W + c], ws[_SMP + 3 * _W + c]
-    lr = ws[_SMP + 4 * _W + c]
-    nw, nx = ws[_CTL + r], ws[_CTL + _W + r]
-    ny, nz = ws[_CTL + 2 * _W + r], ws[_CTL + 3 * _W + r]
-    ln_ = ws[_CTL + 12 * _W + r]
-    # the "shorter way round", decided as for the scaled values
-    f = _decide(rw * nw + rx * nx + ry * ny + rz * nz, _flip_bound(lr, ln_))
-    ws[_REC + r] = rw
-    ws[_REC + _W + r] = rx
-    ws[_REC + 2 * _W + r] = ry
-    ws[_REC + 3 * _W + r] = rz
-    if f == 1.0 and i < n - 1:
-        # the arc towards r[i+1] is r[i] exp(τ L[i]): o = r[i] (0, L[i])
-        # has length θ, so g = 1 (no great circle to work out)
-        lx, ly, lz = ws[_LOG + c], ws[_LOG + _W + c], ws[_LOG + 2 * _W + c]
-        ow, ox, oy, oz = _qmul1(rw, rx, ry, rz, 0.0, lx, ly, lz)
-        theta2 = lx * lx + ly * ly + lz * lz
-        arc = (ow, ox, oy, oz, theta2, math.sqrt(theta2), 1.0)
-    else:
-        arc = _great_circle(rw, rx, ry, rz, f * nw, f * nx, f * ny, f * nz)
-    for k in range(7):
-        ws[_REC + (4 + k) * _W + r] = arc[k]
-    ws[_REC + 22 * _W + r] = lr
-    ws[_REC + 23 * _W + r] = ln_
-    fast = f != 0.0 and not max(abs(lr), abs(ln_)) > _LOG_SCALE_LIMIT
-    aw, ax = ws[_CTL + 4 * _W + r], ws[_CTL + 5 * _W + r]
-    ay, az = ws[_CTL + 6 * _W + r], ws[_CTL + 7 * _W + r]
-    la = ws[_CTL + 13 * _W + r]
-    bw, bx = ws[_CTL + 8 * _W + r], ws[_CTL + 9 * _W + r]
-    by, bz = ws[_CTL + 10 * _W + r], ws[_CTL + 11 * _W + r]
-    lb = ws[_CTL + 14 * _W + r]
-    f = _decide(aw * bw + ax * bx + ay * by + az * bz, _flip_bound(la, lb))
-    arc = _great_circle(aw, ax, ay, az, f * bw, f * bx, f * by, f * bz)
-    ws[_REC + 11 * _W + r] = aw
-    ws[_REC + 12 * _W + r] = ax
-    ws[_REC + 13 * _W + r] = ay
-    ws[_REC + 14 * _W + r] = az
-    for k in range(7):
-        ws[_REC + (15 + k) * _W + r] = arc[k]
-    ws[_REC + 24 * _W + r] = la
-    ws[_REC + 25 * _W + r] = lb
-    # the outer slerp's scales lie between e^lr and e^ln_, and between
-    # e^la and e^lb
-    ws[_REC + 26 * _W + r] = _flip_bound(max(abs(lr), abs(ln_)), max(abs(la), abs(lb)))
-    fast = fast and f != 0.0 and not max(abs(la), abs(lb)) > _LOG_SCALE_LIMIT
-    ws[_REC + 28 * _W + r] = 1.0 if fast else 0.0
-
-
-@helper(inline=True)
-def _prepare(qf, sign, t_in, n, s0, s1, ws):
-    """Set up segments s0..s1 of the squad spline, into slots 0..s1-s0.
-
-    The record of a segment (quantity k of slot r at ``_REC + k * _W + r``):
-    0:11 the arc r[i] -> r[i+1] (r[i], then o, θ², θ, g of
-    :func:`_great_circle`); 11:22 the arc A[i] -> B[i] (unit parts; the
-    last segment continues to the virtual sample r[n-1] r[n-2]⁻¹ r[n-1]);
-    22:26 ln of the scales of r[i], r[i+1], A[i], B[i]; 26 the bound of
-    the outer slerp's direction decision; 28: 1 if the fast route applies,
-    0 for the exact route, -1 if the segment touches a missing sample (NaN).
-
-    Vector loops over the samples, the steps between them and the segments
-    compute the common case (scales near 1, short arcs) and mark what they
-    do not cover; the marked segments, and those at the ends of the series
-    (no sample before, or fewer than two after), are then set up one by one
-    (:func:`_controls_exact`, :func:`_records_exact`).
-    """
-    k0 = max(s0 - 1, 0)
-    k1 = min(s1 + 2, n - 1)
-    a0 = k0 - s0 + 1
-    _samples(qf, sign, ws, k0, k1, a0, False)
-    _logs(t_in, ws, k0, k1, a0, False)
-    # the control points: the segments with two samples on either side in
-    # a vector loop, the others (at the ends of the series) one by one
-    for r in range(s1 - s0 + 1):
-        ws[_REDO + r] = 0.0
-    ia = max(s0, 1)
-    ib = min(s1, n - 3)
-    slow = 0
-    if ib >= ia:
-        slow = _controls(ws, ia - s0, ib - ia + 1)
-    for i in range(s0, s1 + 1):
-        if i < ia or i > ib:
-            _controls_exact(ws, n, i, i - s0, i - s0 + 1)
-    if slow:
-        for r in range(s1 - s0 + 1):
-            if ws[_REDO + r] != 0.0:
-                _controls_exact(ws, n, s0 + r, r, r + 1)
-    if _records(ws, n, s0, s1 - s0 + 1):
-        for r in range(s1 - s0 + 1):
-            if ws[_REDO + r] != 0.0:
-                _records_exact(ws, n, s0 + r, r, r + 1)
-
-
-@helper(inline=True)
-def _along_series(aw, ax, ay, az, ow, ox, oy, oz, theta2, g, tau):
-    """:func:`_along` where τ²θ² < SERIES_ANGLE² (its first branch), and τ²θ²."""
-    y2 = tau * tau * theta2
-    c = cos_small(y2)
-    k = sinc_small(y2) * tau * g
-    return c * aw + k * ow, c * ax + k * ox, c * ay + k * oy, c * az + k * oz, y2
-
-
-@helper(inline=True)
-def _outer_series(aw, ax, ay, az, bw, bx, by, bz, tau):
-    """:func:`_outer`'s series branch, and whether it applies."""
-    d = aw * bw + ax * bx + ay * by + az * bz
-    ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
-    o2 = ow * ow + ox * ox + oy * oy + oz * oz
-    inv_d = 1.0 / d
-    x2 = o2 * inv_d * inv_d
-    p = atan_over_x_small(x2)
-    y2 = tau * tau * x2 * p * p
-    c = cos_small(y2)
-    k = sinc_small(y2) * tau * p * inv_d
-    ok = (d > 0.0) & (o2 < (SERIES_RATIO * d) ** 2) & (y2 < SERIES_ANGLE * SERIES_ANGLE)
-    return (
-        c * aw + k * ow,
-        c * ax + k * ox,
-        c * ay + k * oy,
-        c * az + k * oz,
-        ok,
-    )
-
-
-@helper(inline=True)
-def _exp_series(x):
-    """:func:`_exp_small` for |x| < _SMALL (its first two branches)."""
-    tiny = 1.0 + x * (1.0 + x * 0.5 * (1.0 + x / 3.0))
-    small = 1.0 + x * (
-        1.0
-        + x
-        * 0.5
-        * (1.0 + x / 3.0 * (1.0 + x * 0.25 * (1.0 + x * 0.2 * (1.0 + x / 6.0))))
-    )
-    return tiny if abs(x) < TINY_SQUARE else small
-
-
-@helper(options=_VECTOR)
-def _rows(wr, ob, count):
-    """The first ``count`` rows of the block, from the row scratch (record,
-    τ, sign) into ``ob`` (4 per row, flat), where the fast route's series
-    apply: the two inner slerps (:func:`_along`), the outer slerp
-    (:func:`_outer`), the scale (:func:`_exp_small`) and the stored sign.
-    Marks the other rows in _EXACT (they take the scalar route) and returns
-    how many it marked."""
-    limit = SERIES_ANGLE * SERIES_ANGLE
-    for b in range(min(count, _BLOCK)):
-        tau = wr[_TAU + b]
-        aw, ax, ay, az, ya = _along_series(
-            wr[_ROW + b], wr[_ROW + _R + b], wr[_ROW + 2 * _R + b],
-            wr[_ROW + 3 * _R + b], wr[_ROW + 4 * _R + b], wr[_ROW + 5 * _R + b],
-            wr[_ROW + 6 * _R + b], wr[_ROW + 7 * _R + b], wr[_ROW + 8 * _R + b],
-            wr[_ROW + 10 * _R + b], tau,
-        )  # fmt: skip
-        bw, bx, by, bz, yb = _along_series(
-            wr[_ROW + 11 * _R + b], wr[_ROW + 12 * _R + b], wr[_ROW + 13 * _R + b],
-            wr[_ROW + 14 * _R + b], wr[_ROW + 15 * _R + b], wr[_ROW + 16 * _R + b],
-            wr[_ROW + 17 * _R + b], wr[_ROW + 18 * _R + b], wr[_ROW + 19 * _R + b],
-            wr[_ROW + 21 * _R + b], tau,
-        )  # fmt: skip
-        wr[_INN + b] = aw
-        wr[_INN + _R + b] = ax
-        wr[_INN + 2 * _R + b] = ay
-        wr[_INN + 3 * _R + b] = az
-        wr[_INN + 4 * _R + b] = bw
-        wr[_INN + 5 * _R + b] = bx
-        wr[_INN + 6 * _R + b] = by
-        wr[_INN + 7 * _R + b] = bz
-        wr[_EXACT + b] = 0.0 if (ya < limit) & (yb < limit) else 1.0
-    exact = 0
-    for b in range(min(count, _BLOCK)):
-        tau = wr[_TAU + b]
-        aw, ax, ay, az = (
-            wr[_INN + b],
-            wr[_INN + _R + b],
-            wr[_INN + 2 * _R + b],
-            wr[_INN + 3 * _R + b],
-        )
-        bw, bx, by, bz = (
-            wr[_INN + 4 * _R + b],
-            wr[_INN + 5 * _R + b],
-            wr[_INN + 6 * _R + b],
-            wr[_INN + 7 * _R + b],
-        )
-        flip = _decide(aw * bw + ax * bx + ay * by + az * bz, wr[_ROW + 26 * _R + b])
-        h = 2.0 * tau * (1.0 - tau)
-        w, x, y, z, ok = _outer_series(
-            aw, ax, ay, az, flip * bw, flip * bx, flip * by, flip * bz, h
-        )
-        u = 1.0 - tau
-        e = (1.0 - h) * (
-            u * wr[_ROW + 22 * _R + b] + tau * wr[_ROW + 23 * _R + b]
-        ) + h * (u * wr[_ROW + 24 * _R + b] + tau * wr[_ROW + 25 * _R + b])
-        k = wr[_SGN + b] * _exp_series(e)
-        ob[4 * b] = k * w
-        ob[4 * b + 1] = k * x
-        ob[4 * b + 2] = k * y
-        ob[4 * b + 3] = k * z
-        fast = (
-            (wr[_ROW + 28 * _R + b] > 0.0)
-            & (0.0 <= tau)
-            & (tau <= 1.0)
-            & (flip != 0.0)
-            & ok
-            & (abs(e) < _SMALL)
-            & (wr[_EXACT + b] == 0.0)
-        )
-        wr[_EXACT + b] = 0.0 if fast else 1.0
-        exact += not fast
-    return exact
-
-
-@helper
-def _exact_row(q, sign, t_in, i, tau):
-    """Segment i at τ by the arithmetic of ``squad_coefficients`` and the
-    general branch of ``squad_evaluate``, on the sign-continuous samples."""
-    n = q.shape[0]
-    lo = max(i - 1, 0)
-    hi = min(i + 2, n - 1)
-    r = np.empty((4, 4))
-    for k in range(lo, hi + 1):
-        for j in range(4):
-            r[k - lo, j] = sign[k] * q[k, j]
-    logs = np.zeros((3, 4))
-    for k in range(lo, hi):
-        iw, ix, iy, iz = _qinv1(r[k - lo, 0], r[k - lo, 1], r[k - lo, 2], r[k - lo, 3])
-        nw, nx, ny, nz = _qmul1(
-            iw,
-            ix,
-            iy,
-            iz,
-            r[k + 1 - lo, 0],
-            r[k + 1 - lo, 1],
-            r[k + 1 - lo, 2],
-            r[k + 1 - lo, 3],
-        )
-        lw, lx, ly, lz = _qlog1(nw, nx, ny, nz)
-        logs[k - lo, 0] = lw
-        logs[k - lo, 1] = lx
-        logs[k - lo, 2] = ly
-        logs[k - lo, 3] = lz
-    c = i - lo
-    rw, rx, ry, rz = r[c, 0], r[c, 1], r[c, 2], r[c, 3]
-    if i < n - 1:
-        nw, nx, ny, nz = r[c + 1, 0], r[c + 1, 1], r[c + 1, 2], r[c + 1, 3]
-    else:
-        iw, ix, iy, iz = _qinv1(r[c - 1, 0], r[c - 1, 1], r[c - 1, 2], r[c - 1, 3])
-        pw, px, py, pz = _qmul1(rw, rx, ry, rz, iw, ix, iy, iz)
-        nw, nx, ny, nz = _qmul1(pw, px, py, pz, rw, rx, ry, rz)
-    # (a missing outer neighbour: the end rule, as in _controls_exact)
-    if 1 <= i <= n - 2 and not math.isnan(logs[c - 1, 0]):
-        ratio = (t_in[i + 1] - t_in[i]) / (t_in[i] - t_in[i - 1])
-        ew, ex, ey, ez = _qexp1(
-            (-logs[c, 0] + logs[c - 1, 0] * ratio) * 0.25,
-            (-logs[c, 1] + logs[c - 1, 1] * ratio) * 0.25,
-            (-logs[c, 2] + logs[c - 1, 2] * ratio) * 0.25,
-            (-logs[c, 3] + logs[c - 1, 3] * ratio) * 0.25,
-        )
-        aw, ax, ay, az = _qmul1(rw, rx, ry, rz, ew, ex, ey, ez)
-    else:
-        aw, ax, ay, az = rw, rx, ry, rz
-    if i <= n - 3 and not math.isnan(logs[c + 1, 0]):
-        ratio = (t_in[i + 1] - t_in[i]) / (t_in[i + 2] - t_in[i + 1])
-        ew, ex, ey, ez = _qexp1(
-            (logs[c + 1, 0] * ratio - logs[c, 0]) * -0.25,
-            (logs[c + 1, 1] * ratio - logs[c, 1]) * -0.25,
-            (logs[c + 1, 2] * ratio - logs[c, 2]) * -0.25,
-            (logs[c + 1, 3] * ratio - logs[c, 3]) * -0.25,
-        )
-        bw, bx, by, bz = _qmul1(nw, nx, ny, nz, ew, ex, ey, ez)
-    else:
-        bw, bx, by, bz = nw, nx, ny, nz
-    s1 = _qslerp1(rw, rx, ry, rz, nw, nx, ny, nz, tau)
-    s2 = _qslerp1(aw, ax, ay, az, bw, bx, by, bz, tau)
-    return _qslerp_unit1(
-        s1[0], s1[1], s1[2], s1[3], s2[0], s2[1], s2[2], s2[3], 2.0 * tau * (1.0 - tau)
-    )
-
-
-@helper(inline=True)
-def _outer(aw, ax, ay, az, bw, bx, by, bz, tau):
-    """slerp of unit a towards unit b (no direction flip), as _qslerp_unit1."""
-    d = aw * bw + ax * bx + ay * by + az * bz
-    ow, ox, oy, oz = bw - d * aw, bx - d * ax, by - d * ay, bz - d * az
-    o2 = ow * ow + ox * ox + oy * oy + oz * oz
-    if d > 0.0 and o2 < (SERIES_RATIO * d) ** 2:
-        inv_d = 1.0 / d
-        x2 = o2 * inv_d * inv_d
-        p = atan_over_x_small(x2)
-        y2 = tau * tau * x2 * p * p
-        if y2 < SERIES_ANGLE * SERIES_ANGLE:
-            c = cos_small(y2)
-            k = sinc_small(y2) * tau * p * inv_d
-            return c * aw + k * ow, c * ax + k * ox, c * ay + k * oy, c * az + k * oz
-    so = math.sqrt(o2)
-    if so == 0.0:
-        return aw, ax, ay, az
-    s, c = _sincos(tau * math.atan2(so, d))
-    k = s / so
-    return c * aw + k * ow, c * ax + k * ox, c * ay + k * oy, c * az + k * oz
+        # sparse or unordered: each new segment in the next free record
+        loaded = -2
+        free = 0
+        for j in range(start, stop):
+            i_j = found[j - start]
+            seg = i_j if i_j >= 0 else n - 1  # numpy-quaternion indexes with -1
+            if seg != loaded:
+                # its samples in rows 0.. (sample seg in row 1), its
+                # control points and record in the next free slot
+                k0 = max(seg - 1, 0)
+                k1 = min(seg + 2, n - 1)
+                _samples(qf, sign, ws, k0, k1, k0 - seg + 1, scalar)
+                _logs(t_in, ws, k0, k1, k0 - seg + 1, scalar)
+                _controls_exact(ws, n, seg, free, 1)
+                _records_exact(ws, n, seg, free, 1)
+                loaded = seg
+                free += 1
+            slot[j - start] = free - 1
 
 
 # Not inlined: the three kernels below share one compiled walk (inlined into
@@ -1004,170 +184,58 @@ def _walk(q, sign, t_in, t_out, out, first, last, scalar):
     i = -1
     for start in range(first, last, _BLOCK):
         stop = min(start + _BLOCK, last)
-        ordered = True
-        for j in range(start, stop):
-            t = t_out[j]
-            # i: the last sample at or before t (-1 before the first),
-            # galloping forward from the previous row's (sorted t_out) or
-            # by bisection when t went back
-            if i >= 0 and t < t_in[i]:
-                i = -1
-                ordered = False
-            step = 1
-            lo = i
-            hi = i + 1
-            while hi < n and t_in[hi] <= t:
-                lo = hi
-                hi = i + 1 + step
-                step *= 2
-            if hi > n:
-                hi = n
-            while hi - lo > 1:
-                mid = (lo + hi) // 2
-                if t_in[mid] <= t:
-                    lo = mid
-                else:
-                    hi = mid
-            i = lo
-            found[j - start] = i
-        s0 = found[0]
-        s1 = found[stop - start - 1]
-        if ordered and s0 >= 0 and s1 - s0 < _SPAN and not scalar:
-            # dense: every segment from the first to the last at once
-            _prepare(qf, sign, t_in, n, s0, s1, ws)
-            for j in range(start, stop):
-                slot[j - start] = found[j - start] - s0
-        else:
-            # sparse or unordered: each new segment in the next free record
-            loaded = -2
-            free = 0
-            for j in range(start, stop):
-                i_j = found[j - start]
-                seg = i_j if i_j >= 0 else n - 1  # numpy-quaternion indexes with -1
-                if seg != loaded:
-                    # its samples in rows 0.. (sample seg in row 1), its
-                    # control points and record in the next free slot
-                    k0 = max(seg - 1, 0)
-                    k1 = min(seg + 2, n - 1)
-                    _samples(qf, sign, ws, k0, k1, k0 - seg + 1, scalar)
-                    _logs(t_in, ws, k0, k1, k0 - seg + 1, scalar)
-                    _controls_exact(ws, n, seg, free, 1)
-                    _records_exact(ws, n, seg, free, 1)
-                    loaded = seg
-                    free += 1
-                slot[j - start] = free - 1
-        # each row's τ, stored sign and segment record into the row scratch
-        # (a scalar loop: the records are gathered by slot), then the rows
-        # in vector loops, and the rows these do not cover one by one
-        for jj in range(stop - start):
-            j = start + jj
-            i_j = found[jj]
-            seg = i_j if i_j >= 0 else n - 1
-            if seg < n - 1:
-                dt = t_in[seg + 1] - t_in[seg]
-            else:
-                dt = (t_in[n - 1] + dt_last) - t_in[n - 1]
-            wr[_TAU + jj] = (t_out[j] - t_in[seg]) / dt
-            wr[_SGN + jj] = sign[min(max(i_j, 0), n - 2)]
-            # (slots are >= 0: max spares the negative-index wraparound)
-            r = max(slot[jj], 0)
-            wr[_ROW + 0 * _R + jj] = ws[_REC + 0 * _W + r]
-            wr[_ROW + 1 * _R + jj] = ws[_REC + 1 * _W + r]
-            wr[_ROW + 2 * _R + jj] = ws[_REC + 2 * _W + r]
-            wr[_ROW + 3 * _R + jj] = ws[_REC + 3 * _W + r]
-            wr[_ROW + 4 * _R + jj] = ws[_REC + 4 * _W + r]
-            wr[_ROW + 5 * _R + jj] = ws[_REC + 5 * _W + r]
-            wr[_ROW + 6 * _R + jj] = ws[_REC + 6 * _W + r]
-            wr[_ROW + 7 * _R + jj] = ws[_REC + 7 * _W + r]
-            wr[_ROW + 8 * _R + jj] = ws[_REC + 8 * _W + r]
-            wr[_ROW + 10 * _R + jj] = ws[_REC + 10 * _W + r]
-            wr[_ROW + 11 * _R + jj] = ws[_REC + 11 * _W + r]
-            wr[_ROW + 12 * _R + jj] = ws[_REC + 12 * _W + r]
-            wr[_ROW + 13 * _R + jj] = ws[_REC + 13 * _W + r]
-            wr[_ROW + 14 * _R + jj] = ws[_REC + 14 * _W + r]
-            wr[_ROW + 15 * _R + jj] = ws[_REC + 15 * _W + r]
-            wr[_ROW + 16 * _R + jj] = ws[_REC + 16 * _W + r]
-            wr[_ROW + 17 * _R + jj] = ws[_REC + 17 * _W + r]
-            wr[_ROW + 18 * _R + jj] = ws[_REC + 18 * _W + r]
-            wr[_ROW + 19 * _R + jj] = ws[_REC + 19 * _W + r]
-            wr[_ROW + 21 * _R + jj] = ws[_REC + 21 * _W + r]
-            wr[_ROW + 22 * _R + jj] = ws[_REC + 22 * _W + r]
-            wr[_ROW + 23 * _R + jj] = ws[_REC + 23 * _W + r]
-            wr[_ROW + 24 * _R + jj] = ws[_REC + 24 * _W + r]
-            wr[_ROW + 25 * _R + jj] = ws[_REC + 25 * _W + r]
-            wr[_ROW + 26 * _R + jj] = ws[_REC + 26 * _W + r]
-            wr[_ROW + 28 * _R + jj] = ws[_REC + 28 * _W + r]
+        i, ordered = _find_segments(t_in, t_out, start, stop, i, found)
+        _set_up_segments(
+            qf, sign, t_in, n, start, stop, found, ordered, scalar, ws, slot
+        )
+        _gather_records(t_in, t_out, sign, n, dt_last, start, stop, found, slot, ws, wr)
+        # the rows in vector loops, then the rows these do not cover
         if not (scalar or _rows(wr, of[4 * start :], stop - start)):
             continue
-        # the other rows by the scalar route: _along, _outer and _exp_small
-        # with all their branches, or _exact_row (written out here: a
-        # helper receiving the arrays would cost reference counting per row)
-        for jj in range(stop - start):
-            if not scalar and wr[_EXACT + jj] == 0.0:
-                continue
-            j = start + jj
-            r = slot[jj]
-            s = wr[_SGN + jj]
-            tau = wr[_TAU + jj]
-            state = ws[_REC + 28 * _W + r]
-            if state < 0.0:
-                # a segment missing one of its samples: nothing, except at
-                # its first sample's own time (when that one is present)
-                i_j = found[jj]
-                if tau == 0.0 and i_j >= 0:
-                    out[j, 0], out[j, 1] = q[i_j, 0], q[i_j, 1]
-                    out[j, 2], out[j, 3] = q[i_j, 2], q[i_j, 3]
-                else:
-                    out[j, 0] = out[j, 1] = out[j, 2] = out[j, 3] = np.nan
-                continue
-            if state > 0.0 and 0.0 <= tau <= 1.0:
-                aw, ax, ay, az = _along(
-                    ws[_REC + r], ws[_REC + _W + r], ws[_REC + 2 * _W + r],
-                    ws[_REC + 3 * _W + r], ws[_REC + 4 * _W + r],
-                    ws[_REC + 5 * _W + r], ws[_REC + 6 * _W + r],
-                    ws[_REC + 7 * _W + r], ws[_REC + 8 * _W + r],
-                    ws[_REC + 9 * _W + r], ws[_REC + 10 * _W + r], tau,
-                )  # fmt: skip
-                bw, bx, by, bz = _along(
-                    ws[_REC + 11 * _W + r], ws[_REC + 12 * _W + r],
-                    ws[_REC + 13 * _W + r], ws[_REC + 14 * _W + r],
-                    ws[_REC + 15 * _W + r], ws[_REC + 16 * _W + r],
-                    ws[_REC + 17 * _W + r], ws[_REC + 18 * _W + r],
-                    ws[_REC + 19 * _W + r], ws[_REC + 20 * _W + r],
-                    ws[_REC + 21 * _W + r], tau,
-                )  # fmt: skip
-                flip = _decide(
-                    aw * bw + ax * bx + ay * by + az * bz, ws[_REC + 26 * _W + r]
-                )
-                if flip != 0.0:
-                    h = 2.0 * tau * (1.0 - tau)
-                    w, x, y, z = _outer(
-                        aw, ax, ay, az, flip * bw, flip * bx, flip * by, flip * bz, h
-                    )
-                    u = 1.0 - tau
-                    scale = _exp_small(
-                        (1.0 - h)
-                        * (u * ws[_REC + 22 * _W + r] + tau * ws[_REC + 23 * _W + r])
-                        + h
-                        * (u * ws[_REC + 24 * _W + r] + tau * ws[_REC + 25 * _W + r])
-                    )
-                    k = s * scale
-                    out[j, 0] = k * w
-                    out[j, 1] = k * x
-                    out[j, 2] = k * y
-                    out[j, 3] = k * z
-                    continue
-            i_j = found[jj]
-            w, x, y, z = _exact_row(q, sign, t_in, i_j if i_j >= 0 else n - 1, tau)
-            out[j, 0] = s * w
-            out[j, 1] = s * x
-            out[j, 2] = s * y
-            out[j, 3] = s * z
+        _scalar_rows(q, sign, t_in, out, n, start, stop, found, slot, ws, wr, scalar)
 
 
-@kernel(F2, F1, F1, options=_SERIAL)
-def squad_walk(q, t_in, t_out):
-    """Squad of the stored series ``q`` at ``t_out``, with the stored signs.
+def _walk_body(chunks: int, scalar: bool) -> Callable[..., Any]:
+    """squad_walk's body for ``chunks`` chunks of output rows (1: serial).
+
+    Each chunk is walked on its own (a prange loop: numba's threads in the
+    parallel twin, a plain loop otherwise); a segment's value does not
+    depend on the walk that reached it, so every twin gives the same bits.
+    """
+
+    def body(q, t_in, t_out):
+        n = q.shape[0]
+        m = t_out.shape[0]
+        out = np.empty((m, 4))
+        if n < 2 or m == 0:
+            for j in range(m):
+                for k in range(4):
+                    out[j, k] = q[0, k]
+            return out
+        sign = unflip_signs(q)
+        # whole blocks per chunk, many more chunks than threads (numba's
+        # thread count is not read here: that would keep the kernel out of
+        # the cache)
+        size = ((m + chunks - 1) // chunks + _BLOCK - 1) // _BLOCK * _BLOCK
+        for c in prange(chunks):
+            _walk(
+                q, sign, t_in, t_out, out,
+                min(c * size, m), min((c + 1) * size, m), scalar,
+            )  # fmt: skip
+        return out
+
+    return body
+
+
+def _compiled_as(name: str, doc: str, body: Callable[..., Any]) -> Callable[..., Any]:
+    """``body`` under its kernel's own name: numba's cache files go by name,
+    and the compilations of one body must not share them."""
+    body.__name__ = body.__qualname__ = name
+    body.__doc__ = doc
+    return body
+
+
+_SQUAD_WALK_DOC = """Squad of the stored series ``q`` at ``t_out``, with the stored signs.
 
     Equal (to rounding) to ``unflip``, ``squad`` on the result and the sign
     of the stored sample each output time starts from
@@ -1189,62 +257,31 @@ def squad_walk(q, t_in, t_out):
     ndarray, shape (m, 4)
         NaN where the spline touches a missing sample.
     """
-    n = q.shape[0]
-    m = t_out.shape[0]
-    out = np.empty((m, 4))
-    if n < 2 or m == 0:
-        for j in range(m):
-            for k in range(4):
-                out[j, k] = q[0, k]
-        return out
-    sign = unflip_signs(q)
-    _walk(q, sign, t_in, t_out, out, 0, m, False)
-    return out
 
-
-@kernel(F2, F1, F1, options=_PARALLEL)
-def squad_walk_parallel(q, t_in, t_out):
-    """:func:`squad_walk` with chunks of output rows on numba's threads."""
-    n = q.shape[0]
-    m = t_out.shape[0]
-    out = np.empty((m, 4))
-    if n < 2 or m == 0:
-        for j in range(m):
-            for k in range(4):
-                out[j, k] = q[0, k]
-        return out
-    sign = unflip_signs(q)
-    # whole blocks per chunk, many more chunks than threads (numba's thread
-    # count is not read here: that would keep the kernel out of the cache)
-    chunks = _CHUNKS
-    size = ((m + chunks - 1) // chunks + _BLOCK - 1) // _BLOCK * _BLOCK
-    for c in prange(chunks):
-        _walk(
-            q, sign, t_in, t_out, out, min(c * size, m), min((c + 1) * size, m), False
-        )
-    return out
-
-
-@kernel(F2, F1, F1, options=_SERIAL)
-def squad_walk_scalar(q, t_in, t_out):
-    """:func:`squad_walk` by its scalar code alone: every segment set up on
+squad_walk = kernel(F2, F1, F1, options=_SERIAL)(
+    _compiled_as("squad_walk", _SQUAD_WALK_DOC, _walk_body(1, False))
+)
+squad_walk_parallel = kernel(F2, F1, F1, options=_PARALLEL)(
+    _compiled_as(
+        "squad_walk_parallel",
+        ":func:`squad_walk` with chunks of output rows on numba's threads.",
+        _walk_body(_CHUNKS, False),
+    )
+)
+squad_walk_scalar = kernel(F2, F1, F1, options=_SERIAL)(
+    _compiled_as(
+        "squad_walk_scalar",
+        """:func:`squad_walk` by its scalar code alone: every segment set up on
     its own (:func:`_unit`, :func:`_log_vec`, :func:`_controls_exact`,
-    :func:`_records_exact`) and every row evaluated by the scalar route of :func:`_walk`.
+    :func:`_records_exact`) and every row evaluated by the scalar route of
+    :func:`_walk`.
 
     The vector loops compute the common branches of the same expressions,
     so the two agree bit for bit; the tests hold them to that.
-    """
-    n = q.shape[0]
-    m = t_out.shape[0]
-    out = np.empty((m, 4))
-    if n < 2 or m == 0:
-        for j in range(m):
-            for k in range(4):
-                out[j, k] = q[0, k]
-        return out
-    sign = unflip_signs(q)
-    _walk(q, sign, t_in, t_out, out, 0, m, True)
-    return out
+    """,
+        _walk_body(1, True),
+    )
+)
 
 
 @kernel(F2, F1, F1, F)

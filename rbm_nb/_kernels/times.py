@@ -2,23 +2,17 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
-from .._config import KERNEL
+from .._config import EXACT_VECTOR_KERNEL
 from ._jit import RF1, RI1, I, kernel  # noqa: E741
 
 __all__ = ["seconds_since", "ns_key_faults", "float_key_faults"]
 
-# Counting passes LLVM vectorises (no ZeroDivisionError branch; loop
-# counters from 0): the caller looks for the offending index, to name it,
-# only when a count is not zero.
-_COUNTING = dataclasses.replace(KERNEL, error_model="numpy")
 _NAT = np.iinfo(np.int64).min
 
 
-@kernel(RI1, options=_COUNTING)
+@kernel(RI1, options=EXACT_VECTOR_KERNEL)
 def ns_key_faults(keys):
     """(NaT keys, keys not greater than their predecessor) of int64 keys."""
     n = keys.shape[0]
@@ -31,7 +25,7 @@ def ns_key_faults(keys):
     return nat, unordered
 
 
-@kernel(RF1, options=_COUNTING)
+@kernel(RF1, options=EXACT_VECTOR_KERNEL)
 def float_key_faults(keys):
     """(NaN or infinite keys, keys not greater than their predecessor)."""
     n = keys.shape[0]

@@ -33,7 +33,8 @@ from numba import prange
 
 from .._config import PARALLEL_KERNEL
 from ._jit import F1, F2, I1, I, helper, kernel  # noqa: E741
-from .fused import _ACC, _SLOT_TYPES, BLOCK, SLOTS, WORK, _chain_block
+from .chain_block import SLOT_TYPES, SLOTS, _chain_block
+from .chain_rows import _ACC, BLOCK, WORK
 from .quaternion import _rotate1
 
 __all__ = ["BODY", "REFERENCE", "chain_body_rates", "chain_body_rates_parallel"]
@@ -99,7 +100,7 @@ _STATE = 21
 @helper
 def _evaluate(
     plan, statics, offsets, gaps, own,
-    times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
+    slot_times, slot_t, slot_r, slot_p, slot_c,
     target, j0, j1, base, rows, work, cur,
 ):  # fmt: skip
     """The chain's rotations at target[j0:j1] into ``rows[j - base]`` (w, x, y, z)."""
@@ -108,7 +109,7 @@ def _evaluate(
         k1 = min(k0 + BLOCK, j1)
         computed += _chain_block(
             plan, statics, offsets, gaps, own,
-            times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
+            slot_times, slot_t, slot_r, slot_p, slot_c,
             target, k0, k1, work, cur, True,
         )  # fmt: skip
         for b in range(k1 - k0):
@@ -282,17 +283,17 @@ def _buffers(n):
     return out, slope_w, flips, checkpoint, factors, st
 
 
-@kernel(I1, F2, F1, F1, I1, *_SLOT_TYPES, F1, I)
+@kernel(I1, F2, F1, F1, I1, *SLOT_TYPES, F1, I)
 def chain_body_rates(
     plan, statics, offsets, gaps, own,
-    times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
+    slot_times, slot_t, slot_r, slot_p, slot_c,
     target, axes,
 ):  # fmt: skip
     """Angular velocity of the chain's rotation at the target times.
 
     Parameters
     ----------
-    plan, statics, offsets, gaps, own, times0 .. c2
+    plan, statics, offsets, gaps, own, slot_times .. slot_c
         The chain, as for :func:`rbm_nb._kernels.fused.lookup_chain`.
     target : ndarray, shape (n,), n >= 4
         Strictly increasing target times, in seconds (also the spline's).
@@ -312,14 +313,14 @@ def chain_body_rates(
     n = target.shape[0]
     out, slope_w, flips, checkpoint, factors, st = _buffers(n)
     rows = np.empty((min(SUPER, n), 4))
-    work = np.zeros(WORK * BLOCK)  # zeros: see fused._ACC
+    work = np.zeros(WORK * BLOCK)  # zeros: see chain_rows._ACC
     cur = np.full(SLOTS, -1, dtype=np.int64)
     computed = 0
     for s0 in range(0, n, SUPER):
         s1 = min(s0 + SUPER, n)
         computed += _evaluate(
             plan, statics, offsets, gaps, own,
-            times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
+            slot_times, slot_t, slot_r, slot_p, slot_c,
             target, s0, s1, s0, rows, work, cur,
         )  # fmt: skip
         if _forward(rows, s0, s1, target, out, slope_w, flips, checkpoint, st):
@@ -329,7 +330,7 @@ def chain_body_rates(
         cur[:] = -1  # the segment search starts afresh (a binary search)
         _evaluate(
             plan, statics, offsets, gaps, own,
-            times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
+            slot_times, slot_t, slot_r, slot_p, slot_c,
             target, s0, s1, s0, rows, work, cur,
         )  # fmt: skip
         _backward(
@@ -338,10 +339,10 @@ def chain_body_rates(
     return out, 0, computed
 
 
-@kernel(I1, F2, F1, F1, I1, *_SLOT_TYPES, F1, I, options=PARALLEL_KERNEL)
+@kernel(I1, F2, F1, F1, I1, *SLOT_TYPES, F1, I, options=PARALLEL_KERNEL)
 def chain_body_rates_parallel(
     plan, statics, offsets, gaps, own,
-    times0, t0, r0, p0, c0, times1, t1, r1, p1, c1, times2, t2, r2, p2, c2,
+    slot_times, slot_t, slot_r, slot_p, slot_c,
     target, axes,
 ):  # fmt: skip
     """:func:`chain_body_rates` on all threads, bit for bit.
@@ -372,12 +373,11 @@ def chain_body_rates_parallel(
                 a = s0 + item * piece
                 b = min(a + piece, s1)
                 if a < b:
-                    work_c = np.zeros(WORK * BLOCK)  # zeros: see fused._ACC
+                    work_c = np.zeros(WORK * BLOCK)  # zeros: see chain_rows._ACC
                     cur_c = np.full(SLOTS, -1, dtype=np.int64)
                     computed += _evaluate(
                         plan, statics, offsets, gaps, own,
-                        times0, t0, r0, p0, c0, times1, t1, r1, p1, c1,
-                        times2, t2, r2, p2, c2,
+                        slot_times, slot_t, slot_r, slot_p, slot_c,
                         target, a, b, s0, both[r % 2], work_c, cur_c,
                     )  # fmt: skip
             elif item == CHUNKS and r >= 1:

@@ -21,6 +21,7 @@ from rbm_nb._engine import fused as _fused
 from rbm_nb._kernels import fused as kf
 from rbm_nb._kernels import quaternion as kq
 from rbm_nb._kernels import resample as kr
+from rbm_nb._kernels import squad_table as kst
 
 TOL = 1e-12
 NO_GAPS = np.full(kf.SLOTS, np.inf)
@@ -349,7 +350,7 @@ def test_squad_table_of_repeated_samples():
     table = kf.squad_table(r, stored, t)
     one_by_one = np.zeros_like(table)
     for i in range(n):
-        kf._fill_row(r, stored, t, one_by_one, i)
+        kst._fill_row(r, stored, t, one_by_one, i)
     np.testing.assert_array_equal(table.view(np.int64), one_by_one.view(np.int64))
     a, b = kq.squad_coefficients(r, t)
     seg = kq.squad_segments(r, a, b)
@@ -377,7 +378,7 @@ def test_series_exp_and_log_are_within_4_ulp_of_libm():
     v *= (scale / np.linalg.norm(v, axis=1))[:, None]
     w = rng.normal(scale=1e-3, size=n)
     for i in range(n):
-        got = np.array(kf._qexp_table(w[i], *v[i]))
+        got = np.array(kst._qexp_table(w[i], *v[i]))
         want = np.array(kq._qexp1(w[i], *v[i]))
         np.testing.assert_array_max_ulp(got, want, maxulp=4)
     # logs of near-unit quaternions, arcs up to the series' limit
@@ -386,7 +387,7 @@ def test_series_exp_and_log_are_within_4_ulp_of_libm():
     v = rng.normal(size=(n, 3))
     v *= (ratio * w / np.linalg.norm(v, axis=1))[:, None]
     for i in range(n):
-        got = np.array(kf._qlog_table(w[i], *v[i]))
+        got = np.array(kst._qlog_table(w[i], *v[i]))
         want = np.array(kq._qlog1(w[i], *v[i]))
         assert got[0] == want[0]
         np.testing.assert_array_max_ulp(got[1:], want[1:], maxulp=4)
@@ -400,7 +401,7 @@ def test_exp_and_log_near_the_identity_are_within_4_ulp_of_libm():
     v = rng.normal(size=(n, 3))
     v *= (10.0 ** rng.uniform(-9, -1.1, n) / np.linalg.norm(v, axis=1))[:, None]
     for i in range(n):
-        got = np.array(kf._qexp_table(w[i], *v[i]))
+        got = np.array(kst._qexp_table(w[i], *v[i]))
         want = np.array(kq._qexp1(w[i], *v[i]))
         np.testing.assert_array_max_ulp(got, want, maxulp=4)
     # unit quaternions of small arcs: norm² within rounding of 1
@@ -408,7 +409,7 @@ def test_exp_and_log_near_the_identity_are_within_4_ulp_of_libm():
     q /= np.linalg.norm(q, axis=1, keepdims=True)
     tiny = 0
     for i in range(n):
-        got = np.array(kf._qlog_table(*q[i]))
+        got = np.array(kst._qlog_table(*q[i]))
         want = np.array(kq._qlog1(*q[i]))
         np.testing.assert_array_max_ulp(got, want, maxulp=4)
         tiny += got[0] != 0.0
@@ -419,18 +420,18 @@ def test_exp_and_log_near_the_identity_are_within_4_ulp_of_libm():
     # further off, which no zero step of unit samples gives)
     units = rng.normal(size=(2000, 4))
     units /= np.linalg.norm(units, axis=1, keepdims=True)
-    ws = np.array([kf._log_step(np.array([q, q]), 0)[0] for q in units])
+    ws = np.array([kst._log_step(np.array([q, q]), 0)[0] for q in units])
     assert np.all(np.abs(ws) < 8 * 2.0**-52)  # log |q⁻¹ q|: zero to a few ulp
     own = np.array([kq._qmul1(*kq._qinv1(*q), *q)[0] for q in units])
     assert np.all(np.abs(own - 1.0) <= 4 * 2.0**-52)
     ulps = np.arange(-8, 9)
     for w in np.concatenate([1.0 + ulps * 2.0**-53, 1.0 + ulps[4:-4] * 2.0**-52]):
-        got = np.array(kf._qlog_table(w, 0.0, 0.0, 0.0))
+        got = np.array(kst._qlog_table(w, 0.0, 0.0, 0.0))
         want = np.array(kq._qlog1(w, 0.0, 0.0, 0.0))
         np.testing.assert_array_max_ulp(got, want, maxulp=4)
         assert np.all(got[1:] == 0.0)
     for w in np.concatenate([ulps * 2.0**-60, rng.normal(scale=1e-9, size=50)]):
-        got = np.array(kf._qexp_table(w, 0.0, 0.0, 0.0))
+        got = np.array(kst._qexp_table(w, 0.0, 0.0, 0.0))
         want = np.array(kq._qexp1(w, 0.0, 0.0, 0.0))
         np.testing.assert_array_max_ulp(got, want, maxulp=4)
 
@@ -461,7 +462,7 @@ def test_squad_rows_are_computed_only_for_the_segments_used():
     assert computed() == set()
     times = np.array([0.0205, 0.0213, 5.5551])  # segments 2, 2, 555
     _fused.lookup(plan, _chain.Target(_time.as_track(times)), [False])
-    run = set(range(2, 2 + kf.RUN)) | set(range(555, 555 + kf.RUN))
+    run = set(range(2, 2 + kst.RUN)) | set(range(555, 555 + kst.RUN))
     assert computed() == run
     # a run stops before rows already there
     _fused.lookup(plan, _chain.Target(_time.as_track(np.array([5.0]))), [False])
@@ -484,7 +485,7 @@ def _one_slot(times, t, r, kind):
     table = np.zeros((len(times), kf.TABLE_COLUMNS))
     empty = (np.zeros(1), np.zeros((1, 3)), np.zeros((1, 4)), np.zeros((1, 4)))
     empty = empty + (np.ones((1, kf.TABLE_COLUMNS)),)
-    return plan, statics, (times, t, r_u, r, table) + empty + empty
+    return plan, statics, kf.pack_slots([(times, t, r_u, r, table), empty, empty])
 
 
 def _expected_nan_rows(times, bad, target, window, at_samples):

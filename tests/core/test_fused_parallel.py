@@ -21,6 +21,7 @@ from rbm_nb import _parallel
 from rbm_nb import frames as _frames
 from rbm_nb._engine import chain as _chain
 from rbm_nb._engine import fused as _fused
+from rbm_nb._kernels import chain_rows as kr
 from rbm_nb._kernels import fused as kf
 
 pytestmark = pytest.mark.skipif(
@@ -211,7 +212,7 @@ def test_lookups_on_random_trees(modes, kind, seed, missing):
     nan_rows = 0
     for outof, into in PAIRS:
         _, target, plan, own = _engine_lookup(outof, into)
-        assert len(target) > 10 * kf.BLOCK
+        assert len(target) > 10 * kr.BLOCK
 
         def lookup(plan=plan, target=target, own=own):
             t, r = _fused.lookup(plan, target, own)
@@ -551,7 +552,7 @@ def test_no_rows_and_fewer_rows_than_a_block():
     _tree(rng, "float", False)
     _, target, plan, own = _engine_lookup("c", "world")
     args = _kernel_args(plan, np.zeros(kf.SLOTS), [False] * len(own))
-    for m in (0, 1, kf.BLOCK - 1, kf.BLOCK + 1):
+    for m in (0, 1, kr.BLOCK - 1, kr.BLOCK + 1):
         times = np.ascontiguousarray(target.track.base[:m])
         _forget_tables()
         serial = kf.lookup_chain(*(*args, times, False))[:2]

@@ -16,47 +16,48 @@ import numba
 import numpy as np
 import pytest
 
+from rbm_nb._kernels import chain_rows as kr
 from rbm_nb._kernels import fused as kf
 from rbm_nb._kernels.quaternion import _qslerp_unit1, _sincos
 
-B = kf.BLOCK
+B = kr.BLOCK
 
 
 @numba.njit(cache=False)
 def _scalar_route(w, out):
     """Each gathered row by the scalar route, into out (4, BLOCK)."""
     for b in range(B):
-        tau = w[kf._TAU + b]
-        sn, cs = _sincos(tau * w[kf._TH1 + b])
-        s1 = [cs * w[kf._P + e * B + b] + sn * w[kf._U1 + e * B + b] for e in range(4)]
-        sn, cs = _sincos(tau * w[kf._TH2 + b])
-        s2 = [cs * w[kf._Q + e * B + b] + sn * w[kf._U2 + e * B + b] for e in range(4)]
+        tau = w[kr._TAU + b]
+        sn, cs = _sincos(tau * w[kr._TH1 + b])
+        s1 = [cs * w[kr._P + e * B + b] + sn * w[kr._U1 + e * B + b] for e in range(4)]
+        sn, cs = _sincos(tau * w[kr._TH2 + b])
+        s2 = [cs * w[kr._Q + e * B + b] + sn * w[kr._U2 + e * B + b] for e in range(4)]
         q = _qslerp_unit1(
             s1[0], s1[1], s1[2], s1[3], s2[0], s2[1], s2[2], s2[3],
             2.0 * tau * (1.0 - tau),
         )  # fmt: skip
         for e in range(4):
-            out[e, b] = -q[e] if w[kf._NEG + b] != 0.0 else q[e]
+            out[e, b] = -q[e] if w[kr._NEG + b] != 0.0 else q[e]
 
 
 @numba.njit(cache=False)
 def _vector_route(w, wide_pass):
     """The passes as ``_chain_block`` runs them; returns rows per route."""
-    wide = kf._squad_rows(w)
+    wide = kr._squad_rows(w)
     marked = wide
     if wide_pass:
-        wide = kf._wide_rows(w)
+        wide = kr._wide_rows(w)
     for b in range(B):
-        if w[kf._PATH + b] != kf._GENERAL:
+        if w[kr._PATH + b] != kr._GENERAL:
             continue
-        tau = w[kf._TAU + b]
+        tau = w[kr._TAU + b]
         q = _qslerp_unit1(
-            w[kf._P + b], w[kf._P + B + b], w[kf._P + 2 * B + b], w[kf._P + 3 * B + b],
-            w[kf._Q + b], w[kf._Q + B + b], w[kf._Q + 2 * B + b], w[kf._Q + 3 * B + b],
+            w[kr._P + b], w[kr._P + B + b], w[kr._P + 2 * B + b], w[kr._P + 3 * B + b],
+            w[kr._Q + b], w[kr._Q + B + b], w[kr._Q + 2 * B + b], w[kr._Q + 3 * B + b],
             2.0 * tau * (1.0 - tau),
         )  # fmt: skip
         for e in range(4):
-            w[kf._STEP + (3 + e) * B + b] = -q[e] if w[kf._NEG + b] != 0.0 else q[e]
+            w[kr._STEP + (3 + e) * B + b] = -q[e] if w[kr._NEG + b] != 0.0 else q[e]
     return marked, wide
 
 
@@ -74,45 +75,45 @@ def _orthogonal_unit(rng, p):
 
 def _block(rng, arc):
     """A block of gathered rows: segments with arcs of about ``arc`` radians."""
-    w = np.zeros(kf.WORK * B)
+    w = np.zeros(kr.WORK * B)
     rows = {
-        kf._P: _unit(rng, B),
-        kf._Q: _unit(rng, B),
+        kr._P: _unit(rng, B),
+        kr._Q: _unit(rng, B),
     }
-    rows[kf._U1] = _orthogonal_unit(rng, rows[kf._P])
-    rows[kf._U2] = _orthogonal_unit(rng, rows[kf._Q])
+    rows[kr._U1] = _orthogonal_unit(rng, rows[kr._P])
+    rows[kr._U2] = _orthogonal_unit(rng, rows[kr._Q])
     # the second circle starts near the first (as squad's a[g] near r[g])
-    rows[kf._Q] = rows[kf._P] + arc * rng.normal(size=(B, 4))
-    rows[kf._Q] /= np.linalg.norm(rows[kf._Q], axis=1)[:, None]
-    rows[kf._U2] = _orthogonal_unit(rng, rows[kf._Q])
-    rows[kf._Q][0] = rows[kf._P][0]  # equal starts
-    rows[kf._Q][1] = -rows[kf._P][1]  # opposite starts
-    rows[kf._Q][2] *= 1.001  # not unit
-    rows[kf._P][3] = np.nan  # a missing sample
+    rows[kr._Q] = rows[kr._P] + arc * rng.normal(size=(B, 4))
+    rows[kr._Q] /= np.linalg.norm(rows[kr._Q], axis=1)[:, None]
+    rows[kr._U2] = _orthogonal_unit(rng, rows[kr._Q])
+    rows[kr._Q][0] = rows[kr._P][0]  # equal starts
+    rows[kr._Q][1] = -rows[kr._P][1]  # opposite starts
+    rows[kr._Q][2] *= 1.001  # not unit
+    rows[kr._P][3] = np.nan  # a missing sample
     for start, values in rows.items():
         for e in range(4):
             w[start + e * B : start + (e + 1) * B] = values[:, e]
-    w[kf._TH1 : kf._TH1 + B] = rng.uniform(0.0, arc, B)
-    w[kf._TH2 : kf._TH2 + B] = rng.uniform(0.0, arc, B)
-    w[kf._TH1 + 4] = 0.0
+    w[kr._TH1 : kr._TH1 + B] = rng.uniform(0.0, arc, B)
+    w[kr._TH2 : kr._TH2 + B] = rng.uniform(0.0, arc, B)
+    w[kr._TH1 + 4] = 0.0
     # fractions inside the segment, extrapolated, and far out
     tau = rng.uniform(0.0, 1.0, B)
     tau[::7] = rng.uniform(-3.0, 4.0, tau[::7].shape)
     tau[5] = 1e6
-    w[kf._TH1 + 5] = w[kf._TH2 + 5] = 0.0
-    w[kf._TAU : kf._TAU + B] = tau
-    w[kf._NEG : kf._NEG + B] = rng.random(B) < 0.5
+    w[kr._TH1 + 5] = w[kr._TH2 + 5] = 0.0
+    w[kr._TAU : kr._TAU + B] = tau
+    w[kr._NEG : kr._NEG + B] = rng.random(B) < 0.5
     # rows are gathered only while the inner angles are in sincos's range
     in_range = (
         np.maximum(
-            abs(tau * w[kf._TH1 : kf._TH1 + B]), abs(tau * w[kf._TH2 : kf._TH2 + B])
+            abs(tau * w[kr._TH1 : kr._TH1 + B]), abs(tau * w[kr._TH2 : kr._TH2 + B])
         )
-        < kf.SINCOS_LIMIT
+        < kr.SINCOS_LIMIT
     )
-    path = np.where((rng.random(B) < 0.9) & in_range, kf._GATHERED, 0.0)
-    w[kf._PATH : kf._PATH + B] = path
+    path = np.where((rng.random(B) < 0.9) & in_range, kr._GATHERED, 0.0)
+    w[kr._PATH : kr._PATH + B] = path
     # rows not gathered keep what the scalar pass wrote
-    w[kf._STEP + 3 * B : kf._STEP + 7 * B] = rng.normal(size=4 * B)
+    w[kr._STEP + 3 * B : kr._STEP + 7 * B] = rng.normal(size=4 * B)
     return w
 
 
@@ -123,12 +124,12 @@ def test_vector_passes_give_the_scalar_route(arc, wide_pass):
     counts = np.zeros(3, dtype=np.int64)
     for _ in range(20):
         w = _block(rng, arc)
-        gathered = w[kf._PATH : kf._PATH + B] == kf._GATHERED
-        before = w[kf._STEP + 3 * B : kf._STEP + 7 * B].reshape(4, B).copy()
+        gathered = w[kr._PATH : kr._PATH + B] == kr._GATHERED
+        before = w[kr._STEP + 3 * B : kr._STEP + 7 * B].reshape(4, B).copy()
         want = np.empty((4, B))
         _scalar_route(w.copy(), want)
         marked, left = _vector_route(w, wide_pass)
-        got = w[kf._STEP + 3 * B : kf._STEP + 7 * B].reshape(4, B)
+        got = w[kr._STEP + 3 * B : kr._STEP + 7 * B].reshape(4, B)
         np.testing.assert_array_equal(got[:, gathered], want[:, gathered])
         np.testing.assert_array_equal(got[:, ~gathered], before[:, ~gathered])
         counts += (gathered.sum() - marked, marked - left, left)
@@ -149,18 +150,18 @@ def test_vector_passes_give_the_scalar_route(arc, wide_pass):
 def _own_blocks(times, t, r, target, i0, rotation_only):
     """``_own_rows`` over the target's blocks: (steps (m, 7), taken (blocks,))."""
     m = target.shape[0]
-    w = np.empty(kf.WORK * B)
+    w = np.empty(kr.WORK * B)
     out = np.full((m, 7), np.nan)
     taken = np.zeros((m + B - 1) // B, dtype=np.bool_)
     for j0 in range(0, m, B):
         nb = min(B, m - j0)
-        taken[j0 // B] = kf._own_rows(
-            w, times, t, r, target, i0 + j0, j0, nb, rotation_only, kf._STEP
+        taken[j0 // B] = kr._own_rows(
+            w, times, t, r, target, i0 + j0, j0, nb, rotation_only, kr._STEP
         )
         if taken[j0 // B]:
             for e in range(7):
                 for b in range(nb):
-                    out[j0 + b, e] = w[kf._STEP + e * B + b]
+                    out[j0 + b, e] = w[kr._STEP + e * B + b]
     return out, taken
 
 
@@ -221,7 +222,7 @@ def test_own_runs_give_the_scalar_own_rule_bit_for_bit(missing):
     target = times[start : n - 3]
     results = []
     for own in (start + 1, start + 2):
-        slots = (times, t, r, r, table) + empty + empty
+        slots = kf.pack_slots([(times, t, r, r, table), empty, empty])
         got = kf.lookup_chain(
             plan, np.zeros((1, 7)), np.zeros(kf.SLOTS), np.full(kf.SLOTS, np.inf),
             np.array([own, 0, 0]), *slots, target, False,

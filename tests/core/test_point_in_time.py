@@ -120,7 +120,7 @@ def test_times_are_evaluated_on_the_segments_they_read():
     not the spline coefficients of every sample (the step-by-step route),
     with the step-by-step route's values."""
     from rbm_nb._engine import chain
-    from rbm_nb._kernels import fused
+    from rbm_nb._kernels import squad_table
 
     n = 5000
     ts = np.linspace(0.0, 50.0, n)
@@ -134,7 +134,7 @@ def test_times_are_evaluated_on_the_segments_they_read():
     head = resolve_frame("head")
     assert head._coefficients is None  # no coefficients for all 5000 samples
     computed = int(np.count_nonzero(head._fused_table.rows[:, -1]))
-    assert 0 < computed <= 4 * fused.RUN, computed
+    assert 0 < computed <= 4 * squad_table.RUN, computed
     steps = chain.chain(resolve_frame("eye"), resolve_frame("world"))
     track, inverse, _, _ = rbm._time.requested_times(times)  # sorted, unique
     want_t, want_r = chain.compose(steps, chain.Target(track))

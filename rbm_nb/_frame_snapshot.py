@@ -174,10 +174,10 @@ class FrameTree:
         prepared (sign continuity, missing samples) exactly as the user's
         frames were: the engine cannot tell them from the originals. On
         leaving, the frames are detached from each other: a tree is a
-        reference cycle (parents list their children) and the engine caches
-        the chains of the frames last used, so without this a worker would
-        keep every finished task's window -- its samples and the engine's
-        tables -- until a full pass of the garbage collector.
+        reference cycle (parents list their children), so without this a
+        worker would keep every finished task's window -- its samples and
+        the engine's tables, which go with them -- until a full pass of the
+        garbage collector.
         """
         frames = self._build()
         try:

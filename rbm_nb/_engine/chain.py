@@ -64,33 +64,29 @@ class Target:
         return 0 if self.track is None else len(self.track)
 
 
-class Chain:
+class Chain(list):
     """The steps from one frame value to another, and what is kept about them.
 
-    Iterating gives the steps: (FrameData, inverse) pairs, upward steps
+    The list holds the steps: (FrameData, inverse) pairs, upward steps
     (a frame to its parent, ``False``) from ``outof`` to the common
     ancestor, then downward steps (``True``: the frame's transform
     inverted) down to ``into``. ``static`` is the composed transform
     (t (1, 3), r (1, 4)) when no frame of the chain moves, ``rows`` its rows
     t (3,) and r (4,), kept for lookup_transform's copies; ``plan`` is the
     fused plan (:func:`fused_plan`), made at the first call that needs it.
+    (A list, so that the loops over a chain run at list speed.)
     """
 
-    __slots__ = ("steps", "static", "rows", "plan")
+    __slots__ = ("static", "rows", "plan")
 
     def __init__(self, steps: list) -> None:
-        self.steps = steps
-        self.static = self.rows = None
+        super().__init__(steps)
+        self.static: Any = None
+        self.rows: Any = None
         self.plan: Any = _UNPLANNED
         if all(f.track is None for f, _ in steps):
             self.static = compose(steps, Target(None))
             self.rows = self.static[0][0], self.static[1][0]
-
-    def __iter__(self):
-        return iter(self.steps)
-
-    def __len__(self) -> int:
-        return len(self.steps)
 
 
 _UNPLANNED = object()

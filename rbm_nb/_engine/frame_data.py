@@ -77,6 +77,16 @@ class Samples(_Frozen):
         setter(self, "rotation", rotation)
         setter(self, "missing_rotations", bool(missing_rotations))
 
+    def __reduce__(self):
+        # (pickle and copy would set the slots one by one, which is refused)
+        return Samples, (
+            self.track,
+            self.t,
+            self.r,
+            self.rotation,
+            self.missing_rotations,
+        )
+
 
 class FrameData(_Frozen):
     """One frame's data, options and place in its tree, as a value.
@@ -130,6 +140,15 @@ class FrameData(_Frozen):
         setter(self, "r", samples.r)
         setter(self, "rotation", samples.rotation)
         setter(self, "missing_rotations", samples.missing_rotations)
+
+    def __reduce__(self):
+        return FrameData, (
+            self.name,
+            self.parent,
+            self.samples,
+            self.discrete,
+            self.max_gap,
+        )
 
     def replace(
         self,

@@ -10,6 +10,8 @@ engine reads no private attribute of a frame.
 from __future__ import annotations
 
 import ast
+import copy
+import pickle
 import weakref
 from pathlib import Path
 
@@ -78,6 +80,16 @@ def test_a_frame_hands_the_engine_one_immutable_value():
             setattr(data, attribute, None)
     with pytest.raises(AttributeError, match="immutable"):
         data.samples.t = None
+
+
+def test_frames_pickle_and_copy_with_their_value():
+    world = rbm.ReferenceFrame("world")
+    m = _moving("m", world, 9, max_gap=0.5)
+    for copied in (pickle.loads(pickle.dumps(m)), copy.deepcopy(m)):
+        assert copied.data is not m.data and copied.max_gap == 0.5
+        _same(copied.lookup_transform(copied.parent), m.lookup_transform(world))
+    shallow = copy.copy(m)
+    assert shallow.data is m.data
 
 
 def test_reparenting_after_lookups(forget):

@@ -3,13 +3,16 @@
 A :class:`ReferenceFrame` is a node in a tree: its translation and rotation
 map points given in the frame into its parent (``p_parent = rot(r, p) + t``),
 either once (static) or per timestamp (moving; ``discrete`` frames hold each
-value until the next event). Arrays are validated once, here, and stored
-read-only, so lookups never re-check them.
+value until the next event). Arrays are validated once, here, and kept in
+one immutable value (:attr:`ReferenceFrame.data`, a
+:class:`~rbm_nb._engine.frame_data.FrameData`), so lookups never re-check
+them; a frame that changes (parent, name, ``discrete``, ``max_gap``) makes a
+new value for itself and the frames below it.
 
 This module is the one place where frame names are resolved
 (:func:`resolve_frame`); the methods here resolve their frame arguments and
-forward to the engine (:mod:`rbm_nb._engine`), which works on frame objects
-and never imports this module.
+forward to the engine (:mod:`rbm_nb._engine`), which reads the frames'
+values, keys its caches by them, and never imports this module.
 """
 
 from __future__ import annotations

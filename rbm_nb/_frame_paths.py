@@ -78,16 +78,15 @@ def frames_between(
     ValueError
         If the frames are in different trees.
     """
-    steps = chain(start, end)
-    up = [f for f, inverse in steps if not inverse]
-    down = [f for f, inverse in steps if inverse]
-    if up:
-        ancestor = up[-1].parent
-    elif down:
-        ancestor = down[0].parent
-    else:
-        ancestor = start
-    path = up + [ancestor] + down
+    chain(start, end)  # the engine's check (and message) for different trees
+    up = list(reversed(start.path))  # start .. root
+    down = list(reversed(end.path))
+    i, j = len(up), len(down)
+    while i > 1 and j > 1 and up[i - 2] is down[j - 2]:
+        i -= 1
+        j -= 1
+    # up[i - 1] is the common ancestor
+    path = up[:i] + list(reversed(down[: j - 1]))
     if not include_self:
         path = path[1:]
     if not include_to_frame and path and path[-1] is end:

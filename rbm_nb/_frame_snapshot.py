@@ -9,8 +9,10 @@ other processes or other machines where the registry is empty.
 
 :class:`FrameTree` holds the frames a computation needs (those between the
 frames it names and their lowest common ancestor, which becomes the root)
-as :class:`FrameValue` records: public samples, times and options, read
-through the frames' public properties. :meth:`FrameTree.window` keeps, of
+as :class:`FrameValue` records: the public samples, times and options of
+each frame's one immutable value (``ReferenceFrame.data``, the value the
+engine computes with), so that a snapshot is one consistent state of every
+frame in it. :meth:`FrameTree.window` keeps, of
 every moving frame, only the samples a chunk's time window needs plus
 :data:`MARGIN` samples on each side, so that what one task carries grows
 with its chunk, not with the recording. The margin covers every stencil of
@@ -31,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from ._dask import MARGIN
+from ._engine.frame_data import FrameData
 from .frames import ReferenceFrame
 
 __all__ = ["FrameValue", "FrameTree"]
@@ -54,15 +57,20 @@ class FrameValue:
     max_gap: float | None
 
     @classmethod
-    def of(cls, frame: ReferenceFrame, parent: int) -> FrameValue:
+    def of(cls, data: FrameData, parent: int) -> FrameValue:
+        """The record of a frame's value (``ReferenceFrame.data``)."""
+        if parent < 0:  # the root of the tree: no transform
+            return cls(data.name, parent, None, None, None, data.discrete, data.max_gap)
+        track = data.track
+        moving = track is not None
         return cls(
-            frame.name,
+            data.name,
             parent,
-            None if parent < 0 else frame.translation,
-            None if parent < 0 else frame.rotation,
-            None if parent < 0 else frame.timestamps,
-            bool(frame.discrete),
-            frame.max_gap,
+            _read_only(data.t if moving else data.t[0]),
+            _read_only(data.rotation if moving else data.rotation[0]),
+            None if track is None else _read_only(track.values),
+            data.discrete,
+            data.max_gap,
         )
 
     @property
@@ -103,6 +111,13 @@ class FrameValue:
         )
 
 
+def _read_only(arr: np.ndarray) -> np.ndarray:
+    """A view nobody can write through (the arrays are the frame's own)."""
+    view = arr.view()
+    view.setflags(write=False)
+    return view
+
+
 def _comparable(timestamps: np.ndarray, time: Any) -> bool:
     return (np.asarray(timestamps).dtype.kind == "M") == (
         np.asarray(time).dtype.kind == "M"
@@ -131,7 +146,8 @@ class FrameTree:
         ValueError
             If the frames are not all in one tree (the engine's message).
         """
-        paths = [list(f.path) for f in named]  # root first
+        # one value per frame, read once: root first
+        paths = [list(reversed(f.data.path_to_root())) for f in named]
         for other in paths[1:]:
             if other[0] is not paths[0][0]:
                 first = paths[0]
@@ -145,15 +161,15 @@ class FrameTree:
             p[depth + 1] is paths[0][depth + 1] for p in paths
         ):
             depth += 1
-        index: dict[int, int] = {}
+        index: dict[FrameData, int] = {}
         values: list[FrameValue] = []
         for path in paths:
-            for frame in path[depth:]:
-                if id(frame) not in index:
-                    parent = -1 if not values else index[id(frame.parent)]
-                    index[id(frame)] = len(values)
-                    values.append(FrameValue.of(frame, parent))
-        return cls(tuple(values), tuple(index[id(f)] for f in named))
+            for data in path[depth:]:
+                if data not in index:
+                    parent = -1 if not values else index[data.parent]  # type: ignore[index]
+                    index[data] = len(values)
+                    values.append(FrameValue.of(data, parent))
+        return cls(tuple(values), tuple(index[path[-1]] for path in paths))
 
     @property
     def nbytes(self) -> int:
@@ -174,10 +190,10 @@ class FrameTree:
         prepared (sign continuity, missing samples) exactly as the user's
         frames were: the engine cannot tell them from the originals. On
         leaving, the frames are detached from each other: a tree is a
-        reference cycle (parents list their children) and the engine caches
-        the chains of the frames last used, so without this a worker would
-        keep every finished task's window -- its samples and the engine's
-        tables -- until a full pass of the garbage collector.
+        reference cycle (parents list their children), so without this a
+        worker would keep every finished task's window -- its samples and
+        the engine's tables, which go with them -- until a full pass of the
+        garbage collector.
         """
         frames = self._build()
         try:

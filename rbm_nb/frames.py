@@ -3,13 +3,16 @@
 A :class:`ReferenceFrame` is a node in a tree: its translation and rotation
 map points given in the frame into its parent (``p_parent = rot(r, p) + t``),
 either once (static) or per timestamp (moving; ``discrete`` frames hold each
-value until the next event). Arrays are validated once, here, and stored
-read-only, so lookups never re-check them.
+value until the next event). Arrays are validated once, here, and kept in
+one immutable value (:attr:`ReferenceFrame.data`, a
+:class:`~rbm_nb._engine.frame_data.FrameData`), so lookups never re-check
+them; a frame that changes (parent, name, ``discrete``, ``max_gap``) makes a
+new value for itself and the frames below it.
 
 This module is the one place where frame names are resolved
 (:func:`resolve_frame`); the methods here resolve their frame arguments and
-forward to the engine (:mod:`rbm_nb._engine`), which works on frame objects
-and never imports this module.
+forward to the engine (:mod:`rbm_nb._engine`), which reads the frames'
+values, keys its caches by them, and never imports this module.
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ from ._door import ArrayInput, float_array, kernel_array
 from ._engine import chain as _chain
 from ._engine import transform as _transform
 from ._engine import twist as _twist
+from ._engine.frame_data import FrameData, Samples
 from ._kernels import quaternion as kq
 from ._validation import (
     check_coordinates,
@@ -90,14 +94,12 @@ class FrameRegistry(MutableMapping):
             raise TypeError(f"registry keys are frame names (str), got {name!r}")
         check_frame_name(name)
         self._frames[name] = frame
-        _chain.invalidate()
         self._notify("register", name)
 
     def __delitem__(self, name: str) -> None:
         if name not in self._frames:
             raise KeyError(_not_found_message(name))
         del self._frames[name]
-        _chain.invalidate()
         self._notify("deregister", name)
 
     def __iter__(self) -> Iterator[str]:
@@ -165,7 +167,6 @@ def _register(frame: ReferenceFrame, update: bool = False) -> None:
             child.parent = frame
         old.parent = None
     registry._frames[name] = frame
-    _chain.invalidate()
     registry._notify("register", name)
 
 
@@ -173,7 +174,6 @@ def _deregister(name: str) -> None:
     if name not in registry._frames:
         raise ValueError(_not_found_message(name))
     del registry._frames[name]
-    _chain.invalidate()
     registry._notify("deregister", name)
 
 
@@ -265,7 +265,6 @@ def deregister_frame(name: str) -> None:
 def clear_registry() -> None:
     """Remove every frame from the registry."""
     registry._frames.clear()
-    _chain.invalidate()
     registry._notify("clear", None)
 
 
@@ -422,18 +421,9 @@ class ReferenceFrame:
         discrete: bool = False,
         max_gap: float | None = None,
     ) -> None:
-        if name is not None and not isinstance(name, str):
-            raise ValueError(f"name must be a string, got {type(name).__name__}")
-        if name is not None:
-            check_frame_name(name)
-        self.name = name
+        _check_name(name)
         self._parent: ReferenceFrame | None = None
         self._children: list[ReferenceFrame] = []
-        self._coefficients: Any = None
-        self._track: _time.Track | None = None
-        # a rotation sample is missing (a NaN row): estimates that need
-        # every rotation take the route that handles them first
-        self._missing_rotations = False
         # frames created as roots have no transform of their own (None)
         self._has_transform = parent is not None
         if parent is None:
@@ -447,125 +437,101 @@ class ReferenceFrame:
                         f"frame {name!r}: {arg} given without a parent frame; a "
                         f"root frame has no transform"
                     )
-            self._t = np.zeros((1, 3))
-            self._r = np.array([[1.0, 0.0, 0.0, 0.0]])
-            self._rotation_public = self._r
+            identity = np.array([[1.0, 0.0, 0.0, 0.0]])
+            samples = Samples(None, np.zeros((1, 3)), identity, identity)
         else:
             parent = resolve_frame(parent, "parent")
-            self._init_arrays(translation, rotation, timestamps, inverse)
-        if discrete and self._track is None:
-            raise ValueError(
-                f"frame {name!r}: discrete=True needs timestamps (the times of the events)"
-            )
-        self.discrete = bool(discrete)
-        if max_gap is not None:
-            if not is_scalar(max_gap) or not max_gap > 0 or not np.isfinite(max_gap):
-                raise ValueError(
-                    f"frame {name!r}: max_gap must be a positive number of seconds "
-                    f"or None, got {max_gap!r}"
-                )
-            max_gap = float(max_gap)
-        self.max_gap = max_gap
+            samples = _samples(name, translation, rotation, timestamps, inverse)
+        _check_discrete(name, samples, discrete)
+        # everything the engine reads, as one immutable value (made again,
+        # with the frames below, whenever the frame changes: _remake)
+        self._data = FrameData(
+            name, None, samples, bool(discrete), _checked_max_gap(name, max_gap)
+        )
         if parent is not None:
             self.parent = parent
 
-    def _init_arrays(self, translation, rotation, timestamps, inverse) -> None:
-        label = f"frame {self.name!r}: " if self.name is not None else ""
-        if timestamps is not None:
-            self._track = _time.as_track(timestamps, f"{label}timestamps")
-            n = len(self._track)
-            t_shape: tuple[int, ...] = (n, 3)
-            r_shape: tuple[int, ...] = (n, 4)
-        else:
-            self._track = None
-            t_shape, r_shape = (3,), (4,)
-
-        t: np.ndarray | None = None
-        if translation is not None:
-            t = float_array(translation, f"{label}translation")
-            if t.shape != t_shape:
-                raise ValueError(_shape_message(label, "translation", t.shape, t_shape))
-            if self._track is None:
-                check_finite(t, f"{label}translation")
-                check_coordinates(t, f"{label}translation")
-        stored: np.ndarray | None = None
-        if rotation is not None:
-            stored = float_array(rotation, f"{label}rotation")
-            if stored.shape != r_shape:
-                raise ValueError(
-                    _shape_message(label, "rotation", stored.shape, r_shape)
-                )
-        moving = self._track is not None and r_shape[0] > 1
-        if moving and stored is not None and not inverse:
-            # the usual recording: every check and copy in one pass
-            fused = moving_samples(np.zeros(t_shape) if t is None else t, stored)
-            if fused is not None:
-                self._t, self._rotation_public, self._r, self._missing_rotations = fused
-                return
-        # one check at a time, each naming the row it finds
-        if t is None:
-            t = np.zeros(t_shape)
-        elif self._track is not None:  # NaN rows: missing samples; else mistakes
-            check_missing_rows(t, f"{label}translation")
-        if stored is None:
-            r: np.ndarray = np.zeros(r_shape)
-            r[..., 0] = 1.0
-            stored = r
-        else:
-            if self._track is not None:
-                self._missing_rotations = check_missing_rows(stored, f"{label}rotation")
-            r = normalize_quaternions(
-                stored, f"{label}rotation", allow_nan=self._track is not None
-            )
-        # private copies: the caller's arrays may change later (a moving
-        # frame's rotations are copied by unflip below, which makes a new array)
-        t = np.array(t.reshape(-1, 3), dtype=np.float64, order="C")
-        r = kernel_array(r.reshape(-1, 4)) if moving else np.array(r.reshape(-1, 4))
-        if inverse:
-            r = kq.qconj(r)  # unit quaternions: the conjugate is the inverse
-            t = -kq.rotate_vectors(r, t)
-            stored = r
-        self._t = t
-        # the user's values as given (recordings store ~4 digits, so |q| - 1
-        # reaches 1e-4): returned by the rotation property and by lookups at
-        # the frame's own timestamps; the math below uses unit quaternions
-        self._rotation_public = np.array(
-            stored.reshape(-1, 4), dtype=np.float64, order="C"
-        )
-        # interpolation needs unit quaternions on the same hemisphere
-        self._r = kq.unflip(r) if moving else r
-
     # -- data -------------------------------------------------------------
+
+    @property
+    def data(self) -> FrameData:
+        """This frame as one immutable value: what the engine computes with.
+
+        Its samples (prepared once, when the frame was built), options, name
+        and its parent's value. Changing the frame (a new parent, name,
+        ``discrete`` or ``max_gap``) makes a new value for it and for every
+        frame below it; values already handed out stay as they were.
+        """
+        return self._data
+
+    @property
+    def name(self) -> str | None:
+        """The name of the frame (None if it has none). Settable."""
+        return self._data.name
+
+    @name.setter
+    def name(self, name: str | None) -> None:
+        _check_name(name)
+        self._remake(name=name)
+
+    @property
+    def discrete(self) -> bool:
+        """Whether the timestamps are events held until the next one. Settable."""
+        return self._data.discrete
+
+    @discrete.setter
+    def discrete(self, discrete: bool) -> None:
+        _check_discrete(self.name, self._data.samples, discrete)
+        self._remake(discrete=bool(discrete))
+
+    @property
+    def max_gap(self) -> float | None:
+        """The longest gap (seconds) lookups interpolate across (None: no limit). Settable."""
+        return self._data.max_gap
+
+    @max_gap.setter
+    def max_gap(self, max_gap: float | None) -> None:
+        self._remake(max_gap=_checked_max_gap(self.name, max_gap))
+
+    def _remake(self, **changes: Any) -> None:
+        """Give this frame a new value with ``changes``, and the frames below
+        new values holding it (a value holds its parent's)."""
+        parent = self._parent
+        changes["parent"] = None if parent is None else parent._data
+        self._data = self._data.replace(**changes)
+        stack = list(self._children)
+        while stack:
+            node = stack.pop()
+            assert node._parent is not None  # (a child)
+            node._data = node._data.replace(parent=node._parent._data)
+            stack.extend(node._children)
+        # the one place the engine hears of a change: results are right
+        # without it (its caches are keyed by values), but the old values
+        # may belong to frames that are gone, and their samples with them
+        _chain.forget()
 
     @property
     def translation(self) -> Any:
         """Translation wrt the parent, shape (3,) or (n, 3); None for a root."""
         if not self._has_transform:
             return None
-        return _read_only(self._t if self._track is not None else self._t[0])
+        data = self._data
+        return _read_only(data.t if data.track is not None else data.t[0])
 
     @property
     def rotation(self) -> Any:
         """Rotation wrt the parent, shape (4,) or (n, 4); None for a root."""
         if not self._has_transform:
             return None
-        r = self._rotation_public
-        return _read_only(r if self._track is not None else r[0])
+        data = self._data
+        r = data.rotation
+        return _read_only(r if data.track is not None else r[0])
 
     @property
     def timestamps(self) -> Any:
         """Timestamps of a moving frame as given, shape (n,); None if static."""
-        return None if self._track is None else _read_only(self._track.values)
-
-    def _squad_coefficients(self):
-        # frames are immutable, so the spline coefficients can be kept
-        if self._coefficients is None:
-            if self._track is None:
-                raise ValueError(f"frame {self.name!r} is static: it has no spline")
-            a_coef, b_coef = kq.squad_coefficients(self._r, self._track.base)
-            seg = kq.squad_segments(self._r, a_coef, b_coef)
-            self._coefficients = (a_coef, b_coef, seg)
-        return self._coefficients
+        track = self._data.track
+        return None if track is None else _read_only(track.values)
 
     def __repr__(self) -> str:
         return f"<ReferenceFrame {self.name!r}>"
@@ -595,9 +561,9 @@ class ReferenceFrame:
         if self._parent is not None:
             self._parent._children.remove(self)
         self._parent = parent
-        _chain.invalidate()  # chains through this frame changed
         if parent is not None:
             parent._children.append(self)
+        self._remake()  # the chains through this frame changed
 
     @property
     def children(self) -> tuple:
@@ -1026,6 +992,95 @@ class ReferenceFrame:
             cutoff,
         )
         return (out, ts) if return_timestamps else out
+
+
+def _check_name(name: Any) -> None:
+    if name is not None and not isinstance(name, str):
+        raise ValueError(f"name must be a string, got {type(name).__name__}")
+    if name is not None:
+        check_frame_name(name)
+
+
+def _check_discrete(name: str | None, samples: Samples, discrete: Any) -> None:
+    if discrete and samples.track is None:
+        raise ValueError(
+            f"frame {name!r}: discrete=True needs timestamps (the times of the events)"
+        )
+
+
+def _checked_max_gap(name: str | None, max_gap: Any) -> float | None:
+    if max_gap is None:
+        return None
+    if not is_scalar(max_gap) or not max_gap > 0 or not np.isfinite(max_gap):
+        raise ValueError(
+            f"frame {name!r}: max_gap must be a positive number of seconds "
+            f"or None, got {max_gap!r}"
+        )
+    return float(max_gap)
+
+
+def _samples(name, translation, rotation, timestamps, inverse) -> Samples:
+    """A moving or static frame's arrays, checked once and prepared for the engine."""
+    label = f"frame {name!r}: " if name is not None else ""
+    track: _time.Track | None = None
+    if timestamps is not None:
+        track = _time.as_track(timestamps, f"{label}timestamps")
+        n = len(track)
+        t_shape: tuple[int, ...] = (n, 3)
+        r_shape: tuple[int, ...] = (n, 4)
+    else:
+        t_shape, r_shape = (3,), (4,)
+
+    t: np.ndarray | None = None
+    if translation is not None:
+        t = float_array(translation, f"{label}translation")
+        if t.shape != t_shape:
+            raise ValueError(_shape_message(label, "translation", t.shape, t_shape))
+        if track is None:
+            check_finite(t, f"{label}translation")
+            check_coordinates(t, f"{label}translation")
+    stored: np.ndarray | None = None
+    if rotation is not None:
+        stored = float_array(rotation, f"{label}rotation")
+        if stored.shape != r_shape:
+            raise ValueError(_shape_message(label, "rotation", stored.shape, r_shape))
+    moving = track is not None and r_shape[0] > 1
+    if moving and stored is not None and not inverse:
+        # the usual recording: every check and copy in one pass
+        fused = moving_samples(np.zeros(t_shape) if t is None else t, stored)
+        if fused is not None:
+            t_fused, public, unit, missing = fused
+            return Samples(track, t_fused, unit, public, missing)
+    # one check at a time, each naming the row it finds
+    missing = False
+    if t is None:
+        t = np.zeros(t_shape)
+    elif track is not None:  # NaN rows: missing samples; else mistakes
+        check_missing_rows(t, f"{label}translation")
+    if stored is None:
+        r: np.ndarray = np.zeros(r_shape)
+        r[..., 0] = 1.0
+        stored = r
+    else:
+        if track is not None:
+            missing = check_missing_rows(stored, f"{label}rotation")
+        r = normalize_quaternions(
+            stored, f"{label}rotation", allow_nan=track is not None
+        )
+    # private copies: the caller's arrays may change later (a moving
+    # frame's rotations are copied by unflip below, which makes a new array)
+    t = np.array(t.reshape(-1, 3), dtype=np.float64, order="C")
+    r = kernel_array(r.reshape(-1, 4)) if moving else np.array(r.reshape(-1, 4))
+    if inverse:
+        r = kq.qconj(r)  # unit quaternions: the conjugate is the inverse
+        t = -kq.rotate_vectors(r, t)
+        stored = r
+    # the user's values as given (recordings store ~4 digits, so |q| - 1
+    # reaches 1e-4): returned by the rotation property and by lookups at
+    # the frame's own timestamps; the math uses unit quaternions, which
+    # interpolation needs on the same hemisphere
+    public = np.array(stored.reshape(-1, 4), dtype=np.float64, order="C")
+    return Samples(track, t, kq.unflip(r) if moving else r, public, missing)
 
 
 def _optional(frame: Any, argument: str) -> ReferenceFrame | None:

@@ -25,15 +25,15 @@ __all__ = ["transform_at_times", "latest_common_time"]
 
 
 def _moving(steps):
-    continuous = [f for f, _ in steps if f._track is not None and not f.discrete]
-    discrete = [f for f, _ in steps if f._track is not None and f.discrete]
+    continuous = [f for f, _ in steps if f.track is not None and not f.discrete]
+    discrete = [f for f, _ in steps if f.track is not None and f.discrete]
     return continuous, discrete
 
 
 def _check_range(frames, track) -> None:
     """Raise ExtrapolationError if ``track`` leaves any frame's time range."""
     for frame in frames:
-        own = frame._track
+        own = frame.track
         first, last = own.values[0], own.values[-1]
         span = f"has data from {first} to {last} ({len(own)} samples)"
         if track.key[0] < own.key[0]:
@@ -80,7 +80,7 @@ def transform_at_times(outof, into, times):
     track, inverse, scalar, values = _time.requested_times(times)
     steps = _chain.chain(outof, into)
     continuous, discrete = _moving(steps)
-    _time.check_compatible([f._track for f in continuous + discrete] + [track])
+    _time.check_compatible([f.track for f in continuous + discrete] + [track])
     _check_range(continuous, track)
     t, r = _chain.evaluate(steps, _chain.Target(track, None))
     # (1, 3) and (1, 4) where the chain does not move; copies either way (a
@@ -112,21 +112,21 @@ def latest_common_time(outof, into):
     """
     continuous, discrete = _moving(_chain.chain(outof, into))
     if continuous:
-        _time.check_compatible([f._track for f in continuous])
-        ends = [f._track.key[-1] for f in continuous]
-        starts = [f._track.key[0] for f in continuous]
+        _time.check_compatible([f.track for f in continuous])
+        ends = [f.track.key[-1] for f in continuous]
+        starts = [f.track.key[0] for f in continuous]
         latest = continuous[int(np.argmin(ends))]
         earliest = continuous[int(np.argmax(starts))]
         if max(starts) > min(ends):
             raise ExtrapolationError(
                 f"no common time: frame {earliest.name!r} starts at "
-                f"{earliest._track.values[0]}, after frame {latest.name!r} ends at "
-                f"{latest._track.values[-1]}"
+                f"{earliest.track.values[0]}, after frame {latest.name!r} ends at "
+                f"{latest.track.values[-1]}"
             )
-        return latest._track.values[-1]
+        return latest.track.values[-1]
     if discrete:
-        _time.check_compatible([f._track for f in discrete])
+        _time.check_compatible([f.track for f in discrete])
         return discrete[
-            int(np.argmax([f._track.key[-1] for f in discrete]))
-        ]._track.values[-1]
+            int(np.argmax([f.track.key[-1] for f in discrete]))
+        ].track.values[-1]
     return None

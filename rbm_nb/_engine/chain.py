@@ -18,13 +18,17 @@ The rules are those of the reference package, so results line up with it:
 Unlike the reference, an empty intersection is an error rather than an
 empty result, and datetime64 timestamps are never mixed with numbers.
 
-Frames arrive here resolved (objects, not names); this module reads their
-private arrays (``_t``, ``_r``, ``_track``) directly, which the frames
-validated once when they were built.
+Frames arrive here resolved (objects, not names) and are read through
+their one immutable value (:class:`~rbm_nb._engine.frame_data.FrameData`,
+``frame.data``), which the frames validated once when they were built. The
+chains between two values are cached here, keyed by the pair of values: a
+frame that changes makes new values, so an entry made before the change is
+never found after it.
 """
 
 from __future__ import annotations
 
+import weakref
 from typing import Any
 
 import numpy as np
@@ -35,6 +39,7 @@ from .._kernels import quaternion as kq
 from .._kernels import resample as kr
 from .._kernels import squad_walk as ksw
 from . import fused as _fused
+from .frame_data import FrameData, Samples
 
 _IDENTITY_T = np.zeros((1, 3))
 _IDENTITY_R = np.array([[1.0, 0.0, 0.0, 0.0]])
@@ -59,64 +64,84 @@ class Target:
         return 0 if self.track is None else len(self.track)
 
 
-# Resolved chains per (outof, into), valid while no frame of any tree changes
-# its parent (frames tell the engine through invalidate(); a frame's data never
-# changes after construction). Values keep the two frames alive, so their ids
-# cannot be reused while an entry exists.
-# Entries: (outof, into, steps, static, static rows), the static transform
-# (t (1, 3), r (1, 4)) when no frame of the chain moves, and its rows t (3,)
-# and r (4,), kept for lookup_transform's copies.
-_CHAINS: dict[tuple[int, int], tuple[Any, Any, list, Any, Any]] = {}
+class Chain(list):
+    """The steps from one frame value to another, and what is kept about them.
+
+    The list holds the steps: (FrameData, inverse) pairs, upward steps
+    (a frame to its parent, ``False``) from ``outof`` to the common
+    ancestor, then downward steps (``True``: the frame's transform
+    inverted) down to ``into``. ``static`` is the composed transform
+    (t (1, 3), r (1, 4)) when no frame of the chain moves, ``rows`` its rows
+    t (3,) and r (4,), kept for lookup_transform's copies; ``plan`` is the
+    fused plan (:func:`fused_plan`), made at the first call that needs it.
+    (A list, so that the loops over a chain run at list speed.)
+    """
+
+    __slots__ = ("static", "rows", "plan")
+
+    def __init__(self, steps: list) -> None:
+        super().__init__(steps)
+        self.static: Any = None
+        self.rows: Any = None
+        self.plan: Any = _UNPLANNED
+        if all(f.track is None for f, _ in steps):
+            self.static = compose(steps, Target(None))
+            self.rows = self.static[0][0], self.static[1][0]
+
+
+_UNPLANNED = object()
+
+# Chains per pair of frame values. Keys are values, which never change, so
+# an entry is right for as long as it exists; forget() only lets go of the
+# values (and their samples) of frames that may have gone.
+_CHAINS: dict[tuple[FrameData, FrameData], Chain] = {}
 _MAX_CACHED = 4096
 
 
-def invalidate() -> None:
-    """Forget every cached chain (the frame trees changed)."""
+def forget() -> None:
+    """Drop every cached chain (called when a frame makes a new value).
+
+    Not needed for correct results (keys are immutable values): it keeps
+    the cache from holding the samples of frames that changed or went.
+    """
     _CHAINS.clear()
-    _fused.forget()
 
 
-def _cached(outof, into) -> tuple[Any, Any, list, Any, Any]:
-    key = (id(outof), id(into))
+def _cached(outof, into) -> Chain:
+    key = (outof.data, into.data)
     entry = _CHAINS.get(key)
     if entry is None:
         if len(_CHAINS) >= _MAX_CACHED:
             _CHAINS.clear()
-        steps = _chain(outof, into)
-        static = rows = None
-        if all(f._track is None for f, _ in steps):
-            static = compose(steps, Target(None))
-            rows = static[0][0], static[1][0]
-        entry = (outof, into, steps, static, rows)
-        _CHAINS[key] = entry
+        entry = _CHAINS[key] = Chain(_steps(*key))
     return entry
 
 
-def chain(outof, into):
-    """Frames to traverse from ``outof`` to ``into``, with their direction.
+def chain(outof, into) -> Chain:
+    """The steps from ``outof`` to ``into`` (frames or their values), cached.
 
     Returns
     -------
-    list of (ReferenceFrame, bool)
-        Upward steps (frame -> its parent, ``False``) from ``outof`` to the
-        common ancestor, then downward steps (``True``: the frame's
-        transform inverted) from there to ``into``. Cached per pair of
-        frames (do not modify the list).
+    Chain
+        Iterates (FrameData, bool) pairs: upward steps (frame -> its parent,
+        ``False``) from ``outof`` to the common ancestor, then downward steps
+        (``True``: the frame's transform inverted) from there to ``into``.
+        Cached per pair of values (do not modify it).
     """
-    return _cached(outof, into)[2]
+    return _cached(outof, into)
 
 
 def static_transform(outof, into):
     """(t, r) of shapes (1, 3) and (1, 4) if no frame of the chain moves, else None.
 
-    Composed once per pair of frames and cached with the chain.
+    Composed once per pair of frame values and cached with the chain.
     """
-    return _cached(outof, into)[3]
+    return _cached(outof, into).static
 
 
-def _chain(outof, into):
-    up = outof._path_to_root()
-    down = into._path_to_root()
+def _steps(outof: FrameData, into: FrameData) -> list:
+    up = outof.path_to_root()
+    down = into.path_to_root()
     if up[-1] is not down[-1]:
         raise ValueError(
             f"frames {outof.name!r} and {into.name!r} are in different trees "
@@ -130,12 +155,27 @@ def _chain(outof, into):
     return [(f, False) for f in up[:i]] + [(f, True) for f in reversed(down[:j])]
 
 
+# Spline coefficients per frame's samples, made at the first resampling that
+# needs them; weak keys: they go with the samples.
+_COEFFICIENTS: weakref.WeakKeyDictionary[Samples, tuple] = weakref.WeakKeyDictionary()
+
+
+def _squad_coefficients(frame: FrameData):
+    coefficients = _COEFFICIENTS.get(frame.samples)
+    if coefficients is None:
+        assert frame.track is not None  # (splines are for moving frames)
+        a_coef, b_coef = kq.squad_coefficients(frame.r, frame.track.base)
+        seg = kq.squad_segments(frame.r, a_coef, b_coef)
+        coefficients = _COEFFICIENTS.setdefault(frame.samples, (a_coef, b_coef, seg))
+    return coefficients
+
+
 def match(frames, arrays=(), arrays_first=True) -> Target:
     """Find the timestamps a set of frames and arrays is matched to.
 
     Parameters
     ----------
-    frames : sequence of ReferenceFrame
+    frames : sequence of FrameData
         The frames of the chain (direction does not matter here).
     arrays : sequence of Track or None
         Timestamps of the arrays taking part (None: not timestamped).
@@ -149,8 +189,8 @@ def match(frames, arrays=(), arrays_first=True) -> Target:
         the participants do not overlap.
     """
     array_tracks = [a for a in arrays if a is not None]
-    continuous = [f._track for f in frames if f._track is not None and not f.discrete]
-    discrete = [f._track for f in frames if f._track is not None and f.discrete]
+    continuous = [f.track for f in frames if f.track is not None and not f.discrete]
+    discrete = [f.track for f in frames if f.track is not None and f.discrete]
     ranged = continuous + array_tracks
     _time.check_compatible(ranged + discrete)
 
@@ -179,8 +219,8 @@ def match(frames, arrays=(), arrays_first=True) -> Target:
 def _spans(frames, arrays) -> list[str]:
     parts = []
     for f in frames:
-        if f._track is not None and not f.discrete:
-            parts.append(f"frame {f.name!r}: {_span(f._track)}")
+        if f.track is not None and not f.discrete:
+            parts.append(f"frame {f.name!r}: {_span(f.track)}")
     for k, a in enumerate(arrays):
         if a is not None:
             parts.append(f"array {k}: {_span(a)}")
@@ -197,7 +237,7 @@ def _no_overlap_message(frames, arrays, ranged) -> str:
 
 def _no_sample_message(frames, arrays, source, first, last) -> str:
     """The ranges overlap, but the sampling track has no sample inside."""
-    names = [f"frame {f.name!r}" for f in frames if f._track is source]
+    names = [f"frame {f.name!r}" for f in frames if f.track is source]
     names += [f"array {k}" for k, a in enumerate(arrays) if a is source]
     who = names[0] if names else "the sampling"
     lo = int(np.searchsorted(source.key, first, side="left"))
@@ -260,10 +300,13 @@ def _same_memory(a: np.ndarray, b: np.ndarray) -> bool:
 
 
 def resample_frame(frame, target: Target):
-    """A frame's translation (n|1, 3) and rotation (n|1, 4) at the target times."""
-    track = frame._track
+    """A frame's translation (n|1, 3) and rotation (n|1, 4) at the target times.
+
+    ``frame`` is a :class:`FrameData`.
+    """
+    track = frame.track
     if track is None:
-        return frame._t, frame._rotation_public
+        return frame.t, frame.rotation
     tt = target.track
     if tt is None:
         raise ValueError(
@@ -273,21 +316,21 @@ def resample_frame(frame, target: Target):
     if same is not None:
         # the stored values, with their signs (the reference returns them),
         # NaN only where the sample itself is missing
-        return frame._t[same], frame._rotation_public[same]
+        return frame.t[same], frame.rotation[same]
     if frame.discrete:
         # float seconds on one origin keep the order of the exact keys
         t_out = tt.base_in(track.origin)
         return (
-            kr.hold_last(track.base, frame._t, t_out),
-            kr.hold_last(track.base, frame._rotation_public, t_out),
+            kr.hold_last(track.base, frame.t, t_out),
+            kr.hold_last(track.base, frame.rotation, t_out),
         )
     t_out = tt.base_in(track.origin)
     if len(track) < 2:
-        return frame._t, frame._rotation_public
-    a_coef, b_coef, seg = frame._squad_coefficients()
-    rot = kq.squad_evaluate(frame._r, track.base, a_coef, b_coef, seg, t_out)
-    stored_signs(rot, frame._r, frame._rotation_public, track.base, t_out)
-    trans = kr.interp_linear(track.base, frame._t, t_out)
+        return frame.t, frame.rotation
+    a_coef, b_coef, seg = _squad_coefficients(frame)
+    rot = kq.squad_evaluate(frame.r, track.base, a_coef, b_coef, seg, t_out)
+    stored_signs(rot, frame.r, frame.rotation, track.base, t_out)
+    trans = kr.interp_linear(track.base, frame.t, t_out)
     if frame.max_gap is not None:
         in_gap = in_long_gap(track.base, t_out, frame.max_gap)
         trans[in_gap] = np.nan
@@ -350,10 +393,10 @@ def held(steps, target: Target):
     """
     tracks = []
     for frame, _ in steps:
-        if frame._track is not None:
+        if frame.track is not None:
             if not frame.discrete:
                 return None
-            tracks.append(frame._track)
+            tracks.append(frame.track)
     if not tracks or target.track is None:
         return None
     events = _time.union(tracks) if len(tracks) > 1 else tracks[0]
@@ -412,10 +455,15 @@ def fused_plan(steps, target: Target):
     """
     if target.track is None:
         return None, None
-    plan = _fused.plan(steps, _compose_static)
+    if type(steps) is Chain:
+        plan = steps.plan
+        if plan is _UNPLANNED:
+            plan = steps.plan = _fused.plan(steps, _compose_static)
+    else:
+        plan = _fused.plan(steps, _compose_static)
     if plan is None:
         return None, None
-    runs = [_same_times(f._track, target.track) for f in plan.frames]
+    runs = [_same_times(f.track, target.track) for f in plan.frames]
     return plan, [0 if run is None else run.start + 1 for run in runs]
 
 
@@ -434,7 +482,7 @@ def rates_plan(frame, to_frame):
     if target.track is None or len(target) < 4:
         return None
     plan, own = fused_plan(steps, target)
-    if plan is None or all(own) or any(f._missing_rotations for f in plan.frames):
+    if plan is None or all(own) or any(f.missing_rotations for f in plan.frames):
         return None
     return plan, own, target
 
@@ -497,7 +545,7 @@ def lookup_transform(frame, to_frame):
     Static transforms come back with shapes (3,) and (4,), moving ones with
     (n, 3) and (n, 4).
     """
-    rows = _cached(frame, to_frame)[4]
+    rows = _cached(frame, to_frame).rows
     if rows is not None:
         # copies: the cached transform is shared by every later call
         return rows[0].copy(), rows[1].copy(), None

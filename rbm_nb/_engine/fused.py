@@ -9,7 +9,8 @@ evaluate and compose the whole chain per output row, allocating nothing
 but their result. Chains with more moving frames return None from
 :func:`plan` and take the unfused path of :mod:`rbm_nb._engine.chain`.
 
-Squad tables are per frame, created empty (zeroed pages cost nothing until
+Squad tables are per frame's samples (:class:`~rbm_nb._engine.frame_data.Samples`,
+kept here in a weak mapping: a table goes with its samples), created empty (zeroed pages cost nothing until
 touched) and filled by the kernels one segment at a time, as segments are
 first used: registering a frame computes no coefficients, and a lookup
 computes only those of the segments it needs. Calls that may fill a table
@@ -26,6 +27,7 @@ first runs ``prefill_chain`` (under the lock, in the same launch).
 from __future__ import annotations
 
 import threading
+import weakref
 from typing import Any
 
 import numpy as np
@@ -33,8 +35,9 @@ import numpy as np
 from .. import _memory, _parallel
 from .._kernels import fused as kf
 from .._kernels import velocity_chain as kv
+from .frame_data import FrameData, Samples
 
-__all__ = ["Plan", "forget", "plan", "lookup", "transform", "body_rates"]
+__all__ = ["Plan", "plan", "lookup", "transform", "body_rates"]
 
 _NS_PER_S = 1e9
 _EMPTY_TIMES = np.zeros(1)
@@ -115,22 +118,27 @@ class _Table:
         return self.complete or any(a <= start and stop <= b for a, b in self.filled)
 
 
-def _table(frame) -> _Table:
-    table = frame.__dict__.get("_fused_table")
+# The squad table of each frame's samples. Samples never change, and a frame
+# keeps its samples through every change of its value (a new parent, name or
+# option), so a table lives as long as the samples it was made for.
+_TABLES: weakref.WeakKeyDictionary[Samples, _Table] = weakref.WeakKeyDictionary()
+
+
+def table_of(frame: FrameData) -> _Table:
+    """The squad table of a moving frame's samples (made empty at first use)."""
+    table = _TABLES.get(frame.samples)
     if table is None:
-        # frames never change their data, so the table lives as long as the frame
-        table = _Table(len(frame._track))
-        frame._fused_table = table
+        assert frame.track is not None  # (tables are for moving frames)
+        table = _TABLES.setdefault(frame.samples, _Table(len(frame.track)))
     return table
 
 
 class Plan:
     """A chain prepared for the fused kernels."""
 
-    __slots__ = ("steps", "code", "statics", "frames", "kinds", "tables", "_slots")
+    __slots__ = ("code", "statics", "frames", "kinds", "tables", "_slots")
 
-    def __init__(self, steps, code, statics, frames, kinds, tables) -> None:
-        self.steps = steps  # the chain's step list (identity keys the cache)
+    def __init__(self, code, statics, frames, kinds, tables) -> None:
         self.code = code
         self.statics = statics
         self.frames = frames
@@ -142,9 +150,8 @@ class Plan:
         """The kernels' leading arguments: chain code, statics, offsets, gaps,
         own runs and the slot arrays.
 
-        The slot arrays are the same at every call (a frame's data and its
-        table never change once registered): gathered once. The gaps are
-        read at each call, as ``max_gap`` is a plain attribute.
+        The slot arrays are the same at every call (a frame's value and its
+        table never change): gathered once.
         """
         slots = self._slots
         if slots is None:
@@ -156,9 +163,7 @@ class Plan:
         out: list[Any] = []
         for frame, table in zip(self.frames, self.tables, strict=True):
             c = table.rows if table is not None else _EMPTY_TABLE
-            out.append(
-                (frame._track.base, frame._t, frame._r, frame._rotation_public, c)
-            )
+            out.append((frame.track.base, frame.t, frame.r, frame.rotation, c))
         out += [_EMPTY_SLOT] * (kf.SLOTS - len(self.frames))
         return kf.pack_slots(out)
 
@@ -167,7 +172,7 @@ class Plan:
         tt = target.track
         off = np.zeros(kf.SLOTS)
         for k, frame in enumerate(self.frames):
-            origin = frame._track.origin
+            origin = frame.track.origin
             if tt.kind != "numeric" and origin != tt.origin:
                 off[k] = (tt.origin - origin) / _NS_PER_S
         return off
@@ -176,7 +181,7 @@ class Plan:
         """Per slot, the frame's ``max_gap`` (inf: none)."""
         out = np.full(kf.SLOTS, np.inf)
         for k, frame in enumerate(self.frames):
-            if getattr(frame, "max_gap", None) is not None:
+            if frame.max_gap is not None:
                 out[k] = frame.max_gap
         return out
 
@@ -201,7 +206,7 @@ class Plan:
                     return out
                 # (a track's times are increasing: no pass over them)
                 span = float(base[0]), float(base[-1])
-            times = frame._track.base
+            times = frame.track.base
             n = len(times)
             lo, hi = np.searchsorted(times, np.add(span, offsets[k]), side="right") - 1
             inside = hi < 0 or table.covers(max(int(lo), 0), int(hi) + 1)
@@ -210,36 +215,18 @@ class Plan:
         return out
 
 
-# plans per chain, keyed by the identity of the chain's step list (the
-# chain cache hands out the same list until the trees change); each entry
-# keeps its list alive, so an id is never reused while it is cached
-_PLANS: dict[int, tuple[Any, Plan | None]] = {}
-_MAX_PLANS = 4096
-
-
-def forget() -> None:
-    """Drop every cached plan (the frame trees changed; old frames may go)."""
-    _PLANS.clear()
-
-
 def plan(steps, compose) -> Plan | None:
     """The plan of a chain, or None if it has no moving frame or too many.
 
-    ``compose(run)`` composes a run of static steps into (t (1, 3), r (1, 4)).
+    ``steps`` iterates (FrameData, inverse) pairs; ``compose(run)`` composes
+    a run of static steps into (t (1, 3), r (1, 4)). The caller keeps the
+    plan (:class:`rbm_nb._engine.chain.Chain` holds it with its steps).
     """
-    key = id(steps)
-    cached = _PLANS.get(key)
-    if cached is not None and cached[0] is steps:
-        return cached[1]
-    if len(_PLANS) >= _MAX_PLANS:
-        _PLANS.clear()
-    built = _build(steps, compose)
-    _PLANS[key] = (steps, built)
-    return built
+    return _build(steps, compose)
 
 
 def _build(steps, compose) -> Plan | None:
-    moving = [f for f, _ in steps if f._track is not None]
+    moving = [f for f, _ in steps if f.track is not None]
     if not moving or len(moving) > kf.SLOTS:
         return None
     code: list[int] = []
@@ -257,23 +244,23 @@ def _build(steps, compose) -> Plan | None:
             run.clear()
 
     for frame, inverse in steps:
-        if frame._track is None:
+        if frame.track is None:
             run.append((frame, inverse))
             continue
         flush()
         if frame.discrete:
             kind, table = kf.HELD, None
-        elif len(frame._track) < 2:
+        elif len(frame.track) < 2:
             kind, table = kf.CONSTANT, None
         else:
-            kind, table = kf.SQUAD, _table(frame)
+            kind, table = kf.SQUAD, table_of(frame)
         code.extend((kind, len(frames), 1 if inverse else 0))
         frames.append(frame)
         kinds.append(kind)
         tables.append(table)
     flush()
     stat = np.array(statics) if statics else np.zeros((1, 7))
-    return Plan(steps, np.array(code, dtype=np.int64), stat, frames, kinds, tables)
+    return Plan(np.array(code, dtype=np.int64), stat, frames, kinds, tables)
 
 
 def _run(p: Plan, serial, parallel, args: tuple[Any, ...], target, offsets, own):

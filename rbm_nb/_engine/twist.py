@@ -72,11 +72,11 @@ def _breaks(frame, reference, target):
     track = target.track
     out = None
     for f, _ in _chain.chain(frame, reference):
-        if f._track is None or f.discrete or f.max_gap is None or len(track) < 2:
+        if f.track is None or f.discrete or f.max_gap is None or len(track) < 2:
             continue
-        base = track.base_in(f._track.origin)
+        base = track.base_in(f.track.origin)
         middle = 0.5 * (base[1:] + base[:-1])
-        gap = _chain.in_long_gap(f._track.base, middle, f.max_gap)
+        gap = _chain.in_long_gap(f.track.base, middle, f.max_gap)
         out = gap if out is None else out | gap
     return out
 

@@ -11,7 +11,6 @@ from typing import Any
 import xarray as xr
 
 from .._atomic import atomic_path, check_replaceable
-from .._engine import chain as _engine_chain
 from . import _windows
 from ._sources import _NETCDF_LOCK, Recording, RecordingSource, find_sources
 
@@ -270,17 +269,17 @@ class _TaskGarbage:
     """Frees the reference cycles a task leaves behind, scanning only the task's objects.
 
     A task's frame tree is a reference cycle (a parent lists its children),
-    so its arrays -- the window's data and the tables the lookups cache on
-    the frames -- are freed only by Python's cycle collector, whose full
+    so its arrays -- the window's data -- are freed only by Python's cycle collector, whose full
     passes are rare in a process holding many long-lived objects (compiled
     kernels, dask, xarray): without help a worker's memory grows with the
     number of windows it has run. A full pass over everything takes about
     0.1 s in a worker, longer than a short window's task. So the objects
     that exist when the task starts are frozen (:func:`gc.freeze`), the
     pass after the task scans only what was created since, and they are
-    unfrozen again; the engine's cache of chains, which holds the frames
-    last used, is emptied first. One task per process does this at a time, and only if
-    nothing else has frozen objects (a freeze of others is never undone).
+    unfrozen again. (The engine's cache of chains holds frame values, which
+    form no cycle and go with the next frame built, not frames.) One task
+    per process does this at a time, and only if nothing else has frozen
+    objects (a freeze of others is never undone).
     """
 
     def __init__(self) -> None:
@@ -297,10 +296,6 @@ class _TaskGarbage:
         if self.owner != threading.get_ident():
             return
         try:
-            # the engine caches the chains of the frames last used (until a
-            # frame is built), which would keep this task's tree alive into
-            # the next task, when it is frozen
-            _engine_chain.invalidate()
             gc.collect()
         finally:
             gc.unfreeze()

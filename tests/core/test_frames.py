@@ -366,13 +366,13 @@ def test_one_pass_registration_stores_what_the_checks_one_at_a_time_do(
     monkeypatch.setattr(frames, "moving_samples", lambda t, q: None)
     stepwise = rbm.ReferenceFrame("f", parent=rbm.ReferenceFrame("w"), translation=t,
                                   rotation=q, timestamps=ts)  # fmt: skip
-    for name in ("_t", "_r", "_rotation_public"):
-        got, want = getattr(fused, name), getattr(stepwise, name)
+    for name in ("t", "r", "rotation"):
+        got, want = getattr(fused.data, name), getattr(stepwise.data, name)
         assert got.flags.c_contiguous and got.dtype == np.float64
         np.testing.assert_array_equal(got.view(np.int64), want.view(np.int64))
     assert (
-        fused._missing_rotations
-        == stepwise._missing_rotations
+        fused.data.missing_rotations
+        == stepwise.data.missing_rotations
         == bool(np.isnan(q).any())
     )
     # private copies: changing the caller's arrays changes nothing

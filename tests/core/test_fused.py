@@ -365,7 +365,7 @@ def test_squad_table_of_repeated_samples():
     between = t[:-1] + np.diff(t) * rng.uniform(0.05, 0.95, n - 1)
     got = rbm.lookup_transform("m", "world", time=between)[1]
     m = _frames.resolve_frame("m")
-    want = _chain.resample_frame(m, _chain.Target(_time.as_track(between)))[1]
+    want = _chain.resample_frame(m.data, _chain.Target(_time.as_track(between)))[1]
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
 
 
@@ -451,14 +451,14 @@ def test_squad_rows_are_computed_only_for_the_segments_used():
     )
     m = _frames.resolve_frame("m")
     steps = _chain.chain(m, _frames.resolve_frame("world"))
-    plan, _ = _plan(steps, _chain.Target(m._track))
+    plan, _ = _plan(steps, _chain.Target(m.data.track))
     table = plan.tables[0]
     assert not table.rows.any()  # nothing computed by registering
 
     def computed():
         return set(np.flatnonzero(table.rows[:, kf.TABLE_COLUMNS - 1]).tolist())
 
-    _fused.lookup(plan, _chain.Target(m._track), [True])  # its own times
+    _fused.lookup(plan, _chain.Target(m.data.track), [True])  # its own times
     assert computed() == set()
     times = np.array([0.0205, 0.0213, 5.5551])  # segments 2, 2, 555
     _fused.lookup(plan, _chain.Target(_time.as_track(times)), [False])
@@ -467,7 +467,7 @@ def test_squad_rows_are_computed_only_for_the_segments_used():
     # a run stops before rows already there
     _fused.lookup(plan, _chain.Target(_time.as_track(np.array([5.0]))), [False])
     assert computed() == run | set(range(500, 555))
-    full = kf.squad_table(m._r, m._rotation_public, m._track.base)
+    full = kf.squad_table(m.data.r, m.data.rotation, m.data.track.base)
     rows = sorted(computed())
     np.testing.assert_array_equal(table.rows[rows], full[rows])
     assert not table.complete
@@ -636,7 +636,7 @@ def test_threads_filling_one_table_get_the_same_results():
     t_ref, r_ref = _unfused_lookup(steps, target)
     c, a = _frames.resolve_frame("c"), _frames.resolve_frame("a")
     plan = _fused.plan(steps, _chain._compose_static)
-    table = plan.tables[plan.frames.index(a)]  # a is interpolated at c's times
+    table = plan.tables[plan.frames.index(a.data)]  # a is interpolated at c's times
     assert table is not None and not table.rows.any()
     start = threading.Barrier(4)
     results = []

@@ -80,7 +80,7 @@ def modes(monkeypatch, ignore_load):
 def _forget_tables():
     """Empty every registered frame's squad table (as if just registered)."""
     for frame in _frames.registry.values():
-        table = frame.__dict__.get("_fused_table")
+        table = _fused._TABLES.get(frame.data.samples)
         if table is not None:
             table.clear()
 
@@ -483,7 +483,7 @@ def test_rows_known_to_be_filled_need_no_second_prefill(monkeypatch, ignore_load
         return rbm.transform_points(points, "world", "m", timestamps=ts)
 
     first = transform(50.0, 60.0)
-    table = _frames.resolve_frame("m")._fused_table
+    table = _fused._TABLES[_frames.resolve_frame("m").data.samples]
     assert prefills == [3000] and table.filled == [(5000, 6001)]
     assert not table.complete
     np.testing.assert_array_equal(transform(50.0, 60.0), first)
@@ -527,7 +527,7 @@ def test_a_table_is_complete_by_the_kernels_count_or_by_a_scan(monkeypatch):
     def lookup(lo, hi, rows):
         points = np.zeros((rows, 3))
         rbm.transform_points(points, "world", "m", timestamps=np.linspace(lo, hi, rows))
-        return _frames.resolve_frame("m")._fused_table
+        return _fused._TABLES[_frames.resolve_frame("m").data.samples]
 
     def scanned(table):
         return int(np.count_nonzero(table.rows[:, -1]))

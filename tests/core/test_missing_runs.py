@@ -34,6 +34,7 @@ import xarray as xr
 import rbm_nb as rbm
 from rbm_nb import _parallel
 from rbm_nb import frames as _frames
+from rbm_nb._engine import fused as _fused
 from rbm_nb._kernels import fused as kf
 from rbm_nb._kernels import quaternion as kq
 from rbm_nb._kernels import squad_walk as ksw
@@ -336,7 +337,7 @@ def test_parallel_twins(monkeypatch, ignore_load):
     monkeypatch.setattr(kf, "transform_chain_parallel", spy)
     results = []
     for threads, min_rows in (("1", 10**12), ("2", 1)):
-        table = _frames.registry["f"].__dict__.get("_fused_table")
+        table = _fused._TABLES.get(_frames.registry["f"].data.samples)
         if table is not None:
             table.clear()  # each mode fills the table itself
         monkeypatch.setenv(_parallel.ENV_THREADS, threads)

@@ -120,6 +120,7 @@ def test_times_are_evaluated_on_the_segments_they_read():
     not the spline coefficients of every sample (the step-by-step route),
     with the step-by-step route's values."""
     from rbm_nb._engine import chain
+    from rbm_nb._engine import fused as _fused
     from rbm_nb._kernels import squad_table
 
     n = 5000
@@ -132,8 +133,9 @@ def test_times_are_evaluated_on_the_segments_they_read():
     times = np.array([10.005, 10.012, 33.3, 0.0, 50.0])
     got_t, got_r = lookup_at("eye", "world", times)
     head = resolve_frame("head")
-    assert head._coefficients is None  # no coefficients for all 5000 samples
-    computed = int(np.count_nonzero(head._fused_table.rows[:, -1]))
+    # no coefficients for all 5000 samples
+    assert head.data.samples not in chain._COEFFICIENTS
+    computed = int(np.count_nonzero(_fused._TABLES[head.data.samples].rows[:, -1]))
     assert 0 < computed <= 4 * squad_table.RUN, computed
     steps = chain.chain(resolve_frame("eye"), resolve_frame("world"))
     track, inverse, _, _ = rbm._time.requested_times(times)  # sorted, unique

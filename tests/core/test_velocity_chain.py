@@ -223,7 +223,7 @@ def _single_frame(rng, n, nan_row=None):
         plan.gaps(),
         own,
     ) + plan.slots()
-    base = m._track.base
+    base = m.data.track.base
     return args, 0.5 * (base[1:] + base[:-1])
 
 

@@ -1,0 +1,191 @@
+"""A frame as the engine sees it: one immutable value.
+
+A :class:`~rbm_nb.ReferenceFrame` validates its arguments once and hands the
+engine a :class:`FrameData` (its public ``data`` property): the prepared
+:class:`Samples` (translation, rotations as given, the unit and
+sign-continuous rotations interpolation needs, the :class:`~rbm_nb._time.Track`
+of the times, whether a rotation sample is missing), the options
+``discrete`` and ``max_gap``, the name, and the parent's FrameData.
+
+Nothing in a value changes. A frame that changes (a new parent, a new name
+or option) makes a new value, and so does every frame below it, since a
+value holds its parent's: the chain between two values is fixed for as long
+as they exist. The engine keys its caches by these values -- chains by the
+pair of end values, squad tables and spline coefficients by the Samples,
+which a frame keeps through every change -- so an entry made before a
+change can never be found after it; nothing has to be told to forget it
+for the results to be right.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .. import _time
+
+__all__ = ["Samples", "FrameData"]
+
+_SAME: Any = object()  # replace(): keep this field
+
+
+class _Frozen:
+    """Attributes set once, in ``__init__``; assigning later is an error."""
+
+    __slots__ = ()
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError(f"{type(self).__name__} is immutable (set {name!r})")
+
+    def __delattr__(self, name: str) -> None:
+        raise AttributeError(f"{type(self).__name__} is immutable (del {name!r})")
+
+
+class Samples(_Frozen):
+    """A frame's transform samples, prepared for the kernels.
+
+    Attributes
+    ----------
+    track : Track or None
+        The times of a moving frame (None: static, one row).
+    t : ndarray, shape (n|1, 3)
+        Translations (NaN rows: missing samples).
+    r : ndarray, shape (n|1, 4)
+        Unit rotations, sign-continuous for a moving frame (interpolation).
+    rotation : ndarray, shape (n|1, 4)
+        The rotations as given (returned at the frame's own times).
+    missing_rotations : bool
+        A rotation sample is missing (a NaN row).
+
+    The arrays are the frame's private copies: nobody writes them.
+    """
+
+    __slots__ = ("track", "t", "r", "rotation", "missing_rotations", "__weakref__")
+
+    track: _time.Track | None
+    t: np.ndarray
+    r: np.ndarray
+    rotation: np.ndarray
+    missing_rotations: bool
+
+    def __init__(self, track, t, r, rotation, missing_rotations=False) -> None:
+        setter = object.__setattr__
+        setter(self, "track", track)
+        setter(self, "t", t)
+        setter(self, "r", r)
+        setter(self, "rotation", rotation)
+        setter(self, "missing_rotations", bool(missing_rotations))
+
+    def __reduce__(self):
+        # (pickle and copy would set the slots one by one, which is refused)
+        return Samples, (
+            self.track,
+            self.t,
+            self.r,
+            self.rotation,
+            self.missing_rotations,
+        )
+
+
+class FrameData(_Frozen):
+    """One frame's data, options and place in its tree, as a value.
+
+    The sample attributes (``track``, ``t``, ``r``, ``rotation``,
+    ``missing_rotations``) are those of ``samples``, repeated here because
+    the engine reads them in its loops over chains.
+    """
+
+    __slots__ = (
+        "name",
+        "parent",
+        "samples",
+        "discrete",
+        "max_gap",
+        "track",
+        "t",
+        "r",
+        "rotation",
+        "missing_rotations",
+        "__weakref__",
+    )
+
+    name: str | None
+    parent: FrameData | None
+    samples: Samples
+    discrete: bool
+    max_gap: float | None
+    track: _time.Track | None
+    t: np.ndarray
+    r: np.ndarray
+    rotation: np.ndarray
+    missing_rotations: bool
+
+    def __init__(
+        self,
+        name: str | None,
+        parent: FrameData | None,
+        samples: Samples,
+        discrete: bool = False,
+        max_gap: float | None = None,
+    ) -> None:
+        setter = object.__setattr__
+        setter(self, "name", name)
+        setter(self, "parent", parent)
+        setter(self, "samples", samples)
+        setter(self, "discrete", bool(discrete))
+        setter(self, "max_gap", max_gap)
+        setter(self, "track", samples.track)
+        setter(self, "t", samples.t)
+        setter(self, "r", samples.r)
+        setter(self, "rotation", samples.rotation)
+        setter(self, "missing_rotations", samples.missing_rotations)
+
+    def __reduce__(self):
+        return FrameData, (
+            self.name,
+            self.parent,
+            self.samples,
+            self.discrete,
+            self.max_gap,
+        )
+
+    def replace(
+        self,
+        *,
+        name: Any = _SAME,
+        parent: Any = _SAME,
+        discrete: Any = _SAME,
+        max_gap: Any = _SAME,
+    ) -> FrameData:
+        """A new value with some of ``name``, ``parent``, ``discrete``, ``max_gap`` changed."""
+        return FrameData(
+            self.name if name is _SAME else name,
+            self.parent if parent is _SAME else parent,
+            self.samples,
+            self.discrete if discrete is _SAME else discrete,
+            self.max_gap if max_gap is _SAME else max_gap,
+        )
+
+    @property
+    def data(self) -> FrameData:
+        """The value itself: engine functions take a frame or its value."""
+        return self
+
+    @property
+    def timestamps(self) -> np.ndarray | None:
+        """The times of a moving frame as given (None if static)."""
+        return None if self.track is None else self.track.values
+
+    def path_to_root(self) -> list[FrameData]:
+        """This value, its parent's, ..., the root's."""
+        path = []
+        node: FrameData | None = self
+        while node is not None:
+            path.append(node)
+            node = node.parent
+        return path
+
+    def __repr__(self) -> str:
+        kind = "static" if self.track is None else f"{len(self.track)} samples"
+        return f"<FrameData {self.name!r} ({kind})>"

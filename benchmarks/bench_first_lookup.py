@@ -99,7 +99,7 @@ def parts() -> None:
         bench_fused.register(rbm, frames)
         h = head()
         table = FU._table(h)
-        table.rows[...] = kf.squad_table(h._r, h._rotation_public, h._track.base)
+        table.rows[...] = kf.squad_table(h.data.r, h.data.rotation, h.data.track.base)
         table.update()  # (complete: the scan is outside the timing)
         times["first call, head table already complete"].append(lookup())
     steady = min(times["steady state"])
@@ -128,7 +128,9 @@ def _staged_fill():
     for stage_helper in stages:
         fn = ast.parse(textwrap.dedent(inspect.getsource(stage_helper.py_func))).body[0]
         body = fn.body[1:] if isinstance(fn.body[0], ast.Expr) else fn.body
-        source += textwrap.indent("\n".join(ast.unparse(b) for b in body), "    ") + "\n"
+        source += (
+            textwrap.indent("\n".join(ast.unparse(b) for b in body), "    ") + "\n"
+        )
     lines, k = [], 0
     for line in source.splitlines():
         if re.match(r"    for ", line):
@@ -166,7 +168,7 @@ def fill_loops() -> None:
     _, (frames, *_rest) = bench_fused.workload()
     bench_fused.register(rbm, frames)
     h = F.resolve_frame("head")
-    r, rp, t = h._r, h._rotation_public, h._track.base
+    r, rp, t = h.data.r, h.data.rotation, h.data.track.base
     fill = _staged_fill()
     table = np.zeros((len(t), kf.TABLE_COLUMNS))
     fill(len(FILL_LOOPS), r, rp, t, table)

@@ -429,11 +429,11 @@ def floor_args(n):
     s1 = np.concatenate([s1[0][0], s1[1][0]])
     a, b, seg = head._squad_coefficients()
     target = C.match([eye, head])
-    lo = int(np.searchsorted(eye._track.key, target.track.key[0]))
-    e_t = eye._t[lo : lo + len(target)]
-    e_r = eye._rotation_public[lo : lo + len(target)]
-    off = (target.track.origin - head._track.origin) / 1e9
-    return (s1, s0, head._track.base, head._t, head._r, a, b, seg, e_t, e_r,
+    lo = int(np.searchsorted(eye.data.track.key, target.track.key[0]))
+    e_t = eye.data.t[lo : lo + len(target)]
+    e_r = eye.data.rotation[lo : lo + len(target)]
+    off = (target.track.origin - head.data.track.origin) / 1e9
+    return (s1, s0, head.data.track.base, head.data.t, head.data.r, a, b, seg, e_t, e_r,
             target.track.base, off)  # fmt: skip
 
 

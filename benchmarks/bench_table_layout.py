@@ -202,9 +202,12 @@ def main() -> None:
     print(f"{source}; one thread; best of {REPEATS}; fast paths only")
     for name, at in (("head", "left_eye"), ("left_eye", "head")):
         frame, other = frames.resolve_frame(name), frames.resolve_frame(at)
-        times, r = frame._track.base, frame._r
+        times, r = frame.data.track.base, frame.data.r
         table = fused._table(frame).rows
-        target = other._track.base + (other._track.origin - frame._track.origin) / 1e9
+        target = (
+            other.data.track.base
+            + (other.data.track.origin - frame.data.track.origin) / 1e9
+        )
         target = target[(target > times[1]) & (target < times[-2])].copy()
         # b from the table's great circle a -> b (unit segments)
         a = table[:, 0:4]

@@ -72,11 +72,20 @@ def dump(out: str) -> None:
     for label, ts, n in (("eye", eye_t, len(eye_t)), ("head", head_t, len(head_t)),
                          ("few", few, len(few)), ("unsorted", unsorted, len(unsorted))):  # fmt: skip
         p = points[:n]
-        keep(f"transform_points {label}", rbm.transform_points(p, "left_eye", "world", timestamps=ts))
-        keep(f"transform_vectors {label}", rbm.transform_vectors(p, "left_eye", "world", timestamps=ts))
+        keep(
+            f"transform_points {label}",
+            rbm.transform_points(p, "left_eye", "world", timestamps=ts),
+        )
+        keep(
+            f"transform_vectors {label}",
+            rbm.transform_vectors(p, "left_eye", "world", timestamps=ts),
+        )
         q = rng.normal(size=(n, 4))
         q /= np.linalg.norm(q, axis=1)[:, None]
-        keep(f"transform_quaternions {label}", rbm.transform_quaternions(q, "left_eye", "head", timestamps=ts))
+        keep(
+            f"transform_quaternions {label}",
+            rbm.transform_quaternions(q, "left_eye", "head", timestamps=ts),
+        )
     for a, b in (("head", "world"), ("left_eye", "world"), ("left_eye", "head")):
         keep(f"lookup_twist {a} wrt {b}", rbm.lookup_twist(a, b))
         keep(f"lookup_angular_velocity {a} wrt {b}", rbm.lookup_angular_velocity(a, b))
@@ -95,7 +104,9 @@ def compare(tree_a: Path, tree_b: Path) -> int:
         for k, tree in enumerate((tree_a, tree_b)):
             out = str(Path(tmp) / f"{k}.npz")
             env = dict(os.environ, PYTHONPATH=str(tree))
-            subprocess.run([sys.executable, __file__, "--dump", out], cwd=tree, env=env, check=True)
+            subprocess.run(
+                [sys.executable, __file__, "--dump", out], cwd=tree, env=env, check=True
+            )
             files.append(np.load(out))
         a, b = files
         bad = 0
@@ -115,11 +126,17 @@ def compare(tree_a: Path, tree_b: Path) -> int:
                 both = ~(np.isnan(x) & np.isnan(y))
                 d = float(np.nanmax(np.abs(x - y)[both], initial=0.0))
             else:
-                d = float(np.max(np.abs(x.astype(np.int64) - y.astype(np.int64)), initial=0))
+                d = float(
+                    np.max(np.abs(x.astype(np.int64) - y.astype(np.int64)), initial=0)
+                )
             worst = max(worst, d)
             bad += not same
-            print(f"{'same bits' if same else 'DIFFERENT':10s} max|diff| = {d:.3g}  {name} {x.shape}")
-        print(f"{len(a.files)} outputs; {bad} differ; max |diff| over all = {worst:.3g}")
+            print(
+                f"{'same bits' if same else 'DIFFERENT':10s} max|diff| = {d:.3g}  {name} {x.shape}"
+            )
+        print(
+            f"{len(a.files)} outputs; {bad} differ; max |diff| over all = {worst:.3g}"
+        )
         return 1 if bad else 0
 
 

@@ -173,7 +173,8 @@ def _blue_columns(page) -> np.ndarray:
 
 def test_a_long_recording_with_many_gaps_draws_every_sample(long_plot):
     page = long_plot
-    fields = dict(part.split("=") for part in page.ready_text.split()[1:])
+    ready = page.ready_text.split("LONG-READY")[1].split("\n")[0]
+    fields = dict(part.split("=") for part in ready.split())
     samples, sent, runs = (int(fields[k]) for k in ("samples", "sent", "runs"))
     assert samples <= sent < samples + 1000
     assert float(fields["hours"]) >= 1.5
@@ -258,6 +259,11 @@ def _overview(page, expr):
 
 def test_zooming_into_10_s_fetches_the_samples_there_at_full_resolution(long_plot):
     page = long_plot
+    # what the kernel put in the widget for the 2 million samples: an overview
+    # of overview_width columns, x and y as float64
+    sent = page.ready_text.split("OVERVIEW-SENT")[1].split("\n")[0]
+    fields = dict(part.split("=") for part in sent.split())
+    assert int(fields["bytes"]) <= 16 * 5 * int(fields["width"])
     rows = _overview(page, "u.data[0].length")
     width = _overview(page, "u.bbox.width")
     # the whole 1.6 h as its M4 at this view's own pixel width (asked for

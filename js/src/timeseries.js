@@ -493,9 +493,8 @@ async function render({ model, el }) {
     } else if (windowFull && windowFull.every(Boolean)) {
       resolution.textContent = "zoomed: every sample in view";
     } else {
-      resolution.textContent =
-        `min/max of ${samples.toLocaleString("en-US")} samples per pixel column (${overviewWidth} columns)` +
-        `${windowFull ? "" : " \u00b7 zoom in for every sample"}`;
+      // (no promise of detail on zoom: an exported page has no kernel to ask)
+      resolution.textContent = `min/max of ${samples.toLocaleString("en-US")} samples per pixel column (${overviewWidth} columns)`;
     }
     root.rbmResolution = resolution.textContent;
   }

@@ -13,8 +13,9 @@ same script measures any tree (``--tree`` runs the kernel on another
 checkout, e.g. main before a change):
 
 * ``kernel build``: seconds of the ``dashboard()`` call, as the kernel times it;
-* ``sent``: bytes the page received over its websockets from the start of the
-  run to the first frame (3D view and plots drawn);
+* ``sent``: bytes the Jupyter server sent the page (counted on the wire by a
+  loopback relay the page talks through) from the end of the loading cell to
+  the first frame (3D view and plots drawn);
 * ``cell -> drawn``: seconds from the start of the dashboard cell (after the
   data is loaded; kernel clock) until the 3D view shows its content (the
   frames' labels are in the page and screenshots of its canvas show a
@@ -134,6 +135,65 @@ PLAY_JS = """async (ms) => {
 }"""
 
 
+class CountingProxy:
+    """A loopback TCP relay to the Jupyter server counting the bytes it sends back.
+
+    Counted on the wire (what a remote browser would download), whatever the
+    page's tools report: chromium's devtools leave very large websocket frames
+    out of their events (a 100 MB scene message was not seen).
+    """
+
+    def __init__(self, port: int):
+        import socket
+        import threading
+
+        self.target = port
+        self.down = 0
+        self._lock = threading.Lock()
+        self._server = socket.create_server(("127.0.0.1", 0))
+        self.port = self._server.getsockname()[1]
+        self._open = True
+        threading.Thread(target=self._accept, daemon=True).start()
+
+    def _accept(self) -> None:
+        import socket
+        import threading
+
+        while self._open:
+            try:
+                client, _ = self._server.accept()
+            except OSError:
+                return
+            upstream = socket.create_connection(("127.0.0.1", self.target))
+            for src, dst, count in (
+                (client, upstream, False),
+                (upstream, client, True),
+            ):
+                threading.Thread(
+                    target=self._pump, args=(src, dst, count), daemon=True
+                ).start()
+
+    def _pump(self, src, dst, count: bool) -> None:
+        try:
+            while data := src.recv(1 << 16):
+                dst.sendall(data)
+                if count:
+                    with self._lock:
+                        self.down += len(data)
+        except OSError:
+            pass
+        finally:
+            for sock in (src, dst):
+                try:
+                    sock.shutdown(2)
+                except OSError:
+                    pass
+
+    def close(self) -> None:
+        self._open = False
+        self._server.close()
+
+
 def _renderer_rss() -> int:
     """Resident bytes of this process tree's chromium renderers."""
     import psutil
@@ -201,23 +261,17 @@ def measure(hours: float, tree: Path) -> dict:
             browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
             try:
                 context = browser.new_context(viewport={"width": 1400, "height": 1000})
-                blocked = block_other_ports(context, server.port)
+                proxy = CountingProxy(server.port)
+                blocked = block_other_ports(context, proxy.port)
                 page = context.new_page()
-                received = [0]
-                page.on(
-                    "websocket",
-                    lambda ws: ws.on(
-                        "framereceived",
-                        lambda f: received.__setitem__(
-                            0,
-                            received[0]
-                            + len(f if isinstance(f, bytes) else f.encode()),
-                        ),
-                    ),
-                )
                 errors: list[str] = []
                 page.on("pageerror", lambda e: errors.append(str(e)))
-                page.goto(server.notebook_url("bench.ipynb"), timeout=120000)
+                page.goto(
+                    server.notebook_url("bench.ipynb").replace(
+                        f":{server.port}/", f":{proxy.port}/"
+                    ),
+                    timeout=120000,
+                )
                 page.wait_for_selector(".jp-Notebook .jp-Cell", timeout=120000)
                 try:
                     page.locator(".jp-Dialog").get_by_role(
@@ -232,7 +286,7 @@ def measure(hours: float, tree: Path) -> dict:
                 page.get_by_role("menuitem", name="Run", exact=True).click()
                 page.get_by_text("Run All Cells", exact=True).click()
                 loaded = _output(page, "LOADED", 900000)
-                received[0] = 0  # what the dashboard cell costs
+                proxy.down = 0  # what the dashboard cell costs
                 built = _output(page, "BUILT", 1800000)
                 page.wait_for_function(PLOTS_DRAWN, timeout=600000, polling=50)
                 plots_at = time.time()
@@ -242,13 +296,13 @@ def measure(hours: float, tree: Path) -> dict:
                         raise RuntimeError("the 3D view did not draw in 10 minutes")
                     page.wait_for_timeout(100)
                 drawn_at = max(time.time(), plots_at)
-                row["sent_MB"] = received[0] / 1e6
+                row["sent_MB"] = proxy.down / 1e6
                 row["drawn_s"] = drawn_at - built["start"]
                 row["build_s"] = built["build_s"]
                 # settle: what the views still fetch (plots at their own width,
                 # poses) and the page's work on it
                 page.wait_for_timeout(8000)
-                row["sent_all_MB"] = received[0] / 1e6
+                row["sent_all_MB"] = proxy.down / 1e6
                 row["renderer_MB"] = _renderer_rss() / 1e6
                 row["loaded_MB"] = loaded["loaded"] / 1e6
                 row["rss_GB"] = built["rss"] / 1e9
@@ -265,7 +319,7 @@ def measure(hours: float, tree: Path) -> dict:
                 row["zoom_all_ms"] = zooms
                 page.evaluate(
                     "(() => { const u = document.querySelector('.rbm-ts').rbmCharts[0];"
-                    " u.setScale('x', {min: -1e9, max: 1e9}); })()"
+                    " u.setScale('x', {min: u.data[0][0], max: u.data[0][u.data[0].length - 1]}); })()"
                 )
                 for speed in ("1", "10"):
                     page.get_by_role("button", name=f"bench {speed}x").click()

@@ -376,7 +376,15 @@ def main() -> None:
     args = parser.parse_args()
     rows = []
     for hours in args.hours:
-        row = measure(hours, args.tree.resolve())
+        try:
+            row = measure(hours, args.tree.resolve())
+        except Exception as err:  # the next length may still run
+            # (today's 3 h scene is one 313 MB message: playwright's driver,
+            # which sees every websocket frame, runs out of memory on it)
+            print(
+                f"{label(hours)}: failed: {type(err).__name__}: {err}"[:500], flush=True
+            )
+            continue
         print(json.dumps(row), flush=True)
         rows.append(row)
     print(f"\nkernel on {args.tree.resolve()}\n")

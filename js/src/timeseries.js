@@ -494,7 +494,7 @@ async function render({ model, el }) {
       resolution.textContent = "zoomed: every sample in view";
     } else {
       // (no promise of detail on zoom: an exported page has no kernel to ask)
-      resolution.textContent = `min/max of ${samples.toLocaleString("en-US")} samples per pixel column (${overviewWidth} columns)`;
+      resolution.textContent = `${samples.toLocaleString("en-US")} samples shown as min/max per pixel column (${overviewWidth} columns)`;
     }
     root.rbmResolution = resolution.textContent;
   }

@@ -270,19 +270,22 @@ def test_zooming_into_10_s_fetches_the_samples_there_at_full_resolution(long_plo
     # once the view knew it): per column at most first, last, min, max and
     # first missing sample, and a NaN row per pause
     resolution = page.evaluate("document.querySelectorAll('.rbm-ts')[1].rbmResolution")
-    assert f"({int(width)} columns)" in resolution, resolution
+    assert f"per pixel column ({int(width)} columns)" in resolution, resolution
     assert rows <= 5 * width + 100
     # only recorded samples, each with its own value
     t, x = np.load(page.expected).T
     xs, ys = _overview(
-        page, "[Array.from(u.data[0]), u.data[1].map((v) => v === undefined ? null : v)]"
+        page,
+        "[Array.from(u.data[0]), u.data[1].map((v) => v === undefined ? null : v)]",
     )
     xs, ys = np.asarray(xs), np.array([np.nan if v is None else v for v in ys])
     recorded = np.isin(xs, t)
     assert recorded.sum() > 0.9 * rows and np.isnan(ys[~recorded]).all()
     np.testing.assert_array_equal(ys[recorded], x[np.searchsorted(t, xs[recorded])])
     # every pixel column's extremes of the full recording are in it
-    column = np.minimum(((t - t[0]) * width / (t[-1] - t[0])).astype(int), int(width) - 1)
+    column = np.minimum(
+        ((t - t[0]) * width / (t[-1] - t[0])).astype(int), int(width) - 1
+    )
     full_max = np.full(int(width), -np.inf)
     np.fmax.at(full_max, column, x)
     kept_max = np.full(int(width), -np.inf)

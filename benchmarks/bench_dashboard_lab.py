@@ -113,7 +113,8 @@ ZOOM_JS = """async ([start, end]) => {
   u.setScale('x', {min: start, max: end});
   while (true) {
     const w = root.rbmWindow;
-    if (w && w.start === start && w.end === end && w.full && w.full.every(Boolean)) break;
+    // (a page without w.full sends a 10 s window at full resolution: <= 20000 rows)
+    if (w && w.start === start && w.end === end && (!w.full || w.full.every(Boolean))) break;
     if (performance.now() - t0 > 60000) return null;
     await new Promise((r) => setTimeout(r, 2));
   }

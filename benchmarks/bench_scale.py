@@ -122,6 +122,8 @@ def measure(hours_list) -> list[dict]:
                         {"type": "window", "id": 1, "start": 100.0, "end": 110.0},
                         [],
                     )
+                    if hasattr(plot, "_last_request"):  # answered on a worker thread
+                        plot._last_request.result(timeout=600)
                     zoom = (own.after - before) / 1e6
                     own.after = before
                 rows.append(

@@ -539,9 +539,10 @@ def explorer_plot(series: dict, player, *, max_points: int | None = PLOT_MAX_POI
 
     None when :class:`~rbm_nb.widgets.TimeSeries` is not a widget that can
     follow a player in the browser (then the export has no plot).
-    ``max_points`` (per panel) keeps each stretch's extremes and gaps only,
-    so saccade peaks survive; the default keeps the exported page under
-    5 MB and the notebook's plot the same as the export's.
+    A panel longer than ``max_points`` goes as its min/max overview at the
+    plot's pixel width (every column's extremes and first gap, so saccade
+    peaks survive, in the same bytes at any length) and zooming in fetches
+    every sample in view; the export keeps the overview (1000 columns).
     """
     # lazy (optional dependency): anywidget, only for the dashboard
     from .widgets import TimeSeries
@@ -781,10 +782,11 @@ def export_html(board, path, *, max_frames: int | None = PLOT_MAX_POINTS) -> Pat
 
     The page names the data in its title and plays in any browser with no
     Python and no network. Moving objects keep at most ``max_frames``
-    samples each; the plots keep what the dashboard's plot has (at most
-    :data:`PLOT_MAX_POINTS` per panel), so the notebook's export and
-    ``rbm-nb demo --html`` write the same content, under 5 MB for the
-    example recording.
+    samples each; the plots keep the overview the dashboard's plot was
+    sent (each panel's min/max at ``TimeSeries.overview_width`` pixel
+    columns, whatever the recording's length; the plot's header says so),
+    so the notebook's export and ``rbm-nb demo --html`` write the same
+    content, under 5 MB for the example recording.
     """
     return board.scene.to_html(
         Path(path),

@@ -19,6 +19,7 @@ const CSS = `
 .rbm-ts-title { font-weight: bold; }
 .rbm-ts-time { font-variant-numeric: tabular-nums; }
 .rbm-ts-hint { color: #777; margin-left: auto; font-size: 11px; }
+.rbm-ts-res { color: #555; font-size: 11px; }
 .rbm-ts .u-legend { font-size: 11px; text-align: left; margin-left: 50px; }
 .rbm-ts .u-legend .u-value { font-variant-numeric: tabular-nums; }
 .rbm-ts-error { color: #a00; background: #fee; border: 1px solid #d99;
@@ -165,7 +166,10 @@ async function render({ model, el }) {
   hint.className = "rbm-ts-hint";
   hint.textContent =
     "drag/wheel: zoom \u00b7 shift+drag: pan \u00b7 double-click: all \u00b7 click or drag the red line: seek";
-  head.append(title, readout, hint);
+  // what the panels show: every sample, or a min/max overview at a pixel width
+  const resolution = document.createElement("span");
+  resolution.className = "rbm-ts-res";
+  head.append(title, readout, resolution, hint);
   const body = document.createElement("div");
   root.append(head, body);
   el.appendChild(root);
@@ -476,6 +480,25 @@ async function render({ model, el }) {
   // Answers are kept (a few ranges); an answer to a superseded request is dropped.
   const detail = model.get("detail");
   const overview = charts.map((u) => u.data.slice(1));
+  const viewId = Math.random().toString(36).slice(2);
+  // the plot area's width in device pixels: one M4 column each
+  const plotWidth = () => (first ? Math.max(10, Math.round(first.bbox.width)) : 0);
+  let overviewWidth = model.get("overview_width");
+  let askedOverview = 0;
+  let windowFull = null; // per panel: every sample in view (a window shown)
+  const samples = panels.reduce((n, p) => n + (p.samples || 0), 0);
+  function describe() {
+    if (!detail) {
+      resolution.textContent = "every sample";
+    } else if (windowFull && windowFull.every(Boolean)) {
+      resolution.textContent = "zoomed: every sample in view";
+    } else {
+      // (no promise of detail on zoom: an exported page has no kernel to ask)
+      resolution.textContent = `${samples.toLocaleString("en-US")} samples shown as min/max per pixel column (${overviewWidth} columns)`;
+    }
+    root.rbmResolution = resolution.textContent;
+  }
+  describe();
   const cache = new Map();
   const CACHED_WINDOWS = 8;
   const WINDOW_DELAY_MS = 60;
@@ -520,15 +543,35 @@ async function render({ model, el }) {
       applying = false;
       syncing = false;
     }
-    root.rbmWindow = w ? { start: w.start, end: w.end, rows: w.rows } : null;
+    root.rbmWindow = w ? { start: w.start, end: w.end, rows: w.rows, full: w.full } : null;
+    windowFull = w ? w.full : null;
+    describe();
+  }
+
+  // an overview at this view's own width replaces the one sent with the widget
+  function takeOverview(w) {
+    charts.forEach((u, c) => {
+      const p = u.rbmPanel;
+      sentX[p] = w.x[p];
+      overview[c] = w.y[p];
+    });
+    overviewWidth = w.width;
+    findExtent();
+    shownKey = "";
   }
 
   function askWindow() {
     if (!detail || !first) return;
     const { min, max } = first.scales.x;
-    const key = `${min}:${max}:${shift}`;
+    const width = plotWidth();
+    const key = `${min}:${max}:${shift}:${width}`;
     if (key === shownKey) return;
     if (min <= dataMin && max >= dataMax) {
+      if (width !== overviewWidth && askedOverview !== width) {
+        askedOverview = width; // once per width: the kernel answers with `whole`
+        latest += 1;
+        model.send({ type: "window", id: latest, view: viewId, start: dataMin, end: dataMax, width, whole: true });
+      }
       showWindow(key, null); // everything in view: the overview is the picture
       return;
     }
@@ -537,19 +580,24 @@ async function render({ model, el }) {
       return;
     }
     latest += 1;
-    model.send({ type: "window", id: latest, start: min, end: max });
+    model.send({ type: "window", id: latest, view: viewId, start: min, end: max, width });
   }
 
   const onMessage = (msg, buffers) => {
-    if (!msg || msg.type !== "window") return;
+    if (!msg || msg.type !== "window" || msg.view !== viewId) return;
     if (msg.id !== latest) return; // superseded by a later zoom
-    const w = { start: msg.start, end: msg.end, rows: msg.rows, x: [], y: [] };
+    const w = { start: msg.start, end: msg.end, rows: msg.rows, full: msg.full, width: msg.width, x: [], y: [] };
     let at = 0;
     panels.forEach((panel, p) => {
       w.x.push(typed(buffers[at++], Float64Array));
       w.y.push(panel.components.map(() => withMissing(typed(buffers[at++], Float64Array))));
     });
-    const key = `${msg.start}:${msg.end}:${shift}`;
+    if (msg.whole) {
+      if (msg.shift === shift) takeOverview(w);
+      askWindow();
+      return;
+    }
+    const key = `${msg.start}:${msg.end}:${shift}:${msg.width}`;
     cache.set(key, w);
     if (cache.size > CACHED_WINDOWS) cache.delete(cache.keys().next().value);
     showWindow(key, w);
@@ -573,10 +621,19 @@ async function render({ model, el }) {
 
   const resize = new ResizeObserver(() => {
     const w = width();
+    let resized = false;
     charts.forEach((u) => {
-      if (Math.abs(u.width - w) > 1) u.setSize({ width: w, height: u.height });
+      if (Math.abs(u.width - w) > 1) {
+        u.setSize({ width: w, height: u.height });
+        resized = true;
+      }
     });
     placeCursors();
+    if (resized && detail) {
+      // a new width: an overview (and window) at it
+      clearTimeout(askTimer);
+      askTimer = setTimeout(askWindow, WINDOW_DELAY_MS);
+    }
   });
   resize.observe(body);
 

@@ -10,11 +10,21 @@ in the browser, so it keeps following playback while the kernel is busy.
 Gaps are drawn as gaps: NaN values break the line, and so does a pause in the
 timestamps longer than ``gap`` (a NaN row is inserted there before sending).
 
-With ``max_points``, the whole range goes as a min/max envelope and a zoom
-asks the kernel for the samples in view (a custom comm message answered with
-binary buffers): at full resolution when there are at most ``WINDOW_POINTS``
-of them, else their own envelope. The browser keeps the latest answers and drops
-answers to requests a newer zoom superseded.
+A panel longer than ``max_points`` rows goes as its min/max (M4) overview at
+``overview_width`` pixel columns (``_decimate.py``): only recorded samples,
+per column the first, last, each component's extremes and first missing one,
+so it draws exactly as the full series would at that width, and its bytes do
+not grow with the recording. A view of another width asks for an overview at
+its own width; a zoom asks the kernel for the samples in view (a custom comm
+message answered with binary buffers): every sample when there are at most
+``WINDOW_POINTS``, else their M4 at the view's width. Requests are computed on
+a worker thread (``_latest_only.py``), and a newer request from the same view
+cancels the older ones in the kernel (skipped, or stopped between steps); the
+browser keeps the latest answers.
+
+The kernel holds no copy of a series: values and timestamps are the caller's
+arrays (views), pauses in the timestamps are kept as row numbers, and seconds
+are computed only for the rows that are sent.
 
 Each sample is sent once. Linking a Player later (or any change of time base:
 the eye clock of the example starts 0.7 ms before the head's) sends only the
@@ -32,7 +42,10 @@ import numpy as np
 import traitlets
 from ipywidgets import Widget, widget_serialization
 
+from ._decimate import GAP_FACTOR as GAP_FACTOR  # re-exported: the docs name it here
+from ._decimate import Cancelled, gathered, m4_rows, pause_rows
 from ._frontend import FrontendGuard
+from ._latest_only import LatestOnly
 from ._time import timestamps_as_seconds
 from ._timebase import TimeBase, format_time
 from .player import bundle
@@ -50,16 +63,25 @@ COLORS = (
     "#bcbd22",
     "#17becf",
 )
-#: A pause longer than this many median sample intervals is drawn as a gap.
-GAP_FACTOR = 10.0
-#: A zoomed view gets the samples in view at full resolution when a panel has
-#: at most this many there (or ``max_points``, if larger): a minute of 340 Hz
-#: eye data, 0.5 MB per component; more than that comes as their envelope.
+#: A zoomed view gets every sample in view when a panel has at most this many
+#: there (or ``max_points``, if larger): a minute of 340 Hz eye data, 0.16 MB
+#: per component; more than that comes as their M4 at the view's width (which
+#: draws the same). Also the default ``max_points``.
 WINDOW_POINTS = 20_000
+#: Pixel columns of the overview sent with the widget (a view of another width
+#: asks for its own): about a notebook's plot width.
+OVERVIEW_WIDTH = 1000
+#: bounds of a view's pixel width in a request
+WIDTH_RANGE = (10, 20_000)
 
 
 class _Series:
-    """One panel: raw timestamps, values (n, k), component names and units."""
+    """One panel: raw timestamps, values (n, k), component names and units.
+
+    ``values`` and ``timestamps`` are the caller's arrays whenever they are
+    already float64 / datetime64[ns] (no copy); ``raw`` is the timestamps as
+    numbers to search (int64 ns, a view, or float seconds).
+    """
 
     def __init__(self, label: str, source):
         self.label = label
@@ -101,11 +123,17 @@ class _Series:
             timestamps, f"timestamps of series {label!r}"
         )
         raw = np.asarray(getattr(timestamps, "values", timestamps))
-        self.timestamps = raw if self.kind == "datetime" else seconds
-        if values.ndim not in (1, 2) or values.shape[0] != seconds.size:
+        if self.kind == "datetime":
+            self.timestamps = raw.astype("datetime64[ns]", copy=False)
+            self.raw = self.timestamps.view(np.int64)
+        else:
+            self.timestamps = self.raw = seconds
+        del seconds
+        n = self.raw.size
+        if values.ndim not in (1, 2) or values.shape[0] != n:
             raise ValueError(
                 f"TimeSeries: series {label!r} has values of shape {values.shape}, "
-                f"expected ({seconds.size},) or ({seconds.size}, k)"
+                f"expected ({n},) or ({n}, k)"
             )
         if values.ndim == 1:
             values = values[:, None]
@@ -125,53 +153,21 @@ class _Series:
             else None
         )
 
+    def raw_of(self, base: TimeBase, t: float, side: str) -> int | float:
+        """``t`` seconds of ``base`` in raw units (ns rounded outward by ``side``)."""
+        if self.kind == "datetime":
+            ns = t * 1e9
+            return (base.t0_ns or 0) + int(
+                math.floor(ns) if side == "high" else math.ceil(ns)
+            )
+        return base.t0_s + t
 
-def _with_gaps(x: np.ndarray, y: np.ndarray, gap: float | None):
-    """Insert a NaN row in the middle of every pause longer than the threshold.
-
-    Returns the new x (n + g,), y (n + g, k) and the threshold used.
-    """
-    if x.size < 2:
-        return x, y, gap
-    dt = np.diff(x)
-    if gap is None:
-        positive = dt[dt > 0]
-        if positive.size == 0:
-            return x, y, None
-        gap = GAP_FACTOR * float(np.median(positive))
-    where = np.flatnonzero(dt > gap)
-    if where.size == 0:
-        return x, y, gap
-    mid = x[where] + dt[where] / 2
-    x = np.insert(x, where + 1, mid)
-    y = np.insert(y, where + 1, np.nan, axis=0)
-    return x, y, gap
-
-
-def _envelope(x: np.ndarray, y: np.ndarray, max_points: int | None):
-    """At most about ``max_points`` rows that keep each bucket's extremes and gaps.
-
-    The rows are cut into buckets of equal count; in each, the rows of every
-    component's minimum and maximum are kept (so peaks such as saccades
-    survive), and the first NaN row (so gaps stay gaps). Returns x, y.
-    """
-    n, k = y.shape
-    if max_points is None or n <= max_points:
-        return x, y
-    buckets = max(1, max_points // (2 * k + 1))
-    size = -(-n // buckets)  # ceil
-    padded = np.full((buckets * size, k), np.nan)
-    padded[:n] = y
-    blocks = padded.reshape(buckets, size, k)
-    missing = np.isnan(blocks)
-    lows = np.where(missing, np.inf, blocks).argmin(axis=1)
-    highs = np.where(missing, -np.inf, blocks).argmax(axis=1)
-    # argmax of an all-False column is 0: the first row, harmless to keep
-    first_nan = missing.argmax(axis=1)
-    offsets = (np.arange(buckets) * size)[:, None]
-    keep = np.concatenate([lows, highs, first_nan], axis=1) + offsets
-    keep = np.unique(keep[keep < n])
-    return x[keep], y[keep]
+    def rows_in(self, base: TimeBase, start: float, end: float) -> tuple[int, int]:
+        """Rows ``i0:i1`` shown in ``[start, end]`` (seconds of ``base``) and one each side."""
+        lo, hi = self.raw_of(base, start, "low"), self.raw_of(base, end, "high")
+        i0 = max(int(np.searchsorted(self.raw, lo, side="left")) - 1, 0)
+        i1 = min(int(np.searchsorted(self.raw, hi, side="right")) + 1, self.raw.size)
+        return i0, i1
 
 
 #: bounds of a panel's height in pixels
@@ -226,10 +222,16 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         Pauses in the timestamps longer than this (seconds) are drawn as gaps.
         Default: ``GAP_FACTOR`` times each panel's median sample interval.
         ``numpy.inf`` joins every pause.
-    max_points : int, optional
-        Send at most about this many samples per panel: each stretch of
-        samples is reduced to its minimum and maximum (per component) and its
-        first gap, so peaks and gaps survive. Default: every sample.
+    max_points : int or None, default ``WINDOW_POINTS``
+        A panel with more samples than this goes as its min/max overview at
+        ``overview_width`` pixel columns (per column: its first and last
+        sample, each component's minimum and maximum and first missing one;
+        recorded samples only, so it draws as the full series does at that
+        width), and zooming in fetches the samples in view from the kernel.
+        None: every sample, whatever the length.
+    overview_width : int, default ``OVERVIEW_WIDTH``
+        Pixel columns of the overview sent with the widget; a view of another
+        width asks the kernel for an overview at its own width.
 
     Examples
     --------
@@ -276,10 +278,15 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         sync=True
     )
     title = traitlets.Unicode("", help="Title above the panels.").tag(sync=True)
+    overview_width = traitlets.Int(
+        OVERVIEW_WIDTH,
+        help="Pixel columns of the min/max overview sent with the widget (panels "
+        "longer than max_points); a view of another width asks for its own.",
+    ).tag(sync=True)
     detail = traitlets.Bool(
         False,
         help="Whether a zoom fetches the samples in view from the kernel "
-        "(the data is an envelope: max_points was given).",
+        "(a panel was sent as its min/max overview: longer than max_points).",
     ).tag(sync=True)
 
     def __init__(
@@ -290,7 +297,8 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         panel_height: int = 150,
         title: str | None = None,
         gap: float | None = None,
-        max_points: int | None = None,
+        max_points: int | None = WINDOW_POINTS,
+        overview_width: int = OVERVIEW_WIDTH,
     ):
         if not isinstance(series, Mapping) or not series:
             raise ValueError(
@@ -312,6 +320,7 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
                 f"TimeSeries: max_points must be an integer >= 10, got {max_points!r}"
             )
         self._max_points = None if max_points is None else int(max_points)
+        self._overview_width = self._checked_width(overview_width, "overview_width")
         panel_height = checked_panel_height(panel_height)
         self._series = [_Series(str(k), v) for k, v in series.items()]
         kinds = {s.kind for s in self._series}
@@ -332,13 +341,16 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         # the samples go in the comm's open message, in the player's time base,
         # so linking the player below changes nothing that was sent
         self._data_base = self._base
-        self._full: list[tuple[np.ndarray, np.ndarray]] = []
+        self._pauses: list[np.ndarray] = []
+        self._windows = LatestOnly("rbm-timeseries-window")
+        encoded = self._encoded()
         super().__init__(
             _esm=bundle("timeseries"),
             panel_height=int(panel_height),
             title=title or "",
-            detail=self._max_points is not None,
-            **self._encoded(),
+            detail=any(p["reduced"] for p in encoded["panels"]),
+            overview_width=self._overview_width,
+            **encoded,
         )
         self.on_msg(self._on_message)
         if player is not None:
@@ -347,16 +359,25 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
     # -- data to the browser ---------------------------------------------------
     def _encoded(self) -> dict:
         """``t0_ns``, ``panels`` and ``data`` in the data's time base."""
-        panels, data, self.gaps = [], [], []
+        panels, data, self.gaps, self._pauses = [], [], [], []
         for s in self._series:
-            x = self._data_base.seconds(
-                s.timestamps, f"timestamps of series {s.label!r}"
-            )
-            x, y, used = _with_gaps(x, s.values, self._gap)
-            if self._max_points is not None:
-                self._full.append((x, y))  # what a zoomed view asks for
-            x, y = _envelope(x, y, self._max_points)
+            gap = self._gap
+            if gap is not None and s.kind == "datetime":
+                gap *= 1e9  # raw units: ns
+            pauses, used = pause_rows(s.raw, gap)
+            if used is not None and s.kind == "datetime":
+                used /= 1e9
+            self._pauses.append(pauses)
             self.gaps.append(used)
+            reduced = self._max_points is not None and s.raw.size > self._max_points
+            first = self._data_base.seconds(s.timestamps[:1])[0]
+            last = self._data_base.seconds(s.timestamps[-1:])[0]
+            x, y, _ = self._rows(
+                len(self._pauses) - 1,
+                first,
+                last,
+                self._overview_width if reduced else None,
+            )
             panels.append(
                 {
                     "label": s.label,
@@ -364,6 +385,8 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
                     "components": s.components,
                     "colors": s.colors
                     or [COLORS[i % len(COLORS)] for i in range(len(s.components))],
+                    "samples": int(s.raw.size),
+                    "reduced": bool(reduced),
                 }
             )
             data.append(
@@ -377,58 +400,146 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
             )
         return {"t0_ns": self._data_base.t0_ns, "panels": panels, "data": data}
 
-    def window(self, start: float, end: float) -> list[tuple[np.ndarray, np.ndarray]]:
+    def _rows(
+        self,
+        panel: int,
+        start: float,
+        end: float,
+        width: int | None,
+        cancelled=lambda: False,
+    ) -> tuple[np.ndarray, np.ndarray, bool]:
+        """Panel rows shown in ``[start, end]`` (data seconds), one each side.
+
+        Every row when ``width`` is None or there are at most ``WINDOW_POINTS``
+        (or ``max_points``), else their M4 at ``width`` columns. Returns x (data
+        seconds), y (m, k) with a NaN row in each visible pause, and whether
+        every row is there.
+        """
+        s = self._series[panel]
+        i0, i1 = s.rows_in(self._data_base, start, end)
+        limit = max(WINDOW_POINTS, self._max_points or 0)
+        raw, values = s.raw[i0:i1], s.values[i0:i1]
+        if width is None or i1 - i0 <= limit:
+            rows = np.arange(i1 - i0)
+            full = True
+        else:
+            lo = s.raw_of(self._data_base, start, "low")
+            hi = s.raw_of(self._data_base, end, "high")
+            rows = m4_rows(
+                raw, values, float(lo), float(max(hi, lo + 1)), width, cancelled
+            )
+            full = False
+        pauses = self._pauses[panel]
+        pauses = pauses[(pauses >= i0) & (pauses < i1)] - i0
+        x = self._data_base.seconds(s.timestamps[i0:i1][rows])
+        return (*gathered(x, values, rows, pauses), full)
+
+    def window(
+        self, start: float, end: float, width: int | None = None
+    ) -> list[tuple[np.ndarray, np.ndarray]]:
         """Each panel's rows shown in ``[start, end]`` seconds of the axis.
 
         The rows in the window and one on each side (so the line runs to the
-        edges), at full resolution when they are at most ``WINDOW_POINTS`` (or
-        ``max_points``, if larger), else their envelope of that many rows; x in the data's time base (as the overview was sent).
-        Needs ``max_points`` (without it every sample is in the browser).
+        edges): every one when they are at most ``WINDOW_POINTS`` (or
+        ``max_points``, if larger), else their M4 at ``width`` pixel columns
+        (default ``overview_width``); x in the data's time base (as the
+        overview was sent), a NaN row in each pause.
         """
-        if not self._full:
-            raise ValueError(
-                "TimeSeries.window: this plot sent every sample (no max_points)"
-            )
         start, end = float(start), float(end)
         if not (np.isfinite(start) and np.isfinite(end) and start < end):
             raise ValueError(
                 f"TimeSeries.window: need finite start < end in seconds, got {start}, {end}"
             )
+        width = self._checked_width(
+            self._overview_width if width is None else width, "width"
+        )
+        return self._window_rows(start, end, width)[0]
+
+    def _window_rows(self, start, end, width, cancelled=lambda: False):
         lo, hi = start - self.x_shift, end - self.x_shift
-        limit = max(WINDOW_POINTS, self._max_points or 0)
-        out = []
-        for x, y in self._full:
-            i0 = max(int(np.searchsorted(x, lo, side="left")) - 1, 0)
-            i1 = min(int(np.searchsorted(x, hi, side="right")) + 1, x.size)
-            out.append(_envelope(x[i0:i1], y[i0:i1], limit))
-        return out
+        out, full = [], []
+        for panel in range(len(self._series)):
+            if cancelled():
+                raise Cancelled
+            x, y, every = self._rows(panel, lo, hi, width, cancelled)
+            out.append((x, y))
+            full.append(every)
+        return out, full
+
+    @staticmethod
+    def _checked_width(value, name: str) -> int:
+        low, high = WIDTH_RANGE
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, (int, float, np.integer, np.floating))
+            or not np.isfinite(value)
+            or not low <= value <= high
+        ):
+            raise ValueError(
+                f"TimeSeries: {name} must be a number of pixel columns in "
+                f"[{low}, {high}], got {value!r}"
+            )
+        return int(value)
 
     def _on_message(self, _widget, content, _buffers) -> None:
-        """Answer a browser's request for the samples in view (binary buffers)."""
+        """Queue a browser's request for the samples in view (answered off-thread).
+
+        A newer request from the same view cancels this one in the kernel.
+        """
         if not isinstance(content, dict) or content.get("type") != "window":
             return
+        start, end = _number(content.get("start")), _number(content.get("end"))
+        width = content.get("width", self._overview_width)
         try:
-            rows = self.window(
-                _number(content.get("start")), _number(content.get("end"))
-            )
-        except (TypeError, ValueError):
+            width = self._checked_width(width, "width")
+        except ValueError:
             return  # a malformed request from the page: nothing to draw, no reply
-        buffers: list[bytes] = []
-        for x, y in rows:
-            buffers.append(np.ascontiguousarray(x, dtype=np.float64).tobytes())
-            buffers.extend(
-                np.ascontiguousarray(y[:, k], dtype=np.float64).tobytes()
-                for k in range(y.shape[1])
-            )
-        reply = {
-            "type": "window",
-            "id": content.get("id"),
-            "start": float(content["start"]),
-            "end": float(content["end"]),
-            "shift": self.x_shift,
-            "rows": [int(x.size) for x, _ in rows],
+        if not (np.isfinite(start) and np.isfinite(end) and start < end):
+            return
+        shift = self.x_shift
+        view = str(content.get("view", ""))
+
+        def job(cancelled):
+            return self._window_rows(start, end, width, cancelled)
+
+        def done(result):
+            rows, full = result
+            buffers: list[bytes] = []
+            for x, y in rows:
+                buffers.append(np.ascontiguousarray(x, dtype=np.float64).tobytes())
+                buffers.extend(
+                    np.ascontiguousarray(y[:, k], dtype=np.float64).tobytes()
+                    for k in range(y.shape[1])
+                )
+            reply = {
+                "type": "window",
+                "id": content.get("id"),
+                "view": view,
+                "start": start,
+                "end": end,
+                "width": width,
+                "shift": shift,
+                "rows": [int(x.size) for x, _ in rows],
+                "full": full,
+                "whole": bool(content.get("whole")),
+            }
+            self.send(reply, buffers=buffers)
+
+        self._last_request = self._windows.submit(view, job, done)
+
+    @property
+    def window_requests(self) -> dict:
+        """Window requests answered and cancelled in the kernel so far."""
+        return {
+            "answered": self._windows.answered,
+            "cancelled": self._windows.cancelled,
         }
-        self.send(reply, buffers=buffers)
+
+    def close(self) -> None:
+        windows = getattr(self, "_windows", None)  # None: the constructor failed
+        if windows is not None:
+            windows.close()
+        super().close()
 
     def _shift_to(self, base: TimeBase) -> float:
         """Seconds from ``base``'s second 0 to the data's: what the browser adds."""
@@ -566,8 +677,12 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         t = self.current_time if t is None else self._seconds(t)
         out = {}
         for s in self._series:
-            x = self._base.seconds(s.timestamps)
-            idx = int(np.searchsorted(x, t + 1e-12, side="right")) - 1
+            # searched in the raw stamps: no seconds array of the whole series
+            if s.kind == "datetime":
+                at: int | float = (self._base.t0_ns or 0) + round(t * 1e9)
+            else:
+                at = self._base.t0_s + t + 1e-12
+            idx = int(np.searchsorted(s.raw, at, side="right")) - 1
             if idx >= 0:
                 out[s.label] = s.values[idx]
         return out

@@ -41,15 +41,18 @@ t_long = (t[None, :] + period * np.arange(tiles)[:, None]).ravel()
 x_long = np.tile(x, tiles)
 missing = np.isnan(x_long)
 runs = int(np.count_nonzero(missing[1:] & ~missing[:-1]) + missing[0])
-plot = TimeSeries({{"left eye x": (t_long, x_long)}}, title="long recording")
+plot = TimeSeries({{"left eye x": (t_long, x_long)}}, title="long recording", max_points=None)
 sent = np.frombuffer(plot.data[0]["x"], dtype=np.float64).size  # samples + a NaN row per pause
 print(f"LONG-READY samples={{t_long.size}} sent={{sent}} runs={{runs}} hours={{t_long[-1] / 3600:.2f}}")
 # a player whose clock starts 0.7 ms before the plot's (as the eyes' before the head's)
 player = Player(np.r_[-0.0007, t_long[::10000], t_long[-1]])
 attach = widgets.Button(description="attach the player")
 attach.on_click(lambda _: setattr(plot, "player", player))
-# the same recording as an envelope of 2000 rows; a zoom fetches the samples in view
+# the same recording as its min/max overview at the view's pixel width; a zoom
+# fetches the samples in view
 overview = TimeSeries({{"left eye x": (t_long, x_long)}}, title="overview", max_points=2000)
+sent_overview = sum(len(b) for b in [overview.data[0]["x"], *overview.data[0]["y"]])
+print(f"OVERVIEW-SENT bytes={{sent_overview}} width={{overview.overview_width}}")
 np.save(EXPECTED, np.c_[t_long, x_long])
 widgets.VBox([plot, attach, overview])
 """
@@ -170,7 +173,8 @@ def _blue_columns(page) -> np.ndarray:
 
 def test_a_long_recording_with_many_gaps_draws_every_sample(long_plot):
     page = long_plot
-    fields = dict(part.split("=") for part in page.ready_text.split()[1:])
+    ready = page.ready_text.split("LONG-READY")[1].split("\n")[0]
+    fields = dict(part.split("=") for part in ready.split())
     samples, sent, runs = (int(fields[k]) for k in ("samples", "sent", "runs"))
     assert samples <= sent < samples + 1000
     assert float(fields["hours"]) >= 1.5
@@ -255,9 +259,38 @@ def _overview(page, expr):
 
 def test_zooming_into_10_s_fetches_the_samples_there_at_full_resolution(long_plot):
     page = long_plot
-    t, x = np.load(page.expected).T
+    # what the kernel put in the widget for the 2 million samples: an overview
+    # of overview_width columns, x and y as float64
+    sent = page.ready_text.split("OVERVIEW-SENT")[1].split("\n")[0]
+    fields = dict(part.split("=") for part in sent.split())
+    assert int(fields["bytes"]) <= 16 * 5 * int(fields["width"])
     rows = _overview(page, "u.data[0].length")
-    assert rows <= 2100  # the whole 1.6 h as an envelope
+    width = _overview(page, "u.bbox.width")
+    # the whole 1.6 h as its M4 at this view's own pixel width (asked for
+    # once the view knew it): per column at most first, last, min, max and
+    # first missing sample, and a NaN row per pause
+    resolution = page.evaluate("document.querySelectorAll('.rbm-ts')[1].rbmResolution")
+    assert f"per pixel column ({int(width)} columns)" in resolution, resolution
+    assert rows <= 5 * width + 100
+    # only recorded samples, each with its own value
+    t, x = np.load(page.expected).T
+    xs, ys = _overview(
+        page,
+        "[Array.from(u.data[0]), u.data[1].map((v) => v === undefined ? null : v)]",
+    )
+    xs, ys = np.asarray(xs), np.array([np.nan if v is None else v for v in ys])
+    recorded = np.isin(xs, t)
+    assert recorded.sum() > 0.9 * rows and np.isnan(ys[~recorded]).all()
+    np.testing.assert_array_equal(ys[recorded], x[np.searchsorted(t, xs[recorded])])
+    # every pixel column's extremes of the full recording are in it
+    column = np.minimum(
+        ((t - t[0]) * width / (t[-1] - t[0])).astype(int), int(width) - 1
+    )
+    full_max = np.full(int(width), -np.inf)
+    np.fmax.at(full_max, column, x)
+    kept_max = np.full(int(width), -np.inf)
+    np.fmax.at(kept_max, column[np.searchsorted(t, xs[recorded])], ys[recorded])
+    np.testing.assert_array_equal(kept_max, full_max)
     start, end = 1000.0, 1010.0
     _overview(page, f"u.setScale('x', {{min: {start}, max: {end}}})")
     page.wait_for_function(

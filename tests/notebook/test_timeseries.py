@@ -51,6 +51,8 @@ def test_samples_go_once_as_binary_buffers(speed):
             "units": "m/s",
             "components": ["head speed"],
             "colors": ["#1f77b4"],
+            "samples": 100,
+            "reduced": False,
         }
     ]
     assert plot.t0_ns is None
@@ -216,10 +218,11 @@ def test_max_points_keeps_peaks_and_gaps():
     v = np.sin(t)
     v[50_000] = 7.0  # a one-sample spike
     v[70_000:70_010] = np.nan  # a short gap
-    full = TimeSeries({"v": (t, v)})
-    small = TimeSeries({"v": (t, v)}, max_points=1000)
+    full = TimeSeries({"v": (t, v)}, max_points=None)
+    small = TimeSeries({"v": (t, v)}, max_points=1000, overview_width=500)
     x, y = _decoded(small, 0)
-    assert x.size <= 1000 < _decoded(full, 0)[0].size
+    # at most first, last, min, max and first missing per pixel column
+    assert x.size <= 5 * 500 < _decoded(full, 0)[0].size == t.size
     assert np.all(np.diff(x) > 0)
     assert np.nanmax(y) == 7.0 and np.nanmin(y) == pytest.approx(-1.0, abs=1e-3)
     # the NaN run still breaks the line, and no value is invented
@@ -285,9 +288,9 @@ def test_a_zoomed_view_gets_the_samples_in_view_at_full_resolution():
     v = np.sin(t)
     v[1000:1010] = np.nan
     plot = TimeSeries({"v": (t, v)}, max_points=1000)
-    assert plot.detail and plot.comm.opened[1] and len(_decoded(plot, 0)[0]) <= 1000
+    assert plot.detail and plot.comm.opened[1] and len(_decoded(plot, 0)[0]) <= 5000
     plot.comm.sent.clear()
-    plot.comm.receive({"type": "window", "id": 7, "start": 2.0, "end": 12.0})
+    _ask(plot, {"type": "window", "id": 7, "start": 2.0, "end": 12.0})
     ((message, buffers),) = plot.comm.sent
     reply = message["content"]  # a custom message
     assert reply["type"] == "window" and reply["id"] == 7
@@ -296,19 +299,26 @@ def test_a_zoomed_view_gets_the_samples_in_view_at_full_resolution():
     rows = np.r_[inside[0] - 1, inside, inside[-1] + 1]  # and one on each side
     np.testing.assert_array_equal(x, t[rows])
     np.testing.assert_array_equal(y, v[rows])  # the NaN run too
-    assert reply["rows"] == [rows.size]
-    # a window with more samples than WINDOW_POINTS comes as their envelope
-    from rbm_nb.widgets.timeseries import WINDOW_POINTS
-
+    assert reply["rows"] == [rows.size] and reply["full"] == [True]
+    # a window with more samples than WINDOW_POINTS comes as their M4 at the
+    # view's width
     plot.comm.sent.clear()
-    plot.comm.receive({"type": "window", "id": 8, "start": 0.0, "end": 300.0})
+    _ask(plot, {"type": "window", "id": 8, "start": 0.0, "end": 300.0, "width": 300})
     ((message, buffers),) = plot.comm.sent
-    assert message["content"]["rows"][0] <= WINDOW_POINTS < 100_000
+    assert message["content"]["rows"][0] <= 5 * 300 and message["content"]["full"] == [
+        False
+    ]
     # a request the page got wrong is not answered
     plot.comm.sent.clear()
-    for bad in ({"type": "window", "start": 5.0, "end": 1.0}, {"type": "window"}, "x"):
+    for bad in (
+        {"type": "window", "start": 5.0, "end": 1.0},
+        {"type": "window"},
+        {"type": "window", "start": 1.0, "end": 2.0, "width": "wide"},
+        {"type": "window", "start": 1.0, "end": 2.0, "width": 1e9},
+        "x",
+    ):
         plot.comm.receive(bad)
-    assert plot.comm.sent == []
+    assert plot.comm.sent == [] and plot.window_requests["answered"] == 2
 
 
 def test_a_window_follows_a_player_linked_later(speed):
@@ -320,8 +330,137 @@ def test_a_window_follows_a_player_linked_later(speed):
     np.testing.assert_allclose(x, speed.time.values[19:32])
 
 
-def test_without_max_points_there_is_nothing_to_fetch(speed):
+def test_a_short_series_goes_whole_and_needs_no_fetch(speed):
     plot = TimeSeries({"speed": speed})
-    assert not plot.detail
-    with pytest.raises(ValueError, match="no max_points"):
-        plot.window(1.0, 2.0)
+    assert not plot.detail and plot.panels[0]["reduced"] is False
+    ((x, _),) = plot.window(1.0, 2.0)
+    np.testing.assert_allclose(x, speed.time.values[9:22])
+    with pytest.raises(ValueError, match="width"):
+        plot.window(1.0, 2.0, width=0)
+
+
+def _ask(plot, request):
+    """Send ``request`` as the page would and wait for the worker's answer."""
+    plot.comm.receive(request)
+    plot._last_request.result(timeout=60)
+
+
+def _recording(hours: float, seed: int = 0):
+    """An eye-like series: 340 Hz with jitter, runs of missing samples, pauses."""
+    rng = np.random.default_rng(seed)
+    n = int(hours * 3600 * 340)
+    t = START + np.cumsum(rng.integers(2_800_000, 3_100_000, n)).astype(
+        "timedelta64[ns]"
+    )
+    t[n // 3 :] += np.timedelta64(2, "s")  # a pause
+    v = np.cumsum(rng.normal(size=(n, 2)), axis=0)
+    v[rng.random(n) < 0.03] = np.nan
+    return xr.DataArray(v, dims=("time", "eye"), coords={"time": t, "eye": ["l", "r"]})
+
+
+def test_overview_bytes_do_not_grow_with_the_recording():
+    short, long = _recording(0.1), _recording(1.0)
+    sizes = []
+    for da in (short, long):
+        plot = TimeSeries({"gaze": da})
+        sizes.append(sum(len(b) for b in plot.comm.opened[1]))
+        x, y = _decoded(plot, 0)
+        # at most first, last, 2 x (min, max, first missing) per column (and
+        # the pause's NaN row)
+        assert x.size <= 8 * plot.overview_width + 1 and plot.detail
+    assert sizes[1] < 1.2 * sizes[0]  # 10x the samples, about the same bytes
+    assert long.nbytes > 40 * sizes[1]
+
+
+def test_the_overview_draws_as_the_full_series_at_its_width():
+    da = _recording(0.2, seed=3)
+    width = 400
+    plot = TimeSeries({"gaze": da}, overview_width=width)
+    x, y = _decoded(plot, 0)
+    full_x = (da.time.values - da.time.values[0]).astype(np.int64) / 1e9
+    span = full_x[-1] - full_x[0]
+    column = np.minimum((full_x * width / span).astype(int), width - 1)
+    for c in range(2):
+        values = da.values[:, c]
+        full_min = np.full(width, np.inf)
+        np.fmin.at(full_min, column, values)
+        shown = np.full(width, np.inf)
+        sent_column = np.minimum((x * width / span).astype(int), width - 1)
+        np.fmin.at(shown, sent_column[np.isfinite(y[:, c])], y[np.isfinite(y[:, c]), c])
+        np.testing.assert_array_equal(shown, full_min)  # every column's minimum
+        full_max = np.full(width, -np.inf)
+        np.fmax.at(full_max, column, values)
+        top = np.full(width, -np.inf)
+        np.fmax.at(top, sent_column[np.isfinite(y[:, c])], y[np.isfinite(y[:, c]), c])
+        np.testing.assert_array_equal(top, full_max)  # and maximum
+    # only recorded samples, each with its own value
+    rows = np.flatnonzero(np.isin(full_x, x[~np.all(np.isnan(y), axis=1)]))
+    finite = ~np.all(np.isnan(y), axis=1)
+    np.testing.assert_array_equal(full_x[rows], np.unique(x[finite]))
+    np.testing.assert_array_equal(y[finite], da.values[rows])
+
+
+def test_a_view_asks_for_an_overview_at_its_own_width():
+    plot = TimeSeries({"gaze": _recording(0.3)})
+    plot.comm.sent.clear()
+    request = {"type": "window", "id": 1, "view": "a", "start": -1.0, "end": 1e5}
+    _ask(plot, {**request, "width": 200, "whole": True})
+    ((message, buffers),) = plot.comm.sent
+    assert message["content"]["whole"] and message["content"]["width"] == 200
+    assert message["content"]["rows"][0] <= 8 * 200 + 1
+    assert len(buffers) == 3
+
+
+def test_a_superseded_request_is_cancelled_in_the_kernel(monkeypatch):
+    """The kernel stops a request once a newer one from the same view came."""
+    import threading
+
+    from rbm_nb.widgets import _decimate
+
+    plot = TimeSeries(
+        {"a": _recording(0.2), "b": _recording(0.2, seed=1)}, overview_width=100
+    )
+    plot.comm.sent.clear()
+    started, release = threading.Event(), threading.Event()
+    calls = []
+    m4 = _decimate.m4_rows
+
+    def slow_m4(*args, **kwargs):
+        calls.append(args[2:4])
+        if len(calls) == 1:  # the first request's first panel waits
+            started.set()
+            release.wait(timeout=30)
+        return m4(*args, **kwargs)
+
+    monkeypatch.setattr("rbm_nb.widgets.timeseries.m4_rows", slow_m4)
+    old = {"type": "window", "view": "v", "start": 0.0, "end": 500.0, "width": 100}
+    plot.comm.receive({**old, "id": 1})
+    assert started.wait(timeout=30)  # the kernel is computing request 1
+    plot.comm.receive({**old, "id": 2, "end": 400.0})
+    plot.comm.receive({**old, "id": 3, "end": 300.0})
+    # another view's request is not cancelled by this one's
+    plot.comm.receive({**old, "id": 9, "view": "w"})
+    release.set()
+    plot._last_request.result(timeout=60)
+    answered = sorted(
+        (m["content"]["view"], m["content"]["id"]) for m, _ in plot.comm.sent
+    )
+    assert answered == [("v", 3), ("w", 9)]
+    # 1 stopped after its first panel, 2 never started
+    assert plot.window_requests == {"answered": 2, "cancelled": 2}
+    assert len(calls) == 1 + 2 + 2
+
+
+def test_the_kernel_keeps_no_copy_of_a_long_series():
+    """Values and stamps are the caller's arrays; what stays is the overview."""
+    import tracemalloc
+
+    da = _recording(0.5)
+    tracemalloc.start()
+    before = tracemalloc.get_traced_memory()[0]
+    plot = TimeSeries({"gaze": da})
+    kept = tracemalloc.get_traced_memory()[0] - before
+    tracemalloc.stop()
+    assert np.shares_memory(plot._series[0].values, da.values)
+    data = da.nbytes + da.time.values.nbytes
+    assert kept < 0.05 * data, (kept, data)

@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from ._door import kernel_array, unpack
+from ._door import kernel_array
 from ._engine import chain as ch
 from ._engine import twist as tw
 from ._engine.chain import chain
@@ -52,7 +52,7 @@ from ._kernels import differences as dk
 from ._kernels import quaternion as qk
 from ._kernels import resample as kr
 from ._kernels import rotations as rk
-from ._time import Track, as_track, seconds
+from ._time import as_track, seconds
 from ._xarray import wrap
 
 # samples of not-a-knot spline influence kept on each side: 0.268**32 < 1e-18
@@ -303,38 +303,34 @@ def frame_time_range(outof, into):
 
 
 def transform(
-    method: Callable,
+    block: Callable,
     arr,
-    into,
-    outof,
+    source,
+    to_frame,
     dim,
     axis,
     timestamps,
     time_axis,
     return_timestamps: bool,
-    resolve: Callable,
     snapshot: Callable,
     attr: str,
     quaternions: bool,
 ):
     """A transform of dask-backed data, one task per time chunk.
 
-    The frames are resolved here, once, and the graph carries their values
-    (``snapshot``, :meth:`rbm_nb._frame_snapshot.FrameTree.of`), each task
-    only the samples its chunk's times need: tasks run wherever dask sends
-    them, with or without the client's registry, and a frame registered
-    after this call does not change the result.
+    The frames come resolved (``source``, ``to_frame``) and the graph
+    carries their values (``snapshot``,
+    :meth:`rbm_nb._frame_snapshot.FrameTree.of`), each task only the
+    samples its chunk's times need: tasks run wherever dask sends them,
+    with or without the client's registry, and a frame registered after
+    this call does not change the result.
 
-    ``method(outof, data, into, axis=, time_axis=, timestamps=,
-    timestamps_out=)`` is the engine call of the eager transform;
-    ``resolve(frame, argument)`` turns names into frames.
+    ``block(block, frames, dim=, time_dim=, attr=, origin=)`` is the door's
+    eager call on one block (:func:`rbm_nb._inputs.transform_block`).
     """
     series = _TimeSeries.of(arr, dim, axis, timestamps, time_axis)
-    source = _source_frame(resolve, outof, getattr(arr, "attrs", {}), attr)
-    to_frame = resolve(into, "into")
-    block = functools.partial(
-        _transform_block,
-        method=method,
+    per_block = functools.partial(
+        block,
         dim=series.comp_dim,
         time_dim=series.time_dim,
         attr=attr,
@@ -342,57 +338,12 @@ def transform(
     )
     span = frame_time_range(source, to_frame)
     return series.run(
-        block,
+        per_block,
         snapshot([source, to_frame]),
         [] if span is None else [span],
         quaternions,
         return_timestamps,
     )
-
-
-def _transform_block(block, frames, method, dim, time_dim, attr, origin):
-    """The eager transform of one block, on frames built from their values.
-
-    The block's times count from the whole array's first (``origin``), as
-    in one eager call: from the block's own first they would round
-    differently, and times that equal a frame's samples in the eager call
-    could fall a few ulps beside them.
-    """
-    unpacked = unpack(block, dim=dim, timestamps=time_dim)
-    with frames.built() as (outof, into):
-        out, ts_out = method(
-            outof,
-            unpacked.data,
-            into,
-            axis=unpacked.axis,
-            time_axis=unpacked.time_axis,
-            timestamps=_track_from(unpacked.timestamps, origin),
-            timestamps_out=True,
-        )
-    attrs = dict(unpacked.attrs)
-    attrs[attr] = attrs["representation_frame"] = into.name
-    return wrap(unpacked, out, ts_out, attrs)
-
-
-def _source_frame(resolve: Callable, outof, attrs, attr: str):
-    """``outof``, or the frame a DataArray's attrs name, as the eager call finds it."""
-    import warnings
-
-    if outof is None:
-        if attr not in attrs:
-            raise ValueError(
-                f"outof must be given unless arr is a DataArray whose attrs name a "
-                f"registered frame under {attr!r}"
-            )
-        return resolve(attrs[attr], f"the DataArray's {attr} attribute")
-    frame = resolve(outof, "outof")
-    if attr in attrs and attrs[attr] != frame.name:
-        warnings.warn(
-            f"transforming the {attr!r} of the array out of {frame.name!r}, but "
-            f"its attrs say its {attr} is {attrs[attr]!r}",
-            stacklevel=6,  # the user's call of the public function
-        )
-    return frame
 
 
 class _TimeSeries:
@@ -888,7 +839,7 @@ def velocity_terms(linear: bool, frame, to_frame, what: str, options: dict):
         )  # fmt: skip
         translation, _, trans_target = ch.lookup(to_frame, frame)
     lever, lever_ts = engine_transform(
-        frame, "vectors", translation, to_frame, -1, 0, trans_target.track
+        frame, "vectors", Blocks.of_rows(translation, trans_target.track), to_frame
     )
     lever_track = None if lever_ts is None else track_of(trans_target.track, lever_ts)
     return [(lin, lin_ts), (ang, ang_ts), (lever, lever_track)]
@@ -904,16 +855,16 @@ def _combine(rotated, matched):
 def velocity_transform(
     linear: bool,
     arr,
-    into,
-    outof,
+    frame,
+    to_frame,
     what: str,
     dim,
     axis,
     timestamps,
     time_axis,
     return_timestamps: bool,
-    resolve: Callable,
     snapshot: Callable,
+    block: Callable,
     **options,
 ):
     """A change of frame of dask-backed velocities, lazily per time chunk.
@@ -927,11 +878,6 @@ def velocity_transform(
     :func:`transform`).
     """
     series = _TimeSeries.of(arr, dim, axis, timestamps, time_axis)
-    frame = _source_frame(resolve, outof, getattr(arr, "attrs", {}), what)
-    to_frame = resolve(into, "into")
-    for key in ("moving_frame", "reference_frame"):
-        if options.get(key) is not None:
-            options[key] = resolve(options[key], key)
     extras = velocity_terms(linear, frame, to_frame, what, options)
     whole = series.arr[series.time_dim].values
     context = _VelocityContext(
@@ -939,8 +885,9 @@ def velocity_transform(
         tuple(extras),
         tuple(_interpolated_terms(frame, to_frame, whole, extras)),
     )
-    block = functools.partial(
+    per_block = functools.partial(
         _velocity_block,
+        unpack_block=block,
         what=what,
         dim=series.comp_dim,
         time_dim=series.time_dim,
@@ -949,7 +896,7 @@ def velocity_transform(
     spans = [(t.values[0], t.values[-1]) for _, t in extras if t is not None]
     span = frame_time_range(frame, to_frame)
     return series.run(
-        block,
+        per_block,
         context,
         spans + ([] if span is None else [span]),
         False,
@@ -982,13 +929,10 @@ class _VelocityContext:
         )
 
 
-def _velocity_block(block, context, what, dim, time_dim, origin):
-    """The velocity transform of one block (the terms at the block's times)."""
-    unpacked = unpack(block, dim=dim, timestamps=time_dim)
-    blocks = Blocks(
-        unpacked.data, 3, unpacked.axis, unpacked.time_axis,
-        _track_from(unpacked.timestamps, origin), "vectors",
-    )  # fmt: skip
+def _velocity_block(block, context, unpack_block, what, dim, time_dim, origin):
+    """The velocity transform of one block (the terms at the block's times);
+    ``unpack_block`` is the door's (:func:`rbm_nb._inputs.velocity_block`)."""
+    unpacked, blocks = unpack_block(block, dim, time_dim, origin)
     with context.frames.built() as (frame, to_frame):
         rotated, matched, final = _velocity_parts(
             blocks, frame, to_frame, context.extras, context.interpolated
@@ -1012,21 +956,6 @@ def _origin(times) -> int | None:
     """Nanoseconds of the first of datetime64 ``times`` (None for numbers)."""
     first = as_track(np.asarray(times)[:1])
     return first.origin if first.is_datetime else None
-
-
-def _track_from(timestamps, origin: int | None):
-    """A chunk's timestamps as a Track counted from the whole array's first sample.
-
-    Interpolation reads times as float seconds from an origin; with the
-    chunk's own first sample as origin they would differ from the eager
-    call's by rounding, which fast-changing velocities turn into ~1e-10.
-    """
-    track = as_track(timestamps, copy=False)
-    if origin is None or not track.is_datetime:
-        return track
-    return Track(
-        track.values, track.key, (track.key - origin) / 1e9, origin, track.kind
-    )
 
 
 def _interpolated_terms(frame, to_frame, times, extras) -> list[bool]:

@@ -23,7 +23,6 @@ import numpy as np
 from .._door import kernel_array
 from .._kernels import quaternion as kq
 from .._kernels import resample as kr
-from .._validation import check_mode, check_what
 from . import chain as _chain
 from . import fused as _fused
 from . import velocity as _velocity
@@ -96,7 +95,7 @@ def _represent(vectors, track, outof, into, looked_up=None):
             return _rotate(r, vectors), track
         if outof is reference and into is frame:
             return _rotate(kq.qconj(kernel_array(r)), vectors), track
-    out, ts = transform(outof, "vectors", vectors, into, timestamps=track)
+    out, ts = transform(outof, "vectors", Blocks.of_rows(vectors, track), into)
     return out, track_of(track, ts)
 
 
@@ -180,8 +179,8 @@ def lookup_angular_velocity(
     allow_static=False,
     as_track=False,
 ):
-    """Angular velocity (n, 3) of ``frame`` wrt ``reference`` and its timestamps."""
-    check_mode(mode)
+    """Angular velocity (n, 3) of ``frame`` wrt ``reference`` and its timestamps
+    (``mode`` checked by the caller)."""
     reference, represent_in = defaults(frame, reference, represent_in)
     if (
         mode == "quaternion"
@@ -232,8 +231,8 @@ def lookup_twist(
     allow_static=False,
     as_track=False,
 ):
-    """Linear and angular velocity (n, 3) each of ``frame`` and their timestamps."""
-    check_mode(mode)
+    """Linear and angular velocity (n, 3) each of ``frame`` and their timestamps
+    (``mode`` checked by the caller)."""
     reference, represent_in = defaults(frame, reference, represent_in)
     looked_up = _moving_lookup(frame, reference, allow_static)
     if looked_up is None:
@@ -280,20 +279,14 @@ def _velocity_parts(arr_blocks, frame, to_frame, extra):
     return rotated, ext, final
 
 
-def transform_angular_velocity(
-    frame,
-    arr,
-    to_frame,
-    what="reference_frame",
-    axis=-1,
-    time_axis=0,
-    timestamps=None,
-    cutoff=None,
-):
-    """Change the ``what`` frame of angular velocities from ``frame`` to ``to_frame``."""
-    check_what(what)
+def transform_angular_velocity(frame, blocks, to_frame, what, cutoff=None):
+    """Change the ``what`` frame of angular velocities from ``frame`` to ``to_frame``.
+
+    ``blocks`` are the velocities as the door laid them out (vectors) and
+    ``what`` one of the door's checked modes.
+    """
     if what == "representation_frame":
-        return transform(frame, "vectors", arr, to_frame, axis, time_axis, timestamps)
+        return transform(frame, "vectors", blocks, to_frame)
     if what == "reference_frame":
         # w_M/R' = w_M/R + w_R/R'
         angular, ang_ts = lookup_angular_velocity(
@@ -304,32 +297,28 @@ def transform_angular_velocity(
         angular, ang_ts = lookup_angular_velocity(
             to_frame, frame, to_frame, None, cutoff, "quaternion", True, as_track=True
         )
-    blocks = Blocks(arr, 3, axis, time_axis, timestamps, "vectors")
     rotated, (w,), final = _velocity_parts(blocks, frame, to_frame, [(angular, ang_ts)])
     return blocks.restore(rotated + w, final), final.timestamps
 
 
 def transform_linear_velocity(
     frame,
-    arr,
+    blocks,
     to_frame,
-    what="reference_frame",
+    what,
     moving_frame=None,
     reference_frame=None,
-    axis=-1,
-    time_axis=0,
-    timestamps=None,
     outlier_thresh=None,
     cutoff=None,
 ):
     """Change the ``what`` frame of linear velocities from ``frame`` to ``to_frame``.
 
+    ``blocks`` and ``what`` as for :func:`transform_angular_velocity`;
     ``moving_frame`` (for ``what="reference_frame"``) and ``reference_frame``
     (for ``what="moving_frame"``) are resolved frames or None.
     """
-    check_what(what)
     if what == "representation_frame":
-        return transform(frame, "vectors", arr, to_frame, axis, time_axis, timestamps)
+        return transform(frame, "vectors", blocks, to_frame)
     if what == "reference_frame":
         # v_M/R' = v_M/R + v_R/R' + w_R/R' x t_M/R
         if moving_frame is None:
@@ -372,10 +361,9 @@ def transform_linear_velocity(
         translation, _, trans_target = _chain.lookup(to_frame, frame)
     # the lever arm, represented in to_frame like everything else
     trans, trans_ts = transform(
-        frame, "vectors", translation, to_frame, -1, 0, trans_target.track
+        frame, "vectors", Blocks.of_rows(translation, trans_target.track), to_frame
     )
     trans_track = None if trans_ts is None else track_of(trans_target.track, trans_ts)
-    blocks = Blocks(arr, 3, axis, time_axis, timestamps, "vectors")
     rotated, (v, w, lever), final = _velocity_parts(
         blocks,
         frame,

@@ -42,6 +42,7 @@ from ._door import (
 )
 from ._engine import chain as _chain
 from ._engine import transform as _engine_transform
+from ._engine import twist as _twist
 from ._engine.transform import SIZES, Blocks
 from ._kernels.rows import MAX_COORDINATE
 from ._validation import check_whole_rows, normalize_quaternions
@@ -223,20 +224,26 @@ def arguments(
     now (``outof``'s default). On the short way (``rows`` set) a plain (3,)
     or (n, 3) array goes through a static chain without being laid out.
     """
-    if (
-        timestamps is None
-        and dim is None
-        and kind != "quaternions"
-        and type(arr) is np.ndarray
-        and outof is not None
-    ):
-        # the short way, taken by most one-point calls (widgets, the
-        # tf2-style Transformer): frames named in the order of the long way
-        source = resolve(outof, "outof")
-        to_frame = resolve(into, "into")
-        short = _short_way(source, arr, to_frame, -1 if axis is None else axis)
-        if short is not None:
-            return short
+    if type(arr) is np.ndarray and outof is not None:
+        # a plain array (most calls): no attrs to read outof from
+        if timestamps is None and dim is None and kind != "quaternions":
+            # the short way, taken by most one-point calls (widgets, the
+            # tf2-style Transformer)
+            source = resolve(outof, "outof")
+            to_frame = resolve(into, "into")
+            short = _short_way(source, arr, to_frame, -1 if axis is None else axis)
+            if short is not None:
+                return short
+            # no dim, no timestamps: nothing here can raise after the frames
+            unpacked = unpack(arr, axis=axis, time_axis=time_axis)
+        else:
+            unpacked = unpack(
+                arr, dim=dim, axis=axis, time_axis=time_axis, timestamps=timestamps
+            )
+            source = resolve(outof, "outof")
+            to_frame = resolve(into, "into")
+        laid_out = _blocks_of(unpacked, kind, unpacked.timestamps)
+        return Arguments(source, to_frame, unpacked, None, laid_out, None, None)
     unpacked = unpack(
         arr, dim=dim, axis=axis, time_axis=time_axis, timestamps=timestamps
     )
@@ -310,12 +317,24 @@ def transform_block(block, frames, kind: str, dim, time_dim, attr, origin):
     return wrap(unpacked, out, ts_out, attrs)
 
 
-def velocity_block(block, dim, time_dim, origin) -> tuple[Unpacked, Blocks]:
-    """One block of dask-backed velocities unpacked and laid out (vectors)."""
+def velocity_block(block, context, what: str, dim, time_dim, origin):
+    """The eager velocity transform of one NumPy-backed block.
+
+    ``context`` (:class:`rbm_nb._dask.VelocityContext`) holds the frames'
+    values and the looked-up terms around the block's times, and which
+    terms the whole array's call interpolates; ``what`` is the frame being
+    changed.
+    """
     unpacked = unpack(block, dim=dim, timestamps=time_dim)
-    return unpacked, _blocks_of(
-        unpacked, "vectors", _track_from(unpacked.timestamps, origin)
-    )
+    laid_out = _blocks_of(unpacked, "vectors", _track_from(unpacked.timestamps, origin))
+    with context.frames.built() as (frame, to_frame):
+        rotated, matched, final = _twist.velocity_parts(
+            laid_out, frame, to_frame, context.extras, context.interpolated
+        )
+    out = laid_out.restore(_twist.combine(rotated, matched), final)
+    attrs = dict(unpacked.attrs)
+    attrs[what] = attrs["representation_frame"] = to_frame.name
+    return wrap(unpacked, out, final.timestamps, attrs)
 
 
 def _track_from(timestamps: Any, origin: int | None) -> _time.Track:

@@ -134,9 +134,9 @@ def lookup_at(
     (translation, rotation[, timestamps]), matrices[, timestamps],
     Transform[, timestamps], or Dataset
     """
-    chosen = [k for k, v in (("as_matrix", as_matrix), ("as_transform", as_transform),
-                             ("as_dataset", as_dataset)) if v]  # fmt: skip
-    if len(chosen) > 1:
+    if (as_matrix or as_transform) and (as_dataset or (as_matrix and as_transform)):
+        chosen = [k for k, v in (("as_matrix", as_matrix), ("as_transform", as_transform),
+                                 ("as_dataset", as_dataset)) if v]  # fmt: skip
         raise ValueError(f"choose at most one of {', '.join(chosen)}")
     into = resolve_frame(into, "into")
     outof = resolve_frame(outof, "outof")

@@ -93,15 +93,16 @@ def _lazy_transform(
     if velocity is not None and attr != "representation_frame":
         # the frames' velocities are estimated once, not per chunk
         linear, options = velocity
-        options = {
-            key: _optional(value, key) if key.endswith("_frame") else value
-            for key, value in options.items()
-        }
+        extras = _twist.velocity_terms(
+            linear, source, to_frame, attr,
+            _optional(options.get("moving_frame"), "moving_frame"),
+            _optional(options.get("reference_frame"), "reference_frame"),
+            options.get("outlier_thresh"), options["cutoff"],
+        )  # fmt: skip
         return _dask.velocity_transform(
-            linear, arr, source, to_frame, attr, dim=dim, axis=axis,
-            timestamps=timestamps, time_axis=time_axis,
-            return_timestamps=return_timestamps, snapshot=FrameTree.of,
-            block=_inputs.velocity_block, **options,
+            arr, source, to_frame, extras, dim, axis, timestamps, time_axis,
+            return_timestamps, FrameTree.of,
+            functools.partial(_inputs.velocity_block, what=attr),
         )  # fmt: skip
     block = functools.partial(_inputs.transform_block, kind=kind)
     return _dask.transform(

@@ -35,6 +35,10 @@ __all__ = [
     "lookup_twist",
     "transform_angular_velocity",
     "transform_linear_velocity",
+    "velocity_terms",
+    "velocity_parts",
+    "interpolated_terms",
+    "combine",
 ]
 
 
@@ -257,26 +261,124 @@ def lookup_twist(
 # ---------------------------------------------------------------------------
 
 
-def _velocity_parts(arr_blocks, frame, to_frame, extra):
+def velocity_terms(
+    linear: bool,
+    frame,
+    to_frame,
+    what: str,
+    moving_frame=None,
+    reference_frame=None,
+    outlier_thresh=None,
+    cutoff=None,
+):
+    """The looked-up terms of a change of the reference or moving frame of velocities.
+
+    Estimated once for a whole call (the eager transform, and the lazy one
+    before its graph is cut into chunks). ``what`` is "reference_frame" or
+    "moving_frame"; ``moving_frame`` (linear, reference frame changed) and
+    ``reference_frame`` (linear, moving frame changed) are resolved frames
+    or None.
+
+    Returns
+    -------
+    extras : list of (ndarray (n|1, 3), Track or None)
+        One term for angular velocities (added), three for linear ones
+        (``rotated + ext[0] + ext[1] x ext[2]``, see :func:`combine`).
+    """
+    if not linear:
+        # w_M/R' = w_M/R + w_R/R'  or  w_M'/R = w_M/R + w_M'/M
+        moving, reference = (
+            (frame, to_frame) if what == "reference_frame" else (to_frame, frame)
+        )
+        angular, ang_ts = lookup_angular_velocity(
+            moving, reference, to_frame, None, cutoff, "quaternion", True, as_track=True
+        )
+        return [(angular, ang_ts)]
+    if what == "reference_frame":
+        # v_M/R' = v_M/R + v_R/R' + w_R/R' x t_M/R
+        if moving_frame is None:
+            raise ValueError(
+                "moving_frame must be given to transform the reference frame of a "
+                "linear velocity (its position enters the three-term formula)"
+            )
+        linear_v, angular, twist_ts = lookup_twist(
+            frame, to_frame, to_frame, outlier_thresh, cutoff, "quaternion", True,
+            as_track=True,
+        )  # fmt: skip
+        lin_ts = ang_ts = twist_ts
+        translation, _, trans_target = _chain.lookup(moving_frame, frame)
+    else:
+        # v_M'/R = v_M/R + v_M'/M + w_M/R x t_M'/M
+        if reference_frame is None:
+            raise ValueError(
+                "reference_frame must be given to transform the moving frame of a "
+                "linear velocity (its angular velocity enters the three-term formula)"
+            )
+        linear_v, lin_ts = lookup_linear_velocity(
+            to_frame, frame, to_frame, outlier_thresh, cutoff, True, as_track=True
+        )
+        angular, ang_ts = lookup_angular_velocity(
+            frame, reference_frame, to_frame, None, cutoff, "quaternion", True,
+            as_track=True,
+        )  # fmt: skip
+        translation, _, trans_target = _chain.lookup(to_frame, frame)
+    # the lever arm, represented in to_frame like everything else
+    lever, lever_ts = transform(
+        frame, "vectors", Blocks.of_rows(translation, trans_target.track), to_frame
+    )
+    lever_track = None if lever_ts is None else track_of(trans_target.track, lever_ts)
+    return [(linear_v, lin_ts), (angular, ang_ts), (lever, lever_track)]
+
+
+def combine(rotated, matched):
+    """The transformed velocities from the rotated input and the matched terms."""
+    if len(matched) == 1:
+        return rotated + matched[0]
+    return rotated + matched[0] + np.cross(matched[1], matched[2])
+
+
+def interpolated_terms(frame, to_frame, track, extras) -> list[bool]:
+    """Which terms a transform of arrays at ``track`` interpolates.
+
+    :func:`velocity_parts` takes a term's own values where the array's
+    times are a run of the term's times, and interpolates it otherwise. A
+    chunk of dask-backed data may be such a run where the whole array is
+    not: it then follows the whole array's choice, found here.
+    """
+    target = _chain.match([f for f, _ in _chain.chain(frame, to_frame)], [track])
+    final = _chain.match([], [target.track] + [t for _, t in extras])
+    return [
+        t is not None and _chain._same_times(t, final.track) is None for _, t in extras
+    ]
+
+
+def velocity_parts(blocks, frame, to_frame, extras, interpolated=None):
     """Represent the input in ``to_frame`` and match it with looked-up terms.
 
-    ``extra`` is a list of (array of shape (3,) or (n, 3), Track or None).
-    Returns the matched (n, k, 3) input, the matched extras as (n|1, 1, 3)
-    arrays, and the target.
+    ``extras`` is a list of (array of shape (3,) or (n, 3), Track or None);
+    ``interpolated`` (one flag per term, :func:`interpolated_terms`) forces
+    the interpolation of a term where the whole array's call interpolates
+    it. Returns the matched (n, k, 3) input, the matched extras as
+    (n|1, 1, 3) arrays, and the target.
     """
     steps = _chain.chain(frame, to_frame)
-    target = _chain.match([f for f, _ in steps], [arr_blocks.track])
-    data = _chain.resample_array(arr_blocks.data, arr_blocks.track, target, False)
+    target = _chain.match([f for f, _ in steps], [blocks.track])
+    data = _chain.resample_array(blocks.data, blocks.track, target, False)
     rotated = _chain.apply("vectors", steps, target, data)
-    ext_blocks = [kernel_array(np.reshape(e, (-1, 1, 3))) for e, _ in extra]
-    ext_tracks = [track for _, track in extra]
-    final = _chain.match([], [target.track] + ext_tracks)
+    final = _chain.match([], [target.track] + [t for _, t in extras])
     rotated = _chain.resample_array(rotated, target.track, final, False)
-    ext = [
-        _chain.resample_array(b, track, final, False)
-        for b, track in zip(ext_blocks, ext_tracks, strict=True)
-    ]
-    return rotated, ext, final
+    if interpolated is None:
+        interpolated = [False] * len(extras)
+    matched = []
+    for (values, track), interpolate in zip(extras, interpolated, strict=True):
+        block = kernel_array(np.reshape(values, (-1, 1, 3)))
+        if interpolate:
+            t_out = final.track.base_in(track.origin)
+            block = kr.interp_linear(track.base, kernel_array(block[:, 0, :]), t_out)
+            matched.append(block[:, None, :])
+        else:
+            matched.append(_chain.resample_array(block, track, final, False))
+    return rotated, matched, final
 
 
 def transform_angular_velocity(frame, blocks, to_frame, what, cutoff=None):
@@ -287,18 +389,9 @@ def transform_angular_velocity(frame, blocks, to_frame, what, cutoff=None):
     """
     if what == "representation_frame":
         return transform(frame, "vectors", blocks, to_frame)
-    if what == "reference_frame":
-        # w_M/R' = w_M/R + w_R/R'
-        angular, ang_ts = lookup_angular_velocity(
-            frame, to_frame, to_frame, None, cutoff, "quaternion", True, as_track=True
-        )
-    else:
-        # w_M'/R = w_M/R + w_M'/M
-        angular, ang_ts = lookup_angular_velocity(
-            to_frame, frame, to_frame, None, cutoff, "quaternion", True, as_track=True
-        )
-    rotated, (w,), final = _velocity_parts(blocks, frame, to_frame, [(angular, ang_ts)])
-    return blocks.restore(rotated + w, final), final.timestamps
+    extras = velocity_terms(False, frame, to_frame, what, cutoff=cutoff)
+    rotated, matched, final = velocity_parts(blocks, frame, to_frame, extras)
+    return blocks.restore(combine(rotated, matched), final), final.timestamps
 
 
 def transform_linear_velocity(
@@ -319,56 +412,9 @@ def transform_linear_velocity(
     """
     if what == "representation_frame":
         return transform(frame, "vectors", blocks, to_frame)
-    if what == "reference_frame":
-        # v_M/R' = v_M/R + v_R/R' + w_R/R' x t_M/R
-        if moving_frame is None:
-            raise ValueError(
-                "moving_frame must be given to transform the reference frame of a "
-                "linear velocity (its position enters the three-term formula)"
-            )
-        linear, angular, twist_ts = lookup_twist(
-            frame,
-            to_frame,
-            to_frame,
-            outlier_thresh,
-            cutoff,
-            "quaternion",
-            True,
-            as_track=True,
-        )
-        lin_ts = ang_ts = twist_ts
-        translation, _, trans_target = _chain.lookup(moving_frame, frame)
-    else:
-        # v_M'/R = v_M/R + v_M'/M + w_M/R x t_M'/M
-        if reference_frame is None:
-            raise ValueError(
-                "reference_frame must be given to transform the moving frame of a "
-                "linear velocity (its angular velocity enters the three-term formula)"
-            )
-        linear, lin_ts = lookup_linear_velocity(
-            to_frame, frame, to_frame, outlier_thresh, cutoff, True, as_track=True
-        )
-        angular, ang_ts = lookup_angular_velocity(
-            frame,
-            reference_frame,
-            to_frame,
-            None,
-            cutoff,
-            "quaternion",
-            True,
-            as_track=True,
-        )
-        translation, _, trans_target = _chain.lookup(to_frame, frame)
-    # the lever arm, represented in to_frame like everything else
-    trans, trans_ts = transform(
-        frame, "vectors", Blocks.of_rows(translation, trans_target.track), to_frame
-    )
-    trans_track = None if trans_ts is None else track_of(trans_target.track, trans_ts)
-    rotated, (v, w, lever), final = _velocity_parts(
-        blocks,
-        frame,
-        to_frame,
-        [(linear, lin_ts), (angular, ang_ts), (trans, trans_track)],
-    )
-    out = rotated + v + np.cross(w, lever)
-    return blocks.restore(out, final), final.timestamps
+    extras = velocity_terms(
+        True, frame, to_frame, what, moving_frame, reference_frame, outlier_thresh,
+        cutoff,
+    )  # fmt: skip
+    rotated, matched, final = velocity_parts(blocks, frame, to_frame, extras)
+    return blocks.restore(combine(rotated, matched), final), final.timestamps

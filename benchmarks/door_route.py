@@ -29,9 +29,10 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent / "tests"))
 sys.path.insert(0, str(HERE.parent / "tests" / "core"))
 
-import rbm_nb as rbm  # noqa: E402
 from test_module_graph import import_edges  # noqa: E402
 from transform_points_route import _module_of, _register, _route  # noqa: E402
+
+import rbm_nb as rbm  # noqa: E402
 
 
 def _importers() -> dict[str, set[str]]:
@@ -89,7 +90,9 @@ def main() -> None:
     for label, moving in (("static chain", False), ("moving chain", True)):
         _register(moving)
         rbm.transform_points(p, "world", "eye")  # compile, fill the caches
-        routes.append((f"eager, {label}", _route(lambda: rbm.transform_points(p, "world", "eye"))))
+        routes.append(
+            (f"eager, {label}", _route(lambda: rbm.transform_points(p, "world", "eye")))
+        )
     _register(True)
     call = _dask_call()
     call()

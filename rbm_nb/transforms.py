@@ -15,6 +15,8 @@ from __future__ import annotations
 import functools
 from typing import Any
 
+import numpy as np
+
 from . import _dask, _inputs
 from ._door import ArrayInput
 from ._engine import transform as _engine_transform
@@ -41,7 +43,7 @@ def _transform(
     ``kind`` is "points", "vectors" or "quaternions"; ``velocity``, for a
     change of a velocity's reference or moving frame, ``(linear, options)``.
     """
-    if _dask.is_dask(arr):
+    if type(arr) is not np.ndarray and _dask.is_dask(arr):
         return _lazy_transform(
             kind, arr, into, outof, dim, axis, timestamps, time_axis, attr,
             return_timestamps, velocity,

@@ -41,19 +41,14 @@ from typing import Any
 
 import numpy as np
 
-from ._door import kernel_array, unpack
-from ._engine import chain as ch
+from ._door import kernel_array
 from ._engine import twist as tw
+from ._engine import velocity as _velocity
 from ._engine.chain import chain
-from ._engine.transform import Blocks, track_of
-from ._engine.transform import transform as engine_transform
-from ._engine.velocity import _lowpass, lowpass_reach
 from ._kernels import differences as dk
 from ._kernels import quaternion as qk
-from ._kernels import resample as kr
 from ._kernels import rotations as rk
-from ._time import Track, as_track, seconds
-from ._xarray import wrap
+from ._time import as_track, seconds
 
 # samples of not-a-knot spline influence kept on each side: 0.268**32 < 1e-18
 SPLINE_HALO = 32
@@ -303,38 +298,34 @@ def frame_time_range(outof, into):
 
 
 def transform(
-    method: Callable,
+    block: Callable,
     arr,
-    into,
-    outof,
+    source,
+    to_frame,
     dim,
     axis,
     timestamps,
     time_axis,
     return_timestamps: bool,
-    resolve: Callable,
     snapshot: Callable,
     attr: str,
     quaternions: bool,
 ):
     """A transform of dask-backed data, one task per time chunk.
 
-    The frames are resolved here, once, and the graph carries their values
-    (``snapshot``, :meth:`rbm_nb._frame_snapshot.FrameTree.of`), each task
-    only the samples its chunk's times need: tasks run wherever dask sends
-    them, with or without the client's registry, and a frame registered
-    after this call does not change the result.
+    The frames come resolved (``source``, ``to_frame``) and the graph
+    carries their values (``snapshot``,
+    :meth:`rbm_nb._frame_snapshot.FrameTree.of`), each task only the
+    samples its chunk's times need: tasks run wherever dask sends them,
+    with or without the client's registry, and a frame registered after
+    this call does not change the result.
 
-    ``method(outof, data, into, axis=, time_axis=, timestamps=,
-    timestamps_out=)`` is the engine call of the eager transform;
-    ``resolve(frame, argument)`` turns names into frames.
+    ``block(block, frames, dim=, time_dim=, attr=, origin=)`` is the door's
+    eager call on one block (:func:`rbm_nb._inputs.transform_block`).
     """
     series = _TimeSeries.of(arr, dim, axis, timestamps, time_axis)
-    source = _source_frame(resolve, outof, getattr(arr, "attrs", {}), attr)
-    to_frame = resolve(into, "into")
-    block = functools.partial(
-        _transform_block,
-        method=method,
+    per_block = functools.partial(
+        block,
         dim=series.comp_dim,
         time_dim=series.time_dim,
         attr=attr,
@@ -342,57 +333,12 @@ def transform(
     )
     span = frame_time_range(source, to_frame)
     return series.run(
-        block,
+        per_block,
         snapshot([source, to_frame]),
         [] if span is None else [span],
         quaternions,
         return_timestamps,
     )
-
-
-def _transform_block(block, frames, method, dim, time_dim, attr, origin):
-    """The eager transform of one block, on frames built from their values.
-
-    The block's times count from the whole array's first (``origin``), as
-    in one eager call: from the block's own first they would round
-    differently, and times that equal a frame's samples in the eager call
-    could fall a few ulps beside them.
-    """
-    unpacked = unpack(block, dim=dim, timestamps=time_dim)
-    with frames.built() as (outof, into):
-        out, ts_out = method(
-            outof,
-            unpacked.data,
-            into,
-            axis=unpacked.axis,
-            time_axis=unpacked.time_axis,
-            timestamps=_track_from(unpacked.timestamps, origin),
-            timestamps_out=True,
-        )
-    attrs = dict(unpacked.attrs)
-    attrs[attr] = attrs["representation_frame"] = into.name
-    return wrap(unpacked, out, ts_out, attrs)
-
-
-def _source_frame(resolve: Callable, outof, attrs, attr: str):
-    """``outof``, or the frame a DataArray's attrs name, as the eager call finds it."""
-    import warnings
-
-    if outof is None:
-        if attr not in attrs:
-            raise ValueError(
-                f"outof must be given unless arr is a DataArray whose attrs name a "
-                f"registered frame under {attr!r}"
-            )
-        return resolve(attrs[attr], f"the DataArray's {attr} attribute")
-    frame = resolve(outof, "outof")
-    if attr in attrs and attrs[attr] != frame.name:
-        warnings.warn(
-            f"transforming the {attr!r} of the array out of {frame.name!r}, but "
-            f"its attrs say its {attr} is {attrs[attr]!r}",
-            stacklevel=6,  # the user's call of the public function
-        )
-    return frame
 
 
 class _TimeSeries:
@@ -652,9 +598,9 @@ def lowpass(v, time_dim: str, cutoff: float):
 
     def block(b):
         values = np.moveaxis(np.asarray(b.values), axis, 0)
-        return b.copy(data=np.moveaxis(_lowpass(values, cutoff), 0, axis))
+        return b.copy(data=np.moveaxis(_velocity.lowpass(values, cutoff), 0, axis))
 
-    return over_time(block, v, time_dim, halo=lowpass_reach(cutoff))
+    return over_time(block, v, time_dim, halo=_velocity.lowpass_reach(cutoff))
 
 
 def elementwise(eager: Callable, arr, core_dim: str | int, fill: Any = 0.0, **kwargs):
@@ -834,114 +780,37 @@ def _run_qinterp(
 # ---------------------------------------------------------------------------
 
 
-def velocity_terms(linear: bool, frame, to_frame, what: str, options: dict):
-    """The looked-up terms of a change of frame of velocities, and how to add them.
-
-    The frames are in memory: their velocities (and for linear velocities
-    the lever arm) are estimated here once, as the eager transform does,
-    and each chunk then only matches them to its own timestamps. Mirrors
-    :func:`rbm_nb._engine.twist.transform_angular_velocity` and
-    :func:`~rbm_nb._engine.twist.transform_linear_velocity`.
-
-    Returns
-    -------
-    extras : list of (ndarray (n|1, 3), Track or None)
-        One term for angular velocities (added), three for linear ones
-        (``rotated + ext[0] + ext[1] x ext[2]``, see :func:`_combine`).
-    """
-    cutoff = options.get("cutoff")
-    if not linear:
-        # w_M/R' = w_M/R + w_R/R'  or  w_M'/R = w_M/R + w_M'/M
-        moving, reference = (
-            (frame, to_frame) if what == "reference_frame" else (to_frame, frame)
-        )
-        angular, ang_ts = tw.lookup_angular_velocity(
-            moving, reference, to_frame, None, cutoff, "quaternion", True, True
-        )
-        return [(angular, ang_ts)]
-    thresh = options.get("outlier_thresh")
-    if what == "reference_frame":
-        # v_M/R' = v_M/R + v_R/R' + w_R/R' x t_M/R
-        if options.get("moving_frame") is None:
-            raise ValueError(
-                "moving_frame must be given to transform the reference frame of a "
-                "linear velocity (its position enters the three-term formula)"
-            )
-        lin, ang, lin_ts = tw.lookup_twist(
-            frame, to_frame, to_frame, thresh, cutoff, "quaternion", True, True
-        )
-        ang_ts = lin_ts
-        translation, _, trans_target = ch.lookup(options["moving_frame"], frame)
-    else:
-        # v_M'/R = v_M/R + v_M'/M + w_M/R x t_M'/M
-        if options.get("reference_frame") is None:
-            raise ValueError(
-                "reference_frame must be given to transform the moving frame of a "
-                "linear velocity (its angular velocity enters the three-term formula)"
-            )
-        lin, lin_ts = tw.lookup_linear_velocity(
-            to_frame, frame, to_frame, thresh, cutoff, True, True
-        )
-        ang, ang_ts = tw.lookup_angular_velocity(
-            frame, options["reference_frame"], to_frame, None, cutoff,
-            "quaternion", True, True,
-        )  # fmt: skip
-        translation, _, trans_target = ch.lookup(to_frame, frame)
-    lever, lever_ts = engine_transform(
-        frame, "vectors", translation, to_frame, -1, 0, trans_target.track
-    )
-    lever_track = None if lever_ts is None else track_of(trans_target.track, lever_ts)
-    return [(lin, lin_ts), (ang, ang_ts), (lever, lever_track)]
-
-
-def _combine(rotated, matched):
-    """The transformed velocities from the rotated input and the matched terms."""
-    if len(matched) == 1:
-        return rotated + matched[0]
-    return rotated + matched[0] + np.cross(matched[1], matched[2])
-
-
 def velocity_transform(
-    linear: bool,
     arr,
-    into,
-    outof,
-    what: str,
+    frame,
+    to_frame,
+    extras,
     dim,
     axis,
     timestamps,
     time_axis,
     return_timestamps: bool,
-    resolve: Callable,
     snapshot: Callable,
-    **options,
+    block: Callable,
 ):
     """A change of frame of dask-backed velocities, lazily per time chunk.
 
-    ``what`` is "reference_frame" or "moving_frame" ("representation_frame"
-    is a vector transform). ``options`` are those of the public function
-    (``cutoff``, and for linear velocities ``moving_frame``,
-    ``reference_frame``, ``outlier_thresh``). The frames are resolved and
-    their velocities estimated here, once; each task carries the frames'
-    samples and the velocities' values around its chunk's times (see
-    :func:`transform`).
+    ``extras`` are the looked-up terms, estimated once for the whole array
+    (:func:`rbm_nb._engine.twist.velocity_terms`); each task carries the
+    frames' samples and the terms' values around its chunk's times (see
+    :func:`transform`) and runs ``block(block, context, dim=, time_dim=,
+    origin=)``, the door's eager call on one block
+    (:func:`rbm_nb._inputs.velocity_block`).
     """
     series = _TimeSeries.of(arr, dim, axis, timestamps, time_axis)
-    frame = _source_frame(resolve, outof, getattr(arr, "attrs", {}), what)
-    to_frame = resolve(into, "into")
-    for key in ("moving_frame", "reference_frame"):
-        if options.get(key) is not None:
-            options[key] = resolve(options[key], key)
-    extras = velocity_terms(linear, frame, to_frame, what, options)
     whole = series.arr[series.time_dim].values
-    context = _VelocityContext(
+    context = VelocityContext(
         snapshot([frame, to_frame]),
         tuple(extras),
-        tuple(_interpolated_terms(frame, to_frame, whole, extras)),
+        tuple(tw.interpolated_terms(frame, to_frame, as_track(whole), extras)),
     )
-    block = functools.partial(
-        _velocity_block,
-        what=what,
+    per_block = functools.partial(
+        block,
         dim=series.comp_dim,
         time_dim=series.time_dim,
         origin=_origin(whole),
@@ -949,7 +818,7 @@ def velocity_transform(
     spans = [(t.values[0], t.values[-1]) for _, t in extras if t is not None]
     span = frame_time_range(frame, to_frame)
     return series.run(
-        block,
+        per_block,
         context,
         spans + ([] if span is None else [span]),
         False,
@@ -957,7 +826,7 @@ def velocity_transform(
     )
 
 
-class _VelocityContext:
+class VelocityContext:
     """What a block of a velocity transform needs: frames and the looked-up terms."""
 
     def __init__(self, frames, extras, interpolated):
@@ -965,7 +834,7 @@ class _VelocityContext:
         self.extras = extras
         self.interpolated = interpolated
 
-    def window(self, first, last) -> _VelocityContext:
+    def window(self, first, last) -> VelocityContext:
         extras = []
         for values, track in self.extras:
             if track is None:
@@ -977,26 +846,9 @@ class _VelocityContext:
             lo, hi = max(0, lo), min(n, hi)
             # the same origin: the block interpolates in the eager call's seconds
             extras.append((values[lo:hi], track.slice(lo, hi)))
-        return _VelocityContext(
+        return VelocityContext(
             self.frames.window(first, last), tuple(extras), self.interpolated
         )
-
-
-def _velocity_block(block, context, what, dim, time_dim, origin):
-    """The velocity transform of one block (the terms at the block's times)."""
-    unpacked = unpack(block, dim=dim, timestamps=time_dim)
-    blocks = Blocks(
-        unpacked.data, 3, unpacked.axis, unpacked.time_axis,
-        _track_from(unpacked.timestamps, origin), "vectors",
-    )  # fmt: skip
-    with context.frames.built() as (frame, to_frame):
-        rotated, matched, final = _velocity_parts(
-            blocks, frame, to_frame, context.extras, context.interpolated
-        )
-    out = blocks.restore(_combine(rotated, matched), final)
-    attrs = dict(unpacked.attrs)
-    attrs[what] = attrs["representation_frame"] = to_frame.name
-    return wrap(unpacked, out, final.timestamps, attrs)
 
 
 def time_dim_of(arr, timestamps, time_axis) -> str | None:
@@ -1012,58 +864,3 @@ def _origin(times) -> int | None:
     """Nanoseconds of the first of datetime64 ``times`` (None for numbers)."""
     first = as_track(np.asarray(times)[:1])
     return first.origin if first.is_datetime else None
-
-
-def _track_from(timestamps, origin: int | None):
-    """A chunk's timestamps as a Track counted from the whole array's first sample.
-
-    Interpolation reads times as float seconds from an origin; with the
-    chunk's own first sample as origin they would differ from the eager
-    call's by rounding, which fast-changing velocities turn into ~1e-10.
-    """
-    track = as_track(timestamps, copy=False)
-    if origin is None or not track.is_datetime:
-        return track
-    return Track(
-        track.values, track.key, (track.key - origin) / 1e9, origin, track.kind
-    )
-
-
-def _interpolated_terms(frame, to_frame, times, extras) -> list[bool]:
-    """Which looked-up terms the eager transform of the whole array interpolates.
-
-    The eager call takes a term's own values where the array's times are a
-    run of the term's times, and interpolates it otherwise -- at a time
-    equal to a sample, up to the rounding of seconds between the two time
-    origins. A chunk's times may be a run of the term's times where the whole
-    array's are not, so each chunk follows the whole array's choice.
-    """
-    track = as_track(np.asarray(times))
-    target = ch.match([f for f, _ in ch.chain(frame, to_frame)], [track])
-    final = ch.match([], [target.track] + [t for _, t in extras])
-    return [t is not None and ch._same_times(t, final.track) is None for _, t in extras]
-
-
-def _velocity_parts(blocks, frame, to_frame, extras, interpolated):
-    """The input represented in ``to_frame`` and the terms at the chunk's times.
-
-    :func:`rbm_nb._engine.twist._velocity_parts`, with each term
-    interpolated where the eager call on the whole array interpolates it
-    (``interpolated``), so that chunks give the eager numbers.
-    """
-    steps = ch.chain(frame, to_frame)
-    target = ch.match([f for f, _ in steps], [blocks.track])
-    data = ch.resample_array(blocks.data, blocks.track, target, False)
-    rotated = ch.apply("vectors", steps, target, data)
-    final = ch.match([], [target.track] + [t for _, t in extras])
-    rotated = ch.resample_array(rotated, target.track, final, False)
-    matched = []
-    for (values, track), interpolate in zip(extras, interpolated, strict=True):
-        block = kernel_array(np.reshape(values, (-1, 1, 3)))
-        if interpolate:
-            t_out = final.track.base_in(track.origin)
-            block = kr.interp_linear(track.base, kernel_array(block[:, 0, :]), t_out)
-            matched.append(block[:, None, :])
-        else:
-            matched.append(ch.resample_array(block, track, final, False))
-    return rotated, matched, final

@@ -255,14 +255,28 @@ def requested_times(
             f"{name} must be numeric or datetime64 (like the frames' timestamps), "
             f"got dtype {values.dtype}"
         )
-    key, _ = _keys(values, name)
-    if key.shape[0] == 1 or bool((key[1:] > key[:-1]).all()):
+    key, kind = _keys(values, name)
+    if key.shape[0] == 1:
+        # one time (a widget's, the tf2-style Transformer's): the Track
+        # as_track would make, without checking its order again
+        return _one_time(values, key, kind), np.zeros(1, np.intp), scalar, values
+    if bool((key[1:] > key[:-1]).all()):
         # one time, or times already sorted without repeats (a widget's or
         # a resampling's): no sort, and as_track finds them ordered
         return as_track(values, name), np.arange(key.shape[0]), scalar, values
     _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
     track = as_track(values[first], name)
     return track, inverse.reshape(-1), scalar, values
+
+
+def _one_time(values: np.ndarray, key: np.ndarray, kind: str) -> Track:
+    """The Track of one valid time (``key`` and ``kind`` from :func:`_keys`)."""
+    values = np.array(values, copy=True)
+    if kind == "numeric":
+        key = np.array(key, dtype=np.float64, copy=True)  # not the caller's array
+        return Track(values, key, key, 0, kind)
+    key = np.array(key, copy=True)
+    return Track(values, key, np.zeros(1), int(key[0]), kind)
 
 
 def check_compatible(tracks: Any) -> None:

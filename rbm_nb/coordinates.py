@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from . import _dask
-from ._door import ArrayInput, float_array
+from ._door import ArrayInput, float_array, resolve_axis
 from ._door import is_dataarray as _is_dataarray
 from ._validation import check_no_inf
 
@@ -230,10 +230,7 @@ def _resolve_dim_axis(arr: Any, dim: str | None, axis: int | None) -> int:
         if dim not in arr.dims:
             raise ValueError(f"dim {dim!r} is not a dimension of arr {tuple(arr.dims)}")
         return arr.dims.index(dim)
-    axis = -1 if axis is None else int(axis)
-    if not -ndim <= axis < ndim:
-        raise ValueError(f"axis {axis} is out of range for arr with {ndim} dimensions")
-    return axis % ndim
+    return resolve_axis(-1 if axis is None else axis, ndim, "axis")
 
 
 def transform_coordinates(

@@ -26,7 +26,7 @@ import numpy as np
 
 from . import _dask, _time
 from ._dask import GRADIENT_HALO, SPLINE_HALO
-from ._door import ArrayInput, kernel_array
+from ._door import ArrayInput, kernel_array, resolve_axis
 from ._door import is_dataarray as _is_dataarray
 from ._engine.velocity import (
     angular_series as _angular_series,
@@ -80,7 +80,10 @@ def _unpack(arr, dim, axis, timestamps, time_axis):
                 raise ValueError(
                     f"timestamps {timestamps!r} is not a coordinate of arr"
                 )
-            if time_axis is not None and time_axis % data.ndim != t_axis:
+            if (
+                time_axis is not None
+                and resolve_axis(time_axis, data.ndim, "time_axis") != t_axis
+            ):
                 raise ValueError(
                     f"time_axis={time_axis} contradicts timestamps={timestamps!r}"
                 )
@@ -91,7 +94,7 @@ def _unpack(arr, dim, axis, timestamps, time_axis):
             time_axis = 0 if time_axis is None else time_axis
             if data.ndim < 2:
                 raise ValueError("arr needs a time axis besides the spatial one")
-            time_dim = arr.dims[time_axis % data.ndim]
+            time_dim = arr.dims[resolve_axis(time_axis, data.ndim, "time_axis")]
             if time_dim not in arr.coords:
                 raise ValueError(
                     f"arr's time dimension {time_dim!r} has no coordinate; pass timestamps"
@@ -115,14 +118,10 @@ def _unpack(arr, dim, axis, timestamps, time_axis):
         raise ValueError(
             f"arr must have a time axis and a spatial axis, got shape {data.shape}"
         )
-    axis = -1 if axis is None else axis
-    time_axis = 0 if time_axis is None else time_axis
-    for value, name in ((axis, "axis"), (time_axis, "time_axis")):
-        if not -data.ndim <= value < data.ndim:
-            raise ValueError(
-                f"{name}={value} is out of range for arr with shape {data.shape}"
-            )
-    axis, time_axis = axis % data.ndim, time_axis % data.ndim
+    axis = resolve_axis(-1 if axis is None else axis, data.ndim, "axis")
+    time_axis = resolve_axis(
+        0 if time_axis is None else time_axis, data.ndim, "time_axis"
+    )
     if axis == time_axis:
         raise ValueError(f"the spatial axis and the time axis are both axis {axis}")
     t = _time.seconds(timestamps, data.shape[time_axis])

@@ -25,7 +25,7 @@ from typing import Any, TypeAlias
 
 import numpy as np
 
-from . import _frame_paths, _time
+from . import _frame_paths, _inputs, _time
 from ._door import ArrayInput, float_array, kernel_array
 from ._engine import chain as _chain
 from ._engine import transform as _transform
@@ -36,6 +36,8 @@ from ._validation import (
     check_coordinates,
     check_finite,
     check_missing_rows,
+    check_mode,
+    check_what,
     is_scalar,
     moving_samples,
     normalize_quaternions,
@@ -829,7 +831,7 @@ class ReferenceFrame:
             _optional(represent_in, "represent_in"),
             outlier_thresh,
             cutoff,
-            mode,
+            check_mode(mode),
             allow_static,
         )
         return (linear, angular, ts) if return_timestamps else (linear, angular)
@@ -871,7 +873,7 @@ class ReferenceFrame:
             _optional(represent_in, "represent_in"),
             outlier_thresh,
             cutoff,
-            mode,
+            check_mode(mode),
             allow_static,
         )
         return (angular, ts) if return_timestamps else angular
@@ -886,16 +888,16 @@ class ReferenceFrame:
         return_timestamps: bool = False,
     ) -> Any:
         """Points given in this frame, expressed in ``to_frame``."""
-        out, ts = _transform.transform(
-            self,
+        return _transform_call(
             "points",
+            self,
             arr,
-            resolve_frame(to_frame, "to_frame"),
+            to_frame,
             axis,
             time_axis,
             timestamps,
+            return_timestamps,
         )
-        return (out, ts) if return_timestamps else out
 
     def transform_vectors(
         self,
@@ -907,16 +909,16 @@ class ReferenceFrame:
         return_timestamps: bool = False,
     ) -> Any:
         """Vectors represented in this frame, represented in ``to_frame``."""
-        out, ts = _transform.transform(
-            self,
+        return _transform_call(
             "vectors",
+            self,
             arr,
-            resolve_frame(to_frame, "to_frame"),
+            to_frame,
             axis,
             time_axis,
             timestamps,
+            return_timestamps,
         )
-        return (out, ts) if return_timestamps else out
 
     def transform_quaternions(
         self,
@@ -928,16 +930,16 @@ class ReferenceFrame:
         return_timestamps: bool = False,
     ) -> Any:
         """Orientations wrt this frame, expressed wrt ``to_frame``."""
-        out, ts = _transform.transform(
-            self,
+        return _transform_call(
             "quaternions",
+            self,
             arr,
-            resolve_frame(to_frame, "to_frame"),
+            to_frame,
             axis,
             time_axis,
             timestamps,
+            return_timestamps,
         )
-        return (out, ts) if return_timestamps else out
 
     def transform_angular_velocity(
         self,
@@ -951,15 +953,11 @@ class ReferenceFrame:
         cutoff: float | None = None,
     ) -> Any:
         """Change the reference, moving or representation frame of angular velocities."""
+        to_frame = resolve_frame(to_frame, "to_frame")
+        check_what(what)
+        blocks = _inputs.blocks(arr, 3, axis, time_axis, timestamps, "vectors")
         out, ts = _twist.transform_angular_velocity(
-            self,
-            arr,
-            resolve_frame(to_frame, "to_frame"),
-            what,
-            axis,
-            time_axis,
-            timestamps,
-            cutoff,
+            self, blocks, to_frame, what, cutoff
         )
         return (out, ts) if return_timestamps else out
 
@@ -978,16 +976,16 @@ class ReferenceFrame:
         cutoff: float | None = None,
     ) -> Any:
         """Change the reference, moving or representation frame of linear velocities."""
+        to_frame = resolve_frame(to_frame, "to_frame")
+        check_what(what)
+        blocks = _inputs.blocks(arr, 3, axis, time_axis, timestamps, "vectors")
         out, ts = _twist.transform_linear_velocity(
             self,
-            arr,
-            resolve_frame(to_frame, "to_frame"),
+            blocks,
+            to_frame,
             what,
             _optional(moving_frame, "moving_frame"),
             _optional(reference_frame, "reference_frame"),
-            axis,
-            time_axis,
-            timestamps,
             outlier_thresh,
             cutoff,
         )
@@ -1081,6 +1079,25 @@ def _samples(name, translation, rotation, timestamps, inverse) -> Samples:
     # interpolation needs on the same hemisphere
     public = np.array(stored.reshape(-1, 4), dtype=np.float64, order="C")
     return Samples(track, t, kq.unflip(r) if moving else r, public, missing)
+
+
+def _transform_call(
+    kind, frame, arr, to_frame, axis, time_axis, timestamps, return_timestamps
+):  # fmt: skip
+    """A transform method's call: through the door, then the engine."""
+    args = _inputs.method_arguments(
+        kind, frame, arr, resolve_frame(to_frame, "to_frame"), axis, time_axis,
+        timestamps,
+    )  # fmt: skip
+    if args.rows is not None:  # a static chain, plain rows: the short way
+        out = _transform.transform_static(kind, args.static, args.rows)
+        return (
+            (out.reshape(args.shape), None)
+            if return_timestamps
+            else out.reshape(args.shape)
+        )
+    out, ts = _transform.transform(frame, kind, args.blocks, args.into)
+    return (out, ts) if return_timestamps else out
 
 
 def _optional(frame: Any, argument: str) -> ReferenceFrame | None:

@@ -18,6 +18,7 @@ from . import _xarray
 from ._engine import at_time as _at_time
 from ._engine import chain as _chain
 from ._engine import twist as _twist
+from ._validation import check_mode
 from .conversions import homogeneous_from_transform
 from .frames import FrameLike, ReferenceFrame, resolve_frame
 from .rigid_transform import Transform
@@ -133,9 +134,9 @@ def lookup_at(
     (translation, rotation[, timestamps]), matrices[, timestamps],
     Transform[, timestamps], or Dataset
     """
-    chosen = [k for k, v in (("as_matrix", as_matrix), ("as_transform", as_transform),
-                             ("as_dataset", as_dataset)) if v]  # fmt: skip
-    if len(chosen) > 1:
+    if (as_matrix or as_transform) and (as_dataset or (as_matrix and as_transform)):
+        chosen = [k for k, v in (("as_matrix", as_matrix), ("as_transform", as_transform),
+                                 ("as_dataset", as_dataset)) if v]  # fmt: skip
         raise ValueError(f"choose at most one of {', '.join(chosen)}")
     into = resolve_frame(into, "into")
     outof = resolve_frame(outof, "outof")
@@ -258,7 +259,7 @@ def lookup_twist(
     """
     frame, reference, represent_in = _public_frames(frame, reference, represent_in)
     linear, angular, timestamps = _twist.lookup_twist(
-        frame, reference, represent_in, outlier_thresh, cutoff, mode
+        frame, reference, represent_in, outlier_thresh, cutoff, check_mode(mode)
     )
     if as_dataset:
         return _xarray.twist_dataset(
@@ -323,7 +324,7 @@ def lookup_angular_velocity(
     """
     frame, reference, represent_in = _public_frames(frame, reference, represent_in)
     angular, timestamps = _twist.lookup_angular_velocity(
-        frame, reference, represent_in, outlier_thresh, cutoff, mode
+        frame, reference, represent_in, outlier_thresh, cutoff, check_mode(mode)
     )
     if as_dataarray:
         return _xarray.velocity_dataarray(

@@ -16,7 +16,7 @@ import numpy as np
 
 from . import _dask, _parallel, _time
 from ._config import UNIT_QUATERNION_TOLERANCE
-from ._door import ArrayInput, kernel_array
+from ._door import ArrayInput, kernel_array, resolve_axis
 from ._door import float_array as _door_float_array
 from ._door import is_dataarray as _is_dataarray
 from ._kernels import quaternion as _qk
@@ -42,18 +42,6 @@ def _is_quaternion_dtype(arr: np.ndarray) -> bool:
     return arr.dtype.name == "quaternion"
 
 
-def _normalize_axis(axis: Any, ndim: int, name: str) -> int:
-    try:
-        axis = int(axis)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be an integer, got {axis!r}") from None
-    if not -ndim <= axis < ndim:
-        raise ValueError(
-            f"{name}={axis} is out of range for an array with {ndim} dimensions"
-        )
-    return axis % ndim
-
-
 def _float_array(obj: Any, name: str) -> np.ndarray:
     return _door_float_array(obj, name)
 
@@ -71,7 +59,7 @@ def _split(q: Any, qaxis: int, name: str) -> tuple[np.ndarray, bool]:
         raise ValueError(
             f"{name} must have an axis of length 4 (w, x, y, z), got a scalar"
         )
-    ax = _normalize_axis(qaxis, arr.ndim, "qaxis")
+    ax = resolve_axis(qaxis, arr.ndim, "qaxis")
     if arr.shape[ax] != 4:
         raise ValueError(
             f"{name} must have length 4 (w, x, y, z) along qaxis={qaxis}, got shape {arr.shape}"
@@ -297,7 +285,7 @@ def _resolve_reduce_axes(axis: Any, ndim: int) -> tuple[int, ...]:
     if axis is None:
         return tuple(range(ndim))
     axes = (axis,) if np.ndim(axis) == 0 else tuple(axis)
-    out = tuple(sorted({_normalize_axis(a, ndim, "axis") for a in axes}))
+    out = tuple(sorted({resolve_axis(a, ndim, "axis") for a in axes}))
     if len(out) != len(axes):
         raise ValueError(f"axis contains repeated axes: {axis!r}")
     return out
@@ -368,7 +356,7 @@ def qmean(q: ArrayInput, axis: int | None = None, qaxis: int = -1) -> Any:
     mean[~finite] = np.nan
     qpos = -1
     if not was_quaternion:
-        qin = _normalize_axis(qaxis, qf.ndim, "qaxis")
+        qin = resolve_axis(qaxis, qf.ndim, "qaxis")
         qpos = qin - sum(1 for a in reduce_axes if a < qin)
     out = _join(mean.reshape(keep_shape + (4,)), was_quaternion, qpos)
     if (
@@ -384,7 +372,7 @@ def _reduced_like(
     template: Any, out: np.ndarray, qaxis: int, reduce_axes: tuple[int, ...]
 ):
     """A DataArray for a reduction of ``template`` (its qdim kept, others dropped)."""
-    qdim = template.dims[_normalize_axis(qaxis, template.ndim, "qaxis")]
+    qdim = template.dims[resolve_axis(qaxis, template.ndim, "qaxis")]
     other = [d for d in template.dims if d != qdim]
     dropped = {other[a]: 0 for a in reduce_axes}
     reduced = template.isel(dropped, drop=True)
@@ -550,26 +538,26 @@ def qinterp(
     if _dask.is_dask(q) and not _is_dataarray(q):
         import xarray as xr
 
-        ax = _normalize_axis(axis, q.ndim, "axis")
-        qa = _normalize_axis(qaxis, q.ndim, "qaxis")
+        ax = resolve_axis(axis, q.ndim, "axis")
+        qa = resolve_axis(qaxis, q.ndim, "qaxis")
         dims = [f"dim_{k}" for k in range(q.ndim)]
         dims[ax] = "time"
         wrapped = xr.DataArray(q, {"time": np.asarray(t_in)}, dims)
         out = _qinterp_dataarray(wrapped, "time", dims[qa], t_out, out_of_range="raise")
         return out.data
     if _is_dataarray(q):
-        dim = q.dims[_normalize_axis(axis, q.ndim, "axis")]
-        qdim = q.dims[_normalize_axis(qaxis, q.ndim, "qaxis")]
+        dim = q.dims[resolve_axis(axis, q.ndim, "axis")]
+        qdim = q.dims[resolve_axis(qaxis, q.ndim, "qaxis")]
         return _qinterp_dataarray(q, dim, qdim, t_out, t_in=t_in, out_of_range="raise")
     fast = _qinterp_fast(q, t_in, t_out, axis, qaxis)
     if fast is not None:
         return fast
     arr = np.asarray(q)
     qf, was_quaternion = _split(arr, qaxis, "q")
-    ax = _normalize_axis(axis, arr.ndim, "axis")
+    ax = resolve_axis(axis, arr.ndim, "axis")
     qpos = -1
     if not was_quaternion:
-        qpos = _normalize_axis(qaxis, arr.ndim, "qaxis")
+        qpos = resolve_axis(qaxis, arr.ndim, "qaxis")
         # axis counts the axes of q without qaxis when both name the same
         # axis (qinterp(q.T, ..., qaxis=0) with the default axis=0), as in
         # rigid-body-motion; otherwise it counts all axes of q
@@ -812,7 +800,7 @@ def rotate_vectors(
     check_no_inf(va, "v", row_axis=False)
     if va.ndim == 0:
         raise ValueError("v must have an axis of length 3 (x, y, z), got a scalar")
-    vax = _normalize_axis(axis, va.ndim, "axis")
+    vax = resolve_axis(axis, va.ndim, "axis")
     if va.shape[vax] != 3:
         raise ValueError(
             f"v must have length 3 (x, y, z) along axis={axis}, got shape {va.shape}"
@@ -914,7 +902,7 @@ def from_euler_angles(
             raise ValueError(
                 "rpy must have an axis of length 3 (roll, pitch, yaw), got a scalar"
             )
-        ax = _normalize_axis(axis, arr.ndim, "axis")
+        ax = resolve_axis(axis, arr.ndim, "axis")
         if arr.shape[ax] != 3:
             raise ValueError(
                 f"rpy must have length 3 (roll, pitch, yaw) along axis={axis}, got shape {arr.shape}"
@@ -954,4 +942,4 @@ def from_euler_angles(
     quats = result.reshape(shape + (4,))
     if return_quaternion:
         return _join(quats, True, -1)
-    return np.moveaxis(quats, -1, _normalize_axis(axis, quats.ndim, "axis"))
+    return np.moveaxis(quats, -1, resolve_axis(axis, quats.ndim, "axis"))

@@ -1,7 +1,8 @@
 """Transform points, vectors, quaternions and velocities between frames.
 
-Each public function unpacks its array argument, resolves the frames and
-hands both to the engine (:mod:`rbm_nb._engine.transform` and
+Each public function hands its arguments to the door
+(:func:`rbm_nb._inputs.arguments`: the array unpacked, checked and laid out,
+the frames resolved) and what comes back to the engine (:mod:`rbm_nb._engine.transform` and
 :mod:`rbm_nb._engine.twist`), which matches the array's timestamps with
 those of the frames along the way (see :mod:`rbm_nb._engine.chain`) and
 applies the chained transform with a numba kernel. DataArray input comes
@@ -11,16 +12,17 @@ attributes updated.
 
 from __future__ import annotations
 
-import warnings
+import functools
 from typing import Any
 
-from . import _dask
+import numpy as np
+
+from . import _dask, _inputs
 from ._door import ArrayInput
 from ._engine import transform as _engine_transform
 from ._engine import twist as _twist
 from ._frame_snapshot import FrameTree
 from ._validation import check_what
-from ._xarray import unpack, wrap
 from .frames import FrameLike, resolve_frame
 
 __all__ = [
@@ -33,100 +35,86 @@ __all__ = [
 
 
 def _transform(
-    method,
-    arr,
-    into,
-    outof,
-    dim,
-    axis,
-    timestamps,
-    time_axis,
-    attr,
-    return_timestamps,
-    **kwargs,
-):
-    """Unpack, resolve frames (``outof`` may come from ``attrs[attr]``), wrap."""
-    if _dask.is_dask(arr):
+    kind, arr, into, outof, dim, axis, timestamps, time_axis, attr, return_timestamps,
+    velocity=None,
+):  # fmt: skip
+    """One door call (:func:`rbm_nb._inputs.arguments`), one engine call.
+
+    ``kind`` is "points", "vectors" or "quaternions"; ``velocity``, for a
+    change of a velocity's reference or moving frame, ``(linear, options)``.
+    """
+    if type(arr) is not np.ndarray and _dask.is_dask(arr):
         return _lazy_transform(
-            method, arr, into, outof, dim, axis, timestamps, time_axis, attr,
-            return_timestamps, **kwargs,
+            kind, arr, into, outof, dim, axis, timestamps, time_axis, attr,
+            return_timestamps, velocity,
         )  # fmt: skip
-    unpacked = unpack(
-        arr, dim=dim, axis=axis, time_axis=time_axis, timestamps=timestamps
+    args = _inputs.arguments(
+        kind, arr, into, outof, dim, axis, timestamps, time_axis, attr, resolve_frame
     )
-    attrs = None if unpacked.source is None else dict(unpacked.attrs)
-    if outof is None:
-        if attrs is not None and attr in attrs:
-            outof = resolve_frame(attrs[attr], f"the DataArray's {attr} attribute")
-        else:
-            raise ValueError(
-                f"outof must be given unless arr is a DataArray whose attrs name a "
-                f"registered frame under {attr!r}"
-            )
-    else:
-        outof = resolve_frame(outof, "outof")
-        if attrs is not None and attr in attrs and attrs[attr] != outof.name:
-            warnings.warn(
-                f"transforming the {attr!r} of the array out of {outof.name!r}, but "
-                f"its attrs say its {attr} is {attrs[attr]!r}",
-                stacklevel=3,
-            )
-    into = resolve_frame(into, "into")
-    if method in (_points, _vectors, _quaternions):
+    if args.rows is not None:  # the short way: a static chain, plain rows
+        out = _engine_transform.transform_static(kind, args.static, args.rows)
+        out = out.reshape(args.shape)
+        return (out, None) if return_timestamps else out
+    if velocity is None:
         # the result's timestamps are a copy as long as its time axis: only
         # made when they are returned or wrapped
-        kwargs["timestamps_out"] = return_timestamps or attrs is not None
-    out, ts_out = method(
-        outof,
-        unpacked.data,
-        into,
-        axis=unpacked.axis,
-        time_axis=unpacked.time_axis,
-        timestamps=unpacked.timestamps,
-        **kwargs,
-    )
-    if attrs is not None:  # a DataArray came in: one goes out
-        attrs[attr] = into.name
-        attrs["representation_frame"] = into.name
-        return wrap(unpacked, out, ts_out, attrs)
-    if return_timestamps:
-        return out, ts_out
-    return out
-
-
-def _lazy_transform(
-    method, arr, into, outof, dim, axis, timestamps, time_axis, attr,
-    return_timestamps, **kwargs,
-):  # fmt: skip
-    """The transform of dask-backed data, one task per time chunk (see _dask):
-    the frames are resolved here, once, and the graph carries their values."""
-    if kwargs.get("what", "representation_frame") != "representation_frame":
-        # the frames' velocities are estimated once, not per chunk
-        return _dask.velocity_transform(
-            method is _frame_transform_linear_velocity_kw, arr, into, outof,
-            dim=dim, axis=axis, timestamps=timestamps, time_axis=time_axis,
-            return_timestamps=return_timestamps, resolve=resolve_frame,
-            snapshot=FrameTree.of, **kwargs,
+        out, ts_out = _engine_transform.transform(
+            args.outof, kind, args.blocks, args.into,
+            return_timestamps or args.attrs is not None,
         )  # fmt: skip
-    if method not in (_points, _vectors, _quaternions):
-        # a velocity's representation frame changes as a vector's does
-        method = _vectors
-    return _dask.transform(
-        method, arr, into, outof, dim, axis, timestamps, time_axis,
-        return_timestamps, resolve_frame, FrameTree.of, attr, method is _quaternions,
+    else:
+        out, ts_out = _velocity(args, attr, *velocity)
+    return args.result(out, ts_out, attr, return_timestamps)
+
+
+def _velocity(args, what, linear, options):
+    if not linear:
+        return _twist.transform_angular_velocity(
+            args.outof, args.blocks, args.into, what, options["cutoff"]
+        )
+    return _twist.transform_linear_velocity(
+        args.outof, args.blocks, args.into, what,
+        _optional(options["moving_frame"], "moving_frame"),
+        _optional(options["reference_frame"], "reference_frame"),
+        options["outlier_thresh"], options["cutoff"],
     )  # fmt: skip
 
 
-def _points(frame, arr, into, **kw):
-    return _engine_transform.transform(frame, "points", arr, into, **kw)
+def _optional(frame, argument):
+    return None if frame is None else resolve_frame(frame, argument)
 
 
-def _vectors(frame, arr, into, **kw):
-    return _engine_transform.transform(frame, "vectors", arr, into, **kw)
+def _lazy_transform(
+    kind, arr, into, outof, dim, axis, timestamps, time_axis, attr,
+    return_timestamps, velocity,
+):  # fmt: skip
+    """The transform of dask-backed data, one task per time chunk (see _dask):
+    the frames are resolved here, once, and the graph carries their values;
+    each block goes through the door and the engine as an eager call does."""
+    source, to_frame = _inputs.frames(resolve_frame, outof, into, _attrs_of(arr), attr)
+    if velocity is not None and attr != "representation_frame":
+        # the frames' velocities are estimated once, not per chunk
+        linear, options = velocity
+        extras = _twist.velocity_terms(
+            linear, source, to_frame, attr,
+            _optional(options.get("moving_frame"), "moving_frame"),
+            _optional(options.get("reference_frame"), "reference_frame"),
+            options.get("outlier_thresh"), options["cutoff"],
+        )  # fmt: skip
+        return _dask.velocity_transform(
+            arr, source, to_frame, extras, dim, axis, timestamps, time_axis,
+            return_timestamps, FrameTree.of,
+            functools.partial(_inputs.velocity_block, what=attr),
+        )  # fmt: skip
+    block = functools.partial(_inputs.transform_block, kind=kind)
+    return _dask.transform(
+        block, arr, source, to_frame, dim, axis, timestamps, time_axis,
+        return_timestamps, FrameTree.of, attr, kind == "quaternions",
+    )  # fmt: skip
 
 
-def _quaternions(frame, arr, into, **kw):
-    return _engine_transform.transform(frame, "quaternions", arr, into, **kw)
+def _attrs_of(arr):
+    return dict(arr.attrs) if hasattr(arr, "attrs") else None
 
 
 def transform_vectors(
@@ -180,7 +168,7 @@ def transform_vectors(
     a (n, 3) array in this case instead.
     """
     return _transform(
-        _vectors, arr, into, outof, dim, axis, timestamps, time_axis,
+        "vectors", arr, into, outof, dim, axis, timestamps, time_axis,
         "representation_frame", return_timestamps,
     )  # fmt: skip
 
@@ -201,7 +189,7 @@ def transform_points(
     that ``outof`` defaults to a DataArray's ``reference_frame`` attribute.
     """
     return _transform(
-        _points, arr, into, outof, dim, axis, timestamps, time_axis,
+        "points", arr, into, outof, dim, axis, timestamps, time_axis,
         "reference_frame", return_timestamps,
     )  # fmt: skip
 
@@ -221,7 +209,7 @@ def transform_quaternions(
     Parameters and returns are those of :func:`transform_points`.
     """
     return _transform(
-        _quaternions, arr, into, outof, dim, axis, timestamps, time_axis,
+        "quaternions", arr, into, outof, dim, axis, timestamps, time_axis,
         "reference_frame", return_timestamps,
     )  # fmt: skip
 
@@ -259,9 +247,10 @@ def transform_angular_velocity(
         Low-pass cutoff (fraction of Nyquist) for the looked-up velocity.
     """
     check_what(what)
+    velocity = None if what == "representation_frame" else (False, {"cutoff": cutoff})
     return _transform(
-        _frame_transform_angular_velocity_kw, arr, into, outof, dim, axis, timestamps,
-        time_axis, what, return_timestamps, what=what, cutoff=cutoff,
+        "vectors", arr, into, outof, dim, axis, timestamps, time_axis, what,
+        return_timestamps, velocity,
     )  # fmt: skip
 
 
@@ -303,34 +292,14 @@ def transform_linear_velocity(
         Outlier suppression threshold for the looked-up linear velocity.
     """
     check_what(what)
+    options = {
+        "moving_frame": moving_frame,
+        "reference_frame": reference_frame,
+        "cutoff": cutoff,
+        "outlier_thresh": outlier_thresh,
+    }
+    velocity = None if what == "representation_frame" else (True, options)
     return _transform(
-        _frame_transform_linear_velocity_kw, arr, into, outof, dim, axis, timestamps,
-        time_axis, what, return_timestamps, what=what, moving_frame=moving_frame,
-        reference_frame=reference_frame, cutoff=cutoff, outlier_thresh=outlier_thresh,
-    )  # fmt: skip
-
-
-def _frame_transform_angular_velocity_kw(
-    frame, arr, into, axis, time_axis, timestamps, what, cutoff
-):
-    return _twist.transform_angular_velocity(
-        frame, arr, into, what, axis, time_axis, timestamps, cutoff
-    )
-
-
-def _frame_transform_linear_velocity_kw(
-    frame, arr, into, axis, time_axis, timestamps, what, moving_frame, reference_frame,
-    cutoff, outlier_thresh,
-):  # fmt: skip
-    moving_frame = (
-        None if moving_frame is None else resolve_frame(moving_frame, "moving_frame")
-    )
-    reference_frame = (
-        None
-        if reference_frame is None
-        else resolve_frame(reference_frame, "reference_frame")
-    )
-    return _twist.transform_linear_velocity(
-        frame, arr, into, what, moving_frame, reference_frame, axis, time_axis,
-        timestamps, outlier_thresh, cutoff,
+        "vectors", arr, into, outof, dim, axis, timestamps, time_axis, what,
+        return_timestamps, velocity,
     )  # fmt: skip

@@ -34,18 +34,24 @@ def _check_range(frames, track) -> None:
     """Raise ExtrapolationError if ``track`` leaves any frame's time range."""
     for frame in frames:
         own = frame.track
-        first, last = own.values[0], own.values[-1]
-        span = f"has data from {first} to {last} ({len(own)} samples)"
         if track.key[0] < own.key[0]:
             raise ExtrapolationError(
-                f"frame {frame.name!r} {span}; the requested time {track.values[0]} "
-                f"is before its first sample (lookups do not extrapolate into the past)"
+                f"frame {frame.name!r} {_span(own)}; the requested time "
+                f"{track.values[0]} is before its first sample (lookups do not "
+                "extrapolate into the past)"
             )
         if track.key[-1] > own.key[-1]:
             raise ExtrapolationError(
-                f"frame {frame.name!r} {span}; the requested time {track.values[-1]} "
-                f"is after its last sample (lookups do not extrapolate into the future)"
+                f"frame {frame.name!r} {_span(own)}; the requested time "
+                f"{track.values[-1]} is after its last sample (lookups do not "
+                "extrapolate into the future)"
             )
+
+
+def _span(own) -> str:
+    # worded only when raising: formatting two numpy times costs ~2 µs, a
+    # tenth of a one-time lookup
+    return f"has data from {own.values[0]} to {own.values[-1]} ({len(own)} samples)"
 
 
 def transform_at_times(outof, into, times):

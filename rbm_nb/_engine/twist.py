@@ -23,7 +23,6 @@ import numpy as np
 from .._door import kernel_array
 from .._kernels import quaternion as kq
 from .._kernels import resample as kr
-from .._validation import check_mode, check_what
 from . import chain as _chain
 from . import fused as _fused
 from . import velocity as _velocity
@@ -36,6 +35,10 @@ __all__ = [
     "lookup_twist",
     "transform_angular_velocity",
     "transform_linear_velocity",
+    "velocity_terms",
+    "velocity_parts",
+    "interpolated_terms",
+    "combine",
 ]
 
 
@@ -96,7 +99,7 @@ def _represent(vectors, track, outof, into, looked_up=None):
             return _rotate(r, vectors), track
         if outof is reference and into is frame:
             return _rotate(kq.qconj(kernel_array(r)), vectors), track
-    out, ts = transform(outof, "vectors", vectors, into, timestamps=track)
+    out, ts = transform(outof, "vectors", Blocks.of_rows(vectors, track), into)
     return out, track_of(track, ts)
 
 
@@ -180,8 +183,8 @@ def lookup_angular_velocity(
     allow_static=False,
     as_track=False,
 ):
-    """Angular velocity (n, 3) of ``frame`` wrt ``reference`` and its timestamps."""
-    check_mode(mode)
+    """Angular velocity (n, 3) of ``frame`` wrt ``reference`` and its timestamps
+    (``mode`` checked by the caller)."""
     reference, represent_in = defaults(frame, reference, represent_in)
     if (
         mode == "quaternion"
@@ -232,8 +235,8 @@ def lookup_twist(
     allow_static=False,
     as_track=False,
 ):
-    """Linear and angular velocity (n, 3) each of ``frame`` and their timestamps."""
-    check_mode(mode)
+    """Linear and angular velocity (n, 3) each of ``frame`` and their timestamps
+    (``mode`` checked by the caller)."""
     reference, represent_in = defaults(frame, reference, represent_in)
     looked_up = _moving_lookup(frame, reference, allow_static)
     if looked_up is None:
@@ -258,78 +261,39 @@ def lookup_twist(
 # ---------------------------------------------------------------------------
 
 
-def _velocity_parts(arr_blocks, frame, to_frame, extra):
-    """Represent the input in ``to_frame`` and match it with looked-up terms.
-
-    ``extra`` is a list of (array of shape (3,) or (n, 3), Track or None).
-    Returns the matched (n, k, 3) input, the matched extras as (n|1, 1, 3)
-    arrays, and the target.
-    """
-    steps = _chain.chain(frame, to_frame)
-    target = _chain.match([f for f, _ in steps], [arr_blocks.track])
-    data = _chain.resample_array(arr_blocks.data, arr_blocks.track, target, False)
-    rotated = _chain.apply("vectors", steps, target, data)
-    ext_blocks = [kernel_array(np.reshape(e, (-1, 1, 3))) for e, _ in extra]
-    ext_tracks = [track for _, track in extra]
-    final = _chain.match([], [target.track] + ext_tracks)
-    rotated = _chain.resample_array(rotated, target.track, final, False)
-    ext = [
-        _chain.resample_array(b, track, final, False)
-        for b, track in zip(ext_blocks, ext_tracks, strict=True)
-    ]
-    return rotated, ext, final
-
-
-def transform_angular_velocity(
+def velocity_terms(
+    linear: bool,
     frame,
-    arr,
     to_frame,
-    what="reference_frame",
-    axis=-1,
-    time_axis=0,
-    timestamps=None,
-    cutoff=None,
-):
-    """Change the ``what`` frame of angular velocities from ``frame`` to ``to_frame``."""
-    check_what(what)
-    if what == "representation_frame":
-        return transform(frame, "vectors", arr, to_frame, axis, time_axis, timestamps)
-    if what == "reference_frame":
-        # w_M/R' = w_M/R + w_R/R'
-        angular, ang_ts = lookup_angular_velocity(
-            frame, to_frame, to_frame, None, cutoff, "quaternion", True, as_track=True
-        )
-    else:
-        # w_M'/R = w_M/R + w_M'/M
-        angular, ang_ts = lookup_angular_velocity(
-            to_frame, frame, to_frame, None, cutoff, "quaternion", True, as_track=True
-        )
-    blocks = Blocks(arr, 3, axis, time_axis, timestamps, "vectors")
-    rotated, (w,), final = _velocity_parts(blocks, frame, to_frame, [(angular, ang_ts)])
-    return blocks.restore(rotated + w, final), final.timestamps
-
-
-def transform_linear_velocity(
-    frame,
-    arr,
-    to_frame,
-    what="reference_frame",
+    what: str,
     moving_frame=None,
     reference_frame=None,
-    axis=-1,
-    time_axis=0,
-    timestamps=None,
     outlier_thresh=None,
     cutoff=None,
 ):
-    """Change the ``what`` frame of linear velocities from ``frame`` to ``to_frame``.
+    """The looked-up terms of a change of the reference or moving frame of velocities.
 
-    ``moving_frame`` (for ``what="reference_frame"``) and ``reference_frame``
-    (for ``what="moving_frame"``) are resolved frames or None.
+    Estimated once for a whole call (the eager transform, and the lazy one
+    before its graph is cut into chunks). ``what`` is "reference_frame" or
+    "moving_frame"; ``moving_frame`` (linear, reference frame changed) and
+    ``reference_frame`` (linear, moving frame changed) are resolved frames
+    or None.
+
+    Returns
+    -------
+    extras : list of (ndarray (n|1, 3), Track or None)
+        One term for angular velocities (added), three for linear ones
+        (``rotated + ext[0] + ext[1] x ext[2]``, see :func:`combine`).
     """
-    check_what(what)
-    if what == "representation_frame":
-        return transform(frame, "vectors", arr, to_frame, axis, time_axis, timestamps)
+    if not linear:
+        # w_M/R' = w_M/R + w_R/R'  or  w_M'/R = w_M/R + w_M'/M
+        moving, reference = (
+            (frame, to_frame) if what == "reference_frame" else (to_frame, frame)
+        )
+        angular, ang_ts = lookup_angular_velocity(
+            moving, reference, to_frame, None, cutoff, "quaternion", True, as_track=True
+        )
+        return [(angular, ang_ts)]
     if what == "reference_frame":
         # v_M/R' = v_M/R + v_R/R' + w_R/R' x t_M/R
         if moving_frame is None:
@@ -337,16 +301,10 @@ def transform_linear_velocity(
                 "moving_frame must be given to transform the reference frame of a "
                 "linear velocity (its position enters the three-term formula)"
             )
-        linear, angular, twist_ts = lookup_twist(
-            frame,
-            to_frame,
-            to_frame,
-            outlier_thresh,
-            cutoff,
-            "quaternion",
-            True,
+        linear_v, angular, twist_ts = lookup_twist(
+            frame, to_frame, to_frame, outlier_thresh, cutoff, "quaternion", True,
             as_track=True,
-        )
+        )  # fmt: skip
         lin_ts = ang_ts = twist_ts
         translation, _, trans_target = _chain.lookup(moving_frame, frame)
     else:
@@ -356,31 +314,107 @@ def transform_linear_velocity(
                 "reference_frame must be given to transform the moving frame of a "
                 "linear velocity (its angular velocity enters the three-term formula)"
             )
-        linear, lin_ts = lookup_linear_velocity(
+        linear_v, lin_ts = lookup_linear_velocity(
             to_frame, frame, to_frame, outlier_thresh, cutoff, True, as_track=True
         )
         angular, ang_ts = lookup_angular_velocity(
-            frame,
-            reference_frame,
-            to_frame,
-            None,
-            cutoff,
-            "quaternion",
-            True,
+            frame, reference_frame, to_frame, None, cutoff, "quaternion", True,
             as_track=True,
-        )
+        )  # fmt: skip
         translation, _, trans_target = _chain.lookup(to_frame, frame)
     # the lever arm, represented in to_frame like everything else
-    trans, trans_ts = transform(
-        frame, "vectors", translation, to_frame, -1, 0, trans_target.track
+    lever, lever_ts = transform(
+        frame, "vectors", Blocks.of_rows(translation, trans_target.track), to_frame
     )
-    trans_track = None if trans_ts is None else track_of(trans_target.track, trans_ts)
-    blocks = Blocks(arr, 3, axis, time_axis, timestamps, "vectors")
-    rotated, (v, w, lever), final = _velocity_parts(
-        blocks,
-        frame,
-        to_frame,
-        [(linear, lin_ts), (angular, ang_ts), (trans, trans_track)],
-    )
-    out = rotated + v + np.cross(w, lever)
-    return blocks.restore(out, final), final.timestamps
+    lever_track = None if lever_ts is None else track_of(trans_target.track, lever_ts)
+    return [(linear_v, lin_ts), (angular, ang_ts), (lever, lever_track)]
+
+
+def combine(rotated, matched):
+    """The transformed velocities from the rotated input and the matched terms."""
+    if len(matched) == 1:
+        return rotated + matched[0]
+    return rotated + matched[0] + np.cross(matched[1], matched[2])
+
+
+def interpolated_terms(frame, to_frame, track, extras) -> list[bool]:
+    """Which terms a transform of arrays at ``track`` interpolates.
+
+    :func:`velocity_parts` takes a term's own values where the array's
+    times are a run of the term's times, and interpolates it otherwise. A
+    chunk of dask-backed data may be such a run where the whole array is
+    not: it then follows the whole array's choice, found here.
+    """
+    target = _chain.match([f for f, _ in _chain.chain(frame, to_frame)], [track])
+    final = _chain.match([], [target.track] + [t for _, t in extras])
+    return [
+        t is not None and _chain._same_times(t, final.track) is None for _, t in extras
+    ]
+
+
+def velocity_parts(blocks, frame, to_frame, extras, interpolated=None):
+    """Represent the input in ``to_frame`` and match it with looked-up terms.
+
+    ``extras`` is a list of (array of shape (3,) or (n, 3), Track or None);
+    ``interpolated`` (one flag per term, :func:`interpolated_terms`) forces
+    the interpolation of a term where the whole array's call interpolates
+    it. Returns the matched (n, k, 3) input, the matched extras as
+    (n|1, 1, 3) arrays, and the target.
+    """
+    steps = _chain.chain(frame, to_frame)
+    target = _chain.match([f for f, _ in steps], [blocks.track])
+    data = _chain.resample_array(blocks.data, blocks.track, target, False)
+    rotated = _chain.apply("vectors", steps, target, data)
+    final = _chain.match([], [target.track] + [t for _, t in extras])
+    rotated = _chain.resample_array(rotated, target.track, final, False)
+    if interpolated is None:
+        interpolated = [False] * len(extras)
+    matched = []
+    for (values, track), interpolate in zip(extras, interpolated, strict=True):
+        block = kernel_array(np.reshape(values, (-1, 1, 3)))
+        if interpolate:
+            t_out = final.track.base_in(track.origin)
+            block = kr.interp_linear(track.base, kernel_array(block[:, 0, :]), t_out)
+            matched.append(block[:, None, :])
+        else:
+            matched.append(_chain.resample_array(block, track, final, False))
+    return rotated, matched, final
+
+
+def transform_angular_velocity(frame, blocks, to_frame, what, cutoff=None):
+    """Change the ``what`` frame of angular velocities from ``frame`` to ``to_frame``.
+
+    ``blocks`` are the velocities as the door laid them out (vectors) and
+    ``what`` one of the door's checked modes.
+    """
+    if what == "representation_frame":
+        return transform(frame, "vectors", blocks, to_frame)
+    extras = velocity_terms(False, frame, to_frame, what, cutoff=cutoff)
+    rotated, matched, final = velocity_parts(blocks, frame, to_frame, extras)
+    return blocks.restore(combine(rotated, matched), final), final.timestamps
+
+
+def transform_linear_velocity(
+    frame,
+    blocks,
+    to_frame,
+    what,
+    moving_frame=None,
+    reference_frame=None,
+    outlier_thresh=None,
+    cutoff=None,
+):
+    """Change the ``what`` frame of linear velocities from ``frame`` to ``to_frame``.
+
+    ``blocks`` and ``what`` as for :func:`transform_angular_velocity`;
+    ``moving_frame`` (for ``what="reference_frame"``) and ``reference_frame``
+    (for ``what="moving_frame"``) are resolved frames or None.
+    """
+    if what == "representation_frame":
+        return transform(frame, "vectors", blocks, to_frame)
+    extras = velocity_terms(
+        True, frame, to_frame, what, moving_frame, reference_frame, outlier_thresh,
+        cutoff,
+    )  # fmt: skip
+    rotated, matched, final = velocity_parts(blocks, frame, to_frame, extras)
+    return blocks.restore(combine(rotated, matched), final), final.timestamps

@@ -36,6 +36,8 @@ __all__ = [
     "angular_series",
     "linear_velocity",
     "angular_velocity",
+    "lowpass",
+    "lowpass_reach",
 ]
 
 _MODES = ("quaternion", "rotation_vector")
@@ -137,7 +139,7 @@ def _reject_outliers(t, values, score, thresh) -> np.ndarray:
     return _dk.interpolate_rejected(t, kernel_array(values), keep)
 
 
-def _lowpass(values: np.ndarray, cutoff: float) -> np.ndarray:
+def lowpass(values: np.ndarray, cutoff: float) -> np.ndarray:
     """Zero-phase Butterworth low-pass along axis 0 of (n, ...).
 
     Stretches of NaN (from gaps in the data or from rejected samples at the
@@ -228,7 +230,7 @@ def linear_series(
         score = _dk.second_difference_score(kernel_array(x))
         v = _reject_outliers(t, v, score, outlier_thresh)
     if cutoff is not None:
-        v = _lowpass(v, cutoff)
+        v = lowpass(v, cutoff)
     return v
 
 
@@ -260,7 +262,7 @@ def angular_series(
         rates, bad = _vf.body_rates(kernel_array(q[:, 0, :]), t)
         if not bad:
             w = rates.reshape(n, 1, 3)
-            return w if cutoff is None else _lowpass(w, cutoff)
+            return w if cutoff is None else lowpass(w, cutoff)
     w = np.empty((n, nb, 3))
     # rotation vectors, needed by that mode and by the outlier score
     rv = np.empty((n, nb, 3) if need_rv else (0, nb, 3))
@@ -309,7 +311,7 @@ def angular_series(
         score = _dk.second_difference_score(rv)
         w = _reject_outliers(t, w, score, outlier_thresh)
     if cutoff is not None:
-        w = _lowpass(w, cutoff)
+        w = lowpass(w, cutoff)
     return w
 
 

@@ -259,9 +259,9 @@ def test_timestamped_arrays_match_like_the_engine():
     points = rng.normal(size=(len(ts), 3))
     a, b = c, _frames.resolve_frame("world")
     steps = _chain.chain(b, a)
-    from rbm_nb._engine.transform import Blocks
+    from rbm_nb._inputs import blocks as door_blocks
 
-    blocks = Blocks(points, 3, -1, 0, ts, "points")
+    blocks = door_blocks(points, 3, -1, 0, ts, "points")
     target = _chain.match([f for f, _ in steps], [blocks.track])
     data = _chain.resample_array(blocks.data, blocks.track, target, False)
     ref = _unfused_apply("points", steps, target, data)

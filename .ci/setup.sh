@@ -60,11 +60,12 @@ install() {  # install rbm_nb[$1] (editable) at the exact pins
 # signatures (about 5 min of one core; fused.lookup_chain alone ~45 s), so
 # the compile starts as soon as numba is installed -- a small first uv run --
 # and runs during the main install, one worker process per core, the
-# explorer's kernels first (rbm_nb/_warmup.py). The demo returns once the
-# explorer's kernels are ready and leaves the rest compiling in the
-# background at low priority; the tests wait for all of them (a test must
-# not wait for a compile). A process that needs a signature a worker is
-# compiling waits for it and loads it: nothing compiles twice.
+# explorer's kernels first (rbm_nb/_warmup.py). The demo returns when the
+# install is done and leaves the compile running in the background (at low
+# priority once the explorer's kernels are ready); the tests wait for all
+# of them (a test must not wait for a compile). A process that needs a
+# signature a worker is compiling waits for it and loads it: nothing
+# compiles twice.
 cache_dir=${NUMBA_CACHE_DIR:-rbm_nb/_kernels/__pycache__}
 warm_stamp=".venv/.rbm_nb-warm"
 # kept saying "N M": N of the M kernel signatures ready
@@ -110,12 +111,15 @@ start_warm_up() {  # start the workers unless the cache is warm or they run
     --pids "$warm_pids" --log "$warm_log"
   started=1
 }
-finish_warm_up() {  # wait for the explorer's kernels (demo) or all (test)
+finish_warm_up() {  # demo: say how far it is; test: wait for every kernel
   [ -n "$warm_sources" ] || return 0
-  local target=all
-  [ "$mode" = demo ] && target=explorer
-  say "waiting for the $target kernels to compile"
-  if ! PYTHONPATH=$PWD .venv/bin/python -P -m rbm_nb._warmup --wait "$target" \
+  local how=(--wait all)
+  if [ "$mode" = demo ]; then
+    how=(--report)
+  else
+    say "waiting for the kernels to compile (a test must not wait for one)"
+  fi
+  if ! PYTHONPATH=$PWD .venv/bin/python -P -m rbm_nb._warmup "${how[@]}" \
       --pids "$warm_pids" --status "$warm_status" |
       while IFS= read -r line; do say "$line"; done; then
     cat "$warm_log" >&2
@@ -156,7 +160,7 @@ if [ -n "$warm_sources" ]; then
   if [ "$n" = "$m" ]; then
     say "done: $n of $m kernel signatures ready"
   else
-    say "done: $n of $m kernel signatures ready (the explorer's all); the rest compile in the background ($warm_log; 'bash .ci/setup.sh test' waits for them)"
+    say "done: $n of $m kernel signatures ready, the rest compiling in the background ($warm_log)"
   fi
 else
   say "done"

@@ -40,6 +40,8 @@ Commands::
     python -m rbm_nb._warmup --wait explorer|all [--pids FILE] [--status FILE]
         waits until the explorer's (or every) signature is ready, printing
         "N of M" with an estimate of the time left every 15 s
+    python -m rbm_nb._warmup --report [--status FILE]
+        one line: N of M ready, and the time the rest should take
 
 Why the cache is found again: numba stores it next to the kernel sources
 (``rbm_nb/_kernels/__pycache__``, inside site-packages for a normal install,
@@ -104,25 +106,30 @@ EXPLORER: tuple[str, ...] = (
     "conversions.quaternion_from_matrix",
 )
 
-# Seconds one process took to compile the kernel from an empty cache on this
-# project's 2-core machine (kernels of 3 s and more; the others count 1.5 s).
-# Only the order and the time estimate use it: a stale figure costs time,
-# never a wrong result.
+# Seconds one process takes to compile the kernel from an empty cache on this
+# project's 2-core machine (kernels of 3 s and more; the others count 1.5 s):
+# a warm-up's account (``rbm_nb-compiles.log``) measured under a load of ~10,
+# scaled by 0.35 to the quiet machine's total (the 88 signatures: ~460 s of
+# one core). Only the order and the time estimate use it: a stale figure
+# costs time, never a wrong result.
 COST: dict[str, float] = {
-    "fused.lookup_chain": 45.0,
-    "rows.moving_samples": 7.0,
-    "quaternion.squad_evaluate": 7.0,
-    "conversions.quaternion_from_euler": 6.0,
-    "conversions.matrix_from_quaternion": 5.4,
-    "conversions.axis_angle_from_quaternion": 5.3,
-    "conversions.transform_from_homogeneous": 5.1,
-    "conversions.euler_from_quaternion": 4.7,
-    "rotations.rotate_vectors_into": 4.0,
-    "velocity_fused.body_rates": 4.0,
-    "quaternion.slerp": 3.6,
-    "evaluation.all_path_pairs": 3.5,
-    "quaternion.squad_coefficients": 3.0,
-    "quaternion.squad_segments": 3.0,
+    "squad_walk.squad_walk_parallel": 66.4,
+    "squad_walk.squad_walk_scalar": 65.0,
+    "squad_walk.squad_walk": 63.2,
+    "fused.lookup_chain": 38.5,
+    "fused.squad_table": 24.6,
+    "velocity_chain.chain_body_rates": 23.5,
+    "fused.prefill_chain": 21.4,
+    "velocity_chain.chain_body_rates_parallel": 20.2,
+    "fused.transform_chain_parallel": 16.9,
+    "fused.lookup_chain_parallel": 15.4,
+    "sdf.mesh_distances": 12.3,
+    "rotations.rotate_vectors_into_parallel": 9.3,
+    "rotations.qmul_into_parallel": 7.4,
+    "rows.moving_samples": 6.3,
+    "fused.transform_chain": 5.8,
+    "quaternion.squad_evaluate": 3.8,
+    "conversions.euler_from_quaternion": 3.0,
 }
 DEFAULT_COST = 1.5
 
@@ -411,6 +418,28 @@ def _compile_seconds(kernels: list[Declared]) -> dict[str, float]:
     return out
 
 
+def report(status: str | None, jobs: int) -> int:
+    """Say how many signatures are ready and how long the explorer's and the rest take."""
+    everything = plan()
+    explorer = explorer_kernels()
+    how = ready(everything)
+    _write_status(status, len(how), len(everything))
+    seconds = _compile_seconds(everything)
+    mine = sum(key(k) in how for k in explorer)
+    if mine == len(explorer):
+        return wait("explorer", [], status, jobs)
+    print(
+        f"rbm_nb warm-up: {len(how)} of {len(everything)} kernel signatures ready "
+        f"({mine} of the explorer's {len(explorer)}); compiling on in the "
+        f"background, the explorer's first (about "
+        f"{estimate(explorer, how, seconds, jobs):.0f} s), all in about "
+        f"{estimate(everything, how, seconds, jobs):.0f} s; a notebook that needs "
+        "one waits for it",
+        flush=True,
+    )
+    return 0
+
+
 def wait(target: str, pids: list[int], status: str | None, jobs: int) -> int:
     """Wait until the target's signatures are ready, printing "N of M" and the time left."""
     everything = plan()
@@ -512,6 +541,8 @@ def main(argv: list[str] | None = None) -> int:
     if "--start" in argv:
         start(jobs, pids_file, _option(argv, "--log"), "--background" in argv, verbose)
         return 0
+    if "--report" in argv:
+        return report(status, jobs)
     target = _option(argv, "--wait")
     if target is not None:
         if target not in ("explorer", "all"):

@@ -263,3 +263,24 @@ def test_a_process_waits_for_the_lock_holder_and_then_loads(tmp_path):
     assert caller.wait(timeout=120) == 0
     rows = _numba_cache.read_account(_numba_cache.Path(lock).parent)
     assert [r.outcome for r in rows] == ["compiled"]  # after the lock was free
+
+
+def test_the_report_says_n_of_m_and_the_time_left_without_waiting(
+    tmp_path, monkeypatch, capsys
+):
+    """What the demo's set-up ends with while the compile goes on."""
+    plan = _warmup.plan()
+    keys = [_warmup.key(k) for k in plan]
+    monkeypatch.setattr(
+        _numba_cache, "read_account", lambda folder: _account_rows(keys[1:3])
+    )
+    status = tmp_path / "status"
+    assert _warmup.report(str(status), jobs=2) == 0
+    (line,) = capsys.readouterr().out.strip().splitlines()
+    explorer = len(_warmup.EXPLORER)
+    assert line.startswith(f"rbm_nb warm-up: 2 of {len(keys)} kernel signatures ready")
+    assert f"(2 of the explorer's {explorer})" in line
+    assert status.read_text().split() == ["2", str(len(keys))]
+    # lookup_chain (first in the plan) still to come: at least its cost left
+    first = float(line.split("the explorer's first (about ")[1].split(" s)")[0])
+    assert first >= _warmup.COST["fused.lookup_chain"] * 0.5

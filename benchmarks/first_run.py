@@ -14,9 +14,11 @@ runs the README's sequence and times
    notebooks/06_head_eye_explorer.ipynb`` (a fresh kernel right after the
    URL appeared): its wall time and its first cell's time (from the cell
    timings nbclient records in the executed notebook);
-4. the background compile's end, and the per-signature account the
-   warm-up keeps (``rbm_nb-compiles.log`` in numba's cache folder): every
-   signature compiled once, by which process, before or after the URL.
+4. the per-signature account every process keeps (``rbm_nb-compiles.log``
+   in numba's cache folder): how many signatures were compiled before the
+   URL and after it, whether any was compiled twice or by the notebook's own
+   kernel. The last clone waits for the background compile's end; earlier
+   clones stop it, so that the next clone's timing has the cores.
 
 "first run" = (1) + (3): the issue's sequence, fresh clone -> explorer
 executed. The machine may be shared: each timing comes with the load
@@ -207,19 +209,32 @@ def execute_notebook(
     return wall, (at("shell.execute_reply") - at("iopub.execute_input")).total_seconds()
 
 
-def wait_background(clone: Path, timeout: float = 900) -> float | None:
-    """Seconds until the background compile's processes are gone (None: none ran)."""
-    pidfile = clone / ".venv" / ".rbm_nb-warm-pid"
-    start = time.perf_counter()
+def background_pids(clone: Path) -> list[int]:
     try:
-        pids = [int(p) for p in pidfile.read_text().split()]
+        text = (clone / ".venv" / ".rbm_nb-warm-pid").read_text()
+        return [int(p) for p in text.split()]
     except (OSError, ValueError):
+        return []
+
+
+def wait_background(clone: Path, timeout: float = 1800) -> float | None:
+    """Seconds until the background compile's workers are gone (None: none ran)."""
+    pids = background_pids(clone)
+    if not pids:
         return None
+    start = time.perf_counter()
     while any(_alive(p) for p in pids):
         if time.perf_counter() - start > timeout:
             return float("inf")
         time.sleep(0.5)
     return time.perf_counter() - start
+
+
+def stop_background(clone: Path) -> None:
+    """End the clone's background workers (before the next clone is timed)."""
+    for pid in background_pids(clone):
+        if _alive(pid):
+            os.kill(pid, signal.SIGTERM)
 
 
 def _alive(pid: int) -> bool:
@@ -237,24 +252,26 @@ def _alive(pid: int) -> bool:
 
 
 def account(clone: Path) -> dict[str, int]:
-    """Who compiled what, from rbm_nb-compiles.log; checks nothing was compiled twice."""
+    """Who compiled what, from rbm_nb-compiles.log: counts per signature."""
     path = clone / "rbm_nb" / "_kernels" / "__pycache__" / "rbm_nb-compiles.log"
     try:
         rows = [line.split() for line in path.read_text().splitlines() if line]
     except OSError:
         return {}
     compiled: dict[str, int] = {}
+    by_user = 0
     loaded = 0
     for row in rows:
         if row[1] == "compiled":
             compiled[row[0]] = compiled.get(row[0], 0) + 1
+            by_user += row[4] != "warm-up"
         else:
             loaded += 1
-    twice = sorted(k for k, n in compiled.items() if n > 1)
     return {
         "signatures compiled": len(compiled),
-        "compiled twice": len(twice),
-        "loads from the cache": loaded,
+        "compiled twice": sum(n > 1 for n in compiled.values()),
+        "compiled by the notebook itself": by_user,
+        "put off, then loaded by a worker": loaded,
     }
 
 
@@ -288,7 +305,20 @@ def main(argv: list[str] | None = None) -> int:
         at_url = compiled_so_far(clone)
         print(f"  nbconvert        ({uptime()})", flush=True)
         wall, first_cell = execute_notebook(clone, env, work)
-        background = wait_background(clone)
+        at_notebook_end = compiled_so_far(clone)
+        print(
+            f"  first run {setup + wall:.1f} s (setup {setup:.1f} + notebook "
+            f"{wall:.1f}); URL at {setup + printed:.1f} s, served at "
+            f"{setup + served:.1f} s; first cell {first_cell:.1f} s; compiled at the "
+            f"URL {at_url}, at the notebook's end {at_notebook_end}",
+            flush=True,
+        )
+        if n == args.clones:  # the last clone: how long the rest takes
+            print(f"  background       ({uptime()})", flush=True)
+            background = wait_background(clone)
+        else:  # the next clone's timing must not share the cores with it
+            background = None
+            stop_background(clone)
         sigs = account(clone)
         row = {
             "setup": setup,
@@ -299,6 +329,7 @@ def main(argv: list[str] | None = None) -> int:
             "first cell": first_cell,
             "background left": background,
             "compiled at url": at_url,
+            "compiled at notebook end": at_notebook_end,
             "account": sigs,
             "last line": last,
         }
@@ -313,11 +344,17 @@ def main(argv: list[str] | None = None) -> int:
         )
     for n, r in enumerate(rows, 1):
         done, total = r["compiled at url"] or (None, None)
+        end, _ = r["compiled at notebook end"] or (None, None)
+        background = (
+            f"the rest compiled {r['background left']:.0f} s after the notebook"
+            if r["background left"] is not None
+            else "the rest stopped for the next clone"
+        )
         print(
             f"  clone {n}: signatures compiled before the URL {done} of {total}, "
-            f"after it {None if done is None or not total else total - done}; "
-            f"background compile ended {r['background left']} s after the notebook; "
-            f"{r['account']}"
+            f"after it {None if done is None or not total else total - done} "
+            f"({None if end is None or done is None else end - done} of them by the "
+            f"notebook's end); {background}; {r['account']}"
         )
         print(f"           setup's last line: {r['last line']}")
     return 0

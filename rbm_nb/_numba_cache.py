@@ -156,13 +156,21 @@ def _turn_caching_off() -> None:
 
 
 def kernels_fingerprint() -> str:
-    """A hash of every kernel module's source.
+    """A hash of every kernel module's source and of numba's version.
 
     numba keys a cached kernel on its own file only, but kernels inline
     helpers from other modules (``scalar``, ``quaternion``): after an edit of
     one of those, the cache of an unchanged module would serve stale code.
     """
     digest = hashlib.sha256()
+    # numba ignores entries another numba version wrote; the account of
+    # compiles (ACCOUNT) must then start again too
+    try:
+        from importlib.metadata import version
+
+        digest.update(f"numba {version('numba')}".encode())
+    except Exception:  # noqa: BLE001 - no metadata: the sources still count
+        pass
     for path in sorted(KERNELS.glob("*.py")):
         digest.update(path.name.encode())
         digest.update(path.read_bytes())

@@ -234,11 +234,24 @@ def kernel_stats() -> KernelStats:
     return KernelStats(len(kernels), compiled, loaded, dirs)
 
 
-def account_stats() -> KernelStats:
-    """Of every declared signature in the cache: compiled, or loaded (the account)."""
+def account_stats(since: float = 0.0) -> KernelStats:
+    """Of every declared signature in the cache: compiled, or already there (the account).
+
+    ``since`` (seconds since the epoch): a signature counts as compiled only
+    if it was compiled after that moment (a warm-up's own work), else as
+    loaded from the cache.
+    """
     kernels = declared_kernels()
     how = ready(kernels)
-    compiled = sum(v == "compiled" for v in how.values())
+    compiled = 0
+    for folder in _folders(kernels):
+        compiled += len(
+            {
+                row.key
+                for row in _numba_cache.read_account(folder)
+                if row.key in how and row.outcome == "compiled" and row.time >= since
+            }
+        )
     dirs = tuple(sorted(str(f) for f in _folders(kernels)))
     return KernelStats(len(kernels), compiled, len(how) - compiled, dirs)
 
@@ -314,6 +327,7 @@ def warm_up(
         If a worker process fails (its output is in the message).
     """
     os.environ.setdefault(_numba_cache.ROLE_VARIABLE, ROLE)
+    began = time.time()
     kernels = plan()
     _write_status(status, len(ready(kernels)), len(kernels))
     workers = [_spawn(verbose, background=False, log=None) for _ in range(jobs - 1)]
@@ -333,7 +347,7 @@ def warm_up(
             )
         if verbose and output.strip():
             print(output.rstrip("\n"), flush=True)
-    stats = account_stats()
+    stats = account_stats(since=began)
     _write_status(status, stats.compiled + stats.loaded, stats.kernels)
     return stats
 

@@ -94,7 +94,8 @@ _WORKLOAD = textwrap.dedent(
     for name in explorer.EYES:
         t, r = rbm.lookup_transform(outof=f"pupil/{name}", into="world")
         digest.update(t.tobytes() + r.tobytes())
-        sight = rbm.rotate_vectors(r, np.array([0.0, 0.0, 1.0]))
+        r = r[np.isfinite(r).all(axis=1)]  # the eye's missing rows: no rotation
+        sight = rbm.rotate_vectors(r, np.tile([0.0, 0.0, 1.0], (len(r), 1)))
         digest.update(np.ascontiguousarray(sight).tobytes())
     stats = kernel_stats()
     print("RESULT" + json.dumps({"sha256": digest.hexdigest(),

@@ -292,7 +292,8 @@ def compile_all(
         if verbose:
             print(f"  {k.name}: {time.perf_counter() - start:.1f} s", flush=True)
     for k in put_off:
-        _compile(k, wait=True)
+        if key(k) not in ready([k]):  # still compiling elsewhere: wait, load
+            _compile(k, wait=True)
 
 
 def _lower_priority() -> None:

@@ -52,6 +52,13 @@ def test_a_busy_signature_is_put_off_then_waited_for(monkeypatch):
     _warmup.compile_all(kernels)
     names = [k.name for k in kernels]
     assert calls == [(n, False) for n in names] + [(names[1], True)]
+    # the other process finished it meanwhile: nothing to wait for or load
+    calls.clear()
+    done = {_warmup.key(kernels[1]): "compiled"}
+    looks = iter([{}] * len(kernels) + [done])
+    monkeypatch.setattr(_warmup, "ready", lambda ks=None: next(looks))
+    _warmup.compile_all(kernels)
+    assert calls == [(n, False) for n in names]
 
 
 def test_a_signature_the_account_lists_is_skipped(monkeypatch):

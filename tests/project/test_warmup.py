@@ -34,6 +34,7 @@ def test_the_plan_is_every_kernel_once_the_explorer_s_first():
     assert first[0] == "fused.lookup_chain"  # the longest: at once
     cheap = [_warmup.COST.get(n, _warmup.DEFAULT_COST) for n in first[1:]]
     assert cheap == sorted(cheap)  # the first cells' cheap kernels next
+    assert first[1].startswith("times.")  # the first cell's: at once
     rest = [_warmup.cost(k) for k in plan[len(_warmup.EXPLORER) :]]
     assert rest == sorted(rest, reverse=True)
 

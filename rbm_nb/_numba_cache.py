@@ -24,8 +24,12 @@ import hashlib
 import os
 import stat
 import tempfile
+import time
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
+from typing import Any, NamedTuple
 
 KERNELS = Path(__file__).resolve().parent / "_kernels"
 
@@ -152,13 +156,21 @@ def _turn_caching_off() -> None:
 
 
 def kernels_fingerprint() -> str:
-    """A hash of every kernel module's source.
+    """A hash of every kernel module's source and of numba's version.
 
     numba keys a cached kernel on its own file only, but kernels inline
     helpers from other modules (``scalar``, ``quaternion``): after an edit of
     one of those, the cache of an unchanged module would serve stale code.
     """
     digest = hashlib.sha256()
+    # numba ignores entries another numba version wrote; the account of
+    # compiles (ACCOUNT) must then start again too
+    try:
+        from importlib.metadata import version
+
+        digest.update(f"numba {version('numba')}".encode())
+    except Exception:  # noqa: BLE001 - no metadata: the sources still count
+        pass
     for path in sorted(KERNELS.glob("*.py")):
         digest.update(path.name.encode())
         digest.update(path.read_bytes())
@@ -180,7 +192,7 @@ def drop_stale_kernels(root: Path) -> int:
     except OSError:
         pass
     removed = 0
-    for path in root.rglob("*.nb[ic]"):
+    for path in [*root.rglob("*.nb[ic]"), *root.rglob(ACCOUNT)]:
         # under NUMBA_CACHE_DIR numba mirrors the sources' path: keep to ours
         parts = path.parent.parts
         if root == KERNELS / "__pycache__" or (
@@ -196,3 +208,163 @@ def drop_stale_kernels(root: Path) -> int:
     except OSError:
         pass
     return removed
+
+
+# -- one compile per signature, across processes ---------------------------
+#
+# numba alone lets every process that misses the cache compile: a set-up's
+# background compile, a notebook's kernel and a test process would each
+# compile a kernel none of them has found in the cache yet (a minute for the
+# largest). Every declared kernel therefore compiles through
+# :func:`compile_once`: an exclusive lock per signature, a file in numba's
+# cache folder for that kernel, held while the signature is compiled (or
+# loaded). A process that needs a signature another process is compiling
+# waits for the lock, then loads what the other one saved.
+
+#: one line per signature compiled (by any process) and per signature a
+#: warm-up process loaded: "KEY compiled|loaded SECONDS PID ROLE UNIXTIME"
+ACCOUNT = "rbm_nb-compiles.log"
+#: the role written in the account; the warm-up's processes set it
+ROLE_VARIABLE = "RBM_NB_COMPILE_ROLE"
+
+# keys whose lock this process holds (numba's compiler lock makes one
+# thread at a time compile, so a set is enough): a compile that re-enters
+# the same signature must not wait for itself
+_holding: set[str] = set()
+
+
+def cache_folder(dispatcher: Any) -> Path | None:
+    """The folder numba caches ``dispatcher`` in, or None when it does not cache."""
+    path = getattr(getattr(dispatcher, "_cache", None), "cache_path", None)
+    return Path(path) if path else None
+
+
+def signature_key(dispatcher: Any, args: tuple) -> str:
+    """``module.function(type,type,...)``: one signature, without spaces."""
+    func = dispatcher.py_func
+    types = ",".join(str(a).replace(" ", "") for a in args)
+    return f"{func.__module__}.{func.__qualname__}({types})"
+
+
+def _lock_path(folder: Path, key: str) -> Path:
+    name, _, _ = key.partition("(")
+    digest = hashlib.sha256(key.encode()).hexdigest()[:16]
+    return folder / f"{name}-{digest}.lock"
+
+
+def compile_once(dispatcher: Any, compile_: Any, sig: Any, wait: bool = True) -> Any:
+    """Run numba's ``compile_(sig)`` holding ``sig``'s lock; account for it.
+
+    Another process compiling the same signature holds the lock: this one
+    waits, and numba then loads the signature from the cache instead of
+    compiling it again; with ``wait=False`` it returns None at once instead.
+    """
+    from numba.core.compiler_lock import global_compiler_lock
+    from numba.core.sigutils import normalize_signature
+
+    args, _ = normalize_signature(sig)
+    folder = cache_folder(dispatcher)
+    if folder is None or dispatcher.overloads.get(tuple(args)) is not None:
+        return compile_(sig)
+    key = signature_key(dispatcher, tuple(args))
+    # numba's own lock first: a thread of this process that waited for our
+    # file lock while another thread of it held numba's lock and needed ours
+    # would never wake up
+    with global_compiler_lock:
+        if key in _holding:
+            return compile_(sig)
+        _holding.add(key)
+        try:
+            with _file_lock(_lock_path(folder, key), wait) as locked:
+                if not locked:
+                    return None
+                misses = sum(dispatcher.stats.cache_misses.values())
+                start = time.perf_counter()
+                entry = compile_(sig)
+                compiled = sum(dispatcher.stats.cache_misses.values()) > misses
+                _account(folder, key, compiled, time.perf_counter() - start)
+        finally:
+            _holding.discard(key)
+    return entry
+
+
+@contextmanager
+def _file_lock(path: Path, wait: bool = True) -> Iterator[bool]:
+    """Hold an exclusive lock on ``path``; yields False if busy and not ``wait``."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: each process compiles what it misses
+        yield True
+        return
+    try:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o600)
+    except OSError:  # the folder is not ours to lock in: numba will say more
+        yield True
+        return
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | (0 if wait else fcntl.LOCK_NB))
+        except BlockingIOError:
+            yield False
+            return
+        yield True
+    finally:
+        os.close(fd)  # releases the lock
+
+
+def _account(folder: Path, key: str, compiled: bool, seconds: float) -> None:
+    """Append the compile (always) or load (warm-up processes only) to the account."""
+    role = os.environ.get(ROLE_VARIABLE, "")
+    if not compiled and not role:
+        return  # an ordinary process loading from the cache: nothing to say
+    line = (
+        f"{key} {'compiled' if compiled else 'loaded'} {seconds:.2f} "
+        f"{os.getpid()} {role or 'user'} {time.time():.3f}\n"
+    )
+    try:
+        # one write of a short line in append mode: lines of processes that
+        # write at the same time do not mix
+        fd = os.open(folder / ACCOUNT, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o600)
+    except OSError:
+        return
+    try:
+        os.write(fd, line.encode())
+    finally:
+        os.close(fd)
+
+
+class AccountRow(NamedTuple):
+    key: str
+    outcome: str  # "compiled" or "loaded"
+    seconds: float
+    pid: int
+    role: str
+    time: float  # when it was written (seconds since the epoch)
+
+
+def read_account(folder: Path) -> list[AccountRow]:
+    """The account's lines (see :data:`ACCOUNT`)."""
+    rows: list[AccountRow] = []
+    try:
+        text = (folder / ACCOUNT).read_text()
+    except OSError:
+        return rows
+    for line in text.splitlines():
+        parts = line.split(" ")
+        if len(parts) == 6:
+            rows.append(
+                AccountRow(
+                    parts[0],
+                    parts[1],
+                    float(parts[2]),
+                    int(parts[3]),
+                    parts[4],
+                    float(parts[5]),
+                )
+            )
+    return rows
+
+
+def sources_mtime() -> float:
+    """The latest modification time of a kernel source (numba's cache key)."""
+    return max(path.stat().st_mtime for path in KERNELS.glob("*.py"))

@@ -17,6 +17,10 @@ decorators:
 Nothing is compiled at decoration time (numba compiles on first call, or the
 warm-up compiles the declared signature, both from the on-disk cache when it
 is there).
+
+A kernel's signature compiles at most once over all processes sharing a
+cache folder (the set-up's background compile, notebook kernels, test
+processes): see :func:`rbm_nb._numba_cache.compile_once`.
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ from typing import Any, TypeVar
 
 from numba import njit
 
+from .. import _numba_cache
 from .._config import KERNEL, JitOptions
 
 __all__ = [
@@ -105,10 +110,23 @@ def kernel(*argtypes: str, options: JitOptions = KERNEL) -> Callable[[_Func], _F
 
     def decorate(func: _Func) -> _Func:
         dispatcher = njit(**options.as_kwargs())(func)
+        _compile_once(dispatcher)
         DECLARED.setdefault(func.__module__, []).append(Declared(dispatcher, argtypes))
         return dispatcher
 
     return decorate
+
+
+def _compile_once(dispatcher: Any) -> None:
+    # numba's dispatcher calls self.compile(...) for a call it has no
+    # overload for (and the warm-up calls it directly): an attribute of the
+    # instance comes first, so every compile of the kernel takes the lock
+    original = dispatcher.compile
+
+    def compile(sig: Any, wait: bool = True) -> Any:
+        return _numba_cache.compile_once(dispatcher, original, sig, wait=wait)
+
+    dispatcher.compile = compile
 
 
 def helper(

@@ -34,7 +34,7 @@ from ..widgets._time import (
     seconds_to_datetime64,
     time_as_seconds,
 )
-from . import commands
+from . import commands, stream
 from .commands import Message, color_int
 from .export import write_html
 from .handles import (
@@ -183,6 +183,9 @@ class Scene:
         self._camera_is_auto = True
         self._time: float | None = None
         self._highlight: tuple | None = None
+        # the chunking last sent to a live view (None: poses went whole)
+        self._stream: dict | None = None
+        self._stream_generation = 0
         # meshcat's own grid and axes are 1 m wide at the origin: ours fits the data
         self.state.set_property("/Grid", "visible", False)
         self.state.set_property("/Axes", "visible", False)
@@ -596,11 +599,12 @@ class Scene:
                     self._camera = self._fitted_camera()
                     self._camera_is_auto = True
                 widget = SceneWidget(
-                    lambda cap=None: self._snapshot_message(
-                        self.max_samples
+                    lambda cap=None: (
+                        self._live_snapshot_message()
                         if cap is None
-                        else min(cap, self.max_samples or cap)
+                        else self._snapshot_message(min(cap, self.max_samples or cap))
                     ),
+                    chunk=self._chunk_message,
                     check_frame=self._checked_frame_name,
                 )
                 self._widget = widget
@@ -1109,9 +1113,13 @@ class Scene:
         if self._widget is None or not self._widget.ready:
             return
         origin = self.state.origin
-        if self._widget._origin != origin:  # the time base moved: resend everything
+        if (
+            self._widget._origin != origin  # the time base moved
+            or self._stream is not None  # chunks of the old content are stale
+            or stream.streams(self.state, self.max_samples)
+        ):
             self._widget._origin = origin
-            self._widget.push(*self._snapshot_message(self.max_samples))
+            self._widget.send_content()
             return
         sub = SceneState()
         sub.tracks = {p: self.state.tracks[p] for p in paths}
@@ -1132,6 +1140,43 @@ class Scene:
                         entry[key] += offset
             content = {"type": "snapshot", "commands": offset, "tracks": meta}
             return content, commands_ + buffers
+
+    def _live_snapshot_message(self) -> tuple[dict, list]:
+        """The content message for a live view: poses whole, or a coarse copy
+        and the chunking when they are long (see :mod:`rbm_nb.scene.stream`)."""
+        with self._lock:
+            if not stream.streams(self.state, self.max_samples):
+                self._stream = None
+                return self._snapshot_message(self.max_samples)
+            content, buffers = self._snapshot_message(stream.COARSE_SAMPLES)
+            seconds = self.time
+            at = None if seconds is None else seconds - self.state.origin
+            self._stream_generation += 1
+            self._stream = stream.plan(self.state, at, self._stream_generation)
+            content["stream"] = self._stream
+            return content, buffers
+
+    def _chunk_message(self, content: dict) -> list[tuple[dict, list]]:
+        """Answers to a browser's request for chunks (one message per chunk).
+
+        A request for content that changed since (an older generation) gets
+        the chunks of the current content, which the page then keeps.
+        """
+        with self._lock:
+            plan = self._stream
+            if plan is None:
+                return []
+            answers = []
+            for index in stream.requested_chunks(content, plan["count"]):
+                meta, buffers = self.state.track_chunk(index, plan["chunk"])
+                head = {
+                    "type": "chunk",
+                    "index": index,
+                    "generation": plan["generation"],
+                    "tracks": meta,
+                }
+                answers.append((head, buffers))
+            return answers
 
     def _extent_points(self) -> np.ndarray:
         """Points (scene base coordinates, roughly) that the camera should see."""

@@ -226,9 +226,16 @@ class Scene:
         base=None,
         color="#ffffff",
         max_points: int = 1000,
+        tolerance: float | None = None,
         label: str | None = None,
     ) -> PathHandle:
         """Draw the trajectory of a moving frame in ``base`` as a line.
+
+        The line is simplified to what shows on screen: points are kept,
+        worst first, while a sample lies farther than ``tolerance`` from the
+        line, up to ``max_points``; it is broken where samples are missing
+        (see :mod:`rbm_nb.scene.decimate`). A path of hours sends as much as
+        one of minutes.
 
         Parameters
         ----------
@@ -238,7 +245,11 @@ class Scene:
             The frame the path is expressed in; the scene's base by default.
         color : str or int, default "#ffffff"
         max_points : int, default 1000
-            The path is subsampled to at most this many points.
+            At most this many points are drawn.
+        tolerance : float, optional
+            Metres a sample may lie from the line drawn; by default 1/2000 of
+            the path's bounding-box diagonal (half a pixel when the whole path
+            fills a view 1000 pixels wide).
         """
         frame = _resolve(frame, "add_path: frame")
         base = self._resolve_base(base, "add_path")
@@ -247,14 +258,14 @@ class Scene:
             raise ValueError(
                 f"add_path: frame {frame.name!r} does not move wrt {base.name!r}, it has no path"
             )
-        style = {"color": color, "max_points": max_points}
+        style = {"color": color, "max_points": max_points, "tolerance": tolerance}
         handle = PathHandle(
             self,
             self._new_name(label or f"path {frame.name}"),
             frame,
             base,
             style,
-            track.positions(),
+            track.translation,
         )
         handle._validate_style(handle._style)
         identity = Track(np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0]), name="path")
@@ -828,7 +839,10 @@ class Scene:
             The player to include (the scene's linked one, else a new one).
         max_frames : int or None, default 20000
             Keep at most this many samples per moving object (evenly spaced);
-            None keeps all.
+            None keeps all. The page says at which rate its poses are, and
+            how many points of each path it draws (paths are simplified as
+            in the notebook, see :meth:`add_path`): a page of hours stays
+            a few MB.
         title : str, optional
         autoplay : bool, default False
 

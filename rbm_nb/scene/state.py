@@ -228,7 +228,9 @@ class SceneState:
     def chunk_count(self, chunk_seconds: float, origin: float | None = None) -> int:
         """How many chunks of ``chunk_seconds`` cover the tracks from ``origin``."""
         origin = self.origin if origin is None else float(origin)
-        end = max((float(t.sample_times()[-1]) for t in self.tracks.values()), default=origin)
+        end = max(
+            (float(t.sample_times()[-1]) for t in self.tracks.values()), default=origin
+        )
         return int(math.floor(max(end - origin, 0.0) / chunk_seconds)) + 1
 
     def track_chunk(
@@ -283,7 +285,9 @@ def _pack(picks, origin: float) -> tuple[list[dict], list[bytes]]:
                 break
         if times is None:
             times = len(buffers)
-            buffers.append(np.ascontiguousarray(seconds - origin, dtype="<f8").tobytes())
+            buffers.append(
+                np.ascontiguousarray(seconds - origin, dtype="<f8").tobytes()
+            )
             shared.append((seconds, times))
 
         def pick(a, index=index):

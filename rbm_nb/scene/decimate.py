@@ -42,12 +42,15 @@ def _deviation(points: np.ndarray, a: int, b: int) -> tuple[float, int]:
     return float(np.sqrt(distance2[at])), a + 1 + at
 
 
-def _runs(points: np.ndarray, rows: np.ndarray, tolerance: float, max_points: int):
-    """(first, last) index pairs into ``points`` of the unbroken stretches."""
+def _runs(points: np.ndarray, gap_after: np.ndarray, tolerance: float, max_points: int):
+    """(first, last) index pairs into ``points`` of the unbroken stretches.
+
+    ``gap_after[j]``: samples are missing between ``points[j]`` and the next.
+    """
     n = len(points)
     if n == 0:
         return []
-    jumps = np.flatnonzero(np.diff(rows) > 1)  # a missing row between j and j + 1
+    jumps = np.flatnonzero(gap_after[:-1])
     if len(jumps):
         size = np.linalg.norm(points[jumps + 1] - points[jumps], axis=1)
         breaks = jumps[size > tolerance]
@@ -96,20 +99,25 @@ def simplify_path(
         diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
         tolerance = PATH_TOLERANCE * diagonal
     # first, samples in the grid cell of the one before them go: on a
-    # recording at 200 Hz most do, and each cell is a quarter of the
-    # tolerance wide, so a dropped sample is within CELL_SHARE * sqrt(3) *
-    # tolerance of a kept one (added to the error reported)
+    # recording at 200 Hz most do. A dropped sample is within the cell's
+    # diagonal (slack) of a kept one, so the line is then drawn within the
+    # tolerance less the slack of the samples kept
+    gap_after = np.zeros(len(points), dtype=bool)
+    gap_after[:-1] = np.diff(rows) > 1
     cell = CELL_SHARE * tolerance
     slack = 0.0
     if cell > 0 and len(points) > 2:
         cells = np.floor(points / cell)
         fresh = np.ones(len(points), dtype=bool)
-        fresh[1:] = (cells[1:] != cells[:-1]).any(axis=1) | (np.diff(rows) > 1)
+        # the samples on both sides of a gap stay
+        fresh[1:] = (cells[1:] != cells[:-1]).any(axis=1) | gap_after[:-1]
+        fresh |= gap_after
         fresh[-1] = True
         if not fresh.all():
-            points, rows = points[fresh], rows[fresh]
+            points, gap_after = points[fresh], gap_after[fresh]
             slack = float(np.sqrt(3.0) * cell)
-    runs = _runs(points, rows, tolerance, max_points)
+    runs = _runs(points, gap_after, tolerance, max_points)
+    tolerance -= slack
     keep = np.zeros(len(points), dtype=bool)
     heap: list[tuple[float, int, int, int]] = []
     for first, last in runs:

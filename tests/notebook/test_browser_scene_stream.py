@@ -121,8 +121,10 @@ def streamed(request, browser, tmp_path, monkeypatch):
         print(server.log_text())
         raise
     finally:
-        context.close()
-        server.stop()
+        try:
+            context.close()
+        finally:
+            server.stop()  # also when the browser is gone
 
 
 def view(page, expr: str):
@@ -178,16 +180,20 @@ def test_playing_across_a_chunk_boundary_shows_the_recording(streamed):
         timeout=30000,
     )
     page.wait_for_timeout(500)
+    paused_at = view(page, "v.currentTime()")
     received = view(page, "v.store.chunksReceived")
     view(page, "v.player.set('playing', true)")
-    run = page.evaluate(RECORD, [3.0, ANCHOR])
+    run = page.evaluate(RECORD, [4.0, ANCHOR])
     view(page, "v.player.set('playing', false)")
     rows = np.array(run["rows"])
     times = rows[:, 0]
     print(
         f"{page.app} 1x: {run['rendered'] / run['wall']:.1f} frames/s, "
-        f"clock {run['advanced'] / run['wall']:.2f}x, coarse frames {run['coarse']}"
+        f"clock {run['advanced'] / run['wall']:.2f}x, coarse frames {run['coarse']}, "
+        f"paused at {paused_at:.2f}, shown {times[0]:.2f}..{times[-1]:.2f} s, "
+        f"boundary {boundary:.2f} s"
     )
+    assert paused_at == pytest.approx(boundary - 1.5, abs=0.01)
     # the playhead crossed the boundary, frames on both sides
     assert (times < boundary).sum() >= 5 and (times > boundary).sum() >= 5
     assert view(page, "v.store.chunksReceived") > received  # chunks came ahead of play
@@ -214,6 +220,8 @@ def test_playing_across_a_chunk_boundary_shows_the_recording(streamed):
         f"clock {fast['advanced'] / fast['wall']:.2f}x, coarse frames {fast['coarse']} "
         f"of {len(fast['rows'])}, chunks held {held}, dropped {dropped}"
     )
+    heap = page.evaluate("performance.memory ? performance.memory.usedJSHeapSize : 0")
+    print(f"{page.app}: page JS heap {heap / 1e6:.0f} MB after playing")
     assert fast["advanced"] == pytest.approx(10 * fast["wall"], rel=0.25)
     assert dropped > 0 and held <= 1 + 1 + 12
     canvas = page.locator(".rbm-scene canvas")

@@ -150,8 +150,6 @@ def export_note(scene, max_frames: int | None) -> str:
     the recording has more; paths: the points drawn and the largest distance
     of a sample from the line (see :func:`~rbm_nb.scene.decimate.simplify_path`).
     """
-    from .handles import PathHandle
-
     parts = []
     tracks = list(scene.state.tracks.values())
     if tracks:
@@ -181,7 +179,7 @@ def export_note(scene, max_frames: int | None) -> str:
                     f"{_rate(max(recorded))}; at most {max_frames:,} per moving object)"
                 )
     for handle in scene.handles.values():
-        if isinstance(handle, PathHandle):
+        if handle.kind == "path":
             stretches, error = handle.stretches()
             points = sum(len(s) for s in stretches)
             parts.append(

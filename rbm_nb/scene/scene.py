@@ -253,7 +253,7 @@ class Scene:
         """
         frame = _resolve(frame, "add_path: frame")
         base = self._resolve_base(base, "add_path")
-        track = Track.lookup(frame, base)
+        track = self._looked_up(frame, base)
         if track.static:
             raise ValueError(
                 f"add_path: frame {frame.name!r} does not move wrt {base.name!r}, it has no path"
@@ -915,6 +915,16 @@ class Scene:
                     name = f"{name}_{i}"
                     break
         return name
+
+    def _looked_up(self, frame, base) -> Track:
+        """The pose of ``frame`` in ``base``: the one an anchor holds already
+        (objects drawn in ``frame``), else looked up. A second lookup of a
+        long recording would cost its time and a copy of its poses."""
+        if base is self.base:
+            anchor = self.state.tracks.get(self._anchor_path(frame))
+            if anchor is not None and frame is not self.base:
+                return anchor
+        return Track.lookup(frame, base)
 
     def _anchor_path(self, base) -> str:
         if base is self.base:

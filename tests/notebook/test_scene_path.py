@@ -138,3 +138,17 @@ def test_the_drawn_segments_stop_at_a_gap():
     assert not ((segments[:, 0, 0] < 5.0) & (segments[:, 1, 0] > 5.5)).any()
     assert len(segments) == 2  # a straight line on each side
     scene.close()
+
+
+def test_a_path_of_a_frame_with_objects_drawn_in_it_reuses_their_poses():
+    rbm.register_frame("world")
+    ts = np.arange(100) * 0.1
+    rbm.register_frame(
+        "body", parent="world", timestamps=ts, translation=np.c_[ts, ts, ts]
+    )
+    scene = Scene("world", grid=False)
+    scene.add_frame("body", base="body")  # an object that moves with the body
+    path = scene.add_path("body")
+    # no second lookup: the path's samples are the anchor's poses themselves
+    assert path.samples is scene.state.tracks["/rbm/anchor_body"].translation
+    scene.close()

@@ -1,7 +1,7 @@
 """The explorer's 3D view of a long recording streams its poses (JupyterLab and Notebook 7).
 
 The real head/eye recording (the synthetic one without ``RBM_NB_DATA_DIR``)
-is tiled in time to 40 min and shown by ``explorer_scene()`` with a Player,
+is tiled in time to 20 min and shown by ``explorer_scene()`` with a Player,
 in chromium with every port but Jupyter's blocked. Checked: the page got a
 coarse copy of the poses and the chunking, not the poses; playing at 4x across
 a chunk boundary, every frame shows the head's recorded pose at the time
@@ -21,7 +21,7 @@ import nbformat
 import numpy as np
 import pytest
 
-pytestmark = [pytest.mark.browser, pytest.mark.slow]
+pytestmark = [pytest.mark.browser, pytest.mark.slow, pytest.mark.timeout(600)]
 
 from browser_support import REPO, JupyterLab, block_other_ports, save  # noqa: E402
 
@@ -29,7 +29,7 @@ REAL_DATA = (
     Path(os.environ.get("RBM_NB_SHARED", REPO.parent / "shared")) / "data" / "rbm-data"
 )
 SHOTS = Path("/work/shots/issue-35s")
-MINUTES = 40
+MINUTES = 20
 ANCHOR = "/rbm/anchor_head"
 
 SETUP = f"""
@@ -82,8 +82,9 @@ def streamed(request, browser, tmp_path, monkeypatch):
     blocked = block_other_ports(context, server.port)
     page = context.new_page()
     page.errors = []
-    page.on("pageerror", lambda err: page.errors.append(str(err)))
+    page.on("pageerror", lambda err: page.errors.append((str(err), err.stack or "")))
     page.app, page.expected, page.blocked = app, expected, blocked
+    page.jupyter_static = f"{server.base}static/"
     try:
         page.goto(server.notebook_url("stream.ipynb"), timeout=120000)
         page.wait_for_selector(".jp-Notebook .jp-CodeCell", timeout=120000)
@@ -171,7 +172,7 @@ def test_playing_across_a_chunk_boundary_shows_the_recording(streamed):
     table = np.load(page.expected)
     plan = view(page, "v.store.stream")
     whole = view(page, f"v.store.tracks.get('{ANCHOR}').whole.times.length")
-    # the page got a coarse copy and the chunking, not the 40 min of poses
+    # the page got a coarse copy and the chunking, not the 20 min of poses
     assert plan["count"] >= 10 and whole == 2000 < len(table) / 100
     # play at 4x from the start: 5 s of wall time cross the first boundary
     received = view(page, "v.store.chunksReceived")
@@ -234,4 +235,15 @@ def test_playing_across_a_chunk_boundary_shows_the_recording(streamed):
         shutil.copy(shot, SHOTS / shot.name)
     assert canvas.count() == 1
     assert page.blocked == [], page.blocked
-    assert not page.errors, page.errors
+    # Notebook 7 itself throws on start-up here (a settings schema it lacks);
+    # errors whose every frame is in Jupyter's own bundles are not ours
+    ours = [
+        (message, stack)
+        for message, stack in page.errors
+        if not all(
+            page.jupyter_static in line
+            for line in stack.splitlines()[1:]
+            if "http" in line or "blob:" in line
+        )
+    ]
+    assert ours == [], ours

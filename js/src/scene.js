@@ -3,13 +3,21 @@
 // meshcat's viewer bundle (the meshcat Python package's
 // viewer/dist/main.min.js) is prepended to this module by the Python side and
 // defines globalThis.MeshCat. Scene content arrives over the widget comm:
-//   {type: "snapshot", commands: n, tracks: [...], pins: {...}}  after "ready"
+//   {type: "snapshot", commands: n, tracks: [...], pins: {...}, stream?}  after "ready"
 //   {type: "commands"}        meshcat msgpack commands, one per buffer
 //   {type: "tracks", tracks: [...], remove: [...]}
+//   {type: "chunk", index, generation, tracks: [...]}   a streamed scene's poses
 // A track is {path, n, times, translation, rotation, scale}: buffer indices of
 // float64 seconds from the scene's origin, float32 xyz, xyzw and scale.
 // Poses are applied here every animation frame from the linked Player's time
 // (timeline.js), so playback needs no kernel.
+//
+// A long recording streams (rbm_nb/scene/stream.py): the snapshot's tracks are
+// a coarse copy and `stream` = {chunk: seconds, count, generation, first}.
+// Chunk k holds every sample for the times [k, k + 1) * chunk. Each frame the
+// view asks the kernel for the chunks at and ahead of the playhead (farther
+// ahead the faster it plays) and drops those behind; where a chunk has not
+// arrived, the coarse copy is shown. The clock never waits for a chunk.
 import { followPlayer } from "./timeline.js";
 
 const STORES = new Map();
@@ -61,17 +69,34 @@ function typed(Kind, buffer) {
   return new Kind(bytes.slice().buffer);
 }
 
-function decodeTracks(meta, buffers) {
-  return meta.map((m) => ({
-    path: m.path,
-    parts: m.path.split("/").filter((p) => p.length > 0),
+/** Samples of one track: {times, translation, rotation, scale, hint}. */
+function decodeSamples(m, buffers) {
+  return {
     times: typed(Float64Array, buffers[m.times]),
     translation: typed(Float32Array, buffers[m.translation]),
     rotation: typed(Float32Array, buffers[m.rotation]),
     scale: m.scale === null || m.scale === undefined ? null : typed(Float32Array, buffers[m.scale]),
     hint: 0,
+  };
+}
+
+function decodeTracks(meta, buffers) {
+  return meta.map((m) => ({
+    path: m.path,
+    parts: m.path.split("/").filter((p) => p.length > 0),
+    whole: decodeSamples(m, buffers), // every sample, or a streamed scene's coarse copy
+    chunks: new Map(), // chunk index -> samples (streamed scenes)
   }));
 }
+
+// Prefetch: the chunks covering this many seconds of wall-clock play ahead
+// of the playhead are asked for (at least the next one), and chunks more than
+// KEEP_BEHIND behind it are dropped, so the page holds a bounded window.
+const PREFETCH_WALL_SECONDS = 4;
+const MAX_AHEAD = 12;
+const KEEP_BEHIND = 1;
+// a request unanswered this long (ms) is asked again
+const RETRY_MS = 5000;
 
 class Store {
   constructor() {
@@ -79,6 +104,64 @@ class Store {
     this.tracks = new Map();
     this.pins = {};
     this.views = new Set();
+    this.model = null;
+    this.stream = null; // {chunk, count, generation, first} of a streamed scene
+    this.asked = new Map(); // chunk index -> time asked (ms), until it arrives
+    this.loaded = new Set(); // chunk indices held
+    this.chunksReceived = 0;
+    this.chunksDropped = 0;
+  }
+
+  /** Chunk index of a time (seconds from the scene's origin). */
+  chunkOf(t) {
+    const k = Math.floor(t / this.stream.chunk);
+    return Math.min(Math.max(k, 0), this.stream.count - 1);
+  }
+
+  /** Ask for the chunks at and ahead of ``times``; drop the others. */
+  want(times, speed) {
+    if (!this.stream || !this.model) {
+      return;
+    }
+    const ahead = Math.min(
+      MAX_AHEAD,
+      1 + Math.ceil((Math.abs(speed) * PREFETCH_WALL_SECONDS) / this.stream.chunk),
+    );
+    const keep = new Set();
+    const missing = [];
+    const now = performance.now();
+    for (const t of times) {
+      const here = this.chunkOf(t);
+      for (let k = here - KEEP_BEHIND; k <= here + ahead; k++) {
+        if (k < 0 || k >= this.stream.count) continue;
+        keep.add(k);
+        if (k < here) continue; // behind: kept if held, never asked for
+        const asked = this.asked.get(k);
+        if (!this.loaded.has(k) && (asked === undefined || now - asked > RETRY_MS)) {
+          missing.push(k);
+        }
+      }
+    }
+    for (const k of [...this.loaded]) {
+      if (!keep.has(k)) {
+        this.loaded.delete(k);
+        this.chunksDropped += 1;
+        for (const track of this.tracks.values()) track.chunks.delete(k);
+      }
+    }
+    if (missing.length) {
+      missing.sort((a, b) => a - b);
+      for (const k of missing) this.asked.set(k, now);
+      this.model.send({ type: "chunks", indices: missing, generation: this.stream.generation });
+    }
+  }
+
+  /** The samples to show ``track`` from at time ``t``: its chunk, else the whole/coarse copy. */
+  samplesAt(track, t) {
+    if (!this.stream) {
+      return track.whole;
+    }
+    return track.chunks.get(this.chunkOf(t)) || null;
   }
 
   handle(msg, buffers) {
@@ -86,8 +169,27 @@ class Store {
       this.commands = buffers.slice(0, msg.commands).map((b) => bytesOf(b).slice());
       this.tracks = new Map(decodeTracks(msg.tracks, buffers).map((t) => [t.path, t]));
       this.pins = msg.pins || {};
+      this.stream = msg.stream || null;
+      this.asked.clear();
+      this.loaded.clear();
+      // the kernel sends the chunks at its playhead right after this message
+      for (const k of this.stream ? this.stream.first : []) this.asked.set(k, performance.now());
       for (const view of this.views) {
         view.rebuild();
+      }
+    } else if (msg.type === "chunk") {
+      if (!this.stream || msg.generation !== this.stream.generation) {
+        return; // an answer about content that has changed since
+      }
+      this.asked.delete(msg.index);
+      this.loaded.add(msg.index);
+      this.chunksReceived += 1;
+      for (const m of msg.tracks) {
+        const track = this.tracks.get(m.path);
+        if (track) track.chunks.set(msg.index, decodeSamples(m, buffers));
+      }
+      for (const view of this.views) {
+        view.posesDirty = true;
       }
     } else if (msg.type === "commands") {
       const fresh = buffers.map((b) => bytesOf(b).slice());
@@ -249,6 +351,8 @@ class View {
     this.posesDirty = true;
     this.labels = new Map();
     this.frames = 0;
+    this.coarseFrames = 0; // frames that showed a coarse pose (a chunk was late)
+    this.shown = null;
     this.nodes = new Map();
     this.glyphs = null; // [{object, size}] of the anchors, found after each change
     this.rebuild();
@@ -432,19 +536,34 @@ class View {
     return object;
   }
 
+  /** Times (seconds from the scene's origin) whose poses are shown: the playhead and pins. */
+  shownTimes(t) {
+    const pins = this.model.get("_pins") || {};
+    return [t, ...Object.values(pins).map(Number)];
+  }
+
   applyPoses(t) {
     const pins = this.model.get("_pins") || {};
+    let coarse = 0;
     for (const track of this.store.tracks.values()) {
       const object = this.node(track.path);
       const at = Object.prototype.hasOwnProperty.call(pins, track.path) ? pins[track.path] : t;
-      const i = searchTime(track.times, at + 1e-6, track.hint);
+      let samples = this.store.samplesAt(track, at);
+      if (samples === null) {
+        // its chunk has not arrived (a jump, a busy kernel): the coarse copy
+        // until it does; the clock goes on
+        samples = track.whole;
+        coarse += 1;
+        this.posesDirty = true;
+      }
+      const i = searchTime(samples.times, at + 1e-6, samples.hint);
       if (i < 0) {
         object.visible = false;
         continue;
       }
-      track.hint = i;
-      const p = track.translation;
-      const q = track.rotation;
+      samples.hint = i;
+      const p = samples.translation;
+      const q = samples.rotation;
       if (Number.isNaN(p[3 * i]) || Number.isNaN(q[4 * i])) {
         object.visible = false; // a missing sample: nothing to show there
         continue;
@@ -452,10 +571,13 @@ class View {
       object.visible = true;
       object.position.set(p[3 * i], p[3 * i + 1], p[3 * i + 2]);
       object.quaternion.set(q[4 * i], q[4 * i + 1], q[4 * i + 2], q[4 * i + 3]);
-      if (track.scale) {
-        object.scale.setScalar(track.scale[i]);
+      if (samples.scale) {
+        object.scale.setScalar(samples.scale[i]);
       }
     }
+    // what the last frame showed, for tests and benchmarks
+    this.shown = { time: t, coarse };
+    if (coarse) this.coarseFrames += 1;
     this.viewer.set_dirty();
   }
 
@@ -666,6 +788,10 @@ class View {
 
   tick() {
     const t = this.currentTime();
+    if (this.store.stream) {
+      const speed = this.player && this.player.get("playing") ? Number(this.player.get("speed")) || 1 : 0;
+      this.store.want(this.shownTimes(t), speed);
+    }
     if (t !== this.lastTime || this.posesDirty) {
       this.lastTime = t;
       this.posesDirty = false;
@@ -712,6 +838,7 @@ function savedSnapshot(value) {
 
 function initialize({ model }) {
   const store = storeFor(model);
+  store.model = model;
   const onMessage = (msg, buffers) => store.handle(msg, buffers || []);
   model.on("msg:custom", onMessage);
   // a page without a kernel (saved notebook, nbconvert HTML, docs) draws the

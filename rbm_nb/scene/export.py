@@ -29,11 +29,13 @@ _TEMPLATE = """<!DOCTYPE html>
 <style>
   body {{ margin: 0; font: 13px sans-serif; background: #fafafa; }}
   h1 {{ font-size: 15px; font-weight: normal; margin: 8px 10px 0; color: #333; }}
+  .rbm-export-note {{ margin: 2px 10px 0; color: #666; font-size: 12px; }}
   #rbm-dashboard {{ display: flex; flex-direction: column; gap: 6px; padding: 6px 10px; }}
 </style>
 </head>
 <body>
 <h1>{title}</h1>
+<p class="rbm-export-note">{note}</p>
 <div id="rbm-dashboard"></div>
 <script id="rbm-export-data" type="application/json">{data}</script>
 <script type="module">
@@ -124,7 +126,75 @@ def build_document(
         "layout": layout,
         "autoplay": bool(autoplay),
         "runtime": bundle("export"),
+        "note": export_note(scene, max_frames),
     }
+
+
+def _rate(hertz: float) -> str:
+    return f"{hertz:.3g} Hz" if hertz < 100 else f"{hertz:.0f} Hz"
+
+
+def _duration(seconds: float) -> str:
+    if seconds >= 3600:
+        return f"{seconds / 3600:.3g} h"
+    if seconds >= 60:
+        return f"{seconds / 60:.3g} min"
+    return f"{seconds:.3g} s"
+
+
+def export_note(scene, max_frames: int | None) -> str:
+    """What the page shows of the recording, in words (it is written on the page).
+
+    Poses: at most ``max_frames`` samples per moving object, evenly spaced,
+    so a pose every ``duration / max_frames`` seconds (the export rate) where
+    the recording has more; paths: the points drawn and the largest distance
+    of a sample from the line (see :func:`~rbm_nb.scene.decimate.simplify_path`).
+    """
+    parts = []
+    tracks = list(scene.state.tracks.values())
+    if tracks:
+        recorded = []
+        shown = []
+        span = 0.0
+        for track in tracks:
+            seconds = track.sample_times()
+            duration = float(seconds[-1] - seconds[0])
+            span = max(span, duration)
+            if duration <= 0:
+                continue
+            n = len(seconds)
+            kept = n if max_frames is None else min(n, max_frames)
+            recorded.append((n - 1) / duration)
+            shown.append((kept - 1) / duration)
+        if recorded:
+            low, high = min(shown), max(shown)
+            rate = (
+                _rate(high) if high / low < 1.05 else f"{_rate(low)} to {_rate(high)}"
+            )
+            if max(r / s for r, s in zip(recorded, shown, strict=True)) <= 1.0001:
+                parts.append(f"poses: every sample over {_duration(span)}")
+            else:
+                parts.append(
+                    f"poses at {rate} over {_duration(span)} (recorded at up to "
+                    f"{_rate(max(recorded))}; at most {max_frames:,} per moving object)"
+                )
+    for handle in scene.handles.values():
+        if handle.kind == "path":
+            stretches, error = handle.stretches()
+            points = sum(len(s) for s in stretches)
+            parts.append(
+                f"{handle.name.replace('_', ' ')}: {points:,} of "
+                f"{len(handle.samples):,} samples drawn, within {_length(error)}"
+            )
+    return "; ".join(parts)
+
+
+def _length(metres: float) -> str:
+    if metres >= 1:
+        return f"{metres:.3g} m"
+    if metres >= 0.01:
+        return f"{metres * 100:.3g} cm"
+    return f"{metres * 1000:.3g} mm"
 
 
 # inside a <script> element, "</script", "<!--" and "<script" change how the
@@ -146,8 +216,11 @@ def embeddable_json(value) -> str:
 
 def render_html(document: dict, title: str) -> str:
     runtime = document.pop("runtime")
+    note = document.pop("note", "")
     data = embeddable_json(document)
-    return _TEMPLATE.format(title=html.escape(title), data=data, runtime=runtime)
+    return _TEMPLATE.format(
+        title=html.escape(title), note=html.escape(note), data=data, runtime=runtime
+    )
 
 
 def write_atomic(path: Path, text: str, what: str = "to_html") -> None:

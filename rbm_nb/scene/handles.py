@@ -22,6 +22,7 @@ import numpy as np
 
 from .commands import color_int
 from .commands import meshcat_geometry as _geometry
+from .decimate import simplify_path
 
 
 class SceneHandle:
@@ -148,13 +149,26 @@ class FrameHandle(SceneHandle):
 
 
 class PathHandle(SceneHandle):
-    """The trajectory of a frame in its base, as a line."""
+    """The trajectory of a frame in its base, as a line.
+
+    The line is simplified to what shows on screen (see
+    :func:`~rbm_nb.scene.decimate.simplify_path`): at most ``max_points``
+    points, none farther than the tolerance from the recording (by default
+    1/2000 of the path's extent), broken where samples are missing.
+    """
 
     kind = "path"
 
-    def __init__(self, scene, name, frame, base, style, positions: np.ndarray):
+    def __init__(self, scene, name, frame, base, style, samples: np.ndarray):
         super().__init__(scene, name, frame, base, style)
-        self.positions = positions
+        # the track's own positions, NaN rows where samples are missing (not a copy)
+        self.samples = samples
+        self._shown: tuple[tuple, list[np.ndarray], float] | None = None
+
+    @property
+    def positions(self) -> np.ndarray:
+        """The recorded positions that are not missing, shape (n, 3)."""
+        return self.samples[~np.isnan(self.samples).any(axis=1)]
 
     def _validate_style(self, style):
         color_int(style["color"], "add_path: color")
@@ -170,29 +184,45 @@ class PathHandle(SceneHandle):
                 f"add_path: max_points must be a whole number, at least 2, got {value!r}"
             )
         style["max_points"] = int(value)
+        tolerance = style.get("tolerance")
+        if tolerance is not None:
+            style["tolerance"] = _positive(tolerance, "tolerance", "add_path")
+
+    def stretches(self) -> tuple[list[np.ndarray], float]:
+        """The unbroken pieces of the line drawn, and the largest error (m) left."""
+        key = (self._style["max_points"], self._style.get("tolerance"))
+        if self._shown is None or self._shown[0] != key:
+            stretches, error = simplify_path(
+                self.samples, self._style.get("tolerance"), self._style["max_points"]
+            )
+            self._shown = (key, stretches, error)
+        return self._shown[1], self._shown[2]
 
     def shown_positions(self) -> np.ndarray:
-        """The positions drawn: subsampled to at most ``max_points``."""
-        n = len(self.positions)
-        stride = max(int(np.ceil(n / self._style["max_points"])), 1)
-        shown = self.positions[::stride]
-        if n > 1 and (n - 1) % stride:
-            shown = np.vstack([shown, self.positions[-1:]])
-        return shown
+        """The points drawn (every stretch, in order), shape (m, 3)."""
+        stretches, _ = self.stretches()
+        return np.vstack(stretches) if stretches else np.zeros((0, 3))
 
     def _objects(self):
         g = _geometry()
-        pts = self.shown_positions().astype(np.float32)
-        if len(pts) == 1:
-            pts = np.vstack([pts, pts])
-        line = g.Line(
+        stretches, _ = self.stretches()
+        # segments, not one polyline: a stretch ends where samples are missing
+        ends = []
+        for piece in stretches:
+            if len(piece) == 1:
+                piece = np.vstack([piece, piece])
+            ends.append(np.repeat(piece, 2, axis=0)[1:-1])
+        pts = (
+            np.vstack(ends).astype(np.float32) if ends else np.zeros((2, 3), np.float32)
+        )
+        line = g.LineSegments(
             g.PointsGeometry(np.ascontiguousarray(pts.T)),
             g.LineBasicMaterial(color=color_int(self._style["color"])),
         )
         return [("", line)]
 
     def _extent(self):
-        return self.positions
+        return self.shown_positions()
 
 
 class PointsHandle(SceneHandle):

@@ -34,7 +34,7 @@ from ..widgets._time import (
     seconds_to_datetime64,
     time_as_seconds,
 )
-from . import commands
+from . import commands, stream
 from .commands import Message, color_int
 from .export import write_html
 from .handles import (
@@ -183,6 +183,9 @@ class Scene:
         self._camera_is_auto = True
         self._time: float | None = None
         self._highlight: tuple | None = None
+        # the chunking last sent to a live view (None: poses went whole)
+        self._stream: dict | None = None
+        self._stream_generation = 0
         # meshcat's own grid and axes are 1 m wide at the origin: ours fits the data
         self.state.set_property("/Grid", "visible", False)
         self.state.set_property("/Axes", "visible", False)
@@ -223,9 +226,16 @@ class Scene:
         base=None,
         color="#ffffff",
         max_points: int = 1000,
+        tolerance: float | None = None,
         label: str | None = None,
     ) -> PathHandle:
         """Draw the trajectory of a moving frame in ``base`` as a line.
+
+        The line is simplified to what shows on screen: points are kept,
+        worst first, while a sample lies farther than ``tolerance`` from the
+        line, up to ``max_points``; it is broken where samples are missing
+        (see :mod:`rbm_nb.scene.decimate`). A path of hours sends as much as
+        one of minutes.
 
         Parameters
         ----------
@@ -235,23 +245,27 @@ class Scene:
             The frame the path is expressed in; the scene's base by default.
         color : str or int, default "#ffffff"
         max_points : int, default 1000
-            The path is subsampled to at most this many points.
+            At most this many points are drawn.
+        tolerance : float, optional
+            Metres a sample may lie from the line drawn; by default 1/2000 of
+            the path's bounding-box diagonal (half a pixel when the whole path
+            fills a view 1000 pixels wide).
         """
         frame = _resolve(frame, "add_path: frame")
         base = self._resolve_base(base, "add_path")
-        track = Track.lookup(frame, base)
+        track = self._looked_up(frame, base)
         if track.static:
             raise ValueError(
                 f"add_path: frame {frame.name!r} does not move wrt {base.name!r}, it has no path"
             )
-        style = {"color": color, "max_points": max_points}
+        style = {"color": color, "max_points": max_points, "tolerance": tolerance}
         handle = PathHandle(
             self,
             self._new_name(label or f"path {frame.name}"),
             frame,
             base,
             style,
-            track.positions(),
+            track.translation,
         )
         handle._validate_style(handle._style)
         identity = Track(np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0]), name="path")
@@ -596,11 +610,12 @@ class Scene:
                     self._camera = self._fitted_camera()
                     self._camera_is_auto = True
                 widget = SceneWidget(
-                    lambda cap=None: self._snapshot_message(
-                        self.max_samples
+                    lambda cap=None: (
+                        self._live_snapshot_message()
                         if cap is None
-                        else min(cap, self.max_samples or cap)
+                        else self._snapshot_message(min(cap, self.max_samples or cap))
                     ),
+                    chunk=self._chunk_message,
                     check_frame=self._checked_frame_name,
                 )
                 self._widget = widget
@@ -824,7 +839,10 @@ class Scene:
             The player to include (the scene's linked one, else a new one).
         max_frames : int or None, default 20000
             Keep at most this many samples per moving object (evenly spaced);
-            None keeps all.
+            None keeps all. The page says at which rate its poses are, and
+            how many points of each path it draws (paths are simplified as
+            in the notebook, see :meth:`add_path`): a page of hours stays
+            a few MB.
         title : str, optional
         autoplay : bool, default False
 
@@ -897,6 +915,16 @@ class Scene:
                     name = f"{name}_{i}"
                     break
         return name
+
+    def _looked_up(self, frame, base) -> Track:
+        """The pose of ``frame`` in ``base``: the one an anchor holds already
+        (objects drawn in ``frame``), else looked up. A second lookup of a
+        long recording would cost its time and a copy of its poses."""
+        if base is self.base:
+            anchor = self.state.tracks.get(self._anchor_path(frame))
+            if anchor is not None and frame is not self.base:
+                return anchor
+        return Track.lookup(frame, base)
 
     def _anchor_path(self, base) -> str:
         if base is self.base:
@@ -1109,9 +1137,13 @@ class Scene:
         if self._widget is None or not self._widget.ready:
             return
         origin = self.state.origin
-        if self._widget._origin != origin:  # the time base moved: resend everything
+        if (
+            self._widget._origin != origin  # the time base moved
+            or self._stream is not None  # chunks of the old content are stale
+            or stream.streams(self.state, self.max_samples)
+        ):
             self._widget._origin = origin
-            self._widget.push(*self._snapshot_message(self.max_samples))
+            self._widget.send_content()
             return
         sub = SceneState()
         sub.tracks = {p: self.state.tracks[p] for p in paths}
@@ -1132,6 +1164,43 @@ class Scene:
                         entry[key] += offset
             content = {"type": "snapshot", "commands": offset, "tracks": meta}
             return content, commands_ + buffers
+
+    def _live_snapshot_message(self) -> tuple[dict, list]:
+        """The content message for a live view: poses whole, or a coarse copy
+        and the chunking when they are long (see :mod:`rbm_nb.scene.stream`)."""
+        with self._lock:
+            if not stream.streams(self.state, self.max_samples):
+                self._stream = None
+                return self._snapshot_message(self.max_samples)
+            content, buffers = self._snapshot_message(stream.COARSE_SAMPLES)
+            seconds = self.time
+            at = None if seconds is None else seconds - self.state.origin
+            self._stream_generation += 1
+            self._stream = stream.plan(self.state, at, self._stream_generation)
+            content["stream"] = self._stream
+            return content, buffers
+
+    def _chunk_message(self, content: dict) -> list[tuple[dict, list]]:
+        """Answers to a browser's request for chunks (one message per chunk).
+
+        A request for content that changed since (an older generation) gets
+        the chunks of the current content, which the page then keeps.
+        """
+        with self._lock:
+            plan = self._stream
+            if plan is None:
+                return []
+            answers = []
+            for index in stream.requested_chunks(content, plan["count"]):
+                meta, buffers = self.state.track_chunk(index, plan["chunk"])
+                head = {
+                    "type": "chunk",
+                    "index": index,
+                    "generation": plan["generation"],
+                    "tracks": meta,
+                }
+                answers.append((head, buffers))
+            return answers
 
     def _extent_points(self) -> np.ndarray:
         """Points (scene base coordinates, roughly) that the camera should see."""

@@ -12,6 +12,8 @@ is the transform of its node relative to its parent node.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import umsgpack
 
@@ -185,7 +187,9 @@ class SceneState:
 
         Times are float64 seconds from ``origin`` (the scene's by default);
         translations, rotations ``(x, y, z, w)`` (three.js order) and scales
-        are float32. Tracks with equal timestamps share one time buffer.
+        are float32 (a float32 coordinate 1 km from the origin is within
+        0.06 mm: invisible on screen). Tracks with equal timestamps share one
+        time buffer.
 
         Parameters
         ----------
@@ -201,42 +205,106 @@ class SceneState:
         buffers : list of bytes
         """
         origin = self.origin if origin is None else float(origin)
-        meta: list[dict] = []
-        buffers: list[bytes] = []
-        shared: list[tuple[np.ndarray, int]] = []
+        picks = [
+            (path, track, _decimate(len(track), max_samples))
+            for path, track in self.tracks.items()
+        ]
+        return _pack(picks, origin)
+
+    def bytes_per_second(self) -> float:
+        """Bytes of the packed tracks per second of recording (all tracks)."""
+        total = 0.0
+        for track in self.tracks.values():
+            seconds = track.sample_times()
+            span = float(seconds[-1] - seconds[0])
+            if span > 0:
+                total += _sample_bytes(track) * (len(seconds) - 1) / span
+        return total
+
+    def payload_bytes(self) -> int:
+        """Bytes of every sample of every track, as :meth:`track_payload` packs them."""
+        return sum(_sample_bytes(t) * len(t) for t in self.tracks.values())
+
+    def chunk_count(self, chunk_seconds: float, origin: float | None = None) -> int:
+        """How many chunks of ``chunk_seconds`` cover the tracks from ``origin``."""
+        origin = self.origin if origin is None else float(origin)
+        end = max(
+            (float(t.sample_times()[-1]) for t in self.tracks.values()), default=origin
+        )
+        return int(math.floor(max(end - origin, 0.0) / chunk_seconds)) + 1
+
+    def track_chunk(
+        self, index: int, chunk_seconds: float, origin: float | None = None
+    ) -> tuple[list[dict], list[bytes]]:
+        """Every sample of every track for browser times in one chunk.
+
+        Chunk ``index`` serves the times ``[index, index + 1) * chunk_seconds``
+        (seconds from ``origin``): it holds the samples inside that span and
+        the last one at or before its start, so the latest sample at or
+        before any time in the span is in the chunk, and the pose shown at a
+        chunk's boundary is the recording's own. Slices of the tracks (views)
+        are converted as :meth:`track_payload` does.
+        """
+        origin = self.origin if origin is None else float(origin)
+        start = origin + index * chunk_seconds
+        end = origin + (index + 1) * chunk_seconds
+        picks = []
         for path, track in self.tracks.items():
-            index = _decimate(len(track), max_samples)
-            all_seconds = track.sample_times()
-            seconds = all_seconds if index is None else all_seconds[index]
-            times = None
-            for known, at in shared:
-                if known is seconds or (
-                    known.shape == seconds.shape and np.array_equal(known, seconds)
-                ):
-                    times = at
-                    break
-            if times is None:
-                times = len(buffers)
-                buffers.append(
-                    np.ascontiguousarray(seconds - origin, dtype="<f8").tobytes()
-                )
-                shared.append((seconds, times))
+            seconds = track.sample_times()
+            lo = max(int(np.searchsorted(seconds, start, side="right")) - 1, 0)
+            # the browser looks up t + 1e-6 (scene.js): a sample that close
+            # after the span's end is shown inside it
+            hi = int(np.searchsorted(seconds, end + CHUNK_SLACK, side="right"))
+            picks.append((path, track, slice(lo, max(hi, lo))))
+        return _pack(picks, origin)
 
-            def pick(a, index=index):
-                return a if index is None else a[index]
 
-            entry = {"path": path, "times": times, "n": int(len(seconds))}
-            entry["translation"] = len(buffers)
-            buffers.append(pick(track.translation).astype("<f4").tobytes())
-            xyzw = pick(track.rotation)[:, [1, 2, 3, 0]]
-            entry["rotation"] = len(buffers)
-            buffers.append(np.ascontiguousarray(xyzw, dtype="<f4").tobytes())
-            entry["scale"] = None
-            if track.scale is not None:
-                entry["scale"] = len(buffers)
-                buffers.append(pick(track.scale).astype("<f4").tobytes())
-            meta.append(entry)
-        return meta, buffers
+#: seconds past a chunk's end still served with it (scene.js looks up t + 1e-6)
+CHUNK_SLACK = 1e-5
+
+
+def _sample_bytes(track: Track) -> int:
+    """Bytes per packed sample: time, xyz and xyzw (and scale)."""
+    return 8 + 12 + 16 + (4 if track.scale is not None else 0)
+
+
+def _pack(picks, origin: float) -> tuple[list[dict], list[bytes]]:
+    """Pack ``(path, track, index or slice or None)`` as buffers (see ``track_payload``)."""
+    meta: list[dict] = []
+    buffers: list[bytes] = []
+    shared: list[tuple[np.ndarray, int]] = []
+    for path, track, index in picks:
+        all_seconds = track.sample_times()
+        seconds = all_seconds if index is None else all_seconds[index]
+        times = None
+        for known, at in shared:
+            if known is seconds or (
+                known.shape == seconds.shape and np.array_equal(known, seconds)
+            ):
+                times = at
+                break
+        if times is None:
+            times = len(buffers)
+            buffers.append(
+                np.ascontiguousarray(seconds - origin, dtype="<f8").tobytes()
+            )
+            shared.append((seconds, times))
+
+        def pick(a, index=index):
+            return a if index is None else a[index]
+
+        entry = {"path": path, "times": times, "n": int(len(seconds))}
+        entry["translation"] = len(buffers)
+        buffers.append(pick(track.translation).astype("<f4").tobytes())
+        xyzw = pick(track.rotation)[:, [1, 2, 3, 0]]
+        entry["rotation"] = len(buffers)
+        buffers.append(np.ascontiguousarray(xyzw, dtype="<f4").tobytes())
+        entry["scale"] = None
+        if track.scale is not None:
+            entry["scale"] = len(buffers)
+            buffers.append(pick(track.scale).astype("<f4").tobytes())
+        meta.append(entry)
+    return meta, buffers
 
 
 def _decimate(n: int, max_samples: int | None) -> np.ndarray | None:

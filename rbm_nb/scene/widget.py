@@ -105,6 +105,7 @@ class SceneWidget(FrontendGuard, anywidget.AnyWidget):
         self,
         snapshot: Callable[..., tuple[dict, list]],
         *,
+        chunk: Callable[[dict], list[tuple[dict, list]]] | None = None,
         check_frame: Callable[[str, str], str] | None = None,
         **kwargs,
     ):
@@ -113,6 +114,10 @@ class SceneWidget(FrontendGuard, anywidget.AnyWidget):
         self._check_frame = check_frame
         super().__init__(_esm=scene_esm(), _uid=uuid.uuid4().hex, **kwargs)
         self._snapshot = snapshot
+        # chunk(request) -> answers: the poses of a long recording, asked for
+        # by the page around its playhead (see rbm_nb.scene.stream)
+        self._chunk = chunk
+        self.chunks_sent = 0
         self.ready = False
         self._ready_lock = threading.Lock()
         self._ready_timer: threading.Timer | None = None
@@ -151,8 +156,13 @@ class SceneWidget(FrontendGuard, anywidget.AnyWidget):
             raise traitlets.TraitError(str(err)) from None
 
     def _on_message(self, _widget, content, _buffers) -> None:
-        if isinstance(content, dict) and content.get("type") == "ready":
+        if not isinstance(content, dict):
+            return
+        if content.get("type") == "ready":
             self._on_ready()
+        elif content.get("type") == "chunks" and self._chunk is not None:
+            for head, buffers in self._chunk(content):
+                self._send_chunk(head, buffers)
 
     def _on_ready(self) -> None:
         """Answer a page's ``ready`` with the whole scene, at most once per interval.
@@ -178,7 +188,26 @@ class SceneWidget(FrontendGuard, anywidget.AnyWidget):
         with self._ready_lock:
             self._ready_timer = None
             self._last_snapshot = time.monotonic()
-        self.push(*self._snapshot())
+        self.send_content()
+
+    def send_content(self) -> None:
+        """Send the whole content; for a streamed scene, the chunks at the
+        playhead right after it (no round trip before the first frame)."""
+        content, buffers = self._snapshot()
+        self.push(content, buffers)
+        plan = content.get("stream")
+        if plan and self._chunk is not None:
+            request = {"type": "chunks", "indices": plan["first"]}
+            for head, chunk_buffers in self._chunk(request):
+                self._send_chunk(head, chunk_buffers)
+
+    def _send_chunk(self, content: dict, buffers: list) -> None:
+        """Send one chunk of poses: not content, so the saved state stays as it is."""
+        if not self.ready or self.comm is None:
+            return
+        self.bytes_sent += sum(len(b) for b in buffers)
+        self.chunks_sent += 1
+        self.send(content, buffers=buffers)
 
     def push(self, content: dict, buffers: list) -> None:
         """Send one content message (only once a browser asked for the scene)."""

@@ -185,7 +185,8 @@ def test_objects_are_laid_out_under_rbm(moving):
     grid = objects.pop("/rbm/grid")  # sized to the content, see test_grid_legend_labels
     assert grid["object"]["object"]["type"] == "LineSegments"
     assert set(objects) == {frame.geom_path, path.geom_path, vectors.geom_path}
-    assert objects[path.geom_path]["object"]["object"]["type"] == "Line"
+    # segments: a path is broken where samples are missing (test_scene_path.py)
+    assert objects[path.geom_path]["object"]["object"]["type"] == "LineSegments"
     assert objects[path.geom_path]["object"]["materials"][0]["color"] == 0xFF00FF
     assert objects[frame.geom_path]["object"]["object"]["type"] == "LineSegments"
     again = moving.add_frame("body")
@@ -463,7 +464,8 @@ def test_publisher_spin_and_stop(moving):
     path.spin()
     path.stop()
     assert path.handle.visible
-    assert path.points.shape == (11, 3)
+    # the body moves along a straight line: its two ends draw it exactly
+    np.testing.assert_array_equal(path.points, path.translation[[0, -1]])
 
 
 def test_ros_names_and_play_publisher(moving):

@@ -1,0 +1,142 @@
+"""A long 3D path reduced to the points that show on screen, gaps kept.
+
+The path is simplified top-down (Ramer-Douglas-Peucker, the worst segment
+first): a point is kept while some sample lies farther than ``tolerance``
+from the line drawn, up to ``max_points`` points in all. Runs of missing
+samples (NaN rows, and the rows a frame's ``max_gap`` inserts) break the
+line, except where the jump across them is within ``tolerance`` (it could
+not be seen) or where more runs than ``max_points`` allows would need their
+own ends (the shortest jumps are joined first).
+
+:data:`PATH_TOLERANCE` is the default tolerance as a fraction of the path's
+bounding-box diagonal: 1/2000, half a pixel when the whole path spans a view
+1000 pixels wide.
+"""
+
+from __future__ import annotations
+
+import heapq
+
+import numpy as np
+
+#: default tolerance, as a fraction of the path's bounding-box diagonal
+PATH_TOLERANCE = 1 / 2000
+#: width of the grid cells of the first pass, as a share of the tolerance
+CELL_SHARE = 0.25
+
+
+def _deviation(points: np.ndarray, a: int, b: int) -> tuple[float, int]:
+    """Largest distance of ``points[a+1:b]`` from the segment a-b, and where."""
+    if b - a < 2:
+        return 0.0, -1
+    start, end = points[a], points[b]
+    inner = points[a + 1 : b]
+    direction = end - start
+    length2 = float(direction @ direction)
+    offset = inner - start
+    if length2 > 0:
+        along = np.clip(offset @ direction / length2, 0.0, 1.0)
+        offset = offset - along[:, None] * direction
+    distance2 = np.einsum("ij,ij->i", offset, offset)
+    at = int(np.argmax(distance2))
+    return float(np.sqrt(distance2[at])), a + 1 + at
+
+
+def _runs(points: np.ndarray, gap_after: np.ndarray, tolerance: float, max_points: int):
+    """(first, last) index pairs into ``points`` of the unbroken stretches.
+
+    ``gap_after[j]``: samples are missing between ``points[j]`` and the next.
+    """
+    n = len(points)
+    if n == 0:
+        return []
+    jumps = np.flatnonzero(gap_after[:-1])
+    if len(jumps):
+        size = np.linalg.norm(points[jumps + 1] - points[jumps], axis=1)
+        breaks = jumps[size > tolerance]
+        # every stretch needs its two ends: join the shortest jumps past the budget
+        allowed = max(max_points // 2 - 1, 0)
+        if len(breaks) > allowed:
+            order = np.argsort(size[size > tolerance])[::-1][:allowed]
+            breaks = np.sort(breaks[order])
+    else:
+        breaks = jumps
+    firsts = np.r_[0, breaks + 1]
+    lasts = np.r_[breaks, n - 1]
+    return list(zip(firsts.tolist(), lasts.tolist(), strict=True))
+
+
+def simplify_path(
+    samples, tolerance: float | None = None, max_points: int = 1000
+) -> tuple[list[np.ndarray], float]:
+    """The stretches of the line to draw, and the largest error left.
+
+    Parameters
+    ----------
+    samples : array_like, shape (n, 3)
+        Positions in time order; NaN rows are missing samples.
+    tolerance : float, optional
+        Metres a sample may lie from the line drawn; by default
+        :data:`PATH_TOLERANCE` of the bounding-box diagonal.
+    max_points : int, default 1000
+        Points kept in all (at least 2).
+
+    Returns
+    -------
+    stretches : list of ndarray, shape (k, 3)
+        Unbroken pieces of the line (k >= 1; a lone sample is one point).
+    error : float
+        Largest distance (m) of a sample from its own segment of the line
+        drawn, a bound on its distance from the line (0 if every sample is
+        kept).
+    """
+    samples = np.asarray(samples, dtype=np.float64).reshape(-1, 3)
+    rows = np.flatnonzero(~np.isnan(samples).any(axis=1))
+    points = samples[rows]
+    if len(points) == 0:
+        return [], 0.0
+    if tolerance is None:
+        diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+        tolerance = PATH_TOLERANCE * diagonal
+    # first, samples in the grid cell of the one before them go: on a
+    # recording at 200 Hz most do. A dropped sample is within the cell's
+    # diagonal (slack) of a kept one, so the line is then drawn within the
+    # tolerance less the slack of the samples kept
+    gap_after = np.zeros(len(points), dtype=bool)
+    gap_after[:-1] = np.diff(rows) > 1
+    cell = CELL_SHARE * tolerance
+    slack = 0.0
+    if cell > 0 and len(points) > 2:
+        cells = np.floor(points / cell)
+        fresh = np.ones(len(points), dtype=bool)
+        # the samples on both sides of a gap stay
+        fresh[1:] = (cells[1:] != cells[:-1]).any(axis=1) | gap_after[:-1]
+        fresh |= gap_after
+        fresh[-1] = True
+        if not fresh.all():
+            points, gap_after = points[fresh], gap_after[fresh]
+            slack = float(np.sqrt(3.0) * cell)
+    runs = _runs(points, gap_after, tolerance, max_points)
+    tolerance -= slack
+    keep = np.zeros(len(points), dtype=bool)
+    heap: list[tuple[float, int, int, int]] = []
+    for first, last in runs:
+        keep[first] = keep[last] = True
+        error, at = _deviation(points, first, last)
+        if at >= 0:
+            heap.append((-error, at, first, last))
+    heapq.heapify(heap)
+    count = int(keep.sum())
+    while heap and count < max_points and -heap[0][0] > tolerance:
+        _, at, first, last = heapq.heappop(heap)
+        keep[at] = True
+        count += 1
+        for a, b in ((first, at), (at, last)):
+            error, where = _deviation(points, a, b)
+            if where >= 0:
+                heapq.heappush(heap, (-error, where, a, b))
+    error = -heap[0][0] if heap else 0.0
+    stretches = [
+        points[first : last + 1][keep[first : last + 1]] for first, last in runs
+    ]
+    return stretches, max(error, 0.0) + slack

@@ -119,9 +119,9 @@ COST: dict[str, float] = {
     "squad_walk.squad_walk_scalar": 65.0,
     "squad_walk.squad_walk": 63.2,
     "fused.lookup_chain": 38.5,
-    "fused.squad_table": 24.6,
+    "squad_table.squad_table": 24.6,
     "velocity_chain.chain_body_rates": 23.5,
-    "fused.prefill_chain": 21.4,
+    "chain_prefill.prefill_chain": 21.4,
     "velocity_chain.chain_body_rates_parallel": 20.2,
     "fused.transform_chain_parallel": 16.9,
     "fused.lookup_chain_parallel": 15.4,
@@ -131,7 +131,7 @@ COST: dict[str, float] = {
     "rows.moving_samples": 6.3,
     "fused.transform_chain": 5.8,
     "quaternion.squad_evaluate": 3.8,
-    "conversions.euler_from_quaternion": 3.0,
+    "euler.euler_from_quaternion": 3.0,
 }
 DEFAULT_COST = 1.5
 

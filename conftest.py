@@ -16,10 +16,10 @@ import pytest
 @pytest.fixture(autouse=True)
 def _empty_registry():
     """Clear the frame registry around each test and doctest (if frames are loaded)."""
-    frames = sys.modules.get("rbm_nb.frames")
+    frames = sys.modules.get("rbm_nb.core.frames")
     if frames is not None:
         frames.clear_registry()
     yield
-    frames = sys.modules.get("rbm_nb.frames")
+    frames = sys.modules.get("rbm_nb.core.frames")
     if frames is not None:
         frames.clear_registry()

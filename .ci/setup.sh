@@ -114,7 +114,7 @@ start_warm_up() {  # start the workers unless the cache is warm or they run
   say "compiling the numba kernels into their cache, the explorer's first, one process per core"
   # the source tree itself: rbm_nb is not installed yet (the editable install
   # points at the same files, so the cache serves it)
-  PYTHONPATH=$PWD .venv/bin/python -P -m rbm_nb._warmup --start $background \
+  PYTHONPATH=$PWD .venv/bin/python -P -m rbm_nb._kernels._warmup --start $background \
     --pids "$warm_pids" --log "$warm_log"
   started=1
 }
@@ -126,7 +126,7 @@ finish_warm_up() {  # demo: say how far it is; test: wait for every kernel
   else
     say "waiting for the kernels to compile (a test must not wait for one)"
   fi
-  if ! PYTHONPATH=$PWD .venv/bin/python -P -m rbm_nb._warmup "${how[@]}" \
+  if ! PYTHONPATH=$PWD .venv/bin/python -P -m rbm_nb._kernels._warmup "${how[@]}" \
       --pids "$warm_pids" --status "$warm_status" |
       while IFS= read -r line; do say "$line"; done; then
     cat "$warm_log" >&2

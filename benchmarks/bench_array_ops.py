@@ -8,7 +8,7 @@ points at it, else the synthetic one of ``bench_core.py``):
    orientations at the eye's timestamps), ``rotate_vectors``, ``qmul`` and
    ``qinv`` on 1M rows, and the velocity lookups (with the plain
    ``lookup_transform`` they are computed from, for the floor). Operations
-   with a parallel twin (``rbm_nb._parallel``) are timed with 1 and with 2
+   with a parallel twin (``rbm_nb._infra.parallel``) are timed with 1 and with 2
    threads (``RBM_NB_NUM_THREADS``);
 2. that table in three malloc regimes, each in its own process:
    ``MALLOC_MMAP_THRESHOLD_=131072`` (big arrays are fresh pages on every

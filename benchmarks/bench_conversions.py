@@ -36,7 +36,7 @@ import scipy
 from numba import njit
 from scipy.spatial.transform import RigidTransform, Rotation
 
-import rbm_nb.conversions as conv
+import rbm_nb.core.conversions as conv
 
 
 @njit(cache=True)
@@ -173,7 +173,7 @@ def _scipy_components(transform):
 
 def _transform_cases(n):
     """The Transform value type against scipy's RigidTransform."""
-    from rbm_nb.rigid_transform import Transform
+    from rbm_nb.core.rigid_transform import Transform
 
     rng = np.random.default_rng(1)
     q = rng.normal(size=(2, n, 4))

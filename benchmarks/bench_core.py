@@ -9,7 +9,7 @@ Each operation is timed as the best of 5 after a warm-up call, the
 contenders called in turns (a reference call that takes more than 60 s is
 timed once), rbm_nb twice in the same run:
 on one thread and on two (``RBM_NB_NUM_THREADS=1`` and ``=2``; its parallel
-kernels run only for calls of at least ``rbm_nb._parallel.MIN_ROWS`` rows). Also reported: the first call
+kernels run only for calls of at least ``rbm_nb._infra.parallel.MIN_ROWS`` rows). Also reported: the first call
 in a fresh process with an empty and with a warm numba cache, and the time
 ``import rbm_nb`` takes.
 
@@ -89,7 +89,7 @@ def threads(n):
     """rbm_nb's kernels on at most n threads inside the block (RBM_NB_NUM_THREADS).
 
     rbm_nb reads the variable at each call; its parallel kernels run only for
-    calls of at least ``rbm_nb._parallel.MIN_ROWS`` rows, and only on cores
+    calls of at least ``rbm_nb._infra.parallel.MIN_ROWS`` rows, and only on cores
     that no other runnable thread wants at the time (``_parallel.free_cores``):
     on a busy machine the 2-thread columns measure the serial kernels.
     """

@@ -42,7 +42,7 @@ import numpy as np
 import xarray as xr
 
 import rbm_nb as rbm
-from rbm_nb.explorer import SCENE_CAM_ROTATION, SCENE_CAM_TRANSLATION
+from rbm_nb.app.explorer import SCENE_CAM_ROTATION, SCENE_CAM_TRANSLATION
 from rbm_nb.study import local_cluster, open_study
 
 REPO = Path(__file__).resolve().parents[1]

@@ -63,9 +63,9 @@ def _ms(seconds: float) -> str:
 
 def parts() -> None:
     import rbm_nb as rbm
-    from rbm_nb import frames as F
     from rbm_nb._engine import fused as FU
     from rbm_nb._kernels import fused as kf
+    from rbm_nb.core import frames as F
 
     name, (frames, *_rest) = bench_fused.workload()
     print(f"== the first lookup_transform left_eye->world, in parts ({name})")
@@ -162,8 +162,8 @@ def _staged_fill():
 
 def fill_loops() -> None:
     import rbm_nb as rbm
-    from rbm_nb import frames as F
     from rbm_nb._kernels import fused as kf
+    from rbm_nb.core import frames as F
 
     _, (frames, *_rest) = bench_fused.workload()
     bench_fused.register(rbm, frames)

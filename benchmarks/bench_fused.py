@@ -156,10 +156,10 @@ def register(module, frames):
 
 def fused_direct(outof, into, kind=None, data=None, timestamps=None):
     """A lookup or transform through ``_engine.fused`` (no public plumbing)."""
-    from rbm_nb import frames as F
     from rbm_nb._engine import chain as C
     from rbm_nb._engine import fused as FU
     from rbm_nb._engine.transform import SIZES, Blocks
+    from rbm_nb.core import frames as F
 
     a, b = F.resolve_frame(outof), F.resolve_frame(into)
     steps = C.chain(a, b)
@@ -418,8 +418,8 @@ def floor_args(n):
     Also checks that the floor computes rbm_nb's lookup (to 1e-9).
     """
     import rbm_nb as rbm
-    from rbm_nb import frames as F
     from rbm_nb._engine import chain as C
+    from rbm_nb.core import frames as F
 
     register(rbm, scaling_frames(n))
     head, eye = F.resolve_frame("head"), F.resolve_frame("left_eye")
@@ -637,7 +637,7 @@ def main() -> None:
         "--only", choices=["table", "scaling", "memory", "registration"]
     )
     args = parser.parse_args()
-    from rbm_nb import _parallel
+    from rbm_nb._infra import parallel as _parallel
 
     print(
         f"load average {os.getloadavg()[0]:.2f}, free cores now {_parallel.free_cores()} "

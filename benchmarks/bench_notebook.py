@@ -193,7 +193,7 @@ def main() -> None:
     finally:
         server.stop()
 
-    from rbm_nb.explorer import write_explorer_html
+    from rbm_nb.app.explorer import write_explorer_html
 
     start = time.perf_counter()
     out = write_explorer_html(tmp / "explorer.html", progress=False)

@@ -65,7 +65,7 @@ def serial(fn):
 
 def parallel(fn):
     """fn on the parallel twins, 2 threads, whatever its size (MIN_ROWS = 0)."""
-    from rbm_nb import _parallel
+    from rbm_nb._infra import parallel as _parallel
 
     def call():
         saved = _parallel.MIN_ROWS
@@ -91,7 +91,7 @@ def main() -> None:
     import numba
 
     import rbm_nb as rbm
-    from rbm_nb import _parallel
+    from rbm_nb._infra import parallel as _parallel
 
     print(f"load average {os.getloadavg()}; numba threading layer: ", end="")
     floor, floor_2 = floor_kernels()

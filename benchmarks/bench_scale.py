@@ -88,7 +88,7 @@ def tiled(series: dict, hours: float) -> dict:
 def measure(hours_list) -> list[dict]:
     import comm
 
-    from rbm_nb import explorer
+    from rbm_nb.app import explorer
     from rbm_nb.widgets import Player, TimeSeries
 
     comm.create_comm = CountingComm

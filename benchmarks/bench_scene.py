@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 
 import rbm_nb as rbm
+from rbm_nb.app.explorer import register_head_eye_frames
 from rbm_nb.data import synthetic_head_eye
-from rbm_nb.explorer import register_head_eye_frames
 from rbm_nb.scene import Scene
 from rbm_nb.widgets import Player
 

@@ -89,7 +89,7 @@ def tiled(ds, hours: float):
 def measure(hours: float) -> dict:
     import comm
 
-    from rbm_nb import explorer
+    from rbm_nb.app import explorer
 
     comm.create_comm = CountingComm
     head, left, right, note = explorer.load_head_eye()

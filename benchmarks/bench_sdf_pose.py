@@ -35,7 +35,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 import rbm_nb as rbm
-from rbm_nb.rigid_transform import Transform
+from rbm_nb.core.rigid_transform import Transform
 from rbm_nb.sdf import GridSDF
 
 

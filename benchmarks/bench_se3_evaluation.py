@@ -32,10 +32,13 @@ import spatialmath.base as sb
 from evo.core import metrics, sync, trajectory
 from spatialmath.quaternion import Quaternion
 
-from rbm_nb import evaluation as ev
-from rbm_nb import se3
-from rbm_nb.conversions import matrix_from_quaternion, quaternion_from_rotation_vector
-from rbm_nb.quaternions import qmul
+from rbm_nb.core import evaluation as ev
+from rbm_nb.core import se3
+from rbm_nb.core.conversions import (
+    matrix_from_quaternion,
+    quaternion_from_rotation_vector,
+)
+from rbm_nb.core.quaternions import qmul
 
 
 def _best(func, repeat):

@@ -56,8 +56,8 @@ import numpy as np
 import xarray as xr
 
 import rbm_nb as rbm
+from rbm_nb.app.explorer import SCENE_CAM_ROTATION, SCENE_CAM_TRANSLATION
 from rbm_nb.data import synthetic_head_eye
-from rbm_nb.explorer import SCENE_CAM_ROTATION, SCENE_CAM_TRANSLATION
 from rbm_nb.study import open_study
 
 FIXATION_SPEED = 30.0  # deg/s

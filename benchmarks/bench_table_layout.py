@@ -190,8 +190,8 @@ def _best_ns_per_row(kernel, args, rows: int, cold: bool) -> float:
 
 def main() -> None:
     import rbm_nb as rbm
-    from rbm_nb import frames
     from rbm_nb._engine import fused
+    from rbm_nb.core import frames
 
     source, (registered, *_rest) = bench_fused.workload()
     bench_fused.register(rbm, registered)

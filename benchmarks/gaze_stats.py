@@ -16,7 +16,8 @@ from __future__ import annotations
 import numpy as np
 
 import rbm_nb as rbm
-from rbm_nb import explorer, gaze
+from rbm_nb.app import explorer
+from rbm_nb.core import gaze
 
 
 def _stats(label: str, ang: np.ndarray, eccentricity: np.ndarray) -> None:

@@ -31,7 +31,7 @@ def dump(out: str) -> None:
     import xarray as xr
 
     import rbm_nb as rbm
-    from rbm_nb.explorer import register_head_eye_frames
+    from rbm_nb.app.explorer import register_head_eye_frames
 
     head, left, right = (
         xr.open_dataset(DATA / f"{name}.nc").load()

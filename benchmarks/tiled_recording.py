@@ -44,7 +44,7 @@ def tiled(datasets, hours: float):
 
 def tiled_head_eye(hours: float):
     """(head, left_eye, right_eye) of the example recording, tiled to ``hours``."""
-    from rbm_nb import explorer
+    from rbm_nb.app import explorer
 
     head, left_eye, right_eye, _ = explorer.load_head_eye()
     return tuple(tiled((head, left_eye, right_eye), hours))

@@ -12,7 +12,7 @@ from __future__ import annotations
 import json
 import time
 
-from rbm_nb import explorer
+from rbm_nb.app import explorer
 from rbm_nb.widgets import TimeSeries
 
 

@@ -12,7 +12,7 @@ import importlib
 import sys
 from typing import TYPE_CHECKING
 
-from ._lazy import lazy_attributes
+from ._infra.lazy import lazy_attributes
 
 __version__ = "0.1.0"
 
@@ -107,30 +107,24 @@ __getattr__, __dir__ = lazy_attributes(__name__, _EXPORTS, _SUBMODULES)
 
 
 if TYPE_CHECKING:  # pragma: no cover - static analysers see the real names
-    from . import (  # noqa: F401
+    from . import data, io, ros, scene, sdf, study, widgets  # noqa: F401
+    from .app import explorer
+    from .core import (
         accessors,
         conversions,
         coordinates,
-        data,
         estimators,
         evaluation,
-        explorer,
         frames,
         gaze,
-        io,
         lookups,
         plot,
         quaternions,
         rigid_transform,
-        ros,
-        scene,
-        sdf,
         se3,
-        study,
         transforms,
-        widgets,
     )
-    from .conversions import (  # noqa: F401
+    from .core.conversions import (  # noqa: F401
         axis_angle_from_quaternion,
         euler_from_quaternion,
         homogeneous_from_transform,
@@ -142,15 +136,14 @@ if TYPE_CHECKING:  # pragma: no cover - static analysers see the real names
         rotation_vector_from_quaternion,
         transform_from_homogeneous,
     )
-    from .coordinates import (  # noqa: F401
+    from .core.coordinates import (  # noqa: F401
         cartesian_to_polar,
         cartesian_to_spherical,
         polar_to_cartesian,
         spherical_to_cartesian,
         transform_coordinates,
     )
-    from .data import example_data  # noqa: F401
-    from .estimators import (  # noqa: F401
+    from .core.estimators import (  # noqa: F401
         best_fit_rotation,
         best_fit_transform,
         estimate_angular_velocity,
@@ -158,7 +151,7 @@ if TYPE_CHECKING:  # pragma: no cover - static analysers see the real names
         iterative_closest_point,
         shortest_arc_rotation,
     )
-    from .frames import (  # noqa: F401
+    from .core.frames import (  # noqa: F401
         ReferenceFrame,
         clear_registry,
         deregister_frame,
@@ -167,14 +160,14 @@ if TYPE_CHECKING:  # pragma: no cover - static analysers see the real names
         registry,
         render_tree,
     )
-    from .lookups import (  # noqa: F401
+    from .core.lookups import (  # noqa: F401
         lookup_angular_velocity,
         lookup_linear_velocity,
         lookup_pose,
         lookup_transform,
         lookup_twist,
     )
-    from .quaternions import (  # noqa: F401
+    from .core.quaternions import (  # noqa: F401
         from_euler_angles,
         qinterp,
         qinv,
@@ -182,14 +175,15 @@ if TYPE_CHECKING:  # pragma: no cover - static analysers see the real names
         qmul,
         rotate_vectors,
     )
-    from .rigid_transform import Transform  # noqa: F401
-    from .transforms import (  # noqa: F401
+    from .core.rigid_transform import Transform  # noqa: F401
+    from .core.transforms import (  # noqa: F401
         transform_angular_velocity,
         transform_linear_velocity,
         transform_points,
         transform_quaternions,
         transform_vectors,
     )
+    from .data import example_data  # noqa: F401
 
 
 # The ``DataArray.rbm`` accessor must exist as soon as xarray does, even when
@@ -203,6 +197,6 @@ def _register_accessor() -> None:
 if "xarray" in sys.modules:
     _register_accessor()
 else:
-    from ._import_hook import call_after_import
+    from ._infra.import_hook import call_after_import
 
     call_after_import("xarray", _register_accessor)

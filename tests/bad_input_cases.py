@@ -507,7 +507,7 @@ def rbm_nb_command(*argv):
     import io
     from unittest import mock
 
-    from rbm_nb import cli
+    from rbm_nb.app import cli
 
     def work(*args, **kwargs):
         raise AssertionError(f"rbm-nb {' '.join(argv)} started work")
@@ -523,7 +523,7 @@ def rbm_nb_command(*argv):
             mock.patch.object(cli.os, "execve", work),
             mock.patch.object(cli, "_html_demo", work),
             mock.patch.object(cli, "_text_demo", work),
-            mock.patch("rbm_nb.app.serve", work),
+            mock.patch("rbm_nb.app.server.serve", work),
         ):
             cli.main(list(argv))
     except SystemExit as stop:
@@ -828,7 +828,7 @@ def motive_loads(folder):
 
 def demo_data_note(folder, source, files, *expected):
     """What ``rbm-nb demo`` says about its data, with RBM_NB_DATA_DIR=folder."""
-    from rbm_nb.cli import _data_note
+    from rbm_nb.app.cli import _data_note
 
     for name, text in files.items():
         (folder / name).write_text(text)

@@ -75,7 +75,7 @@ class _ReclaimAccessorAfterOracle(importlib.abc.MetaPathFinder):
 def _register_our_accessor() -> None:
     import xarray as xr
 
-    from rbm_nb.accessors import DataArrayAccessor
+    from rbm_nb.core.accessors import DataArrayAccessor
 
     with warnings.catch_warnings():
         # "overriding a preexisting attribute": the oracle's, on purpose
@@ -110,7 +110,7 @@ def ignore_load(monkeypatch):
     memory after a warm-up call (which must have taken the same twin), must
     not depend on what else runs on the machine.
     """
-    from rbm_nb import _parallel
+    from rbm_nb._infra import parallel as _parallel
 
     monkeypatch.setattr(_parallel, "free_cores", lambda: None)
     monkeypatch.setattr(_parallel, "_reading", (-math.inf, None))  # read it now

@@ -101,7 +101,7 @@ def seed_numba_cache(tree: Path) -> int:
     kernel again: minutes that test nothing the set-up's own warm-up did not.
     numba keys each cached kernel on its source file's size and modification
     time (``shutil.copy2`` and tar keep both), and rbm_nb's stamp file (the
-    fingerprint of all kernel sources, ``rbm_nb._numba_cache``) comes along:
+    fingerprint of all kernel sources, ``rbm_nb._infra.numba_cache``) comes along:
     if any source differed, the first import would drop every copied file
     and the warm-up compile as usual. Returns the number of cache files
     copied (0 when this checkout caches elsewhere, under NUMBA_CACHE_DIR).

@@ -4,7 +4,7 @@ This layer sits between the public facades (:mod:`rbm_nb.frames`,
 :mod:`rbm_nb.transforms`, :mod:`rbm_nb.lookups`) and the numba kernels
 (:mod:`rbm_nb._kernels`). Everything here receives frames that are already
 resolved (``ReferenceFrame`` objects, never names) and arrays that already
-went through the door (:mod:`rbm_nb._door`). Of a frame it reads one
+went through the door (:mod:`rbm_nb._door.unpack`). Of a frame it reads one
 immutable value, ``frame.data`` (:mod:`~rbm_nb._engine.frame_data`), and
 keys its caches by such values; it never imports :mod:`rbm_nb.frames`, so
 the import graph stays a tree of layers:

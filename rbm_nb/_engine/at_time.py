@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _time
+from .._door import time as _time
 from ..errors import ExtrapolationError
 from . import chain as _chain
 

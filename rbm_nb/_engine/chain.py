@@ -33,8 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from .. import _time
-from .._door import kernel_array
+from .._door import time as _time
+from .._door.unpack import kernel_array
 from .._kernels import quaternion as kq
 from .._kernels import resample as kr
 from .._kernels import squad_walk as ksw

@@ -19,7 +19,7 @@ read only rows known to be computed (a complete table, or intervals a
 parallel call's prefill reported) run without it, as nothing writes those
 rows again.
 
-Long calls run the kernels' ``prange`` twins (``rbm_nb._parallel.launch``
+Long calls run the kernels' ``prange`` twins (``rbm_nb._infra.parallel.launch``
 decides); the twins only read the tables, so a parallel call that may fill
 first runs ``prefill_chain`` (under the lock, in the same launch).
 """
@@ -32,7 +32,8 @@ from typing import Any
 
 import numpy as np
 
-from .. import _memory, _parallel
+from .._infra import memory as _memory
+from .._infra import parallel as _parallel
 from .._kernels import fused as kf
 from .._kernels import velocity_chain as kv
 from .frame_data import FrameData, Samples

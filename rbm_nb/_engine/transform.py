@@ -1,6 +1,6 @@
 """Points, vectors and quaternions carried from one resolved frame to another.
 
-The door (:mod:`rbm_nb._inputs`) hands over an array argument checked and
+The door (:mod:`rbm_nb._door.inputs`) hands over an array argument checked and
 rearranged to (n, k, c) blocks (time first, k independent items, c
 components); here they are matched with the chain's timestamps, transformed
 by one kernel call and laid out again like the input. Nothing is validated
@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _time
-from .._door import kernel_array, moveaxis
+from .._door import time as _time
+from .._door.unpack import kernel_array, moveaxis
 from .._kernels import resample as kr
 from . import chain as _chain
 
@@ -24,7 +24,7 @@ SIZES = {"points": 3, "vectors": 3, "quaternions": 4}
 class Blocks:
     """An array argument laid out as (n, k, c) blocks, and how to undo it.
 
-    Built by the door (:func:`rbm_nb._inputs.blocks`), which validated the
+    Built by the door (:func:`rbm_nb._door.inputs.blocks`), which validated the
     values and resolved the axes; the engine only reads and restores them.
     """
 

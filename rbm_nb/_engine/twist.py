@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._door import kernel_array
+from .._door.unpack import kernel_array
 from .._kernels import quaternion as kq
 from .._kernels import resample as kr
 from . import chain as _chain

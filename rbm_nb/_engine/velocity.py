@@ -22,13 +22,13 @@ from typing import Any
 
 import numpy as np
 
-from .. import _time
-from .._door import kernel_array
+from .._door import time as _time
+from .._door.unpack import kernel_array
+from .._door.validation import is_scalar
 from .._kernels import differences as _dk
 from .._kernels import quaternion as _qk
 from .._kernels import rotations as _rk
 from .._kernels import velocity_fused as _vf
-from .._validation import is_scalar
 
 __all__ = [
     "check_options",
@@ -153,7 +153,7 @@ def lowpass(values: np.ndarray, cutoff: float) -> np.ndarray:
     # rigid-body-motion hands to filtfilt: the same filter, but a 7th-order
     # polynomial's rounding noise (~1e-10, depending on where a pass starts)
     # drops to that of each section, so a chunked series filters like the
-    # whole one (rbm_nb._dask); both pad by the same 3 * 8 samples
+    # whole one (rbm_nb._door.dask_blocks); both pad by the same 3 * 8 samples
     sos = butter(_BUTTER_ORDER, cutoff, output="sos")
     finite = np.isfinite(values)
     if finite.all():

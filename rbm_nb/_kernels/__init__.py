@@ -1,9 +1,9 @@
 """numba kernels: unchecked, C-contiguous writeable float64 in, arrays out.
 
 Nothing here validates its input; the public modules do that before calling
-in, through the door (:mod:`rbm_nb._door`). Nothing here compiles at import
+in, through the door (:mod:`rbm_nb._door.unpack`). Nothing here compiles at import
 time either: kernels compile on first call, or in the warm-up
-(``python -m rbm_nb._warmup``), both from numba's on-disk cache when it is
+(``python -m rbm_nb._kernels._warmup``), both from numba's on-disk cache when it is
 there.
 
 Modules, by role:
@@ -47,13 +47,13 @@ Every numba function is made with one of the decorators of
   the kernel is compiled for (``F``/``I``/``B`` scalars, ``F1``/``F2``/``F3``
   C-contiguous float64 arrays of 1-3 dimensions, ``I1``, ``B2``; or any numba
   type string). Callers hand it exactly those types: arrays go through
-  :func:`rbm_nb._door.float_array` or :func:`rbm_nb._door.kernel_array`.
+  :func:`rbm_nb._door.unpack.float_array` or :func:`rbm_nb._door.unpack.kernel_array`.
 * The module is picked up automatically (any non-underscore module of this
   package): the warm-up compiles its declared signatures, and
   ``tests/test_zz_kernel_signatures.py`` checks that every numba function of
   the module is declared and that the test suite compiled no other
   signature.
-* Options come from :mod:`rbm_nb._config` (``KERNEL`` by default,
+* Options come from :mod:`rbm_nb._infra.config` (``KERNEL`` by default,
   ``EXACT_VECTOR_KERNEL`` for loops that must vectorise and keep scalar
   rounding, ``VECTOR_KERNEL`` where fused multiply-adds are measured
   harmless, ``PARALLEL_KERNEL`` for prange twins); scalar math comes from
@@ -66,6 +66,6 @@ Every numba function is made with one of the decorators of
   cache files do not collide).
 """
 
-from .._numba_cache import configure as _configure_numba_cache
+from .._infra.numba_cache import configure as _configure_numba_cache
 
 _configure_numba_cache()  # before any kernel is decorated: a writable cache or none

@@ -7,8 +7,8 @@ decorators:
   types of the one signature the kernel is compiled for (spelled with the
   aliases below, e.g. ``@kernel(F2, F1)`` for a C-contiguous (n, k) and an
   (n,) float64 array) and records it in :data:`DECLARED`. The door
-  (:mod:`rbm_nb._door`) hands kernels exactly those types, so a call never
-  compiles another variant; :mod:`rbm_nb._warmup` compiles exactly the
+  (:mod:`rbm_nb._door.unpack`) hands kernels exactly those types, so a call never
+  compiles another variant; :mod:`rbm_nb._kernels._warmup` compiles exactly the
   declared signatures; and ``tests/test_zz_kernel_signatures.py`` fails if
   the test suite made numba compile anything else.
 * :func:`helper` for functions only called from other kernels (compiled as
@@ -20,7 +20,7 @@ is there).
 
 A kernel's signature compiles at most once over all processes sharing a
 cache folder (the set-up's background compile, notebook kernels, test
-processes): see :func:`rbm_nb._numba_cache.compile_once`.
+processes): see :func:`rbm_nb._infra.numba_cache.compile_once`.
 """
 
 from __future__ import annotations
@@ -33,8 +33,8 @@ from typing import Any, TypeVar
 
 from numba import njit
 
-from .. import _numba_cache
-from .._config import KERNEL, JitOptions
+from .._infra import numba_cache as _numba_cache
+from .._infra.config import KERNEL, JitOptions
 
 __all__ = [
     "DECLARED",
@@ -105,7 +105,7 @@ def kernel(*argtypes: str, options: JitOptions = KERNEL) -> Callable[[_Func], _F
     *argtypes : str
         numba type strings of the arguments, one per parameter.
     options : JitOptions
-        The option set from :mod:`rbm_nb._config`.
+        The option set from :mod:`rbm_nb._infra.config`.
     """
 
     def decorate(func: _Func) -> _Func:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import prange
 
-from .._config import PARALLEL_KERNEL
+from .._infra.config import PARALLEL_KERNEL
 from ._jit import F1, F2, I1, helper, kernel
 from .chain_block import SLOT_TYPES, SLOTS, SQUAD
 from .chain_rows import BLOCK

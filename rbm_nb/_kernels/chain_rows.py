@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from .._config import EXACT_VECTOR_KERNEL
+from .._infra.config import EXACT_VECTOR_KERNEL
 from ._jit import helper
 from ._prefetch import prefetch, prefetch_for_write
 from .quaternion import _SQRT2, _is_unit, _qmul1, _rotate1

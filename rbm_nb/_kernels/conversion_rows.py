@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 
-from .._config import VECTOR_KERNEL
+from .._infra.config import VECTOR_KERNEL
 from ._jit import helper
 from .scalar import TINY_ANGLE as _SMALL_ANGLE
 

@@ -38,7 +38,7 @@ import math
 
 import numpy as np
 
-from .._config import VECTOR_KERNEL
+from .._infra.config import VECTOR_KERNEL
 from ._jit import F1, F2, F3, F, helper, kernel
 from .conversion_rows import (
     _canonical_sign,

@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from .._config import EXACT_VECTOR_KERNEL
+from .._infra.config import EXACT_VECTOR_KERNEL
 from ._jit import B2, F1, F2, F3, helper, kernel
 
 

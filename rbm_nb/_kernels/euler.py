@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from .._config import VECTOR_KERNEL
+from .._infra.config import VECTOR_KERNEL
 from ._jit import F2, B, F, I, helper, kernel
 from .conversion_rows import _indicator, _pick, _unit_norm_bounds
 from .scalar import PI as _PI

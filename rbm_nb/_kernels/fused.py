@@ -78,7 +78,7 @@ from typing import Any
 import numpy as np
 from numba import prange
 
-from .._config import PARALLEL_KERNEL
+from .._infra.config import PARALLEL_KERNEL
 from ._jit import F1, F2, F3, I1, B, I, kernel  # noqa: E741
 from .chain_block import CONSTANT, HELD, SLOT_TYPES, SLOTS, SQUAD, STATIC, _chain_block
 from .chain_prefill import CHUNKS, _chunk_bounds, prefill_chain

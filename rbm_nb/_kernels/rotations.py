@@ -18,11 +18,11 @@ import dataclasses
 import numpy as np
 from numba import prange
 
-from .._config import VECTOR_KERNEL
+from .._infra.config import VECTOR_KERNEL
 from ._jit import F2, helper, kernel
 from .quaternion import _qinv1, _qlog1, _rotate1
 
-# The prange twins of the branch-free loops (launched by rbm_nb._parallel).
+# The prange twins of the branch-free loops (launched by rbm_nb._infra.parallel).
 _PARALLEL_VECTOR = dataclasses.replace(VECTOR_KERNEL, parallel=True)
 # blocks of rows a parallel twin splits its rows into
 _BLOCKS = 64

@@ -1,6 +1,6 @@
 """Validation of sample rows in one pass (frames' data at registration).
 
-The numpy versions in :mod:`rbm_nb._validation` make several temporaries
+The numpy versions in :mod:`rbm_nb._door.validation` make several temporaries
 per check (``isnan``, ``isinf``, ``any``/``all`` along rows, norms); for
 recordings of 1e5-1e7 samples those passes dominate registering a frame.
 These kernels answer "is every row fine?" in one pass without
@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from .._config import EXACT_VECTOR_KERNEL
+from .._infra.config import EXACT_VECTOR_KERNEL
 from ._jit import F1, F2, B, F, helper, kernel
 
 # Coordinates beyond this are refused with the infinities: no physical

@@ -24,15 +24,7 @@ from .scalar import (
     cos_small,
     sinc_small,
 )
-from .squad_segments import (
-    _BLOCK,
-    _N_REC,
-    _REC,
-    _SMALL,
-    _VECTOR,
-    _W,
-    _decide,
-)
+from .squad_segments import _BLOCK, _N_REC, _REC, _SMALL, _VECTOR, _W, _decide
 
 
 @helper(inline=True)

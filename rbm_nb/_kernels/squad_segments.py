@@ -20,16 +20,10 @@ from typing import Any
 from numba import types
 from numba.extending import intrinsic
 
-from .._config import VECTOR_KERNEL
+from .._infra.config import VECTOR_KERNEL
 from ._jit import helper
 from .quaternion import _qmul1
-from .scalar import (
-    SERIES_ANGLE,
-    SERIES_RATIO,
-    atan_over_x_small,
-    cos_small,
-    sinc_small,
-)
+from .scalar import SERIES_ANGLE, SERIES_RATIO, atan_over_x_small, cos_small, sinc_small
 
 # Scales |q| whose log is beyond this take the exact route (the bounds used
 # to decide a slerp's direction assume scales near 1).

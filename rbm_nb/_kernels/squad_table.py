@@ -17,17 +17,9 @@ import math
 
 import numpy as np
 
-from .._config import EXACT_VECTOR_KERNEL
+from .._infra.config import EXACT_VECTOR_KERNEL
 from ._jit import F1, F2, helper, kernel  # noqa: E741
-from .quaternion import (
-    _EPS,
-    _SQRT2,
-    _is_unit,
-    _qexp1,
-    _qinv1,
-    _qlog1,
-    _qmul1,
-)
+from .quaternion import _EPS, _SQRT2, _is_unit, _qexp1, _qinv1, _qlog1, _qmul1
 from .scalar import (
     SERIES_ANGLE,
     SERIES_RATIO,

@@ -48,7 +48,7 @@ from typing import Any
 import numpy as np
 from numba import prange
 
-from .._config import KERNEL, PARALLEL_KERNEL
+from .._infra.config import KERNEL, PARALLEL_KERNEL
 from ._jit import F1, F2, F, helper, kernel
 from .search import gallop
 from .squad_rows import _WR, _gather_records, _rows, _scalar_rows

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._config import EXACT_VECTOR_KERNEL
+from .._infra.config import EXACT_VECTOR_KERNEL
 from ._jit import RF1, RI1, I, kernel  # noqa: E741
 
 __all__ = ["seconds_since", "ns_key_faults", "float_key_faults"]

@@ -31,7 +31,7 @@ import math
 import numpy as np
 from numba import prange
 
-from .._config import PARALLEL_KERNEL
+from .._infra.config import PARALLEL_KERNEL
 from ._jit import F1, F2, I1, I, helper, kernel  # noqa: E741
 from .chain_block import SLOT_TYPES, SLOTS, _chain_block
 from .chain_rows import _ACC, BLOCK, WORK

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .._lazy import lazy_attributes
+from .._infra.lazy import lazy_attributes
 from .fetch import ExampleDataStore, ExampleDataUnavailable, example_data
 
 _LAZY = {
@@ -29,10 +29,5 @@ __all__ = ["ExampleDataStore", "ExampleDataUnavailable", "example_data", *_LAZY]
 __getattr__, __dir__ = lazy_attributes(__name__, _LAZY)
 
 if TYPE_CHECKING:  # pragma: no cover - static analysers see the real names
-    from .load import (  # noqa: F401
-        DataChoice,
-        last_choice,
-        load_example,
-        write_synthetic_rosbag,
-    )
+    from .load import DataChoice, last_choice, load_example, write_synthetic_rosbag  # noqa: F401
     from .synthetic import HeadEyeRecording, synthetic_head_eye  # noqa: F401

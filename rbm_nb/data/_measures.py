@@ -14,9 +14,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._kernels.quaternion import qconj, qmul, rotate_vectors
-from ..estimators import estimate_angular_velocity, estimate_linear_velocity
-from ..frames import ReferenceFrame
-from ..transforms import transform_linear_velocity
+from ..core.estimators import estimate_angular_velocity, estimate_linear_velocity
+from ..core.frames import ReferenceFrame
+from ..core.transforms import transform_linear_velocity
 
 if TYPE_CHECKING:
     import xarray as xr

@@ -9,12 +9,12 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 # the folder rules, shared with rbm_nb.ros; also importable from here
-from .._folders import CACHE_DIR_ENV as CACHE_DIR_ENV
-from .._folders import DATA_DIR_ENV, env_folder
-from .._folders import cache_dir as cache_dir
-from .._folders import example_data_dirs as example_data_dirs
-from .._folders import pooch_module as _pooch
-from .._progress import download_bar
+from .._infra.folders import CACHE_DIR_ENV as CACHE_DIR_ENV
+from .._infra.folders import DATA_DIR_ENV, env_folder
+from .._infra.folders import cache_dir as cache_dir
+from .._infra.folders import example_data_dirs as example_data_dirs
+from .._infra.folders import pooch_module as _pooch
+from .._infra.progress import download_bar
 from .registry import BASE_URL, REGISTRY
 
 # connect fast or give up: offline, an answer within seconds beats a long hang

@@ -8,8 +8,8 @@ Pupil Core eye tracker.
 from __future__ import annotations
 
 # the folders' environment variables, here for the registry's readers; the
-# rules are in rbm_nb._folders
-from .._folders import CACHE_DIR_ENV, DATA_DIR_ENV
+# rules are in rbm_nb._infra.folders
+from .._infra.folders import CACHE_DIR_ENV, DATA_DIR_ENV
 
 __all__ = ["BASE_URL", "CACHE_DIR_ENV", "DATA_DIR_ENV", "REGISTRY"]
 

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..quaternions import from_euler_angles
+from ..core.quaternions import from_euler_angles
 from ._files import FileFormatError
 from ._schema import motion_dataset
 

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from .._config import UNIT_QUATERNION_TOLERANCE
+from .._infra.config import UNIT_QUATERNION_TOLERANCE
 from ..io._files import FileFormatError
 
 if TYPE_CHECKING:

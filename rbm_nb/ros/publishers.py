@@ -16,7 +16,7 @@ from ..scene import scene as scene_module
 from ..scene.publishers import FramePublisher, PathPublisher
 
 if TYPE_CHECKING:
-    from ..frames import FrameLike
+    from ..core.frames import FrameLike
     from ..scene.scene import Scene
 
 

@@ -10,9 +10,9 @@ from pathlib import Path
 from types import TracebackType
 from typing import TYPE_CHECKING
 
-from .._atomic import atomic_path, check_replaceable
-from .._folders import CACHE_DIR_ENV, cache_dir, example_data_dirs
-from .._progress import progress_bar
+from .._infra.atomic import atomic_path, check_replaceable
+from .._infra.folders import CACHE_DIR_ENV, cache_dir, example_data_dirs
+from .._infra.progress import progress_bar
 from ..io._files import FileFormatError, load_netcdf
 from ..io._schema import motion_dataset
 from ._messages import (
@@ -379,7 +379,7 @@ class RosbagReader:
         ``cache/<topic>.nc`` beside the bag, as rigid-body-motion does; but
         never in the example-data folder, which holds only the registry's
         files: a bag there is cached under ``rosbag/<bag name>-<path hash>/``
-        in :func:`rbm_nb._folders.cache_dir` (``RBM_NB_CACHE_DIR``).
+        in :func:`rbm_nb._infra.folders.cache_dir` (``RBM_NB_CACHE_DIR``).
         """
         name = f"{topic.replace('/', '_')}.nc"
         folder = self.bag_file.parent.resolve()

@@ -15,7 +15,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..frames import ReferenceFrame, check_frame_name, register_frame, registry
+from ..core.frames import ReferenceFrame, check_frame_name, register_frame, registry
 from .reader import RosbagReader
 
 __all__ = ["load_tf_tree", "register_frames_from_bag"]

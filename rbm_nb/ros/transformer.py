@@ -44,12 +44,12 @@ from typing import TypeAlias
 import numpy as np
 import numpy.typing as npt
 
-from .._door import float_array
+from .._door.unpack import float_array
+from .._door.validation import check_finite, normalize_quaternions
 from .._engine import at_time as _at_time
 from .._kernels import quaternion as kq
-from .._validation import check_finite, normalize_quaternions
+from ..core.frames import ReferenceFrame, resolve_frame
 from ..errors import ExtrapolationError
-from ..frames import ReferenceFrame, resolve_frame
 from .tf_tree import load_tf_tree, time_span
 
 __all__ = [

@@ -12,9 +12,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from .._atomic import FolderKind, atomic_path, check_replaceable, scratch_target
-from .._config import UNIT_QUATERNION_TOLERANCE
-from .._xarray import dataset_variable
+from .._door.xarray import dataset_variable
+from .._infra.atomic import FolderKind, atomic_path, check_replaceable, scratch_target
+from .._infra.config import UNIT_QUATERNION_TOLERANCE
 from ._messages import (
     TF_MESSAGE,
     TRANSFORM_STAMPED,

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .._lazy import lazy_attributes
+from .._infra.lazy import lazy_attributes
 
 _EXPORTS = {
     "Scene": "scene",

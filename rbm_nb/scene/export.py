@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._atomic import atomic_path
+from .._infra.atomic import atomic_path
 
 _TEMPLATE = """<!DOCTYPE html>
 <html>

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .. import frames
+from ..core import frames
 from ..widgets._time import (
     DATETIME,
     check_kinds,

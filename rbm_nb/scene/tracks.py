@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import lookups
+from ..core import lookups
 from ..widgets._time import check_kinds, timestamps_as_seconds
 from .commands import pose_matrix
 

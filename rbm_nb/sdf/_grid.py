@@ -7,12 +7,12 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._door import float_array, kernel_array
+from .._door.unpack import float_array, kernel_array
+from .._door.validation import check_finite, check_last_axis
 from .._kernels import sdf
-from .._validation import check_finite, check_last_axis
-from ..frames import ReferenceFrame, resolve_frame
-from ..rigid_transform import Transform
-from ..transforms import transform_points, transform_quaternions
+from ..core.frames import ReferenceFrame, resolve_frame
+from ..core.rigid_transform import Transform
+from ..core.transforms import transform_points, transform_quaternions
 from . import _mesh
 
 _IDENTITY_Q = np.array([[1.0, 0.0, 0.0, 0.0]])

@@ -11,9 +11,9 @@ import tempfile
 
 import numpy as np
 
-from .._door import float_array, kernel_array
+from .._door.unpack import float_array, kernel_array
+from .._door.validation import check_finite, check_last_axis
 from .._kernels import sdf
-from .._validation import check_finite, check_last_axis
 
 # more nodes than this is almost certainly a resolution given in the wrong unit
 MAX_GRID_NODES = 50_000_000

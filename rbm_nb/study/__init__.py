@@ -20,7 +20,7 @@ study's files at the same paths (a shared file system); in-memory
 recordings travel with the tasks instead. Nothing needs to be registered
 on the workers: ``frames`` builds each recording's frames in its task, and
 rbm_nb's lazy array functions carry the frames their graphs need as
-values, resolved when the graph is built (see :mod:`rbm_nb._dask`).
+values, resolved when the graph is built (see :mod:`rbm_nb._door.dask_blocks`).
 """
 
 from ._cluster import WORKER_SETTINGS, local_cluster

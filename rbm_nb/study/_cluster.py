@@ -15,7 +15,7 @@ rbm_nb's analyses, and one makes it less private than it should be:
   it is switched off.
 * each worker would run rbm_nb's parallel kernels on every core while the
   other workers do the same; :func:`local_cluster` gives each worker its
-  share of the cores (``RBM_NB_NUM_THREADS``, see :mod:`rbm_nb._parallel`).
+  share of the cores (``RBM_NB_NUM_THREADS``, see :mod:`rbm_nb._infra.parallel`).
 * the scheduler and workers listen on local ports; :func:`local_cluster`
   secures them with a throw-away TLS certificate (distributed's
   ``Security.temporary()``), so only this process's clients can connect:
@@ -42,7 +42,7 @@ import os
 from collections.abc import Iterator
 from typing import Any, Final
 
-from .._parallel import ENV_THREADS
+from .._infra.parallel import ENV_THREADS
 
 __all__ = ["WORKER_SETTINGS", "local_cluster"]
 

@@ -10,7 +10,7 @@ from typing import Any
 
 import xarray as xr
 
-from .._atomic import atomic_path, check_replaceable
+from .._infra.atomic import atomic_path, check_replaceable
 from . import _windows
 from ._sources import _NETCDF_LOCK, Recording, RecordingSource, find_sources
 

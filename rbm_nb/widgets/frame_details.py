@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..conversions import euler_from_quaternion
+from ..core.conversions import euler_from_quaternion
 
 #: Euler sequence of the details: intrinsic z-y'-x'' (yaw, pitch, roll).
 EULER_ORDER = "zyx"

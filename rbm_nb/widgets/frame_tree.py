@@ -22,7 +22,7 @@ import ipywidgets as widgets
 import numpy as np
 import traitlets
 
-from .. import frames, lookups
+from ..core import frames, lookups
 from ._time import time_as_seconds, timestamps_as_seconds
 from ._timebase import format_time
 from .frame_details import (
@@ -314,7 +314,7 @@ class FrameTree(widgets.VBox):
         if self._scene_widget is not None:
             self._scene_widget.unobserve(self._on_scene_selected, "selected")
             self._scene_widget = None
-        frames = sys.modules.get("rbm_nb.frames")
+        frames = sys.modules.get("rbm_nb.core.frames")
         if self._listener is not None and frames is not None:
             try:
                 frames.remove_registry_callback(self._listener)

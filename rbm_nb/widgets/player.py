@@ -51,14 +51,9 @@ import anywidget
 import numpy as np
 import traitlets
 
-from .. import frames
+from ..core import frames
 from ._frontend import FrontendGuard
-from ._time import (
-    DATETIME,
-    check_kinds,
-    time_as_seconds,
-    timestamps_as_seconds,
-)
+from ._time import DATETIME, check_kinds, time_as_seconds, timestamps_as_seconds
 from ._timebase import format_time
 from .playback import Playback, check_speed
 
@@ -148,7 +143,7 @@ def _resolve_timestamps(source) -> tuple[Any, str]:
         if source not in frames.registry:
             raise ValueError(f"Player: no frame named {source!r} is registered")
         source = frames.registry[source]
-    frames_mod = sys.modules.get("rbm_nb.frames")
+    frames_mod = sys.modules.get("rbm_nb.core.frames")
     is_frame = frames_mod is not None and isinstance(source, frames_mod.ReferenceFrame)
     if is_frame or (
         hasattr(source, "timestamps") and not isinstance(source, np.ndarray)

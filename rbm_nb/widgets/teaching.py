@@ -16,8 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from ..frames import register_frame, registry
-from ..quaternions import from_euler_angles
+from ..core.frames import register_frame, registry
+from ..core.quaternions import from_euler_angles
 
 _NO_PREDICTION = (
     "No prediction yet: write yours in place of None in the cell above this one, "

@@ -13,8 +13,8 @@ import pytest
 import xarray as xr
 from conftest import REPO
 
-from rbm_nb.accessors import DataArrayAccessor
-from rbm_nb.quaternions import from_euler_angles, qinterp, qinv
+from rbm_nb.core.accessors import DataArrayAccessor
+from rbm_nb.core.quaternions import from_euler_angles, qinterp, qinv
 
 RNG = np.random.default_rng(11)
 
@@ -61,10 +61,10 @@ def test_accessor_is_registered_in_a_fresh_interpreter(order):
     script = imports + textwrap.dedent(
         """
         import sys
-        assert "rbm_nb.quaternions" not in sys.modules  # registering loads no numerics
+        assert "rbm_nb.core.quaternions" not in sys.modules  # registering loads no numerics
         da = xr.DataArray([[0.0, 0.0, 0.0, 2.0]], dims=("time", "quaternion_axis"))
         out = da.rbm.qinv()
-        assert type(da.rbm).__module__ == "rbm_nb.accessors"
+        assert type(da.rbm).__module__ == "rbm_nb.core.accessors"
         print(out.values.tolist())
         """
     )

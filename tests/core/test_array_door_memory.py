@@ -55,7 +55,7 @@ def test_transform_points_makes_no_timestamps_nobody_asked_for(
     moving_tree, threads, monkeypatch, ignore_load
 ):
     # on 2 threads the parallel twin runs (and its scratch must stay per thread)
-    from rbm_nb import _parallel
+    from rbm_nb._infra import parallel as _parallel
 
     if threads > 1 and _parallel.threads() < 2:
         pytest.skip("numba has a single thread here")

@@ -27,9 +27,9 @@ from numba import njit
 from scipy.spatial.transform import RigidTransform, Rotation
 
 import rbm_nb as rbm
-from rbm_nb import conversions as conv
 from rbm_nb._kernels import conversions as kern
 from rbm_nb._kernels import scalar
+from rbm_nb.core import conversions as conv
 
 ORDERS = conv.EULER_ORDERS
 VARIANTS = [(o, e) for o in ORDERS for e in (False, True)]
@@ -940,6 +940,6 @@ def test_docstring_examples_run():
     import doctest
     import importlib
 
-    module = importlib.import_module("rbm_nb.conversions")
+    module = importlib.import_module("rbm_nb.core.conversions")
     result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
     assert result.attempted > 0 and result.failed == 0

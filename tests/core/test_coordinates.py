@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 import rbm_nb as rbm
-from rbm_nb.coordinates import (
+from rbm_nb.core.coordinates import (
     cartesian_to_polar,
     cartesian_to_spherical,
     polar_to_cartesian,

@@ -28,7 +28,7 @@ import dask.array as dsa  # noqa: E402
 from recordings import REAL_DIR, REPO, real_recording  # noqa: E402
 
 import rbm_nb as rbm  # noqa: E402
-from rbm_nb import gaze  # noqa: E402
+from rbm_nb.core import gaze  # noqa: E402
 
 pytestmark = pytest.mark.slow
 

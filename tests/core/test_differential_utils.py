@@ -19,7 +19,7 @@ import quaternion
 import xarray as xr
 
 import rbm_nb as rbm
-from rbm_nb.accessors import DataArrayAccessor
+from rbm_nb.core.accessors import DataArrayAccessor
 
 SEEDS = [0, 1, 2]
 RTOL = 1e-6

@@ -1,6 +1,6 @@
 """The door of the transforms (issue 32, item 2): checks once, before the engine.
 
-The facades and the dask path hand the engine what :mod:`rbm_nb._inputs`
+The facades and the dask path hand the engine what :mod:`rbm_nb._door.inputs`
 returns; the engine's transform modules check nothing; the dask path calls
 no facade back and reads no private name of the engine.
 """
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import rbm_nb as rbm
-from rbm_nb import _inputs
+from rbm_nb._door import inputs as _inputs
 
 PACKAGE = Path(rbm.__file__).resolve().parent
 
@@ -80,14 +80,18 @@ def test_the_dask_path_calls_no_facade_back():
         da.from_array(np.ones((100, 3)), chunks=(50, 3)), {"time": t},
         ("time", "cartesian_axis"), attrs={"reference_frame": "eye"},
     )  # fmt: skip
-    facades = {"rbm_nb.transforms", "rbm_nb.lookups", "rbm_nb.estimators"}
+    facades = {
+        "rbm_nb.core.transforms",
+        "rbm_nb.core.lookups",
+        "rbm_nb.core.estimators",
+    }
     calls = []
 
     def profile(frame, event, arg):
         if event == "call" and frame.f_back is not None:
             caller = frame.f_back.f_globals.get("__name__", "")
             callee = frame.f_globals.get("__name__", "")
-            if caller == "rbm_nb._dask" and callee in facades:
+            if caller == "rbm_nb._door.dask_blocks" and callee in facades:
                 calls.append(f"{callee}.{frame.f_code.co_name}")
 
     sys.setprofile(profile)

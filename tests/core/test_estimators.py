@@ -24,7 +24,7 @@ from hypothesis.extra.numpy import arrays
 from rbm_nb._engine.velocity import angular_velocity as _angular_velocity
 from rbm_nb._engine.velocity import linear_velocity as _linear_velocity
 from rbm_nb._kernels import differences as dk
-from rbm_nb.estimators import (
+from rbm_nb.core.estimators import (
     best_fit_rotation,
     best_fit_transform,
     estimate_angular_velocity,
@@ -32,7 +32,7 @@ from rbm_nb.estimators import (
     iterative_closest_point,
     shortest_arc_rotation,
 )
-from rbm_nb.quaternions import from_euler_angles, qmul, rotate_vectors
+from rbm_nb.core.quaternions import from_euler_angles, qmul, rotate_vectors
 
 RNG = np.random.default_rng(7)
 

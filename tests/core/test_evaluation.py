@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 import rbm_nb as rbm
-from rbm_nb import evaluation as ev
-from rbm_nb.conversions import quaternion_from_rotation_vector
-from rbm_nb.quaternions import qmul
+from rbm_nb.core import evaluation as ev
+from rbm_nb.core.conversions import quaternion_from_rotation_vector
+from rbm_nb.core.quaternions import qmul
 
 evo_metrics = pytest.importorskip("evo.core.metrics")
 from evo.core import geometry, sync, trajectory  # noqa: E402

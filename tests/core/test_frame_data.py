@@ -19,10 +19,10 @@ import numpy as np
 import pytest
 
 import rbm_nb as rbm
-from rbm_nb import frames as _frames
 from rbm_nb._engine import chain as _chain
 from rbm_nb._engine import fused as _fused
 from rbm_nb._engine.frame_data import FrameData
+from rbm_nb.core import frames as _frames
 
 ENGINE = Path(_chain.__file__).parent
 N = 50

@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 import rbm_nb as rbm
-from rbm_nb._frame_paths import frame_path
-from rbm_nb.frames import ReferenceFrame, find_frame, frames_between
+from rbm_nb._door.frame_paths import frame_path
+from rbm_nb.core.frames import ReferenceFrame, find_frame, frames_between
 
 
 @pytest.fixture
@@ -173,7 +173,7 @@ def test_docstring_examples_run():
     import doctest
     import importlib
 
-    module = importlib.import_module("rbm_nb._frame_paths")
+    module = importlib.import_module("rbm_nb._door.frame_paths")
     result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
     assert result.attempted > 0 and result.failed == 0
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import rbm_nb as rbm
-from rbm_nb import frames
+from rbm_nb.core import frames
 
 
 @pytest.fixture

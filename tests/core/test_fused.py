@@ -14,14 +14,14 @@ import numpy as np
 import pytest
 
 import rbm_nb as rbm
-from rbm_nb import _time
-from rbm_nb import frames as _frames
+from rbm_nb._door import time as _time
 from rbm_nb._engine import chain as _chain
 from rbm_nb._engine import fused as _fused
 from rbm_nb._kernels import fused as kf
 from rbm_nb._kernels import quaternion as kq
 from rbm_nb._kernels import resample as kr
 from rbm_nb._kernels import squad_table as kst
+from rbm_nb.core import frames as _frames
 
 TOL = 1e-12
 NO_GAPS = np.full(kf.SLOTS, np.inf)
@@ -259,7 +259,7 @@ def test_timestamped_arrays_match_like_the_engine():
     points = rng.normal(size=(len(ts), 3))
     a, b = c, _frames.resolve_frame("world")
     steps = _chain.chain(b, a)
-    from rbm_nb._inputs import blocks as door_blocks
+    from rbm_nb._door.inputs import blocks as door_blocks
 
     blocks = door_blocks(points, 3, -1, 0, ts, "points")
     target = _chain.match([f for f, _ in steps], [blocks.track])

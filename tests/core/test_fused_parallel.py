@@ -17,12 +17,12 @@ import numpy as np
 import pytest
 
 import rbm_nb as rbm
-from rbm_nb import _parallel
-from rbm_nb import frames as _frames
 from rbm_nb._engine import chain as _chain
 from rbm_nb._engine import fused as _fused
+from rbm_nb._infra import parallel as _parallel
 from rbm_nb._kernels import chain_rows as kr
 from rbm_nb._kernels import fused as kf
+from rbm_nb.core import frames as _frames
 
 pytestmark = pytest.mark.skipif(
     numba.config.NUMBA_NUM_THREADS < 2,  # type: ignore[attr-defined]

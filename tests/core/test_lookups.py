@@ -145,7 +145,7 @@ def test_lookups_see_re_registered_frames(trees):
 def test_the_plain_call_is_lookup_at_and_hands_out_copies():
     """lookup_transform(outof, into) takes a short path; it must give what
     the general one gives, and arrays the caller may change."""
-    from rbm_nb.lookups import lookup_at
+    from rbm_nb.core.lookups import lookup_at
 
     rbm.clear_registry()
     rbm.register_frame("world")

@@ -1,11 +1,11 @@
-"""Large arrays start on a huge page boundary (rbm_nb._memory)."""
+"""Large arrays start on a huge page boundary (rbm_nb._infra.memory)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from rbm_nb import _memory
+from rbm_nb._infra import memory as _memory
 
 
 @pytest.mark.parametrize(

@@ -32,13 +32,13 @@ import pytest
 import xarray as xr
 
 import rbm_nb as rbm
-from rbm_nb import _parallel
-from rbm_nb import frames as _frames
 from rbm_nb._engine import fused as _fused
+from rbm_nb._infra import parallel as _parallel
 from rbm_nb._kernels import fused as kf
 from rbm_nb._kernels import quaternion as kq
 from rbm_nb._kernels import squad_walk as ksw
-from rbm_nb.lookups import lookup_at
+from rbm_nb.core import frames as _frames
+from rbm_nb.core.lookups import lookup_at
 
 naive = pytest.importorskip("naive")
 quaternion = pytest.importorskip("quaternion")
@@ -546,7 +546,7 @@ def test_real_half_way_between_samples_whose_neighbours_are_missing(real):
 
 
 def test_real_gaze_directions_lose_only_missing_samples(real):
-    from rbm_nb import gaze
+    from rbm_nb.core import gaze
 
     head, left, right = real
     _register_real(head, left, right)

@@ -1,4 +1,4 @@
-"""rbm_nb._parallel: which twin a call runs, and with how many threads."""
+"""rbm_nb._infra.parallel: which twin a call runs, and with how many threads."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import time
 import numba
 import pytest
 
-from rbm_nb import _parallel
+from rbm_nb._infra import parallel as _parallel
 
 
 def _twins():

@@ -11,9 +11,9 @@ from scipy.spatial.transform import Rotation
 
 import rbm_nb as rbm
 from rbm_nb._engine import at_time
+from rbm_nb.core.frames import ReferenceFrame, resolve_frame
+from rbm_nb.core.lookups import lookup_at
 from rbm_nb.errors import ExtrapolationError
-from rbm_nb.frames import ReferenceFrame, resolve_frame
-from rbm_nb.lookups import lookup_at
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")

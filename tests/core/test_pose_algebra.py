@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from rbm_nb.rigid_transform import Transform
+from rbm_nb.core.rigid_transform import Transform
 
 skrobot_coords = pytest.importorskip("skrobot.coordinates")
 Coordinates = skrobot_coords.Coordinates

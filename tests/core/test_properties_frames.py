@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 import rbm_nb as rbm
-from rbm_nb import frames
+from rbm_nb.core import frames
 
 N = 6
 TS = np.linspace(0.0, 1.0, N)

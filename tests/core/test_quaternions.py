@@ -18,7 +18,7 @@ from hypothesis.extra.numpy import arrays
 import rbm_nb as rbm
 from rbm_nb._kernels import quaternion as kq
 from rbm_nb._kernels import rotations as rk
-from rbm_nb.quaternions import (
+from rbm_nb.core.quaternions import (
     from_euler_angles,
     qinterp,
     qinv,

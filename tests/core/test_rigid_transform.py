@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import RigidTransform, Rotation, Slerp
 
 import rbm_nb as rbm
-from rbm_nb.rigid_transform import Transform
+from rbm_nb.core.rigid_transform import Transform
 
 
 def random_transforms(shape, seed=0):
@@ -363,6 +363,6 @@ def test_docstring_examples_run():
     import doctest
     import importlib
 
-    module = importlib.import_module("rbm_nb.rigid_transform")
+    module = importlib.import_module("rbm_nb.core.rigid_transform")
     result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
     assert result.attempted > 0 and result.failed == 0

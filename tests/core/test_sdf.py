@@ -433,7 +433,7 @@ def test_from_mesh_signs_a_hollow_shell_and_its_cavity():
 
 def test_from_mesh_signs_every_node_like_the_winding_number():
     # the region shortcut against a winding number at every node
-    from rbm_nb._door import kernel_array
+    from rbm_nb._door.unpack import kernel_array
     from rbm_nb._kernels.sdf import winding_numbers
 
     mesh = trimesh.creation.torus(major_radius=0.2, minor_radius=0.06)

@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rbm_nb import se3
-from rbm_nb.conversions import matrix_from_quaternion
+from rbm_nb.core import se3
+from rbm_nb.core.conversions import matrix_from_quaternion
 
 sb = pytest.importorskip("spatialmath.base")
 from spatialmath.quaternion import Quaternion  # noqa: E402
@@ -184,7 +184,7 @@ def test_rotation_matrix_input_matches_spatialmath(rep):
 
 
 def test_rotation_vector_of_matrix_input_is_exact_near_a_half_turn():
-    from rbm_nb.conversions import quaternion_from_rotation_vector
+    from rbm_nb.core.conversions import quaternion_from_rotation_vector
 
     axis = _rng(19).normal(size=(N, 3))
     axis /= np.linalg.norm(axis, axis=1)[:, None]
@@ -238,7 +238,7 @@ def test_exp_jacobians_are_exact_at_and_near_zero():
 
 def test_jacobian_is_the_derivative_of_the_rotation():
     """omega = A(Γ) dΓ/dt, checked by finite differences of the rotation."""
-    from rbm_nb.conversions import (
+    from rbm_nb.core.conversions import (
         quaternion_from_euler,
         quaternion_from_rotation_vector,
     )
@@ -339,7 +339,7 @@ def test_qexp_qlog_match_spatialmath():
 
 
 def test_qlog_of_unit_quaternion_is_half_the_rotation_vector():
-    from rbm_nb.conversions import quaternion_from_rotation_vector
+    from rbm_nb.core.conversions import quaternion_from_rotation_vector
 
     v = _rng(18).uniform(-1, 1, size=(N, 3))
     lg = se3.qlog(quaternion_from_rotation_vector(v))

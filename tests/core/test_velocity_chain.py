@@ -15,14 +15,14 @@ import numpy as np
 import pytest
 
 import rbm_nb as rbm
-from rbm_nb import _parallel
-from rbm_nb import frames as _frames
 from rbm_nb._engine import chain as _chain
 from rbm_nb._engine import twist as _twist
+from rbm_nb._infra import parallel as _parallel
 from rbm_nb._kernels import fused as kf
 from rbm_nb._kernels import resample as kr
 from rbm_nb._kernels import velocity_chain as kv
 from rbm_nb._kernels import velocity_fused as vf
+from rbm_nb.core import frames as _frames
 
 
 def _rotations(rng, n, step):

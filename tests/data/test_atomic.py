@@ -26,8 +26,8 @@ import numpy as np
 import pytest
 from conftest import REPO
 
-from rbm_nb import _atomic
-from rbm_nb._atomic import FolderKind, atomic_path, clean_stale_scratch
+from rbm_nb._infra import atomic as _atomic
+from rbm_nb._infra.atomic import FolderKind, atomic_path, clean_stale_scratch
 
 # the kind of folder these tests write: only part<k>.txt files
 PARTS = FolderKind(
@@ -329,7 +329,7 @@ def test_scratch_of_a_killed_writer_through_a_link_is_cleaned(tmp_path):
     link.symlink_to(real)
     script = (
         "import os, signal, sys\n"
-        "from rbm_nb._atomic import atomic_path\n"
+        "from rbm_nb._infra.atomic import atomic_path\n"
         "with atomic_path(sys.argv[1]) as tmp:\n"
         "    tmp.write_text('half')\n"
         "    os.kill(os.getpid(), signal.SIGKILL)\n"
@@ -363,7 +363,7 @@ WRITER = textwrap.dedent(
     """
     import os, sys
     from pathlib import Path
-    from rbm_nb import _atomic
+    from rbm_nb._infra import atomic as _atomic
     target, kind, exchange = Path(sys.argv[1]), sys.argv[2], sys.argv[3] == "1"
     if not exchange:
         _atomic._RENAMEAT2[:] = [None]
@@ -447,7 +447,7 @@ def test_kill_between_park_and_rename_is_repaired(tmp_path):
         """
         import os, signal, sys
         from pathlib import Path
-        from rbm_nb import _atomic
+        from rbm_nb._infra import atomic as _atomic
         _atomic._RENAMEAT2[:] = [None]
         real_replace = os.replace
         def replace(src, dst):
@@ -533,7 +533,7 @@ def _in_mount_namespace(tmp_path, mount_commands: str, code: str):
 CHECK_ERROR = """
 import errno, os, sys
 from pathlib import Path
-from rbm_nb._atomic import atomic_path
+from rbm_nb._infra.atomic import atomic_path
 target = Path(sys.argv[1]) if len(sys.argv) > 1 else Path({target!r})
 try:
     with atomic_path(target) as tmp:

@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 import rbm_nb as rbm
-from rbm_nb import explorer
+from rbm_nb.app import explorer
 from tests.recordings import real_recording, synthetic_recording
 
 
@@ -86,7 +86,7 @@ def test_eyes_counter_rotate_against_the_head_and_converge(load):
 
 def _pitch_gains(left, right) -> dict:
     """Gain of each eye's elevation rate against the head's nose-up rate (slow phases)."""
-    from rbm_nb import gaze
+    from rbm_nb.core import gaze
 
     omega = rbm.lookup_angular_velocity(
         "head", "world", represent_in="head", as_dataarray=True

@@ -8,8 +8,8 @@ import xarray as xr
 from recordings import recording
 
 import rbm_nb as rbm
-from rbm_nb import gaze
-from rbm_nb.quaternions import rotate_vectors
+from rbm_nb.core import gaze
+from rbm_nb.core.quaternions import rotate_vectors
 
 T = np.arange(6) * 0.1
 
@@ -161,7 +161,7 @@ def test_bad_frames_and_directions():
 
 def test_recording_gaze_is_masked_and_within_60_degrees():
     """On the real recording (else synthetic): the issue's acceptance numbers."""
-    from rbm_nb.explorer import register_head_eye_frames
+    from rbm_nb.app.explorer import register_head_eye_frames
 
     head, left, right, source = recording()
     register_head_eye_frames(head, left, right)

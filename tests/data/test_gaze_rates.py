@@ -7,7 +7,7 @@ import pytest
 import xarray as xr
 
 import rbm_nb as rbm
-from rbm_nb import gaze
+from rbm_nb.core import gaze
 
 
 @pytest.fixture

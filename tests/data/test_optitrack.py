@@ -29,7 +29,7 @@ def reference(monkeypatch):
     """
     import xarray as xr
 
-    from rbm_nb.accessors import DataArrayAccessor
+    from rbm_nb.core.accessors import DataArrayAccessor
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -14,8 +14,8 @@ import xarray as xr
 dask = pytest.importorskip("dask")
 
 import rbm_nb as rbm  # noqa: E402
+from rbm_nb.app.explorer import SCENE_CAM_ROTATION, SCENE_CAM_TRANSLATION  # noqa: E402
 from rbm_nb.data import synthetic_head_eye  # noqa: E402
-from rbm_nb.explorer import SCENE_CAM_ROTATION, SCENE_CAM_TRANSLATION  # noqa: E402
 from rbm_nb.study import WORKER_SETTINGS, local_cluster, open_study  # noqa: E402
 
 N_RECORDINGS = 8

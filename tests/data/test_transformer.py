@@ -7,8 +7,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import rbm_nb as rbm
-from rbm_nb.frames import ReferenceFrame
-from rbm_nb.lookups import lookup_at
+from rbm_nb.core.frames import ReferenceFrame
+from rbm_nb.core.lookups import lookup_at
 from rbm_nb.ros.transformer import (
     DEFAULT_CACHE_TIME,
     ConnectivityError,

@@ -492,7 +492,7 @@ def test_export_hides_the_gaze_ray_where_the_real_eye_was_not_seen(
     import xarray as xr
     from conftest import SHARED
 
-    from rbm_nb.explorer import write_explorer_html
+    from rbm_nb.app.explorer import write_explorer_html
 
     folder = SHARED / "data" / "rbm-data"
     monkeypatch.setenv("RBM_NB_DATA_DIR", str(folder))

@@ -17,7 +17,7 @@ from browser_support import JupyterLab, changed_pixels, png_pixels, save
 from conftest import REPO
 
 import rbm_nb as rbm
-from rbm_nb import explorer
+from rbm_nb.app import explorer
 
 RBM_NB = Path(sys.executable).with_name("rbm-nb")
 EXPLORER = REPO / "notebooks" / "06_head_eye_explorer.ipynb"
@@ -103,7 +103,7 @@ def test_demo_serves_jupyterlab_on_the_explorer(tmp_path):
 
 
 def test_port_zero_is_not_requested_literally():
-    from rbm_nb.cli import _free_port
+    from rbm_nb.app.cli import _free_port
 
     assert _free_port(0) > 0
 

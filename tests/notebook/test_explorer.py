@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import rbm_nb as rbm
-from rbm_nb import explorer
+from rbm_nb.app import explorer
 from tests.recordings import real_recording
 
 MAX_EXPORT_BYTES = 5_000_000
@@ -124,7 +124,7 @@ _RENAMED = {
 
 def _register_renamed():
     """Copy the registered example tree under _RENAMED's names (public API only)."""
-    from rbm_nb import frames
+    from rbm_nb.core import frames
 
     for old, new in _RENAMED.items():
         frame = frames.registry[old]

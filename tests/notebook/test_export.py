@@ -210,7 +210,7 @@ def test_bad_max_frames(scene, tmp_path, max_frames):
 
 def register_head_eye(recording):
     """The guide's head/eye frame tree (section 1.6) on a recording."""
-    from rbm_nb.explorer import register_head_eye_frames
+    from rbm_nb.app.explorer import register_head_eye_frames
 
     register_head_eye_frames(
         recording.head, recording.left_eye, recording.right_eye, ros_eyes=True
@@ -219,7 +219,7 @@ def register_head_eye(recording):
 
 @pytest.mark.slow
 def test_full_head_eye_explorer_exports_under_5_mb(tmp_path):
-    from rbm_nb.explorer import write_explorer_html
+    from rbm_nb.app.explorer import write_explorer_html
 
     out = write_explorer_html(
         tmp_path / "explorer.html", source="synthetic", progress=False

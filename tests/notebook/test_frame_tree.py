@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 import rbm_nb as rbm
-from rbm_nb import frames
+from rbm_nb.core import frames
 from rbm_nb.widgets import FrameTree, Player
 from rbm_nb.widgets.frame_details import (
     EULER_ORDER,
@@ -276,7 +276,7 @@ def _same_rotation(q1, q2):
 
 
 def test_head_frame_of_the_explorer_shows_yaw_90_pitch_90():
-    from rbm_nb.explorer import R_T265_ROS
+    from rbm_nb.app.explorer import R_T265_ROS
 
     rbm.register_frame("world")
     rbm.ReferenceFrame.from_rotation_matrix(

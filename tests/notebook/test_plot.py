@@ -14,7 +14,7 @@ import pytest  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
 
 import rbm_nb as rbm  # noqa: E402
-from rbm_nb.plot import Arrow3D  # noqa: E402
+from rbm_nb.core.plot import Arrow3D  # noqa: E402
 
 
 @pytest.fixture(autouse=True)

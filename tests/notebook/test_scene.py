@@ -811,8 +811,8 @@ def test_no_socket_is_opened(moving):
 
 def test_explorer_gaze_rays_are_hidden_where_the_eye_was_not_seen():
     """Blinks, lost pupils and samples below confidence 0.6 draw no gaze ray."""
+    from rbm_nb.app.explorer import explorer_scene, register_head_eye_frames
     from rbm_nb.data import synthetic_head_eye
-    from rbm_nb.explorer import explorer_scene, register_head_eye_frames
 
     recording = synthetic_head_eye(duration=20.0, seed=2)
     register_head_eye_frames(*recording)
@@ -850,7 +850,7 @@ def test_a_track_is_hidden_across_a_gap_longer_than_max_gap():
     import numpy as np
 
     import rbm_nb as rbm
-    from rbm_nb import frames
+    from rbm_nb.core import frames
     from rbm_nb.scene.tracks import Track
 
     t = np.array([0.0, 0.1, 0.2, 2.0, 2.1])

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import pytest
 
-from rbm_nb import app
+from rbm_nb.app import server as app
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 

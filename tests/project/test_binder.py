@@ -106,7 +106,7 @@ rbm.register_frame("camera", parent="head", translation=(0.02, -0.03, 0.0),
 t, r = rbm.lookup_transform(outof="camera", into="world")
 t2 = time.perf_counter()
 assert t.shape == (n, 3) and r.shape == (n, 4)
-from rbm_nb._warmup import kernel_stats
+from rbm_nb._kernels._warmup import kernel_stats
 stats = kernel_stats()
 print(json.dumps({"import_s": t1 - t0, "call_s": t2 - t1, "import_and_call_s": t2 - t0,
                   "compiled": stats.compiled, "loaded": stats.loaded,
@@ -119,7 +119,7 @@ KERNEL_PROBE = """
 import json, os, sys
 import rbm_nb
 from ipywidgets.widgets.widget import _instances
-from rbm_nb._warmup import kernel_dispatchers, kernel_stats
+from rbm_nb._kernels._warmup import kernel_dispatchers, kernel_stats
 from rbm_nb.scene.widget import SceneWidget
 _stats = kernel_stats()
 print(json.dumps({
@@ -508,7 +508,7 @@ def test_first_frame_core_call_loads_its_kernels_from_the_cache(binder, timings)
     assert at_root["compiled"] == 0 and at_root["loaded"] > 0, at_root
 
     # and a second warm-up has nothing left to compile
-    rc, out, _ = binder.run_python("from rbm_nb._warmup import main; main([])")
+    rc, out, _ = binder.run_python("from rbm_nb._kernels._warmup import main; main([])")
     assert rc == 0, out
     assert re.search(
         r"warm-up: (\d+) of \1 kernel signatures ready \(0 compiled, [1-9]\d* loaded",
@@ -756,7 +756,7 @@ def test_explorer_notebook_runs_in_the_binder_jupyter_server(binder, jupyter, ti
 @pytest.mark.timeout(900)  # builds a venv with pip (about 70 s here)
 def test_warm_up_leaves_the_registry_as_it_was():
     import rbm_nb as rbm
-    from rbm_nb._warmup import kernel_dispatchers, warm_up
+    from rbm_nb._kernels._warmup import kernel_dispatchers, warm_up
 
     rbm.register_frame("world")
     rbm.register_frame("head", parent="world", translation=(0.0, 0.0, 1.7))

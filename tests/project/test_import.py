@@ -21,7 +21,7 @@ def test_import_loads_no_heavy_modules():
         """
         import json, sys
         import rbm_nb
-        heavy = ["numba", "xarray", "scipy", "quaternion", "matplotlib", "rbm_nb.frames"]
+        heavy = ["numba", "xarray", "scipy", "quaternion", "matplotlib", "rbm_nb.core.frames"]
         print(json.dumps({name: name in sys.modules for name in heavy}))
         """
     )

@@ -147,7 +147,7 @@ def test_nothing_writable_means_no_caching_and_one_warning(installed):
 
 def test_writable_install_keeps_numba_default(tmp_path):
     """In-process: nothing to do when the kernels' own __pycache__ is writable."""
-    from rbm_nb import _numba_cache
+    from rbm_nb._infra import numba_cache as _numba_cache
 
     if not _numba_cache._writable(_numba_cache.KERNELS / "__pycache__"):
         pytest.skip("this checkout's rbm_nb/_kernels is not writable")

@@ -6,7 +6,7 @@ helpers from other modules, so an edit there must invalidate them too.
 
 from __future__ import annotations
 
-from rbm_nb import _numba_cache
+from rbm_nb._infra import numba_cache as _numba_cache
 
 
 def _touch(path):

@@ -180,7 +180,9 @@ def test_sdist_fast_tests_pass_against_its_own_tree(dists, venv, tmp_path):
     # as .ci/setup.sh does: fill numba's cache before the tests (from this
     # checkout's, which saves compiling every kernel a second time: 2.5 min)
     seeded = seed_numba_cache(src)
-    warm = run([str(venv), "-m", "rbm_nb._warmup"], timeout=1800, env=env, cwd=src)
+    warm = run(
+        [str(venv), "-m", "rbm_nb._kernels._warmup"], timeout=1800, env=env, cwd=src
+    )
     print(f"sdist: {seeded} numba cache files seeded;", warm.stdout + warm.stderr)
     # The fast selection in two processes side by side, one per core of CI's
     # two: the frame core's tests, and every other layer with the docstring

@@ -1,4 +1,4 @@
-"""rbm_nb._warmup: order, sharing the work between processes, progress (fast checks).
+"""rbm_nb._kernels._warmup: order, sharing the work between processes, progress (fast checks).
 
 The whole parallel warm-up, in a fresh environment with an empty cache, is
 run by ``binder/postBuild`` in ``tests/project/test_binder.py``, which then
@@ -16,7 +16,8 @@ import time
 
 import pytest
 
-from rbm_nb import _numba_cache, _warmup
+from rbm_nb._infra import numba_cache as _numba_cache
+from rbm_nb._kernels import _warmup
 from rbm_nb._kernels._jit import declared_kernels
 
 
@@ -245,7 +246,7 @@ def test_a_process_waits_for_the_lock_holder_and_then_loads(tmp_path):
         [
             sys.executable,
             "-c",
-            "from rbm_nb import _numba_cache as c; from rbm_nb._kernels import quaternion"
+            "from rbm_nb._infra import numba_cache as _numba_cache as c; from rbm_nb._kernels import quaternion"
             " as q; from numba import types as t; a = (t.float64[:, ::1],);"
             " k = c.signature_key(q.qconj, a); print(c._lock_path(c.cache_folder(q.qconj), k))",
         ],

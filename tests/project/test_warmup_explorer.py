@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from rbm_nb import _warmup
+from rbm_nb._kernels import _warmup
 
 REPO = Path(__file__).resolve().parents[2]
 NOTEBOOK = REPO / "notebooks" / "06_head_eye_explorer.ipynb"
@@ -82,7 +82,7 @@ _WORKLOAD = textwrap.dedent(
     import numpy as np
     import rbm_nb as rbm
     from rbm_nb import explorer
-    from rbm_nb._warmup import kernel_stats
+    from rbm_nb._kernels._warmup import kernel_stats
 
     head, left, right, _ = explorer.load_head_eye("synthetic")
     explorer.register_head_eye_frames(head, left, right)
@@ -107,7 +107,7 @@ _WORKLOAD = textwrap.dedent(
 _COMPILE = textwrap.dedent(
     """
     import sys
-    from rbm_nb import _warmup
+    from rbm_nb._kernels import _warmup as _warmup
     by_name = {_warmup.short_name(k): k for k in _warmup.declared_kernels()}
     for name in sys.argv[1:]:
         _warmup._compile(by_name[name])

@@ -12,10 +12,10 @@ from typing import Any
 
 import numpy as np
 
-from . import _dask
-from ._door import ArrayInput, float_array, resolve_axis
-from ._door import is_dataarray as _is_dataarray
-from ._validation import check_no_inf
+from .._door import dask_blocks as _dask
+from .._door.unpack import ArrayInput, float_array, resolve_axis
+from .._door.unpack import is_dataarray as _is_dataarray
+from .._door.validation import check_no_inf
 
 # system name -> (dimension name, axis labels) per dimensionality
 _SYSTEM_AXES: dict[tuple[str, int], tuple[str, list[str]]] = {

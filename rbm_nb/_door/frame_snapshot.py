@@ -1,6 +1,6 @@
 """Frames as immutable values, cut to a time window, for tasks on other processes.
 
-A lazy computation (:mod:`rbm_nb._dask`) resolves its frames once, on the
+A lazy computation (:mod:`rbm_nb._door.dask_blocks`) resolves its frames once, on the
 client, when its graph is built: names are looked up in the registry then,
 and the graph holds values, not names. A frame registered, replaced or
 removed afterwards does not change a graph already built -- a graph is a
@@ -32,9 +32,9 @@ from typing import Any
 
 import numpy as np
 
-from ._dask import MARGIN
-from ._engine.frame_data import FrameData
-from .frames import ReferenceFrame
+from .._engine.frame_data import FrameData
+from ..core.frames import ReferenceFrame
+from .dask_blocks import MARGIN
 
 __all__ = ["FrameValue", "FrameTree"]
 

@@ -15,7 +15,7 @@ the engine what comes back; the engine checks nothing again
   given), and either Blocks or, for a one-point-sized call through a static
   chain, the checked rows the engine's short way takes;
 * :func:`transform_block`, :func:`velocity_block`: the same door for one
-  block of dask-backed data, so that the lazy path (:mod:`rbm_nb._dask`)
+  block of dask-backed data, so that the lazy path (:mod:`rbm_nb._door.dask_blocks`)
   runs exactly the eager engine call on each chunk and never calls back
   into a facade.
 
@@ -31,22 +31,15 @@ from typing import Any
 
 import numpy as np
 
-from . import _time
-from ._door import (
-    Unpacked,
-    float_array,
-    kernel_array,
-    moveaxis,
-    resolve_axis,
-    unpack,
-)
-from ._engine import chain as _chain
-from ._engine import transform as _engine_transform
-from ._engine import twist as _twist
-from ._engine.transform import SIZES, Blocks
-from ._kernels.rows import MAX_COORDINATE
-from ._validation import check_whole_rows, normalize_quaternions
-from ._xarray import wrap
+from .._engine import chain as _chain
+from .._engine import transform as _engine_transform
+from .._engine import twist as _twist
+from .._engine.transform import SIZES, Blocks
+from .._kernels.rows import MAX_COORDINATE
+from . import time as _time
+from .unpack import Unpacked, float_array, kernel_array, moveaxis, resolve_axis, unpack
+from .validation import check_whole_rows, normalize_quaternions
+from .xarray import wrap
 
 __all__ = [
     "blocks",
@@ -320,7 +313,7 @@ def transform_block(block, frames, kind: str, dim, time_dim, attr, origin):
 def velocity_block(block, context, what: str, dim, time_dim, origin):
     """The eager velocity transform of one NumPy-backed block.
 
-    ``context`` (:class:`rbm_nb._dask.VelocityContext`) holds the frames'
+    ``context`` (:class:`rbm_nb._door.dask_blocks.VelocityContext`) holds the frames'
     values and the looked-up terms around the block's times, and which
     terms the whole array's call interpolates; ``what`` is the frame being
     changed.

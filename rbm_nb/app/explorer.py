@@ -21,14 +21,14 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import frames, gaze
-from . import frames as registry
-from ._progress import make_bar
-from .data.load import last_choice, load_example
-from .frames import ReferenceFrame
-from .io._files import load_netcdf
-from .lookups import lookup_angular_velocity, lookup_transform
-from .quaternions import rotate_vectors
+from .._infra.progress import make_bar
+from ..core import frames, gaze
+from ..core import frames as registry
+from ..core.frames import ReferenceFrame
+from ..core.lookups import lookup_angular_velocity, lookup_transform
+from ..core.quaternions import rotate_vectors
+from ..data.load import last_choice, load_example
+from ..io._files import load_netcdf
 
 # rotation between the T265's VR axes and ROS axes (guide 1.6)
 R_T265_ROS = np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
@@ -480,7 +480,7 @@ def explorer_scene(
     select the head.
     """
     # lazy (optional dependency): notebook extras; write_explorer_html needs none
-    from .scene import Scene
+    from ..scene import Scene
 
     world = world or frames.world
     head = frames.head
@@ -545,7 +545,7 @@ def explorer_plot(series: dict, player, *, max_points: int | None = PLOT_MAX_POI
     every sample in view; the export keeps the overview (1000 columns).
     """
     # lazy (optional dependency): anywidget, only for the dashboard
-    from .widgets import TimeSeries
+    from ..widgets import TimeSeries
 
     if not hasattr(TimeSeries, "_esm"):
         return None
@@ -708,7 +708,7 @@ def dashboard(
     import ipywidgets as widgets
 
     # lazy (optional dependency): ipywidgets, only for the dashboard
-    from .widgets.frame_tree import FrameTree
+    from ..widgets.frame_tree import FrameTree
 
     given = [head, left_eye, right_eye]
     if frames is not None:

@@ -43,9 +43,9 @@ from itertools import product
 
 import numpy as np
 
-from ._config import UNIT_QUATERNION_TOLERANCE
-from ._door import float_array, kernel_array
-from ._kernels import conversions as _kc
+from .._door.unpack import float_array, kernel_array
+from .._infra.config import UNIT_QUATERNION_TOLERANCE
+from .._kernels import conversions as _kc
 
 __all__ = [
     "EULER_ORDERS",

@@ -27,9 +27,9 @@ from pathlib import Path
 
 import rbm_nb as rbm
 
-from . import __version__
-from .data.fetch import ExampleDataStore
-from .data.registry import DATA_DIR_ENV
+from .. import __version__
+from ..data.fetch import ExampleDataStore
+from ..data.registry import DATA_DIR_ENV
 
 EXPLORER = "06_head_eye_explorer.ipynb"
 CLONE_NOTEBOOKS = Path(__file__).resolve().parents[1] / "notebooks"
@@ -360,7 +360,7 @@ def main(argv: list[str] | None = None) -> int:
     _refuse_inapplicable(demo, args, _given_options(argv))
     if args.command == "app":
         # lazy (import time): the app loads the explorer (~0.6 s)
-        from .app import serve
+        from .server import serve
 
         return serve(
             port=_free_port(args.port),

@@ -47,9 +47,9 @@ import numbers
 
 import numpy as np
 
+from .._door.unpack import float_array, kernel_array
+from .._kernels import se3
 from . import conversions
-from ._door import float_array, kernel_array
-from ._kernels import se3
 
 __all__ = [
     "REPRESENTATIONS",

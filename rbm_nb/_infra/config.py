@@ -21,7 +21,7 @@ Kernels are compiled with one of these option sets, all typed:
   for bit).
 * :data:`PARALLEL_KERNEL`: :data:`KERNEL` with ``parallel=True``, for the
   ``prange`` twins of kernels over many rows. They are only ever launched
-  through :func:`rbm_nb._parallel.launch`, which picks the serial twin for
+  through :func:`rbm_nb._infra.parallel.launch`, which picks the serial twin for
   short inputs and whenever a parallel launch would be unsafe.
 """
 
@@ -31,7 +31,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Final, Literal
 
-from . import _numba_cache
+from . import numba_cache as _numba_cache
 
 
 @dataclass(frozen=True)
@@ -50,7 +50,7 @@ class JitOptions:
     def as_kwargs(self) -> dict[str, Any]:
         """The options as keyword arguments for ``numba.njit``."""
         kwargs: dict[str, Any] = {
-            # off when no folder is writable for numba's cache (rbm_nb._numba_cache)
+            # off when no folder is writable for numba's cache (rbm_nb._infra.numba_cache)
             "cache": self.cache and _numba_cache.caching,
             "nogil": self.nogil,
             "fastmath": set(self.fastmath)

@@ -36,7 +36,7 @@ KERNELS = Path(__file__).resolve().parent / "_kernels"
 _configured = False
 
 #: False once :func:`configure` found no writable folder; read by
-#: :meth:`rbm_nb._config.JitOptions.as_kwargs` when kernels are decorated
+#: :meth:`rbm_nb._infra.config.JitOptions.as_kwargs` when kernels are decorated
 caching = True
 
 
@@ -150,7 +150,7 @@ def _set_numba_cache_dir(folder: Path) -> None:
 
 
 def _turn_caching_off() -> None:
-    # read by every option set of rbm_nb._config when a kernel is decorated
+    # read by every option set of rbm_nb._infra.config when a kernel is decorated
     global caching
     caching = False
 

@@ -1,7 +1,7 @@
 """When a kernel may run on several cores, and how many.
 
 Kernels that loop over many independent rows have a ``prange`` twin compiled
-with :data:`rbm_nb._config.PARALLEL_KERNEL`. :func:`launch` chooses between
+with :data:`rbm_nb._infra.config.PARALLEL_KERNEL`. :func:`launch` chooses between
 the serial kernel and its twin for each call. The twin is used only when all
 of these hold:
 

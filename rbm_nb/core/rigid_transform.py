@@ -16,14 +16,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._door.unpack import float_array, kernel_array
+from .._door.validation import check_finite, check_last_axis, normalize_quaternions
+from .._kernels import quaternion as _kq
 from . import _pose_algebra as _pa
-from ._door import float_array, kernel_array
-from ._kernels import quaternion as _kq
-from ._validation import (
-    check_finite,
-    check_last_axis,
-    normalize_quaternions,
-)
 from .conversions import (
     MATRIX_TOLERANCE,
     homogeneous_from_transform,

@@ -14,11 +14,11 @@ from __future__ import annotations
 
 from typing import Any
 
-from . import _xarray
-from ._engine import at_time as _at_time
-from ._engine import chain as _chain
-from ._engine import twist as _twist
-from ._validation import check_mode
+from .._door import xarray as _xarray
+from .._door.validation import check_mode
+from .._engine import at_time as _at_time
+from .._engine import chain as _chain
+from .._engine import twist as _twist
 from .conversions import homogeneous_from_transform
 from .frames import FrameLike, ReferenceFrame, resolve_frame
 from .rigid_transform import Transform

@@ -20,7 +20,7 @@ Processes. numba compiles on one core, so the warm-up runs one worker
 process per usable core (``--jobs N`` to choose). Each signature compiles at
 most once over every process sharing the cache folder: workers, and also a
 notebook's kernel or a test process that calls a kernel meanwhile
-(:func:`rbm_nb._numba_cache.compile_once`, a lock per signature in numba's
+(:func:`rbm_nb._infra.numba_cache.compile_once`, a lock per signature in numba's
 cache folder). A worker passes over a signature whose lock another process
 holds and comes back to it at the end, when it only has to load it. Every
 compile and every load of a worker is written to the account
@@ -29,19 +29,19 @@ counted: per signature, exactly.
 
 Commands::
 
-    python -m rbm_nb._warmup [-v] [--jobs N] [--status FILE]
+    python -m rbm_nb._kernels._warmup [-v] [--jobs N] [--status FILE]
         every signature, in the foreground (Binder's postBuild; a wheel's
         tests); the last line says "M of M kernel signatures ready (c
         compiled, l loaded from the cache ...)", c + l = M
-    python -m rbm_nb._warmup --start [--jobs N] [--pids FILE] [--log FILE] [--background]
+    python -m rbm_nb._kernels._warmup --start [--jobs N] [--pids FILE] [--log FILE] [--background]
         starts the workers and returns at once (``.ci/setup.sh``, before the
         install has finished). --background: after the explorer's kernels
         the workers lower their priority (``nice``), as they keep compiling
         while the user works
-    python -m rbm_nb._warmup --wait explorer|all [--pids FILE] [--status FILE]
+    python -m rbm_nb._kernels._warmup --wait explorer|all [--pids FILE] [--status FILE]
         waits until the explorer's (or every) signature is ready, printing
         "N of M" with an estimate of the time left every 15 s
-    python -m rbm_nb._warmup --report [--status FILE]
+    python -m rbm_nb._kernels._warmup --report [--status FILE]
         one line: N of M ready, and the time the rest should take
 
 Why the cache is found again: numba stores it next to the kernel sources
@@ -66,9 +66,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from . import _numba_cache
-from ._kernels._jit import Declared, declared_kernels
-from ._parallel import usable_cores
+from .._infra import numba_cache as _numba_cache
+from .._infra.parallel import usable_cores
+from ._jit import Declared, declared_kernels
 
 __all__ = [
     "COST",
@@ -319,7 +319,7 @@ def warm_up(
         Print one line per compiled kernel (name, seconds).
     jobs : int, default 1
         Processes that compile at the same time: this one and ``jobs - 1``
-        workers (``python -m rbm_nb._warmup --worker``, with this
+        workers (``python -m rbm_nb._kernels._warmup --worker``, with this
         interpreter, environment and working directory, so that they import
         the same rbm_nb).
     status : str, optional
@@ -365,7 +365,7 @@ def warm_up(
 def _command(verbose: bool, background: bool) -> list[str]:
     # -P again if this process has it: the workers must import this rbm_nb
     flags = ["-P"] if getattr(sys.flags, "safe_path", False) else []
-    cmd = [sys.executable, *flags, "-m", "rbm_nb._warmup", "--worker"]
+    cmd = [sys.executable, *flags, "-m", "rbm_nb._kernels._warmup", "--worker"]
     return cmd + (["-v"] if verbose else []) + (["--background"] if background else [])
 
 

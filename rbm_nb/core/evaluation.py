@@ -50,11 +50,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ._door import float_array, kernel_array
-from ._kernels import evaluation as k
-from ._kernels.evaluation import absolute_pose_errors, relative_pose_errors
-from ._validation import normalize_quaternions
-from ._xarray import transform_dataset
+from .._door.unpack import float_array, kernel_array
+from .._door.validation import normalize_quaternions
+from .._door.xarray import transform_dataset
+from .._kernels import evaluation as k
+from .._kernels.evaluation import absolute_pose_errors, relative_pose_errors
 from .conversions import quaternion_from_matrix
 from .frames import ReferenceFrame, register_frame, resolve_frame
 from .lookups import lookup_pose, lookup_transform

@@ -1,4 +1,4 @@
-"""DataArray out: wrapping results (arguments are unpacked by :mod:`rbm_nb._door`).
+"""DataArray out: wrapping results (arguments are unpacked by :mod:`rbm_nb._door.unpack`).
 
 xarray is imported inside the functions that build objects, so that plain
 numpy callers never pay for it.
@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 # the unpacking half lives in the door; these names stay importable from here
-from ._door import Unpacked, is_dataarray, unpack
+from .unpack import Unpacked, is_dataarray, unpack
 
 if TYPE_CHECKING:
     import xarray as xr

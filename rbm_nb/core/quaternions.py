@@ -14,21 +14,23 @@ from typing import Any
 
 import numpy as np
 
-from . import _dask, _parallel, _time
-from ._config import UNIT_QUATERNION_TOLERANCE
-from ._door import ArrayInput, kernel_array, resolve_axis
-from ._door import float_array as _door_float_array
-from ._door import is_dataarray as _is_dataarray
-from ._kernels import quaternion as _qk
-from ._kernels import rotations as _rk
-from ._kernels import squad_walk as _sw
-from ._validation import (
+from .._door import dask_blocks as _dask
+from .._door import time as _time
+from .._door.unpack import ArrayInput, kernel_array, resolve_axis
+from .._door.unpack import float_array as _door_float_array
+from .._door.unpack import is_dataarray as _is_dataarray
+from .._door.validation import (
     check_finite,
     check_missing_rows,
     check_no_inf,
     check_unit_norms,
 )
-from .errors import UnsupportedError
+from .._infra import parallel as _parallel
+from .._infra.config import UNIT_QUATERNION_TOLERANCE
+from .._kernels import quaternion as _qk
+from .._kernels import rotations as _rk
+from .._kernels import squad_walk as _sw
+from ..errors import UnsupportedError
 
 __all__ = ["from_euler_angles", "qinterp", "qinv", "qmean", "qmul", "rotate_vectors"]
 
@@ -387,7 +389,7 @@ def _reduced_like(
 
 
 def _time_values(t_in: Any, t_out: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Both time arrays as float64 seconds on ``t_in[0]`` (see :mod:`rbm_nb._time`)."""
+    """Both time arrays as float64 seconds on ``t_in[0]`` (see :mod:`rbm_nb._door.time`)."""
     return _time.seconds_pair(t_in, t_out)
 
 

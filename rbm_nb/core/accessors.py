@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import xarray as xr
 
-from .errors import UnsupportedError
+from ..errors import UnsupportedError
 
 
 @xr.register_dataarray_accessor("rbm")

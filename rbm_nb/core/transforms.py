@@ -1,7 +1,7 @@
 """Transform points, vectors, quaternions and velocities between frames.
 
 Each public function hands its arguments to the door
-(:func:`rbm_nb._inputs.arguments`: the array unpacked, checked and laid out,
+(:func:`rbm_nb._door.inputs.arguments`: the array unpacked, checked and laid out,
 the frames resolved) and what comes back to the engine (:mod:`rbm_nb._engine.transform` and
 :mod:`rbm_nb._engine.twist`), which matches the array's timestamps with
 those of the frames along the way (see :mod:`rbm_nb._engine.chain`) and
@@ -17,12 +17,13 @@ from typing import Any
 
 import numpy as np
 
-from . import _dask, _inputs
-from ._door import ArrayInput
-from ._engine import transform as _engine_transform
-from ._engine import twist as _twist
-from ._frame_snapshot import FrameTree
-from ._validation import check_what
+from .._door import dask_blocks as _dask
+from .._door import inputs as _inputs
+from .._door.frame_snapshot import FrameTree
+from .._door.unpack import ArrayInput
+from .._door.validation import check_what
+from .._engine import transform as _engine_transform
+from .._engine import twist as _twist
 from .frames import FrameLike, resolve_frame
 
 __all__ = [
@@ -38,7 +39,7 @@ def _transform(
     kind, arr, into, outof, dim, axis, timestamps, time_axis, attr, return_timestamps,
     velocity=None,
 ):  # fmt: skip
-    """One door call (:func:`rbm_nb._inputs.arguments`), one engine call.
+    """One door call (:func:`rbm_nb._door.inputs.arguments`), one engine call.
 
     ``kind`` is "points", "vectors" or "quaternions"; ``velocity``, for a
     change of a velocity's reference or moving frame, ``(linear, options)``.

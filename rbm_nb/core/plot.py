@@ -16,8 +16,8 @@ import numpy.typing as npt
 from matplotlib.patches import FancyArrowPatch
 from mpl_toolkits.mplot3d import Axes3D, proj3d
 
-from ._config import UNIT_QUATERNION_TOLERANCE
-from ._kernels import conversions as _kc
+from .._infra.config import UNIT_QUATERNION_TOLERANCE
+from .._kernels import conversions as _kc
 from .frames import resolve_frame
 from .lookups import lookup_pose, lookup_transform
 

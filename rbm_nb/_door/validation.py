@@ -11,10 +11,10 @@ from typing import Any
 
 import numpy as np
 
-from . import _memory
-from ._config import UNIT_QUATERNION_TOLERANCE
-from ._door import kernel_array, kernel_ready, resolve_axis
-from ._kernels import rows as _rows
+from .._infra import memory as _memory
+from .._infra.config import UNIT_QUATERNION_TOLERANCE
+from .._kernels import rows as _rows
+from .unpack import kernel_array, kernel_ready, resolve_axis
 
 __all__ = [
     "resolve_axis",

@@ -25,14 +25,11 @@ from typing import Any, TypeAlias
 
 import numpy as np
 
-from . import _frame_paths, _inputs, _time
-from ._door import ArrayInput, float_array, kernel_array
-from ._engine import chain as _chain
-from ._engine import transform as _transform
-from ._engine import twist as _twist
-from ._engine.frame_data import FrameData, Samples
-from ._kernels import quaternion as kq
-from ._validation import (
+from .._door import frame_paths as _frame_paths
+from .._door import inputs as _inputs
+from .._door import time as _time
+from .._door.unpack import ArrayInput, float_array, kernel_array
+from .._door.validation import (
     check_coordinates,
     check_finite,
     check_missing_rows,
@@ -42,7 +39,12 @@ from ._validation import (
     moving_samples,
     normalize_quaternions,
 )
-from ._xarray import dataarray_coordinate, dataset_variable
+from .._door.xarray import dataarray_coordinate, dataset_variable
+from .._engine import chain as _chain
+from .._engine import transform as _transform
+from .._engine import twist as _twist
+from .._engine.frame_data import FrameData, Samples
+from .._kernels import quaternion as kq
 from .conversions import quaternion_from_matrix
 
 __all__ = [
@@ -318,7 +320,7 @@ def _registry_frames() -> list[ReferenceFrame]:
 def find_frame(path: str) -> ReferenceFrame:
     """The one frame of the registry's trees matching ``path``, e.g. ``"world/.../eye"``.
 
-    See :mod:`rbm_nb._frame_paths` for the path syntax.
+    See :mod:`rbm_nb._door.frame_paths` for the path syntax.
 
     Raises
     ------
@@ -347,7 +349,7 @@ def frames_between(
 ) -> tuple[ReferenceFrame, ...]:
     """The frames on the way from ``frame`` to ``to_frame`` (names resolved).
 
-    See :func:`rbm_nb._frame_paths.frames_between`.
+    See :func:`rbm_nb._door.frame_paths.frames_between`.
     """
     return _frame_paths.frames_between(
         resolve_frame(frame, "frame"),
@@ -596,7 +598,7 @@ class ReferenceFrame:
     ) -> Any:
         """The frames from this one up to the common ancestor and down to ``to_frame``.
 
-        See :func:`rbm_nb._frame_paths.frames_between`.
+        See :func:`rbm_nb._door.frame_paths.frames_between`.
         """
         return _frame_paths.frames_between(
             self,

@@ -30,7 +30,7 @@ from collections.abc import Iterable
 from fnmatch import fnmatchcase
 from typing import Any
 
-from ._engine.chain import chain
+from .._engine.chain import chain
 
 __all__ = ["find_frame", "frames_between", "frame_path"]
 

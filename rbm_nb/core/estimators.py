@@ -24,25 +24,18 @@ from typing import Any
 
 import numpy as np
 
-from . import _dask, _time
-from ._dask import GRADIENT_HALO, SPLINE_HALO
-from ._door import ArrayInput, kernel_array, resolve_axis
-from ._door import is_dataarray as _is_dataarray
-from ._engine.velocity import (
-    angular_series as _angular_series,
-)
-from ._engine.velocity import (
-    check_options as _check_options,
-)
-from ._engine.velocity import (
-    linear_series as _linear_series,
-)
-from ._engine.velocity import (
-    lowpass_reach as _lowpass_reach,
-)
-from ._kernels import conversions as _kc
-from ._kernels import quaternion as _qk
-from ._validation import check_no_inf, check_unit_norms, is_scalar
+from .._door import dask_blocks as _dask
+from .._door import time as _time
+from .._door.dask_blocks import GRADIENT_HALO, SPLINE_HALO
+from .._door.unpack import ArrayInput, kernel_array, resolve_axis
+from .._door.unpack import is_dataarray as _is_dataarray
+from .._door.validation import check_no_inf, check_unit_norms, is_scalar
+from .._engine.velocity import angular_series as _angular_series
+from .._engine.velocity import check_options as _check_options
+from .._engine.velocity import linear_series as _linear_series
+from .._engine.velocity import lowpass_reach as _lowpass_reach
+from .._kernels import conversions as _kc
+from .._kernels import quaternion as _qk
 from .coordinates import _replace_dim
 
 __all__ = [

@@ -1,0 +1,1 @@
+"""rbm_nb._infra"""

@@ -12,104 +12,115 @@ import importlib
 import sys
 from typing import TYPE_CHECKING
 
+from ._infra.import_hook import alias_modules, call_after_import
 from ._infra.lazy import lazy_attributes
-
-__version__ = "0.1.0"
+from ._version import __version__
 
 # public name -> submodule that defines it. Submodules themselves are listed in
 # _SUBMODULES. Keeping this table explicit (rather than star-imports) is what
 # lets the top level stay lazy.
 _EXPORTS: dict[str, str] = {
     # reference frames and the registry
-    "ReferenceFrame": "frames",
-    "registry": "frames",
-    "register_frame": "frames",
-    "deregister_frame": "frames",
-    "clear_registry": "frames",
-    "render_tree": "frames",
-    "find_frame": "frames",
+    "ReferenceFrame": "core.frames",
+    "registry": "core.frames",
+    "register_frame": "core.frames",
+    "deregister_frame": "core.frames",
+    "clear_registry": "core.frames",
+    "render_tree": "core.frames",
+    "find_frame": "core.frames",
     # transformations
-    "transform_vectors": "transforms",
-    "transform_points": "transforms",
-    "transform_quaternions": "transforms",
-    "transform_angular_velocity": "transforms",
-    "transform_linear_velocity": "transforms",
-    "transform_coordinates": "coordinates",
+    "transform_vectors": "core.transforms",
+    "transform_points": "core.transforms",
+    "transform_quaternions": "core.transforms",
+    "transform_angular_velocity": "core.transforms",
+    "transform_linear_velocity": "core.transforms",
+    "transform_coordinates": "core.coordinates",
     # lookups
-    "lookup_transform": "lookups",
-    "lookup_pose": "lookups",
-    "lookup_twist": "lookups",
-    "lookup_linear_velocity": "lookups",
-    "lookup_angular_velocity": "lookups",
+    "lookup_transform": "core.lookups",
+    "lookup_pose": "core.lookups",
+    "lookup_twist": "core.lookups",
+    "lookup_linear_velocity": "core.lookups",
+    "lookup_angular_velocity": "core.lookups",
     # estimators
-    "estimate_linear_velocity": "estimators",
-    "estimate_angular_velocity": "estimators",
-    "shortest_arc_rotation": "estimators",
-    "best_fit_rotation": "estimators",
-    "best_fit_transform": "estimators",
-    "iterative_closest_point": "estimators",
+    "estimate_linear_velocity": "core.estimators",
+    "estimate_angular_velocity": "core.estimators",
+    "shortest_arc_rotation": "core.estimators",
+    "best_fit_rotation": "core.estimators",
+    "best_fit_transform": "core.estimators",
+    "iterative_closest_point": "core.estimators",
     # quaternion utilities
-    "from_euler_angles": "quaternions",
-    "qinv": "quaternions",
-    "qmul": "quaternions",
-    "qmean": "quaternions",
-    "qinterp": "quaternions",
-    "rotate_vectors": "quaternions",
+    "from_euler_angles": "core.quaternions",
+    "qinv": "core.quaternions",
+    "qmul": "core.quaternions",
+    "qmean": "core.quaternions",
+    "qinterp": "core.quaternions",
+    "rotate_vectors": "core.quaternions",
     # coordinate systems
-    "cartesian_to_polar": "coordinates",
-    "polar_to_cartesian": "coordinates",
-    "cartesian_to_spherical": "coordinates",
-    "spherical_to_cartesian": "coordinates",
+    "cartesian_to_polar": "core.coordinates",
+    "polar_to_cartesian": "core.coordinates",
+    "cartesian_to_spherical": "core.coordinates",
+    "spherical_to_cartesian": "core.coordinates",
     # example data
     "example_data": "data",
     # conversions and the transform value type (beyond the reference)
-    "Transform": "rigid_transform",
-    "quaternion_from_matrix": "conversions",
-    "matrix_from_quaternion": "conversions",
-    "quaternion_from_rotation_vector": "conversions",
-    "rotation_vector_from_quaternion": "conversions",
-    "quaternion_from_axis_angle": "conversions",
-    "axis_angle_from_quaternion": "conversions",
-    "quaternion_from_euler": "conversions",
-    "euler_from_quaternion": "conversions",
-    "homogeneous_from_transform": "conversions",
-    "transform_from_homogeneous": "conversions",
+    "Transform": "core.rigid_transform",
+    "quaternion_from_matrix": "core.conversions",
+    "matrix_from_quaternion": "core.conversions",
+    "quaternion_from_rotation_vector": "core.conversions",
+    "rotation_vector_from_quaternion": "core.conversions",
+    "quaternion_from_axis_angle": "core.conversions",
+    "axis_angle_from_quaternion": "core.conversions",
+    "quaternion_from_euler": "core.conversions",
+    "euler_from_quaternion": "core.conversions",
+    "homogeneous_from_transform": "core.conversions",
+    "transform_from_homogeneous": "core.conversions",
 }
 
-_SUBMODULES = {
-    "accessors",
-    "conversions",
-    "coordinates",
-    "data",
-    "estimators",
-    "explorer",
-    "frames",
-    "gaze",
-    "io",
-    "lookups",
-    "plot",
-    "quaternions",
-    "rigid_transform",
-    "ros",
-    "scene",
-    "study",
-    "se3",
-    "evaluation",
-    "sdf",
-    "transforms",
-    "widgets",
+# public submodule -> where it lives. The spec's facades are in ``core``, the
+# explorer and the command line in ``app``; ``rbm_nb.frames`` & co. stay
+# importable under their old names (see _MOVED below).
+_SUBMODULES: dict[str, str] = {
+    **{
+        name: f"core.{name}"
+        for name in (
+            "accessors",
+            "conversions",
+            "coordinates",
+            "estimators",
+            "evaluation",
+            "frames",
+            "gaze",
+            "lookups",
+            "plot",
+            "quaternions",
+            "rigid_transform",
+            "se3",
+            "transforms",
+        )
+    },
+    "explorer": "app.explorer",
+    **{
+        name: name for name in ("data", "io", "ros", "scene", "sdf", "study", "widgets")
+    },
+}
+# ``import rbm_nb.frames`` (the path rigid-body-motion users and our own
+# notebooks of earlier releases write) gives the module now in ``core``
+_MOVED: dict[str, str] = {
+    **{name: path for name, path in _SUBMODULES.items() if path != name},
+    "cli": "app.cli",
 }
 
 __all__ = sorted(_EXPORTS) + sorted(_SUBMODULES) + ["__version__"]
 
 
 __getattr__, __dir__ = lazy_attributes(__name__, _EXPORTS, _SUBMODULES)
+alias_modules(__name__, _MOVED)
 
 
 if TYPE_CHECKING:  # pragma: no cover - static analysers see the real names
     from . import data, io, ros, scene, sdf, study, widgets  # noqa: F401
-    from .app import explorer
-    from .core import (
+    from .app import explorer  # noqa: F401
+    from .core import (  # noqa: F401
         accessors,
         conversions,
         coordinates,
@@ -191,12 +202,10 @@ if TYPE_CHECKING:  # pragma: no cover - static analysers see the real names
 # ~0.4 s, so register right away only if xarray is already loaded, and
 # otherwise once it gets imported.
 def _register_accessor() -> None:
-    importlib.import_module(f"{__name__}.accessors")
+    importlib.import_module(f"{__name__}.core.accessors")
 
 
 if "xarray" in sys.modules:
     _register_accessor()
 else:
-    from ._infra.import_hook import call_after_import
-
     call_after_import("xarray", _register_accessor)

@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import importlib
 import sys
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 
 
 def lazy_attributes(
-    package: str, exports: dict[str, str], submodules: Iterable[str] = ()
+    package: str,
+    exports: dict[str, str],
+    submodules: Iterable[str] | Mapping[str, str] = (),
 ) -> tuple[Callable[[str], object], Callable[[], list[str]]]:
     """``__getattr__`` and ``__dir__`` for ``package``.
 
@@ -23,10 +25,13 @@ def lazy_attributes(
         The package's ``__name__``.
     exports : dict of str to str
         Public name -> submodule (relative to ``package``) that defines it.
-    submodules : iterable of str
-        Submodules that are themselves attributes of the package.
+    submodules : iterable of str, or dict of str to str
+        Submodules that are themselves attributes of the package; a dict maps
+        the attribute's name to the submodule's path relative to ``package``
+        when the two differ (``{"frames": "core.frames"}``).
     """
-    submodules = frozenset(submodules)
+    paths = dict(submodules) if isinstance(submodules, Mapping) else {}
+    paths.update((name, name) for name in submodules if name not in paths)
 
     def __getattr__(name: str):
         if name in exports:
@@ -35,11 +40,11 @@ def lazy_attributes(
             # cache on the package: later lookups don't come back here
             setattr(sys.modules[package], name, value)
             return value
-        if name in submodules:
-            return importlib.import_module(f"{package}.{name}")
+        if name in paths:
+            return importlib.import_module(f"{package}.{paths[name]}")
         raise AttributeError(f"module {package!r} has no attribute {name!r}")
 
     def __dir__() -> list[str]:
-        return sorted(set(vars(sys.modules[package])) | set(exports) | submodules)
+        return sorted(set(vars(sys.modules[package])) | set(exports) | set(paths))
 
     return __getattr__, __dir__

@@ -31,7 +31,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, NamedTuple
 
-KERNELS = Path(__file__).resolve().parent / "_kernels"
+KERNELS = Path(__file__).resolve().parents[1] / "_kernels"
 
 _configured = False
 

@@ -33,7 +33,7 @@ Every numba function is made with one of the decorators of
 :mod:`rbm_nb._kernels._jit`, never with ``numba.njit`` directly::
 
     from ._jit import F, F2, helper, kernel
-    from .._config import VECTOR_KERNEL  # only for branch-free vector loops
+    from .._infra.config import VECTOR_KERNEL  # only for branch-free vector loops
 
     @helper(inline=True)          # called only from kernels
     def _distance1(x, y, z):

@@ -25,38 +25,38 @@ import sys
 import tempfile
 from pathlib import Path
 
-import rbm_nb as rbm
-
-from .. import __version__
+from .._version import __version__
+from ..core import frames, lookups, quaternions, transforms
 from ..data.fetch import ExampleDataStore
 from ..data.registry import DATA_DIR_ENV
 
 EXPLORER = "06_head_eye_explorer.ipynb"
-CLONE_NOTEBOOKS = Path(__file__).resolve().parents[1] / "notebooks"
-PACKAGED_NOTEBOOKS = Path(__file__).resolve().parent / "_notebooks"
+# this file is rbm_nb/app/cli.py: the clone is two folders up, the package one
+CLONE_NOTEBOOKS = Path(__file__).resolve().parents[2] / "notebooks"
+PACKAGED_NOTEBOOKS = Path(__file__).resolve().parents[1] / "_notebooks"
 
 
 def _text_demo() -> int:
     import numpy as np
 
-    rbm.clear_registry()
-    rbm.register_frame("world")
+    frames.clear_registry()
+    frames.register_frame("world")
     # a body walking 5 m along x in 5 s while turning 90 degrees about z
     ts = np.linspace(0.0, 5.0, 6)
     yaw = np.linspace(0.0, np.pi / 2, 6)
-    rbm.register_frame(
+    frames.register_frame(
         "body",
         parent="world",
         translation=np.column_stack([ts, np.zeros(6), np.zeros(6)]),
-        rotation=rbm.from_euler_angles(yaw=yaw),
+        rotation=quaternions.from_euler_angles(yaw=yaw),
         timestamps=ts,
     )
     # a camera fixed on the body, 10 cm above it
-    rbm.register_frame("camera", parent="body", translation=(0.0, 0.0, 0.1))
+    frames.register_frame("camera", parent="body", translation=(0.0, 0.0, 0.1))
 
     print("Frame tree:")
-    rbm.render_tree("world")
-    position, orientation, stamps = rbm.lookup_pose(
+    frames.render_tree("world")
+    position, orientation, stamps = lookups.lookup_pose(
         "camera", "world", return_timestamps=True
     )
     print("\nPose of 'camera' in 'world':")
@@ -66,7 +66,7 @@ def _text_demo() -> int:
             f" {t:6.2f}   {np.array2string(p, precision=3):24s}  "
             f"{np.array2string(q, precision=3)}"
         )
-    point = rbm.transform_points((1.0, 0.0, 0.0), outof="world", into="camera")
+    point = transforms.transform_points((1.0, 0.0, 0.0), outof="world", into="camera")
     print("\nThe world point (1, 0, 0) seen from 'camera' over time:")
     print(np.array2string(point, precision=3))
     return 0

@@ -447,7 +447,7 @@ def rotvelxform(
     >>> rotvelxform([0.1, 1.5707963267948966, 0.3], inverse=True)
     Traceback (most recent call last):
     ...
-    rbm_nb.se3.SingularityError: rotvelxform(inverse=True, representation='rpy/xyz') is singular at Γ: pitch = 90°, where cos(pitch) = 0 (pitch = ±90°)
+    rbm_nb.core.se3.SingularityError: rotvelxform(inverse=True, representation='rpy/xyz') is singular at Γ: pitch = 90°, where cos(pitch) = 0 (pitch = ±90°)
     """
     code = _representation(representation)
     if not (isinstance(tol, numbers.Real) and tol >= 0):

@@ -10,6 +10,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import rbm_nb as rbm
+from rbm_nb._door import time as _time
 from rbm_nb._engine import at_time
 from rbm_nb.core.frames import ReferenceFrame, resolve_frame
 from rbm_nb.core.lookups import lookup_at
@@ -138,7 +139,7 @@ def test_times_are_evaluated_on_the_segments_they_read():
     computed = int(np.count_nonzero(_fused._TABLES[head.data.samples].rows[:, -1]))
     assert 0 < computed <= 4 * squad_table.RUN, computed
     steps = chain.chain(resolve_frame("eye"), resolve_frame("world"))
-    track, inverse, _, _ = rbm._time.requested_times(times)  # sorted, unique
+    track, inverse, _, _ = _time.requested_times(times)  # sorted, unique
     want_t, want_r = chain.compose(steps, chain.Target(track))
     np.testing.assert_allclose(got_t, want_t[inverse], rtol=0, atol=1e-12)
     assert same_rotation(got_r, want_r[inverse], 1e-12)
@@ -146,7 +147,7 @@ def test_times_are_evaluated_on_the_segments_they_read():
     for k, when in enumerate(np.linspace(0.01, 49.99, 40)):
         one_t, one_r = lookup_at("eye", "world", when)
         want_t, want_r = chain.compose(
-            steps, chain.Target(rbm._time.requested_times(when)[0])
+            steps, chain.Target(_time.requested_times(when)[0])
         )
         np.testing.assert_allclose(one_t, want_t[0], rtol=0, atol=1e-12, err_msg=k)
         assert same_rotation(one_r, want_r[0], 1e-12), k

@@ -1,10 +1,12 @@
 """The door between the public API and the engine.
 
 Everything a user hands the frame core comes in here and leaves as checked,
-kernel-ready values: arrays and DataArrays unpacked (``unpack``), the rules
-for timestamps (``time``), coordinates and quaternions (``validation``),
-xarray results (``xarray``), frame paths through the tree (``frame_paths``),
-frames resolved into immutable values (``frame_snapshot``) and the blocks a
-lazy dask computation runs (``dask_blocks``). Below it, ``_engine`` and
-``_kernels`` check nothing.
+kernel-ready values: the arguments of a transform (``inputs``: arrays laid out
+as the engine's blocks, frames resolved, one entry per dask block), arrays
+and DataArrays unpacked (``unpack``), coordinates and quaternions checked
+(``validation``), xarray results (``xarray``), frame paths through the tree
+(``frame_paths``) and the blocks a lazy dask computation runs
+(``dask_blocks``). Timestamps become the engine's tracks
+(:mod:`rbm_nb._engine.time`) here too. Below it, ``_engine`` and ``_kernels``
+check what only the data can tell (time ranges, sampling), nothing else.
 """

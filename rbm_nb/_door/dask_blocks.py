@@ -17,7 +17,7 @@ equals the eager result on the whole array:
   sign-continuous from the first sample on, which a chunk cannot see).
 
 Frames are resolved once, when the graph is built, on the client: the
-graph holds their values (:mod:`rbm_nb._door.frame_snapshot`), not their names,
+graph holds their values (:mod:`rbm_nb.core._frame_snapshot`), not their names,
 so the tasks run on any scheduler -- threads, worker processes, workers on
 other machines, whose registries are empty. **A graph is a snapshot of the
 registry**: a frame registered, replaced or removed after a lazy call does
@@ -44,10 +44,10 @@ import numpy as np
 from .._engine import twist as tw
 from .._engine import velocity as _velocity
 from .._engine.chain import chain
+from .._engine.time import as_track, seconds
 from .._kernels import differences as dk
 from .._kernels import quaternion as qk
 from .._kernels import rotations as rk
-from .time import as_track, seconds
 from .unpack import kernel_array
 
 # samples of not-a-knot spline influence kept on each side: 0.268**32 < 1e-18
@@ -124,7 +124,7 @@ def over_time(
         What the function needs besides the block, cut to each block's time
         window: ``func(block, context.window(first, last))`` is called with
         the first and last time the block reads. Frames travel this way
-        (:class:`rbm_nb._door.frame_snapshot.FrameTree`): each task carries the
+        (:class:`rbm_nb.core._frame_snapshot.FrameTree`): each task carries the
         samples of its window, not the frames' whole recordings.
 
     Returns
@@ -194,7 +194,7 @@ def _one_block(data):
 
 
 def _seconds_from_first(times: np.ndarray) -> np.ndarray:
-    """datetime64 times as float seconds from the first, as rbm_nb._door.time does."""
+    """datetime64 times as float seconds from the first, as rbm_nb._engine.time does."""
     return seconds(times, len(times), "time")
 
 
@@ -315,7 +315,7 @@ def transform(
 
     The frames come resolved (``source``, ``to_frame``) and the graph
     carries their values (``snapshot``,
-    :meth:`rbm_nb._door.frame_snapshot.FrameTree.of`), each task only the
+    :meth:`rbm_nb.core._frame_snapshot.FrameTree.of`), each task only the
     samples its chunk's times need: tasks run wherever dask sends them,
     with or without the client's registry, and a frame registered after
     this call does not change the result.

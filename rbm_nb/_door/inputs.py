@@ -32,11 +32,11 @@ from typing import Any
 import numpy as np
 
 from .._engine import chain as _chain
+from .._engine import time as _time
 from .._engine import transform as _engine_transform
 from .._engine import twist as _twist
 from .._engine.transform import SIZES, Blocks
 from .._kernels.rows import MAX_COORDINATE
-from . import time as _time
 from .unpack import Unpacked, float_array, kernel_array, moveaxis, resolve_axis, unpack
 from .validation import check_whole_rows, normalize_quaternions
 from .xarray import wrap

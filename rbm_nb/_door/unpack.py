@@ -28,6 +28,8 @@ from typing import Any, TypeAlias
 
 import numpy as np
 
+from .._kernels._arrays import kernel_array, kernel_ready, moveaxis, read_only
+
 # An array argument of the public API: anything numpy turns into numbers
 # (lists, arrays, numpy-quaternion arrays) or an xarray.DataArray. Spelled
 # Any because the functions look at it (DataArray or not) before converting.
@@ -38,6 +40,7 @@ __all__ = [
     "is_dataarray",
     "float_array",
     "kernel_array",
+    "kernel_ready",
     "read_only",
     "resolve_axis",
     "moveaxis",
@@ -50,35 +53,6 @@ def is_dataarray(obj: Any) -> bool:
     """Whether ``obj`` is an ``xarray.DataArray`` (xarray is never imported here)."""
     xr = sys.modules.get("xarray")
     return xr is not None and isinstance(obj, xr.DataArray)
-
-
-def kernel_ready(arr: Any) -> bool:
-    """Whether ``arr`` is a writeable C-contiguous ndarray, the layout every
-    kernel signature takes (the dtype is the caller's to check)."""
-    return type(arr) is np.ndarray and arr.flags.c_contiguous and arr.flags.writeable
-
-
-def read_only(arr: Any) -> np.ndarray | None:
-    """A read-only view of a C-contiguous ndarray, or None if ``arr`` is not one.
-
-    For the kernels declared on read-only arrays (``_jit.RF1``, ``RI1``): a
-    writeable array is viewed read-only rather than handed over as it is,
-    which would make numba compile a second, writeable variant.
-    """
-    if type(arr) is not np.ndarray or not arr.flags.c_contiguous:
-        return None
-    if not arr.flags.writeable:
-        return arr
-    view = arr.view()
-    view.flags.writeable = False
-    return view
-
-
-def kernel_array(arr: Any) -> np.ndarray:
-    """``arr`` as a writeable C-contiguous float64 array (a copy only if needed)."""
-    if kernel_ready(arr) and arr.dtype == np.float64:
-        return arr
-    return np.array(arr, dtype=np.float64, order="C")
 
 
 def float_array(value: Any, name: str) -> np.ndarray:
@@ -115,24 +89,6 @@ def resolve_axis(axis: Any, ndim: int, name: str = "axis") -> int:
             f"{name}={axis} is out of range for an array with {ndim} dimension(s)"
         )
     return int(axis % ndim)
-
-
-def moveaxis(arr: np.ndarray, source, destination) -> np.ndarray:
-    """``np.moveaxis``, or ``arr`` itself where no axis moves.
-
-    The usual argument, (n, 3) with time first and coordinates last, moves
-    nothing; numpy's argument handling alone costs about 5 µs a call, a
-    tenth of a one-point transform.
-    """
-    n = arr.ndim
-    if isinstance(source, tuple):
-        for s, d in zip(source, destination, strict=True):
-            if s % n != d % n:
-                return np.moveaxis(arr, source, destination)
-        return arr
-    return (
-        arr if source % n == destination % n else np.moveaxis(arr, source, destination)
-    )
 
 
 class Unpacked:

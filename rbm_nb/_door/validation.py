@@ -14,7 +14,8 @@ import numpy as np
 from .._infra import memory as _memory
 from .._infra.config import UNIT_QUATERNION_TOLERANCE
 from .._kernels import rows as _rows
-from .unpack import kernel_array, kernel_ready, resolve_axis
+from .._kernels._arrays import is_scalar, kernel_array, kernel_ready
+from .unpack import resolve_axis
 
 __all__ = [
     "resolve_axis",
@@ -33,13 +34,6 @@ __all__ = [
 ]
 
 WHAT_MODES = ("reference_frame", "moving_frame", "representation_frame")
-
-
-def is_scalar(value: Any) -> bool:
-    """Whether ``value`` is one real number (not a bool, string or array)."""
-    return isinstance(value, int | float | np.integer | np.floating) and not isinstance(
-        value, bool | np.bool_
-    )
 
 
 def check_last_axis(arr: np.ndarray, size: int, name: str) -> None:

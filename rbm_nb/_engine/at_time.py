@@ -17,9 +17,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._door import time as _time
 from ..errors import ExtrapolationError
 from . import chain as _chain
+from . import time as _time
 
 __all__ = ["transform_at_times", "latest_common_time"]
 

@@ -33,12 +33,12 @@ from typing import Any
 
 import numpy as np
 
-from .._door import time as _time
-from .._door.unpack import kernel_array
 from .._kernels import quaternion as kq
 from .._kernels import resample as kr
 from .._kernels import squad_walk as ksw
+from .._kernels._arrays import kernel_array
 from . import fused as _fused
+from . import time as _time
 from .frame_data import FrameData, Samples
 
 _IDENTITY_T = np.zeros((1, 3))

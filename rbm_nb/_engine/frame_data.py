@@ -3,7 +3,7 @@
 A :class:`~rbm_nb.ReferenceFrame` validates its arguments once and hands the
 engine a :class:`FrameData` (its public ``data`` property): the prepared
 :class:`Samples` (translation, rotations as given, the unit and
-sign-continuous rotations interpolation needs, the :class:`~rbm_nb._door.time.Track`
+sign-continuous rotations interpolation needs, the :class:`~rbm_nb._engine.time.Track`
 of the times, whether a rotation sample is missing), the options
 ``discrete`` and ``max_gap``, the name, and the parent's FrameData.
 
@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from .._door import time as _time
+from . import time as _time
 
 __all__ = ["Samples", "FrameData"]
 

@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._door import time as _time
-from .._door.unpack import kernel_array, moveaxis
 from .._kernels import resample as kr
+from .._kernels._arrays import kernel_array, moveaxis
 from . import chain as _chain
+from . import time as _time
 
 __all__ = ["Blocks", "transform", "transform_static", "track_of", "SIZES"]
 

@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._door.unpack import kernel_array
 from .._kernels import quaternion as kq
 from .._kernels import resample as kr
+from .._kernels._arrays import kernel_array
 from . import chain as _chain
 from . import fused as _fused
 from . import velocity as _velocity

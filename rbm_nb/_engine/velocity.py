@@ -22,13 +22,12 @@ from typing import Any
 
 import numpy as np
 
-from .._door import time as _time
-from .._door.unpack import kernel_array
-from .._door.validation import is_scalar
 from .._kernels import differences as _dk
 from .._kernels import quaternion as _qk
 from .._kernels import rotations as _rk
 from .._kernels import velocity_fused as _vf
+from .._kernels._arrays import is_scalar, kernel_array
+from . import time as _time
 
 __all__ = [
     "check_options",

@@ -25,11 +25,11 @@ from typing import Any
 import numpy as np
 
 from .._door import dask_blocks as _dask
-from .._door import time as _time
 from .._door.dask_blocks import GRADIENT_HALO, SPLINE_HALO
 from .._door.unpack import ArrayInput, kernel_array, resolve_axis
 from .._door.unpack import is_dataarray as _is_dataarray
 from .._door.validation import check_no_inf, check_unit_norms, is_scalar
+from .._engine import time as _time
 from .._engine.velocity import angular_series as _angular_series
 from .._engine.velocity import check_options as _check_options
 from .._engine.velocity import linear_series as _linear_series

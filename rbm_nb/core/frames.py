@@ -27,7 +27,6 @@ import numpy as np
 
 from .._door import frame_paths as _frame_paths
 from .._door import inputs as _inputs
-from .._door import time as _time
 from .._door.unpack import ArrayInput, float_array, kernel_array
 from .._door.validation import (
     check_coordinates,
@@ -41,6 +40,7 @@ from .._door.validation import (
 )
 from .._door.xarray import dataarray_coordinate, dataset_variable
 from .._engine import chain as _chain
+from .._engine import time as _time
 from .._engine import transform as _transform
 from .._engine import twist as _twist
 from .._engine.frame_data import FrameData, Samples

@@ -15,7 +15,6 @@ from typing import Any
 import numpy as np
 
 from .._door import dask_blocks as _dask
-from .._door import time as _time
 from .._door.unpack import ArrayInput, kernel_array, resolve_axis
 from .._door.unpack import float_array as _door_float_array
 from .._door.unpack import is_dataarray as _is_dataarray
@@ -25,6 +24,7 @@ from .._door.validation import (
     check_no_inf,
     check_unit_norms,
 )
+from .._engine import time as _time
 from .._infra import parallel as _parallel
 from .._infra.config import UNIT_QUATERNION_TOLERANCE
 from .._kernels import quaternion as _qk
@@ -389,7 +389,7 @@ def _reduced_like(
 
 
 def _time_values(t_in: Any, t_out: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Both time arrays as float64 seconds on ``t_in[0]`` (see :mod:`rbm_nb._door.time`)."""
+    """Both time arrays as float64 seconds on ``t_in[0]`` (see :mod:`rbm_nb._engine.time`)."""
     return _time.seconds_pair(t_in, t_out)
 
 

@@ -19,11 +19,11 @@ import numpy as np
 
 from .._door import dask_blocks as _dask
 from .._door import inputs as _inputs
-from .._door.frame_snapshot import FrameTree
 from .._door.unpack import ArrayInput
 from .._door.validation import check_what
 from .._engine import transform as _engine_transform
 from .._engine import twist as _twist
+from ._frame_snapshot import FrameTree
 from .frames import FrameLike, resolve_frame
 
 __all__ = [

@@ -546,7 +546,7 @@ def test_a_tasks_frames_are_freed_when_it_ends(recording, tree, monkeypatch):
     import gc
     import weakref
 
-    from rbm_nb._door.frame_snapshot import FrameTree
+    from rbm_nb.core._frame_snapshot import FrameTree
 
     built = []
     build = FrameTree._build

@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 import rbm_nb as rbm
-from rbm_nb._door import time as _time
 from rbm_nb._engine import chain as _chain
 from rbm_nb._engine import fused as _fused
+from rbm_nb._engine import time as _time
 from rbm_nb._kernels import fused as kf
 from rbm_nb._kernels import quaternion as kq
 from rbm_nb._kernels import resample as kr

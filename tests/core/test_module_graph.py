@@ -66,26 +66,6 @@ LAYERS = (
 # the package root holds the layers and nothing else: at most this many entries
 MAX_ROOT_ENTRIES = 20
 
-# Imports that still go up a layer, known and listed so that no new one
-# appears unnoticed (the test fails when one is added and when one goes: then
-# delete it here). What is left: the engine still reads the door's time rules
-# and array helpers, and validates (issue 32, item 2); the frame snapshot
-# reads ReferenceFrame (item 3).
-KNOWN_UPWARD = {
-    ("rbm_nb._door.frame_snapshot", "rbm_nb.core.frames"),
-    ("rbm_nb._engine.at_time", "rbm_nb._door.time"),
-    ("rbm_nb._engine.chain", "rbm_nb._door.time"),
-    ("rbm_nb._engine.chain", "rbm_nb._door.unpack"),
-    ("rbm_nb._engine.transform", "rbm_nb._door.time"),
-    ("rbm_nb._engine.transform", "rbm_nb._door.unpack"),
-    ("rbm_nb._engine.transform", "rbm_nb._door.validation"),
-    ("rbm_nb._engine.twist", "rbm_nb._door.unpack"),
-    ("rbm_nb._engine.twist", "rbm_nb._door.validation"),
-    ("rbm_nb._engine.velocity", "rbm_nb._door.time"),
-    ("rbm_nb._engine.velocity", "rbm_nb._door.unpack"),
-    ("rbm_nb._engine.velocity", "rbm_nb._door.validation"),
-}
-
 # Loops between sub-packages (each module of ``rbm_nb.<name>`` counted as
 # ``rbm_nb.<name>``), known and left for the move of code between layers
 # (issue 32, items 5 and 6): no module imports itself back, but the packages do.
@@ -93,10 +73,7 @@ KNOWN_UPWARD = {
 # and scene.{scene,export,widget} widgets.player, while widgets.slider_panel
 # builds a scene.widget.SceneWidget. The test fails when a new loop appears
 # and when this one goes (then delete it here).
-KNOWN_PACKAGE_LOOPS = [
-    ["rbm_nb._door", "rbm_nb._engine", "rbm_nb.core"],
-    ["rbm_nb.scene", "rbm_nb.widgets"],
-]
+KNOWN_PACKAGE_LOOPS = [["rbm_nb.scene", "rbm_nb.widgets"]]
 
 
 def _modules(package: Path) -> dict[str, Path]:
@@ -411,4 +388,4 @@ def test_layers_import_only_downwards():
         for target in targets
         if _layer_of(target) > _layer_of(source)
     }
-    assert upward == KNOWN_UPWARD
+    assert upward == set()

@@ -10,8 +10,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import rbm_nb as rbm
-from rbm_nb._door import time as _time
 from rbm_nb._engine import at_time
+from rbm_nb._engine import time as _time
 from rbm_nb.core.frames import ReferenceFrame, resolve_frame
 from rbm_nb.core.lookups import lookup_at
 from rbm_nb.errors import ExtrapolationError

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 import rbm_nb as rbm
-from rbm_nb._door import time as _time
 from rbm_nb._door.unpack import read_only
+from rbm_nb._engine import time as _time
 from rbm_nb._engine.chain import stored_signs
 from rbm_nb._kernels import quaternion as kq
 from rbm_nb._kernels import squad_walk as sw

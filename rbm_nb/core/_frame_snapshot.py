@@ -32,9 +32,9 @@ from typing import Any
 
 import numpy as np
 
+from .._door.dask_blocks import MARGIN
 from .._engine.frame_data import FrameData
-from ..core.frames import ReferenceFrame
-from .dask_blocks import MARGIN
+from .frames import ReferenceFrame
 
 __all__ = ["FrameValue", "FrameTree"]
 

@@ -27,8 +27,8 @@ from typing import Any
 
 import numpy as np
 
+from .._kernels._arrays import kernel_array, read_only
 from .._kernels.times import float_key_faults, ns_key_faults, seconds_since
-from .unpack import kernel_array, read_only
 
 __all__ = [
     "Track",

@@ -67,7 +67,7 @@ install() {  # install rbm_nb[$1] (editable) at the exact pins
 # signatures (about 5 min of one core; fused.lookup_chain alone ~45 s), so
 # the compile starts as soon as numba is installed -- a small first uv run --
 # and runs during the main install, one worker process per core, the
-# explorer's kernels first (rbm_nb/_warmup.py). The demo returns when the
+# explorer's kernels first (rbm_nb/_kernels/_warmup.py). The demo returns when the
 # install is done and leaves the compile running in the background (at low
 # priority once the explorer's kernels are ready); the tests wait for all
 # of them (a test must not wait for a compile). A process that needs a

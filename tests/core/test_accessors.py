@@ -1,4 +1,4 @@
-"""The DataArray.rbm accessor (rbm_nb/accessors.py)."""
+"""The DataArray.rbm accessor (rbm_nb/core/accessors.py)."""
 
 from __future__ import annotations
 

@@ -28,7 +28,7 @@ from scipy.spatial.transform import RigidTransform, Rotation
 
 import rbm_nb as rbm
 from rbm_nb import conversions as conv
-from rbm_nb._kernels import conversions as kern
+from rbm_nb._kernels import euler as kern_euler
 from rbm_nb._kernels import scalar
 
 ORDERS = conv.EULER_ORDERS
@@ -202,8 +202,8 @@ def naive_euler_from_quaternion(q, order, extrinsic):
     middle = 2 * np.arctan2(np.hypot(c, d), np.hypot(a, b))
     hs, hd = np.arctan2(b, a), np.arctan2(d, c)
     first, last = hs - hd, hs + hd
-    at0 = np.abs(middle) < kern._GIMBAL_EPS
-    atpi = np.abs(middle - np.pi) < kern._GIMBAL_EPS
+    at0 = np.abs(middle) < kern_euler._GIMBAL_EPS
+    atpi = np.abs(middle - np.pi) < kern_euler._GIMBAL_EPS
     if extrinsic:
         first = np.where(at0, 2 * hs, np.where(atpi, -2 * hd, first))
         last = np.where(at0 | atpi, 0.0, last)

@@ -1,7 +1,7 @@
 """Same bits as another checkout: the frame core's outputs on the real recording.
 
 Registers the explorer's head/eye frame tree (guide 1.6,
-``rbm_nb.explorer.register_head_eye_frames``) on the real recording
+``rbm_nb.app.explorer.register_head_eye_frames``) on the real recording
 (``RBM_NB_DATA_DIR``, default ``/work/shared/data/rbm-data``) in this tree
 and in another checkout, each in its own process with its own numba cache,
 computes lookups, transforms, twists and velocities (sorted target times,
@@ -32,6 +32,7 @@ def dump(out: str) -> None:
 
     import rbm_nb as rbm
     from rbm_nb.app.explorer import register_head_eye_frames
+    from rbm_nb.core.lookups import lookup_at
 
     head, left, right = (
         xr.open_dataset(DATA / f"{name}.nc").load()
@@ -40,8 +41,11 @@ def dump(out: str) -> None:
     rbm.clear_registry()
     register_head_eye_frames(head, left, right, ros_eyes=True)
     rng = np.random.default_rng(0)
-    eye_t = left.time.values
-    head_t = head.time.values
+    # times where every frame has data (lookups do not extrapolate)
+    lo = max(ds.time.values[0] for ds in (head, left, right))
+    hi = min(ds.time.values[-1] for ds in (head, left, right))
+    eye_t = left.time.values[(left.time.values >= lo) & (left.time.values <= hi)]
+    head_t = head.time.values[(head.time.values >= lo) & (head.time.values <= hi)]
     unsorted = rng.permutation(eye_t)[:5000]
     few = eye_t[1000:1040]  # serial launches
     one = eye_t[5000:5001]
@@ -67,10 +71,10 @@ def dump(out: str) -> None:
         keep(f"lookup_transform {a}->{b}", rbm.lookup_transform(a, b))
         for label, ts in (("eye", eye_t), ("head", head_t), ("unsorted", unsorted),
                           ("few", few), ("one", one)):  # fmt: skip
-            keep(f"lookup_at {a}->{b} {label}", rbm.lookup_at(a, b, ts))
+            keep(f"lookup_at {a}->{b} {label}", lookup_at(a, b, ts))
         keep(f"lookup_pose {a} wrt {b}", rbm.lookup_pose(a, b))
     for label, ts, n in (("eye", eye_t, len(eye_t)), ("head", head_t, len(head_t)),
-                         ("few", few, len(few)), ("unsorted", unsorted, len(unsorted))):  # fmt: skip
+                         ("few", few, len(few))):  # fmt: skip
         p = points[:n]
         keep(
             f"transform_points {label}",

@@ -24,7 +24,16 @@ from .scalar import (
     cos_small,
     sinc_small,
 )
-from .squad_segments import _BLOCK, _N_REC, _REC, _SMALL, _VECTOR, _W, _decide
+from .squad_segments import (
+    _BLOCK,
+    _N_REC,
+    _REC,
+    _SERIAL,
+    _SMALL,
+    _VECTOR,
+    _W,
+    _decide,
+)
 
 
 @helper(inline=True)
@@ -281,7 +290,7 @@ def _outer(aw, ax, ay, az, bw, bx, by, bz, tau):
     return c * aw + k * ow, c * ax + k * ox, c * ay + k * oy, c * az + k * oz
 
 
-@helper(inline=True)
+@helper(options=_SERIAL)
 def _gather_records(t_in, t_out, sign, n, dt_last, start, stop, found, slot, ws, wr):
     """Each row's τ, stored sign and segment record into the row scratch
     ``wr`` (a scalar loop: the records are gathered by slot)."""
@@ -325,7 +334,7 @@ def _gather_records(t_in, t_out, sign, n, dt_last, start, stop, found, slot, ws,
         wr[_ROW + 28 * _R + jj] = ws[_REC + 28 * _W + r]
 
 
-@helper(inline=True)
+@helper(options=_SERIAL)
 def _scalar_rows(q, sign, t_in, out, n, start, stop, found, slot, ws, wr, scalar):
     """The rows the vector loops did not cover (all of them if ``scalar``),
     one by one: _along, _outer and _exp_small with all their branches, or

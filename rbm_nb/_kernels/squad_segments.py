@@ -14,16 +14,23 @@ same bits.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 
 from numba import types
 from numba.extending import intrinsic
 
-from .._infra.config import VECTOR_KERNEL
+from .._infra.config import KERNEL, VECTOR_KERNEL
 from ._jit import helper
 from .quaternion import _qmul1
-from .scalar import SERIES_ANGLE, SERIES_RATIO, atan_over_x_small, cos_small, sinc_small
+from .scalar import (
+    SERIES_ANGLE,
+    SERIES_RATIO,
+    atan_over_x_small,
+    cos_small,
+    sinc_small,
+)
 
 # Scales |q| whose log is beyond this take the exact route (the bounds used
 # to decide a slerp's direction assume scales near 1).
@@ -40,6 +47,10 @@ _N_REC = 29
 _BLOCK = 96
 _SPAN = 2 * _BLOCK
 
+# fused multiply-add in the series (fastmath "contract" only: results move by
+# an ulp at most, far inside the 1e-12 the tests hold them to): the walk and
+# its scalar parts
+_SERIAL = dataclasses.replace(KERNEL, fastmath=frozenset({"contract"}))
 # The vector loops: fused multiply-add in the series (fastmath "contract"
 # only: results move by an ulp at most, far inside the 1e-12 the tests hold
 # them to), and no ZeroDivisionError branch (it would keep LLVM from

@@ -48,12 +48,13 @@ from typing import Any
 import numpy as np
 from numba import prange
 
-from .._infra.config import KERNEL, PARALLEL_KERNEL
+from .._infra.config import PARALLEL_KERNEL
 from ._jit import F1, F2, F, helper, kernel
 from .search import gallop
 from .squad_rows import _WR, _gather_records, _rows, _scalar_rows
 from .squad_segments import (
     _BLOCK,
+    _SERIAL,
     _SPAN,
     _WS,
     _controls_exact,
@@ -71,9 +72,7 @@ __all__ = [
     "squad_input_fault",
 ]
 
-# fused multiply-add in the series (fastmath "contract" only: results move by
-# an ulp at most, far inside the 1e-12 the tests hold them to)
-_SERIAL = dataclasses.replace(KERNEL, fastmath=frozenset({"contract"}))
+# the walk's options (squad_segments._SERIAL), and the same in parallel
 _PARALLEL = dataclasses.replace(PARALLEL_KERNEL, fastmath=frozenset({"contract"}))
 
 # chunks of output rows the parallel twin hands to numba's threads
@@ -103,7 +102,7 @@ def unflip_signs(q):
     return out
 
 
-@helper(inline=True)
+@helper(options=_SERIAL)
 def _find_segments(t_in, t_out, start, stop, i, found):
     """Each row's sample index into ``found`` (the last sample at or before
     its time, -1 before the first), galloping forward from the previous
@@ -123,7 +122,7 @@ def _find_segments(t_in, t_out, start, stop, i, found):
     return i, ordered
 
 
-@helper(inline=True)
+@helper(options=_SERIAL)
 def _set_up_segments(qf, sign, t_in, n, start, stop, found, ordered, scalar, ws, slot):
     """The block's segments in the scratch ``ws``, and each row's record slot.
 
@@ -159,7 +158,13 @@ def _set_up_segments(qf, sign, t_in, n, start, stop, found, ordered, scalar, ws,
             slot[j - start] = free - 1
 
 
-# Not inlined: the three kernels below share one compiled walk (inlined into
+# The walk's parts are helpers of their own, not inlined into it: inlined
+# (numba's inline="always"), _walk took 918 s to compile on the loaded
+# 2-core VM where main's one-piece walk took 805 s and this one 763 s (the
+# three compiled side by side). Each is called once per block, with the
+# walk's options (fused multiply-add: the same rounding as inlined).
+#
+# Not inlined either: the three kernels below share one compiled walk (inlined into
 # each, it made them the slowest kernels to compile by far: 116, 201 and 98 s
 # of the warm-up's 746 s on the 2-core VM, the prange twin the worst, as
 # numba's parfor passes went over the whole walk). One call per kernel call

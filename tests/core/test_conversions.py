@@ -27,7 +27,7 @@ from numba import njit
 from scipy.spatial.transform import RigidTransform, Rotation
 
 import rbm_nb as rbm
-from rbm_nb._kernels import conversions as kern
+from rbm_nb._kernels import euler as kern_euler
 from rbm_nb._kernels import scalar
 from rbm_nb.core import conversions as conv
 
@@ -202,8 +202,8 @@ def naive_euler_from_quaternion(q, order, extrinsic):
     middle = 2 * np.arctan2(np.hypot(c, d), np.hypot(a, b))
     hs, hd = np.arctan2(b, a), np.arctan2(d, c)
     first, last = hs - hd, hs + hd
-    at0 = np.abs(middle) < kern._GIMBAL_EPS
-    atpi = np.abs(middle - np.pi) < kern._GIMBAL_EPS
+    at0 = np.abs(middle) < kern_euler._GIMBAL_EPS
+    atpi = np.abs(middle - np.pi) < kern_euler._GIMBAL_EPS
     if extrinsic:
         first = np.where(at0, 2 * hs, np.where(atpi, -2 * hd, first))
         last = np.where(at0 | atpi, 0.0, last)
@@ -940,6 +940,6 @@ def test_docstring_examples_run():
     import doctest
     import importlib
 
-    module = importlib.import_module("rbm_nb.core.conversions")
+    module = importlib.import_module("rbm_nb.conversions")
     result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
     assert result.attempted > 0 and result.failed == 0

@@ -100,7 +100,18 @@ _SUBMODULES: dict[str, str] = {
     },
     "explorer": "app.explorer",
     **{
-        name: name for name in ("data", "io", "ros", "scene", "sdf", "study", "widgets")
+        name: name
+        for name in (
+            "app",
+            "core",
+            "data",
+            "io",
+            "ros",
+            "scene",
+            "sdf",
+            "study",
+            "widgets",
+        )
     },
 }
 # ``import rbm_nb.frames`` (the path rigid-body-motion users and our own
@@ -110,7 +121,14 @@ _MOVED: dict[str, str] = {
     "cli": "app.cli",
 }
 
-__all__ = sorted(_EXPORTS) + sorted(_SUBMODULES) + ["__version__"]
+# the public names, and the sub-packages that hold the rest: the facades'
+# modules are listed once, where they live (``core``), so that the API
+# reference documents each of them under its own name
+__all__ = (
+    sorted(_EXPORTS)
+    + sorted(name for name, path in _SUBMODULES.items() if path == name)
+    + ["__version__"]
+)
 
 
 __getattr__, __dir__ = lazy_attributes(__name__, _EXPORTS, _SUBMODULES)
@@ -118,7 +136,7 @@ alias_modules(__name__, _MOVED)
 
 
 if TYPE_CHECKING:  # pragma: no cover - static analysers see the real names
-    from . import data, io, ros, scene, sdf, study, widgets  # noqa: F401
+    from . import app, core, data, io, ros, scene, sdf, study, widgets  # noqa: F401
     from .app import explorer  # noqa: F401
     from .core import (  # noqa: F401
         accessors,

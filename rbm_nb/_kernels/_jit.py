@@ -120,8 +120,11 @@ def kernel(*argtypes: str, options: JitOptions = KERNEL) -> Callable[[_Func], _F
 def _compile_once(dispatcher: Any) -> None:
     # numba's dispatcher calls self.compile(...) for a call it has no
     # overload for (and the warm-up calls it directly): an attribute of the
-    # instance comes first, so every compile of the kernel takes the lock
-    original = dispatcher.compile
+    # instance comes first, so every compile of the kernel takes the lock.
+    # Under NUMBA_DISABLE_JIT=1 njit gives the plain function: nothing to lock.
+    original = getattr(dispatcher, "compile", None)
+    if original is None:
+        return
 
     def compile(sig: Any, wait: bool = True) -> Any:
         return _numba_cache.compile_once(dispatcher, original, sig, wait=wait)

@@ -246,7 +246,7 @@ def test_a_process_waits_for_the_lock_holder_and_then_loads(tmp_path):
         [
             sys.executable,
             "-c",
-            "from rbm_nb._infra import numba_cache as _numba_cache as c; from rbm_nb._kernels import quaternion"
+            "from rbm_nb._infra import numba_cache as c; from rbm_nb._kernels import quaternion"
             " as q; from numba import types as t; a = (t.float64[:, ::1],);"
             " k = c.signature_key(q.qconj, a); print(c._lock_path(c.cache_folder(q.qconj), k))",
         ],

@@ -116,7 +116,15 @@ _COMPILE = textwrap.dedent(
 
 
 def _python(code: str, cache: Path, *args: str) -> str:
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "PYTHONPATH": str(REPO)}
+    # one thread: the notebook's calls take the serial kernels (EXPLORER), while
+    # a plain process on several cores launches the parallel twins for the
+    # workload's whole-recording lookups, which the warm-up compiles later
+    env = {
+        **os.environ,
+        "NUMBA_CACHE_DIR": str(cache),
+        "PYTHONPATH": str(REPO),
+        "RBM_NB_NUM_THREADS": "1",
+    }
     done = subprocess.run(
         [sys.executable, "-c", code, *args],
         env=env,

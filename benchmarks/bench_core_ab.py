@@ -53,9 +53,10 @@ for label, call in ops.items():
 """
 
 
-def run(tree: Path) -> dict[str, float]:
+def run(tree: Path, child: str = CHILD) -> dict[str, float]:
+    """One fresh process in ``tree`` running ``child``: label -> best time."""
     env = dict(os.environ, PYTHONPATH=str(tree))
-    code = CHILD.format(benchmarks=str(REPO / "benchmarks"))
+    code = child.format(benchmarks=str(REPO / "benchmarks"))
     out = subprocess.run(
         [sys.executable, "-c", code], cwd=tree, env=env, capture_output=True,
         text=True, check=True,
@@ -63,22 +64,26 @@ def run(tree: Path) -> dict[str, float]:
     return {k: float(v) for k, v in (line.split("\t") for line in out.splitlines())}
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def compare(
+    description: str, child: str = CHILD, header: str = "call", unit: str = " ms"
+) -> None:
+    """Parse OTHER_TREE/--rounds, run ``child`` in both trees in turns, print ratios."""
+    parser = argparse.ArgumentParser(description=description)
     parser.add_argument("other", type=Path, help="another checkout of the repository")
     parser.add_argument("--rounds", type=int, default=4)
     args = parser.parse_args()
     best: dict[str, dict[str, float]] = collections.defaultdict(dict)
     for _ in range(args.rounds):
         for name, tree in (("other", args.other.resolve()), ("this", REPO)):
-            for label, ms in run(tree).items():
-                best[label][name] = min(best[label].get(name, float("inf")), ms)
-    print(f"{'call':36s} {'other':>10s} {'this':>10s}  this/other")
+            for label, value in run(tree, child).items():
+                best[label][name] = min(best[label].get(name, float("inf")), value)
+    print(f"{header:40s} {'other':>11s} {'this':>11s}  this/other")
     for label, d in best.items():
         print(
-            f"{label:36s} {d['other']:8.2f} ms {d['this']:8.2f} ms  {d['this'] / d['other']:.3f}"
+            f"{label:40s} {d['other']:8.3f}{unit} {d['this']:8.3f}{unit}"
+            f"  {d['this'] / d['other']:.3f}"
         )
 
 
 if __name__ == "__main__":
-    main()
+    compare(__doc__.split("\n\n")[0])

@@ -12,14 +12,7 @@ Run:  .venv/bin/python benchmarks/bench_small_ab.py OTHER_TREE [--rounds 4]
 
 from __future__ import annotations
 
-import argparse
-import collections
-import os
-import subprocess
-import sys
-from pathlib import Path
-
-REPO = Path(__file__).resolve().parents[1]
+from bench_core_ab import compare
 
 CHILD = """
 import os, sys, time
@@ -66,32 +59,5 @@ for label, (call, batch, unit) in ops.items():
 """
 
 
-def run(tree: Path) -> dict[str, float]:
-    env = dict(os.environ, PYTHONPATH=str(tree))
-    code = CHILD.format(benchmarks=str(REPO / "benchmarks"))
-    out = subprocess.run(
-        [sys.executable, "-c", code], cwd=tree, env=env, capture_output=True,
-        text=True, check=True,
-    ).stdout  # fmt: skip
-    return {k: float(v) for k, v in (line.split("\t") for line in out.splitlines())}
-
-
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("other", type=Path, help="another checkout of the repository")
-    parser.add_argument("--rounds", type=int, default=4)
-    args = parser.parse_args()
-    best: dict[str, dict[str, float]] = collections.defaultdict(dict)
-    for _ in range(args.rounds):
-        for name, tree in (("other", args.other.resolve()), ("this", REPO)):
-            for label, value in run(tree).items():
-                best[label][name] = min(best[label].get(name, float("inf")), value)
-    print(f"{'call (best CPU time)':40s} {'other':>9s} {'this':>9s}  this/other")
-    for label, d in best.items():
-        print(
-            f"{label:40s} {d['other']:9.3f} {d['this']:9.3f}  {d['this'] / d['other']:.3f}"
-        )
-
-
 if __name__ == "__main__":
-    main()
+    compare(__doc__.split("\n\n")[0], CHILD, "call (best CPU time)", unit="")

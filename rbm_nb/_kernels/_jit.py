@@ -42,6 +42,7 @@ __all__ = [
     "Declared",
     "kernel",
     "helper",
+    "compiled_as",
     "F",
     "I",
     "B",
@@ -157,3 +158,20 @@ def declared_kernels() -> list[Declared]:
         if not info.name.startswith("_"):
             importlib.import_module(f"{package}.{info.name}")
     return [k for kernels in DECLARED.values() for k in kernels]
+
+
+def compiled_as(
+    name: str, doc: str | None, body: Callable[..., Any]
+) -> Callable[..., Any]:
+    """``body`` under its kernel's own name, for a serial kernel and its twin.
+
+    A kernel with a prange twin is one body made twice (for one chunk and
+    for many) and decorated twice, with and without ``parallel``. numba's
+    cache files go by the function's name and source line, not by its
+    compile options: under one name the twin would load the serial
+    kernel's code (or the reverse). Each compilation therefore gets its
+    own name.
+    """
+    body.__name__ = body.__qualname__ = name
+    body.__doc__ = doc
+    return body

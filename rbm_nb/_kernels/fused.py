@@ -79,7 +79,7 @@ import numpy as np
 from numba import prange
 
 from .._infra.config import PARALLEL_KERNEL
-from ._jit import F1, F2, F3, I1, B, I, kernel  # noqa: E741
+from ._jit import F1, F2, F3, I1, B, I, compiled_as, kernel  # noqa: E741
 from .chain_block import CONSTANT, HELD, SLOT_TYPES, SLOTS, SQUAD, STATIC, _chain_block
 from .chain_prefill import CHUNKS, _chunk_bounds, prefill_chain
 from .chain_rows import BLOCK, WORK, _apply_block, _store_lookup
@@ -129,16 +129,6 @@ def pack_slots(
 # Each scratch is allocated in the loop, which numba hoists to once per
 # thread (a (chunks, BLOCK, 7) array would be half of a transform_points
 # output of the recording).
-
-
-def _compiled_as(
-    name: str, doc: str | None, body: Callable[..., Any]
-) -> Callable[..., Any]:
-    """``body`` under its kernel's own name: numba's cache files go by name,
-    and the two compilations of one body must not share them."""
-    body.__name__ = body.__qualname__ = name
-    body.__doc__ = doc
-    return body
 
 
 def _lookup_body(chunks: int) -> Callable[..., Any]:
@@ -245,20 +235,20 @@ _TWIN_DOC = """:func:`{0}` on all threads, with tables prefilled.
     """
 
 lookup_chain = kernel(*CHAIN, F1, B)(
-    _compiled_as("lookup_chain", _LOOKUP_DOC, _lookup_body(1))
+    compiled_as("lookup_chain", _LOOKUP_DOC, _lookup_body(1))
 )
 transform_chain = kernel(*CHAIN, F1, F3, I)(
-    _compiled_as("transform_chain", _TRANSFORM_DOC, _transform_body(1))
+    compiled_as("transform_chain", _TRANSFORM_DOC, _transform_body(1))
 )
 lookup_chain_parallel = kernel(*CHAIN, F1, B, options=PARALLEL_KERNEL)(
-    _compiled_as(
+    compiled_as(
         "lookup_chain_parallel",
         _TWIN_DOC.format("lookup_chain"),
         _lookup_body(CHUNKS),
     )
 )
 transform_chain_parallel = kernel(*CHAIN, F1, F3, I, options=PARALLEL_KERNEL)(
-    _compiled_as(
+    compiled_as(
         "transform_chain_parallel",
         _TWIN_DOC.format("transform_chain"),
         _transform_body(CHUNKS),

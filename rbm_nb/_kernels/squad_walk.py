@@ -49,7 +49,7 @@ import numpy as np
 from numba import prange
 
 from .._infra.config import PARALLEL_KERNEL
-from ._jit import F1, F2, F, helper, kernel
+from ._jit import F1, F2, F, compiled_as, helper, kernel
 from .search import gallop
 from .squad_rows import _WR, _gather_records, _rows, _scalar_rows
 from .squad_segments import (
@@ -232,14 +232,6 @@ def _walk_body(chunks: int, scalar: bool) -> Callable[..., Any]:
     return body
 
 
-def _compiled_as(name: str, doc: str, body: Callable[..., Any]) -> Callable[..., Any]:
-    """``body`` under its kernel's own name: numba's cache files go by name,
-    and the compilations of one body must not share them."""
-    body.__name__ = body.__qualname__ = name
-    body.__doc__ = doc
-    return body
-
-
 _SQUAD_WALK_DOC = """Squad of the stored series ``q`` at ``t_out``, with the stored signs.
 
     Equal (to rounding) to ``unflip``, ``squad`` on the result and the sign
@@ -264,17 +256,17 @@ _SQUAD_WALK_DOC = """Squad of the stored series ``q`` at ``t_out``, with the sto
     """
 
 squad_walk = kernel(F2, F1, F1, options=_SERIAL)(
-    _compiled_as("squad_walk", _SQUAD_WALK_DOC, _walk_body(1, False))
+    compiled_as("squad_walk", _SQUAD_WALK_DOC, _walk_body(1, False))
 )
 squad_walk_parallel = kernel(F2, F1, F1, options=_PARALLEL)(
-    _compiled_as(
+    compiled_as(
         "squad_walk_parallel",
         ":func:`squad_walk` with chunks of output rows on numba's threads.",
         _walk_body(_CHUNKS, False),
     )
 )
 squad_walk_scalar = kernel(F2, F1, F1, options=_SERIAL)(
-    _compiled_as(
+    compiled_as(
         "squad_walk_scalar",
         """:func:`squad_walk` by its scalar code alone: every segment set up on
     its own (:func:`_unit`, :func:`_log_vec`, :func:`_controls_exact`,

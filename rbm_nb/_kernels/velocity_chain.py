@@ -27,12 +27,14 @@ The chain's arguments are those of :mod:`rbm_nb._kernels.fused`.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from numba import prange
 
 from .._infra.config import PARALLEL_KERNEL
-from ._jit import F1, F2, I1, I, helper, kernel  # noqa: E741
+from ._jit import F1, F2, I1, I, compiled_as, helper, kernel  # noqa: E741
 from .chain_block import SLOT_TYPES, SLOTS, _chain_block
 from .chain_rows import _ACC, BLOCK, WORK
 from .quaternion import _rotate1
@@ -283,13 +285,74 @@ def _buffers(n):
     return out, slope_w, flips, checkpoint, factors, st
 
 
-@kernel(I1, F2, F1, F1, I1, *SLOT_TYPES, F1, I)
-def chain_body_rates(
-    plan, statics, offsets, gaps, own,
-    slot_times, slot_t, slot_r, slot_p, slot_c,
-    target, axes,
-):  # fmt: skip
-    """Angular velocity of the chain's rotation at the target times.
+# ---------------------------------------------------------------------------
+# the serial kernel and its prange twin, from one body
+# ---------------------------------------------------------------------------
+
+# The runs of rows go forwards, then backwards, through a pipeline: step r
+# evaluates run r (in ``chunks`` pieces, into one of two buffers) and sweeps
+# run r - 1 (from the other). The sweep is the last of the loop's items, so
+# that numba's static schedule gives it to the thread with the fewest
+# pieces. Compiled without ``parallel`` and with one piece, prange is range
+# and the items run in order: evaluate run r, then sweep run r - 1, which is
+# the serial kernel. Each piece's segment search starts afresh (a binary
+# search); the segment of a time does not depend on where the search
+# started, so both compilations give every row the same arithmetic.
+
+
+def _rates_body(chunks: int) -> Callable[..., Any]:
+    def body(
+        plan, statics, offsets, gaps, own,
+        slot_times, slot_t, slot_r, slot_p, slot_c,
+        target, axes,
+    ):  # fmt: skip
+        n = target.shape[0]
+        out, slope_w, flips, checkpoint, factors, st = _buffers(n)
+        both = np.empty((2, min(SUPER, n), 4))
+        runs = (n + SUPER - 1) // SUPER
+        bad = np.zeros(1, dtype=np.int64)
+        computed = 0
+        for r in range(2 * runs + 1):
+            # step r evaluates run r and sweeps run r - 1; runs 0 .. runs - 1
+            # go forwards (the elimination), runs .. 2 runs - 1 backwards
+            for item in prange(chunks + 1):
+                if item < chunks and r < 2 * runs:
+                    s0 = (2 * runs - 1 - r if r >= runs else r) * SUPER
+                    s1 = min(s0 + SUPER, n)
+                    piece = (s1 - s0 + chunks - 1) // chunks
+                    piece = (piece + BLOCK - 1) // BLOCK * BLOCK
+                    a = s0 + item * piece
+                    b = min(a + piece, s1)
+                    if a < b:
+                        work_c = np.zeros(WORK * BLOCK)  # zeros: see chain_rows._ACC
+                        cur_c = np.full(SLOTS, -1, dtype=np.int64)
+                        computed += _evaluate(
+                            plan, statics, offsets, gaps, own,
+                            slot_times, slot_t, slot_r, slot_p, slot_c,
+                            target, a, b, s0, both[r % 2], work_c, cur_c,
+                        )  # fmt: skip
+                elif item == chunks and r >= 1:
+                    k = r - 1
+                    s0 = (2 * runs - 1 - k if k >= runs else k) * SUPER
+                    s1 = min(s0 + SUPER, n)
+                    buf = both[k % 2]
+                    if k < runs:
+                        bad[0] = _forward(
+                            buf, s0, s1, target, out, slope_w, flips, checkpoint, st
+                        )
+                    else:
+                        _backward(
+                            buf, s0, s1, target, out, slope_w, flips,
+                            checkpoint, factors, st, axes,
+                        )  # fmt: skip
+            if bad[0]:
+                return out, 1, computed
+        return out, 0, computed
+
+    return body
+
+
+_RATES_DOC = """Angular velocity of the chain's rotation at the target times.
 
     Parameters
     ----------
@@ -310,90 +373,18 @@ def chain_body_rates(
     computed : int
         Rows of the squad tables computed by this call.
     """
-    n = target.shape[0]
-    out, slope_w, flips, checkpoint, factors, st = _buffers(n)
-    rows = np.empty((min(SUPER, n), 4))
-    work = np.zeros(WORK * BLOCK)  # zeros: see chain_rows._ACC
-    cur = np.full(SLOTS, -1, dtype=np.int64)
-    computed = 0
-    for s0 in range(0, n, SUPER):
-        s1 = min(s0 + SUPER, n)
-        computed += _evaluate(
-            plan, statics, offsets, gaps, own,
-            slot_times, slot_t, slot_r, slot_p, slot_c,
-            target, s0, s1, s0, rows, work, cur,
-        )  # fmt: skip
-        if _forward(rows, s0, s1, target, out, slope_w, flips, checkpoint, st):
-            return out, 1, computed
-    for s0 in range((n - 1) // SUPER * SUPER, -1, -SUPER):
-        s1 = min(s0 + SUPER, n)
-        cur[:] = -1  # the segment search starts afresh (a binary search)
-        _evaluate(
-            plan, statics, offsets, gaps, own,
-            slot_times, slot_t, slot_r, slot_p, slot_c,
-            target, s0, s1, s0, rows, work, cur,
-        )  # fmt: skip
-        _backward(
-            rows, s0, s1, target, out, slope_w, flips, checkpoint, factors, st, axes
-        )
-    return out, 0, computed
 
-
-@kernel(I1, F2, F1, F1, I1, *SLOT_TYPES, F1, I, options=PARALLEL_KERNEL)
-def chain_body_rates_parallel(
-    plan, statics, offsets, gaps, own,
-    slot_times, slot_t, slot_r, slot_p, slot_c,
-    target, axes,
-):  # fmt: skip
-    """:func:`chain_body_rates` on all threads, bit for bit.
+_TWIN_DOC = """:func:`chain_body_rates` on all threads, bit for bit.
 
     Call :func:`rbm_nb._kernels.fused.prefill_chain` first (unless the
-    tables are complete): the evaluations only read the tables. The runs
-    of rows go forwards, then backwards, through a pipeline: while one
-    thread sweeps run k, the others evaluate run k + 1 in :data:`CHUNKS`
-    pieces, into the other of two buffers. The sweep is the last of the
-    loop's items, so that numba's static schedule gives it to the thread
-    with the fewest pieces.
+    tables are complete): the evaluations only read the tables. Each run
+    of rows is evaluated in :data:`CHUNKS` pieces on the other threads
+    while one thread sweeps the run before it.
     """
-    n = target.shape[0]
-    out, slope_w, flips, checkpoint, factors, st = _buffers(n)
-    both = np.empty((2, min(SUPER, n), 4))
-    runs = (n + SUPER - 1) // SUPER
-    bad = np.zeros(1, dtype=np.int64)
-    computed = 0
-    for r in range(2 * runs + 1):
-        # step r evaluates run r and sweeps run r - 1; runs 0 .. runs - 1 go
-        # forwards (the elimination), runs .. 2 runs - 1 backwards
-        for item in prange(CHUNKS + 1):
-            if item < CHUNKS and r < 2 * runs:
-                s0 = (2 * runs - 1 - r if r >= runs else r) * SUPER
-                s1 = min(s0 + SUPER, n)
-                piece = (s1 - s0 + CHUNKS - 1) // CHUNKS
-                piece = (piece + BLOCK - 1) // BLOCK * BLOCK
-                a = s0 + item * piece
-                b = min(a + piece, s1)
-                if a < b:
-                    work_c = np.zeros(WORK * BLOCK)  # zeros: see chain_rows._ACC
-                    cur_c = np.full(SLOTS, -1, dtype=np.int64)
-                    computed += _evaluate(
-                        plan, statics, offsets, gaps, own,
-                        slot_times, slot_t, slot_r, slot_p, slot_c,
-                        target, a, b, s0, both[r % 2], work_c, cur_c,
-                    )  # fmt: skip
-            elif item == CHUNKS and r >= 1:
-                k = r - 1
-                s0 = (2 * runs - 1 - k if k >= runs else k) * SUPER
-                s1 = min(s0 + SUPER, n)
-                buf = both[k % 2]
-                if k < runs:
-                    bad[0] = _forward(
-                        buf, s0, s1, target, out, slope_w, flips, checkpoint, st
-                    )
-                else:
-                    _backward(
-                        buf, s0, s1, target, out, slope_w, flips,
-                        checkpoint, factors, st, axes,
-                    )  # fmt: skip
-        if bad[0]:
-            return out, 1, computed
-    return out, 0, computed
+
+chain_body_rates = kernel(I1, F2, F1, F1, I1, *SLOT_TYPES, F1, I)(
+    compiled_as("chain_body_rates", _RATES_DOC, _rates_body(1))
+)
+chain_body_rates_parallel = kernel(
+    I1, F2, F1, F1, I1, *SLOT_TYPES, F1, I, options=PARALLEL_KERNEL
+)(compiled_as("chain_body_rates_parallel", _TWIN_DOC, _rates_body(CHUNKS)))

@@ -26,7 +26,8 @@ the frames module sits above this one and uses it too.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -303,7 +304,7 @@ def transform_block(block, frames, kind: str, dim, time_dim, attr, origin):
     """
     unpacked = unpack(block, dim=dim, timestamps=time_dim)
     laid_out = _blocks_of(unpacked, kind, _track_from(unpacked.timestamps, origin))
-    with frames.built() as (outof, into):
+    with _task_values(frames) as (outof, into):
         out, ts_out = _engine_transform.transform(outof, kind, laid_out, into)
     attrs = dict(unpacked.attrs)
     attrs[attr] = attrs["representation_frame"] = into.name
@@ -320,7 +321,7 @@ def velocity_block(block, context, what: str, dim, time_dim, origin):
     """
     unpacked = unpack(block, dim=dim, timestamps=time_dim)
     laid_out = _blocks_of(unpacked, "vectors", _track_from(unpacked.timestamps, origin))
-    with context.frames.built() as (frame, to_frame):
+    with _task_values(context.frames) as (frame, to_frame):
         rotated, matched, final = _twist.velocity_parts(
             laid_out, frame, to_frame, context.extras, context.interpolated
         )
@@ -328,6 +329,21 @@ def velocity_block(block, context, what: str, dim, time_dim, origin):
     attrs = dict(unpacked.attrs)
     attrs[what] = attrs["representation_frame"] = to_frame.name
     return wrap(unpacked, out, final.timestamps, attrs)
+
+
+@contextmanager
+def _task_values(frames: Any) -> Iterator[list[Any]]:
+    """The values of a task's frames (``FrameTree.values``: made from the
+    records, nothing checked again), let go of when the task ends.
+
+    The engine caches chains by pairs of values; a task's values serve one
+    block, so its entries are dropped with them (as a frame that changes
+    drops them), or a worker would hold every finished window's samples.
+    """
+    try:
+        yield frames.values()
+    finally:
+        _chain.forget()
 
 
 def _track_from(timestamps: Any, origin: int | None) -> _time.Track:

@@ -9,31 +9,33 @@ other processes or other machines where the registry is empty.
 
 :class:`FrameTree` holds the frames a computation needs (those between the
 frames it names and their lowest common ancestor, which becomes the root)
-as :class:`FrameValue` records: the public samples, times and options of
+as :class:`FrameValue` records: the prepared samples, times and options of
 each frame's one immutable value (``ReferenceFrame.data``, the value the
 engine computes with), so that a snapshot is one consistent state of every
-frame in it. :meth:`FrameTree.window` keeps, of
+frame in it. A worker makes the values again from the records
+(:meth:`FrameTree.values`); it builds no ReferenceFrame and checks nothing
+again. :meth:`FrameTree.window` keeps, of
 every moving frame, only the samples a chunk's time window needs plus
 :data:`MARGIN` samples on each side, so that what one task carries grows
 with its chunk, not with the recording. The margin covers every stencil of
 the engine -- SQUAD reads samples i-1 .. i+2, linear interpolation i and
 i+1, the missing-sample rules the same neighbours -- with room to spare, and
 it does not depend on how those rules treat missing samples: the eager
-engine runs on the window's frames (:meth:`FrameTree.build`) exactly as on
+engine runs on the window's values (:meth:`FrameTree.values`) exactly as on
 the whole ones, and the margin keeps the window's edges out of reach.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from .._door.dask_blocks import MARGIN
-from .._engine.frame_data import FrameData
+from .._engine import time as _time
+from .._engine.frame_data import FrameData, Samples
 from .frames import ReferenceFrame
 
 __all__ = ["FrameValue", "FrameTree"]
@@ -41,42 +43,37 @@ __all__ = ["FrameValue", "FrameTree"]
 
 @dataclass(frozen=True)
 class FrameValue:
-    """One frame's data as a value: what :class:`~rbm_nb.ReferenceFrame` takes.
+    """One frame's immutable value, as a record of its tree.
 
+    ``samples`` is the frame's prepared :class:`~rbm_nb._engine.frame_data.Samples`
+    (``ReferenceFrame.data.samples``: checked, unit and sign-continuous
+    rotations, the Track of its times), or for a window the rows it keeps;
     ``parent`` is the index of the parent in the :class:`FrameTree` (-1 for
-    its root). Arrays are the frame's public, read-only ones (no copy), or
-    for a window the rows it keeps.
+    its root, whose transform is the identity). A worker turns the records
+    back into :class:`~rbm_nb._engine.frame_data.FrameData` values
+    (:meth:`FrameTree.values`) without checking or preparing anything
+    again: that was done once, when the user's frame was built.
     """
 
     name: str | None
     parent: int
-    translation: np.ndarray | None
-    rotation: np.ndarray | None
-    timestamps: np.ndarray | None
+    samples: Samples
     discrete: bool
     max_gap: float | None
 
     @classmethod
     def of(cls, data: FrameData, parent: int) -> FrameValue:
         """The record of a frame's value (``ReferenceFrame.data``)."""
-        if parent < 0:  # the root of the tree: no transform
-            return cls(data.name, parent, None, None, None, data.discrete, data.max_gap)
-        track = data.track
-        moving = track is not None
-        return cls(
-            data.name,
-            parent,
-            _read_only(data.t if moving else data.t[0]),
-            _read_only(data.rotation if moving else data.rotation[0]),
-            None if track is None else _read_only(track.values),
-            data.discrete,
-            data.max_gap,
-        )
+        samples = _IDENTITY if parent < 0 else data.samples
+        return cls(data.name, parent, samples, data.discrete, data.max_gap)
 
     @property
     def nbytes(self) -> int:
-        arrays = (self.translation, self.rotation, self.timestamps)
-        return sum(a.nbytes for a in arrays if a is not None)
+        s = self.samples
+        arrays = [s.t, s.r, s.rotation]
+        if s.track is not None:
+            arrays += [s.track.values, s.track.key, s.track.base]
+        return sum(a.nbytes for a in arrays)
 
     def window(self, first: Any, last: Any, margin: int) -> FrameValue:
         """The samples covering ``first .. last``, ``margin`` more on each side.
@@ -87,9 +84,10 @@ class FrameValue:
         them). Times of another kind than the frame's (datetime64 against
         numbers) are not cut here: the engine names that error on compute.
         """
-        ts = self.timestamps
-        if ts is None or not _comparable(ts, first):
+        track = self.samples.track
+        if track is None or not _comparable(track.values, first):
             return self
+        ts = track.values
         n = len(ts)
         lo = int(np.searchsorted(ts, first, side="right")) - 1 - margin
         hi = int(np.searchsorted(ts, last, side="left")) + 1 + margin
@@ -100,22 +98,24 @@ class FrameValue:
             return self
         # the first sample stays: times count from it (float seconds since the
         # first sample), so the window interpolates with the whole frame's
-        # numbers; it is far outside the stencils the margin keeps
+        # numbers; it is far outside the stencils the margin keeps. The rows
+        # are the prepared ones (sign-continuous over the whole recording),
+        # so the window's rows are the eager call's to the bit.
         rows = np.r_[0, lo:hi] if lo > 0 else slice(lo, hi)
-        assert self.translation is not None and self.rotation is not None
-        return replace(
-            self,
-            translation=self.translation[rows],
-            rotation=self.rotation[rows],
-            timestamps=ts[rows],
+        s = self.samples
+        cut = _time.Track(
+            track.values[rows], track.key[rows], track.base[rows], track.origin,
+            track.kind,
+        )  # fmt: skip
+        samples = Samples(
+            cut, s.t[rows], s.r[rows], s.rotation[rows], s.missing_rotations
         )
+        return replace(self, samples=samples)
 
 
-def _read_only(arr: np.ndarray) -> np.ndarray:
-    """A view nobody can write through (the arrays are the frame's own)."""
-    view = arr.view()
-    view.setflags(write=False)
-    return view
+# the root of a tree: its own transform is not on any path below it
+_IDENTITY_ROW = np.array([[1.0, 0.0, 0.0, 0.0]])
+_IDENTITY = Samples(None, np.zeros((1, 3)), _IDENTITY_ROW, _IDENTITY_ROW)
 
 
 def _comparable(timestamps: np.ndarray, time: Any) -> bool:
@@ -182,41 +182,20 @@ class FrameTree:
             self, frames=tuple(f.window(first, last, margin) for f in self.frames)
         )
 
-    @contextmanager
-    def built(self) -> Iterator[list[ReferenceFrame]]:
-        """Fresh ReferenceFrame objects (unregistered), the named ones in order.
+    def values(self) -> list[FrameData]:
+        """The named frames' values (FrameData), in order, made from the records.
 
-        Built with the public constructor, so the frames are validated and
-        prepared (sign continuity, missing samples) exactly as the user's
-        frames were: the engine cannot tell them from the originals. On
-        leaving, the frames are detached from each other: a tree is a
-        reference cycle (parents list their children), so without this a
-        worker would keep every finished task's window -- its samples and
-        the engine's tables, which go with them -- until a full pass of the
-        garbage collector.
+        No ReferenceFrame is built: the samples were checked and prepared
+        when the user's frames were, and a value is all the engine reads
+        (:mod:`rbm_nb._engine.frame_data`). Values link only to their parents,
+        so a finished task's values go with its last reference.
         """
-        frames = self._build()
-        try:
-            yield [frames[k] for k in self.named]
-        finally:
-            for frame in reversed(frames[1:]):
-                frame.parent = None
-
-    def _build(self) -> list[ReferenceFrame]:
-        built: list[ReferenceFrame] = []
+        made: list[FrameData] = []
         for value in self.frames:
-            if value.parent < 0:
-                built.append(ReferenceFrame(value.name))
-                continue
-            built.append(
-                ReferenceFrame(
-                    value.name,
-                    parent=built[value.parent],
-                    translation=value.translation,
-                    rotation=value.rotation,
-                    timestamps=value.timestamps,
-                    discrete=value.discrete,
-                    max_gap=value.max_gap,
+            parent = None if value.parent < 0 else made[value.parent]
+            made.append(
+                FrameData(
+                    value.name, parent, value.samples, value.discrete, value.max_gap
                 )
             )
-        return built
+        return [made[k] for k in self.named]

@@ -540,29 +540,31 @@ def test_long_recordings_count_times_from_the_first_sample():
 
 
 def test_a_tasks_frames_are_freed_when_it_ends(recording, tree, monkeypatch):
-    """Without a pass of the cycle collector: a built tree is a reference cycle,
-    and the engine caches the chains of the frames last used, so a worker
-    would otherwise keep every finished window until a full collection."""
+    """Without a pass of the cycle collector: the engine caches chains by the
+    values they join, so a worker could otherwise keep every finished task's
+    values (and the window's samples and tables that go with them). The
+    samples themselves belong to the graph (its tasks' arguments)."""
     import gc
     import weakref
 
     from rbm_nb.core._frame_snapshot import FrameTree
 
-    built = []
-    build = FrameTree._build
+    made = []
+    values = FrameTree.values
 
-    def recording_build(self):
-        frames = build(self)
-        built.extend(weakref.ref(f) for f in frames)
-        return frames
+    def recording_values(self):
+        named = values(self)
+        for value in named:
+            made.extend(weakref.ref(data) for data in value.path_to_root())
+        return named
 
-    monkeypatch.setattr(FrameTree, "_build", recording_build)
+    monkeypatch.setattr(FrameTree, "values", recording_values)
     pos = _eye(recording, "position").chunk(time=CHUNK)
     lazy = rbm.transform_points(pos, outof="head", into="world", dim="cartesian_axis")
     gc.disable()
     try:
         lazy.compute(scheduler="sync")
-        assert built
-        assert [r for r in built if r() is not None] == []
+        assert made
+        assert [r for r in made if r() is not None] == []
     finally:
         gc.enable()

@@ -15,10 +15,21 @@ what a time is and how it is ordered:
   timedelta64).
 
 The ordering rule is explicit: :func:`as_track` requires strictly increasing
-times (a frame's or an array's samples); :func:`requested_times` accepts any
+times (a frame's or an array's samples); with ``repeats=True`` it accepts
+repeated times but no step back (the notebook layer's plots and players of
+data logged with repeated stamps); :func:`requested_times` accepts any
 order and repeats (the times a caller asks a lookup at). Whatever is
 computed, timestamps handed back are slices (or the sorted union) of the
 original values, in their original dtype.
+
+The notebook layer (widgets, scene, ROS transformer, studies) uses the same
+rule and keeps the same exact keys, plus a :class:`TimeBase`: second 0 of a
+view. Seconds from second 0 are computed from the keys (int64 subtraction
+before any float), so two datetimes 1 ns apart stay two samples at any
+epoch. Floats counted from the Unix epoch exist only where a value crosses
+to JavaScript or to a caller that asked for one (``TimeBase.epoch``).
+:func:`latest_index` is the one search for "the sample shown at a time":
+a time within :data:`TIE` of a sample is that sample.
 """
 
 from __future__ import annotations
@@ -38,6 +49,12 @@ __all__ = [
     "union",
     "seconds",
     "seconds_pair",
+    "TimeBase",
+    "latest_index",
+    "TIE",
+    "epoch_seconds",
+    "ns_keys",
+    "from_epoch_seconds",
 ]
 
 _NS_PER_S = 1e9
@@ -138,15 +155,27 @@ class Track:
         """Times in seconds for finite differences (the reference's units)."""
         return self.base
 
+    def epoch_seconds(self) -> np.ndarray:
+        """The times as float data seconds (since the Unix epoch for datetime64).
 
-def _first_unordered(key: np.ndarray) -> int:
-    """Index of the first key not greater than its predecessor, or -1."""
-    bad = np.flatnonzero(key[1:] <= key[:-1])
+        ~0.25 µs coarse at today's epochs: only for views whose axis is
+        still counted from the epoch (see :func:`epoch_seconds`).
+        """
+        if self.kind == "numeric":
+            return self.key
+        return self.key / _NS_PER_S
+
+
+def _first_unordered(key: np.ndarray, repeats: bool = False) -> int:
+    """Index of the first key below (or, unless ``repeats``, equal to) its predecessor, or -1."""
+    bad = np.flatnonzero(key[1:] < key[:-1] if repeats else key[1:] <= key[:-1])
     return int(bad[0]) + 1 if bad.size else -1
 
 
-def _ordered_keys(values: np.ndarray, name: str) -> tuple[np.ndarray, str]:
-    """:func:`_keys` of strictly increasing times; raises naming the first fault.
+def _ordered_keys(
+    values: np.ndarray, name: str, repeats: bool = False
+) -> tuple[np.ndarray, str]:
+    """:func:`_keys` of increasing times; raises naming the first fault.
 
     The usual case, datetime64[ns] or float64 times without a fault, takes
     one counting kernel (two vectorised passes) instead of numpy's four
@@ -164,11 +193,12 @@ def _ordered_keys(values: np.ndarray, name: str) -> tuple[np.ndarray, str]:
         if view is not None and float_key_faults(view) == (0, 0):
             return values, "numeric"
     key, kind = _keys(values, name)
-    i = _first_unordered(key)
+    i = _first_unordered(key, repeats)
     if i >= 0:
         what = "a duplicate of" if key[i] == key[i - 1] else "earlier than"
+        rule = "sorted (repeats allowed)" if repeats else "strictly increasing"
         raise ValueError(
-            f"{name} must be strictly increasing: {name}[{i}] = {values[i]} is "
+            f"{name} must be {rule}: {name}[{i}] = {values[i]} is "
             f"{what} {name}[{i - 1}] = {values[i - 1]}"
         )
     return key, kind
@@ -179,8 +209,9 @@ def as_track(
     name: str = "timestamps",
     length: int | None = None,
     copy: bool = True,
+    repeats: bool = False,
 ) -> Track:
-    """Validate strictly increasing timestamps and wrap them in a :class:`Track`.
+    """Validate increasing timestamps and wrap them in a :class:`Track`.
 
     Parameters
     ----------
@@ -194,14 +225,22 @@ def as_track(
     copy : bool, default True
         Keep a private copy of the values (frames do; a transient track for
         one call does not need to).
+    repeats : bool, default False
+        Accept repeated times (non-decreasing). Frames and the core's arrays
+        need strictly increasing times; plots and players of logged data may
+        repeat a stamp (see the module docstring).
 
     Raises
     ------
     ValueError
         If the timestamps are not one-dimensional, not numeric or datetime64,
         empty, of the wrong length, contain NaN/inf/NaT, or are not strictly
-        increasing (the message names the first offending index).
+        increasing (non-decreasing with ``repeats``; the message names the
+        first offending index).
     """
+    if isinstance(timestamps, Track) and length is None:
+        if repeats or _first_unordered(timestamps.key) < 0:
+            return timestamps
     values = np.asarray(getattr(timestamps, "values", timestamps))
     if copy:
         # callers may change their array later; frames must not change with it
@@ -214,7 +253,7 @@ def as_track(
         raise ValueError(
             f"{name} has {values.shape[0]} entries but the data has {length} samples"
         )
-    key, kind = _ordered_keys(values, name)
+    key, kind = _ordered_keys(values, name, repeats)
     if kind == "numeric":
         key = kernel_array(key)  # the kernels interpolate on it directly
         return Track(values, key, key, 0, kind)
@@ -279,13 +318,21 @@ def _one_time(values: np.ndarray, key: np.ndarray, kind: str) -> Track:
     return Track(values, key, np.zeros(1), int(key[0]), kind)
 
 
-def check_compatible(tracks: Any) -> None:
-    """Raise if different kinds of time (numbers, datetime64, timedelta64) meet."""
-    kinds = sorted({t.kind for t in tracks if t is not None})
+def check_compatible(tracks: Any, what: str | None = None) -> None:
+    """Raise if different kinds of time (numbers, datetime64, timedelta64) meet.
+
+    ``tracks`` holds :class:`Track`, :class:`TimeBase` or kind names
+    (``"numeric"``, ``"datetime64"``, ``"timedelta64"``); None is skipped.
+    ``what`` (e.g. ``"link(Scene 'head')"``) starts the message.
+    """
+    kinds = sorted(
+        {t if isinstance(t, str) else t.kind for t in tracks if t is not None}
+    )
     if len(kinds) > 1:
+        where = f"{what}: " if what else ""
         raise ValueError(
-            f"cannot match {kinds[0]} timestamps with {kinds[1]} timestamps; convert "
-            f"one of them (e.g. numeric seconds since the first sample)"
+            f"{where}cannot match {kinds[0]} timestamps with {kinds[1]} timestamps; "
+            f"convert one of them (e.g. numeric seconds since the first sample)"
         )
 
 
@@ -356,3 +403,221 @@ def seconds_pair(
     sa, origin = _raw_seconds(a, None)
     sb, _ = _raw_seconds(b, origin)
     return sa, sb
+
+
+#: Seconds within which a time is the sample it is compared with. Half a
+#: nanosecond: keys in ns are integers, so a time rounded to the ns is
+#: exact, and float times that went through JavaScript (or ``0.1 * 3``)
+#: still find their sample.
+TIE = 0.5e-9
+
+# one time value of a user: pandas scalars carry their numpy twin
+_SCALAR_DTYPES = ("to_datetime64", "to_timedelta64")
+
+
+def _scalar(t: Any, name: str) -> tuple[Any, str]:
+    """One time value as a numpy scalar and its kind; refuses NaT, NaN, inf."""
+    for method in _SCALAR_DTYPES:
+        if hasattr(t, method):
+            t = getattr(t, method)()
+            break
+    arr = np.asarray(t)
+    if arr.ndim != 0 and arr.size != 1:
+        raise ValueError(f"{name} must be one time, got shape {arr.shape}")
+    arr = arr.reshape(1)
+    key, kind = _keys(arr, name)
+    return key[0], kind
+
+
+class TimeBase:
+    """Second 0 of a view: the exact key every time of the view counts from.
+
+    Parameters
+    ----------
+    t0_ns : int, optional
+        Second 0 in int64 nanoseconds (since the Unix epoch for datetime64
+        data, since zero for timedelta64 data).
+    t0_s : float, default 0.0
+        Second 0 of numeric timestamps (ignored when ``t0_ns`` is given).
+    elapsed : bool, default False
+        Whether ``t0_ns`` counts a timedelta64 (no date to show).
+    """
+
+    __slots__ = ("t0_ns", "t0_s", "elapsed")
+
+    def __init__(
+        self, t0_ns: int | None = None, t0_s: float = 0.0, elapsed: bool = False
+    ) -> None:
+        self.t0_ns = None if t0_ns is None else int(t0_ns)
+        self.t0_s = 0.0 if t0_ns is not None else float(t0_s)
+        self.elapsed = bool(elapsed) and t0_ns is not None
+
+    @classmethod
+    def of(cls, timestamps: Any, name: str = "timestamps") -> TimeBase:
+        """The time base whose second 0 is the earliest of ``timestamps``.
+
+        ``timestamps`` is a :class:`Track` or anything :func:`as_track`
+        accepts (validated with ``repeats=True``).
+        """
+        track = as_track(timestamps, name, copy=False, repeats=True)
+        first = track.key[0]
+        if track.kind == "numeric":
+            return cls(t0_s=float(first))
+        return cls(t0_ns=int(first), elapsed=track.kind == "timedelta64")
+
+    @property
+    def kind(self) -> str:
+        """``"datetime64"``, ``"timedelta64"`` or ``"numeric"`` (as :class:`Track`)."""
+        if self.t0_ns is None:
+            return "numeric"
+        return "timedelta64" if self.elapsed else "datetime64"
+
+    @property
+    def absolute(self) -> bool:
+        """Whether second 0 is a date (datetime64 data)."""
+        return self.kind == "datetime64"
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, TimeBase):
+            return NotImplemented
+        return (self.t0_ns, self.t0_s, self.elapsed) == (
+            other.t0_ns,
+            other.t0_s,
+            other.elapsed,
+        )
+
+    def __hash__(self) -> int:
+        return hash((self.t0_ns, self.t0_s, self.elapsed))
+
+    def __repr__(self) -> str:
+        if self.t0_ns is None:
+            return f"TimeBase(t0_s={self.t0_s!r})"
+        return f"TimeBase(t0_ns={self.t0_ns}{', elapsed=True' if self.elapsed else ''})"
+
+    def seconds(self, timestamps: Any, name: str = "timestamps") -> np.ndarray:
+        """Timestamps (a :class:`Track` or an array) as float64 seconds from second 0.
+
+        ns keys are subtracted as int64 before the division, so nothing is
+        lost to epoch-sized floats.
+        """
+        if isinstance(timestamps, Track):
+            key, kind = timestamps.key, timestamps.kind
+        else:
+            arr = np.asarray(getattr(timestamps, "values", timestamps)).reshape(-1)
+            key, kind = _keys(arr, name)
+        check_compatible([self.kind, kind], name)
+        if self.t0_ns is None:
+            return np.asarray(key, dtype=np.float64) - self.t0_s
+        return (key - self.t0_ns) / _NS_PER_S
+
+    def at(self, t: Any, name: str = "time") -> float:
+        """One time as seconds from second 0.
+
+        ``t`` is of the data's kind (datetime64 or a pandas Timestamp for
+        datetime data, timedelta64 for elapsed times, a number otherwise);
+        a number for datetime data is taken as seconds since the Unix epoch
+        (what :meth:`epoch` hands out).
+        """
+        key, kind = _scalar(t, name)
+        if kind == "numeric" and self.t0_ns is not None:
+            return float(key) - self.t0_ns / _NS_PER_S
+        check_compatible([self.kind, kind], name)
+        if self.t0_ns is None:
+            return float(key) - self.t0_s
+        return float(int(key) - self.t0_ns) / _NS_PER_S
+
+    def key(self, t: float) -> int | float:
+        """``t`` seconds from second 0 as an exact key (int ns, rounded; or float)."""
+        if self.t0_ns is None:
+            return self.t0_s + float(t)
+        return self.t0_ns + round(float(t) * _NS_PER_S)
+
+    def value(self, t: float) -> Any:
+        """``t`` seconds from second 0 in the data's own kind (datetime64[ns] exact to the ns)."""
+        if self.t0_ns is None:
+            return self.t0_s + float(t)
+        unit = "timedelta64" if self.elapsed else "datetime64"
+        return np.array(self.key(t), dtype=np.int64).view(f"{unit}[ns]")[()]
+
+    @property
+    def origin(self) -> float:
+        """Second 0 as float seconds (since the epoch for datetime data).
+
+        Only for JavaScript and callers of :meth:`epoch`: ~0.25 µs coarse at
+        today's epochs.
+        """
+        return self.t0_s if self.t0_ns is None else self.t0_ns / _NS_PER_S
+
+    def epoch(self, t: float) -> float:
+        """``t`` seconds from second 0 as float data seconds (``origin + t``)."""
+        return self.origin + float(t)
+
+    def shift_to(self, other: TimeBase) -> float:
+        """Seconds from ``other``'s second 0 to this one's (exact for ns bases)."""
+        check_compatible([self.kind, other.kind], "time bases")
+        if self.t0_ns is not None and other.t0_ns is not None:
+            return (self.t0_ns - other.t0_ns) / _NS_PER_S
+        return self.t0_s - other.t0_s
+
+
+def latest_index(track: Track, base: TimeBase, t: float) -> int:
+    """Index of the latest sample of ``track`` at or before ``t`` seconds of ``base``.
+
+    -1 before the first sample. A time within :data:`TIE` of a sample is
+    that sample.
+    """
+    if track.kind == "numeric":
+        at = base.key(t)
+        return int(np.searchsorted(track.key, at + TIE, side="right")) - 1
+    check_compatible([track.kind, base.kind], "time")
+    ns = base.key(t)  # rounded to the ns: exact
+    return int(np.searchsorted(track.key, ns, side="right")) - 1
+
+
+def epoch_seconds(t: Any, kind: str | None = None, name: str = "time") -> Any:
+    """Times as float data seconds (since the Unix epoch for datetime64).
+
+    For the views whose axis still counts from the epoch (the scene, the
+    tf2-style :class:`~rbm_nb.ros.transformer.Transformer`): ~0.25 µs coarse
+    at today's epochs; every other view counts from a :class:`TimeBase`.
+    ``t`` is one time (returns a float) or an array in any order (returns
+    float64 values); NaT, NaN and inf are refused naming the index. ``kind``
+    is the kind of the data ``t`` is compared with (None: any); numbers are
+    taken as data seconds whatever the kind.
+    """
+    values = np.asarray(getattr(t, "values", t))
+    if values.ndim == 0:
+        key, t_kind = _scalar(t, name)
+        if t_kind == "numeric":
+            return float(key)
+        check_compatible([kind, t_kind], name)
+        return int(key) / _NS_PER_S
+    keys, t_kind = _keys(values, name)
+    if t_kind == "numeric":
+        return keys
+    check_compatible([kind, t_kind], name)
+    return keys / _NS_PER_S
+
+
+def from_epoch_seconds(seconds: Any, kind: str) -> np.ndarray:
+    """Float data seconds back to the data's kind (datetime64[ns] rounded to the ns)."""
+    seconds = np.asarray(seconds, dtype=np.float64)
+    if kind == "numeric":
+        return seconds
+    ns = np.round(seconds * _NS_PER_S).astype(np.int64)
+    return ns.view(f"{kind}[ns]")
+
+
+def ns_keys(values: Any, name: str = "timestamps") -> np.ndarray:
+    """int64 nanoseconds of datetime64/timedelta64 values, in any order.
+
+    For writers that store exact stamps (a ROS bag's sec/nsec). Refuses NaT
+    and numbers, naming the argument.
+    """
+    arr = np.asarray(getattr(values, "values", values))
+    key, kind = _keys(arr, name)
+    if kind == "numeric":
+        raise ValueError(
+            f"{name} must be datetime64 or timedelta64, got dtype {arr.dtype}"
+        )
+    return key

@@ -21,6 +21,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._engine.time import epoch_seconds
 from .._infra.progress import make_bar
 from ..core import frames, gaze
 from ..core import frames as registry
@@ -430,10 +431,8 @@ def guided_instants(series: dict, *, window: float = 2.0) -> dict:
 
 
 def _seconds(times) -> np.ndarray:
-    times = np.asarray(times)
-    if np.issubdtype(times.dtype, np.datetime64):
-        return times.astype("datetime64[ns]").astype(np.int64) / 1e9
-    return times.astype(float)
+    # float data seconds by the one time rule (epoch seconds for datetime64)
+    return np.asarray(epoch_seconds(np.asarray(times)), dtype=float)
 
 
 # the head model's parts, in the head's axes (x forward, y left, z up), from

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .._engine.time import epoch_seconds
 from .._kernels.quaternion import qconj, qmul, rotate_vectors
 from ..core.estimators import estimate_angular_velocity, estimate_linear_velocity
 from ..core.frames import ReferenceFrame
@@ -28,7 +29,7 @@ HEAD_TURN_THRESHOLD = np.deg2rad(30.0)  # head speed that counts as a head turn
 
 def _seconds(time, origin) -> np.ndarray:
     """datetime64 values as float seconds since ``origin``."""
-    return (np.asarray(time) - origin).astype("timedelta64[ns]").astype(np.int64) * 1e-9
+    return epoch_seconds(np.asarray(time) - origin, name="time")
 
 
 def walking_mask(head: xr.Dataset, threshold: float = 0.5) -> np.ndarray:

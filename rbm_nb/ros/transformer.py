@@ -47,6 +47,7 @@ import numpy.typing as npt
 from .._door.unpack import float_array
 from .._door.validation import check_finite, normalize_quaternions
 from .._engine import at_time as _at_time
+from .._engine.time import epoch_seconds
 from .._kernels import quaternion as kq
 from ..core.frames import ReferenceFrame, resolve_frame
 from ..errors import ExtrapolationError
@@ -90,16 +91,13 @@ class _Edge:
 
 
 def _seconds(timestamps) -> np.ndarray:
-    """Timestamps as float seconds (datetime64: since the Unix epoch)."""
-    ts = np.asarray(timestamps)
-    if ts.dtype.kind == "M":
-        return ts.astype("datetime64[ns]").view(np.int64) / 1e9
-    return ts.astype(np.float64)
+    """Timestamps as float seconds (datetime64: since the Unix epoch), by the one time rule."""
+    return epoch_seconds(np.asarray(timestamps), name="time")
 
 
 def _time_value(time, name: str = "time") -> float:
     if isinstance(time, (np.datetime64,)) or np.asarray(time).dtype.kind == "M":
-        return float(_seconds(np.asarray(time).reshape(1))[0])
+        return float(epoch_seconds(time, name=name))
     try:
         value = float(time)
     except (TypeError, ValueError):

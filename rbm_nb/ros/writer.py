@@ -13,6 +13,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .._door.xarray import dataset_variable
+from .._engine.time import ns_keys
 from .._infra.atomic import FolderKind, atomic_path, check_replaceable, scratch_target
 from .._infra.config import UNIT_QUATERNION_TOLERANCE
 from ._messages import (
@@ -476,7 +477,7 @@ class RosbagWriter:
                 raise ValueError(
                     f"timestamps contain NaT at index {int(np.flatnonzero(np.isnat(stamps))[0])}"
                 )
-            ns = stamps.astype("datetime64[ns]").astype(np.int64)
+            ns = ns_keys(stamps, "timestamps")
         else:
             try:
                 seconds = stamps.astype(np.float64)

@@ -14,7 +14,7 @@ import weakref
 
 import numpy as np
 
-from ..widgets._time import time_as_seconds
+from .._engine.time import epoch_seconds
 from .scene import Scene, _resolve, default_scene
 from .tracks import Track
 
@@ -144,7 +144,7 @@ class FramePublisher:
             self.publish()
             return
 
-        idx = self._track.index_at(time_as_seconds(t, self.timestamps_kind))
+        idx = self._track.index_at(epoch_seconds(t, self.timestamps_kind))
         if idx >= 0:
             self.publish(idx)
 

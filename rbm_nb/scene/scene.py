@@ -27,13 +27,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .._engine.time import check_compatible, epoch_seconds, from_epoch_seconds
 from ..core import frames
-from ..widgets._time import (
-    DATETIME,
-    check_kinds,
-    seconds_to_datetime64,
-    time_as_seconds,
-)
 from . import commands, stream
 from .commands import Message, color_int
 from .export import write_html
@@ -486,7 +481,7 @@ class Scene:
         sample (every object as it was last).
         """
         self._check_open()
-        seconds = time_as_seconds(t, self.state.kind)
+        seconds = epoch_seconds(t, self.state.kind, "Scene.set_time: t")
         if not math.isfinite(seconds):
             raise ValueError(f"Scene.set_time: t must be finite, got {t!r}")
         timeline = self.state.timeline()
@@ -544,8 +539,8 @@ class Scene:
         seconds, original = timeline
         if original is not None:
             return original
-        if self.state.kind == DATETIME:
-            return seconds_to_datetime64(seconds)
+        if self.state.kind is not None:
+            return from_epoch_seconds(seconds, self.state.kind)
         return seconds
 
     def player(
@@ -580,8 +575,8 @@ class Scene:
     def _attach_player(self, player) -> None:
         """Follow ``player`` (called by ``Player.link``)."""
         self._check_open()
-        check_kinds(
-            self.state.kind, player.timestamps_kind, f"link(Scene {self.name!r})"
+        check_compatible(
+            [self.state.kind, player.timestamps_kind], f"link(Scene {self.name!r})"
         )
         self._player = player
         if self.state.pins:  # the player drives everything from now on
@@ -975,7 +970,7 @@ class Scene:
         with self._lock:
             kinds = [t.kind for t in (carrier, inner) if t is not None and not t.static]
             for kind in kinds:
-                check_kinds(self.state.kind, kind, f"scene {self.name!r}")
+                check_compatible([self.state.kind, kind], f"scene {self.name!r}")
             moving_before = set(self.state.tracks)
             anchor, messages = self._acquire_anchor(handle.base)
             handle.root_path = f"{anchor}/{handle.name}"

@@ -17,7 +17,7 @@ import math
 import numpy as np
 import umsgpack
 
-from ..widgets._time import check_kinds
+from .._engine.time import check_compatible
 from . import commands
 from .commands import Message, TransformPacker
 from .tracks import Track
@@ -78,7 +78,7 @@ class SceneState:
         """Make the node at ``path`` follow ``track`` (a moving one)."""
         if track.static:
             raise ValueError(f"{what}: the track of {path!r} does not move")
-        check_kinds(self.kind, track.kind, what)
+        check_compatible([self.kind, track.kind], what)
         self.kind = track.kind
         self.tracks[path] = track
         self._timeline = None

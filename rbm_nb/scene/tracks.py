@@ -12,8 +12,8 @@ from typing import Any
 
 import numpy as np
 
+from .._engine.time import TimeBase, as_track, check_compatible
 from ..core import lookups
-from ..widgets._time import check_kinds, timestamps_as_seconds
 from .commands import pose_matrix
 
 TIME_TOLERANCE = 1e-9  # seconds
@@ -55,9 +55,10 @@ class Track:
             self.kind = None
             self.original_timestamps = None
         else:
-            self.seconds, self.kind = timestamps_as_seconds(
-                timestamps, f"{name} timestamps"
+            _track = as_track(
+                timestamps, f"{name} timestamps", copy=False, repeats=True
             )
+            self.seconds, self.kind = _track.epoch_seconds(), _track.kind
             self.original_timestamps = np.asarray(
                 getattr(timestamps, "values", timestamps)
             )
@@ -154,7 +155,7 @@ class Track:
         return bool(np.isnan(self.translation.reshape(-1, 3)[index]).any())
 
     def check_kind(self, kind: str | None, what: str) -> None:
-        check_kinds(kind, self.kind, what)
+        check_compatible([kind, self.kind], what)
 
 
 def _max_gap(frame, base) -> float | None:
@@ -178,7 +179,7 @@ def _hidden_across_gaps(t, r, ts, gap: float):
     step: Any
     if ts.dtype.kind == "M":
         step = np.timedelta64(int(round(gap * 1e9)), "ns")
-        seconds = (ts - ts[0]) / np.timedelta64(1, "s")
+        seconds = TimeBase.of(ts).seconds(ts)
     else:
         step = gap
         seconds = ts.astype(np.float64)

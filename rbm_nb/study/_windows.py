@@ -17,6 +17,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from .._engine.time import epoch_seconds, from_epoch_seconds
+
 
 @dataclass(frozen=True)
 class Window:
@@ -48,7 +50,7 @@ def _seconds_as(reference: Any, seconds: float) -> Any:
     if isinstance(reference, (np.datetime64,)) or (
         hasattr(reference, "dtype") and np.dtype(reference.dtype).kind == "M"
     ):
-        return np.timedelta64(int(round(seconds * 1e9)), "ns")
+        return from_epoch_seconds(seconds, "timedelta64")[()]
     return seconds
 
 
@@ -91,6 +93,4 @@ def _as_scalar(value: Any) -> Any:
 
 
 def _in_seconds(span: Any) -> float:
-    if isinstance(span, np.timedelta64):
-        return float(span / np.timedelta64(1, "ns")) * 1e-9
-    return float(span)
+    return float(epoch_seconds(span, name="span"))

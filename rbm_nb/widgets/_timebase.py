@@ -6,9 +6,11 @@ time where the data has one (datetime64 timestamps)::
 
     12.345 s · 2020-02-02 00:27:26.345
 
-A :class:`TimeBase` is that start: ``t0_ns`` (absolute nanoseconds since the
-epoch, for datetime64 data) or ``t0_s`` (the first float timestamp, for data
-in plain seconds). The browser side formats with the same rules in
+Second 0 is a :class:`~rbm_nb._engine.time.TimeBase` (``t0_ns``, absolute
+nanoseconds since the epoch for datetime64 data, or ``t0_s``, the first
+float timestamp): what a time is, and how seconds from second 0 are counted
+exactly, is :mod:`rbm_nb._engine.time`'s; this module only prints them.
+The browser side formats with the same rules in
 ``formatTime`` of ``js/src/timeline.js``; ``tests/notebook/test_timebase.py`` checks both against each
 other.
 """
@@ -16,84 +18,16 @@ other.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from decimal import ROUND_HALF_UP, Decimal
 
 import numpy as np
 
+from .._engine.time import TimeBase
+
+__all__ = ["TimeBase", "SEPARATOR", "format_time", "format_seconds", "format_absolute"]
+
 #: Separator between the recording time and the absolute time in a readout.
 SEPARATOR = " \u00b7 "
-
-
-@dataclass(frozen=True)
-class TimeBase:
-    """Second 0 of a recording.
-
-    Attributes
-    ----------
-    t0_ns : int or None
-        Absolute time of second 0 in ns since the epoch, for datetime64 data.
-    t0_s : float
-        Timestamp value of second 0 for data in plain float seconds (0.0 for
-        datetime64 data).
-    """
-
-    t0_ns: int | None = None
-    t0_s: float = 0.0
-
-    @classmethod
-    def of(cls, timestamps) -> TimeBase:
-        """The time base that puts second 0 at the first of ``timestamps``.
-
-        Parameters
-        ----------
-        timestamps : array_like, shape (n,)
-            datetime64 or float seconds, sorted (n >= 1).
-        """
-        arr = np.asarray(getattr(timestamps, "values", timestamps))
-        if arr.ndim != 1 or arr.size == 0:
-            raise ValueError(
-                f"TimeBase.of: timestamps must be a non-empty 1-d array, got shape {arr.shape}"
-            )
-        if np.issubdtype(arr.dtype, np.datetime64):
-            return cls(t0_ns=int(arr[:1].astype("datetime64[ns]").astype(np.int64)[0]))
-        return cls(t0_s=float(arr[0]))
-
-    @property
-    def absolute(self) -> bool:
-        """Whether the recording has an absolute (datetime) time."""
-        return self.t0_ns is not None
-
-    def seconds(self, timestamps, name: str = "timestamps") -> np.ndarray:
-        """Timestamps as float64 seconds from second 0.
-
-        datetime64 input is taken exactly as int64 ns before the subtraction,
-        so no precision is lost to epoch-sized floats.
-
-        Raises
-        ------
-        ValueError
-            If datetime64 timestamps meet a time base without ``t0_ns`` or
-            float timestamps one with it (the two cannot be lined up).
-        """
-        arr = np.asarray(getattr(timestamps, "values", timestamps))
-        if np.issubdtype(arr.dtype, np.datetime64):
-            if self.t0_ns is None:
-                raise ValueError(
-                    f"{name} are datetime64 but this time base is in plain seconds"
-                )
-            ns = arr.astype("datetime64[ns]").astype(np.int64)
-            return (ns - self.t0_ns).astype(np.float64) / 1e9
-        if self.t0_ns is not None:
-            raise ValueError(
-                f"{name} are plain seconds but this time base is absolute "
-                "(datetime64); use datetime64 timestamps everywhere"
-            )
-        return np.asarray(arr, dtype=np.float64) - self.t0_s
-
-    def format(self, t: float) -> str:
-        """``t`` (seconds from second 0) as the shared readout."""
-        return format_time(t, self.t0_ns)
 
 
 def format_seconds(t: float) -> str:

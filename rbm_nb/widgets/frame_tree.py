@@ -22,8 +22,8 @@ import ipywidgets as widgets
 import numpy as np
 import traitlets
 
+from .._engine.time import TimeBase, as_track, epoch_seconds
 from ..core import frames, lookups
-from ._time import time_as_seconds, timestamps_as_seconds
 from ._timebase import format_time
 from .frame_details import (
     Details,
@@ -73,9 +73,8 @@ def frame_info(frame) -> dict:
         "time_kind": None,
     }
     if frame.timestamps is not None:
-        seconds, time_kind = timestamps_as_seconds(
-            frame.timestamps, f"timestamps of {frame.name!r}"
-        )
+        track = as_track(frame.timestamps, f"timestamps of {frame.name!r}", copy=False)
+        seconds, time_kind = track.epoch_seconds(), track.kind
         info.update(
             samples=len(seconds),
             start=float(seconds[0]),
@@ -287,7 +286,7 @@ class FrameTree(widgets.VBox):
 
     def set_time(self, t) -> None:
         """Show poses at time ``t`` (float seconds or datetime64); for Player links."""
-        self.time = time_as_seconds(t)
+        self.time = epoch_seconds(t, name="FrameTree.set_time: t")
         if self._listener is None:  # no registry hook: notice changes on steps
             self._poll_registry()
 
@@ -306,7 +305,7 @@ class FrameTree(widgets.VBox):
             self._update_details()
 
     def _on_player_time(self, change=None) -> None:
-        self.set_time(self._player.data_time)
+        self.set_time(self._player.time_value)
 
     def close(self) -> None:
         if self._player is not None:
@@ -575,17 +574,15 @@ class FrameTree(widgets.VBox):
         if first is None:
             return 0.0, None
         seconds, stamp = first
-        if np.issubdtype(stamp.dtype, np.datetime64):
-            ns = int(stamp.astype("datetime64[ns]").astype(np.int64)[0])
-            return ns / 1e9, ns
-        return seconds, None
+        base = TimeBase.of(stamp)
+        return base.origin, base.t0_ns if base.absolute else None
 
     def format_time(self, seconds: float) -> str:
         """Data seconds (epoch seconds for datetime frames) as the shared readout."""
         origin, t0_ns = self._time_base()
         if t0_ns is not None:
             # exact: data seconds are epoch floats, the readout counts from t0_ns
-            return format_time(seconds - t0_ns / 1e9, t0_ns)
+            return format_time(seconds - TimeBase(t0_ns).origin, t0_ns)
         return format_time(seconds - origin)
 
     def _single_details(self, frame) -> FrameDetails:
@@ -594,9 +591,9 @@ class FrameTree(widgets.VBox):
         if frame.parent is not None:
             seconds = None
             if frame.timestamps is not None:
-                seconds, _ = timestamps_as_seconds(
-                    frame.timestamps, f"timestamps of {frame.name!r}"
-                )
+                seconds = as_track(
+                    frame.timestamps, f"timestamps of {frame.name!r}", copy=False
+                ).epoch_seconds()
             pose = pose_at(
                 f"wrt {frame.parent.name}",
                 np.asarray(frame.translation, dtype=float),
@@ -623,7 +620,7 @@ class FrameTree(widgets.VBox):
             seconds = (
                 None
                 if ts is None
-                else timestamps_as_seconds(ts, "transform timestamps")[0]
+                else as_track(ts, "transform timestamps", copy=False).epoch_seconds()
             )
             self._lookup_cache[key] = (np.asarray(t), np.asarray(r), seconds)
         t, r, seconds = self._lookup_cache[key]
@@ -672,9 +669,9 @@ def _missing_near(frame, at: float) -> bool:
     """Whether ``frame``'s sample at or before ``at``, or the next one, is NaN."""
     if frame.timestamps is None:
         return False
-    seconds, _ = timestamps_as_seconds(
-        frame.timestamps, f"timestamps of {frame.name!r}"
-    )
+    seconds = as_track(
+        frame.timestamps, f"timestamps of {frame.name!r}", copy=False
+    ).epoch_seconds()
     i = int(np.searchsorted(seconds, at, side="right")) - 1
     rows = [j for j in (i, i + 1) if 0 <= j < len(seconds)]
     for values in (frame.translation, frame.rotation):

@@ -16,9 +16,12 @@ from __future__ import annotations
 
 import numpy as np
 
-#: Two times closer than this (seconds) are the same sample: float seconds
-#: since the epoch carry ~1e-7 s of rounding.
-TOLERANCE = 1e-6
+from .._engine.time import TIE
+
+#: Two times closer than this (seconds) are the same sample. The Player hands
+#: seconds from its first sample computed from exact keys, so half a
+#: nanosecond is enough (the time module's one rule, :data:`~rbm_nb._engine.time.TIE`).
+TOLERANCE = TIE
 
 
 class Playback:

@@ -51,9 +51,9 @@ import anywidget
 import numpy as np
 import traitlets
 
+from .._engine.time import TimeBase, as_track, check_compatible, latest_index
 from ..core import frames
 from ._frontend import FrontendGuard
-from ._time import DATETIME, check_kinds, time_as_seconds, timestamps_as_seconds
 from ._timebase import format_time
 from .playback import Playback, check_speed
 
@@ -74,7 +74,7 @@ def bundle(name: str) -> str:
 class _Link:
     """A Python object the kernel drives when it learns the player's time."""
 
-    def __init__(self, obj: Any, player_kind: str):
+    def __init__(self, obj: Any, base: TimeBase):
         self.obj = obj
         set_time = getattr(obj, "set_time", None)
         publish = getattr(obj, "publish", None)
@@ -85,26 +85,33 @@ class _Link:
                 f"cannot link {type(obj).__name__}: it needs a set_time(t) or a publish(idx) "
                 "method, or a 'player' trait"
             )
-        self.seconds: np.ndarray | None = None
+        self.base = base
+        self.track = None
         kind = getattr(obj, "timestamps_kind", None)
         if self.set_time is None:
             timestamps = getattr(obj, "timestamps", None)
             if timestamps is not None:
-                self.seconds, kind = timestamps_as_seconds(
-                    timestamps, f"timestamps of the linked {type(obj).__name__}"
+                self.track = as_track(
+                    timestamps,
+                    f"timestamps of the linked {type(obj).__name__}",
+                    copy=False,
+                    repeats=True,
                 )
-        check_kinds(player_kind, kind, f"link({type(obj).__name__})")
+                kind = self.track.kind
+        check_compatible([base.kind, kind], f"link({type(obj).__name__})")
         self.last: int | None = None
 
-    def show(self, index: int, seconds: float) -> None:
+    def show(self, index: int, time: float) -> None:
+        """Show the player's ``time`` (seconds from its second 0)."""
         if self.set_time is not None:
-            self.set_time(seconds)
+            # the time in the data's own kind: a datetime64 exact to the ns
+            self.set_time(self.base.value(time))
             return
         assert self.publish is not None  # __init__ refuses an object with neither
-        if self.seconds is None:
+        if self.track is None:
             idx = index
         else:
-            idx = int(np.searchsorted(self.seconds, seconds + 1e-6, side="right")) - 1
+            idx = latest_index(self.track, self.base, time)
             if idx < 0:  # nothing recorded yet at this time
                 return
         if idx != self.last:
@@ -245,26 +252,31 @@ class Player(FrontendGuard, anywidget.AnyWidget):
         speed = check_speed(speed, "Player")
         skip = 1.0 if skip is None else _positive(skip, "skip")
         raw, what = _resolve_timestamps(timestamps)
-        seconds, self.timestamps_kind = timestamps_as_seconds(raw, what)
-        self._raw = np.asarray(getattr(raw, "values", raw))
-        self._seconds = seconds
-        self.playback = Playback(seconds, speed=speed, loop=loop)
+        # exact keys (int64 ns for datetime64) and second 0: the samples'
+        # seconds from the start come from int64 differences, so stamps 1 ns
+        # apart stay two samples at any epoch
+        self._track = as_track(raw, what, repeats=True)
+        self._base = TimeBase.of(self._track)
+        self.timestamps_kind = self._track.kind
+        self._raw = self._track.values
+        relative = self._base.seconds(self._track)
+        self.playback = Playback(relative, speed=speed, loop=loop)
         if not np.isfinite(self.playback.duration):
             raise ValueError(
-                f"Player: the timestamps run from {seconds[0]:.6g} to "
-                f"{seconds[-1]:.6g} s, a span too long to play (not finite)"
+                f"Player: the timestamps run over {relative[-1]:.6g} s, a span too "
+                "long to play (not finite)"
             )
         self.step = int(step)
         self._links: list[_Link] = []
         self._callbacks: list[Callable[[float], Any]] = []
-        t0_ns = None
-        if self.timestamps_kind == DATETIME:
-            t0_ns = int(self._raw[:1].astype("datetime64[ns]").astype(np.int64)[0])
+        # the JS boundary: second 0 as absolute ns (display) and as float
+        # data seconds (``origin``, epoch seconds for datetime data)
+        t0_ns = self._base.t0_ns if self._base.absolute else None
         super().__init__(
             _esm=bundle("player"),
             _uid=uuid.uuid4().hex,
             duration=self.playback.duration,
-            origin=self.playback.origin,
+            origin=self._base.origin,
             t0_ns=t0_ns,
             speed=speed,
             loop=bool(loop),
@@ -294,7 +306,7 @@ class Player(FrontendGuard, anywidget.AnyWidget):
     @property
     def n(self) -> int:
         """Number of samples on the time axis."""
-        return len(self._seconds)
+        return len(self._raw)
 
     @property
     def timestamps(self) -> np.ndarray:
@@ -303,8 +315,22 @@ class Player(FrontendGuard, anywidget.AnyWidget):
 
     @property
     def seconds(self) -> np.ndarray:
-        """The time axis as float seconds (epoch seconds for datetime64)."""
-        return self._seconds
+        """The time axis as float data seconds (epoch seconds for datetime64).
+
+        ~0.25 µs coarse at today's epochs; :attr:`timebase` and
+        :attr:`timestamps` are exact.
+        """
+        return self._base.origin + self.playback.relative
+
+    @property
+    def timebase(self) -> TimeBase:
+        """Second 0 of the player (its first sample), exact."""
+        return self._base
+
+    @property
+    def time_value(self):
+        """The current time in the data's kind: datetime64[ns] (exact to the ns) or float."""
+        return self._base.value(self.time)
 
     @property
     def index(self) -> int:
@@ -328,8 +354,7 @@ class Player(FrontendGuard, anywidget.AnyWidget):
 
     def index_at(self, t) -> int:
         """Index of the latest sample at or before ``t`` (data seconds or datetime64)."""
-        seconds = time_as_seconds(t, self.timestamps_kind)
-        return self.playback.index_at(seconds - self.origin)
+        return self.playback.index_at(self._base.at(t, "Player.index_at: t"))
 
     # -- navigation (kernel side; the browser does the same without the kernel) ----
     def seek(self, index: int) -> None:
@@ -338,9 +363,7 @@ class Player(FrontendGuard, anywidget.AnyWidget):
 
     def seek_time(self, t) -> None:
         """Go to ``t``: data seconds (epoch seconds for datetime data) or datetime64."""
-        self.time = self.playback.clamp(
-            time_as_seconds(t, self.timestamps_kind) - self.origin
-        )
+        self.time = self.playback.clamp(self._base.at(t, "Player.seek_time: t"))
 
     def step_forward(self) -> None:
         """Go ``step`` samples forward."""
@@ -392,8 +415,9 @@ class Player(FrontendGuard, anywidget.AnyWidget):
 
         A widget with a ``player`` trait (the 3D scene, the time-series plot)
         follows the player in the browser: its ``player`` is set to this one.
-        Any other object needs ``set_time(t)`` (called with data seconds,
-        epoch seconds for datetime data) or ``publish(idx)``; the kernel calls
+        Any other object needs ``set_time(t)`` (called with the time in the
+        data's kind: a datetime64[ns] exact to the ns for datetime data, float
+        seconds otherwise) or ``publish(idx)``; the kernel calls
         it when it learns a new time. With ``publish`` and a ``timestamps``
         attribute, the index is that of its latest sample at or before the
         player's time.
@@ -411,7 +435,7 @@ class Player(FrontendGuard, anywidget.AnyWidget):
         if follower is not None:
             follower.player = self
             return obj
-        link = _Link(obj, self.timestamps_kind)
+        link = _Link(obj, self._base)
         self._links.append(link)
         self._show(link)
         return obj
@@ -444,7 +468,7 @@ class Player(FrontendGuard, anywidget.AnyWidget):
 
     def _show(self, link: _Link) -> None:
         try:
-            link.show(self.index, self.data_time)
+            link.show(self.index, self.time)
         except Exception as err:
             self.error_object = err
             self.error = f"{type(err).__name__}: {err}"
@@ -456,7 +480,7 @@ class Player(FrontendGuard, anywidget.AnyWidget):
         index = self.index
         for link in list(self._links):
             try:
-                link.show(index, seconds)
+                link.show(index, self.time)
             except Exception as err:  # shown in the widget; playback goes on
                 self.error_object = err
                 self.error = f"{type(err).__name__}: {err}"

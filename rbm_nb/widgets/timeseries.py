@@ -42,12 +42,12 @@ import numpy as np
 import traitlets
 from ipywidgets import Widget, widget_serialization
 
+from .._engine.time import TIE, TimeBase, as_track, check_compatible
 from ._decimate import GAP_FACTOR as GAP_FACTOR  # re-exported: the docs name it here
 from ._decimate import Cancelled, gathered, m4_rows, pause_rows
 from ._frontend import FrontendGuard
 from ._latest_only import LatestOnly
-from ._time import timestamps_as_seconds
-from ._timebase import TimeBase, format_time
+from ._timebase import format_time
 from .player import bundle
 
 #: Line colours of a panel's components, in order (matplotlib's tab10).
@@ -117,18 +117,19 @@ class _Series:
             else:
                 components = None
             self.units = str(source.attrs.get("units", ""))
-        # validates (1-d, finite, sorted, no NaT); the raw stamps are kept so
-        # datetime64 data is re-based exactly in int64 ns
-        seconds, self.kind = timestamps_as_seconds(
-            timestamps, f"timestamps of series {label!r}"
+        # validated (1-d, finite, sorted, no NaT) by the one time rule; its
+        # exact keys (int64 ns for datetime64) are what is searched, so
+        # datetime64 data is re-based exactly
+        track = as_track(
+            timestamps, f"timestamps of series {label!r}", copy=False, repeats=True
         )
-        raw = np.asarray(getattr(timestamps, "values", timestamps))
-        if self.kind == "datetime":
-            self.timestamps = raw.astype("datetime64[ns]", copy=False)
-            self.raw = self.timestamps.view(np.int64)
-        else:
-            self.timestamps = self.raw = seconds
-        del seconds
+        self.kind = track.kind
+        self.raw = track.key
+        self.timestamps = (
+            track.values
+            if track.kind == "numeric"
+            else track.key.view(f"{track.kind}[ns]")
+        )
         n = self.raw.size
         if values.ndim not in (1, 2) or values.shape[0] != n:
             raise ValueError(
@@ -155,7 +156,7 @@ class _Series:
 
     def raw_of(self, base: TimeBase, t: float, side: str) -> int | float:
         """``t`` seconds of ``base`` in raw units (ns rounded outward by ``side``)."""
-        if self.kind == "datetime":
+        if self.kind != "numeric":
             ns = t * 1e9
             return (base.t0_ns or 0) + int(
                 math.floor(ns) if side == "high" else math.ceil(ns)
@@ -323,13 +324,8 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         self._overview_width = self._checked_width(overview_width, "overview_width")
         panel_height = checked_panel_height(panel_height)
         self._series = [_Series(str(k), v) for k, v in series.items()]
-        kinds = {s.kind for s in self._series}
-        if len(kinds) > 1:
-            raise ValueError(
-                "TimeSeries: all series need the same kind of timestamps, got "
-                "both datetime64 and float seconds"
-            )
-        self.timestamps_kind = kinds.pop()
+        check_compatible([s.kind for s in self._series], "TimeSeries: series")
+        self.timestamps_kind = self._series[0].kind
         self._gap = None if gap is None else float(gap)
         self.gaps: list[float | None] = []
         first = min((s.timestamps[:1] for s in self._series), key=lambda a: a[0])
@@ -362,10 +358,10 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         panels, data, self.gaps, self._pauses = [], [], [], []
         for s in self._series:
             gap = self._gap
-            if gap is not None and s.kind == "datetime":
+            if gap is not None and s.kind != "numeric":
                 gap *= 1e9  # raw units: ns
             pauses, used = pause_rows(s.raw, gap)
-            if used is not None and s.kind == "datetime":
+            if used is not None and s.kind != "numeric":
                 used /= 1e9
             self._pauses.append(pauses)
             self.gaps.append(used)
@@ -398,7 +394,8 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
                     ],
                 }
             )
-        return {"t0_ns": self._data_base.t0_ns, "panels": panels, "data": data}
+        t0_ns = self._data_base.t0_ns if self._data_base.absolute else None
+        return {"t0_ns": t0_ns, "panels": panels, "data": data}
 
     def _rows(
         self,
@@ -543,11 +540,7 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
 
     def _shift_to(self, base: TimeBase) -> float:
         """Seconds from ``base``'s second 0 to the data's: what the browser adds."""
-        data = self._data_base
-        if data.t0_ns is not None and base.t0_ns is not None:
-            # int64 ns first: no epoch-sized float rounding
-            return (data.t0_ns - base.t0_ns) / 1e9
-        return float(data.t0_s) - float(base.t0_s)
+        return self._data_base.shift_to(base)
 
     @traitlets.validate("time")
     def _valid_time(self, proposal):
@@ -587,19 +580,22 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
                 "TimeSeries.player must be a Player (a widget with 'time' and "
                 f"'t0_ns' traits), got {type(player).__name__}"
             )
-        if player is not None and (player.t0_ns is None) != (
-            self.timestamps_kind != "datetime"
-        ):
-            raise traitlets.TraitError(
-                "TimeSeries.player: the player's timestamps and the series' are not "
-                "the same kind (datetime64 vs float seconds)"
-            )
+        if player is not None:
+            try:
+                check_compatible(
+                    [self.timestamps_kind, self._base_of(player)], "TimeSeries.player"
+                )
+            except ValueError as err:
+                raise traitlets.TraitError(str(err)) from None
         return player
 
     def _base_of(self, player) -> TimeBase:
         """Second 0 of the axis when following ``player`` (None: the series')."""
         if player is None:
             return self._own_base
+        base = getattr(player, "timebase", None)
+        if isinstance(base, TimeBase):
+            return base
         if player.t0_ns is not None:
             return TimeBase(t0_ns=int(player.t0_ns))
         # a Player on float seconds starts at its first timestamp; the player
@@ -615,7 +611,7 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
             # the browser shifts the x it holds: the samples are not sent again
             with self.hold_sync():
                 self.x_shift = self._shift_to(base)
-                self.t0_ns = base.t0_ns
+                self.t0_ns = base.t0_ns if base.absolute else None
 
     # -- time ----------------------------------------------------------------
     @property
@@ -638,10 +634,11 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         target.time = self._seconds(t)
 
     def _seconds(self, t) -> float:
-        if isinstance(t, np.datetime64) or hasattr(t, "to_datetime64"):
-            t = getattr(t, "to_datetime64", lambda: t)()
+        if isinstance(t, (np.datetime64, np.timedelta64)) or hasattr(
+            t, "to_datetime64"
+        ):
             try:
-                return float(self._base.seconds(np.asarray([t]), "time")[0])
+                return self._base.at(t, "t")
             except ValueError as err:
                 raise ValueError(f"TimeSeries.set_time: {err}") from None
         value = float(t)
@@ -678,10 +675,9 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         out = {}
         for s in self._series:
             # searched in the raw stamps: no seconds array of the whole series
-            if s.kind == "datetime":
-                at: int | float = (self._base.t0_ns or 0) + round(t * 1e9)
-            else:
-                at = self._base.t0_s + t + 1e-12
+            at = self._base.key(t)  # exact: int ns rounded, or float
+            if s.kind == "numeric":
+                at += TIE
             idx = int(np.searchsorted(s.raw, at, side="right")) - 1
             if idx >= 0:
                 out[s.label] = s.values[idx]
@@ -690,7 +686,9 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
     def readout(self, t: float | None = None) -> str:
         """The time and the values at ``t`` as one line of text."""
         t = self.current_time if t is None else self._seconds(t)
-        parts = [f"t = {format_time(t, self._base.t0_ns)}"]
+        parts = [
+            f"t = {format_time(t, self._base.t0_ns if self._base.absolute else None)}"
+        ]
         values = self.values_at(t)
         for s in self._series:
             if s.label not in values:

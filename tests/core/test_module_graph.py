@@ -69,7 +69,7 @@ MAX_ROOT_ENTRIES = 20
 # Loops between sub-packages (each module of ``rbm_nb.<name>`` counted as
 # ``rbm_nb.<name>``), known and left for the move of code between layers
 # (issue 32, items 5 and 6): no module imports itself back, but the packages do.
-# scene -> widgets: scene.{publishers,tracks,state,scene} use widgets._time
+# scene -> widgets: (scene takes its time rule from _engine.time, not widgets)
 # and scene.{scene,export,widget} widgets.player, while widgets.slider_panel
 # builds a scene.widget.SceneWidget. The test fails when a new loop appears
 # and when this one goes (then delete it here).

@@ -80,7 +80,7 @@ def test_frame_info_of_datetime_frame():
     assert info["samples"] == 201
     assert info["span"] == pytest.approx(1.0)
     assert info["rate"] == pytest.approx(200.0)
-    assert info["time_kind"] == "datetime"
+    assert info["time_kind"] == "datetime64"
 
 
 def test_single_selection_shows_pose_wrt_parent_at_the_current_time(tree_frames):

@@ -154,6 +154,8 @@ def _confident(eye, min_confidence: float | None):
     for var in ("position", "orientation"):
         values = masked[var].values.copy()
         values[low] = np.nan
+        # ours alone and never written again: the frame keeps it, no copy
+        values.setflags(write=False)
         masked[var] = (masked[var].dims, values, masked[var].attrs)
     return masked
 

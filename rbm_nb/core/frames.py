@@ -38,13 +38,17 @@ from .._door.validation import (
     moving_samples,
     normalize_quaternions,
 )
-from .._door.xarray import dataarray_coordinate, dataset_variable
+from .._door.xarray import dataarray_coordinate, dataset_variable, is_dataarray
 from .._engine import chain as _chain
 from .._engine import time as _time
 from .._engine import transform as _transform
 from .._engine import twist as _twist
 from .._engine.frame_data import FrameData, Samples
+from .._infra import memory as _memory
+from .._infra.config import UNIT_QUATERNION_TOLERANCE
+from .._infra.frozen import is_frozen, kernel_alias
 from .._kernels import quaternion as kq
+from .._kernels import rows as _rows
 from .conversions import quaternion_from_matrix
 
 __all__ = [
@@ -1024,7 +1028,15 @@ def _samples(name, translation, rotation, timestamps, inverse) -> Samples:
     label = f"frame {name!r}: " if name is not None else ""
     track: _time.Track | None = None
     if timestamps is not None:
-        track = _time.as_track(timestamps, f"{label}timestamps")
+        track = _time.as_track(
+            timestamps,
+            f"{label}timestamps",
+            copy=not is_frozen(getattr(timestamps, "values", timestamps)),
+        )
+        if not inverse:
+            shared = _shared_samples(track, translation, rotation)
+            if shared is not None:
+                return shared
         n = len(track)
         t_shape: tuple[int, ...] = (n, 3)
         r_shape: tuple[int, ...] = (n, 4)
@@ -1081,6 +1093,54 @@ def _samples(name, translation, rotation, timestamps, inverse) -> Samples:
     # interpolation needs on the same hemisphere
     public = np.array(stored.reshape(-1, 4), dtype=np.float64, order="C")
     return Samples(track, t, kq.unflip(r) if moving else r, public, missing)
+
+
+def _frozen_rows(value: Any, columns: int) -> np.ndarray | None:
+    """``value``'s (n, columns) float64 C-contiguous array if it is frozen, else None."""
+    arr = value.data if is_dataarray(value) else value
+    if (
+        type(arr) is np.ndarray
+        and arr.dtype == np.float64
+        and arr.ndim == 2
+        and arr.shape[1] == columns
+        and arr.flags.c_contiguous
+        and is_frozen(arr)
+    ):
+        return arr
+    return None
+
+
+def _shared_samples(track, translation, rotation) -> Samples | None:
+    """A moving frame's samples that keep the caller's frozen arrays, or None.
+
+    Translations (n, 3) and rotations (n, 4) that nobody can change any more
+    (:func:`rbm_nb._infra.frozen.is_frozen`: read-only down to their memory)
+    are kept as they are; only the unit, sign-continuous rotations
+    interpolation needs are made (by the same kernel and checks as a copied
+    frame's, so every value is the same bit for bit). At 3 h of the
+    explorer's recording this is 7 of the 11 floats a frame kept per sample.
+    None (copy as before) for anything else, or if a row fails a check (the
+    caller's checks then name it).
+    """
+    n = len(track)
+    t = _frozen_rows(translation, 3)
+    q = _frozen_rows(rotation, 4)
+    if n < 2 or t is None or q is None or t.shape[0] != n or q.shape[0] != n:
+        return None
+    # the kernel's copies of t and q go to scratch, dropped at once
+    scratch = np.empty(7 * n)
+    r = _memory.zeros((n, 4))
+    bad, missing = _rows.moving_samples(
+        kernel_alias(t),
+        kernel_alias(q),
+        UNIT_QUATERNION_TOLERANCE,
+        scratch[: 3 * n].reshape(n, 3),
+        scratch[3 * n :].reshape(n, 4),
+        r,
+    )
+    if bad:
+        return None
+    return Samples(track, kernel_alias(t), r, kernel_alias(q), bool(missing))
 
 
 def _transform_call(

@@ -1,0 +1,222 @@
+"""Kernel memory and build time of the explorer's dashboard, no browser (issue 35).
+
+    RBM_NB_DATA_DIR=/work/shared/data/rbm-data PYTHONPATH=. \\
+        python benchmarks/bench_dashboard_memory.py [--hours 0 1 3] [--compare OTHER_TREE]
+        [--no-trace]
+
+For each length, a fresh Python process loads the example recording tiled in
+time (``tiled_recording.py``: head 200 Hz, eyes ~340 Hz, NaN rows kept; 0 =
+the real 5.5 min) and builds what ``bench_dashboard_lab.py``'s kernel builds:
+``explorer.dashboard(head, left_eye, right_eye)`` (frames registered, the
+plots' series, Scene, Player, FrameTree, TimeSeries), with rbm_nb, the scene,
+the widgets and ipywidgets imported first (imports are not the data's memory)
+and numba's kernels compiled once on the real 5.5 min recording before the
+data is loaded (they are a fixed cost, not the data's; the first row shows it
+separately as ``warm``).
+
+* ``loaded MB``: the bytes of every array of the three datasets the user
+  loaded (``Dataset.nbytes``: every variable -- also those the dashboard never
+  reads, such as the head's velocities and the eyes' confidence -- and every
+  coordinate). That is what the user holds; the target compares against it.
+* ``RSS``: the process's resident memory after the build minus before the
+  data was loaded, so ``RSS`` counts the data itself plus everything the build
+  keeps (``ratio`` = that / loaded; the issue's target at 3 h: <= 1.5). Also
+  the peak (VmHWM minus the same baseline) during the build.
+* ``build s``: seconds of the ``dashboard()`` call.
+* ``floor MB``: RSS of the process with everything imported and warmed, before
+  the data (not part of the ratio; printed so a reader can see it).
+
+Without ``--no-trace`` a second fresh process per length builds the same
+dashboard under ``tracemalloc`` and splits what the build keeps by the
+innermost rbm_nb module that allocated it: ``engine`` (``rbm_nb/_engine``,
+``rbm_nb/_kernels``: interpolation tables, chains, tracks of times),
+``frames`` (``core/frames.py``, ``_door``: the frames' stored samples),
+``scene`` (``rbm_nb/scene``), ``plots`` (``rbm_nb/widgets``, ``core/gaze``:
+the series and the plots' overviews), ``other`` (the rest of rbm_nb, and
+allocations outside rbm_nb).
+
+``--read-only``: the recording's arrays are handed over read-only (owned
+by nobody who can write them, as :mod:`rbm_nb._infra.frozen` defines it), so
+frames keep them instead of copies; by default they are writeable, as
+``xarray`` loads them, and frames copy what they keep.
+
+``--compare TREE`` runs the same lengths in another checkout (e.g.
+``/work/main``) in the same run and prints its table and the ratios.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+
+CHILD = r"""
+import gc, json, os, sys, time
+sys.path.insert(0, {bench!r})
+import numpy as np
+import psutil
+from rbm_nb import explorer
+import rbm_nb.scene, rbm_nb.widgets, ipywidgets  # imports are not the data's memory
+from tiled_recording import tiled_head_eye, loaded_bytes
+
+proc = psutil.Process()
+
+def peak():
+    with open("/proc/self/status") as f:
+        return [int(l.split()[1]) * 1024 for l in f if l.startswith("VmHWM")][0]
+
+def reset_peak():
+    # writing 5 to clear_refs resets VmHWM to the current RSS
+    try:
+        with open("/proc/self/clear_refs", "w") as f:
+            f.write("5")
+    except OSError:
+        pass
+
+# compile and load numba's kernels once on the real recording: a fixed cost
+t0 = time.perf_counter()
+board = explorer.dashboard(*tiled_head_eye(0))
+explorer.close_dashboard(board)
+del board
+gc.collect()
+warm = time.perf_counter() - t0
+trace = {trace}
+rss_before = proc.memory_info().rss
+data = tiled_head_eye({hours})
+if {read_only}:
+    data = tuple(ds.copy(deep=True) for ds in data)
+    for ds in data:
+        for var in ds.variables.values():
+            var.values.setflags(write=False)
+loaded = loaded_bytes(data)
+gc.collect()
+reset_peak()
+if trace:
+    import tracemalloc
+    tracemalloc.start(40)
+t0 = time.perf_counter()
+board = explorer.dashboard(*data)
+build = time.perf_counter() - t0
+gc.collect()
+out = {{"loaded": loaded, "floor": rss_before, "warm_s": warm, "build_s": build,
+       "rss": proc.memory_info().rss - rss_before, "peak": peak() - rss_before}}
+if trace:
+    snap = tracemalloc.take_snapshot()
+    tracemalloc.stop()
+    groups = {{"engine": 0, "frames": 0, "scene": 0, "plots": 0, "other": 0}}
+    def group(tb):
+        for frame in reversed(tb):  # innermost first
+            name = frame.filename.replace(os.sep, "/")
+            if "/rbm_nb/" not in name:
+                continue
+            part = name.split("/rbm_nb/", 1)[1]
+            if part.startswith(("_engine/", "_kernels/")):
+                return "engine"
+            if part.startswith(("core/frames", "_door/")):
+                return "frames"
+            if part.startswith("scene/"):
+                return "scene"
+            if part.startswith(("widgets/", "core/gaze")):
+                return "plots"
+            return "other"
+        return "other"
+    for stat in snap.statistics("traceback"):
+        groups[group(stat.traceback)] += stat.size
+    out["groups"] = groups
+    out["traced"] = sum(groups.values())
+print("RESULT " + json.dumps(out))
+"""
+
+
+def run(tree: Path, hours: float, trace: bool, read_only: bool) -> dict:
+    env = dict(os.environ, PYTHONPATH=str(tree))
+    script = CHILD.format(
+        bench=str(HERE), hours=hours, trace=trace, read_only=read_only
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script],
+        env=env,
+        cwd=tree,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    for line in done.stdout.splitlines():
+        if line.startswith("RESULT "):
+            return json.loads(line[len("RESULT ") :])
+    raise RuntimeError(f"{tree} at {hours} h failed:\n{done.stderr[-3000:]}")
+
+
+def measure(tree: Path, hours_list, trace: bool, read_only: bool) -> list[dict]:
+    rows = []
+    for hours in hours_list:
+        row = {"hours": hours, **run(tree, hours, False, read_only)}
+        if trace:
+            row["trace"] = run(tree, hours, True, read_only)
+        rows.append(row)
+        print(f"  {tree} {hours} h: {json.dumps(row)}", file=sys.stderr)
+    return rows
+
+
+def _label(hours: float) -> str:
+    return "5.5 min (real)" if hours == 0 else f"{hours:g} h"
+
+
+def table(rows) -> str:
+    mb = 1e6
+    lines = [
+        "| recording | loaded MB | RSS MB (ratio) | peak MB (ratio) | build s "
+        "| floor MB | engine | frames | scene | plots | other (MB, tracemalloc) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        groups = r.get("trace", {}).get("groups")
+        split = (
+            " | ".join(f"{groups[k] / mb:.0f}" for k in groups)
+            if groups
+            else " | ".join("-" * 5)
+        )
+        lines.append(
+            f"| {_label(r['hours'])} | {r['loaded'] / mb:.0f} "
+            f"| {r['rss'] / mb:.0f} ({r['rss'] / r['loaded']:.2f}x) "
+            f"| {r['peak'] / mb:.0f} ({r['peak'] / r['loaded']:.2f}x) "
+            f"| {r['build_s']:.2f} | {r['floor'] / mb:.0f} | {split} |"
+        )
+    return "\n".join(lines)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--hours", type=float, nargs="+", default=[0, 1, 3])
+    parser.add_argument("--compare", type=Path, help="another checkout to run too")
+    parser.add_argument("--no-trace", action="store_true", help="skip tracemalloc")
+    parser.add_argument(
+        "--read-only", action="store_true", help="the recording's arrays read-only"
+    )
+    args = parser.parse_args()
+    here = HERE.parent
+    ours = measure(here, args.hours, not args.no_trace, args.read_only)
+    print(f"\nthis tree ({here})\n")
+    print(table(ours))
+    if args.compare:
+        theirs = measure(
+            args.compare.resolve(), args.hours, not args.no_trace, args.read_only
+        )
+        print(f"\n{args.compare.resolve()}\n")
+        print(table(theirs))
+        print("\n| recording | RSS this / other | build s this / other |")
+        print("|---|---|---|")
+        for a, b in zip(ours, theirs, strict=True):
+            print(
+                f"| {_label(a['hours'])} | {a['rss'] / b['rss']:.2f} "
+                f"| {a['build_s'] / b['build_s']:.2f} |"
+            )
+
+
+if __name__ == "__main__":
+    main()

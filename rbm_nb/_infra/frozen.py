@@ -1,0 +1,67 @@
+"""Whether an array can be trusted not to change: kept as a view instead of copied.
+
+A frame must not change after it is made, so it used to copy every array it
+was given. A copy is needed only when someone can still write the memory.
+An array is *frozen* when nothing holding it can: the array is read-only
+and so is every array it views (numpy's ``base`` chain), down to memory that
+is itself read-only (``bytes``, a read-only ``mmap`` or buffer) or owned by
+a read-only array. A read-only view of a writeable array is not frozen: its
+owner can still write through the base.
+
+A read-only array that owns its memory is its owner's promise: numpy lets
+the owner set ``writeable`` back to True (and nobody else). rbm_nb keeps
+that promise's terms -- what you hand over read-only, you do not write
+again -- as numpy's own views do.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+__all__ = ["is_frozen", "kernel_alias"]
+
+
+def is_frozen(arr: Any) -> bool:
+    """True if ``arr`` is an ndarray whose memory nobody can write any more."""
+    node = arr
+    while isinstance(node, np.ndarray):
+        if node.flags.writeable:
+            return False
+        node = node.base
+    if node is None:
+        return True  # a read-only array owning its memory
+    if isinstance(node, bytes):
+        return True
+    try:
+        return memoryview(node).readonly
+    except TypeError:
+        return False  # memory of an object that does not say
+
+
+class _Alias:
+    """Presents a frozen array's memory as writeable, keeping the array alive."""
+
+    __slots__ = ("__array_interface__", "_owner")
+
+    def __init__(self, arr: np.ndarray) -> None:
+        interface = dict(arr.__array_interface__)
+        interface["data"] = (interface["data"][0], False)
+        self.__array_interface__ = interface
+        self._owner = arr
+
+
+def kernel_alias(arr: np.ndarray) -> np.ndarray:
+    """A writeable-flagged view of a frozen C-contiguous array's memory.
+
+    The kernels are compiled for writeable arrays only (one signature each,
+    :mod:`rbm_nb._kernels._jit`); a read-only array would make numba refuse
+    the call. A frame hands them this alias of the caller's frozen array:
+    the same memory, read and never written (a frame's samples are read by
+    every kernel and written by none, as before when they were copies).
+    ``arr`` itself when it is already writeable.
+    """
+    if arr.flags.writeable:
+        return arr
+    return np.asarray(_Alias(arr))

@@ -18,6 +18,7 @@
 // view asks the kernel for the chunks at and ahead of the playhead (farther
 // ahead the faster it plays) and drops those behind; where a chunk has not
 // arrived, the coarse copy is shown. The clock never waits for a chunk.
+import { PathRefiner } from "./lib/path_refine.js";
 import { followPlayer } from "./timeline.js";
 
 const STORES = new Map();
@@ -355,6 +356,7 @@ class View {
     this.shown = null;
     this.nodes = new Map();
     this.glyphs = null; // [{object, size}] of the anchors, found after each change
+    this.refiner = new PathRefiner(this); // paths finer where the camera zooms in
     this.rebuild();
     this.applyCamera();
     this.showLegend();
@@ -426,6 +428,7 @@ class View {
     this.glyphs = null;
     this.triads = null;
     this.posesDirty = true;
+    this.refiner.reset();
     this.viewer.set_dirty();
   }
 
@@ -799,6 +802,7 @@ class View {
     }
     this.follow();
     this.keepVisible();
+    this.refiner.tick(performance.now());
     if (this.viewer.needs_render) {
       this.viewer.render();
       this.frames += 1;
@@ -810,6 +814,7 @@ class View {
 
   dispose() {
     cancelAnimationFrame(this.handle);
+    this.refiner.dispose();
     this.resize.disconnect();
     this.stopFollowing();
     this.store.views.delete(this);

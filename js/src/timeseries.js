@@ -278,6 +278,34 @@ async function render({ model, el }) {
     }
   };
 
+  // -- the exact readout: the time under the mouse (seconds of the axis), and
+  // the kernel's answer for it once it arrives (see askExact below)
+  let hoverT = null;
+  let exactAnswer = null; // {t, samples: [{x, values}] per panel}
+  let shownWindow = null; // the window of full-resolution rows spliced in, if any
+  // the time under a chart's cursor: its pixel's (every synced panel agrees),
+  // null when the mouse is away. uPlot fills the legend before its setCursor
+  // hook runs, so the legend asks the chart, not the last hook's answer.
+  function cursorTime(u) {
+    const left = u.cursor.left;
+    return left === null || left === undefined || left < 0 ? null : u.posToVal(Math.round(left), "x");
+  }
+  // whether panel i's data here is not every sample at time t
+  function approximate(i, t) {
+    if (!panels[i].reduced || t === null) return false;
+    if (!shownWindow || !shownWindow.full[i]) return true;
+    const wx = shownWindow.x[i];
+    // the window holds every row in [start, end] and one beyond each side:
+    // the nearest sample of any time between its first and last row is here
+    return !(wx.length && t >= wx[0] + shift && t <= wx[wx.length - 1] + shift);
+  }
+  // the kernel's answer for panel i at time t, if it has come
+  function exactFor(i, t) {
+    if (!exactAnswer || t === null || exactAnswer.t !== t || !approximate(i, t)) return null;
+    return exactAnswer.samples[i];
+  }
+  let onCursor = () => {};
+
   const width = () => Math.max(200, (body.clientWidth || el.clientWidth || 800) - 4);
   const height = model.get("panel_height");
 
@@ -285,8 +313,20 @@ async function render({ model, el }) {
     const x = shownX(sentX[i], shift);
     const ys = data[i].y.map((v) => withMissing(typed(v, Float64Array)));
     const last = i === panels.length - 1;
+    // The readout (legend) shows the recording's own sample nearest the
+    // cursor: from the data here where it is every sample, else the kernel's
+    // answer; until that arrives, the kept sample marked "\u2248" (approximate).
     const series = [
-      { label: "time", value: (u, v) => (v === null ? "\u2014" : formatTime(v, t0Ns())) },
+      {
+        label: "time",
+        value: (u, v) => {
+          if (v === null) return "\u2014";
+          const t = cursorTime(u);
+          const exact = exactFor(i, t);
+          if (exact) return formatTime(exact.x, t0Ns());
+          return (approximate(i, t) ? "\u2248 " : "") + formatTime(v, t0Ns());
+        },
+      },
       ...panel.components.map((name, k) => ({
         label: name,
         stroke: panel.colors[k],
@@ -295,7 +335,13 @@ async function render({ model, el }) {
         gaps: gapSpans,
         paths: guardedPaths(i),
         // no cursor: a dash; a cursor on a sample with no value: "missing"
-        value: (u, v, si, idx) => (idx === null || idx === undefined ? "\u2014" : formatValue(v, panel.units)),
+        value: (u, v, si, idx) => {
+          if (idx === null || idx === undefined) return "\u2014";
+          const t = cursorTime(u);
+          const exact = exactFor(i, t);
+          if (exact) return formatValue(exact.values[k], panel.units);
+          return (approximate(i, t) ? "\u2248 " : "") + formatValue(v, panel.units);
+        },
       })),
     ];
     let panStart = null;
@@ -397,6 +443,7 @@ async function render({ model, el }) {
       },
       legend: { live: true },
       hooks: {
+        setCursor: [(u) => onCursor(u)],
         setScale: [
           (u, key) => {
             if (key !== "x") return;
@@ -544,6 +591,7 @@ async function render({ model, el }) {
       syncing = false;
     }
     root.rbmWindow = w ? { start: w.start, end: w.end, rows: w.rows, full: w.full } : null;
+    shownWindow = w;
     windowFull = w ? w.full : null;
     describe();
   }
@@ -583,7 +631,81 @@ async function render({ model, el }) {
     model.send({ type: "window", id: latest, view: viewId, start: min, end: max, width });
   }
 
+  // -- exact readout: when the mouse rests on a time where some panel here is
+  // not every sample, ask the kernel for the recording's samples nearest that
+  // time. The request carries only the time; the answers are kept (a few
+  // hundred times); an answer to a superseded request is dropped.
+  const exactCache = new Map();
+  const CACHED_EXACT = 256;
+  const EXACT_DELAY_MS = 30;
+  let exactTimer = null;
+  let exactId = 0;
+  let exactAskedAt = 0;
+  const exactView = `${viewId}:exact`;
+  root.rbmExact = { asked: 0, answered: 0, cached: 0, latencyMs: [], shown: null };
+  function showExact() {
+    charts.forEach((u) => {
+      if (u.cursor.idx !== null && u.cursor.idx !== undefined) u.setLegend({ idx: u.cursor.idx });
+    });
+    const readout = charts.map((u) => {
+      const p = u.rbmPanel;
+      const exact = exactFor(p, hoverT);
+      return {
+        panel: p,
+        approximate: approximate(p, hoverT),
+        exact: !!exact,
+        x: exact ? exact.x : null,
+        values: exact ? Array.from(exact.values) : null,
+        legend: Array.from(u.root.querySelectorAll(".u-legend .u-value")).map((e) => e.textContent),
+      };
+    });
+    root.rbmExact.shown = { t: hoverT, panels: readout };
+  }
+  function askExact() {
+    exactTimer = null;
+    if (hoverT === null) return;
+    if (!charts.some((u) => approximate(u.rbmPanel, hoverT))) return;
+    const key = `${hoverT}:${shift}`;
+    if (exactCache.has(key)) {
+      root.rbmExact.cached += 1;
+      exactAnswer = exactCache.get(key);
+      showExact();
+      return;
+    }
+    exactId += 1;
+    exactAskedAt = performance.now();
+    root.rbmExact.asked += 1;
+    model.send({ type: "exact", id: exactId, view: exactView, t: hoverT });
+  }
+  onCursor = (u) => {
+    const t = cursorTime(u);
+    if (t === hoverT) return; // the other panels follow the same cursor (sync)
+    hoverT = t;
+    clearTimeout(exactTimer);
+    if (t !== null && detail) exactTimer = setTimeout(askExact, EXACT_DELAY_MS);
+    root.rbmExact.shown = { t: hoverT, panels: null };
+  };
+  function takeExact(msg, buffers) {
+    if (msg.id !== exactId) return; // the mouse has moved on
+    const samples = panels.map((panel, p) => {
+      const row = typed(buffers[p], Float64Array);
+      return { x: row[0] + msg.shift, values: row.subarray(1) };
+    });
+    const answer = { t: msg.t, samples };
+    exactCache.set(`${msg.t}:${msg.shift}`, answer);
+    if (exactCache.size > CACHED_EXACT) exactCache.delete(exactCache.keys().next().value);
+    root.rbmExact.answered += 1;
+    root.rbmExact.latencyMs.push(performance.now() - exactAskedAt);
+    if (msg.t !== hoverT || msg.shift !== shift) return;
+    exactAnswer = answer;
+    showExact();
+  }
+
   const onMessage = (msg, buffers) => {
+    if (msg && msg.type === "exact" && msg.view === exactView) {
+      takeExact(msg, buffers);
+      return;
+    }
     if (!msg || msg.type !== "window" || msg.view !== viewId) return;
     if (msg.id !== latest) return; // superseded by a later zoom
     const w = { start: msg.start, end: msg.end, rows: msg.rows, full: msg.full, width: msg.width, x: [], y: [] };
@@ -647,6 +769,7 @@ async function render({ model, el }) {
     model.off("change:x_shift", onShift);
     model.off("msg:custom", onMessage);
     clearTimeout(askTimer);
+    clearTimeout(exactTimer);
     model.off("change:time", onTime);
     model.off("change:t0_ns", onTime);
     stopFollowing();

@@ -140,3 +140,48 @@ def simplify_path(
         points[first : last + 1][keep[first : last + 1]] for first, last in runs
     ]
     return stretches, max(error, 0.0) + slack
+
+
+def refine_region(
+    samples: np.ndarray,
+    low: np.ndarray,
+    high: np.ndarray,
+    tolerance: float,
+    max_points: int,
+) -> tuple[list[np.ndarray], float]:
+    """The stretches of the line through the box ``[low, high]``, finer.
+
+    Every sample inside the box and the one on each side of every run of
+    them (so the line reaches the box's edges) is simplified as
+    :func:`simplify_path` does, at ``tolerance``, up to ``max_points``;
+    samples outside break the line, as missing ones do.
+
+    Parameters
+    ----------
+    samples : ndarray, shape (n, 3)
+        The whole path, NaN rows where samples are missing (not copied).
+    low, high : ndarray, shape (3,)
+        Corners of the box, in the path's coordinates.
+    tolerance : float
+        Metres a sample may lie from the line drawn (> 0).
+    max_points : int
+
+    Returns
+    -------
+    stretches, error
+        As :func:`simplify_path`; error is the largest distance left.
+    """
+    # NaN rows compare False: a missing sample is never inside
+    inside = np.asarray(((samples >= low) & (samples <= high)).all(axis=1))
+    near = inside.copy()
+    near[1:] |= inside[:-1]
+    near[:-1] |= inside[1:]
+    rows = np.flatnonzero(near)
+    if rows.size == 0:
+        return [], 0.0
+    picked = samples[rows]
+    # rows left out between two picked ones: a break, as a missing sample is
+    breaks = np.flatnonzero(np.diff(rows) > 1) + 1
+    if breaks.size:
+        picked = np.insert(picked, breaks, np.nan, axis=0)
+    return simplify_path(picked, tolerance, max_points)

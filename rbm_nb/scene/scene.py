@@ -41,6 +41,7 @@ from .handles import (
     VectorsHandle,
     _points_array,
 )
+from .path_refine import PathRefiner
 from .state import ROOT, SceneState
 from .tracks import Track
 
@@ -614,6 +615,8 @@ class Scene:
                     check_frame=self._checked_frame_name,
                 )
                 self._widget = widget
+                # finer paths where the camera zooms in (path_refine.py)
+                self._path_refiner = PathRefiner(widget, lambda: self.handles)
                 for name in (
                     "_origin",
                     "_camera",

@@ -339,6 +339,9 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         self._data_base = self._base
         self._pauses: list[np.ndarray] = []
         self._windows = LatestOnly("rbm-timeseries-window")
+        # the cursor's exact values: their own worker, so a long window job
+        # never holds up the readout
+        self._exact = LatestOnly("rbm-timeseries-exact")
         encoded = self._encoded()
         super().__init__(
             _esm=bundle("timeseries"),
@@ -483,7 +486,12 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
 
         A newer request from the same view cancels this one in the kernel.
         """
-        if not isinstance(content, dict) or content.get("type") != "window":
+        if not isinstance(content, dict):
+            return
+        if content.get("type") == "exact":
+            self._on_exact_request(content)
+            return
+        if content.get("type") != "window":
             return
         start, end = _number(content.get("start")), _number(content.get("end"))
         width = content.get("width", self._overview_width)
@@ -524,6 +532,92 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
 
         self._last_request = self._windows.submit(view, job, done)
 
+    def _on_exact_request(self, content: dict) -> None:
+        """Queue a browser's request for the recording's samples at its cursor.
+
+        The request carries only a time (seconds of the axis); anything else
+        is the kernel's. A time that is not a finite number gets no reply. A
+        newer request from the same view cancels this one in the kernel.
+        """
+        t = content.get("t")
+        if (
+            isinstance(t, bool)
+            or not isinstance(t, (int, float))
+            or not math.isfinite(t)
+        ):
+            return
+        t = float(t)
+        shift = self.x_shift
+        view = str(content.get("view", ""))
+
+        def job(cancelled):
+            return self._nearest_in_data(t - shift)
+
+        def done(result):
+            buffers = [
+                np.asarray([x, *values], dtype=np.float64).tobytes()
+                for x, values in result
+            ]
+            self.send(
+                {
+                    "type": "exact",
+                    "id": content.get("id"),
+                    "view": view,
+                    "t": t,
+                    "shift": shift,
+                },
+                buffers=buffers,
+            )
+
+        self._last_exact = self._exact.submit(view, job, done)
+
+    def nearest_samples(self, t: float | None = None) -> dict:
+        """The recorded sample nearest ``t`` of every panel, and its time.
+
+        What the cursor's readout shows in the browser: the recording's own
+        sample (never one of a decimated overview), read from the full series.
+
+        Parameters
+        ----------
+        t : float, optional
+            Seconds of the axis; default the cursor's time.
+
+        Returns
+        -------
+        dict of str to (float, ndarray of shape (k,))
+            Per panel, the sample's time in seconds of the axis and its values
+            (NaN where the recording has none). The earlier sample wins a tie.
+        """
+        t = self.current_time if t is None else self._seconds(t)
+        shift = self.x_shift
+        return {
+            s.label: (x + shift, values)
+            for s, (x, values) in zip(
+                self._series, self._nearest_in_data(t - shift), strict=True
+            )
+        }
+
+    def _nearest_in_data(self, t: float) -> list[tuple[float, np.ndarray]]:
+        """Per panel: (seconds of the data's base, values) of the row nearest ``t``."""
+        out = []
+        for s in self._series:
+            first = float(self._data_base.seconds(s.timestamps[:1])[0])
+            last = float(self._data_base.seconds(s.timestamps[-1:])[0])
+            # past either end the end row is the nearest; clamping also keeps
+            # a huge time from overflowing the ns arithmetic
+            at = min(max(t, first), last)
+            lo = s.raw_of(self._data_base, at, "low")
+            i = int(np.searchsorted(s.raw, lo, side="left"))
+            if i >= s.raw.size or (
+                i > 0
+                and float(self._data_base.seconds(s.timestamps[i - 1 : i])[0])
+                >= 2 * at - float(self._data_base.seconds(s.timestamps[i : i + 1])[0])
+            ):
+                i -= 1
+            x = float(self._data_base.seconds(s.timestamps[i : i + 1])[0])
+            out.append((x, np.array(s.values[i], dtype=np.float64)))
+        return out
+
     @property
     def window_requests(self) -> dict:
         """Window requests answered and cancelled in the kernel so far."""
@@ -533,9 +627,10 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         }
 
     def close(self) -> None:
-        windows = getattr(self, "_windows", None)  # None: the constructor failed
-        if windows is not None:
-            windows.close()
+        for name in ("_windows", "_exact"):
+            worker = getattr(self, name, None)  # None: the constructor failed
+            if worker is not None:
+                worker.close()
         super().close()
 
     def _shift_to(self, base: TimeBase) -> float:

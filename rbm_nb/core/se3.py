@@ -47,6 +47,7 @@ import numbers
 
 import numpy as np
 
+from .._door import shapes as _shapes
 from .._door.unpack import float_array, kernel_array
 from .._kernels import se3
 from . import conversions
@@ -102,62 +103,13 @@ def _kernels():
 
 
 def _rows(value, name: str, tail: tuple[int, ...]) -> tuple[np.ndarray, tuple]:
-    """``value`` as C-contiguous float64 rows ``(n, *tail)`` plus its leading shape."""
-    arr = float_array(value, name)
-    k = len(tail)
-    if arr.ndim < k or arr.shape[arr.ndim - k :] != tail:
-        expected = "(..., " + ", ".join(map(str, tail)) + ")"
-        raise ValueError(f"{name} must have shape {expected}, got {arr.shape}")
-    lead = arr.shape[: arr.ndim - k]
-    rows = kernel_array(arr.reshape((-1,) + tail))
-    bad = ~np.isfinite(rows.reshape(rows.shape[0], -1)).all(axis=1)
-    if bad.any():
-        raise ValueError(f"{name}{_where(lead, int(np.argmax(bad)))} is not finite")
-    return rows, lead
-
-
-def _where(lead: tuple, flat: int) -> str:
-    """``[i, j]`` of a flat row index in the leading shape (empty for a scalar)."""
-    if lead == ():
-        return ""
-    return "[" + ", ".join(str(int(i)) for i in np.unravel_index(flat, lead)) + "]"
-
-
-def _check_rotations(rot: np.ndarray, lead: tuple, name: str) -> None:
-    """Raise if a (n, k, k) matrix's 3 x 3 block is not a rotation (``_ROTATION_TOLERANCE``)."""
-    i = _kernels().first_non_rotation(kernel_array(rot), _ROTATION_TOLERANCE)
-    if i >= 0:
-        r = rot[i, :3, :3]
-        dev = np.abs(r.T @ r - np.eye(3)).max()
-        raise ValueError(
-            f"{name}{_where(lead, i)} is not a rotation: |RᵀR - I| reaches "
-            f"{dev:.3g} (tolerance {_ROTATION_TOLERANCE:g}) and det(R) = "
-            f"{np.linalg.det(r):.6g}"
-        )
+    """Finite C-contiguous float64 rows ``(n, *tail)`` plus the leading shape."""
+    return _shapes.rows(value, name, tail, finite=True)
 
 
 def _poses(value, name: str, rotation: bool = True) -> tuple[np.ndarray, tuple]:
-    """Validated (n, 4, 4) homogeneous matrices: last row (0, 0, 0, 1), R in SO(3).
-
-    ``rotation=False`` skips the SO(3) test (for first-order poses such as
-    the output of ``delta2tr``).
-    """
-    arr = float_array(value, name)
-    if arr.ndim < 2 or arr.shape[-2:] != (4, 4):
-        raise ValueError(f"{name} must have shape (..., 4, 4), got {arr.shape}")
-    lead = arr.shape[:-2]
-    rows = kernel_array(arr.reshape((-1, 4, 4)))
-    i, code = _kernels().first_bad_pose(rows, _ROTATION_TOLERANCE, bool(rotation))
-    if code == 1:
-        raise ValueError(f"{name}{_where(lead, i)} is not finite")
-    if code == 2:
-        raise ValueError(
-            f"{name}{_where(lead, i)} is not a homogeneous matrix: its last row is "
-            f"{rows[i, 3].tolist()}, expected [0, 0, 0, 1]"
-        )
-    if code == 3:
-        _check_rotations(rows[i : i + 1], (), f"{name}{_where(lead, i)}")
-    return rows, lead
+    """Validated (n, 4, 4) homogeneous matrices (see :func:`rbm_nb._door.shapes.poses`)."""
+    return _shapes.poses(value, name, _ROTATION_TOLERANCE, rotation)
 
 
 # ---------------------------------------------------------------------------
@@ -341,7 +293,7 @@ def tr2adjoint(T) -> np.ndarray:
     arr = float_array(T, "T")
     if arr.shape[-2:] == (3, 3):
         rows, lead = _rows(arr, "T", (3, 3))
-        _check_rotations(rows, lead, "T")
+        _shapes.rotation_blocks(rows, lead, "T", _ROTATION_TOLERANCE)
         return rows.reshape(lead + (3, 3)).copy()
     rows, lead = _poses(arr, "T")
     return _kernels().tr2adjoint(rows).reshape(lead + (6, 6))
@@ -365,7 +317,7 @@ def _representation(representation) -> int:
 def _angles_of_rotations(rot: np.ndarray, lead: tuple, code: int) -> np.ndarray:
     """spatialmath's ``r2x``: the angle triple of each rotation matrix."""
     try:
-        _check_rotations(rot, lead, "Γ")
+        _shapes.rotation_blocks(rot, lead, "Γ", _ROTATION_TOLERANCE)
     except ValueError as err:
         # the likely mistake: a stack of exactly three angle triples
         raise ValueError(
@@ -465,7 +417,7 @@ def rotvelxform(
         value = np.linalg.norm(row) if code == 4 else row[1]
         raise SingularityError(
             f"rotvelxform(inverse=True, representation={representation!r}) is "
-            f"singular at Γ{_where(lead, bad)}: {what} = {np.rad2deg(value):.6g}°, "
+            f"singular at Γ{_shapes.where(lead, bad)}: {what} = {np.rad2deg(value):.6g}°, "
             f"where {why}"
         )
     if full:
@@ -603,7 +555,7 @@ def trnorm(T) -> np.ndarray:
     out, bad = _kernels().trnorm(rows)
     if bad >= 0:
         raise ValueError(
-            f"T{_where(lead, bad)} cannot be normalised: its y and z columns are "
+            f"T{_shapes.where(lead, bad)} cannot be normalised: its y and z columns are "
             "parallel or zero"
         )
     return out.reshape(lead + tail)
@@ -619,7 +571,7 @@ def _fractions(s) -> np.ndarray:
         i = int(np.argmax(~np.isfinite(flat) | (flat < 0) | (flat > 1)))
         raise ValueError(
             f"s must lie in [0, 1] (or be an integer number of steps > 1); "
-            f"s{_where(arr.shape, i)} = {flat[i]!r}"
+            f"s{_shapes.where(arr.shape, i)} = {flat[i]!r}"
         )
     return arr
 
@@ -780,6 +732,6 @@ def qlog(q) -> np.ndarray:
     zero = ~rows.any(axis=1)
     if zero.any():
         raise ValueError(
-            f"q{_where(lead, int(np.argmax(zero)))} is zero: it has no logarithm"
+            f"q{_shapes.where(lead, int(np.argmax(zero)))} is zero: it has no logarithm"
         )
     return _kernels().qlog(rows).reshape(lead + (4,))

@@ -27,11 +27,6 @@ _SYSTEM_AXES: dict[tuple[str, int], tuple[str, list[str]]] = {
 }
 
 
-def _checked(arr: Any, axis: Any, length: int, what: str) -> tuple[np.ndarray, int]:
-    """``arr`` as float64 with its ``length`` coordinates moved last, and the axis."""
-    return _shapes.along_axis(arr, "arr", axis, length, what)
-
-
 def cartesian_to_polar(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     """Convert 2-D cartesian coordinates (x, y) into polar coordinates (r, phi).
 
@@ -61,7 +56,7 @@ def cartesian_to_polar(arr: ArrayInput, axis: int = -1) -> np.ndarray:
         return _dask.elementwise(
             cartesian_to_polar, getattr(arr, "data", arr), axis, axis=axis
         )
-    arr, axis = _checked(arr, axis, 2, "x, y")
+    arr, axis = _shapes.along_axis(arr, "arr", axis, 2, "x, y")
     x, y = arr[..., 0], arr[..., 1]
     return np.stack((np.hypot(x, y), np.arctan2(y, x)), axis=axis)
 
@@ -95,7 +90,7 @@ def polar_to_cartesian(arr: ArrayInput, axis: int = -1) -> np.ndarray:
         return _dask.elementwise(
             polar_to_cartesian, getattr(arr, "data", arr), axis, axis=axis
         )
-    arr, axis = _checked(arr, axis, 2, "r, phi")
+    arr, axis = _shapes.along_axis(arr, "arr", axis, 2, "r, phi")
     r, phi = arr[..., 0], arr[..., 1]
     return np.stack((r * np.cos(phi), r * np.sin(phi)), axis=axis)
 
@@ -131,7 +126,7 @@ def cartesian_to_spherical(arr: ArrayInput, axis: int = -1) -> np.ndarray:
         return _dask.elementwise(
             cartesian_to_spherical, getattr(arr, "data", arr), axis, axis=axis
         )
-    arr, axis = _checked(arr, axis, 3, "x, y, z")
+    arr, axis = _shapes.along_axis(arr, "arr", axis, 3, "x, y, z")
     x, y, z = arr[..., 0], arr[..., 1], arr[..., 2]
     rho = np.hypot(x, y)
     # arctan2 rather than arccos(z / r): defined at the origin and accurate near
@@ -168,7 +163,7 @@ def spherical_to_cartesian(arr: ArrayInput, axis: int = -1) -> np.ndarray:
         return _dask.elementwise(
             spherical_to_cartesian, getattr(arr, "data", arr), axis, axis=axis
         )
-    arr, axis = _checked(arr, axis, 3, "r, theta, phi")
+    arr, axis = _shapes.along_axis(arr, "arr", axis, 3, "r, theta, phi")
     r, theta, phi = arr[..., 0], arr[..., 1], arr[..., 2]
     rho = r * np.sin(theta)
     return np.stack(

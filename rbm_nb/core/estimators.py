@@ -257,10 +257,6 @@ def _vectors(v, axis, name: str) -> tuple[np.ndarray, int]:
     return np.moveaxis(moved, -1, ax), ax
 
 
-def _dim_axis(v1, dim, axis):
-    return dim_axis(v1, dim, axis, "v1")
-
-
 def shortest_arc_rotation(
     v1: ArrayInput, v2: ArrayInput, dim: str | None = None, axis: int | None = None
 ) -> Any:
@@ -295,7 +291,7 @@ def shortest_arc_rotation(
     >>> shortest_arc_rotation([1.0, 0, 0], [0, 1.0, 0]).round(6)
     array([0.707107, 0.      , 0.      , 0.707107])
     """
-    axis = _dim_axis(v1, dim, axis)
+    axis = dim_axis(v1, dim, axis, "v1")
     a, ax1 = _vectors(v1, axis, "v1")
     b, ax2 = _vectors(v2, axis, "v2")
     am, bm = np.moveaxis(a, ax1, -1), np.moveaxis(b, ax2, -1)
@@ -348,7 +344,7 @@ def shortest_arc_rotation(
 
 
 def _point_rows(v1, v2, dim, axis, same_shape: bool) -> tuple[np.ndarray, np.ndarray]:
-    axis = _dim_axis(v1, dim, axis)
+    axis = dim_axis(v1, dim, axis, "v1")
     a, ax1 = _vectors(v1, axis, "v1")
     b, ax2 = _vectors(v2, axis, "v2")
     if a.ndim < 2:

@@ -98,21 +98,6 @@ def _kernels():
 
 
 # ---------------------------------------------------------------------------
-# validation
-# ---------------------------------------------------------------------------
-
-
-def _rows(value, name: str, tail: tuple[int, ...]) -> tuple[np.ndarray, tuple]:
-    """Finite C-contiguous float64 rows ``(n, *tail)`` plus the leading shape."""
-    return _shapes.rows(value, name, tail, finite=True)
-
-
-def _poses(value, name: str, rotation: bool = True) -> tuple[np.ndarray, tuple]:
-    """Validated (n, 4, 4) homogeneous matrices (see :func:`rbm_nb._door.shapes.poses`)."""
-    return _shapes.poses(value, name, _ROTATION_TOLERANCE, rotation)
-
-
-# ---------------------------------------------------------------------------
 # skew / vex
 # ---------------------------------------------------------------------------
 
@@ -136,7 +121,7 @@ def skew(v) -> np.ndarray:
            [ 3.,  0., -1.],
            [-2.,  1.,  0.]])
     """
-    rows, lead = _rows(v, "v", (3,))
+    rows, lead = _shapes.rows(v, "v", (3,), finite=True)
     return _kernels().skew(rows).reshape(lead + (3, 3))
 
 
@@ -161,7 +146,7 @@ def vex(s) -> np.ndarray:
     array([[1., 2., 3.],
            [4., 5., 6.]])
     """
-    rows, lead = _rows(s, "s", (3, 3))
+    rows, lead = _shapes.rows(s, "s", (3, 3), finite=True)
     return _kernels().vex(rows).reshape(lead + (3,))
 
 
@@ -207,10 +192,10 @@ def tr2delta(T0, T1=None) -> np.ndarray:
     """
     k = _kernels()
     if T1 is None:
-        rows, lead = _poses(T0, "T0", rotation=False)
+        rows, lead = _shapes.poses(T0, "T0", _ROTATION_TOLERANCE, rotation=False)
         return k.tr2delta(np.eye(4)[None], rows).reshape(lead + (6,))
-    a, a_lead = _poses(T0, "T0", rotation=False)
-    b, b_lead = _poses(T1, "T1", rotation=False)
+    a, a_lead = _shapes.poses(T0, "T0", _ROTATION_TOLERANCE, rotation=False)
+    b, b_lead = _shapes.poses(T1, "T1", _ROTATION_TOLERANCE, rotation=False)
     lead = _broadcast(a_lead, b_lead, "T0", "T1")
     # a single pose on either side is reused by the kernel; anything else
     # is broadcast explicitly
@@ -260,7 +245,7 @@ def delta2tr(d) -> np.ndarray:
            [-0.002,  0.   ,  1.   ,  0.   ],
            [ 0.   ,  0.   ,  0.   ,  1.   ]])
     """
-    rows, lead = _rows(d, "d", (6,))
+    rows, lead = _shapes.rows(d, "d", (6,), finite=True)
     return _kernels().delta2tr(rows).reshape(lead + (4, 4))
 
 
@@ -292,10 +277,10 @@ def tr2adjoint(T) -> np.ndarray:
     """
     arr = float_array(T, "T")
     if arr.shape[-2:] == (3, 3):
-        rows, lead = _rows(arr, "T", (3, 3))
+        rows, lead = _shapes.rows(arr, "T", (3, 3), finite=True)
         _shapes.rotation_blocks(rows, lead, "T", _ROTATION_TOLERANCE)
         return rows.reshape(lead + (3, 3)).copy()
-    rows, lead = _poses(arr, "T")
+    rows, lead = _shapes.poses(arr, "T", _ROTATION_TOLERANCE)
     return _kernels().tr2adjoint(rows).reshape(lead + (6, 6))
 
 
@@ -406,10 +391,10 @@ def rotvelxform(
         raise ValueError(f"tol must be a non-negative number, got {tol!r}")
     arr = float_array(Γ, "Γ")
     if arr.shape[-2:] == (3, 3):
-        rot, lead = _rows(arr, "Γ", (3, 3))
+        rot, lead = _shapes.rows(arr, "Γ", (3, 3), finite=True)
         angles = kernel_array(_angles_of_rotations(rot, lead, code))
     else:
-        angles, lead = _rows(arr, "Γ", (3,))
+        angles, lead = _shapes.rows(arr, "Γ", (3,), finite=True)
     out, bad = _kernels().rotvelxform(angles, code, bool(inverse), float(tol))
     if bad >= 0:
         what, why = _SINGULAR_WHAT[code]
@@ -509,7 +494,7 @@ def exp2jac(v) -> np.ndarray:
 
 
 def _forward(angles, code: int) -> np.ndarray:
-    rows, lead = _rows(angles, "angles", (3,))
+    rows, lead = _shapes.rows(angles, "angles", (3,), finite=True)
     out, _ = _kernels().rotvelxform(rows, code, False, 0.0)
     return out.reshape(lead + (3, 3))
 
@@ -551,7 +536,7 @@ def trnorm(T) -> np.ndarray:
     """
     arr = float_array(T, "T")
     tail = (3, 3) if arr.shape[-2:] == (3, 3) else (4, 4)
-    rows, lead = _rows(arr, "T", tail)
+    rows, lead = _shapes.rows(arr, "T", tail, finite=True)
     out, bad = _kernels().trnorm(rows)
     if bad >= 0:
         raise ValueError(
@@ -626,7 +611,7 @@ def trinterp(start, end, s, shortest: bool = True) -> np.ndarray:
     rotation_only = end_arr.shape[-2:] == (3, 3)
     if rotation_only:
         end_arr = _embed(end_arr)
-    end_rows, end_lead = _poses(end_arr, "end")
+    end_rows, end_lead = _shapes.poses(end_arr, "end", _ROTATION_TOLERANCE)
     if start is None:
         start_rows, start_lead = np.eye(4)[None], ()
     else:
@@ -636,8 +621,10 @@ def trinterp(start, end, s, shortest: bool = True) -> np.ndarray:
                 f"start and end must both be rotations (3, 3) or both poses "
                 f"(4, 4), got shapes {start_arr.shape} and {end_arr.shape}"
             )
-        start_rows, start_lead = _poses(
-            _embed(start_arr) if rotation_only else start_arr, "start"
+        start_rows, start_lead = _shapes.poses(
+            _embed(start_arr) if rotation_only else start_arr,
+            "start",
+            _ROTATION_TOLERANCE,
         )
     frac = _fractions(s)
     lead = _broadcast(start_lead, end_lead, "start", "end")
@@ -696,7 +683,7 @@ def qexp(q) -> np.ndarray:
     >>> qexp([0, np.pi / 4, 0, 0]).round(6)
     array([0.707107, 0.707107, 0.      , 0.      ])
     """
-    rows, lead = _rows(q, "q", (4,))
+    rows, lead = _shapes.rows(q, "q", (4,), finite=True)
     return _kernels().qexp(rows).reshape(lead + (4,))
 
 
@@ -728,7 +715,7 @@ def qlog(q) -> np.ndarray:
     >>> qlog([np.cos(0.3), np.sin(0.3), 0, 0]).round(6) + 0.0
     array([0. , 0.3, 0. , 0. ])
     """
-    rows, lead = _rows(q, "q", (4,))
+    rows, lead = _shapes.rows(q, "q", (4,), finite=True)
     zero = ~rows.any(axis=1)
     if zero.any():
         raise ValueError(

@@ -17,9 +17,10 @@ that every facade words the same mistake the same way:
 * :func:`along_axis`: an axis of length ``length`` anywhere (the one axis
   rule, :func:`rbm_nb._door.unpack.resolve_axis`), moved last, no infinities;
 * :func:`where`: ``[i, j]`` of a flat row index in a leading shape, the way
-  every message names a row;
-* :func:`rotation_blocks`, :func:`poses`: rotation and homogeneous matrices
-  within a tolerance of SO(3) (one counting kernel when they pass).
+  every message names a row.
+
+Rotation and homogeneous matrices are checked by :mod:`rbm_nb._door.poses`
+(apart, so that only what takes them loads their kernels).
 """
 
 from __future__ import annotations
@@ -28,7 +29,6 @@ from typing import Any
 
 import numpy as np
 
-from .._kernels import se3 as _se3
 from .unpack import float_array, kernel_array, moveaxis, resolve_axis
 from .validation import check_last_axis, check_no_inf
 
@@ -40,8 +40,6 @@ __all__ = [
     "one_or_many",
     "along_axis",
     "where",
-    "rotation_blocks",
-    "poses",
 ]
 
 
@@ -179,38 +177,3 @@ def along_axis(
 
 def _index(idx: Any) -> str:
     return "[" + ", ".join(str(int(i)) for i in idx) + "]" if len(idx) else ""
-
-
-def rotation_blocks(rot: np.ndarray, lead: tuple, name: str, tolerance: float) -> None:
-    """Raise if a (n, k, k) matrix's 3 x 3 block is not a rotation within ``tolerance``."""
-    i = _se3.first_non_rotation(kernel_array(rot), tolerance)
-    if i >= 0:
-        r = rot[i, :3, :3]
-        dev = np.abs(r.T @ r - np.eye(3)).max()
-        raise ValueError(
-            f"{name}{where(lead, i)} is not a rotation: |RᵀR - I| reaches "
-            f"{dev:.3g} (tolerance {tolerance:g}) and det(R) = "
-            f"{np.linalg.det(r):.6g}"
-        )
-
-
-def poses(
-    value: Any, name: str, tolerance: float, rotation: bool = True
-) -> tuple[np.ndarray, tuple]:
-    """(n, 4, 4) homogeneous matrices: last row (0, 0, 0, 1), R in SO(3).
-
-    ``rotation=False`` skips the SO(3) test (first-order poses such as the
-    output of ``delta2tr``).
-    """
-    flat, lead = rows(value, name, (4, 4))
-    i, code = _se3.first_bad_pose(flat, tolerance, bool(rotation))
-    if code == 1:
-        raise ValueError(f"{name}{where(lead, i)} is not finite")
-    if code == 2:
-        raise ValueError(
-            f"{name}{where(lead, i)} is not a homogeneous matrix: its last row is "
-            f"{flat[i, 3].tolist()}, expected [0, 0, 0, 1]"
-        )
-    if code == 3:
-        rotation_blocks(flat[i : i + 1], (), f"{name}{where(lead, i)}", tolerance)
-    return flat, lead

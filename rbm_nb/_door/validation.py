@@ -29,6 +29,7 @@ __all__ = [
     "check_whole_rows",
     "moving_samples",
     "check_unit_norms",
+    "check_tolerance",
     "check_what",
     "check_mode",
 ]
@@ -220,6 +221,13 @@ def check_finite(arr: np.ndarray, name: str, row_axis: bool = True) -> None:
         bad = np.argwhere(~finite)[0]
         where = bad[:-1] if row_axis and arr.ndim > 1 else bad
         raise ValueError(f"{name}{_index(where)} is not finite")
+
+
+def check_tolerance(value: Any, name: str = "tol") -> float:
+    """A tolerance argument: a finite number >= 0 (the one rule for all of them)."""
+    if not is_scalar(value) or not 0 <= value < np.inf:
+        raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+    return float(value)
 
 
 def check_what(what: Any) -> str:

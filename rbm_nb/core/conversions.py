@@ -44,6 +44,7 @@ from itertools import product
 import numpy as np
 
 from .._door import shapes as _shapes
+from .._door.validation import check_tolerance
 from .._infra.config import UNIT_QUATERNION_TOLERANCE
 from .._kernels import conversions as _kc
 
@@ -139,11 +140,6 @@ def _report_matrices(name: str, mats: np.ndarray, lead: tuple, tol: float) -> No
     )
 
 
-def _check_tol(tol) -> None:
-    if not (isinstance(tol, (int, float, np.floating)) and 0 <= tol < np.inf):
-        raise ValueError(f"tol must be a finite number >= 0, got {tol!r}")
-
-
 def _parse_order(order) -> tuple[int, int, int]:
     if isinstance(order, str) and order in EULER_ORDERS:
         return tuple("xyz".index(c) for c in order)  # type: ignore[return-value]
@@ -230,7 +226,7 @@ def quaternion_from_matrix(matrix, *, tol: float = MATRIX_TOLERANCE) -> np.ndarr
     >>> quaternion_from_matrix([[0, -1, 0], [1, 0, 0], [0, 0, 1]]).round(6)
     array([0.707107, 0.      , 0.      , 0.707107])
     """
-    _check_tol(tol)
+    check_tolerance(tol)
     rows, lead = _shapes.rows(matrix, "matrix", (3, 3))
     out, n_invalid = _kc.quaternion_from_matrix(rows, float(tol))
     if n_invalid:
@@ -580,7 +576,7 @@ def transform_from_homogeneous(
     >>> t, r
     (array([0., 0., 0.]), array([1., 0., 0., 0.]))
     """
-    _check_tol(tol)
+    check_tolerance(tol)
     rows, lead = _shapes.rows(matrix, "matrix", (4, 4))
     t, q, n_invalid = _kc.transform_from_homogeneous(rows, float(tol))
     if n_invalid:

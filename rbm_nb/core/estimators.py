@@ -30,7 +30,7 @@ from .._door.series import velocity_options as _velocity_options
 from .._door.shapes import along_axis
 from .._door.unpack import ArrayInput, dim_axis, kernel_array
 from .._door.unpack import is_dataarray as _is_dataarray
-from .._door.validation import check_unit_norms, is_scalar
+from .._door.validation import check_tolerance, check_unit_norms, is_scalar
 from .._engine.velocity import angular_series as _angular_series
 from .._engine.velocity import linear_series as _linear_series
 from .._engine.velocity import lowpass_reach as _lowpass_reach
@@ -574,8 +574,7 @@ def iterative_closest_point(
         raise ValueError(
             f"max_iterations must be a non-negative integer, got {max_iterations!r}"
         )
-    if not is_scalar(tolerance) or not tolerance >= 0:
-        raise ValueError(f"tolerance must be a non-negative number, got {tolerance!r}")
+    check_tolerance(tolerance, "tolerance")
 
     moved = p1.copy()
     if init_transform is not None:

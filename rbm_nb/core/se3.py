@@ -47,8 +47,10 @@ import numbers
 
 import numpy as np
 
+from .._door import poses as _poses
 from .._door import shapes as _shapes
 from .._door.unpack import float_array, kernel_array
+from .._door.validation import check_tolerance
 from .._kernels import se3
 from . import conversions
 
@@ -192,10 +194,10 @@ def tr2delta(T0, T1=None) -> np.ndarray:
     """
     k = _kernels()
     if T1 is None:
-        rows, lead = _shapes.poses(T0, "T0", _ROTATION_TOLERANCE, rotation=False)
+        rows, lead = _poses.poses(T0, "T0", _ROTATION_TOLERANCE, rotation=False)
         return k.tr2delta(np.eye(4)[None], rows).reshape(lead + (6,))
-    a, a_lead = _shapes.poses(T0, "T0", _ROTATION_TOLERANCE, rotation=False)
-    b, b_lead = _shapes.poses(T1, "T1", _ROTATION_TOLERANCE, rotation=False)
+    a, a_lead = _poses.poses(T0, "T0", _ROTATION_TOLERANCE, rotation=False)
+    b, b_lead = _poses.poses(T1, "T1", _ROTATION_TOLERANCE, rotation=False)
     lead = _broadcast(a_lead, b_lead, "T0", "T1")
     # a single pose on either side is reused by the kernel; anything else
     # is broadcast explicitly
@@ -278,9 +280,9 @@ def tr2adjoint(T) -> np.ndarray:
     arr = float_array(T, "T")
     if arr.shape[-2:] == (3, 3):
         rows, lead = _shapes.rows(arr, "T", (3, 3), finite=True)
-        _shapes.rotation_blocks(rows, lead, "T", _ROTATION_TOLERANCE)
+        _poses.rotation_blocks(rows, lead, "T", _ROTATION_TOLERANCE)
         return rows.reshape(lead + (3, 3)).copy()
-    rows, lead = _shapes.poses(arr, "T", _ROTATION_TOLERANCE)
+    rows, lead = _poses.poses(arr, "T", _ROTATION_TOLERANCE)
     return _kernels().tr2adjoint(rows).reshape(lead + (6, 6))
 
 
@@ -302,7 +304,7 @@ def _representation(representation) -> int:
 def _angles_of_rotations(rot: np.ndarray, lead: tuple, code: int) -> np.ndarray:
     """spatialmath's ``r2x``: the angle triple of each rotation matrix."""
     try:
-        _shapes.rotation_blocks(rot, lead, "Γ", _ROTATION_TOLERANCE)
+        _poses.rotation_blocks(rot, lead, "Γ", _ROTATION_TOLERANCE)
     except ValueError as err:
         # the likely mistake: a stack of exactly three angle triples
         raise ValueError(
@@ -387,8 +389,7 @@ def rotvelxform(
     rbm_nb.core.se3.SingularityError: rotvelxform(inverse=True, representation='rpy/xyz') is singular at Γ: pitch = 90°, where cos(pitch) = 0 (pitch = ±90°)
     """
     code = _representation(representation)
-    if not (isinstance(tol, numbers.Real) and tol >= 0):
-        raise ValueError(f"tol must be a non-negative number, got {tol!r}")
+    check_tolerance(tol)
     arr = float_array(Γ, "Γ")
     if arr.shape[-2:] == (3, 3):
         rot, lead = _shapes.rows(arr, "Γ", (3, 3), finite=True)
@@ -611,7 +612,7 @@ def trinterp(start, end, s, shortest: bool = True) -> np.ndarray:
     rotation_only = end_arr.shape[-2:] == (3, 3)
     if rotation_only:
         end_arr = _embed(end_arr)
-    end_rows, end_lead = _shapes.poses(end_arr, "end", _ROTATION_TOLERANCE)
+    end_rows, end_lead = _poses.poses(end_arr, "end", _ROTATION_TOLERANCE)
     if start is None:
         start_rows, start_lead = np.eye(4)[None], ()
     else:
@@ -621,7 +622,7 @@ def trinterp(start, end, s, shortest: bool = True) -> np.ndarray:
                 f"start and end must both be rotations (3, 3) or both poses "
                 f"(4, 4), got shapes {start_arr.shape} and {end_arr.shape}"
             )
-        start_rows, start_lead = _shapes.poses(
+        start_rows, start_lead = _poses.poses(
             _embed(start_arr) if rotation_only else start_arr,
             "start",
             _ROTATION_TOLERANCE,

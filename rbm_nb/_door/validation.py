@@ -31,7 +31,6 @@ __all__ = [
     "check_unit_norms",
     "check_tolerance",
     "check_what",
-    "check_mode",
 ]
 
 WHAT_MODES = ("reference_frame", "moving_frame", "representation_frame")
@@ -236,14 +235,6 @@ def check_what(what: Any) -> str:
             f"what must be one of {', '.join(repr(m) for m in WHAT_MODES)}, got {what!r}"
         )
     return what
-
-
-def check_mode(mode: Any) -> str:
-    if mode not in ("quaternion", "rotation_vector"):
-        raise ValueError(
-            f"mode must be 'quaternion' or 'rotation_vector', got {mode!r}"
-        )
-    return mode
 
 
 def _index(idx) -> str:

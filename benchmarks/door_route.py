@@ -12,7 +12,15 @@ lower layer calling a higher one back. Routes:
   moving chain, computed with the synchronous scheduler (graph building
   and the tasks both traced).
 
-Run: ``PYTHONPATH=. python benchmarks/door_route.py [--tree]``
+With ``--facades``, the other facades' routes too (issue 32, item 2): per
+call, its stays, modules, climbs, the *door calls* (calls from a facade
+module of ``rbm_nb.core`` into ``rbm_nb._door``), the *own checks* (calls
+of the facade module's private helpers whose name says they check or
+unpack: ``_check*``, ``_unpack``, ``_as_*``, ``_split``, ``_checked``,
+``_poses``, ``_vectors``; the facades' ``_rows`` are layout helpers) and
+the depth of the first kernel.
+
+Run: ``PYTHONPATH=. python benchmarks/door_route.py [--tree] [--facades]``
 (``--tree`` also prints each route's call tree). Run it from another
 checkout to compare (it traces the rbm_nb on ``sys.path``).
 """
@@ -82,6 +90,79 @@ def _dask_call():
     return lambda: rbm.transform_points(arr, "world").compute(scheduler="sync")
 
 
+_OWN_CHECKS = ("_check", "_unpack", "_as_", "_split", "_checked", "_poses",
+               "_vectors", "_paired_rows", "_resolve_dim_axis", "_dim_axis")  # fmt: skip
+
+
+def _facade_calls() -> list[tuple[str, object]]:
+    import xarray as xr
+
+    rng = np.random.default_rng(0)
+    t = np.arange(50) * 0.01
+    x = rng.normal(size=(50, 3))
+    q = rbm.quaternion_from_euler(rng.normal(size=(50, 3)) * 0.1, "xyz")
+    directions = xr.DataArray(
+        np.tile([0.0, 0.0, 1.0], (50, 1)), dims=("time", "cartesian_axis"),
+        coords={"time": t}, attrs={"representation_frame": "world"},
+    )  # fmt: skip
+    transform = rbm.Transform([1.0, 0, 0], [1.0, 0, 0, 0])
+    return [
+        ("estimate_linear_velocity", lambda: rbm.estimate_linear_velocity(x, timestamps=t)),
+        ("estimate_angular_velocity", lambda: rbm.estimate_angular_velocity(q, timestamps=t)),
+        ("shortest_arc_rotation", lambda: rbm.shortest_arc_rotation(x, x[::-1])),
+        ("quaternion_from_matrix", lambda: rbm.quaternion_from_matrix(np.eye(3))),
+        ("matrix_from_quaternion", lambda: rbm.matrix_from_quaternion(q)),
+        ("se3.skew", lambda: rbm.se3.skew(x)),
+        ("se3.tr2adjoint", lambda: rbm.se3.tr2adjoint(np.eye(4))),
+        ("cartesian_to_spherical", lambda: rbm.cartesian_to_spherical(x)),
+        ("transform_coordinates", lambda: rbm.transform_coordinates(x, "spherical", "cartesian")),
+        ("qmul", lambda: rbm.qmul(q, q)),
+        ("rotate_vectors", lambda: rbm.rotate_vectors(q, x)),
+        ("qinterp", lambda: rbm.qinterp(q, t, t[1:-1] + 0.001)),
+        ("Transform.apply", lambda: transform.apply(x)),
+        ("gaze.angles", lambda: rbm.gaze.angles(directions, "world")),
+        ("lookup_angular_velocity", lambda: rbm.lookup_angular_velocity("head", "world")),
+    ]  # fmt: skip
+
+
+def _facade_figures(route) -> tuple[int, int, int | None]:
+    """(door calls, own checks, kernel depth) of one facade's route."""
+    stack: list[str] = []
+    door = own = 0
+    kernel = None
+    for depth, name in route:
+        del stack[depth:]
+        module = _module_of(name)
+        caller = stack[-1] if stack else None
+        if (
+            caller
+            and caller.startswith("rbm_nb.core.")
+            and module.startswith("rbm_nb._door")
+        ):
+            door += 1
+        function = name.split(" ")[0].rsplit(".", 1)[-1]
+        if module.startswith("rbm_nb.core.") and function.startswith(_OWN_CHECKS):
+            own += 1
+        if kernel is None and name.endswith("[numba kernel]"):
+            kernel = depth
+        stack.append(module)
+    return door, own, kernel
+
+
+def facades(importers) -> None:
+    _register(True)
+    print("\nfacades: stays, modules, climbs, door calls, own checks, kernel depth")
+    for label, call in _facade_calls():
+        call()  # compile, fill the caches
+        route = _route(call)
+        stays, modules, n_climbs, _ = _figures(route, importers)
+        door, own, kernel = _facade_figures(route)
+        print(
+            f"  {label:27s} {stays:4d} stays {modules:3d} modules {n_climbs:2d} climbs "
+            f"{door:2d} door calls {own:2d} own checks  kernel at {kernel}"
+        )
+
+
 def main() -> None:
     tree = "--tree" in sys.argv
     importers = _importers()
@@ -106,6 +187,8 @@ def main() -> None:
         if tree:
             for d, n in route:
                 print(f"{'  ' * d}{n}")
+    if "--facades" in sys.argv:
+        facades(importers)
 
 
 if __name__ == "__main__":

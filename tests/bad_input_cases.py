@@ -862,6 +862,22 @@ _INFQ[3, 0] = np.inf
 
 
 # one row per line group reads as a table; keep the formatter out
+
+# -- the facades that reach the door through _door.shapes / _door.series (issue 32) --
+
+
+def gaze_directions_with(dims=("time", "cartesian_axis"), attrs=None, width=3):
+    """gaze.angles of a DataArray shaped like gaze.directions' result, but not quite."""
+    import xarray as xr
+
+    directions = xr.DataArray(
+        np.tile([1.0, 0.0, 0.0], (4, 1))[:, :width], dims=dims,
+        coords={dims[0]: np.arange(4.0)},
+        attrs={"representation_frame": "world"} if attrs is None else attrs,
+    )  # fmt: skip
+    return rbm.gaze.angles(directions, "world")
+
+
 # fmt: off
 CASES: list[Case] = [
     # -- ReferenceFrame construction ----------------------------------------
@@ -1594,6 +1610,63 @@ CASES: list[Case] = [
          (demo_data_note, "auto", {"head.nc": "not the recording"},
           "head.nc in", "sha256 differs", "shows the synthetic recording",
           "point RBM_NB_DATA_DIR at a folder"), {}, None, ""),
+    # -- se3, gaze, plots, Transform methods, coordinates, velocity options at the
+    # -- door (issue 32, items 2: _door.shapes, _door.series) --------------------
+    Case("se3-skew-shape", "se3.skew", ([1.0, 2.0],), {}, ValueError,
+         r"v must have shape \(\.\.\., 3\), got \(2,\)"),
+    Case("se3-skew-inf-row", "se3.skew", ([[0.0, 0, 0], [np.inf, 0, 0]],), {},
+         ValueError, r"v\[1\] is not finite"),
+    Case("se3-tr2adjoint-scaled", "se3.tr2adjoint", (np.diag([2.0, 1, 1, 1]),), {},
+         ValueError, r"T is not a rotation: \|RᵀR - I\| reaches 3"),
+    Case("se3-tr2adjoint-bottom-row", "se3.tr2adjoint",
+         (np.stack([np.eye(4), np.eye(4) + np.eye(4, k=-3)]),), {}, ValueError,
+         r"T\[1\] is not a homogeneous matrix: its last row is \[1\.0, 0\.0, 0\.0, 1\.0\]"),
+    Case("se3-qlog-zero", "se3.qlog", (np.zeros(4),), {}, ValueError,
+         "q is zero: it has no logarithm"),
+    Case("gaze-angles-not-dataarray", "gaze.angles", (np.zeros((4, 3)), "world"), {},
+         ValueError, "directions must be a DataArray from gaze.directions, got ndarray"),
+    Case("gaze-angles-dims", gaze_directions_with, (("t", "cartesian_axis"),), {},
+         ValueError, r"directions must have dims \('time', 'cartesian_axis'\)"),
+    Case("gaze-angles-two-components", gaze_directions_with, (), {"width": 2},
+         ValueError, "directions must have 3 components along 'cartesian_axis'"),
+    Case("gaze-angles-no-frame", gaze_directions_with, (), {"attrs": {}}, ValueError,
+         "directions has no 'representation_frame' attribute"),
+    Case("plot-points-shape", "plot.points", (np.zeros((2, 2)),), {}, ValueError,
+         r"points: arr must have shape \(3,\) or \(N, 3\), got \(2, 2\)"),
+    Case("plot-quaternions-text", "plot.quaternions", (["a", "b", "c", "d"],), {},
+         ValueError, "quaternions: arr must be numeric"),
+    Case("Transform-apply-vectors-length", transform_method,
+         ("apply_vectors", np.zeros((4, 4))), {}, ValueError,
+         r"vectors must have length 3 along its last axis"),
+    Case("cartesian-to-polar-length", "cartesian_to_polar", (np.ones((3, 3)),), {},
+         ValueError, r"arr must have length 2 \(x, y\) along axis=-1, got shape \(3, 3\)"),
+    Case("coordinates-dim-with-ndarray", "transform_coordinates", (np.ones(3),),
+         {"into": "spherical", "outof": "cartesian", "dim": "x"}, ValueError,
+         "dim can only be given when arr is a DataArray; use axis"),
+    Case("shortest-arc-dim-with-ndarray", "shortest_arc_rotation",
+         (np.ones(3), np.ones(3)), {"dim": "x"}, ValueError,
+         "dim can only be given when v1 is a DataArray; use axis"),
+    Case("qmul-second-quaternion-length", "qmul", (np.ones(4), np.ones(3)), {},
+         ValueError, r"q\[1\] must have length 4 \(w, x, y, z\) along qaxis=-1"),
+    Case("transform-linear-velocity-cutoff", "transform_linear_velocity",
+         (np.zeros((4, 3)), "world", "moving"),
+         {"timestamps": np.arange(4.0), "cutoff": 1.5}, ValueError,
+         r"cutoff must be a fraction of the Nyquist frequency in \(0, 1\), got 1\.5"),
+    Case("transform-angular-velocity-cutoff-text", "transform_angular_velocity",
+         (np.zeros((4, 3)), "world", "moving"),
+         {"timestamps": np.arange(4.0), "cutoff": "0.5"}, ValueError,
+         "cutoff must be a fraction of the Nyquist frequency"),
+    Case("lookup-linear-velocity-outlier-negative", "lookup_linear_velocity",
+         ("moving", "world"), {"outlier_thresh": -1.0}, ValueError,
+         "outlier_thresh must be a non-negative number, got -1.0"),
+    Case("se3-rotvelxform-tol-inf", "se3.rotvelxform", (np.zeros(3),), {"tol": np.inf},
+         ValueError, r"tol must be a finite number >= 0, got inf"),
+    Case("icp-tolerance-inf", "iterative_closest_point", (PTS, PTS),
+         {"tolerance": np.inf}, ValueError,
+         r"tolerance must be a finite number >= 0, got inf"),
+    Case("frame-lookup-angular-velocity-mode", frame_method,
+         ("moving", "lookup_angular_velocity"), {"mode": "euler"}, ValueError,
+         "mode must be 'quaternion' or 'rotation_vector', got 'euler'"),
     # -- rosbags ---------------------------------------------------------------
     Case("rosbag-missing-file", rosbag_reader,
          ("/nonexistent/nope.bag", "get_topics_and_types"), {}, FileNotFoundError,

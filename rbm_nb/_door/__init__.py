@@ -3,8 +3,11 @@
 Everything a user hands the frame core comes in here and leaves as checked,
 kernel-ready values: the arguments of a transform (``inputs``: arrays laid out
 as the engine's blocks, frames resolved, one entry per dask block), arrays
-and DataArrays unpacked (``unpack``), coordinates and quaternions checked
-(``validation``), xarray results (``xarray``), frame paths through the tree
+and DataArrays unpacked (``unpack``: the one axis and dim rules), the other
+facades' arrays (``shapes``: fixed trailing shapes, an axis of a given
+length; ``poses``: rotation and homogeneous matrices), the velocity
+estimators' series and every velocity's options (``series``), coordinates
+and quaternions checked (``validation``), xarray results (``xarray``), frame paths through the tree
 (``frame_paths``) and the blocks a lazy dask computation runs
 (``dask_blocks``). Timestamps become the engine's tracks
 (:mod:`rbm_nb._engine.time`) here too. Below it, ``_engine`` and ``_kernels``

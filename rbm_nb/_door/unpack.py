@@ -15,6 +15,8 @@ take, so that each kernel compiles one signature
   kernels that only read it take (no copy, writeable or not);
 * :func:`resolve_axis`: an axis argument checked and made non-negative
   (the one axis rule of the package);
+* :func:`dim_axis`: the axis a ``dim`` argument names (the one rule of
+  ``dim`` and ``axis``);
 * :func:`moveaxis`: ``np.moveaxis`` without its cost where nothing moves;
 * :func:`unpack`: the spatial and time axes of an array or DataArray
   argument, and its timestamps (from a coordinate for DataArrays).
@@ -43,6 +45,7 @@ __all__ = [
     "kernel_ready",
     "read_only",
     "resolve_axis",
+    "dim_axis",
     "moveaxis",
     "Unpacked",
     "unpack",
@@ -89,6 +92,21 @@ def resolve_axis(axis: Any, ndim: int, name: str = "axis") -> int:
             f"{name}={axis} is out of range for an array with {ndim} dimension(s)"
         )
     return int(axis % ndim)
+
+
+def dim_axis(arr: Any, dim: str | None, axis: Any, name: str = "arr") -> Any:
+    """The axis ``dim`` names in a DataArray, else ``axis`` as given (maybe None).
+
+    The one rule of ``dim`` and ``axis`` arguments: ``dim`` only for a
+    DataArray, not both, and a name the DataArray has.
+    """
+    if dim is None:
+        return axis
+    if not is_dataarray(arr):
+        raise ValueError(f"dim can only be given when {name} is a DataArray; use axis")
+    if axis is not None:
+        raise ValueError("give either dim or axis, not both")
+    return _dim_index(arr, dim, "dim")
 
 
 class Unpacked:
@@ -138,8 +156,7 @@ def unpack(
         dimension names, or spatial and time axis being the same.
     """
     if not is_dataarray(arr):
-        if dim is not None:
-            raise ValueError("dim can only be given for DataArray input; use axis")
+        dim_axis(arr, dim, axis)  # raises for a dim
         data = np.asarray(arr)
         if data.dtype.kind not in "fiub" and data.dtype.name == "quaternion":
             data = float_array(data, "arr")
@@ -152,11 +169,8 @@ def unpack(
             )
         return Unpacked(data, axis, time_axis, None, timestamps, None)
 
-    if dim is not None and axis is not None:
-        raise ValueError("give either dim or axis, not both")
-    if dim is not None:
-        axis = _dim_index(arr, dim, "dim")
-    elif axis is None:
+    axis = dim_axis(arr, dim, axis)
+    if axis is None:
         axis = -1
     time_dim = None
     if isinstance(timestamps, str):

@@ -29,8 +29,8 @@ __all__ = [
     "check_whole_rows",
     "moving_samples",
     "check_unit_norms",
+    "check_tolerance",
     "check_what",
-    "check_mode",
 ]
 
 WHAT_MODES = ("reference_frame", "moving_frame", "representation_frame")
@@ -222,20 +222,19 @@ def check_finite(arr: np.ndarray, name: str, row_axis: bool = True) -> None:
         raise ValueError(f"{name}{_index(where)} is not finite")
 
 
+def check_tolerance(value: Any, name: str = "tol") -> float:
+    """A tolerance argument: a finite number >= 0 (the one rule for all of them)."""
+    if not is_scalar(value) or not 0 <= value < np.inf:
+        raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+    return float(value)
+
+
 def check_what(what: Any) -> str:
     if what not in WHAT_MODES:
         raise ValueError(
             f"what must be one of {', '.join(repr(m) for m in WHAT_MODES)}, got {what!r}"
         )
     return what
-
-
-def check_mode(mode: Any) -> str:
-    if mode not in ("quaternion", "rotation_vector"):
-        raise ValueError(
-            f"mode must be 'quaternion' or 'rotation_vector', got {mode!r}"
-        )
-    return mode
 
 
 def _index(idx) -> str:

@@ -22,12 +22,34 @@ __all__ = [
     "is_dataarray",
     "unpack",
     "wrap",
+    "check_directions",
     "dataset_variable",
     "dataarray_coordinate",
     "transform_dataset",
     "twist_dataset",
     "velocity_dataarray",
 ]
+
+
+def check_directions(directions: Any) -> None:
+    """A gaze.directions result: dims (time, cartesian_axis), 3 components,
+    the frame they are given in named by ``attrs["representation_frame"]``."""
+    if not is_dataarray(directions):
+        raise ValueError(
+            f"directions must be a DataArray from gaze.directions, got "
+            f"{type(directions).__name__}"
+        )
+    if set(directions.dims) != {"time", "cartesian_axis"}:
+        raise ValueError(
+            f"directions must have dims ('time', 'cartesian_axis'), got {directions.dims}"
+        )
+    if directions.sizes["cartesian_axis"] != 3:
+        raise ValueError("directions must have 3 components along 'cartesian_axis'")
+    if "representation_frame" not in directions.attrs:
+        raise ValueError(
+            "directions has no 'representation_frame' attribute naming the frame "
+            "they are given in"
+        )
 
 
 def dataset_variable(ds: xr.Dataset, name: Hashable, argument: str) -> Any:

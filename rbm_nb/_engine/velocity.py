@@ -26,11 +26,12 @@ from .._kernels import differences as _dk
 from .._kernels import quaternion as _qk
 from .._kernels import rotations as _rk
 from .._kernels import velocity_fused as _vf
-from .._kernels._arrays import is_scalar, kernel_array
+from .._kernels._arrays import kernel_array
 from . import time as _time
 
 __all__ = [
-    "check_options",
+    "MODES",
+    "FILTER_PADLEN",
     "linear_series",
     "angular_series",
     "linear_velocity",
@@ -39,14 +40,14 @@ __all__ = [
     "lowpass_reach",
 ]
 
-_MODES = ("quaternion", "rotation_vector")
+MODES = ("quaternion", "rotation_vector")
 _BUTTER_ORDER = 7
 # filtfilt's default padding, 3 * (number of filter coefficients)
-_FILTER_PADLEN = 3 * (_BUTTER_ORDER + 1)
+FILTER_PADLEN = 3 * (_BUTTER_ORDER + 1)
 
 
 # ---------------------------------------------------------------------------
-# argument checks shared by the public and the array-level functions
+# the filter's reach (the options are checked at the door: _door.series)
 # ---------------------------------------------------------------------------
 
 
@@ -60,30 +61,20 @@ def lowpass_reach(cutoff: float) -> int:
 
     _, poles, _ = butter(_BUTTER_ORDER, cutoff, output="zpk")
     radius = float(np.max(np.abs(poles)))
-    return _FILTER_PADLEN + int(math.ceil(math.log(1e-16) / math.log(radius)))
+    return FILTER_PADLEN + int(math.ceil(math.log(1e-16) / math.log(radius)))
 
 
-def check_options(
-    outlier_thresh: Any, cutoff: Any, n: int, mode: str | None = None
-) -> None:
-    if mode is not None and mode not in _MODES:
+def _enough_for_filter(cutoff: Any, n: int) -> None:
+    """The low-pass filter pads by FILTER_PADLEN samples on each side.
+
+    The options' values are checked at the door
+    (:func:`rbm_nb._door.series.velocity_options`); how many samples a
+    lookup's series has is known only here, once the chain is evaluated.
+    """
+    if cutoff is not None and n <= FILTER_PADLEN:
         raise ValueError(
-            f"mode must be 'quaternion' or 'rotation_vector', got {mode!r}"
+            f"cutoff: the low-pass filter needs more than {FILTER_PADLEN} samples, got {n}"
         )
-    if outlier_thresh is not None:
-        if not is_scalar(outlier_thresh) or not outlier_thresh >= 0:
-            raise ValueError(
-                f"outlier_thresh must be a non-negative number, got {outlier_thresh!r}"
-            )
-    if cutoff is not None:
-        if not is_scalar(cutoff) or not 0 < cutoff < 1:
-            raise ValueError(
-                f"cutoff must be a fraction of the Nyquist frequency in (0, 1), got {cutoff!r}"
-            )
-        if n <= _FILTER_PADLEN:
-            raise ValueError(
-                f"cutoff: the low-pass filter needs more than {_FILTER_PADLEN} samples, got {n}"
-            )
 
 
 # Velocities divide by sampling intervals and by their products (numpy's
@@ -163,7 +154,7 @@ def lowpass(values: np.ndarray, cutoff: float) -> np.ndarray:
         ok = np.isfinite(flat[:, col])
         edges = np.flatnonzero(np.diff(np.concatenate(([0], ok.view(np.int8), [0]))))
         for start, stop in zip(edges[::2], edges[1::2], strict=True):
-            if stop - start > _FILTER_PADLEN:
+            if stop - start > FILTER_PADLEN:
                 out[start:stop, col] = sosfiltfilt(sos, flat[start:stop, col])
     return out.reshape(values.shape)
 
@@ -250,9 +241,8 @@ def angular_series(
             f"arr needs at least 2 samples to estimate a velocity, got {n}"
         )
     check_intervals(t, what)
-    zero = _rk.first_zero_row(kernel_array(q.reshape(-1, 4)))
-    if zero >= 0:
-        raise ValueError(f"arr contains a zero quaternion (row {zero} when flattened)")
+    # no zero row: the door refuses quaternions far from unit norm
+    # (_door.validation.check_unit_norms) and frames' rotations are unit
     need_rv = mode == "rotation_vector" or outlier_thresh is not None
     no_breaks = breaks is None or not breaks.any()
     fused = not need_rv and mode == "quaternion" and n >= 4 and no_breaks
@@ -336,7 +326,7 @@ def linear_velocity(
     """
     x = np.asarray(arr, dtype=np.float64)
     t = _time.seconds(timestamps, x.shape[0])
-    check_options(outlier_thresh, cutoff, x.shape[0])
+    _enough_for_filter(cutoff, x.shape[0])
     return linear_series(
         x.reshape(x.shape[0], 1, -1), t, outlier_thresh, cutoff, breaks, what
     ).reshape(x.shape)
@@ -368,11 +358,9 @@ def angular_velocity(
         In "quaternion" mode the vector part of ``2 q⁻¹ dq/dt``, i.e. the
         angular velocity in the rotated (body) frame.
     """
-    qa = np.asarray(q, dtype=np.float64)
-    if qa.ndim != 2 or qa.shape[1] != 4:
-        raise ValueError(f"q must have shape (n, 4), got {qa.shape}")
+    qa = np.asarray(q, dtype=np.float64)  # (n, 4): the engine's own lookups
     t = _time.seconds(timestamps, qa.shape[0])
-    check_options(outlier_thresh, cutoff, qa.shape[0], mode)
+    _enough_for_filter(cutoff, qa.shape[0])
     return angular_series(
         qa[:, None, :], t, mode, outlier_thresh, cutoff, breaks, what
     )[:, 0, :]

@@ -43,7 +43,8 @@ from itertools import product
 
 import numpy as np
 
-from .._door.unpack import float_array, kernel_array
+from .._door import shapes as _shapes
+from .._door.validation import check_tolerance
 from .._infra.config import UNIT_QUATERNION_TOLERANCE
 from .._kernels import conversions as _kc
 
@@ -77,52 +78,6 @@ MATRIX_TOLERANCE = 1e-6
 # ---------------------------------------------------------------------------
 
 
-def _as_array(value, name: str, tail: tuple[int, ...]) -> np.ndarray:
-    """``value`` as float64 whose last axes have the shape ``tail``."""
-    arr = float_array(value, name)
-    k = len(tail)
-    if arr.ndim < k or arr.shape[arr.ndim - k :] != tail:
-        expected = "(..., " + ", ".join(map(str, tail)) + ")" if tail else "(...)"
-        raise ValueError(f"{name} must have shape {expected}, got {arr.shape}")
-    return arr
-
-
-def _as_rows(value, name: str, tail: tuple[int, ...]) -> tuple[np.ndarray, tuple]:
-    """``value`` as contiguous float64 rows of shape ``(n, *tail)``.
-
-    Returns the rows and the leading shape they were flattened from.
-    """
-    arr = _as_array(value, name, tail)
-    lead = arr.shape[: arr.ndim - len(tail)]
-    return kernel_array(arr.reshape((-1,) + tail)), lead
-
-
-def _paired_rows(a, a_name, a_tail, b, b_name, b_tail):
-    """Two arguments as rows over their broadcast leading shape."""
-    a = _as_array(a, a_name, a_tail)
-    b = _as_array(b, b_name, b_tail)
-    a_lead = a.shape[: a.ndim - len(a_tail)]
-    b_lead = b.shape[: b.ndim - len(b_tail)]
-    try:
-        lead = np.broadcast_shapes(a_lead, b_lead)
-    except ValueError:
-        raise ValueError(
-            f"{a_name} of shape {a.shape} and {b_name} of shape {b.shape} do not "
-            f"broadcast: their leading shapes {a_lead} and {b_lead} must be compatible"
-        ) from None
-    a = kernel_array(np.broadcast_to(a, lead + a_tail)).reshape((-1,) + a_tail)
-    b = kernel_array(np.broadcast_to(b, lead + b_tail)).reshape((-1,) + b_tail)
-    return a, b, lead
-
-
-def _where(lead: tuple, flat_index: int) -> str:
-    """``[i, j]`` of a flat row index in the leading shape (empty for a scalar)."""
-    if lead == ():
-        return ""
-    index = (int(i) for i in np.unravel_index(flat_index, lead))
-    return "[" + ", ".join(map(str, index)) + "]"
-
-
 def _report_quaternions(name: str, rows: np.ndarray, lead: tuple) -> None:
     """Raise for the quaternion farthest from unit norm (the kernel found some)."""
     with np.errstate(all="ignore"):
@@ -131,11 +86,11 @@ def _report_quaternions(name: str, rows: np.ndarray, lead: tuple) -> None:
     idx = int(np.argmax(dev))
     if not np.isfinite(norm[idx]):
         raise ValueError(
-            f"{name}{_where(lead, idx)} has norm {norm[idx]:.6g}: it is not finite, "
+            f"{name}{_shapes.where(lead, idx)} has norm {norm[idx]:.6g}: it is not finite, "
             f"so it is not a rotation"
         )
     raise ValueError(
-        f"{name}{_where(lead, idx)} has norm {norm[idx]:.6g}, which is not a "
+        f"{name}{_shapes.where(lead, idx)} has norm {norm[idx]:.6g}, which is not a "
         f"rotation: quaternions must have unit norm to within "
         f"{UNIT_QUATERNION_TOLERANCE:g} (closer ones are normalised)"
     )
@@ -145,7 +100,9 @@ def _report_non_finite(name: str, rows: np.ndarray, lead: tuple, what: str) -> N
     """Raise for the first row of ``rows`` holding a non-finite value."""
     bad = ~np.isfinite(rows.reshape(len(rows), -1)).all(axis=1)
     idx = int(np.argmax(bad))
-    raise ValueError(f"{name}{_where(lead, idx)} is {rows[idx].tolist()}: {what}")
+    raise ValueError(
+        f"{name}{_shapes.where(lead, idx)} is {rows[idx].tolist()}: {what}"
+    )
 
 
 def _report_matrices(name: str, mats: np.ndarray, lead: tuple, tol: float) -> None:
@@ -166,7 +123,7 @@ def _report_matrices(name: str, mats: np.ndarray, lead: tuple, tol: float) -> No
             score[~(bottom <= tol)] = np.inf
     idx = int(np.argmax(np.where(np.isnan(score), np.inf, score)))
     block = mats[idx]
-    where = _where(lead, idx)
+    where = _shapes.where(lead, idx)
     if not np.all(np.isfinite(block)):
         raise ValueError(f"{name}{where} contains non-finite values: {block.tolist()}")
     if block.shape == (4, 4) and not np.abs(block[3] - [0, 0, 0, 1]).max() <= tol:
@@ -181,11 +138,6 @@ def _report_matrices(name: str, mats: np.ndarray, lead: tuple, tol: float) -> No
         f"det = {det[idx]:.6g}{hint}{worst}); rotation matrices must be orthonormal "
         f"to within tol={tol:g} with a positive determinant"
     )
-
-
-def _check_tol(tol) -> None:
-    if not (isinstance(tol, (int, float, np.floating)) and 0 <= tol < np.inf):
-        raise ValueError(f"tol must be a finite number >= 0, got {tol!r}")
 
 
 def _parse_order(order) -> tuple[int, int, int]:
@@ -237,7 +189,7 @@ def matrix_from_quaternion(quaternion) -> np.ndarray:
            [ 1.,  0.,  0.],
            [ 0.,  0.,  1.]])
     """
-    rows, lead = _as_rows(quaternion, "quaternion", (4,))
+    rows, lead = _shapes.rows(quaternion, "quaternion", (4,))
     out, n_invalid = _kc.matrix_from_quaternion(rows, UNIT_QUATERNION_TOLERANCE)
     if n_invalid:
         _report_quaternions("quaternion", rows, lead)
@@ -274,8 +226,8 @@ def quaternion_from_matrix(matrix, *, tol: float = MATRIX_TOLERANCE) -> np.ndarr
     >>> quaternion_from_matrix([[0, -1, 0], [1, 0, 0], [0, 0, 1]]).round(6)
     array([0.707107, 0.      , 0.      , 0.707107])
     """
-    _check_tol(tol)
-    rows, lead = _as_rows(matrix, "matrix", (3, 3))
+    check_tolerance(tol)
+    rows, lead = _shapes.rows(matrix, "matrix", (3, 3))
     out, n_invalid = _kc.quaternion_from_matrix(rows, float(tol))
     if n_invalid:
         _report_matrices("matrix", rows, lead, tol)
@@ -313,7 +265,7 @@ def quaternion_from_rotation_vector(rotation_vector) -> np.ndarray:
     >>> quaternion_from_rotation_vector([0.0, 0.0, np.pi]).round(12) + 0.0
     array([0., 0., 0., 1.])
     """
-    rows, lead = _as_rows(rotation_vector, "rotation_vector", (3,))
+    rows, lead = _shapes.rows(rotation_vector, "rotation_vector", (3,))
     out, n_invalid = _kc.quaternion_from_rotation_vector(rows)
     if n_invalid:
         _report_non_finite(
@@ -348,7 +300,7 @@ def rotation_vector_from_quaternion(quaternion) -> np.ndarray:
     >>> rotation_vector_from_quaternion([np.cos(0.25), np.sin(0.25), 0, 0])
     array([0.5, 0. , 0. ])
     """
-    rows, lead = _as_rows(quaternion, "quaternion", (4,))
+    rows, lead = _shapes.rows(quaternion, "quaternion", (4,))
     out, n_invalid = _kc.rotation_vector_from_quaternion(
         rows, UNIT_QUATERNION_TOLERANCE
     )
@@ -390,14 +342,14 @@ def quaternion_from_axis_angle(axis, angle) -> np.ndarray:
     >>> quaternion_from_axis_angle([0, 0, 2], np.pi).round(12) + 0.0
     array([0., 0., 0., 1.])
     """
-    axes, angles, lead = _paired_rows(axis, "axis", (3,), angle, "angle", ())
+    axes, angles, lead = _shapes.paired_rows(axis, "axis", (3,), angle, "angle", ())
     out, n_invalid = _kc.quaternion_from_axis_angle(axes, angles)
     if n_invalid:
         length = np.linalg.norm(axes, axis=1)
         ok = np.isfinite(angles) & np.isfinite(length) & ((length > 0) | (angles == 0))
         bad = int(np.argmin(ok))
         raise ValueError(
-            f"axis{_where(lead, bad)} is {axes[bad].tolist()} with angle "
+            f"axis{_shapes.where(lead, bad)} is {axes[bad].tolist()} with angle "
             f"{float(angles[bad])!r}: axes must be finite and non-zero (a zero axis is "
             "only allowed with a zero angle) and angles finite"
         )
@@ -432,7 +384,7 @@ def axis_angle_from_quaternion(quaternion) -> tuple[np.ndarray, np.ndarray]:
     >>> axis + 0.0, round(float(angle), 12)
     (array([ 0., -1.,  0.]), 1.0)
     """
-    rows, lead = _as_rows(quaternion, "quaternion", (4,))
+    rows, lead = _shapes.rows(quaternion, "quaternion", (4,))
     axis, angle, n_invalid = _kc.axis_angle_from_quaternion(
         rows, UNIT_QUATERNION_TOLERANCE
     )
@@ -482,7 +434,7 @@ def quaternion_from_euler(
     array([0.707107, 0.      , 0.      , 0.707107])
     """
     i, j, k = _parse_order(order)
-    rows, lead = _as_rows(angles, "angles", (3,))
+    rows, lead = _shapes.rows(angles, "angles", (3,))
     radians = np.deg2rad(rows) if degrees else rows
     out, n_invalid = _kc.quaternion_from_euler(radians, i, j, k, bool(extrinsic))
     if n_invalid:
@@ -531,7 +483,7 @@ def euler_from_quaternion(
     array([45.,  0.,  0.])
     """
     i, j, k = _parse_order(order)
-    rows, lead = _as_rows(quaternion, "quaternion", (4,))
+    rows, lead = _shapes.rows(quaternion, "quaternion", (4,))
     out, n_invalid = _kc.euler_from_quaternion(
         rows, i, j, k, bool(extrinsic), UNIT_QUATERNION_TOLERANCE
     )
@@ -578,7 +530,7 @@ def homogeneous_from_transform(translation, rotation) -> np.ndarray:
            [0., 0., 1., 3.],
            [0., 0., 0., 1.]])
     """
-    t_rows, q_rows, lead = _paired_rows(
+    t_rows, q_rows, lead = _shapes.paired_rows(
         translation, "translation", (3,), rotation, "rotation", (4,)
     )
     out, bad_q, bad_t = _kc.homogeneous_from_transform(
@@ -624,8 +576,8 @@ def transform_from_homogeneous(
     >>> t, r
     (array([0., 0., 0.]), array([1., 0., 0., 0.]))
     """
-    _check_tol(tol)
-    rows, lead = _as_rows(matrix, "matrix", (4, 4))
+    check_tolerance(tol)
+    rows, lead = _shapes.rows(matrix, "matrix", (4, 4))
     t, q, n_invalid = _kc.transform_from_homogeneous(rows, float(tol))
     if n_invalid:
         _report_matrices("matrix", rows, lead, tol)

@@ -13,9 +13,9 @@ from typing import Any
 import numpy as np
 
 from .._door import dask_blocks as _dask
-from .._door.unpack import ArrayInput, float_array, resolve_axis
+from .._door import shapes as _shapes
+from .._door.unpack import ArrayInput, dim_axis, resolve_axis
 from .._door.unpack import is_dataarray as _is_dataarray
-from .._door.validation import check_no_inf
 
 # system name -> (dimension name, axis labels) per dimensionality
 _SYSTEM_AXES: dict[tuple[str, int], tuple[str, list[str]]] = {
@@ -25,25 +25,6 @@ _SYSTEM_AXES: dict[tuple[str, int], tuple[str, list[str]]] = {
     ("spherical", 3): ("spherical_axis", ["r", "theta", "phi"]),
     ("quaternion", 4): ("quaternion_axis", ["w", "x", "y", "z"]),
 }
-
-
-def _checked(arr: Any, axis: int, length: int, what: str) -> tuple[np.ndarray, int]:
-    """Return ``arr`` as a float array and ``axis`` normalised, checking its length."""
-    arr = float_array(arr, "arr")
-    if arr.ndim == 0:
-        raise ValueError(
-            f"arr must have an axis of length {length} ({what}), got a scalar"
-        )
-    if not -arr.ndim <= axis < arr.ndim:
-        raise ValueError(f"axis {axis} is out of range for arr with shape {arr.shape}")
-    axis %= arr.ndim
-    if arr.shape[axis] != length:
-        raise ValueError(
-            f"arr must have length {length} ({what}) along axis {axis}, "
-            f"got shape {arr.shape}"
-        )
-    check_no_inf(np.moveaxis(arr, axis, -1), "arr")
-    return arr, axis
 
 
 def cartesian_to_polar(arr: ArrayInput, axis: int = -1) -> np.ndarray:
@@ -75,8 +56,8 @@ def cartesian_to_polar(arr: ArrayInput, axis: int = -1) -> np.ndarray:
         return _dask.elementwise(
             cartesian_to_polar, getattr(arr, "data", arr), axis, axis=axis
         )
-    arr, axis = _checked(arr, axis, 2, "x, y")
-    x, y = np.take(arr, 0, axis=axis), np.take(arr, 1, axis=axis)
+    arr, axis = _shapes.along_axis(arr, "arr", axis, 2, "x, y")
+    x, y = arr[..., 0], arr[..., 1]
     return np.stack((np.hypot(x, y), np.arctan2(y, x)), axis=axis)
 
 
@@ -109,8 +90,8 @@ def polar_to_cartesian(arr: ArrayInput, axis: int = -1) -> np.ndarray:
         return _dask.elementwise(
             polar_to_cartesian, getattr(arr, "data", arr), axis, axis=axis
         )
-    arr, axis = _checked(arr, axis, 2, "r, phi")
-    r, phi = np.take(arr, 0, axis=axis), np.take(arr, 1, axis=axis)
+    arr, axis = _shapes.along_axis(arr, "arr", axis, 2, "r, phi")
+    r, phi = arr[..., 0], arr[..., 1]
     return np.stack((r * np.cos(phi), r * np.sin(phi)), axis=axis)
 
 
@@ -145,8 +126,8 @@ def cartesian_to_spherical(arr: ArrayInput, axis: int = -1) -> np.ndarray:
         return _dask.elementwise(
             cartesian_to_spherical, getattr(arr, "data", arr), axis, axis=axis
         )
-    arr, axis = _checked(arr, axis, 3, "x, y, z")
-    x, y, z = (np.take(arr, i, axis=axis) for i in range(3))
+    arr, axis = _shapes.along_axis(arr, "arr", axis, 3, "x, y, z")
+    x, y, z = arr[..., 0], arr[..., 1], arr[..., 2]
     rho = np.hypot(x, y)
     # arctan2 rather than arccos(z / r): defined at the origin and accurate near
     # the poles, where arccos loses half of the digits.
@@ -182,8 +163,8 @@ def spherical_to_cartesian(arr: ArrayInput, axis: int = -1) -> np.ndarray:
         return _dask.elementwise(
             spherical_to_cartesian, getattr(arr, "data", arr), axis, axis=axis
         )
-    arr, axis = _checked(arr, axis, 3, "r, theta, phi")
-    r, theta, phi = (np.take(arr, i, axis=axis) for i in range(3))
+    arr, axis = _shapes.along_axis(arr, "arr", axis, 3, "r, theta, phi")
+    r, theta, phi = arr[..., 0], arr[..., 1], arr[..., 2]
     rho = r * np.sin(theta)
     return np.stack(
         (rho * np.cos(phi), rho * np.sin(phi), r * np.cos(theta)), axis=axis
@@ -221,16 +202,8 @@ def _replace_dim(
 
 def _resolve_dim_axis(arr: Any, dim: str | None, axis: int | None) -> int:
     """The axis of a DataArray (or array) meant by ``dim`` or ``axis``."""
-    ndim = np.ndim(arr)
-    if dim is not None:
-        if not _is_dataarray(arr):
-            raise ValueError("dim can only be given when arr is a DataArray")
-        if axis is not None:
-            raise ValueError("give either dim or axis, not both")
-        if dim not in arr.dims:
-            raise ValueError(f"dim {dim!r} is not a dimension of arr {tuple(arr.dims)}")
-        return arr.dims.index(dim)
-    return resolve_axis(-1 if axis is None else axis, ndim, "axis")
+    ax = dim_axis(arr, dim, axis)
+    return resolve_axis(-1 if ax is None else ax, np.ndim(arr), "axis")
 
 
 def transform_coordinates(

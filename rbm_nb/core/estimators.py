@@ -19,19 +19,19 @@ conversion and DataArray support around them.
 
 from __future__ import annotations
 
-import sys
 from typing import Any
 
 import numpy as np
 
 from .._door import dask_blocks as _dask
 from .._door.dask_blocks import GRADIENT_HALO, SPLINE_HALO
-from .._door.unpack import ArrayInput, kernel_array, resolve_axis
+from .._door.series import series as _series
+from .._door.series import velocity_options as _velocity_options
+from .._door.shapes import along_axis
+from .._door.unpack import ArrayInput, dim_axis, kernel_array
 from .._door.unpack import is_dataarray as _is_dataarray
-from .._door.validation import check_no_inf, check_unit_norms, is_scalar
-from .._engine import time as _time
+from .._door.validation import check_tolerance, check_unit_norms, is_scalar
 from .._engine.velocity import angular_series as _angular_series
-from .._engine.velocity import check_options as _check_options
 from .._engine.velocity import linear_series as _linear_series
 from .._engine.velocity import lowpass_reach as _lowpass_reach
 from .._kernels import conversions as _kc
@@ -52,78 +52,6 @@ __all__ = [
 # ---------------------------------------------------------------------------
 
 
-def _unpack(arr, dim, axis, timestamps, time_axis):
-    """Data, spatial axis, time axis and timestamps of a (Data)Array input."""
-    if _is_dataarray(arr):
-        data = np.asarray(arr.values)
-        if dim is not None and axis is not None:
-            raise ValueError("give either dim or axis, not both")
-        if dim is not None:
-            if dim not in arr.dims:
-                raise ValueError(
-                    f"dim {dim!r} is not a dimension of arr {tuple(arr.dims)}"
-                )
-            axis = arr.dims.index(dim)
-        if isinstance(timestamps, str):
-            if timestamps in arr.dims:
-                t_axis = arr.dims.index(timestamps)
-            elif timestamps in arr.coords and arr.coords[timestamps].ndim == 1:
-                t_axis = arr.dims.index(arr.coords[timestamps].dims[0])
-            else:
-                raise ValueError(
-                    f"timestamps {timestamps!r} is not a coordinate of arr"
-                )
-            if (
-                time_axis is not None
-                and resolve_axis(time_axis, data.ndim, "time_axis") != t_axis
-            ):
-                raise ValueError(
-                    f"time_axis={time_axis} contradicts timestamps={timestamps!r}"
-                )
-            if timestamps not in arr.coords:
-                raise ValueError(f"dimension {timestamps!r} of arr has no coordinate")
-            time_axis, timestamps = t_axis, arr.coords[timestamps].values
-        elif timestamps is None:
-            time_axis = 0 if time_axis is None else time_axis
-            if data.ndim < 2:
-                raise ValueError("arr needs a time axis besides the spatial one")
-            time_dim = arr.dims[resolve_axis(time_axis, data.ndim, "time_axis")]
-            if time_dim not in arr.coords:
-                raise ValueError(
-                    f"arr's time dimension {time_dim!r} has no coordinate; pass timestamps"
-                )
-            timestamps = arr.coords[time_dim].values
-    else:
-        if dim is not None:
-            raise ValueError("dim can only be given when arr is a DataArray")
-        data = np.asarray(arr)
-        if timestamps is None:
-            raise ValueError(
-                "timestamps must be given unless arr is a DataArray with a time coordinate"
-            )
-        if isinstance(timestamps, str):
-            raise ValueError(
-                "timestamps can only name a coordinate when arr is a DataArray"
-            )
-    if data.dtype.kind not in "biuf":
-        raise ValueError(f"arr must be numeric, got dtype {data.dtype}")
-    if data.ndim < 2:
-        raise ValueError(
-            f"arr must have a time axis and a spatial axis, got shape {data.shape}"
-        )
-    axis = resolve_axis(-1 if axis is None else axis, data.ndim, "axis")
-    time_axis = resolve_axis(
-        0 if time_axis is None else time_axis, data.ndim, "time_axis"
-    )
-    if axis == time_axis:
-        raise ValueError(f"the spatial axis and the time axis are both axis {axis}")
-    t = _time.seconds(timestamps, data.shape[time_axis])
-    data = kernel_array(data)
-    # NaN rows are missing samples (gaps); infinities are mistakes
-    check_no_inf(np.moveaxis(data, (time_axis, axis), (0, -1)), "arr")
-    return data, axis, time_axis, t
-
-
 def _to_series(data, axis, time_axis):
     moved = np.moveaxis(data, (time_axis, axis), (0, -1))
     return moved.reshape(moved.shape[0], -1, moved.shape[-1]), moved.shape
@@ -138,11 +66,11 @@ def _lazy_estimate(eager, arr, dim, axis, timestamps, time_axis, halo, **options
     """A velocity estimate of dask-backed data, chunk by chunk with a halo (see _dask)."""
     if options.get("outlier_thresh") is not None:
         # its value, before the graph is built (rejection is lazy, see _dask)
-        _check_options(options["outlier_thresh"], None, sys.maxsize)
+        _velocity_options(options["outlier_thresh"], None)
     if options.get("cutoff") is not None:
         # the value of cutoff, before it sets the halo; the series' length is
         # checked by each chunk's eager call, which reads the whole halo
-        _check_options(None, options["cutoff"], sys.maxsize)
+        _velocity_options(None, options["cutoff"])
         halo = max(halo, _lowpass_reach(options["cutoff"]))
     quaternions = options.pop("quaternions", False)
     return _dask.estimate(
@@ -218,8 +146,8 @@ def estimate_linear_velocity(
             estimate_linear_velocity, arr, dim, axis, timestamps, time_axis,
             GRADIENT_HALO, outlier_thresh=outlier_thresh, cutoff=cutoff,
         )  # fmt: skip
-    data, axis, time_axis, t = _unpack(arr, dim, axis, timestamps, time_axis)
-    _check_options(outlier_thresh, cutoff, data.shape[time_axis])
+    data, axis, time_axis, t = _series(arr, dim, axis, timestamps, time_axis)
+    _velocity_options(outlier_thresh, cutoff, data.shape[time_axis])
     series, moved_shape = _to_series(data, axis, time_axis)
     v = _linear_series(series, t, outlier_thresh, cutoff)
     out = _from_series(v, moved_shape, axis, time_axis, data.shape[axis])
@@ -298,12 +226,12 @@ def estimate_angular_velocity(
             halo, quaternions=True, mode=mode, outlier_thresh=outlier_thresh,
             cutoff=cutoff,
         )  # fmt: skip
-    data, axis, time_axis, t = _unpack(arr, dim, axis, timestamps, time_axis)
+    data, axis, time_axis, t = _series(arr, dim, axis, timestamps, time_axis)
     if data.shape[axis] != 4:
         raise ValueError(
             f"arr must have length 4 (w, x, y, z) along axis {axis}, got shape {data.shape}"
         )
-    _check_options(outlier_thresh, cutoff, data.shape[time_axis], mode)
+    _velocity_options(outlier_thresh, cutoff, data.shape[time_axis], mode)
     check_unit_norms(np.moveaxis(data, (time_axis, axis), (0, -1)), "arr")
     series, moved_shape = _to_series(data, axis, time_axis)
     w = _angular_series(series, t, mode, outlier_thresh, cutoff)
@@ -322,42 +250,11 @@ def estimate_angular_velocity(
 
 
 def _vectors(v, axis, name: str) -> tuple[np.ndarray, int]:
-    data = np.asarray(v.values if _is_dataarray(v) else v)
-    if data.dtype.kind not in "biuf":
-        raise ValueError(f"{name} must be numeric, got dtype {data.dtype}")
-    data = data.astype(np.float64, copy=False)
-    if data.ndim == 0:
-        raise ValueError(
-            f"{name} must have an axis of length 3 (x, y, z), got a scalar"
-        )
+    """Finite float64 vectors with x, y, z along ``axis`` (kept in place)."""
+    data = v.values if _is_dataarray(v) else v
     ax = -1 if axis is None else axis
-    if not -data.ndim <= ax < data.ndim:
-        raise ValueError(
-            f"axis={ax} is out of range for {name} with shape {data.shape}"
-        )
-    ax %= data.ndim
-    if data.shape[ax] != 3:
-        raise ValueError(
-            f"{name} must have length 3 (x, y, z) along axis {ax}, got shape {data.shape}"
-        )
-    finite = np.isfinite(data)
-    if not finite.all():
-        bad = np.argwhere(~np.moveaxis(finite, ax, -1))[0][:-1]
-        where = "[" + ", ".join(str(int(i)) for i in bad) + "]" if len(bad) else ""
-        raise ValueError(f"{name} must be finite; {name}{where} is not finite")
-    return data, ax
-
-
-def _dim_axis(v1, dim, axis):
-    if dim is None:
-        return axis
-    if not _is_dataarray(v1):
-        raise ValueError("dim can only be given when v1 is a DataArray")
-    if axis is not None:
-        raise ValueError("give either dim or axis, not both")
-    if dim not in v1.dims:
-        raise ValueError(f"dim {dim!r} is not a dimension of v1 {tuple(v1.dims)}")
-    return v1.dims.index(dim)
+    moved, ax = along_axis(data, name, ax, 3, "x, y, z", finite=True)
+    return np.moveaxis(moved, -1, ax), ax
 
 
 def shortest_arc_rotation(
@@ -394,7 +291,7 @@ def shortest_arc_rotation(
     >>> shortest_arc_rotation([1.0, 0, 0], [0, 1.0, 0]).round(6)
     array([0.707107, 0.      , 0.      , 0.707107])
     """
-    axis = _dim_axis(v1, dim, axis)
+    axis = dim_axis(v1, dim, axis, "v1")
     a, ax1 = _vectors(v1, axis, "v1")
     b, ax2 = _vectors(v2, axis, "v2")
     am, bm = np.moveaxis(a, ax1, -1), np.moveaxis(b, ax2, -1)
@@ -447,7 +344,7 @@ def shortest_arc_rotation(
 
 
 def _point_rows(v1, v2, dim, axis, same_shape: bool) -> tuple[np.ndarray, np.ndarray]:
-    axis = _dim_axis(v1, dim, axis)
+    axis = dim_axis(v1, dim, axis, "v1")
     a, ax1 = _vectors(v1, axis, "v1")
     b, ax2 = _vectors(v2, axis, "v2")
     if a.ndim < 2:
@@ -677,8 +574,7 @@ def iterative_closest_point(
         raise ValueError(
             f"max_iterations must be a non-negative integer, got {max_iterations!r}"
         )
-    if not is_scalar(tolerance) or not tolerance >= 0:
-        raise ValueError(f"tolerance must be a non-negative number, got {tolerance!r}")
+    check_tolerance(tolerance, "tolerance")
 
     moved = p1.copy()
     if init_transform is not None:

@@ -27,12 +27,12 @@ import numpy as np
 
 from .._door import frame_paths as _frame_paths
 from .._door import inputs as _inputs
+from .._door.series import velocity_options
 from .._door.unpack import ArrayInput, float_array, kernel_array
 from .._door.validation import (
     check_coordinates,
     check_finite,
     check_missing_rows,
-    check_mode,
     check_what,
     is_scalar,
     moving_samples,
@@ -837,7 +837,7 @@ class ReferenceFrame:
             _optional(represent_in, "represent_in"),
             outlier_thresh,
             cutoff,
-            check_mode(mode),
+            velocity_options(outlier_thresh, cutoff, mode=mode),
             allow_static,
         )
         return (linear, angular, ts) if return_timestamps else (linear, angular)
@@ -852,6 +852,7 @@ class ReferenceFrame:
         return_timestamps: bool = False,
     ) -> Any:
         """Linear velocity of this frame wrt ``reference``, shape (n, 3)."""
+        velocity_options(outlier_thresh, cutoff)
         linear, ts = _twist.lookup_linear_velocity(
             self,
             _optional(reference, "reference"),
@@ -879,7 +880,7 @@ class ReferenceFrame:
             _optional(represent_in, "represent_in"),
             outlier_thresh,
             cutoff,
-            check_mode(mode),
+            velocity_options(outlier_thresh, cutoff, mode=mode),
             allow_static,
         )
         return (angular, ts) if return_timestamps else angular

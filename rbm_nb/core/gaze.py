@@ -32,6 +32,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
+from .._door.unpack import is_dataarray as _is_dataarray
+from .._door.xarray import check_directions
 from .frames import ReferenceFrame, resolve_frame
 from .quaternions import rotate_vectors
 from .transforms import transform_vectors
@@ -185,7 +187,7 @@ def angles(
         If ``directions`` lacks the dims or frame attribute, ``forward`` and
         ``up`` are not two different axes, or a frame is not registered.
     """
-    _check_directions(directions)
+    check_directions(directions)
     f_axis, f_sign = _signed_axis(forward, "forward")
     u_axis, u_sign = _signed_axis(up, "up")
     if f_axis == u_axis:
@@ -291,10 +293,6 @@ def _finite_number(value, name: str) -> float:
     if not np.isfinite(value):
         raise ValueError(f"{name} must be finite, got {value!r}")
     return float(value)
-
-
-def _is_dataarray(obj) -> bool:
-    return type(obj).__name__ == "DataArray" and hasattr(obj, "dims")
 
 
 def _eye_samples(eye, confidence):
@@ -420,25 +418,6 @@ def _vectors_dataarray(values, times, frame_name):
             "representation_frame": frame_name,
         },
     )
-
-
-def _check_directions(directions) -> None:
-    if not _is_dataarray(directions):
-        raise ValueError(
-            f"directions must be a DataArray from gaze.directions, got "
-            f"{type(directions).__name__}"
-        )
-    if set(directions.dims) != {"time", "cartesian_axis"}:
-        raise ValueError(
-            f"directions must have dims ('time', 'cartesian_axis'), got {directions.dims}"
-        )
-    if directions.sizes["cartesian_axis"] != 3:
-        raise ValueError("directions must have 3 components along 'cartesian_axis'")
-    if "representation_frame" not in directions.attrs:
-        raise ValueError(
-            "directions has no 'representation_frame' attribute naming the frame "
-            "they are given in"
-        )
 
 
 def _signed_axis(spec, name: str):

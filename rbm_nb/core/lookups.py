@@ -15,7 +15,7 @@ from __future__ import annotations
 from typing import Any
 
 from .._door import xarray as _xarray
-from .._door.validation import check_mode
+from .._door.series import velocity_options
 from .._engine import at_time as _at_time
 from .._engine import chain as _chain
 from .._engine import twist as _twist
@@ -259,7 +259,12 @@ def lookup_twist(
     """
     frame, reference, represent_in = _public_frames(frame, reference, represent_in)
     linear, angular, timestamps = _twist.lookup_twist(
-        frame, reference, represent_in, outlier_thresh, cutoff, check_mode(mode)
+        frame,
+        reference,
+        represent_in,
+        outlier_thresh,
+        cutoff,
+        velocity_options(outlier_thresh, cutoff, mode=mode),
     )
     if as_dataset:
         return _xarray.twist_dataset(
@@ -290,6 +295,7 @@ def lookup_linear_velocity(
     timestamps : ndarray, shape (n,), if ``return_timestamps``
     """
     frame, reference, represent_in = _public_frames(frame, reference, represent_in)
+    velocity_options(outlier_thresh, cutoff)
     linear, timestamps = _twist.lookup_linear_velocity(
         frame, reference, represent_in, outlier_thresh, cutoff
     )
@@ -324,7 +330,12 @@ def lookup_angular_velocity(
     """
     frame, reference, represent_in = _public_frames(frame, reference, represent_in)
     angular, timestamps = _twist.lookup_angular_velocity(
-        frame, reference, represent_in, outlier_thresh, cutoff, check_mode(mode)
+        frame,
+        reference,
+        represent_in,
+        outlier_thresh,
+        cutoff,
+        velocity_options(outlier_thresh, cutoff, mode=mode),
     )
     if as_dataarray:
         return _xarray.velocity_dataarray(

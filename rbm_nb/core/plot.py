@@ -16,6 +16,7 @@ import numpy.typing as npt
 from matplotlib.patches import FancyArrowPatch
 from mpl_toolkits.mplot3d import Axes3D, proj3d
 
+from .._door import shapes as _shapes
 from .._infra.config import UNIT_QUATERNION_TOLERANCE
 from .._kernels import conversions as _kc
 from .frames import resolve_frame
@@ -90,17 +91,6 @@ def _axes_3d(ax, figsize):
 
     fig = plt.figure(figsize=figsize)
     return fig.add_subplot(111, projection="3d")
-
-
-def _as_rows(arr, width: int, name: str) -> np.ndarray:
-    arr = np.asarray(arr, dtype=float)
-    if arr.ndim == 1:
-        arr = arr[np.newaxis, :]
-    if arr.ndim != 2 or arr.shape[1] != width:
-        raise ValueError(
-            f"{name} must have shape ({width},) or (N, {width}), got {np.shape(arr)}"
-        )
-    return arr
 
 
 def _grow_limits(ax, pts: np.ndarray) -> None:
@@ -245,7 +235,7 @@ def points(
     -------
     lines : list of Line3D
     """
-    arr = _as_rows(arr, 3, "points: arr")
+    arr = _shapes.one_or_many(arr, "points: arr", 3)
     ax = _axes_3d(ax, figsize)
     lines = ax.plot(arr[:, 0], arr[:, 1], arr[:, 2], fmt, **kwargs)
     _grow_limits(ax, arr)
@@ -276,11 +266,11 @@ def vectors(
     -------
     lines : Line3DCollection
     """
-    arr = _as_rows(arr, 3, "vectors: arr")
+    arr = _shapes.one_or_many(arr, "vectors: arr", 3)
     if base is None:
         tails = np.zeros_like(arr)
     else:
-        tails = _as_rows(base, 3, "vectors: base")
+        tails = _shapes.one_or_many(base, "vectors: base", 3)
         if len(tails) == 1 and len(arr) > 1:
             tails = np.repeat(tails, len(arr), axis=0)
         if tails.shape != arr.shape:
@@ -322,7 +312,7 @@ def quaternions(
     lines : list of Line3DCollection
         The x, y and z arrows.
     """
-    q = _as_rows(arr, 4, "quaternions: arr")
+    q = _shapes.one_or_many(arr, "quaternions: arr", 4)
     axes = _rotation_matrices(q)  # columns are the rotated unit axes
     kwargs.setdefault("length", 0.5)
     ax = _axes_3d(ax, figsize)

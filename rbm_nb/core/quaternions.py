@@ -15,8 +15,8 @@ from typing import Any
 import numpy as np
 
 from .._door import dask_blocks as _dask
-from .._door.unpack import ArrayInput, kernel_array, resolve_axis
-from .._door.unpack import float_array as _door_float_array
+from .._door import shapes as _shapes
+from .._door.unpack import ArrayInput, float_array, kernel_array, resolve_axis
 from .._door.unpack import is_dataarray as _is_dataarray
 from .._door.validation import (
     check_finite,
@@ -44,10 +44,6 @@ def _is_quaternion_dtype(arr: np.ndarray) -> bool:
     return arr.dtype.name == "quaternion"
 
 
-def _float_array(obj: Any, name: str) -> np.ndarray:
-    return _door_float_array(obj, name)
-
-
 def _split(q: Any, qaxis: int, name: str) -> tuple[np.ndarray, bool]:
     """Quaternions as a float array with the components last, and whether
     the input was of quaternion dtype (whose ``qaxis`` is then ignored)."""
@@ -56,18 +52,7 @@ def _split(q: Any, qaxis: int, name: str) -> tuple[np.ndarray, bool]:
         import quaternion
 
         return quaternion.as_float_array(arr), True
-    arr = _float_array(arr, name)
-    if arr.ndim == 0:
-        raise ValueError(
-            f"{name} must have an axis of length 4 (w, x, y, z), got a scalar"
-        )
-    ax = resolve_axis(qaxis, arr.ndim, "qaxis")
-    if arr.shape[ax] != 4:
-        raise ValueError(
-            f"{name} must have length 4 (w, x, y, z) along qaxis={qaxis}, got shape {arr.shape}"
-        )
-    moved = np.moveaxis(arr, ax, -1)
-    check_no_inf(moved, name)
+    moved, _ = _shapes.along_axis(arr, name, qaxis, 4, "w, x, y, z", "qaxis")
     return moved, False
 
 
@@ -631,7 +616,7 @@ def _qinterp_dataarray(
         t_in_f, flat_out if inside is None else flat_out[inside], da.sizes[dim]
     )
 
-    data = np.moveaxis(_float_array(da.values, "q"), da.dims.index(qdim), -1)
+    data = np.moveaxis(float_array(da.values, "q"), da.dims.index(qdim), -1)
     ax = [d for d in da.dims if d != qdim].index(dim)
     if inside is None:
         values = _squad_along(data, ax, t_in_f, flat_out)
@@ -678,7 +663,7 @@ def _lazy_rotate_vectors(q, v, axis: int, qaxis: int, one_to_one: bool):
             "has the shape of q times v); call .compute() first"
         )
     if not _dask.is_dask(q) and np.ndim(q) == 1:
-        single = _door_float_array(getattr(q, "values", q), "q")
+        single = float_array(getattr(q, "values", q), "q")
         core = v.dims[axis] if _is_dataarray(v) else axis
         return _dask.elementwise(
             lambda block: rotate_vectors(single, block, axis=axis), v, core
@@ -782,7 +767,7 @@ def rotate_vectors(
         return _lazy_rotate_vectors(q, v, axis, qaxis, one_to_one)
     qa = np.asarray(q)
     va = v.values if _is_dataarray(v) else v
-    va = _float_array(va, "v")
+    va = float_array(va, "v")
     template = v if _is_dataarray(v) else None
     # Common case first: (n, 4) x (n, 3) contiguous float64, no copies at all
     # and one pass (infinities and zero quaternions are counted by the kernel).
@@ -799,18 +784,9 @@ def rotate_vectors(
         and (qa.shape[0] == va.shape[0] or qa.shape[0] == 1 or va.shape[0] == 1)
     ):
         return _like(template, _rotate_rows(kernel_array(qa), va, qa, va))
-    check_no_inf(va, "v", row_axis=False)
-    if va.ndim == 0:
-        raise ValueError("v must have an axis of length 3 (x, y, z), got a scalar")
-    vax = resolve_axis(axis, va.ndim, "axis")
-    if va.shape[vax] != 3:
-        raise ValueError(
-            f"v must have length 3 (x, y, z) along axis={axis}, got shape {va.shape}"
-        )
-
+    vm, vax = _shapes.along_axis(va, "v", axis, 3, "x, y, z")
     qf, _ = _split(qa, qaxis, "q")
     q_shape = qf.shape[:-1]
-    vm = np.moveaxis(va, vax, -1)
     v_shape = vm.shape[:-1]
     if one_to_one and q_shape:
         if len(q_shape) != len(v_shape):
@@ -899,7 +875,7 @@ def from_euler_angles(
     if rpy is not None:
         if roll is not None or pitch is not None or yaw is not None:
             raise ValueError("give either rpy or roll/pitch/yaw, not both")
-        arr = _float_array(rpy, "rpy")
+        arr = float_array(rpy, "rpy")
         if arr.ndim == 0:
             raise ValueError(
                 "rpy must have an axis of length 3 (roll, pitch, yaw), got a scalar"
@@ -921,7 +897,7 @@ def from_euler_angles(
             ("y", yaw, "yaw"),
         ):
             if value is not None:
-                angles[key] = _float_array(value, name)
+                angles[key] = float_array(value, name)
                 check_finite(angles[key], name, row_axis=False)
         if not angles:
             raise ValueError("give at least one of rpy, roll, pitch or yaw")

@@ -16,8 +16,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._door.unpack import float_array, kernel_array
-from .._door.validation import check_finite, check_last_axis, normalize_quaternions
+from .._door import shapes as _shapes
+from .._door.unpack import kernel_array
+from .._door.validation import check_finite, normalize_quaternions
 from .._kernels import quaternion as _kq
 from . import _pose_algebra as _pa
 from .conversions import (
@@ -32,18 +33,12 @@ __all__ = ["Transform"]
 _AXES = "xyz"
 
 
-def _as_float(value, name: str, tail: int) -> np.ndarray:
-    arr = float_array(value, name)
-    check_last_axis(arr, tail, name)
-    return arr
-
-
 def _unit_rotation(rotation) -> np.ndarray:
-    return normalize_quaternions(_as_float(rotation, "rotation", 4), "rotation")
+    return normalize_quaternions(_shapes.last_axis(rotation, "rotation", 4), "rotation")
 
 
 def _finite_translation(translation) -> np.ndarray:
-    t = _as_float(translation, "translation", 3)
+    t = _shapes.last_axis(translation, "translation", 3)
     check_finite(t, "translation")
     return t
 
@@ -311,7 +306,7 @@ class Transform:
         )
 
     def _rotate(self, vectors, name: str, shift: bool) -> np.ndarray:
-        v = _as_float(vectors, name, 3)
+        v = _shapes.last_axis(vectors, name, 3)
         try:
             shape = np.broadcast_shapes(self.shape, v.shape[:-1])
         except ValueError:
@@ -632,7 +627,7 @@ class Transform:
         For a single pose and a large cloud this is several times faster than
         rotating every point by the quaternion, and what scikit-robot does.
         """
-        p = _as_float(points, "points", 3)
+        p = _shapes.last_axis(points, "points", 3)
         rot = homogeneous_from_transform(self._translation, self._rotation)[:3, :3]
         rows = p.reshape(-1, 3).T  # (3, n): one BLAS call on the long axis
         if inverse:

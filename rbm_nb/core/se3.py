@@ -47,7 +47,10 @@ import numbers
 
 import numpy as np
 
+from .._door import poses as _poses
+from .._door import shapes as _shapes
 from .._door.unpack import float_array, kernel_array
+from .._door.validation import check_tolerance
 from .._kernels import se3
 from . import conversions
 
@@ -97,70 +100,6 @@ def _kernels():
 
 
 # ---------------------------------------------------------------------------
-# validation
-# ---------------------------------------------------------------------------
-
-
-def _rows(value, name: str, tail: tuple[int, ...]) -> tuple[np.ndarray, tuple]:
-    """``value`` as C-contiguous float64 rows ``(n, *tail)`` plus its leading shape."""
-    arr = float_array(value, name)
-    k = len(tail)
-    if arr.ndim < k or arr.shape[arr.ndim - k :] != tail:
-        expected = "(..., " + ", ".join(map(str, tail)) + ")"
-        raise ValueError(f"{name} must have shape {expected}, got {arr.shape}")
-    lead = arr.shape[: arr.ndim - k]
-    rows = kernel_array(arr.reshape((-1,) + tail))
-    bad = ~np.isfinite(rows.reshape(rows.shape[0], -1)).all(axis=1)
-    if bad.any():
-        raise ValueError(f"{name}{_where(lead, int(np.argmax(bad)))} is not finite")
-    return rows, lead
-
-
-def _where(lead: tuple, flat: int) -> str:
-    """``[i, j]`` of a flat row index in the leading shape (empty for a scalar)."""
-    if lead == ():
-        return ""
-    return "[" + ", ".join(str(int(i)) for i in np.unravel_index(flat, lead)) + "]"
-
-
-def _check_rotations(rot: np.ndarray, lead: tuple, name: str) -> None:
-    """Raise if a (n, k, k) matrix's 3 x 3 block is not a rotation (``_ROTATION_TOLERANCE``)."""
-    i = _kernels().first_non_rotation(kernel_array(rot), _ROTATION_TOLERANCE)
-    if i >= 0:
-        r = rot[i, :3, :3]
-        dev = np.abs(r.T @ r - np.eye(3)).max()
-        raise ValueError(
-            f"{name}{_where(lead, i)} is not a rotation: |RᵀR - I| reaches "
-            f"{dev:.3g} (tolerance {_ROTATION_TOLERANCE:g}) and det(R) = "
-            f"{np.linalg.det(r):.6g}"
-        )
-
-
-def _poses(value, name: str, rotation: bool = True) -> tuple[np.ndarray, tuple]:
-    """Validated (n, 4, 4) homogeneous matrices: last row (0, 0, 0, 1), R in SO(3).
-
-    ``rotation=False`` skips the SO(3) test (for first-order poses such as
-    the output of ``delta2tr``).
-    """
-    arr = float_array(value, name)
-    if arr.ndim < 2 or arr.shape[-2:] != (4, 4):
-        raise ValueError(f"{name} must have shape (..., 4, 4), got {arr.shape}")
-    lead = arr.shape[:-2]
-    rows = kernel_array(arr.reshape((-1, 4, 4)))
-    i, code = _kernels().first_bad_pose(rows, _ROTATION_TOLERANCE, bool(rotation))
-    if code == 1:
-        raise ValueError(f"{name}{_where(lead, i)} is not finite")
-    if code == 2:
-        raise ValueError(
-            f"{name}{_where(lead, i)} is not a homogeneous matrix: its last row is "
-            f"{rows[i, 3].tolist()}, expected [0, 0, 0, 1]"
-        )
-    if code == 3:
-        _check_rotations(rows[i : i + 1], (), f"{name}{_where(lead, i)}")
-    return rows, lead
-
-
-# ---------------------------------------------------------------------------
 # skew / vex
 # ---------------------------------------------------------------------------
 
@@ -184,7 +123,7 @@ def skew(v) -> np.ndarray:
            [ 3.,  0., -1.],
            [-2.,  1.,  0.]])
     """
-    rows, lead = _rows(v, "v", (3,))
+    rows, lead = _shapes.rows(v, "v", (3,), finite=True)
     return _kernels().skew(rows).reshape(lead + (3, 3))
 
 
@@ -209,7 +148,7 @@ def vex(s) -> np.ndarray:
     array([[1., 2., 3.],
            [4., 5., 6.]])
     """
-    rows, lead = _rows(s, "s", (3, 3))
+    rows, lead = _shapes.rows(s, "s", (3, 3), finite=True)
     return _kernels().vex(rows).reshape(lead + (3,))
 
 
@@ -255,10 +194,10 @@ def tr2delta(T0, T1=None) -> np.ndarray:
     """
     k = _kernels()
     if T1 is None:
-        rows, lead = _poses(T0, "T0", rotation=False)
+        rows, lead = _poses.poses(T0, "T0", _ROTATION_TOLERANCE, rotation=False)
         return k.tr2delta(np.eye(4)[None], rows).reshape(lead + (6,))
-    a, a_lead = _poses(T0, "T0", rotation=False)
-    b, b_lead = _poses(T1, "T1", rotation=False)
+    a, a_lead = _poses.poses(T0, "T0", _ROTATION_TOLERANCE, rotation=False)
+    b, b_lead = _poses.poses(T1, "T1", _ROTATION_TOLERANCE, rotation=False)
     lead = _broadcast(a_lead, b_lead, "T0", "T1")
     # a single pose on either side is reused by the kernel; anything else
     # is broadcast explicitly
@@ -308,7 +247,7 @@ def delta2tr(d) -> np.ndarray:
            [-0.002,  0.   ,  1.   ,  0.   ],
            [ 0.   ,  0.   ,  0.   ,  1.   ]])
     """
-    rows, lead = _rows(d, "d", (6,))
+    rows, lead = _shapes.rows(d, "d", (6,), finite=True)
     return _kernels().delta2tr(rows).reshape(lead + (4, 4))
 
 
@@ -340,10 +279,10 @@ def tr2adjoint(T) -> np.ndarray:
     """
     arr = float_array(T, "T")
     if arr.shape[-2:] == (3, 3):
-        rows, lead = _rows(arr, "T", (3, 3))
-        _check_rotations(rows, lead, "T")
+        rows, lead = _shapes.rows(arr, "T", (3, 3), finite=True)
+        _poses.rotation_blocks(rows, lead, "T", _ROTATION_TOLERANCE)
         return rows.reshape(lead + (3, 3)).copy()
-    rows, lead = _poses(arr, "T")
+    rows, lead = _poses.poses(arr, "T", _ROTATION_TOLERANCE)
     return _kernels().tr2adjoint(rows).reshape(lead + (6, 6))
 
 
@@ -365,7 +304,7 @@ def _representation(representation) -> int:
 def _angles_of_rotations(rot: np.ndarray, lead: tuple, code: int) -> np.ndarray:
     """spatialmath's ``r2x``: the angle triple of each rotation matrix."""
     try:
-        _check_rotations(rot, lead, "Γ")
+        _poses.rotation_blocks(rot, lead, "Γ", _ROTATION_TOLERANCE)
     except ValueError as err:
         # the likely mistake: a stack of exactly three angle triples
         raise ValueError(
@@ -450,14 +389,13 @@ def rotvelxform(
     rbm_nb.core.se3.SingularityError: rotvelxform(inverse=True, representation='rpy/xyz') is singular at Γ: pitch = 90°, where cos(pitch) = 0 (pitch = ±90°)
     """
     code = _representation(representation)
-    if not (isinstance(tol, numbers.Real) and tol >= 0):
-        raise ValueError(f"tol must be a non-negative number, got {tol!r}")
+    check_tolerance(tol)
     arr = float_array(Γ, "Γ")
     if arr.shape[-2:] == (3, 3):
-        rot, lead = _rows(arr, "Γ", (3, 3))
+        rot, lead = _shapes.rows(arr, "Γ", (3, 3), finite=True)
         angles = kernel_array(_angles_of_rotations(rot, lead, code))
     else:
-        angles, lead = _rows(arr, "Γ", (3,))
+        angles, lead = _shapes.rows(arr, "Γ", (3,), finite=True)
     out, bad = _kernels().rotvelxform(angles, code, bool(inverse), float(tol))
     if bad >= 0:
         what, why = _SINGULAR_WHAT[code]
@@ -465,7 +403,7 @@ def rotvelxform(
         value = np.linalg.norm(row) if code == 4 else row[1]
         raise SingularityError(
             f"rotvelxform(inverse=True, representation={representation!r}) is "
-            f"singular at Γ{_where(lead, bad)}: {what} = {np.rad2deg(value):.6g}°, "
+            f"singular at Γ{_shapes.where(lead, bad)}: {what} = {np.rad2deg(value):.6g}°, "
             f"where {why}"
         )
     if full:
@@ -557,7 +495,7 @@ def exp2jac(v) -> np.ndarray:
 
 
 def _forward(angles, code: int) -> np.ndarray:
-    rows, lead = _rows(angles, "angles", (3,))
+    rows, lead = _shapes.rows(angles, "angles", (3,), finite=True)
     out, _ = _kernels().rotvelxform(rows, code, False, 0.0)
     return out.reshape(lead + (3, 3))
 
@@ -599,11 +537,11 @@ def trnorm(T) -> np.ndarray:
     """
     arr = float_array(T, "T")
     tail = (3, 3) if arr.shape[-2:] == (3, 3) else (4, 4)
-    rows, lead = _rows(arr, "T", tail)
+    rows, lead = _shapes.rows(arr, "T", tail, finite=True)
     out, bad = _kernels().trnorm(rows)
     if bad >= 0:
         raise ValueError(
-            f"T{_where(lead, bad)} cannot be normalised: its y and z columns are "
+            f"T{_shapes.where(lead, bad)} cannot be normalised: its y and z columns are "
             "parallel or zero"
         )
     return out.reshape(lead + tail)
@@ -619,7 +557,7 @@ def _fractions(s) -> np.ndarray:
         i = int(np.argmax(~np.isfinite(flat) | (flat < 0) | (flat > 1)))
         raise ValueError(
             f"s must lie in [0, 1] (or be an integer number of steps > 1); "
-            f"s{_where(arr.shape, i)} = {flat[i]!r}"
+            f"s{_shapes.where(arr.shape, i)} = {flat[i]!r}"
         )
     return arr
 
@@ -674,7 +612,7 @@ def trinterp(start, end, s, shortest: bool = True) -> np.ndarray:
     rotation_only = end_arr.shape[-2:] == (3, 3)
     if rotation_only:
         end_arr = _embed(end_arr)
-    end_rows, end_lead = _poses(end_arr, "end")
+    end_rows, end_lead = _poses.poses(end_arr, "end", _ROTATION_TOLERANCE)
     if start is None:
         start_rows, start_lead = np.eye(4)[None], ()
     else:
@@ -684,8 +622,10 @@ def trinterp(start, end, s, shortest: bool = True) -> np.ndarray:
                 f"start and end must both be rotations (3, 3) or both poses "
                 f"(4, 4), got shapes {start_arr.shape} and {end_arr.shape}"
             )
-        start_rows, start_lead = _poses(
-            _embed(start_arr) if rotation_only else start_arr, "start"
+        start_rows, start_lead = _poses.poses(
+            _embed(start_arr) if rotation_only else start_arr,
+            "start",
+            _ROTATION_TOLERANCE,
         )
     frac = _fractions(s)
     lead = _broadcast(start_lead, end_lead, "start", "end")
@@ -744,7 +684,7 @@ def qexp(q) -> np.ndarray:
     >>> qexp([0, np.pi / 4, 0, 0]).round(6)
     array([0.707107, 0.707107, 0.      , 0.      ])
     """
-    rows, lead = _rows(q, "q", (4,))
+    rows, lead = _shapes.rows(q, "q", (4,), finite=True)
     return _kernels().qexp(rows).reshape(lead + (4,))
 
 
@@ -776,10 +716,10 @@ def qlog(q) -> np.ndarray:
     >>> qlog([np.cos(0.3), np.sin(0.3), 0, 0]).round(6) + 0.0
     array([0. , 0.3, 0. , 0. ])
     """
-    rows, lead = _rows(q, "q", (4,))
+    rows, lead = _shapes.rows(q, "q", (4,), finite=True)
     zero = ~rows.any(axis=1)
     if zero.any():
         raise ValueError(
-            f"q{_where(lead, int(np.argmax(zero)))} is zero: it has no logarithm"
+            f"q{_shapes.where(lead, int(np.argmax(zero)))} is zero: it has no logarithm"
         )
     return _kernels().qlog(rows).reshape(lead + (4,))

@@ -19,6 +19,7 @@ import numpy as np
 
 from .._door import dask_blocks as _dask
 from .._door import inputs as _inputs
+from .._door.series import velocity_options as _velocity_options
 from .._door.unpack import ArrayInput
 from .._door.validation import check_what
 from .._engine import transform as _engine_transform
@@ -44,6 +45,8 @@ def _transform(
     ``kind`` is "points", "vectors" or "quaternions"; ``velocity``, for a
     change of a velocity's reference or moving frame, ``(linear, options)``.
     """
+    if velocity is not None:
+        _velocity_options(velocity[1].get("outlier_thresh"), velocity[1]["cutoff"])
     if type(arr) is not np.ndarray and _dask.is_dask(arr):
         return _lazy_transform(
             kind, arr, into, outof, dim, axis, timestamps, time_axis, attr,

@@ -254,7 +254,9 @@ def test_root_frames_and_discrete_without_timestamps(world):
 def test_outof_needed_and_dim_needs_dataarray(moving):
     with pytest.raises(ValueError, match="outof must be given"):
         rbm.transform_points(np.zeros(3), "world")
-    with pytest.raises(ValueError, match="dim can only be given for DataArray"):
+    with pytest.raises(
+        ValueError, match="dim can only be given when arr is a DataArray"
+    ):
         rbm.transform_points(np.zeros(3), "world", "moving", dim="x")
     with pytest.raises(ValueError, match="same axis"):
         rbm.transform_points(

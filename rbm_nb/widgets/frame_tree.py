@@ -178,6 +178,9 @@ class FrameTree(widgets.VBox):
         self._lookup_cache: dict = {}
         self._current: Details = None
         self._player: Any = None  # the linked Player
+        # the time set_time was given, exact (a datetime64 to the ns), while
+        # ``time`` (float data seconds) still says the same
+        self._exact: tuple[Any, float] | None = None
         self._scene_widget: Any = None  # the linked Scene's widget
         self._message = widgets.HTML(value="")
         self._rows_box = widgets.VBox(
@@ -286,7 +289,12 @@ class FrameTree(widgets.VBox):
 
     def set_time(self, t) -> None:
         """Show poses at time ``t`` (float seconds or datetime64); for Player links."""
-        self.time = epoch_seconds(t, name="FrameTree.set_time: t")
+        seconds = epoch_seconds(t, name="FrameTree.set_time: t")
+        same = self.time == seconds
+        self._exact = (t, seconds)  # before ``time`` redraws the details
+        self.time = seconds
+        if same:  # times under ~0.25 us apart share their epoch float
+            self._update_details()
         if self._listener is None:  # no registry hook: notice changes on steps
             self._poll_registry()
 
@@ -557,11 +565,11 @@ class FrameTree(widgets.VBox):
         return self._pair_details(self._frame(names[0]), self._frame(names[1]))
 
     # -- one time base: seconds from the start, plus the date if any ---------------
-    def _time_base(self) -> tuple[float, int | None]:
-        """(second 0 in data seconds, its absolute ns or None)."""
+    def _time_base(self) -> TimeBase:
+        """Second 0: the linked player's, else the earliest frame's first sample."""
         player = self._player
         if player is not None:
-            return float(player.origin), player.t0_ns
+            return player.timebase
         first = None
         for row in self._rows.values():
             frame = row["frame"]
@@ -572,36 +580,43 @@ class FrameTree(widgets.VBox):
             if first is None or seconds < first[0]:
                 first = (seconds, stamps[:1])
         if first is None:
-            return 0.0, None
-        seconds, stamp = first
-        base = TimeBase.of(stamp)
-        return base.origin, base.t0_ns if base.absolute else None
+            return TimeBase(t0_s=0.0)
+        return TimeBase.of(first[1])
 
     def format_time(self, seconds: float) -> str:
         """Data seconds (epoch seconds for datetime frames) as the shared readout."""
-        origin, t0_ns = self._time_base()
-        if t0_ns is not None:
-            # exact: data seconds are epoch floats, the readout counts from t0_ns
-            return format_time(seconds - TimeBase(t0_ns).origin, t0_ns)
-        return format_time(seconds - origin)
+        base = self._time_base()
+        return _readout(base)(base.at(seconds))
+
+    def _shown(self, base: TimeBase) -> float | None:
+        """The time shown as seconds of ``base``; exact when set_time had a datetime."""
+        if self.time is None:
+            return None
+        try:
+            if self._exact is not None and self._exact[1] == self.time:
+                return base.at(self._exact[0])
+            return base.at(self.time)
+        except ValueError:  # a time of another kind than the tree's frames
+            return self.time - base.origin
 
     def _single_details(self, frame) -> FrameDetails:
         info = self._rows[frame.name]["info"]
         pose = None
         if frame.parent is not None:
+            base = self._time_base()
             seconds = None
             if frame.timestamps is not None:
-                seconds = as_track(
-                    frame.timestamps, f"timestamps of {frame.name!r}", copy=False
-                ).epoch_seconds()
+                seconds = _seconds_on(
+                    base, frame.timestamps, f"timestamps of {frame.name!r}"
+                )
             pose = pose_at(
                 f"wrt {frame.parent.name}",
                 np.asarray(frame.translation, dtype=float),
                 np.asarray(frame.rotation, dtype=float),
                 seconds,
-                self.time,
-                self.format_time,
-                lambda at: self._missing_text([frame], at),
+                self._shown(base),
+                _readout(base),
+                lambda at: self._missing_text([frame], at, base),
             )
         return FrameDetails(
             name=frame.name,
@@ -617,34 +632,39 @@ class FrameTree(widgets.VBox):
         key = (a.name, b.name, id(a), id(b))
         if key not in self._lookup_cache:
             t, r, ts = lookups.lookup_transform(outof=a, into=b, return_timestamps=True)
-            seconds = (
+            track = (
                 None
                 if ts is None
-                else as_track(ts, "transform timestamps", copy=False).epoch_seconds()
+                else as_track(ts, "transform timestamps", copy=False, repeats=True)
             )
-            self._lookup_cache[key] = (np.asarray(t), np.asarray(r), seconds)
-        t, r, seconds = self._lookup_cache[key]
+            self._lookup_cache[key] = (np.asarray(t), np.asarray(r), track)
+        t, r, track = self._lookup_cache[key]
+        base = self._time_base()
+        seconds = (
+            None if track is None else _seconds_on(base, track, "transform timestamps")
+        )
         frames = [f for f in a.frames_between(b) if f.timestamps is not None]
         pose = pose_at(
             f"of {a.name} in {b.name}",
             t,
             r,
             seconds,
-            self.time,
-            self.format_time,
-            lambda at: self._missing_text(frames, at),
+            self._shown(base),
+            _readout(base),
+            lambda at: self._missing_text(frames, at, base),
         )
         return PairDetails(outof=a.name, into=b.name, chain=chain, pose=pose)
 
-    def _missing_text(self, frames, at: float) -> str:
+    def _missing_text(self, frames, at: float, base: TimeBase) -> str:
         """ "no sample of <frame> at <time> (missing: <why>)" for a NaN result at ``at``.
 
         Names the moving frames of ``frames`` whose own sample at or next to
         ``at`` has no value (the samples an interpolation there needs).
         """
-        culprits = [f for f in frames if _missing_near(f, at)]
+        culprits = [f for f in frames if _missing_near(f, at, base)]
+        readout = _readout(base)
         if not culprits:
-            return f"no sample at {self.format_time(at)} (missing)"
+            return f"no sample at {readout(at)} (missing)"
         names = ", ".join(f.name for f in culprits)
         reasons = [
             self._missing_reasons[f.name]
@@ -652,7 +672,7 @@ class FrameTree(widgets.VBox):
             if f.name in self._missing_reasons
         ]
         why = "; ".join(dict.fromkeys(reasons)) or "the recording has no value there"
-        return f"no sample of {names} at {self.format_time(at)} (missing: {why})"
+        return f"no sample of {names} at {readout(at)} (missing: {why})"
 
     def __repr__(self) -> str:
         return f"<FrameTree root={self.root!r} frames={len(self._order)} selected={self.selected}>"
@@ -665,13 +685,29 @@ def _path_to_root(frame) -> list:
     return out
 
 
-def _missing_near(frame, at: float) -> bool:
+def _readout(base: TimeBase):
+    """Seconds of ``base`` -> the shared readout (with the date for datetime data)."""
+    t0_ns = base.t0_ns if base.absolute else None
+    return lambda seconds: format_time(seconds, t0_ns)
+
+
+def _seconds_on(base: TimeBase, timestamps, name: str) -> np.ndarray:
+    """Sample times as seconds of ``base``, from exact keys.
+
+    A frame whose times are of another kind than the base's (a tree mixing
+    datetime64 and numeric frames) keeps its data seconds less second 0's.
+    """
+    track = as_track(timestamps, name, copy=False, repeats=True)
+    if track.kind == base.kind:
+        return base.seconds(track)
+    return track.epoch_seconds() - base.origin
+
+
+def _missing_near(frame, at: float, base: TimeBase) -> bool:
     """Whether ``frame``'s sample at or before ``at``, or the next one, is NaN."""
     if frame.timestamps is None:
         return False
-    seconds = as_track(
-        frame.timestamps, f"timestamps of {frame.name!r}", copy=False
-    ).epoch_seconds()
+    seconds = _seconds_on(base, frame.timestamps, f"timestamps of {frame.name!r}")
     i = int(np.searchsorted(seconds, at, side="right")) - 1
     rows = [j for j in (i, i + 1) if 0 <= j < len(seconds)]
     for values in (frame.translation, frame.rotation):

@@ -135,3 +135,26 @@ def test_mixed_kinds_between_player_and_view_are_refused():
         ValueError, match=r"link\(IndexLinked\): cannot match datetime64 timestamps"
     ):
         floats.link(IndexLinked(STAMPS))
+
+
+def test_frame_tree_shows_each_ns_sample():
+    import rbm_nb as rbm
+    from rbm_nb.widgets import FrameTree
+
+    rbm.register_frame("world")
+    rbm.register_frame(
+        "head",
+        parent="world",
+        translation=np.c_[np.arange(4.0), np.zeros(4), np.zeros(4)],
+        timestamps=STAMPS,
+    )
+    player = Player(STAMPS)
+    tree = FrameTree("world", player=player)
+    tree.select("head")
+    for i in (1, 2, 0, 3):
+        player.seek(i)
+        assert tree.details.pose.translation == (float(i), 0.0, 0.0)
+    alone = FrameTree("world")
+    alone.select("head")
+    alone.set_time(STAMPS[2])
+    assert alone.details.pose.translation == (2.0, 0.0, 0.0)

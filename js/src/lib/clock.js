@@ -6,6 +6,13 @@
 // The time is set on the model every animation frame (every linked view sees
 // it at once) and sent to the kernel at most every THROTTLE_MS, and at once on
 // pause and at the end. Nothing here waits for the kernel.
+//
+// The anchor is always the model's own time: play and every frame re-read
+// it, so a time the clock did not see being set (a seek whose change event
+// reached another listener first, a set without events, a kernel update
+// applied while paused) is where play goes on from, never an older anchor
+// (a report: paused at 61.56 s, the first frame after play showed 77.75 s;
+// tests/notebook/test_clock_js.py).
 import { THROTTLE_MS } from "../timeline.js";
 
 export class Clock {
@@ -20,14 +27,8 @@ export class Clock {
     this.anchorWall = now();
     this.lastPush = -Infinity;
     this.frames = 0;
-    this.onTime = () => {
-      const t = Number(model.get("time"));
-      if (t !== this.lastSet) {
-        // set by the kernel or another view (a seek): continue from there
-        this.lastSet = t;
-        this.reanchor();
-      }
-    };
+    // set by the kernel or another view (a seek): continue from there
+    this.onTime = () => this.follow();
     this.onSpeed = () => this.reanchor();
     this.onPlaying = () => {
       if (model.get("playing")) {
@@ -42,6 +43,8 @@ export class Clock {
       if (!model.get("playing")) {
         return;
       }
+      // a time set since the last frame that no event told us of: a seek
+      this.follow();
       const now = this.now();
       const duration = Number(model.get("duration")) || 0;
       const speed = Number(model.get("speed")) || 1;
@@ -88,7 +91,18 @@ export class Clock {
     this.anchorWall = this.now();
   }
 
+  /** Re-anchor at the model's time if it is not the one this clock set last. */
+  follow() {
+    const t = Number(this.model.get("time")) || 0;
+    if (t !== this.lastSet) {
+      this.lastSet = t;
+      this.reanchor();
+    }
+  }
+
   start() {
+    // from the model's time as it is now, whoever set it
+    this.lastSet = Number(this.model.get("time")) || 0;
     const duration = Number(this.model.get("duration")) || 0;
     if (this.lastSet >= duration) {
       this.set(0);

@@ -172,8 +172,9 @@ class Track:
 
 
 def _fresh(arr: np.ndarray) -> bool:
-    """Whether ``arr`` owns its memory and may be written (no view of another's)."""
-    return bool(arr.flags.owndata and arr.flags.writeable and arr.dtype == np.float64)
+    """Whether an array handed over may be marked in place (not a converted copy's
+    source: np.asarray above made no copy of a float64 array)."""
+    return bool(arr.flags.writeable and arr.dtype == np.float64)
 
 
 def _max_gap(frame, base) -> float | None:

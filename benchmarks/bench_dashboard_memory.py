@@ -27,13 +27,16 @@ separately as ``warm``).
   the data (not part of the ratio; printed so a reader can see it).
 
 Without ``--no-trace`` a second fresh process per length builds the same
-dashboard under ``tracemalloc`` and splits what the build keeps by the
-innermost rbm_nb module that allocated it: ``engine`` (``rbm_nb/_engine``,
-``rbm_nb/_kernels``: interpolation tables, chains, tracks of times),
-``frames`` (``core/frames.py``, ``_door``: the frames' stored samples),
-``scene`` (``rbm_nb/scene``), ``plots`` (``rbm_nb/widgets``, ``core/gaze``:
-the series and the plots' overviews), ``other`` (the rest of rbm_nb, and
-allocations outside rbm_nb).
+dashboard under ``tracemalloc`` and splits what the build keeps (allocated,
+not necessarily resident) by the innermost rbm_nb module that allocated it:
+``tables`` (the engine's squad tables: allocated whole per moving frame,
+resident only where rows were computed -- untouched pages cost no RSS),
+``frames`` (``core/frames.py``, ``_door``, the frames' time copies and the
+explorer's confidence-masked eye arrays the frames keep), ``engine`` (the
+rest of ``rbm_nb/_engine``, ``rbm_nb/_kernels``: lookup results, chains),
+``scene`` (``rbm_nb/scene``: tracks), ``plots`` (``rbm_nb/widgets``,
+``core/gaze``, the explorer's series), ``other`` (the rest, and allocations
+outside rbm_nb).
 
 ``--read-only``: the recording's arrays are handed over read-only (owned
 by nobody who can write them, as :mod:`rbm_nb._infra.frozen` defines it), so
@@ -108,22 +111,40 @@ out = {{"loaded": loaded, "floor": rss_before, "warm_s": warm, "build_s": build,
 if trace:
     snap = tracemalloc.take_snapshot()
     tracemalloc.stop()
-    groups = {{"engine": 0, "frames": 0, "scene": 0, "plots": 0, "other": 0}}
+    import inspect
+    lines, first = inspect.getsourcelines(explorer._confident)
+    masking = range(first, first + len(lines))
+    groups = {{"tables": 0, "frames": 0, "engine": 0, "scene": 0, "plots": 0, "other": 0}}
     def group(tb):
+        parts = []
         for frame in reversed(tb):  # innermost first
             name = frame.filename.replace(os.sep, "/")
-            if "/rbm_nb/" not in name:
-                continue
-            part = name.split("/rbm_nb/", 1)[1]
-            if part.startswith(("_engine/", "_kernels/")):
-                return "engine"
-            if part.startswith(("core/frames", "_door/")):
-                return "frames"
-            if part.startswith("scene/"):
-                return "scene"
-            if part.startswith(("widgets/", "core/gaze")):
-                return "plots"
+            if "/rbm_nb/" in name:
+                parts.append((name.split("/rbm_nb/", 1)[1], frame.lineno))
+        if any(p.startswith("_engine/fused") for p, _ in parts) and any(
+            p.startswith("_infra/memory") for p, _ in parts[:1]
+        ) and not any(p.startswith("core/frames") for p, _ in parts):
+            return "tables"
+        kept = [(p, line) for p, line in parts if not p.startswith("_infra/")]
+        if not kept:
             return "other"
+        inner = kept[0]
+        parts = [p for p, _ in kept]
+        if not parts:
+            return "other"
+        if any(p.startswith("core/frames") for p in parts[:3]):
+            return "frames"  # the frames' samples and times (door, time copies)
+        part = parts[0]
+        if part.startswith("app/explorer") and inner[1] in masking:
+            return "frames"  # the eyes' confidence-masked copies the frames hold
+        if part.startswith(("_engine/", "_kernels/")):
+            return "engine"
+        if part.startswith(("core/frames", "_door/")):
+            return "frames"
+        if part.startswith("scene/"):
+            return "scene"
+        if part.startswith(("widgets/", "core/gaze", "app/explorer")):
+            return "plots"
         return "other"
     for stat in snap.statistics("traceback"):
         groups[group(stat.traceback)] += stat.size
@@ -171,15 +192,15 @@ def table(rows) -> str:
     mb = 1e6
     lines = [
         "| recording | loaded MB | RSS MB (ratio) | peak MB (ratio) | build s "
-        "| floor MB | engine | frames | scene | plots | other (MB, tracemalloc) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "| floor MB | tables | frames | engine | scene | plots | other (MB, tracemalloc) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         groups = r.get("trace", {}).get("groups")
         split = (
             " | ".join(f"{groups[k] / mb:.0f}" for k in groups)
             if groups
-            else " | ".join("-" * 5)
+            else " | ".join("-" * 6)
         )
         lines.append(
             f"| {_label(r['hours'])} | {r['loaded'] / mb:.0f} "

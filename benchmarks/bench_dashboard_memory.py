@@ -2,7 +2,7 @@
 
     RBM_NB_DATA_DIR=/work/shared/data/rbm-data PYTHONPATH=. \\
         python benchmarks/bench_dashboard_memory.py [--hours 0 1 3] [--compare OTHER_TREE]
-        [--no-trace]
+        [--repeat N] [--no-trace] [--read-only]
 
 For each length, a fresh Python process loads the example recording tiled in
 time (``tiled_recording.py``: head 200 Hz, eyes ~340 Hz, NaN rows kept; 0 =
@@ -27,13 +27,16 @@ separately as ``warm``).
   the data (not part of the ratio; printed so a reader can see it).
 
 Without ``--no-trace`` a second fresh process per length builds the same
-dashboard under ``tracemalloc`` and splits what the build keeps by the
-innermost rbm_nb module that allocated it: ``engine`` (``rbm_nb/_engine``,
-``rbm_nb/_kernels``: interpolation tables, chains, tracks of times),
-``frames`` (``core/frames.py``, ``_door``: the frames' stored samples),
-``scene`` (``rbm_nb/scene``), ``plots`` (``rbm_nb/widgets``, ``core/gaze``:
-the series and the plots' overviews), ``other`` (the rest of rbm_nb, and
-allocations outside rbm_nb).
+dashboard under ``tracemalloc`` and splits what the build keeps (allocated,
+not necessarily resident) by the innermost rbm_nb module that allocated it:
+``tables`` (the engine's squad tables: allocated whole per moving frame,
+resident only where rows were computed -- untouched pages cost no RSS),
+``frames`` (``core/frames.py``, ``_door``, the frames' time copies and the
+explorer's confidence-masked eye arrays the frames keep), ``engine`` (the
+rest of ``rbm_nb/_engine``, ``rbm_nb/_kernels``: lookup results, chains),
+``scene`` (``rbm_nb/scene``: tracks), ``plots`` (``rbm_nb/widgets``,
+``core/gaze``, the explorer's series), ``other`` (the rest, and allocations
+outside rbm_nb).
 
 ``--read-only``: the recording's arrays are handed over read-only (owned
 by nobody who can write them, as :mod:`rbm_nb._infra.frozen` defines it), so
@@ -41,7 +44,10 @@ frames keep them instead of copies; by default they are writeable, as
 ``xarray`` loads them, and frames copy what they keep.
 
 ``--compare TREE`` runs the same lengths in another checkout (e.g.
-``/work/main``) in the same run and prints its table and the ratios.
+``/work/main``) in the same run and prints its table and the ratios;
+``--repeat N`` builds N times per tree, the trees taking turns, and keeps
+each tree's fastest build (the build times of a shared machine vary by 2x
+from run to run).
 """
 
 from __future__ import annotations
@@ -108,22 +114,40 @@ out = {{"loaded": loaded, "floor": rss_before, "warm_s": warm, "build_s": build,
 if trace:
     snap = tracemalloc.take_snapshot()
     tracemalloc.stop()
-    groups = {{"engine": 0, "frames": 0, "scene": 0, "plots": 0, "other": 0}}
+    import inspect
+    lines, first = inspect.getsourcelines(explorer._confident)
+    masking = range(first, first + len(lines))
+    groups = {{"tables": 0, "frames": 0, "engine": 0, "scene": 0, "plots": 0, "other": 0}}
     def group(tb):
+        parts = []
         for frame in reversed(tb):  # innermost first
             name = frame.filename.replace(os.sep, "/")
-            if "/rbm_nb/" not in name:
-                continue
-            part = name.split("/rbm_nb/", 1)[1]
-            if part.startswith(("_engine/", "_kernels/")):
-                return "engine"
-            if part.startswith(("core/frames", "_door/")):
-                return "frames"
-            if part.startswith("scene/"):
-                return "scene"
-            if part.startswith(("widgets/", "core/gaze")):
-                return "plots"
+            if "/rbm_nb/" in name:
+                parts.append((name.split("/rbm_nb/", 1)[1], frame.lineno))
+        if any(p.startswith("_engine/fused") for p, _ in parts) and any(
+            p.startswith("_infra/memory") for p, _ in parts[:1]
+        ) and not any(p.startswith("core/frames") for p, _ in parts):
+            return "tables"
+        kept = [(p, line) for p, line in parts if not p.startswith("_infra/")]
+        if not kept:
             return "other"
+        inner = kept[0]
+        parts = [p for p, _ in kept]
+        if not parts:
+            return "other"
+        if any(p.startswith("core/frames") for p in parts[:3]):
+            return "frames"  # the frames' samples and times (door, time copies)
+        part = parts[0]
+        if part.startswith("app/explorer") and inner[1] in masking:
+            return "frames"  # the eyes' confidence-masked copies the frames hold
+        if part.startswith(("_engine/", "_kernels/")):
+            return "engine"
+        if part.startswith(("core/frames", "_door/")):
+            return "frames"
+        if part.startswith("scene/"):
+            return "scene"
+        if part.startswith(("widgets/", "core/gaze", "app/explorer")):
+            return "plots"
         return "other"
     for stat in snap.statistics("traceback"):
         groups[group(stat.traceback)] += stat.size
@@ -152,14 +176,23 @@ def run(tree: Path, hours: float, trace: bool, read_only: bool) -> dict:
     raise RuntimeError(f"{tree} at {hours} h failed:\n{done.stderr[-3000:]}")
 
 
-def measure(tree: Path, hours_list, trace: bool, read_only: bool) -> list[dict]:
-    rows = []
+def measure(trees, hours_list, trace: bool, read_only: bool, repeat: int):
+    """Rows per tree; with ``repeat`` > 1 the trees take turns, fresh processes
+    each time, and each keeps its fastest build (a loaded machine slows a run
+    now and then; the least disturbed one is the comparable one)."""
+    rows: list[list[dict]] = [[] for _ in trees]
     for hours in hours_list:
-        row = {"hours": hours, **run(tree, hours, False, read_only)}
-        if trace:
-            row["trace"] = run(tree, hours, True, read_only)
-        rows.append(row)
-        print(f"  {tree} {hours} h: {json.dumps(row)}", file=sys.stderr)
+        runs: list[list[dict]] = [[] for _ in trees]
+        for _ in range(repeat):
+            for k, tree in enumerate(trees):
+                runs[k].append(run(tree, hours, False, read_only))
+        for k, tree in enumerate(trees):
+            best = min(runs[k], key=lambda r: r["build_s"])
+            row = {"hours": hours, **best, "builds": [r["build_s"] for r in runs[k]]}
+            if trace:
+                row["trace"] = run(tree, hours, True, read_only)
+            rows[k].append(row)
+            print(f"  {tree} {hours} h: {json.dumps(row)}", file=sys.stderr)
     return rows
 
 
@@ -171,15 +204,15 @@ def table(rows) -> str:
     mb = 1e6
     lines = [
         "| recording | loaded MB | RSS MB (ratio) | peak MB (ratio) | build s "
-        "| floor MB | engine | frames | scene | plots | other (MB, tracemalloc) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "| floor MB | tables | frames | engine | scene | plots | other (MB, tracemalloc) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         groups = r.get("trace", {}).get("groups")
         split = (
             " | ".join(f"{groups[k] / mb:.0f}" for k in groups)
             if groups
-            else " | ".join("-" * 5)
+            else " | ".join("-" * 6)
         )
         lines.append(
             f"| {_label(r['hours'])} | {r['loaded'] / mb:.0f} "
@@ -196,22 +229,22 @@ def main() -> None:
     parser.add_argument("--compare", type=Path, help="another checkout to run too")
     parser.add_argument("--no-trace", action="store_true", help="skip tracemalloc")
     parser.add_argument(
+        "--repeat", type=int, default=1, help="builds per tree, taking turns (best)"
+    )
+    parser.add_argument(
         "--read-only", action="store_true", help="the recording's arrays read-only"
     )
     args = parser.parse_args()
     here = HERE.parent
-    ours = measure(here, args.hours, not args.no_trace, args.read_only)
-    print(f"\nthis tree ({here})\n")
-    print(table(ours))
+    trees = [here] + ([args.compare.resolve()] if args.compare else [])
+    results = measure(trees, args.hours, not args.no_trace, args.read_only, args.repeat)
+    for tree, rows in zip(trees, results, strict=True):
+        print(f"\n{tree}\n")
+        print(table(rows))
     if args.compare:
-        theirs = measure(
-            args.compare.resolve(), args.hours, not args.no_trace, args.read_only
-        )
-        print(f"\n{args.compare.resolve()}\n")
-        print(table(theirs))
-        print("\n| recording | RSS this / other | build s this / other |")
+        print("\n| recording | RSS this / other | build s this / other (best) |")
         print("|---|---|---|")
-        for a, b in zip(ours, theirs, strict=True):
+        for a, b in zip(*results, strict=True):
             print(
                 f"| {_label(a['hours'])} | {a['rss'] / b['rss']:.2f} "
                 f"| {a['build_s'] / b['build_s']:.2f} |"

@@ -530,6 +530,15 @@ def lookup(frame, to_frame, rotation_only: bool = False):
     steps = chain(frame, to_frame)
     target = match([f for f, _ in steps])
     t, r = evaluate(steps, target, rotation_only)
+    if len(steps) == 1:
+        # a frame into its parent at its own times is its samples themselves
+        # (views); the caller gets copies, never the frame's memory (which
+        # may be the user's own read-only arrays, see core/frames.py)
+        first = steps[0][0]
+        if np.may_share_memory(t, first.t):
+            t = t.copy()
+        if np.may_share_memory(r, first.rotation) or np.may_share_memory(r, first.r):
+            r = r.copy()
     n = len(target)
     # composed rows of a chain that does not move here, once (r: the fused
     # kernels' t has no rows when rotation_only)

@@ -150,7 +150,9 @@ def _confident(eye, min_confidence: float | None):
     low = (eye.confidence < min_confidence).values
     if not low.any():
         return eye
-    masked = eye.copy()
+    # shallow: the new position and orientation replace the copy's variables,
+    # the rest (times, confidence) is the caller's, read and never written
+    masked = eye.copy(deep=False)
     for var in ("position", "orientation"):
         values = masked[var].values.copy()
         values[low] = np.nan

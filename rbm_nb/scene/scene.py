@@ -1002,7 +1002,13 @@ class Scene:
         if inner is not None:
             reach += _reach(inner.positions())
         if handle.base is not self.base:
-            reach += _reach(Track.lookup(handle.base, self.base).positions())
+            # the anchor's track when the base has one already: the same
+            # lookup, not repeated for every object drawn on that base
+            anchor = self.state.tracks.get(self._anchor_path(handle.base))
+            base_track = (
+                Track.lookup(handle.base, self.base) if anchor is None else anchor
+            )
+            reach += _reach(base_track.positions())
         if not reach <= MAX_COORDINATE:
             raise ValueError(
                 f"add_{handle.kind}: {handle.name!r} reaches {reach:.3g} m from the "

@@ -55,6 +55,8 @@ class Track:
         self.seconds: np.ndarray | None
         self.original_timestamps: np.ndarray | None
         self.kind: str | None
+        # rows with data, when some are missing (None: all of them)
+        self._present: np.ndarray | None = None
         t = np.asarray(translation, dtype=np.float64)
         r = np.asarray(rotation, dtype=np.float64)
         if timestamps is None:
@@ -88,7 +90,10 @@ class Track:
         else:
             # a missing sample (NaN anywhere in its row) hides the object there
             missing = np.isnan(t).any(axis=1) | np.isnan(r).any(axis=1)
+            # kept (1 byte a sample): positions() is asked for often while a
+            # scene is built (extent, reach, grid) and need not search again
             if missing.any():
+                self._present = np.logical_not(missing)
                 if not (owned and _fresh(t) and _fresh(r)):
                     t, r = t.copy(), r.copy()
                 t[missing] = np.nan
@@ -162,7 +167,11 @@ class Track:
     def positions(self) -> np.ndarray:
         """The translations of the samples that are not missing, as (n, 3)."""
         points = self.translation.reshape(-1, 3)
-        return points[~np.isnan(points).any(axis=1)]
+        if self.seconds is None:
+            return points[~np.isnan(points).any(axis=1)]
+        if self._present is None:
+            return points.copy()
+        return points[self._present]
 
     def missing(self, index: int) -> bool:
         """Whether sample ``index`` has no data (the object is hidden then)."""
@@ -173,8 +182,9 @@ class Track:
 
 
 def _fresh(arr: np.ndarray) -> bool:
-    """Whether ``arr`` owns its memory and may be written (no view of another's)."""
-    return bool(arr.flags.owndata and arr.flags.writeable and arr.dtype == np.float64)
+    """Whether an array handed over may be marked in place (not a converted copy's
+    source: np.asarray above made no copy of a float64 array)."""
+    return bool(arr.flags.writeable and arr.dtype == np.float64)
 
 
 def _max_gap(frame, base) -> float | None:

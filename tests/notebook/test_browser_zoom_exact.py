@@ -165,13 +165,25 @@ def chart(page, expr: str):
     )
 
 
-def hover(page, share: float) -> float:
-    """Move the mouse over the plot at ``share`` of its width; the time there."""
+def hover(page, share: float, nudge: float = 0.0) -> float:
+    """Move the mouse over the plot at ``share`` of its width; the time there.
+
+    The mouse lands on whole pixels, where an overview's pixel columns meet
+    and the samples it keeps (each column's first and last) are the
+    recording's nearest. ``nudge`` pixels more (as a zoomed page's
+    fractional mouse positions) move the cursor into a column, where the
+    nearest sample is seldom one the overview kept.
+    """
     page.locator(".rbm-ts").scroll_into_view_if_needed()
     box = page.locator(".rbm-ts .u-over").first.bounding_box()
-    x = box["x"] + share * box["width"]
+    x = round(box["x"] + share * box["width"])
     page.mouse.move(x, box["y"] + box["height"] / 2)
-    return chart(page, "u.posToVal(Math.round(u.cursor.left), 'x')")
+    if nudge:
+        chart(
+            page,
+            f"u.setCursor({{left: u.cursor.left + {nudge}, top: u.cursor.top}})",
+        )
+    return chart(page, "u.posToVal(u.cursor.left, 'x')")
 
 
 def legend(page) -> list[str]:
@@ -206,7 +218,7 @@ def test_hovering_over_a_long_overview_shows_the_exact_recording_value(zoomed):
     page.locator(".jp-OutputArea-output", has_text="BUSY-STARTED").wait_for(
         timeout=60000
     )
-    t = hover(page, 0.4137)
+    t = hover(page, 0.4137, nudge=0.5)
     page.wait_for_timeout(300)
     waiting = legend(page)
     shot(page, "readout_waiting", page.locator(".rbm-ts"))
@@ -233,8 +245,11 @@ def test_hovering_over_a_long_overview_shows_the_exact_recording_value(zoomed):
         f"x={want[1]!r}; overview's kept sample at {kept[0]:.6f} s x={kept[1]!r}"
     )
     # more positions, with the kernel idle: the latency of the exact readout
-    for share in (0.1, 0.25, 0.55, 0.7, 0.85, 0.95):
-        t = hover(page, share)
+    differed = []
+    for share, nudge in [(s, 0.0) for s in (0.1, 0.25, 0.55, 0.7, 0.95)] + [
+        (s, 0.5) for s in (0.17, 0.34, 0.62, 0.85)
+    ]:
+        t = hover(page, share, nudge)
         page.wait_for_function(
             "(t) => { const s = document.querySelector('.rbm-ts').rbmExact.shown;"
             " return s && s.t === t && s.panels && s.panels.every((p) => p.exact); }",
@@ -245,6 +260,20 @@ def test_hovering_over_a_long_overview_shows_the_exact_recording_value(zoomed):
         want = nearest(table, t)
         assert got["panels"][0]["x"] == want[0]
         np.testing.assert_array_equal(got["panels"][0]["values"], want[1:])
+        kept = chart(page, "[u.data[0][u.cursor.idx], u.data[1][u.cursor.idx]]")
+        if kept[0] != want[0]:
+            differed.append(
+                (
+                    nudge,
+                    round(t, 3),
+                    round(kept[0] - want[0], 3),
+                    round(kept[1] - want[1], 4),
+                )
+            )
+    print(
+        f"{page.app}: the overview's kept sample was not the recording's nearest at "
+        f"{len(differed)} of 9 cursor times (nudge px, t, dt s, dx m): {differed}"
+    )
     stats = page.evaluate("document.querySelector('.rbm-ts').rbmExact")
     idle = stats["latencyMs"][1:]  # the first waited for the busy cell
     print(

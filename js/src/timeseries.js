@@ -283,12 +283,12 @@ async function render({ model, el }) {
   let hoverT = null;
   let exactAnswer = null; // {t, samples: [{x, values}] per panel}
   let shownWindow = null; // the window of full-resolution rows spliced in, if any
-  // the time under a chart's cursor: its pixel's (every synced panel agrees),
-  // null when the mouse is away. uPlot fills the legend before its setCursor
-  // hook runs, so the legend asks the chart, not the last hook's answer.
+  // the time under a chart's cursor (every synced panel agrees), null when
+  // the mouse is away. uPlot fills the legend before its setCursor hook runs,
+  // so the legend asks the chart, not the last hook's answer.
   function cursorTime(u) {
     const left = u.cursor.left;
-    return left === null || left === undefined || left < 0 ? null : u.posToVal(Math.round(left), "x");
+    return left === null || left === undefined || left < 0 ? null : u.posToVal(left, "x");
   }
   // whether panel i's data here is not every sample at time t
   function approximate(i, t) {

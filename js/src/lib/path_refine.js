@@ -85,12 +85,20 @@ export class PathRefiner {
 
   /** The coarse line object of a path, or null. */
   source(path) {
+    let node;
     try {
-      const object = this.view.node(path.node);
-      return object && object.isLineSegments ? object : null;
+      node = this.view.node(path.node);
     } catch (err) {
       return null;
     }
+    // meshcat may keep the loaded line below the node's own object
+    let found = null;
+    if (node) {
+      node.traverse((o) => {
+        if (!found && o.isLineSegments && o.name !== "rbm-refined") found = o;
+      });
+    }
+    return found;
   }
 
   /** What the view shows of a path: {low, high, distance} in its coordinates, or null. */
@@ -267,7 +275,7 @@ export class PathRefiner {
   /** Vertices drawn for ``node`` that the view shows (for tests). */
   visibleVertices(node) {
     const path = (this.paths || []).find((p) => p.node === node);
-    const object = path ? this.source(path) : this.view.node(node);
+    const object = path ? this.source(path) : null;
     const shown = this.shown.get(node);
     const lines = shown ? shown.objects : object ? [object] : [];
     const camera = this.view.viewer.camera;

@@ -91,11 +91,7 @@ class Anchors:
         state.add_track(path, track, f"scene {self._context.name!r}")
         return []
 
-    def pin(self, frame, seconds: float) -> bool:
-        """Show the anchor of ``frame`` at its own time ``seconds`` (publishers);
-        False when ``frame`` anchors nothing that moves."""
+    def moving_path(self, frame) -> str | None:
+        """The path of ``frame``'s anchor when it exists and moves, else None."""
         path = self.path(frame)
-        if path not in self._context.state.tracks:
-            return False
-        self._context.state.pins[path] = float(seconds)
-        return True
+        return path if path in self._context.state.tracks else None

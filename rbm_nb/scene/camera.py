@@ -15,6 +15,7 @@ import numpy as np
 
 from .bounds import MAX_COORDINATE, Bounds
 from .handles import _points_array
+from .objects import SceneObjects
 from .state import SceneState
 
 #: the direction the camera looks from (towards -x, +y, -z: the usual 3/4 view)
@@ -91,17 +92,23 @@ class Camera:
         self.place(p, t, auto=False)
 
     def focus(
-        self, name: str, pose_path: str, state: SceneState, seconds: float, distance
-    ) -> None:
-        """Look at the frame ``name`` (its triad at ``pose_path``) as it is at
-        ``seconds``, from ``distance`` metres."""
-        pose = state.world_pose(pose_path, seconds)
+        self, name: str, objects: SceneObjects, state: SceneState, seconds, distance
+    ):
+        """Look at the frame ``name`` (drawn in ``objects``) as it is at
+        ``seconds``, from ``distance`` metres (ten times its triad's size by
+        default)."""
+        paths = objects.frame_paths()
+        drawn_frame(name, paths, "Scene.focus")
+        if distance is None:
+            distance = 10.0 * objects.triad_at(paths[name]).style["scale"]
+        distance = camera_distance(distance)
+        pose = state.world_pose(paths[name], seconds)
         if pose is None:  # not started yet or missing now: where it is last
-            pose = state.world_pose(pose_path, math.inf)
+            pose = state.world_pose(paths[name], math.inf)
         if pose is None:
             raise ValueError(
                 f"Scene.focus: frame {name!r} has no pose at the time shown ({seconds:g} s) "
                 "nor at its last sample: its samples there are missing"
             )
         target = pose[:3, 3]
-        self.place(target + VIEW_DIRECTION * float(distance), target, auto=False)
+        self.place(target + VIEW_DIRECTION * distance, target, auto=False)

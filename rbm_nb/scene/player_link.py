@@ -134,6 +134,23 @@ class PlayerLink:
         state = self._context.state
         return {path: t - state.origin for path, t in state.pins.items()}
 
+    def pin(self, path: str, seconds: float) -> None:
+        """Show the node at ``path`` at its own time ``seconds`` (publishers)."""
+        with self._context.lock:
+            self._context.state.pins[path] = float(seconds)
+            self._view.sync("_pins", self.pins())
+
+    def pin_sample(self, path: str, index: int) -> float | None:
+        """Show the node at ``path`` at sample ``index`` of its own track; its
+        time, or None when it does not move."""
+        self._context.check_open()
+        track = self._context.state.tracks.get(path)
+        if track is None:
+            return None
+        seconds = float(track.sample_times()[index])
+        self.pin(path, seconds)
+        return seconds
+
     def _unpin(self) -> None:
         if self._context.state.pins:
             self._context.state.pins.clear()

@@ -24,7 +24,7 @@ from __future__ import annotations
 from ..core import frames
 from .anchors import Anchors
 from .assembly import Assembly
-from .camera import Camera, camera_distance, drawn_frame
+from .camera import Camera, drawn_frame
 from .context import SceneContext
 from .export import write_html
 from .grid import Grid, format_length, nice_step  # noqa: F401 (documented here before)
@@ -441,15 +441,10 @@ class Scene:
             Camera distance in metres (ten times the triad's size by default).
         """
         name = _resolve(frame, "Scene.focus: frame").name
-        paths = self._objects.frame_paths()
-        drawn_frame(name, paths, "Scene.focus")
-        if distance is None:
-            distance = 10.0 * self._objects.triad_at(paths[name]).style["scale"]
-        distance = camera_distance(distance)
         t = self.time if self.time is not None else self.state.origin
         self._context.check_open()
         with self._context.lock:
-            self._camera_part.focus(name, paths[name], self.state, t, distance)
+            self._camera_part.focus(name, self._objects, self.state, t, distance)
             self._traits.push("_camera")
 
     def fit_camera(self) -> None:
@@ -590,21 +585,13 @@ class Scene:
 
     def _show_handle_index(self, handle: SceneHandle, index: int) -> float | None:
         """Show ``handle``'s pose at sample ``index`` of its own track (publishers)."""
-        self._context.check_open()
-        with self._context.lock:
-            track = self.state.tracks.get(handle.pose_path)
-            if track is None:
-                return None
-            seconds = float(track.sample_times()[index])
-            self.state.pins[handle.pose_path] = seconds
-            self._traits.push("_pins")
-            return seconds
+        return self._link.pin_sample(handle.pose_path, index)
 
     def _sync_anchor(self, frame, seconds: float) -> None:
         """Move anchors based on ``frame`` (objects expressed in it) to ``seconds``."""
-        with self._context.lock:
-            if self._anchors.pin(frame, seconds):
-                self._traits.push("_pins")
+        path = self._anchors.moving_path(frame)
+        if path is not None:
+            self._link.pin(path, seconds)
 
     # read by tests and benchmarks written before the split
     @property

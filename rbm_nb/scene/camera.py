@@ -42,16 +42,6 @@ def _reach(point: np.ndarray) -> float:
     return float(np.max(np.abs(point)))
 
 
-def drawn_frame(name: str, frame_paths: dict[str, str], owner: str) -> str:
-    """``name`` when a triad of that frame is drawn (``frame_paths``), else a ValueError."""
-    if name not in frame_paths:
-        raise ValueError(
-            f"{owner}: frame {name!r} is not drawn in this scene; "
-            f"add_frame({name!r}) first (drawn: {sorted(frame_paths)})"
-        )
-    return name
-
-
 class Camera:
     """The camera of one scene: ``value`` (the widget's ``_camera``) and
     whether it follows the content (``auto``)."""
@@ -97,8 +87,8 @@ class Camera:
         """Look at the frame ``name`` (drawn in ``objects``) as it is at
         ``seconds``, from ``distance`` metres (ten times its triad's size by
         default)."""
+        objects.drawn(name, "Scene.focus")
         paths = objects.frame_paths()
-        drawn_frame(name, paths, "Scene.focus")
         if distance is None:
             distance = 10.0 * objects.triad_at(paths[name]).style["scale"]
         distance = camera_distance(distance)

@@ -8,7 +8,9 @@ of the view ask it where each frame's triad is.
 from __future__ import annotations
 
 import itertools
+from typing import cast
 
+from ..core import frames
 from .anchors import slug
 from .handles import FrameHandle, SceneHandle
 
@@ -67,3 +69,24 @@ class SceneObjects:
     def triad_at(self, pose_path: str) -> FrameHandle:
         """The (first) triad whose pose is at ``pose_path``."""
         return next(h for h in self.triads() if h.pose_path == pose_path)
+
+    def drawn(self, name: str, owner: str) -> str:
+        """``name`` when a triad of that frame is drawn, else a ValueError."""
+        paths = self.frame_paths()
+        if name not in paths:
+            raise ValueError(
+                f"{owner}: frame {name!r} is not drawn in this scene; "
+                f"add_frame({name!r}) first (drawn: {sorted(paths)})"
+            )
+        return name
+
+    def checked_frame_name(self, name, trait: str) -> str:
+        """What the view's ``selected`` (a registered frame) and ``follow``
+        (a drawn one) accept, from Python and from the browser."""
+        if not isinstance(name, str):
+            raise ValueError(f"Scene.{trait} must be a frame name, got {name!r}")
+        # a registered frame always has a name
+        resolved = cast(str, frames.resolve_frame(name, f"Scene.{trait}").name)
+        if trait == "follow":
+            self.drawn(resolved, "Scene.follow")
+        return resolved

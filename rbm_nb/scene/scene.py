@@ -24,7 +24,7 @@ from __future__ import annotations
 from ..core import frames
 from .anchors import Anchors
 from .assembly import Assembly
-from .camera import Camera, drawn_frame
+from .camera import Camera
 from .context import SceneContext
 from .export import write_html
 from .grid import Grid, format_length, nice_step  # noqa: F401 (documented here before)
@@ -368,7 +368,9 @@ class Scene:
             if self._view.widget is None:
                 if self._camera_part.value is None:
                     self._camera_part.fit(self._assembly.bounds())
-                widget = self._view.open(lambda: self.time, self._checked_frame_name)
+                widget = self._view.open(
+                    lambda: self.time, self._objects.checked_frame_name
+                )
                 self._traits.push(*ALL_TRAITS)
                 self._link.show_in(widget)
                 widget.observe(self._on_selected, "selected")
@@ -413,22 +415,12 @@ class Scene:
             drawn = name is not None and name in self._objects.frame_paths()
             self.highlight(name if drawn else None)
 
-    def _checked_frame_name(self, name: str, trait: str) -> str:
-        """What ``selected`` (a registered frame) and ``follow`` (a drawn one) accept."""
-        if not isinstance(name, str):
-            raise ValueError(f"Scene.{trait} must be a frame name, got {name!r}")
-        resolved = _resolve(name, f"Scene.{trait}").name
-        if trait == "follow":
-            drawn_frame(resolved, self._objects.frame_paths(), "Scene.follow")
-        return resolved
-
     def follow(self, frame=None) -> None:
         """Keep the camera on ``frame`` (drawn with ``add_frame``) as it moves; None stops."""
-        name = None
         if frame is not None:
-            name = _resolve(frame, "Scene.follow: frame").name
-            drawn_frame(name, self._objects.frame_paths(), "Scene.follow")
-        self.widget.follow = name
+            frame = _resolve(frame, "Scene.follow: frame").name
+            self._objects.drawn(frame, "Scene.follow")
+        self.widget.follow = frame
 
     def focus(self, frame, *, distance: float | None = None) -> None:
         """Point the camera at ``frame`` as it is at the current time.

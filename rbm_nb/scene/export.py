@@ -82,8 +82,6 @@ def build_document(
     from ..widgets.player import Player, bundle
 
     if player is None:
-        player = scene._player
-    if player is None:
         # a static scene still gets the page's player, on a single instant
         player = Player(scene) if scene.timestamps_kind is not None else Player([0.0])
     if not isinstance(player, Player):

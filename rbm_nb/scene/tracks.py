@@ -8,6 +8,7 @@ or before the player's time with a binary search.
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import numpy as np
@@ -172,6 +173,27 @@ class Track:
         if self._present is None:
             return points.copy()
         return points[self._present]
+
+    @functools.cached_property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, int] | None:
+        """Lowest, highest and mean position of the samples that are not
+        missing, and their count; None when all are missing.
+
+        Computed once, without copying the samples (a missing sample is NaN
+        across its row): the scene's grid and camera ask at every change.
+        """
+        points = self.translation.reshape(-1, 3)
+        present = ~np.isnan(points[:, 0])
+        count = int(present.sum())
+        if count == 0:
+            return None
+        mean = np.add.reduce(points, axis=0, where=present[:, np.newaxis]) / count
+        return (
+            np.fmin.reduce(points, axis=0),
+            np.fmax.reduce(points, axis=0),
+            mean,
+            count,
+        )
 
     def missing(self, index: int) -> bool:
         """Whether sample ``index`` has no data (the object is hidden then)."""

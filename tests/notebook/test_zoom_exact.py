@@ -154,7 +154,7 @@ def long_path_scene(minutes=60):
     scene = Scene("world", grid=False)
     handle = scene.add_path("body", max_points=2000)
     assert scene.widget is not None  # the view: its refiner answers the page
-    refiner = scene._path_refiner
+    refiner = scene._view.path_refiner
     assert isinstance(refiner, PathRefiner)
     return scene, handle, refiner, xyz
 

@@ -1,0 +1,91 @@
+"""The explorer's scene build on a long recording, this tree against another.
+
+    RBM_NB_DATA_DIR=/work/shared/data/rbm-data PYTHONPATH=. \\
+        python benchmarks/bench_scene_build.py --compare /work/main [--hours 1] [--repeat 2]
+
+The example recording (the real one with ``RBM_NB_DATA_DIR``) is tiled to
+``--hours`` (:mod:`tiled_recording`), its frames registered as the explorer
+does, and ``explorer.explorer_scene()`` timed (world axes, head model, head
+path, gaze rays: nine objects, seven of them hanging from the moving head).
+Loading and tiling are not timed. Each run is a fresh process, the trees
+take turns, the best of ``--repeat`` runs per tree is kept and the ratio
+printed (before / after: above 1 means this tree builds faster). Without
+``--compare`` only this tree runs.
+
+No tracemalloc here (``bench_scene_scale.py`` traces memory during the
+build, which slows it): this is the build's own time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+
+
+def measure(hours: float) -> dict:
+    sys.path.insert(0, str(HERE))
+    from tiled_recording import tiled_head_eye
+
+    from rbm_nb.app import explorer
+
+    head, left, right = tiled_head_eye(hours)
+    explorer.register_head_eye_frames(head, left, right)
+    start = time.perf_counter()
+    scene = explorer.explorer_scene()
+    build = time.perf_counter() - start
+    samples = len(head.time)
+    scene.close()
+    return {"build_s": build, "head_samples": samples}
+
+
+def run(tree: Path, hours: float) -> dict:
+    env = dict(os.environ, PYTHONPATH=str(tree))
+    out = subprocess.run(
+        [sys.executable, str(Path(__file__).resolve()), "--one", str(hours)],
+        env=env,
+        cwd=tree,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--hours", type=float, default=1.0)
+    parser.add_argument("--repeat", type=int, default=2)
+    parser.add_argument("--compare", help="another checkout (before the change)")
+    parser.add_argument("--one", type=float, help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.one is not None:
+        print(json.dumps(measure(args.one)))
+        return
+    trees = {"after": HERE.parent}
+    if args.compare:
+        trees = {"before": Path(args.compare).resolve(), "after": HERE.parent}
+    best: dict[str, float] = {}
+    for turn in range(args.repeat):
+        for name, tree in trees.items():
+            row = run(tree, args.hours)
+            best[name] = min(best.get(name, float("inf")), row["build_s"])
+            print(
+                f"turn {turn + 1} {name}: {row['build_s']:.2f} s "
+                f"({row['head_samples']:,} head samples)",
+                file=sys.stderr,
+            )
+    for name, seconds in best.items():
+        print(f"{name}: explorer_scene() at {args.hours:g} h: {seconds:.2f} s (best)")
+    if "before" in best:
+        print(f"ratio before/after: {best['before'] / best['after']:.2f}x")
+
+
+if __name__ == "__main__":
+    main()

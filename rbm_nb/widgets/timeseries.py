@@ -22,6 +22,13 @@ a worker thread (``_latest_only.py``), and a newer request from the same view
 cancels the older ones in the kernel (skipped, or stopped between steps); the
 browser keeps the latest answers.
 
+The readout under the mouse shows the recording's own sample nearest the
+cursor's time. Where the browser holds every sample (a short panel, a zoomed
+window at full resolution) it reads its own; over an overview it marks the
+kept sample it has with "≈" and asks the kernel (an ``exact`` comm message
+carrying only the time, latest-only on its own worker, cached in the page),
+which answers from the full series (:meth:`TimeSeries.nearest_samples`).
+
 The kernel holds no copy of a series: values and timestamps are the caller's
 arrays (views), pauses in the timestamps are kept as row numbers, and seconds
 are computed only for the rows that are sent.

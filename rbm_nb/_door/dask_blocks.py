@@ -48,7 +48,7 @@ from .._engine.time import as_track, seconds
 from .._kernels import differences as dk
 from .._kernels import quaternion as qk
 from .._kernels import rotations as rk
-from .unpack import kernel_array
+from .unpack import kernel_array, resolve_axis
 
 # samples of not-a-knot spline influence kept on each side: 0.268**32 < 1e-18
 SPLINE_HALO = 32
@@ -255,7 +255,9 @@ def as_dataarray(arr, time_axis: int | None, timestamps):
     """A plain dask array as a DataArray with a ``time`` coordinate."""
     import xarray as xr
 
-    time_axis = 0 if time_axis is None else time_axis % arr.ndim
+    time_axis = resolve_axis(
+        0 if time_axis is None else time_axis, arr.ndim, "time_axis"
+    )
     dims = [f"dim_{k}" for k in range(arr.ndim)]
     dims[time_axis] = "time"
     coords = {}
@@ -360,7 +362,7 @@ class _TimeSeries:
                     "(without them the result would follow the frames' own times)"
                 )
             arr = as_dataarray(arr, time_axis, timestamps)
-            comp_dim = arr.dims[-1 if axis is None else axis % arr.ndim]
+            comp_dim = arr.dims[resolve_axis(-1 if axis is None else axis, arr.ndim)]
             return cls(arr, True, "time", comp_dim)
         time_dim = time_dim_of(arr, timestamps, time_axis)
         if time_dim is None or time_dim not in arr.coords:
@@ -418,7 +420,7 @@ def estimate(
         if timestamps is None:
             raise ValueError("timestamps must be given for a dask array")
         arr = as_dataarray(arr, time_axis, timestamps)
-        dim = arr.dims[-1 if axis is None else axis % arr.ndim]
+        dim = arr.dims[resolve_axis(-1 if axis is None else axis, arr.ndim)]
         time_dim, axis = "time", None
     else:
         time_dim = (
@@ -621,7 +623,7 @@ def elementwise(eager: Callable, arr, core_dim: str | int, fill: Any = 0.0, **kw
         return over_time(
             lambda block: eager(block, **kwargs), arr, chunked, fill={core_dim: fill}
         )
-    axis = core_dim % arr.ndim
+    axis = resolve_axis(core_dim, arr.ndim)
     data = arr.rechunk({axis: -1})
     stand_in = _filled(
         tuple(s if k == axis else 1 for k, s in enumerate(data.shape)), fill, axis

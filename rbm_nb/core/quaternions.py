@@ -190,7 +190,7 @@ def _lazy_qmul(q, qaxis: int):
     import dask.array as dsa
 
     parts = [dsa.asarray(x) for x in q]
-    parts = [p.rechunk({qaxis % p.ndim: -1}) for p in parts]
+    parts = [p.rechunk({resolve_axis(qaxis, p.ndim, "qaxis"): -1}) for p in parts]
     return dsa.map_blocks(lambda *b: qmul(*b, qaxis=qaxis), *parts, dtype=np.float64)
 
 
@@ -678,8 +678,8 @@ def _lazy_rotate_vectors(q, v, axis: int, qaxis: int, one_to_one: bool):
 
     qd = dsa.asarray(getattr(q, "data", q))
     vd = dsa.asarray(getattr(v, "data", v))
-    qd = qd.rechunk({qaxis % qd.ndim: -1})
-    vd = vd.rechunk({axis % vd.ndim: -1})
+    qd = qd.rechunk({resolve_axis(qaxis, qd.ndim, "qaxis"): -1})
+    vd = vd.rechunk({resolve_axis(axis, vd.ndim, "axis"): -1})
     return dsa.map_blocks(
         lambda a, b: rotate_vectors(a, b, axis=axis, qaxis=qaxis),
         qd, vd, dtype=np.float64, chunks=vd.chunks,

@@ -608,6 +608,18 @@ def from_epoch_seconds(seconds: Any, kind: str) -> np.ndarray:
     return ns.view(f"{kind}[ns]")
 
 
+def sort_keys(values: Any, name: str = "timestamps") -> np.ndarray:
+    """Exact sort keys of one-dimensional times, in any order.
+
+    int64 nanoseconds for datetime64/timedelta64, float64 for numbers: the
+    keys :class:`Track` orders by, for code that matches times without making
+    a track of them. NaT, NaN, inf and other dtypes are refused naming
+    ``name`` and the first offending index.
+    """
+    arr = np.asarray(getattr(values, "values", values))
+    return _keys(arr, name)[0]
+
+
 def ns_keys(values: Any, name: str = "timestamps") -> np.ndarray:
     """int64 nanoseconds of datetime64/timedelta64 values, in any order.
 

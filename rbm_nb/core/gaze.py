@@ -34,6 +34,7 @@ import numpy.typing as npt
 
 from .._door.unpack import is_dataarray as _is_dataarray
 from .._door.xarray import check_directions
+from .._engine.time import sort_keys
 from .frames import ReferenceFrame, resolve_frame
 from .quaternions import rotate_vectors
 from .transforms import transform_vectors
@@ -254,7 +255,7 @@ def rates(angles: xr.DataArray, *, window: float = 0.02) -> xr.DataArray:
     if _finite_number(window, "window") <= 0:
         raise ValueError(f"window must be positive (seconds), got {window!r}")
     arr = angles.transpose("time", ...)
-    keys = _keys(arr["time"].values)
+    keys = sort_keys(arr["time"].values, "angles time")
     scale = 1e9 if np.issubdtype(arr["time"].dtype, np.datetime64) else 1.0
     # from the first time: epoch seconds as floats would round to 0.2 us
     t = (keys - keys[0]) / scale if len(keys) else keys / scale
@@ -327,16 +328,6 @@ def _eye_samples(eye, confidence):
     return times, out
 
 
-def _keys(t) -> np.ndarray:
-    """Sort keys: int64 ns for datetime64 (exact), float64 otherwise."""
-    t = np.asarray(t)
-    if np.issubdtype(t.dtype, np.datetime64):
-        return t.astype("datetime64[ns]").astype(np.int64)
-    if not np.issubdtype(t.dtype, np.number):
-        raise ValueError(f"timestamps must be numeric or datetime64, got {t.dtype}")
-    return t.astype(float)
-
-
 def _match(own, times, name) -> np.ndarray:
     """Index into ``own`` of each of ``times`` (exact sample), -1 where none."""
     own, times = np.asarray(own), np.asarray(times)
@@ -346,7 +337,8 @@ def _match(own, times, name) -> np.ndarray:
             f"confidence times ({times.dtype}) and the timestamps of eye_frame "
             f"{name!r} ({own.dtype}) must both be datetime64 or both numeric"
         )
-    a, b = _keys(own), _keys(times)
+    a = sort_keys(own, f"timestamps of eye_frame {name!r}")
+    b = sort_keys(times, "confidence times")
     if len(a) == 0:
         return np.full(len(b), -1)
     # datetime64 keys are exact ns; numeric ones may have been through float
@@ -391,7 +383,7 @@ def _represent(vectors, times, outof, into) -> np.ndarray:
 
 
 def _insert_gap_rows(times, values, max_gap):
-    keys = _keys(times)
+    keys = sort_keys(times, "times")
     scale = 1e9 if np.issubdtype(np.asarray(times).dtype, np.datetime64) else 1.0
     gaps = np.flatnonzero(np.diff(keys) > max_gap * scale)
     if gaps.size == 0:

@@ -26,10 +26,7 @@ PACKAGE = REPO / "rbm_nb"
 OWNERS = {"rbm_nb/_engine/time.py", "rbm_nb/_kernels/times.py"}
 
 #: Conversions that are not about a time value (with the reason).
-NOT_TIME = {
-    # engineer D replaces gaze._keys (a copy of _engine.time._keys) this session
-    "rbm_nb/core/gaze.py",
-}
+NOT_TIME: set[str] = set()
 
 _TIME_TOKENS = {"ts", "ns", "t0", "stamp", "stamps", "timestamp", "timestamps"}
 _INT_NAMES = {"int64", "int", "uint64"}

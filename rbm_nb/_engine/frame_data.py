@@ -58,7 +58,10 @@ class Samples(_Frozen):
     missing_rotations : bool
         A rotation sample is missing (a NaN row).
 
-    The arrays are the frame's private copies: nobody writes them.
+    The arrays are the frame's private copies, or the caller's own arrays
+    where nobody can write them any more (``rbm_nb._infra.frozen``: ``t``,
+    ``rotation`` and the track's values; the kernels get a writeable-flagged
+    alias of the same memory). Nobody writes them.
     """
 
     __slots__ = ("track", "t", "r", "rotation", "missing_rotations", "__weakref__")

@@ -59,7 +59,9 @@ class Assembly:
         with context.lock:
             for track in (placement.carrier, inner):
                 if track is not None and not track.static:
-                    check_compatible([state.kind, track.kind], f"scene {context.name!r}")
+                    check_compatible(
+                        [state.kind, track.kind], f"scene {context.name!r}"
+                    )
             moving_before = set(state.tracks)
             path, messages = anchors.acquire(handle.base, anchor)
             handle.root_path = f"{path}/{handle.name}"

@@ -28,7 +28,7 @@ from .handles import (
     _points_array,
 )
 from .objects import SceneObjects
-from .tracks import Track
+from .tracks import PoseTrack
 
 IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
 H = TypeVar("H", bound=SceneHandle)
@@ -37,8 +37,8 @@ H = TypeVar("H", bound=SceneHandle)
 @dataclass
 class Placement(Generic[H]):
     handle: H
-    carrier: Track
-    inner: Track | None = None
+    carrier: PoseTrack
+    inner: PoseTrack | None = None
     offset: np.ndarray | None = None
 
 
@@ -88,7 +88,7 @@ class Placements:
             style,
             track.translation,
         )
-        return Placement(handle, Track(np.zeros(3), IDENTITY, name="path"))
+        return Placement(handle, PoseTrack(np.zeros(3), IDENTITY, name="path"))
 
     def points(
         self, points, frame, timestamps, style: dict, label
@@ -102,7 +102,7 @@ class Placements:
         if timestamps is not None:
             identity = np.zeros((len(pts), 4))
             identity[:, 0] = 1.0
-            inner = Track(pts, identity, timestamps, name="add_points: points")
+            inner = PoseTrack(pts, identity, timestamps, name="add_points: points")
         handle = self._styled(
             PointsHandle,
             label or f"points {frame.name}",
@@ -129,7 +129,7 @@ class Placements:
                     "add_vectors: with timestamps, give one origin of shape (3,)"
                 )
             norms = np.linalg.norm(vecs, axis=1)
-            inner = Track(
+            inner = PoseTrack(
                 np.repeat(origins_arr, len(vecs), axis=0),
                 rotations_from_x(vecs, norms),
                 timestamps,

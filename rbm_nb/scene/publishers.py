@@ -16,7 +16,7 @@ import numpy as np
 
 from .._engine.time import epoch_seconds
 from .scene import Scene, _resolve, default_scene
-from .tracks import Track
+from .tracks import PoseTrack
 
 # frame name -> publishers listening for it (``subscribe=``), per scene
 _listeners: dict[tuple[int, str], list] = {}
@@ -91,7 +91,7 @@ class FramePublisher:
             )
         self._track = self.scene._track(self.handle.pose_path)
         if self._track is None:
-            track = Track.lookup(self.frame, self.base)
+            track = PoseTrack.lookup(self.frame, self.base)
             self.translation, self.rotation, self.timestamps = (
                 track.translation,
                 track.rotation,

@@ -20,7 +20,7 @@ import umsgpack
 from .._engine.time import check_compatible
 from . import commands
 from .commands import Message, TransformPacker
-from .tracks import Track
+from .tracks import PoseTrack
 
 ROOT = "/rbm"
 
@@ -40,7 +40,7 @@ class SceneState:
         ``set_transform`` commands of nodes that do not move, by path.
     properties : dict of (str, str) to Message
         ``set_property`` commands by (path, property).
-    tracks : dict of str to Track
+    tracks : dict of str to PoseTrack
         Poses over time of the nodes that move, by path.
     pins : dict of str to float
         Nodes shown at their own time (float seconds) instead of the scene's
@@ -53,7 +53,7 @@ class SceneState:
         self.objects: dict[str, Message] = {}
         self.statics: dict[str, Message] = {}
         self.properties: dict[tuple[str, str], Message] = {}
-        self.tracks: dict[str, Track] = {}
+        self.tracks: dict[str, PoseTrack] = {}
         self.pins: dict[str, float] = {}
         self.kind: str | None = None
         self._timeline: tuple[np.ndarray, np.ndarray | None] | None = None
@@ -74,7 +74,7 @@ class SceneState:
         self.properties[(path, key)] = message
         return message
 
-    def add_track(self, path: str, track: Track, what: str = "scene") -> None:
+    def add_track(self, path: str, track: PoseTrack, what: str = "scene") -> None:
         """Make the node at ``path`` follow ``track`` (a moving one)."""
         if track.static:
             raise ValueError(f"{what}: the track of {path!r} does not move")
@@ -263,7 +263,7 @@ class SceneState:
 CHUNK_SLACK = 1e-5
 
 
-def _sample_bytes(track: Track) -> int:
+def _sample_bytes(track: PoseTrack) -> int:
     """Bytes per packed sample: time, xyz and xyzw (and scale)."""
     return 8 + 12 + 16 + (4 if track.scale is not None else 0)
 

@@ -2,7 +2,7 @@
 
 A scene object is placed by the transform of its frame into the scene's base.
 That transform is looked up once for the whole recording when the object is
-added and kept as a :class:`Track`; each step then picks the latest sample at
+added and kept as a :class:`PoseTrack`; each step then picks the latest sample at
 or before the player's time with a binary search.
 """
 
@@ -20,7 +20,7 @@ from .commands import pose_matrix
 TIME_TOLERANCE = 1e-9  # seconds
 
 
-class Track:
+class PoseTrack:
     """Translation and rotation of something, static or sampled over time.
 
     Parameters
@@ -108,7 +108,7 @@ class Track:
         self.scale: np.ndarray | None = scale
 
     @classmethod
-    def lookup(cls, frame, base, name: str | None = None) -> Track:
+    def lookup(cls, frame, base, name: str | None = None) -> PoseTrack:
         """The transform of ``frame`` into ``base`` (points in frame -> base)."""
         label = name or f"pose of {frame.name!r} in {base.name!r}"
         if frame is base:

@@ -23,7 +23,7 @@ from rbm_nb.scene.commands import (
     meshcat_geometry,
     pose_matrix,
 )
-from rbm_nb.scene.tracks import Track
+from rbm_nb.scene.tracks import PoseTrack
 
 pytestmark = pytest.mark.usefixtures("recording_comm")
 
@@ -124,19 +124,19 @@ def test_transform_packer_long_paths():
 )
 def test_track_picks_latest_sample_at_or_before(t, expected):
     ts = np.arange(11) * 0.1
-    track = Track(np.zeros((11, 3)), np.tile([1.0, 0, 0, 0], (11, 1)), ts)
+    track = PoseTrack(np.zeros((11, 3)), np.tile([1.0, 0, 0, 0], (11, 1)), ts)
     assert track.index_at(t) == expected
 
 
 def test_track_validates_shapes():
     with pytest.raises(ValueError, match=r"3 timestamps need translation \(3, 3\)"):
-        Track(np.zeros((2, 3)), np.zeros((2, 4)), np.arange(3.0))
+        PoseTrack(np.zeros((2, 3)), np.zeros((2, 4)), np.arange(3.0))
     with pytest.raises(ValueError, match="static pose"):
-        Track(np.zeros((2, 3)), np.zeros(4))
+        PoseTrack(np.zeros((2, 3)), np.zeros(4))
     with pytest.raises(ValueError, match="static pose must not be NaN"):
-        Track(np.array([np.nan, 0, 0]), np.array([1.0, 0, 0, 0]))
+        PoseTrack(np.array([np.nan, 0, 0]), np.array([1.0, 0, 0, 0]))
     with pytest.raises(ValueError, match="infinite"):
-        Track(np.array([[np.inf, 0, 0]]), np.array([[1.0, 0, 0, 0]]), [0.0])
+        PoseTrack(np.array([[np.inf, 0, 0]]), np.array([[1.0, 0, 0, 0]]), [0.0])
 
 
 def test_missing_samples_hide_the_object():
@@ -144,7 +144,7 @@ def test_missing_samples_hide_the_object():
     t = np.array([[0.0, 0, 0], [1.0, 0, 0], [np.nan, 0, 0], [3.0, 0, 0]])
     r = np.tile([1.0, 0, 0, 0], (4, 1))
     r[1] = np.nan
-    track = Track(t, r, np.arange(4.0))
+    track = PoseTrack(t, r, np.arange(4.0))
     assert [track.missing(i) for i in range(4)] == [False, True, True, False]
     assert np.isnan(track.translation[1]).all() and np.isnan(track.rotation[2]).all()
     np.testing.assert_array_equal(track.positions(), [[0.0, 0, 0], [3.0, 0, 0]])
@@ -783,7 +783,7 @@ def test_focus_refuses_a_frame_whose_samples_are_missing(moving):
     t = np.c_[np.arange(11.0), np.zeros(11), np.ones(11)]
     t[5:] = np.nan  # a blink from 0.5 s to the end
     r = np.tile([1.0, 0.0, 0.0, 0.0], (11, 1))
-    moving.state.add_track(frame.pose_path, Track(t, r, np.arange(11) * 0.1))
+    moving.state.add_track(frame.pose_path, PoseTrack(t, r, np.arange(11) * 0.1))
     moving.set_time(0.2)
     moving.focus("body")  # shown now: aimed at it
     np.testing.assert_allclose(moving._camera["target"], [2.0, 0.0, 1.0])
@@ -851,7 +851,7 @@ def test_a_track_is_hidden_across_a_gap_longer_than_max_gap():
 
     import rbm_nb as rbm
     from rbm_nb.core import frames
-    from rbm_nb.scene.tracks import Track
+    from rbm_nb.scene.tracks import PoseTrack
 
     t = np.array([0.0, 0.1, 0.2, 2.0, 2.1])
     rbm.register_frame("world")
@@ -862,11 +862,11 @@ def test_a_track_is_hidden_across_a_gap_longer_than_max_gap():
         "free", parent="world", timestamps=t, translation=np.ones((5, 3))
     )
     world = frames.registry["world"]
-    track = Track.lookup(frames.registry["eye"], world)
+    track = PoseTrack.lookup(frames.registry["eye"], world)
     assert len(track) == 6
     assert not track.missing(track.index_at(0.6))  # within max_gap of 0.2 s
     assert track.missing(track.index_at(0.71))  # beyond it, until the next sample
     assert track.missing(track.index_at(1.99))
     assert not track.missing(track.index_at(2.0))
-    free = Track.lookup(frames.registry["free"], world)
+    free = PoseTrack.lookup(frames.registry["free"], world)
     assert len(free) == 5 and not free.missing(free.index_at(1.5))

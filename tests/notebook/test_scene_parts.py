@@ -4,7 +4,7 @@
 assembly, grid, camera, selection, player link, view, traits) and no state
 of its own; each module of ``rbm_nb.scene`` stays short. The grid and the
 camera are refitted after every change from per-track summaries
-(``Track.bounds``), never from copies of the tracks: a naive twin of the
+(``PoseTrack.bounds``), never from copies of the tracks: a naive twin of the
 old point-cloud extent checks the box, tracemalloc checks the copies.
 """
 
@@ -20,7 +20,7 @@ from conftest import REPO
 import rbm_nb as rbm
 from rbm_nb.scene import Scene
 from rbm_nb.scene.handles import PathHandle, PointsHandle
-from rbm_nb.scene.tracks import Track
+from rbm_nb.scene.tracks import PoseTrack
 
 pytestmark = pytest.mark.usefixtures("recording_comm")
 
@@ -161,15 +161,17 @@ def test_track_bounds_skip_missing_samples():
     translation[[1, 4]] = np.nan
     rotation = np.tile([1.0, 0.0, 0.0, 0.0], (6, 1))
     rotation[2] = np.nan  # a missing rotation hides the sample too
-    track = Track(translation, rotation, ts)
+    track = PoseTrack(translation, rotation, ts)
     kept = track.positions()
     low, high, mean, count = track.bounds
     np.testing.assert_array_equal(low, kept.min(axis=0))
     np.testing.assert_array_equal(high, kept.max(axis=0))
     np.testing.assert_allclose(mean, kept.mean(axis=0), rtol=1e-15)
     assert count == len(kept) == 3
-    assert Track(np.full((2, 3), np.nan), np.ones((2, 4)), [0.0, 1.0]).bounds is None
-    static = Track((1.0, 2.0, 3.0), (1.0, 0.0, 0.0, 0.0))
+    assert (
+        PoseTrack(np.full((2, 3), np.nan), np.ones((2, 4)), [0.0, 1.0]).bounds is None
+    )
+    static = PoseTrack((1.0, 2.0, 3.0), (1.0, 0.0, 0.0, 0.0))
     assert [v.tolist() for v in static.bounds[:3]] == [[1.0, 2.0, 3.0]] * 3
 
 
@@ -194,7 +196,7 @@ def test_adding_objects_to_a_moving_frame_copies_no_track(long_walk):
 
     Seven objects hang from the moving head (as in the explorer): the box
     they sweep is the head's track's, summarised once. Before the split the
-    refit copied every track for every object (``Track.positions()``) and
+    refit copied every track for every object (``PoseTrack.positions()``) and
     the reach check looked the head up again: tens of MB for one more mesh.
     """
     scene = Scene("world")
@@ -218,7 +220,7 @@ def test_adding_objects_to_a_moving_frame_copies_no_track(long_walk):
 
 
 def test_summarising_a_track_copies_none_of_it(long_walk):
-    track = Track.lookup(rbm.registry["head"], rbm.registry["world"])
+    track = PoseTrack.lookup(rbm.registry["head"], rbm.registry["world"])
     size = track.translation.nbytes
     tracemalloc.start()
     try:

@@ -12,14 +12,14 @@ import umsgpack
 
 from rbm_nb.scene.commands import meshcat_geometry
 from rbm_nb.scene.state import ROOT, SceneState
-from rbm_nb.scene.tracks import Track
+from rbm_nb.scene.tracks import PoseTrack
 
 
 def moving_track(ts, x0=0.0):
     n = len(ts)
     rotation = np.zeros((n, 4))
     rotation[:, 0] = 1.0
-    return Track(np.c_[x0 + np.asarray(ts), np.zeros(n), np.zeros(n)], rotation, ts)
+    return PoseTrack(np.c_[x0 + np.asarray(ts), np.zeros(n), np.zeros(n)], rotation, ts)
 
 
 def test_snapshot_rebuilds_from_nothing_and_delete_forgets_a_subtree():
@@ -93,11 +93,11 @@ def test_mixing_datetime_and_float_tracks_is_refused():
     state = SceneState()
     state.add_track("/rbm/a", moving_track([0.0, 1.0]))
     stamps = np.datetime64("2020-01-01") + np.arange(2) * np.timedelta64(1, "s")
-    dated = Track(np.zeros((2, 3)), np.tile([1.0, 0, 0, 0], (2, 1)), stamps)
+    dated = PoseTrack(np.zeros((2, 3)), np.tile([1.0, 0, 0, 0], (2, 1)), stamps)
     with pytest.raises(
         ValueError,
         match="cannot match datetime64 timestamps with numeric",
     ):
         state.add_track("/rbm/b", dated, "scene 'x'")
     with pytest.raises(ValueError, match="does not move"):
-        state.add_track("/rbm/c", Track(np.zeros(3), [1.0, 0, 0, 0]))
+        state.add_track("/rbm/c", PoseTrack(np.zeros(3), [1.0, 0, 0, 0]))

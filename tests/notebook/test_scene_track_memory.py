@@ -12,7 +12,7 @@ import tracemalloc
 import numpy as np
 
 import rbm_nb as rbm
-from rbm_nb.scene.tracks import Track
+from rbm_nb.scene.tracks import PoseTrack
 
 
 def register_walk(n: int) -> None:
@@ -35,9 +35,9 @@ def test_track_of_a_lookup_keeps_the_lookup_arrays():
     n = 400_000  # 2,000 s at 200 Hz: 22 MB of poses
     register_walk(n)
     frame, base = rbm.registry["walker"], rbm.registry["world"]
-    Track.lookup(frame, base)  # kernels and caches warm
+    PoseTrack.lookup(frame, base)  # kernels and caches warm
     tracemalloc.start()
-    track = Track.lookup(frame, base)
+    track = PoseTrack.lookup(frame, base)
     kept, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     poses = track.translation.nbytes + track.rotation.nbytes
@@ -55,6 +55,6 @@ def test_track_never_marks_arrays_it_does_not_own():
     t = np.zeros((4, 3))
     r = np.tile([1.0, 0.0, 0.0, 0.0], (4, 1))
     t[1, 0] = np.nan
-    track = Track(t, r, timestamps=np.arange(4.0))
+    track = PoseTrack(t, r, timestamps=np.arange(4.0))
     assert np.isnan(track.rotation[1]).all()
     assert not np.isnan(r).any()  # the caller's array is as it was

@@ -31,26 +31,40 @@ B1 = "boolean[::1]"
 
 
 @helper
-def _deviation(points, a, b):
-    """(distance, index) of the farthest of ``points[a+1:b]`` from segment a-b."""
+def _deviation(points, a, b, offsets, alongs):
+    """(distance, index) of the farthest of ``points[a+1:b]`` from segment a-b.
+
+    ``offsets`` (m, 3) and ``alongs`` (m,): scratch, so that a split
+    allocates nothing.
+    """
     if b - a < 2:
         return 0.0, -1
+    k = b - a - 1
     start = points[a]
     direction = points[b] - start
     length2 = np.dot(direction, direction)
-    offset = points[a + 1 : b] - start
+    offset = offsets[:k]
+    for i in range(k):
+        for c in range(3):
+            offset[i, c] = points[a + 1 + i, c] - start[c]
     if length2 > 0:
-        if offset.shape[0] == 1:  # numpy's matmul takes a (1, 3) @ (3,) as ddot
-            along = np.full(1, np.dot(offset[0], direction)) / length2
+        along = alongs[:k]
+        if k == 1:  # numpy's matmul takes a (1, 3) @ (3,) as ddot
+            along[0] = np.dot(offset[0], direction)
         else:
-            along = np.dot(offset, direction) / length2
-        for i in range(offset.shape[0]):
-            t = min(max(along[i], 0.0), 1.0)
-            for k in range(3):
-                offset[i, k] = offset[i, k] - t * direction[k]
+            np.dot(offset, direction, along)
+        for i in range(k):
+            t = along[i] / length2
+            # np.clip: a NaN stays NaN
+            if t < 0.0:
+                t = 0.0
+            elif t > 1.0:
+                t = 1.0
+            for c in range(3):
+                offset[i, c] = offset[i, c] - t * direction[c]
     best = 0.0
     at = 0
-    for i in range(offset.shape[0]):
+    for i in range(k):
         x, y, z = offset[i, 0], offset[i, 1], offset[i, 2]
         d2 = (x * x + z * z) + y * y
         if d2 != d2:  # np.argmax: the first NaN wins
@@ -128,12 +142,14 @@ def split_worst_first(points, run_firsts, run_lasts, tolerance, max_points, keep
     firsts = np.empty(size, dtype=np.int64)
     lasts = np.empty(size, dtype=np.int64)
     spare = m
+    offsets = np.empty((m, 3))
+    alongs = np.empty(m)
     n = 0
     for r in range(run_firsts.shape[0]):
         first, last = run_firsts[r], run_lasts[r]
         keep[first] = True
         keep[last] = True
-        error, at = _deviation(points, first, last)
+        error, at = _deviation(points, first, last, offsets, alongs)
         if at >= 0:
             errors[n] = -error
             ats[n] = at
@@ -158,7 +174,7 @@ def split_worst_first(points, run_firsts, run_lasts, tolerance, max_points, keep
         for half in range(2):
             a = first if half == 0 else at
             b = at if half == 0 else last
-            error, where = _deviation(points, a, b)
+            error, where = _deviation(points, a, b, offsets, alongs)
             if where >= 0:  # heapq.heappush
                 errors[n] = -error
                 ats[n] = where

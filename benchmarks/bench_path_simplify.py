@@ -5,13 +5,14 @@
 
 The head's positions of the example recording tiled in time to ``--hours``
 (``tiled_recording.py``; NaN rows kept) are simplified as the scene does
-(:func:`rbm_nb.scene.decimate.simplify_path`, default tolerance, 1000
-points), and refined as a zoomed camera asks (``refine_region``: a box a
-tenth of the path's extent wide around a sample mid-recording, 1/2000 of that box's diagonal,
-10,000 points). Each is timed (best of ``--repeat``) with the kernel and with
-the former numpy/heapq loop, kept as the reference in
-``tests/notebook/test_path_simplify_kernel.py``, and the answers are checked
-to be the same bit for bit. Printed: seconds before, after, and the ratio.
+(:func:`rbm_nb.scene.decimate.simplify_path`, default tolerance, 1000 and
+2000 points), and refined as a zoomed camera asks (``refine_region``: a box
+a tenth of the path's extent wide around a sample mid-recording, 1/2000 and
+1/20000 of that box's diagonal, 10,000 points). Each is timed (best of
+``--repeat``) with the kernel and with the former numpy/heapq loop, kept as
+the reference in ``tests/notebook/test_path_simplify_kernel.py``, and the
+answers are checked to be the same bit for bit. Printed: seconds before,
+after, and the ratio.
 """
 
 from __future__ import annotations
@@ -74,18 +75,24 @@ def main() -> None:
     middle = samples[np.flatnonzero(~np.isnan(samples).any(axis=1))[len(samples) // 2]]
     extent = hi - lo
     low, high = middle - extent / 20, middle + extent / 20
-    tolerance = float(np.linalg.norm(high - low)) / 2000
     print(f"head path: {len(samples)} samples ({args.hours:g} h tiled)")
+    diagonal = float(np.linalg.norm(high - low))
     cases = {
-        "simplify_path (scene build)": (
+        "simplify_path, 1000 points (add_path's default)": (
             lambda: reference._reference_simplify_path(samples),
             lambda: decimate.simplify_path(samples),
         ),
-        "refine_region (zoomed camera)": (
-            lambda: _refine_before(samples, low, high, tolerance, 10_000),
-            lambda: decimate.refine_region(samples, low, high, tolerance, 10_000),
+        "simplify_path, 2000 points (the explorer's)": (
+            lambda: reference._reference_simplify_path(samples, None, 2000),
+            lambda: decimate.simplify_path(samples, None, 2000),
         ),
     }
+    for share in (2000, 20000):
+        tolerance = diagonal / share
+        cases[f"refine_region, box diagonal / {share}"] = (
+            lambda t=tolerance: _refine_before(samples, low, high, t, 10_000),
+            lambda t=tolerance: decimate.refine_region(samples, low, high, t, 10_000),
+        )
     for name, (before, after) in cases.items():
         t_before, out_before = _best(before, args.repeat)
         t_after, out_after = _best(after, args.repeat)

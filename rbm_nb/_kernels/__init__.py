@@ -25,7 +25,8 @@ Modules, by role:
   every step; the slot arguments), ``chain_rows`` (the block's scratch and
   its vector passes), ``squad_table`` (the lazily filled squad table),
   ``chain_prefill`` (the table rows a parallel call reads, filled first);
-  ``velocity_chain`` and ``velocity_fused`` (angular velocity of a chain).
+  ``velocity_chain`` and ``velocity_fused`` (angular velocity of a chain);
+* the scene: ``simplify`` (a 3D path's worst-segment-first split).
 
 Adding a kernel module
 ----------------------

@@ -106,6 +106,8 @@ EXPLORER: tuple[str, ...] = (
     "rotations.first_zero_row",
     "velocity_fused.body_rates",
     "conversions.quaternion_from_matrix",
+    # the scene's head path, simplified when the dashboard is built
+    "simplify.split_worst_first",
 )
 
 # Seconds one process takes to compile the kernel from an empty cache on this

@@ -15,31 +15,14 @@ bounding-box diagonal: 1/2000, half a pixel when the whole path spans a view
 
 from __future__ import annotations
 
-import heapq
-
 import numpy as np
+
+from .._kernels.simplify import split_worst_first
 
 #: default tolerance, as a fraction of the path's bounding-box diagonal
 PATH_TOLERANCE = 1 / 2000
 #: width of the grid cells of the first pass, as a share of the tolerance
 CELL_SHARE = 0.25
-
-
-def _deviation(points: np.ndarray, a: int, b: int) -> tuple[float, int]:
-    """Largest distance of ``points[a+1:b]`` from the segment a-b, and where."""
-    if b - a < 2:
-        return 0.0, -1
-    start, end = points[a], points[b]
-    inner = points[a + 1 : b]
-    direction = end - start
-    length2 = float(direction @ direction)
-    offset = inner - start
-    if length2 > 0:
-        along = np.clip(offset @ direction / length2, 0.0, 1.0)
-        offset = offset - along[:, None] * direction
-    distance2 = np.einsum("ij,ij->i", offset, offset)
-    at = int(np.argmax(distance2))
-    return float(np.sqrt(distance2[at])), a + 1 + at
 
 
 def _runs(points: np.ndarray, gap_after: np.ndarray, tolerance: float, max_points: int):
@@ -119,23 +102,17 @@ def simplify_path(
     runs = _runs(points, gap_after, tolerance, max_points)
     tolerance -= slack
     keep = np.zeros(len(points), dtype=bool)
-    heap: list[tuple[float, int, int, int]] = []
-    for first, last in runs:
-        keep[first] = keep[last] = True
-        error, at = _deviation(points, first, last)
-        if at >= 0:
-            heap.append((-error, at, first, last))
-    heapq.heapify(heap)
-    count = int(keep.sum())
-    while heap and count < max_points and -heap[0][0] > tolerance:
-        _, at, first, last = heapq.heappop(heap)
-        keep[at] = True
-        count += 1
-        for a, b in ((first, at), (at, last)):
-            error, where = _deviation(points, a, b)
-            if where >= 0:
-                heapq.heappush(heap, (-error, where, a, b))
-    error = -heap[0][0] if heap else 0.0
+    firsts = np.array([first for first, _ in runs], dtype=np.int64)
+    lasts = np.array([last for _, last in runs], dtype=np.int64)
+    # the worst segment first, in the kernel: points (m, 3) C-contiguous float64
+    error = split_worst_first(
+        np.ascontiguousarray(points),
+        firsts,
+        lasts,
+        float(tolerance),
+        int(max_points),
+        keep,
+    )
     stretches = [
         points[first : last + 1][keep[first : last + 1]] for first, last in runs
     ]

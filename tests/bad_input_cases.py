@@ -1272,7 +1272,7 @@ CASES: list[Case] = [
          {"time": [0.0, 1.0, 2.0]}, ValueError, r"\(3, 3\) and \(3, 4\)"),
     Case("transformer-set-transform-time-nan", transformer,
          ("set_transform", np.zeros(3), Q1, "world", "x"), {"time": np.nan},
-         ValueError, "time must be finite"),
+         ValueError, "time is nan; a time must be a finite number"),
     # -- files: OptiTrack, netCDF, rosbag writer ----------------------------------
     Case("optitrack-missing-file", in_temp_folder, (optitrack_in, "nope.csv"), {},
          FileNotFoundError, "nope.csv"),

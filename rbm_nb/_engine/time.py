@@ -425,6 +425,10 @@ def _scalar(t: Any, name: str) -> tuple[Any, str]:
     if arr.ndim != 0 and arr.size != 1:
         raise ValueError(f"{name} must be one time, got shape {arr.shape}")
     arr = arr.reshape(1)
+    if arr.dtype.kind in "mM" and np.isnat(arr[0]):
+        raise ValueError(f"{name} is NaT; a time must be a valid date")
+    if arr.dtype.kind in "fc" and not np.isfinite(arr[0]):
+        raise ValueError(f"{name} is {arr[0]}; a time must be a finite number")
     key, kind = _keys(arr, name)
     return key[0], kind
 

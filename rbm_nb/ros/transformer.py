@@ -321,7 +321,10 @@ class Transformer:
             r0 = normalize_quaternions(_vector(rotation, 4, "rotation"), "rotation")
             self._set_edge(child, parent, t0, r0, None, False)
             return
-        times = _seconds(np.atleast_1d(time))
+        if np.ndim(time) == 0:
+            times = np.array([epoch_seconds(time, name="time")])
+        else:
+            times = _seconds(time)
         if times.ndim != 1 or not np.isfinite(times).all():
             raise ValueError(f"time must be finite seconds, shape (n,), got {time!r}")
         n = len(times)

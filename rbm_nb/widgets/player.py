@@ -260,12 +260,13 @@ class Player(FrontendGuard, anywidget.AnyWidget):
         self.timestamps_kind = self._track.kind
         self._raw = self._track.values
         relative = self._base.seconds(self._track)
-        self.playback = Playback(relative, speed=speed, loop=loop)
-        if not np.isfinite(self.playback.duration):
+        if not np.isfinite(relative[-1]):  # e.g. -1e308 to 1e308: the span overflows
+            first, last = self._track.values[0], self._track.values[-1]
             raise ValueError(
-                f"Player: the timestamps run over {relative[-1]:.6g} s, a span too "
-                "long to play (not finite)"
+                f"Player: the timestamps run from {first:.6g} to {last:.6g} s, a span "
+                "too long to play (not finite)"
             )
+        self.playback = Playback(relative, speed=speed, loop=loop)
         self.step = int(step)
         self._links: list[_Link] = []
         self._callbacks: list[Callable[[float], Any]] = []

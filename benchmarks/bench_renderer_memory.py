@@ -139,7 +139,11 @@ def chromium_processes() -> list[dict]:
             )
             if kind == "utility":
                 sub = next(
-                    (a.split("=", 1)[1] for a in cmd if a.startswith("--utility-sub-type=")),
+                    (
+                        a.split("=", 1)[1]
+                        for a in cmd
+                        if a.startswith("--utility-sub-type=")
+                    ),
                     "",
                 )
                 kind = f"utility:{sub.rsplit('.', 1)[-1]}"
@@ -316,7 +320,9 @@ def table(rows: list[dict]) -> str:
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     empty = {
-        r["app"]: r["tab_uss_MB"] + r["gpu_pss_MB"] for r in rows if r["name"] == "empty"
+        r["app"]: r["tab_uss_MB"] + r["gpu_pss_MB"]
+        for r in rows
+        if r["name"] == "empty"
     }
     for r in rows:
         base = empty.get(r["app"])

@@ -21,7 +21,13 @@ checkout, e.g. main before a change):
   frames' labels are in the page and screenshots of its canvas show a
   picture, polled every 0.1 s) and every plot panel's uPlot canvas exists;
   ``sent in all``: the bytes received by 8 s later;
-* ``renderer``: resident memory of chromium's renderer processes after drawing;
+* ``renderer``: resident memory (RSS) summed over chromium's renderer
+  processes after drawing (as in earlier tables; it counts spare renderers
+  and chromium's shared code in each: an empty JupyterLab notebook reads
+  ~500 MB), then the tab's renderer alone as private memory (USS) and the
+  GPU process's PSS (software WebGL draws there), as
+  ``bench_renderer_memory.py`` reads them; that script also measures the
+  empty notebook, the floor these figures sit on;
 * ``kernel RSS``: the kernel's resident memory after the build (and its peak,
   VmHWM), and its growth over the RSS before the data was loaded (rbm_nb's
   modules already imported) per byte of the loaded datasets' own arrays (the
@@ -54,6 +60,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
 sys.path.insert(0, str(REPO / "tests"))
+sys.path.insert(0, str(HERE))
 
 LOAD_CELL = """
 import os, sys, time, psutil
@@ -235,6 +242,7 @@ def _output(page, marker: str, timeout_ms: float) -> dict:
 
 def measure(hours: float, tree: Path) -> dict:
     import nbformat
+    from bench_renderer_memory import chromium_processes
     from browser_support import CHROMIUM, CHROMIUM_ARGS, JupyterLab, block_other_ports
     from playwright.sync_api import TimeoutError as PlaywrightTimeout
     from playwright.sync_api import sync_playwright
@@ -305,6 +313,15 @@ def measure(hours: float, tree: Path) -> dict:
                 page.wait_for_timeout(8000)
                 row["sent_all_MB"] = proxy.down / 1e6
                 row["renderer_MB"] = _renderer_rss() / 1e6
+                procs = chromium_processes()
+                tab = max(
+                    (p for p in procs if p["type"] == "renderer"),
+                    key=lambda p: p["pss"],
+                )
+                row["tab_uss_MB"] = tab["uss"] / 1e6
+                row["gpu_pss_MB"] = (
+                    sum(p["pss"] for p in procs if p["type"] == "gpu-process") / 1e6
+                )
                 row["loaded_MB"] = loaded["loaded"] / 1e6
                 row["rss_GB"] = built["rss"] / 1e9
                 row["rss_peak_GB"] = built["rss_peak"] / 1e9
@@ -348,7 +365,7 @@ def label(hours: float) -> str:
 def table(rows: list[dict]) -> str:
     head = (
         "| recording | kernel build | sent before first frame (in all) | cell -> 3D + plots drawn "
-        "| renderer | kernel RSS (growth / loaded) | zoom 10 s -> full resolution drawn "
+        "| renderer: sum of RSS (tab private, GPU) | kernel RSS (growth / loaded) | zoom 10 s -> full resolution drawn "
         "| fps 1x (clock) | fps 10x (clock) |\n|---|---|---|---|---|---|---|---|---|"
     )
     lines = [head]
@@ -357,6 +374,7 @@ def table(rows: list[dict]) -> str:
         lines.append(
             f"| {label(r['hours'])} | {r['build_s']:.1f} s | {r['sent_MB']:.1f} MB ({r['sent_all_MB']:.1f}) "
             f"| {r['drawn_s']:.1f} s | {r['renderer_MB']:.0f} MB "
+            f"({r['tab_uss_MB']:.0f}, {r['gpu_pss_MB']:.0f} MB) "
             f"| {r['rss_GB']:.2f} GB, peak {r['rss_peak_GB']:.2f} ({r['rss_per_loaded']:.2f} x {r['loaded_MB']:.0f} MB) "
             f"| {zoom} | {r['fps_1x']:.0f} ({r['clock_1x']:.2f} s/s) "
             f"| {r['fps_10x']:.0f} ({r['clock_10x']:.2f} s/s) |"

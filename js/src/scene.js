@@ -250,15 +250,32 @@ function searchTime(times, t, hint) {
   return lo;
 }
 
-function softwareRenderer(renderer) {
-  try {
-    const gl = renderer.getContext();
-    const info = gl.getExtension("WEBGL_debug_renderer_info");
-    const name = info ? String(gl.getParameter(info.UNMASKED_RENDERER_WEBGL)) : "";
-    return /swiftshader|llvmpipe|software/i.test(name);
-  } catch (err) {
-    return false;
+function isSoftware(gl) {
+  const info = gl.getExtension("WEBGL_debug_renderer_info");
+  const name = info ? String(gl.getParameter(info.UNMASKED_RENDERER_WEBGL)) : "";
+  return /swiftshader|llvmpipe|software/i.test(name);
+}
+
+// Whether WebGL draws on the CPU (remote desktops, CI, headless browsers),
+// asked once per page of a throwaway context that is released at once: a
+// WebGL context holds its drawing buffers until it is garbage collected, so
+// the 3D view makes exactly one, with the settings this answer decides.
+let SOFTWARE = null;
+function softwareWebGL() {
+  if (SOFTWARE === null) {
+    SOFTWARE = false;
+    try {
+      const gl = document.createElement("canvas").getContext("webgl", { antialias: false });
+      if (gl) {
+        SOFTWARE = isSoftware(gl);
+        const lose = gl.getExtension("WEBGL_lose_context");
+        if (lose) lose.loseContext();
+      }
+    } catch (err) {
+      SOFTWARE = false;
+    }
   }
+  return SOFTWARE;
 }
 
 function cssColor(value) {
@@ -314,23 +331,19 @@ class View {
     el.appendChild(this.root);
     this.root.style.height = `${model.get("height")}px`;
 
-    const viewer = new MeshCat.Viewer(this.pane, false);
+    // Our own renderer, handed to meshcat (which would make an antialiased
+    // one with soft shadows): without a GPU, antialiasing is done on the CPU,
+    // halves the frame rate and multiplies the drawing buffers by its samples
+    const renderer = new this.THREE.WebGLRenderer({ antialias: !softwareWebGL(), alpha: true });
+    // lines and triads cast no useful shadows; shadow maps cost a second render per frame
+    renderer.shadowMap.enabled = false;
+    this.pane.appendChild(renderer.domElement);
+    const viewer = new MeshCat.Viewer(this.pane, false, renderer);
     // meshcat sizes itself to the window; a widget has its own box
     const pane = this.pane;
     const original = viewer.set_3d_pane_size.bind(viewer);
     viewer.set_3d_pane_size = (w, h) =>
       original(w === undefined ? pane.clientWidth || 1 : w, h === undefined ? pane.clientHeight || 1 : h);
-    // lines and triads cast no useful shadows; shadow maps cost a second render per frame
-    viewer.renderer.shadowMap.enabled = false;
-    if (softwareRenderer(viewer.renderer)) {
-      // no GPU (remote desktops, CI, headless browsers): antialiasing is done on
-      // the CPU and halves the frame rate; draw without it
-      const plain = new this.THREE.WebGLRenderer({ antialias: false, alpha: true });
-      plain.shadowMap.enabled = false;
-      viewer.renderer.domElement.replaceWith(plain.domElement);
-      viewer.renderer.dispose();
-      viewer.renderer = plain;
-    }
     viewer.camera.far = 1e5;
     viewer.camera.near = 0.01;
     viewer.camera.updateProjectionMatrix();
@@ -819,6 +832,9 @@ class View {
     this.stopFollowing();
     this.store.views.delete(this);
     this.viewer.renderer.dispose();
+    // three's dispose() keeps the context (and its drawing buffers) until
+    // the canvas is garbage collected: release it now
+    this.viewer.renderer.forceContextLoss();
     this.root.remove();
   }
 }

@@ -1,0 +1,146 @@
+"""The 3D view holds one WebGL context, and lets it go when closed (JupyterLab and Notebook 7).
+
+A WebGL context keeps its drawing buffers (with antialiasing, one per
+sample) in the renderer or GPU process until it is lost or garbage
+collected. The page's ``getContext`` is wrapped to remember every WebGL
+context made; while the explorer's 3D view of the real recording (the
+synthetic one without ``RBM_NB_DATA_DIR``) is shown, exactly one is live
+(not lost), and closing the widget from the kernel releases it. Under
+software WebGL (this chromium) that context is not antialiased. The memory
+figures are in ``benchmarks/bench_renderer_memory.py``.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import nbformat
+import pytest
+
+pytestmark = [pytest.mark.browser, pytest.mark.slow, pytest.mark.timeout(600)]
+
+from browser_support import REPO, JupyterLab, block_other_ports, save  # noqa: E402
+
+REAL_DATA = (
+    Path(os.environ.get("RBM_NB_SHARED", REPO.parent / "shared")) / "data" / "rbm-data"
+)
+
+SHOW = """
+from rbm_nb import explorer
+head, left, right, note = explorer.load_head_eye()
+explorer.register_head_eye_frames(head, left, right)
+scene = explorer.explorer_scene()
+print("SCENE-READY")
+scene.widget
+"""
+CLOSE = """
+scene.widget.close()
+print("SCENE-CLOSED")
+"""
+
+# every WebGL context the page makes, and how many are not lost
+COUNT_CONTEXTS = """(() => {
+  const made = [];
+  const original = HTMLCanvasElement.prototype.getContext;
+  HTMLCanvasElement.prototype.getContext = function (kind, ...rest) {
+    const context = original.call(this, kind, ...rest);
+    if (context && /webgl/.test(String(kind)) && !made.includes(context)) made.push(context);
+    return context;
+  };
+  window.rbmWebGL = () => ({made: made.length,
+                            live: made.filter((gl) => !gl.isContextLost()).length});
+})();"""
+
+
+def run_cell(page, index: int, marker: str) -> None:
+    from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
+    cell = page.locator(".jp-Notebook .jp-CodeCell").nth(index)
+    done = page.locator(".jp-OutputArea-output", has_text=marker)
+    for _ in range(20):
+        cell.locator(".jp-InputArea-editor").click()
+        page.keyboard.press("Shift+Enter")
+        try:
+            done.wait_for(timeout=15000)
+            return
+        except PlaywrightTimeout:
+            if "*" in cell.locator(".jp-InputPrompt").inner_text():
+                done.wait_for(timeout=300000)
+                return
+    raise AssertionError(f"cell {index} did not print {marker}")
+
+
+@pytest.mark.parametrize("app", ["lab", "notebook"])
+def test_the_3d_view_holds_one_webgl_context_and_releases_it(
+    app, browser, tmp_path, monkeypatch
+):
+    from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
+    if REAL_DATA.is_dir():
+        monkeypatch.setenv("RBM_NB_DATA_DIR", str(REAL_DATA))
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [nbformat.v4.new_code_cell(SHOW), nbformat.v4.new_code_cell(CLOSE)]
+    nb.metadata["kernelspec"] = {
+        "name": "python3",
+        "display_name": "Python 3",
+        "language": "python",
+    }
+    nbformat.write(nb, tmp_path / "contexts.ipynb")
+    (tmp_path / "home").mkdir()
+    server = JupyterLab(
+        tmp_path / "home", [tmp_path / "contexts.ipynb"], app=app, proxy=False
+    )
+    context = browser.new_context(viewport={"width": 1200, "height": 900})
+    context.add_init_script(COUNT_CONTEXTS)
+    blocked = block_other_ports(context, server.port)
+    page = context.new_page()
+    try:
+        page.goto(server.notebook_url("contexts.ipynb"), timeout=120000)
+        page.wait_for_selector(".jp-Notebook .jp-CodeCell", timeout=120000)
+        try:
+            page.locator(".jp-Dialog").get_by_role(
+                "button", name="Select", exact=True
+            ).click(timeout=10000)
+        except PlaywrightTimeout:
+            pass
+        assert page.evaluate("window.rbmWebGL()")["made"] == 0
+        run_cell(page, 0, "SCENE-READY")
+        page.wait_for_function(
+            """() => { const el = document.querySelector('.rbm-scene');
+                       return el && el.rbmView && el.rbmView.frames > 0
+                              && el.querySelectorAll('.rbm-label').length > 0; }""",
+            timeout=120000,
+        )
+        shown = page.evaluate("window.rbmWebGL()")
+        view = page.evaluate(
+            """(() => { const v = document.querySelector('.rbm-scene').rbmView;
+                 const gl = v.viewer.renderer.getContext();
+                 const info = gl.getExtension('WEBGL_debug_renderer_info');
+                 return {antialias: gl.getContextAttributes().antialias,
+                         software: /swiftshader|llvmpipe|software/i.test(
+                           info ? String(gl.getParameter(info.UNMASKED_RENDERER_WEBGL)) : ''),
+                         canvases: v.pane.querySelectorAll('canvas').length}; })()"""
+        )
+        save(f"renderer_contexts_{app}.png", page.locator(".rbm-scene").screenshot())
+        # one live context for the one 3D view, drawn into the view's one canvas
+        assert shown["live"] == 1, shown
+        assert view["canvases"] == 1, view
+        if view["software"]:
+            assert view["antialias"] is False, view
+        run_cell(page, 1, "SCENE-CLOSED")
+        page.wait_for_function(
+            "() => document.querySelector('.rbm-scene') === null", timeout=60000
+        )
+        closed = page.evaluate("window.rbmWebGL()")
+        assert closed["live"] == 0, closed
+        assert blocked == [], blocked
+    except Exception:
+        save(f"renderer_contexts_{app}_failure.png", page.screenshot(full_page=True))
+        print(server.log_text())
+        raise
+    finally:
+        try:
+            context.close()
+        finally:
+            server.stop()

@@ -141,6 +141,35 @@ def recording_comm(monkeypatch):
 
 
 @pytest.fixture(scope="session")
+def executed_notebook(tmp_path_factory):
+    """``executed_notebook(name, data=None)``: notebooks/<name> executed in a
+    fresh kernel, once per session for every test that checks it (a copy each
+    time); ``data``: "real", "synthetic" or None. Executions run two at a
+    time in the background once asked for (``.prefetch``; see
+    notebook_runs.py)."""
+    pytest.importorskip("nbclient")
+    from notebook_runs import NotebookRuns
+
+    runs = NotebookRuns(tmp_path_factory.mktemp("notebooks"), dict(os.environ))
+    try:
+        yield runs
+    finally:
+        runs.close()
+
+
+def selected_params(request, test_name: str) -> list[dict]:
+    """The parameters of the selected runs of ``test_name`` in the requesting
+    module, in the order they run (for fixtures that start work ahead)."""
+    return [
+        item.callspec.params
+        for item in request.session.items
+        if item.module is request.module
+        and getattr(item, "originalname", None) == test_name
+        and hasattr(item, "callspec")
+    ]
+
+
+@pytest.fixture(scope="session")
 def docs_build(tmp_path_factory):
     """The documentation build, running in the background from first use."""
     pytest.importorskip("sphinx", reason="the docs extra is not installed")

@@ -108,6 +108,8 @@ def _execute_ahead(request):
 
 
 @pytest.mark.slow
+# waits for its run, which shares the cores with the next one
+@pytest.mark.timeout(900)
 @pytest.mark.parametrize("name", sorted(ANSWERS))
 @pytest.mark.parametrize("which", [0, 1], ids=["solutions", "wrong"])
 def test_exercise_checks(name, which, executed_notebook):

@@ -86,6 +86,8 @@ def _execute_ahead(request):
 
 
 @pytest.mark.slow
+# waits for its run, which shares the cores with the next one
+@pytest.mark.timeout(900)
 @pytest.mark.parametrize("path, source", list(_runs()))
 def test_notebook_runs_offline_in_a_fresh_kernel(path, source, executed_notebook):
     # executed once per session, two at a time (tests/notebook_runs.py): the

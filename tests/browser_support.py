@@ -58,12 +58,16 @@ CHROMIUM_ARGS = [
 #: what anywidget's model initialisation may take in the tests' pages (ms)
 ANYWIDGET_TIMEOUT_MS = 60_000
 #: an init script: AbortSignal.timeout(ms) called from a script of anywidget's
-#: bundle (its URL has /anywidget/static/) waits ANYWIDGET_TIMEOUT_MS instead
+#: bundle (its URL has /anywidget/static/) waits ANYWIDGET_TIMEOUT_MS instead;
+#: window.rbmAnywidgetTimeouts counts those calls (one per model)
 ANYWIDGET_TIMEOUT_JS = """(() => {
   const timeout = AbortSignal.timeout.bind(AbortSignal);
+  window.rbmAnywidgetTimeouts = 0;
   AbortSignal.timeout = (ms) => {
     const caller = (new Error().stack || '').split('\\n').slice(2).join('\\n');
-    return timeout(/\\/anywidget\\/static\\//.test(caller) ? Math.max(ms, STRETCHED) : ms);
+    if (!/\\/anywidget\\/static\\//.test(caller)) return timeout(ms);
+    window.rbmAnywidgetTimeouts += 1;
+    return timeout(Math.max(ms, STRETCHED));
   };
 })();""".replace("STRETCHED", str(ANYWIDGET_TIMEOUT_MS))
 

@@ -74,6 +74,9 @@ def test_sliders_turn_the_frame_and_the_kernel_follows(
             timeout=60000,
         )
         assert page.evaluate(TRIAD_X_JS) == pytest.approx([0, 1, 0], abs=1e-6)
+        # the pages' longer wait for anywidget's models applied (conftest.py's
+        # browser fixture): one per model of the scene and the sliders
+        assert page.evaluate("window.rbmAnywidgetTimeouts") >= 2
         ARTIFACTS.mkdir(exist_ok=True)
         save(f"sliders-{app}-yaw-90.png", page.screenshot())
         page.locator("input.rbm-slider-yaw").evaluate(

@@ -163,7 +163,8 @@ def selected_params(request, test_name: str) -> list[dict]:
     return [
         item.callspec.params
         for item in request.session.items
-        if item.module is request.module
+        # doctest items (rbm_nb's docstrings) have no module attribute
+        if getattr(item, "module", None) is request.module
         and getattr(item, "originalname", None) == test_name
         and hasattr(item, "callspec")
     ]

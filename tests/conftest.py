@@ -141,6 +141,36 @@ def recording_comm(monkeypatch):
 
 
 @pytest.fixture(scope="session")
+def executed_notebook(tmp_path_factory):
+    """``executed_notebook(name, data=None)``: notebooks/<name> executed in a
+    fresh kernel, once per session for every test that checks it (a copy each
+    time); ``data``: "real", "synthetic" or None. Executions run two at a
+    time in the background once asked for (``.prefetch``; see
+    notebook_runs.py)."""
+    pytest.importorskip("nbclient")
+    from notebook_runs import NotebookRuns
+
+    runs = NotebookRuns(tmp_path_factory.mktemp("notebooks"), dict(os.environ))
+    try:
+        yield runs
+    finally:
+        runs.close()
+
+
+def selected_params(request, test_name: str) -> list[dict]:
+    """The parameters of the selected runs of ``test_name`` in the requesting
+    module, in the order they run (for fixtures that start work ahead)."""
+    return [
+        item.callspec.params
+        for item in request.session.items
+        # doctest items (rbm_nb's docstrings) have no module attribute
+        if getattr(item, "module", None) is request.module
+        and getattr(item, "originalname", None) == test_name
+        and hasattr(item, "callspec")
+    ]
+
+
+@pytest.fixture(scope="session")
 def docs_build(tmp_path_factory):
     """The documentation build, running in the background from first use."""
     pytest.importorskip("sphinx", reason="the docs extra is not installed")
@@ -168,8 +198,14 @@ def _docs_build_starts_with_the_project_tests(request):
 
 @pytest.fixture(scope="module")
 def browser():
-    """Debian's chromium driven by playwright (never a downloaded browser)."""
-    from browser_support import CHROMIUM, CHROMIUM_ARGS
+    """Debian's chromium driven by playwright (never a downloaded browser).
+
+    Every context it makes with ``new_context`` runs
+    ``browser_support.ANYWIDGET_TIMEOUT_JS`` first: anywidget's 2 s for a
+    model to initialise, lengthened (see browser_support.py). Pages from
+    ``browser.new_page`` do not (exports opened from disk: no Jupyter).
+    """
+    from browser_support import ANYWIDGET_TIMEOUT_JS, CHROMIUM, CHROMIUM_ARGS
 
     if not Path(CHROMIUM).exists():
         pytest.fail(
@@ -179,10 +215,65 @@ def browser():
 
     with sync_playwright() as pw:
         chromium = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        new_context = chromium.new_context
+
+        def new_context_with_init_script(*args, **kwargs):
+            context = new_context(*args, **kwargs)
+            context.add_init_script(ANYWIDGET_TIMEOUT_JS)
+            return context
+
+        chromium.new_context = new_context_with_init_script
         try:
             yield chromium
         finally:
             chromium.close()
+
+
+@pytest.fixture(scope="session")
+def jupyter_servers(tmp_path_factory):
+    """``jupyter_servers(app)``: the session's JupyterLab (``"lab"``) or
+    Notebook 7 (``"notebook"``) server, without jupyter-server-proxy (as on a
+    hub or in VS Code), started on first use and stopped at the end.
+
+    A module-scoped fixture that uses one calls ``end_sessions()`` on it when
+    done; a test takes ``jupyter_server`` instead, which does that for it.
+    """
+    from browser_support import JupyterLab
+
+    servers: dict[str, JupyterLab] = {}
+    # the environment as the session has it, not as the test that happens to
+    # start a server has patched it (a kernel's own variables: kernel_with_env)
+    environ = dict(os.environ)
+
+    def get(app: str = "lab") -> JupyterLab:
+        if app not in servers:
+            home = tmp_path_factory.mktemp(f"jupyter-{app}")
+            servers[app] = JupyterLab(home, [], app=app, proxy=False, environ=environ)
+        return servers[app]
+
+    try:
+        yield get
+    finally:
+        for server in servers.values():
+            server.stop()
+
+
+@pytest.fixture
+def jupyter_server(jupyter_servers):
+    """``jupyter_server(app)``: the shared server (see ``jupyter_servers``);
+    the kernels the test started there are shut down after it."""
+    used = []
+
+    def get(app: str = "lab"):
+        server = jupyter_servers(app)
+        used.append(server)
+        return server
+
+    try:
+        yield get
+    finally:
+        for server in used:
+            server.end_sessions()
 
 
 @pytest.fixture

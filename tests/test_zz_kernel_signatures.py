@@ -10,14 +10,18 @@ Run alone, it checks what this process has compiled so far.
 from __future__ import annotations
 
 import importlib
+import json
+import os
 import pkgutil
+import subprocess
+import sys
+from pathlib import Path
 
-import numpy as np
 from numba.core import sigutils
 from numba.core.dispatcher import Dispatcher
 
 from rbm_nb import _kernels
-from rbm_nb._kernels._jit import DECLARED, HELPERS, declared_kernels
+from rbm_nb._kernels._jit import HELPERS, declared_kernels
 
 
 def _kernel_modules():
@@ -54,27 +58,51 @@ def test_each_kernel_declares_one_signature_that_numba_parses():
         assert len(args) == k.dispatcher.py_func.__code__.co_argcount, k.name
 
 
-def test_a_call_with_other_types_would_be_caught():
-    """The check below really sees extra signatures (a float32 call here)."""
-    from rbm_nb._kernels import quaternion as kq
-
-    declared = next(k for k in DECLARED[kq.__name__] if k.dispatcher is kq.qconj)
-    before = set(kq.qconj.signatures)
-    kq.qconj(np.zeros((2, 4), dtype=np.float32))
-    extra = set(kq.qconj.signatures) - before - {_argtypes(declared)}
-    assert extra, "a float32 call compiled nothing new"
-
-
-def test_the_session_compiled_only_declared_signatures():
+def undeclared_signatures() -> dict[str, list[str]]:
+    """Per kernel, the signatures this process compiled that it does not declare."""
     undeclared = {}
     for k in declared_kernels():
         want = _argtypes(k)
         other = [s for s in k.dispatcher.signatures if tuple(s) != want]
-        if k.dispatcher.py_func.__name__ == "qconj":
-            # test_a_call_with_other_types_would_be_caught compiles float32 on purpose
-            other = [s for s in other if "float32" not in str(s)]
         if other:
             undeclared[k.name] = [str(s) for s in other]
+    return undeclared
+
+
+# a float32 call, then what the check below finds in that process
+_FLOAT32_CALL = """
+import json, sys
+import numpy as np
+sys.path.insert(0, sys.argv[1])
+from test_zz_kernel_signatures import undeclared_signatures
+from rbm_nb._kernels import quaternion as kq
+kq.qconj(np.zeros((2, 4), dtype=np.float32))
+print("UNDECLARED" + json.dumps(undeclared_signatures()))
+"""
+
+
+def test_a_call_with_other_types_would_be_caught(tmp_path):
+    """The check below really sees extra signatures (a float32 call here).
+
+    In a process of its own with a temporary numba cache: the session's own
+    kernels, and the checkout's cache, keep only declared signatures.
+    """
+    done = subprocess.run(
+        [sys.executable, "-c", _FLOAT32_CALL, str(Path(__file__).parent)],
+        env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)},
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    line = next(x for x in done.stdout.splitlines() if x.startswith("UNDECLARED"))
+    undeclared = json.loads(line[len("UNDECLARED") :])
+    assert list(undeclared) == ["rbm_nb._kernels.quaternion.qconj"], undeclared
+    assert "float32" in undeclared["rbm_nb._kernels.quaternion.qconj"][0]
+
+
+def test_the_session_compiled_only_declared_signatures():
+    undeclared = undeclared_signatures()
     listing = "\n".join(f"{name}: {sigs}" for name, sigs in undeclared.items())
     assert not undeclared, (
         f"kernels compiled signatures they do not declare:\n{listing}"

@@ -30,13 +30,19 @@ from browser_support import (  # noqa: E402
     ARTIFACTS,
     MEASURE_JS,
     REPO,
-    JupyterLab,
-    block_other_ports,
     changed_pixels,
     listening_sockets,
     magenta_pixels,
+    new_context,
+    open_notebook,
+    our_errors,
+    output_text,
     png_pixels,
+    prompt,
+    run_cell,
     save,
+    wait_done,
+    write_notebook,
 )
 
 REAL_DATA = (
@@ -217,90 +223,31 @@ print("NEW SOCKETS", sorted(listening() - before))""",
 ]
 
 
-def explorer_notebook(path: Path, release: Path) -> Path:
+def explorer_notebook(path: Path, release: Path, kernel: str) -> Path:
     """Write the explorer notebook; its busy cell waits for ``release`` to exist."""
-    import nbformat
-
-    nb = nbformat.v4.new_notebook()
-    nb.cells = [
-        nbformat.v4.new_code_cell(source.replace("{release!r}", repr(str(release))))
-        for source in CELLS
-    ]
-    nb.metadata["kernelspec"] = {
-        "name": "python3",
-        "display_name": "Python 3",
-        "language": "python",
-    }
-    nbformat.write(nb, path)
-    return path
-
-
-def run_cell(page, index: int) -> None:
-    """Run code cell ``index`` (shift+enter), retrying while the UI is not ready."""
-    from playwright.sync_api import TimeoutError as PlaywrightTimeout
-
-    cell = page.locator(".jp-Notebook .jp-CodeCell").nth(index)
-    for _ in range(10):
-        cell.locator(".jp-InputArea-editor").click()
-        page.keyboard.press("Shift+Enter")
-        try:
-            page.wait_for_function(
-                """(i) => { const c = document.querySelectorAll('.jp-Notebook .jp-CodeCell')[i];
-                            return /\\[(\\*|\\d+)\\]/.test(c.querySelector('.jp-InputPrompt').innerText); }""",
-                arg=index,
-                timeout=5000,
-            )
-            return
-        except PlaywrightTimeout:
-            continue
-    raise AssertionError(f"cell {index} did not start running")
-
-
-def prompt(page, index: int) -> str:
-    return (
-        page.locator(".jp-Notebook .jp-CodeCell")
-        .nth(index)
-        .locator(".jp-InputPrompt")
-        .inner_text()
-    )
-
-
-def wait_done(page, index: int, timeout: float = 300000) -> None:
-    page.wait_for_function(
-        """(i) => { const c = document.querySelectorAll('.jp-Notebook .jp-CodeCell')[i];
-                    const t = c.querySelector('.jp-InputPrompt').innerText;
-                    return /\\[\\d+\\]/.test(t); }""",
-        arg=index,
-        timeout=timeout,
-    )
-
-
-def output_text(page, index: int) -> str:
-    return (
-        page.locator(".jp-Notebook .jp-CodeCell")
-        .nth(index)
-        .locator(".jp-OutputArea")
-        .inner_text()
+    return write_notebook(
+        path,
+        [source.replace("{release!r}", repr(str(release))) for source in CELLS],
+        kernel,
     )
 
 
 @pytest.mark.parametrize("app", ["lab", "notebook"])
 def test_explorer_plays_in_the_browser_while_the_kernel_is_busy(
-    app, browser, tmp_path, monkeypatch
+    app, browser, jupyter_server, tmp_path
 ):
-    from playwright.sync_api import TimeoutError as PlaywrightTimeout
-
-    if REAL_DATA.is_dir():
-        monkeypatch.setenv("RBM_NB_DATA_DIR", str(REAL_DATA))
+    server = jupyter_server(app)
+    env = {"RBM_NB_DATA_DIR": str(REAL_DATA)} if REAL_DATA.is_dir() else {}
     release = tmp_path / "release_busy_cell"
-    notebook = explorer_notebook(tmp_path / "explorer_busy.ipynb", release)
-    (tmp_path / "home").mkdir()
-    server = JupyterLab(tmp_path / "home", [notebook], app=app, proxy=False)
-    context = browser.new_context(viewport={"width": 1300, "height": 1400})
-    blocked = block_other_ports(context, server.port)
+    name = server.add_notebook(
+        explorer_notebook(
+            tmp_path / "explorer_busy.ipynb", release, server.kernel_with_env(env)
+        )
+    )
+    context, blocked = new_context(
+        browser, server, viewport={"width": 1300, "height": 1400}
+    )
     page = context.new_page()
-    errors = []
-    page.on("pageerror", lambda err: errors.append((str(err), err.stack or "")))
     measurements = {}
     try:
         # jupyter-server-proxy is really off: its route does not exist
@@ -310,21 +257,14 @@ def test_explorer_plays_in_the_browser_while_the_kernel_is_busy(
         with pytest.raises(urllib.error.HTTPError):
             urllib.request.urlopen(server.url(f"proxy/{server.port}/api"), timeout=10)
 
-        page.goto(server.notebook_url(notebook.name), timeout=120000)
-        page.wait_for_selector(".jp-Notebook .jp-CodeCell", timeout=120000)
-        try:  # the UI may ask which kernel to start
-            page.locator(".jp-Dialog").get_by_role(
-                "button", name="Select", exact=True
-            ).click(timeout=10000)
-        except PlaywrightTimeout:
-            pass
-        kernels = []
+        open_notebook(page, server, name)
+        kernel = None
         for _ in range(120):
-            kernels = server.kernel_pids()
-            if kernels:
+            kernel = server.kernel_pid(name)
+            if kernel:
                 break
             page.wait_for_timeout(500)
-        [kernel] = kernels
+        assert kernel, "the notebook's kernel did not start"
         sockets_before = listening_sockets(kernel)
 
         run_cell(page, 0)
@@ -411,18 +351,7 @@ def test_explorer_plays_in_the_browser_while_the_kernel_is_busy(
         assert "NEW SOCKETS []" in text, text
         assert listening_sockets(kernel) == sockets_before
         assert blocked == [], blocked  # nothing needed another port
-        # Notebook 7 itself throws on start-up here (a settings schema it lacks);
-        # errors whose every frame is in Jupyter's own bundles are not ours
-        own = f"{server.base}static/"
-        ours = [
-            (message, stack)
-            for message, stack in errors
-            if not all(
-                own in line
-                for line in stack.splitlines()[1:]
-                if "http" in line or "blob:" in line
-            )
-        ]
+        ours = our_errors(page.errors, server)
         assert ours == [], ours
         print(app, measurements)
     except Exception:
@@ -431,7 +360,6 @@ def test_explorer_plays_in_the_browser_while_the_kernel_is_busy(
         raise
     finally:
         context.close()
-        server.stop()
 
 
 def test_plot_click_seeks_and_moves_the_3d_view(page, tmp_path):

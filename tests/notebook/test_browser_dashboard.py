@@ -16,13 +16,20 @@ from __future__ import annotations
 import re
 import time
 
-import nbformat
 import numpy as np
 import pytest
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
-from browser_support import JupyterLab, changed_pixels, png_pixels, save  # noqa: E402
+from browser_support import (  # noqa: E402
+    changed_pixels,
+    new_context,
+    open_notebook,
+    png_pixels,
+    run_all_cells,
+    save,
+    write_notebook,
+)
 
 NAN_RUN = (8.0, 10.0)  # seconds with NaN values in the "wave" panel
 
@@ -81,23 +88,6 @@ widgets.VBox([widgets.HBox([tree, scene.widget]), player, plot, kernel_time, ker
 """
 
 
-def _notebook(path, hold_dir):
-    """The dashboard notebook; its busy button holds the kernel until
-    ``hold_dir/release`` exists, and says so in ``hold_dir``."""
-    nb = nbformat.v4.new_notebook()
-    nb.cells = [
-        nbformat.v4.new_code_cell(SETUP.replace("HOLD_DIR", repr(str(hold_dir)))),
-        nbformat.v4.new_code_cell('print("DASHBOARD-READY")'),
-    ]
-    nb.metadata["kernelspec"] = {
-        "name": "python3",
-        "display_name": "Python 3",
-        "language": "python",
-    }
-    nbformat.write(nb, path)
-    return path
-
-
 @pytest.fixture(scope="module")
 def hold_dir(tmp_path_factory):
     """Where the busy button's handler says it holds the kernel ("holding"),
@@ -106,39 +96,28 @@ def hold_dir(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def lab(tmp_path_factory, hold_dir):
-    tmp = tmp_path_factory.mktemp("dashboard")
-    notebook = _notebook(tmp / "dashboard.ipynb", hold_dir)
-    (tmp / "lab").mkdir()
-    server = JupyterLab(tmp / "lab", [notebook])
+def lab(jupyter_servers, tmp_path_factory, hold_dir):
+    """The session's JupyterLab with the dashboard notebook, whose busy button
+    holds the kernel until ``hold_dir/release`` exists, and says so in
+    ``hold_dir``; its kernel is shut down after the module."""
+    server = jupyter_servers("lab")
+    source = SETUP.replace("HOLD_DIR", repr(str(hold_dir)))
+    cells = [source, 'print("DASHBOARD-READY")']
+    path = tmp_path_factory.mktemp("dashboard") / "dashboard.ipynb"
+    server.dashboard = server.add_notebook(write_notebook(path, cells))
     try:
         yield server
     finally:
-        server.stop()
+        server.end_sessions()
 
 
 @pytest.fixture(scope="module")
 def dashboard(browser, lab):
-    from playwright.sync_api import TimeoutError as PlaywrightTimeout
-
-    context = browser.new_context(viewport={"width": 1200, "height": 1400})
+    context, _ = new_context(browser, viewport={"width": 1200, "height": 1400})
     page = context.new_page()
-    page.errors = []
-    page.on("pageerror", lambda err: page.errors.append(str(err)))
     try:
-        page.goto(lab.url("lab/tree/dashboard.ipynb"), timeout=120000)
-        page.wait_for_selector(".jp-Notebook .jp-Cell", timeout=120000)
-        try:
-            page.locator(".jp-Dialog").get_by_role(
-                "button", name="Select", exact=True
-            ).click(timeout=20000)
-        except PlaywrightTimeout:
-            pass
-        page.wait_for_selector(
-            ".jp-Notebook-ExecutionIndicator[data-status='idle']", timeout=120000
-        )
-        page.get_by_role("menuitem", name="Run", exact=True).click()
-        page.get_by_text("Run All Cells", exact=True).click()
+        open_notebook(page, lab, lab.dashboard)
+        run_all_cells(page)
         page.locator(".jp-OutputArea-output", has_text="DASHBOARD-READY").wait_for(
             timeout=180000
         )

@@ -19,12 +19,18 @@ Screenshots of the default view go to test-artifacts/.
 
 from __future__ import annotations
 
-import nbformat
 import pytest
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
-from browser_support import JupyterLab, block_other_ports, save  # noqa: E402
+from browser_support import (  # noqa: E402
+    new_context,
+    open_notebook,
+    our_errors,
+    run_cell,
+    save,
+    write_notebook,
+)
 from conftest import REPO  # noqa: E402
 
 REAL_DATA = REPO.parent / "shared" / "data" / "rbm-data"
@@ -93,37 +99,6 @@ PLAYER_TIME = (
 )
 
 
-def _notebook(path):
-    nb = nbformat.v4.new_notebook()
-    nb.cells = [nbformat.v4.new_code_cell(CELL)]
-    nb.metadata["kernelspec"] = {
-        "name": "python3",
-        "display_name": "Python 3",
-        "language": "python",
-    }
-    nbformat.write(nb, path)
-    return path
-
-
-def _run_first_cell(page) -> None:
-    from playwright.sync_api import TimeoutError as PlaywrightTimeout
-
-    cell = page.locator(".jp-Notebook .jp-CodeCell").first
-    for _ in range(10):
-        cell.locator(".jp-InputArea-editor").click()
-        page.keyboard.press("Shift+Enter")
-        try:
-            page.wait_for_function(
-                """() => /\\[(\\*|\\d+)\\]/.test(document.querySelector(
-                       '.jp-Notebook .jp-CodeCell .jp-InputPrompt').innerText)""",
-                timeout=5000,
-            )
-            return
-        except PlaywrightTimeout:
-            continue
-    raise AssertionError("the cell did not start running")
-
-
 def _plot_box(page):
     box = page.locator(".rbm-ts .u-over").first.bounding_box()
     return box["x"], box["y"], box["width"], box["height"]
@@ -137,35 +112,27 @@ WIDTHS = {"real": 1400, "synthetic": 1280}
 @pytest.mark.parametrize("source", ["real", "synthetic"])
 @pytest.mark.parametrize("app", ["lab", "notebook"])
 def test_explorer_in_a_1280_to_1400_px_window(
-    app, source, browser, tmp_path, monkeypatch
+    app, source, browser, jupyter_server, tmp_path
 ):
-    from playwright.sync_api import TimeoutError as PlaywrightTimeout
-
     if source == "real":
         if not REAL_DATA.is_dir():
             pytest.skip("no real data")
-        monkeypatch.setenv("RBM_NB_DATA_DIR", str(REAL_DATA))
+        data = REAL_DATA
     else:
-        (tmp_path / "no-data").mkdir()
-        monkeypatch.setenv("RBM_NB_DATA_DIR", str(tmp_path / "no-data"))
-    notebook = _notebook(tmp_path / "explorer.ipynb")
-    (tmp_path / "home").mkdir()
-    server = JupyterLab(tmp_path / "home", [notebook], app=app, proxy=False)
-    context = browser.new_context(viewport={"width": WIDTHS[source], "height": 1500})
-    block_other_ports(context, server.port)
+        data = tmp_path / "no-data"
+        data.mkdir()
+    server = jupyter_server(app)
+    kernel = server.kernel_with_env({"RBM_NB_DATA_DIR": str(data)})
+    name = server.add_notebook(
+        write_notebook(tmp_path / f"explorer-{source}.ipynb", [CELL], kernel)
+    )
+    context, _ = new_context(
+        browser, server, viewport={"width": WIDTHS[source], "height": 1500}
+    )
     page = context.new_page()
-    errors = []
-    page.on("pageerror", lambda err: errors.append((str(err), err.stack or "")))
     try:
-        page.goto(server.notebook_url(notebook.name), timeout=120000)
-        page.wait_for_selector(".jp-Notebook .jp-CodeCell", timeout=120000)
-        try:
-            page.locator(".jp-Dialog").get_by_role(
-                "button", name="Select", exact=True
-            ).click(timeout=10000)
-        except PlaywrightTimeout:
-            pass
-        _run_first_cell(page)
+        open_notebook(page, server, name)
+        run_cell(page, 0)
         page.wait_for_function(
             """() => { const el = document.querySelector('.rbm-scene');
                        const ts = document.querySelector('.rbm-ts');
@@ -323,19 +290,7 @@ def test_explorer_in_a_1280_to_1400_px_window(
         page.mouse.up()
         page.wait_for_timeout(300)
         assert page.evaluate(PLAYER_TIME) < clicked
-        # Notebook 7 itself throws on start-up (a settings schema it lacks):
-        # errors whose every frame is in Jupyter's own bundles are not ours
-        own = f"{server.base}static/"
-        ours = [
-            message
-            for message, stack in errors
-            if not all(
-                own in line
-                for line in stack.splitlines()[1:]
-                if "http" in line or "blob:" in line
-            )
-        ]
+        ours = [message for message, _ in our_errors(page.errors, server)]
         assert ours == [], ours
     finally:
         context.close()
-        server.stop()

@@ -13,13 +13,19 @@ a message naming the panel instead of an empty plot.
 
 from __future__ import annotations
 
-import nbformat
 import numpy as np
 import pytest
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
-from browser_support import JupyterLab, png_pixels, save  # noqa: E402
+from browser_support import (  # noqa: E402
+    new_context,
+    open_notebook,
+    png_pixels,
+    run_all_cells,
+    save,
+    write_notebook,
+)
 
 HOURS = 1.6
 #: uPlot 1.6.32 overflowed past about this many runs of missing samples
@@ -59,27 +65,18 @@ widgets.VBox([plot, attach, overview])
 
 
 @pytest.fixture(scope="module")
-def lab(tmp_path_factory):
+def lab(jupyter_servers, tmp_path_factory):
+    """The session's JupyterLab with the long-plot notebook; its kernel is shut
+    down after the module."""
+    server = jupyter_servers("lab")
     tmp = tmp_path_factory.mktemp("long_plot")
-    nb = nbformat.v4.new_notebook()
-    nb.cells = [
-        nbformat.v4.new_code_cell(
-            SETUP.replace("EXPECTED", repr(str(tmp / "expected.npy")))
-        )
-    ]
-    nb.metadata["kernelspec"] = {
-        "name": "python3",
-        "display_name": "Python 3",
-        "language": "python",
-    }
-    nbformat.write(nb, tmp / "long.ipynb")
-    (tmp / "lab").mkdir()
-    server = JupyterLab(tmp / "lab", [tmp / "long.ipynb"])
     server.expected = tmp / "expected.npy"
+    cells = [SETUP.replace("EXPECTED", repr(str(server.expected)))]
+    server.long_plot = server.add_notebook(write_notebook(tmp / "long.ipynb", cells))
     try:
         yield server
     finally:
-        server.stop()
+        server.end_sessions()
 
 
 # Path2D.lineTo fails once the test asks it to: a canvas that cannot draw
@@ -94,14 +91,10 @@ Path2D.prototype.lineTo = function (...args) {
 
 @pytest.fixture(scope="module")
 def long_plot(browser, lab):
-    from playwright.sync_api import TimeoutError as PlaywrightTimeout
-
-    context = browser.new_context(viewport={"width": 1200, "height": 900})
+    context, _ = new_context(browser, viewport={"width": 1200, "height": 900})
     context.add_init_script(BREAK_PATHS)
     page = context.new_page()
-    page.errors = []
     page.console_errors = []
-    page.on("pageerror", lambda err: page.errors.append(str(err)))
     # bytes the kernel sends to the page over its websockets
     page.received = [0]
 
@@ -121,19 +114,8 @@ def long_plot(browser, lab):
         lambda msg: msg.type == "error" and page.console_errors.append(msg.text),
     )
     try:
-        page.goto(lab.url("lab/tree/long.ipynb"), timeout=120000)
-        page.wait_for_selector(".jp-Notebook .jp-Cell", timeout=120000)
-        try:
-            page.locator(".jp-Dialog").get_by_role(
-                "button", name="Select", exact=True
-            ).click(timeout=20000)
-        except PlaywrightTimeout:
-            pass
-        page.wait_for_selector(
-            ".jp-Notebook-ExecutionIndicator[data-status='idle']", timeout=120000
-        )
-        page.get_by_role("menuitem", name="Run", exact=True).click()
-        page.get_by_text("Run All Cells", exact=True).click()
+        open_notebook(page, lab, lab.long_plot)
+        run_all_cells(page)
         ready = page.locator(".jp-OutputArea-output", has_text="LONG-READY")
         ready.wait_for(timeout=300000)
         page.ready_text = ready.inner_text()

@@ -28,28 +28,17 @@ NODE_MATRIX_JS = """(path) => {
 
 
 @pytest.fixture(scope="module")
-def saved_01(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("saved01")
-    mp = pytest.MonkeyPatch()
-    mp.setenv("MPLCONFIGDIR", str(tmp / "mpl"))
-    try:
-        yield _saved_html(tmp)
-    finally:
-        mp.undo()
+def saved_01(tmp_path_factory, executed_notebook):
+    # notebook 01 as test_notebooks.py executed it (once per session), without
+    # the kernel listing cell tests/notebook_runs.py appends
+    notebook = executed_notebook("01_reference_frames.ipynb")
+    notebook.cells.pop()
+    return _saved_html(notebook, tmp_path_factory.mktemp("saved01"))
 
 
-def _saved_html(tmp_path):
-    import nbclient
-    import nbformat
+def _saved_html(notebook, tmp_path):
     from nbconvert import HTMLExporter
 
-    notebook = nbformat.read(
-        REPO / "notebooks" / "01_reference_frames.ipynb", as_version=4
-    )
-    nbclient.NotebookClient(
-        notebook, timeout=300, kernel_name="python3",
-        resources={"metadata": {"path": str(tmp_path)}},
-    ).execute()  # fmt: skip
     assert notebook.metadata["widgets"]["application/vnd.jupyter.widget-state+json"]
     exporter = HTMLExporter(
         template_name="lab",

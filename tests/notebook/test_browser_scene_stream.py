@@ -17,13 +17,19 @@ import os
 import shutil
 from pathlib import Path
 
-import nbformat
 import numpy as np
 import pytest
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow, pytest.mark.timeout(600)]
 
-from browser_support import REPO, JupyterLab, block_other_ports, save  # noqa: E402
+from browser_support import (  # noqa: E402
+    REPO,
+    new_context,
+    open_notebook,
+    our_errors,
+    save,
+    write_notebook,
+)
 
 REAL_DATA = (
     Path(os.environ.get("RBM_NB_SHARED", REPO.parent / "shared")) / "data" / "rbm-data"
@@ -57,43 +63,28 @@ widgets.VBox([scene.widget, player])
 
 
 @pytest.fixture(params=["lab", "notebook"])
-def streamed(request, browser, tmp_path, monkeypatch):
+def streamed(request, browser, jupyter_server, tmp_path):
     from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
     app = request.param
-    if REAL_DATA.is_dir():
-        monkeypatch.setenv("RBM_NB_DATA_DIR", str(REAL_DATA))
-    nb = nbformat.v4.new_notebook()
+    server = jupyter_server(app)
+    env = {"RBM_NB_DATA_DIR": str(REAL_DATA)} if REAL_DATA.is_dir() else {}
     expected = tmp_path / "expected.npy"
-    nb.cells = [
-        nbformat.v4.new_code_cell(SETUP.replace("EXPECTED", repr(str(expected))))
-    ]
-    nb.metadata["kernelspec"] = {
-        "name": "python3",
-        "display_name": "Python 3",
-        "language": "python",
-    }
-    nbformat.write(nb, tmp_path / "stream.ipynb")
-    (tmp_path / "home").mkdir()
-    server = JupyterLab(
-        tmp_path / "home", [tmp_path / "stream.ipynb"], app=app, proxy=False
+    name = server.add_notebook(
+        write_notebook(
+            tmp_path / "stream.ipynb",
+            [SETUP.replace("EXPECTED", repr(str(expected)))],
+            server.kernel_with_env(env),
+        )
     )
-    context = browser.new_context(viewport={"width": 1200, "height": 900})
-    blocked = block_other_ports(context, server.port)
+    context, blocked = new_context(
+        browser, server, viewport={"width": 1200, "height": 900}
+    )
     page = context.new_page()
-    page.errors = []
-    page.on("pageerror", lambda err: page.errors.append((str(err), err.stack or "")))
     page.app, page.expected, page.blocked = app, expected, blocked
-    page.jupyter_static = f"{server.base}static/"
+    page.server = server
     try:
-        page.goto(server.notebook_url("stream.ipynb"), timeout=120000)
-        page.wait_for_selector(".jp-Notebook .jp-CodeCell", timeout=120000)
-        try:
-            page.locator(".jp-Dialog").get_by_role(
-                "button", name="Select", exact=True
-            ).click(timeout=10000)
-        except PlaywrightTimeout:
-            pass
+        open_notebook(page, server, name)
         cell = page.locator(".jp-Notebook .jp-CodeCell").first
         for _ in range(20):
             cell.locator(".jp-InputArea-editor").click()
@@ -122,10 +113,7 @@ def streamed(request, browser, tmp_path, monkeypatch):
         print(server.log_text())
         raise
     finally:
-        try:
-            context.close()
-        finally:
-            server.stop()  # also when the browser is gone
+        context.close()
 
 
 def view(page, expr: str):
@@ -235,15 +223,5 @@ def test_playing_across_a_chunk_boundary_shows_the_recording(streamed):
         shutil.copy(shot, SHOTS / shot.name)
     assert canvas.count() == 1
     assert page.blocked == [], page.blocked
-    # Notebook 7 itself throws on start-up here (a settings schema it lacks);
-    # errors whose every frame is in Jupyter's own bundles are not ours
-    ours = [
-        (message, stack)
-        for message, stack in page.errors
-        if not all(
-            page.jupyter_static in line
-            for line in stack.splitlines()[1:]
-            if "http" in line or "blob:" in line
-        )
-    ]
+    ours = our_errors(page.errors, page.server)
     assert ours == [], ours

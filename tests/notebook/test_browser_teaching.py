@@ -11,8 +11,17 @@ import pytest
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow, pytest.mark.timeout(300)]
 
-from browser_support import ARTIFACTS, JupyterLab, block_other_ports, save  # noqa: E402
-from test_browser import output_text, run_cell, wait_done  # noqa: E402
+from browser_support import (  # noqa: E402
+    ARTIFACTS,
+    new_context,
+    open_notebook,
+    our_errors,
+    output_text,
+    run_cell,
+    save,
+    wait_done,
+    write_notebook,
+)
 
 CELLS = [
     """import numpy as np
@@ -39,41 +48,18 @@ TRIAD_X_JS = """() => {
 }"""
 
 
-def _notebook(path):
-    import nbformat
-
-    nb = nbformat.v4.new_notebook()
-    nb.cells = [nbformat.v4.new_code_cell(source) for source in CELLS]
-    nb.metadata["kernelspec"] = {
-        "name": "python3",
-        "display_name": "Python 3",
-        "language": "python",
-    }
-    nbformat.write(nb, path)
-    return path
-
-
 @pytest.mark.parametrize("app", ["lab", "notebook"])
-def test_sliders_turn_the_frame_and_the_kernel_follows(app, browser, tmp_path):
-    from playwright.sync_api import TimeoutError as PlaywrightTimeout
-
-    notebook = _notebook(tmp_path / "sliders.ipynb")
-    (tmp_path / "home").mkdir()
-    server = JupyterLab(tmp_path / "home", [notebook], app=app, proxy=False)
-    context = browser.new_context(viewport={"width": 1200, "height": 1300})
-    blocked = block_other_ports(context, server.port)
+def test_sliders_turn_the_frame_and_the_kernel_follows(
+    app, browser, jupyter_server, tmp_path
+):
+    server = jupyter_server(app)
+    name = server.add_notebook(write_notebook(tmp_path / "sliders.ipynb", CELLS))
+    context, blocked = new_context(
+        browser, server, viewport={"width": 1200, "height": 1300}
+    )
     page = context.new_page()
-    errors = []
-    page.on("pageerror", lambda err: errors.append((str(err), err.stack or "")))
     try:
-        page.goto(server.notebook_url(notebook.name), timeout=120000)
-        page.wait_for_selector(".jp-Notebook .jp-CodeCell", timeout=120000)
-        try:  # the UI may ask which kernel to start
-            page.locator(".jp-Dialog").get_by_role(
-                "button", name="Select", exact=True
-            ).click(timeout=10000)
-        except PlaywrightTimeout:
-            pass
+        open_notebook(page, server, name)
         run_cell(page, 0)
         wait_done(page, 0)
         page.wait_for_selector(".rbm-sliders .rbm-report", timeout=60000)
@@ -88,6 +74,9 @@ def test_sliders_turn_the_frame_and_the_kernel_follows(app, browser, tmp_path):
             timeout=60000,
         )
         assert page.evaluate(TRIAD_X_JS) == pytest.approx([0, 1, 0], abs=1e-6)
+        # the pages' longer wait for anywidget's models applied (conftest.py's
+        # browser fixture): one per model of the scene and the sliders
+        assert page.evaluate("window.rbmAnywidgetTimeouts") >= 2
         ARTIFACTS.mkdir(exist_ok=True)
         save(f"sliders-{app}-yaw-90.png", page.screenshot())
         page.locator("input.rbm-slider-yaw").evaluate(
@@ -108,20 +97,8 @@ def test_sliders_turn_the_frame_and_the_kernel_follows(app, browser, tmp_path):
         run_cell(page, 1)
         wait_done(page, 1)
         assert "LOOKUP [3.0, 0.0, 0.0] 180.0" in output_text(page, 1)
-        # Notebook 7 throws on start-up (a settings schema it lacks): errors
-        # whose every frame is in Jupyter's own bundles are not ours
-        own = f"{server.base}static/"
-        ours = [
-            (message, stack)
-            for message, stack in errors
-            if not all(
-                own in line
-                for line in stack.splitlines()[1:]
-                if "http" in line or "blob:" in line
-            )
-        ]
+        ours = our_errors(page.errors, server)
         assert not ours, ours
         assert not blocked, blocked
     finally:
         context.close()
-        server.stop()

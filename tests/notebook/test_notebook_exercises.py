@@ -89,20 +89,37 @@ def _checks(notebook) -> list[str]:
     return said
 
 
+@pytest.fixture(scope="module", autouse=True)
+def _execute_ahead(request):
+    """Start every selected run: two kernels at a time while the tests wait."""
+    from conftest import selected_params
+
+    selected = selected_params(request, "test_exercise_checks")
+    runs = request.getfixturevalue("executed_notebook") if selected else None
+    for params in selected:
+        name, which = params["name"], params["which"]
+        runs.prefetch_run(
+            ("exercises", name, which),
+            lambda name=name, which=which: _with_answers(
+                REPO / "notebooks" / name, which
+            ),
+            "synthetic",
+        )
+
+
 @pytest.mark.slow
+# waits for its run, which shares the cores with the next one
+@pytest.mark.timeout(900)
 @pytest.mark.parametrize("name", sorted(ANSWERS))
 @pytest.mark.parametrize("which", [0, 1], ids=["solutions", "wrong"])
-def test_exercise_checks(name, which, tmp_path, monkeypatch):
-    import nbclient
-
-    monkeypatch.setenv("MPLCONFIGDIR", str(tmp_path / "mpl"))
-    (tmp_path / "no-data").mkdir()
-    monkeypatch.setenv("RBM_NB_DATA_DIR", str(tmp_path / "no-data"))
-    notebook = _with_answers(REPO / "notebooks" / name, which)
-    nbclient.NotebookClient(
-        notebook, timeout=600, kernel_name="python3",
-        resources={"metadata": {"path": str(tmp_path)}},
-    ).execute()  # fmt: skip
+def test_exercise_checks(name, which, executed_notebook):
+    # in a fresh kernel, offline (the synthetic recording), two at a time
+    # (tests/notebook_runs.py)
+    notebook = executed_notebook.run(
+        ("exercises", name, which),
+        lambda: _with_answers(REPO / "notebooks" / name, which),
+        "synthetic",
+    )
     said = _checks(notebook)
     assert len(said) == len(ANSWERS[name])
     verdict = "Right." if which == 0 else "Not quite"

@@ -29,7 +29,6 @@ USES_EXAMPLE_DATA = {
     "07_many_recordings.ipynb",
     "09_velocity_tools_and_evaluation.ipynb",
 }
-REAL_DATA = REPO.parent / "shared" / "data" / "rbm-data"
 
 
 def _runs():
@@ -74,35 +73,31 @@ def _stream_text(notebook) -> str:
     return "\n".join(texts)
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("path, source", list(_runs()))
-def test_notebook_runs_offline_in_a_fresh_kernel(path, source, tmp_path, monkeypatch):
-    import nbclient
-    import nbformat
+@pytest.fixture(scope="module", autouse=True)
+def _execute_ahead(request):
+    """Start every selected run: two kernels at a time while the tests wait."""
+    from conftest import selected_params
 
-    # the kernel inherits this environment: no display, matplotlib config in
-    # tmp, and the example data from the real folder or from an empty one
-    # (offline, the recording is then the synthetic stand-in)
-    monkeypatch.setenv("MPLCONFIGDIR", str(tmp_path / "mpl"))
-    if source == "real":
-        if not REAL_DATA.is_dir():
-            pytest.fail(f"{REAL_DATA} is missing: CI has ../shared beside the clone")
-        monkeypatch.setenv("RBM_NB_DATA_DIR", str(REAL_DATA))
-    elif source == "synthetic":
-        (tmp_path / "no-data").mkdir()
-        monkeypatch.setenv("RBM_NB_DATA_DIR", str(tmp_path / "no-data"))
-    monkeypatch.delenv("RBM_NB_VIEWER_PROXY", raising=False)
-    notebook = nbformat.read(path, as_version=4)
-    client = nbclient.NotebookClient(
-        notebook,
-        timeout=600,
-        kernel_name="python3",
-        resources={"metadata": {"path": str(tmp_path)}},  # exports land in tmp
-    )
+    selected = selected_params(request, "test_notebook_runs_offline_in_a_fresh_kernel")
+    if selected:  # else the fast tests here need no kernel
+        runs = request.getfixturevalue("executed_notebook")
+        for params in selected:
+            runs.prefetch(params["path"].name, params["source"])
+
+
+@pytest.mark.slow
+# waits for its run, which shares the cores with the next one
+@pytest.mark.timeout(900)
+@pytest.mark.parametrize("path, source", list(_runs()))
+def test_notebook_runs_offline_in_a_fresh_kernel(path, source, executed_notebook):
+    # executed once per session, two at a time (tests/notebook_runs.py): the
+    # kernel gets no display, matplotlib config in tmp, and the example data
+    # from the real folder or from an empty one (offline, the recording is
+    # then the synthetic stand-in); test_warmup_explorer.py and
+    # test_browser_offline.py check the same executions
     start = time.perf_counter()
-    client.execute()
-    elapsed = time.perf_counter() - start
-    print(f"{path.name}: executed in {elapsed:.1f} s")
+    notebook = executed_notebook(path.name, source)
+    print(f"{path.name}: waited {time.perf_counter() - start:.1f} s for its run")
     text = _stream_text(notebook)
     if path.name in SAYS_ITS_DATA:
         marker = SAYS_ITS_DATA[path.name]

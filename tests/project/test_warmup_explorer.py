@@ -19,55 +19,25 @@ import pytest
 from rbm_nb._kernels import _warmup
 
 REPO = Path(__file__).resolve().parents[2]
-NOTEBOOK = REPO / "notebooks" / "06_head_eye_explorer.ipynb"
 
-# Lists the kernels this process has an overload of (the explorer's calls).
-_LISTED = (
-    "import json\n"
-    "from rbm_nb._kernels._jit import declared_kernels\n"
-    "print('KERNELS' + json.dumps(sorted(k.name.removeprefix('rbm_nb._kernels.')"
-    " for k in declared_kernels() if k.dispatcher.signatures)))\n"
-)
-
-
-def _run_notebook(tmp_path: Path, env: dict[str, str], synthetic: bool) -> set[str]:
-    nbformat = pytest.importorskip("nbformat")
-    nbclient = pytest.importorskip("nbclient")
-    nb = nbformat.read(NOTEBOOK, as_version=4)
-    if synthetic:
-        first = next(c for c in nb.cells if c.cell_type == "code")
-        assert "explorer.load_head_eye()" in first.source
-        first.source = first.source.replace(
-            "explorer.load_head_eye()", 'explorer.load_head_eye("synthetic")'
-        )
-    nb.cells.append(nbformat.v4.new_code_cell(_LISTED))
-    old = dict(os.environ)
-    os.environ.update(env)  # the kernel inherits this process's environment
-    try:
-        client = nbclient.NotebookClient(
-            nb,
-            timeout=900,
-            kernel_name="python3",
-            resources={"metadata": {"path": str(tmp_path)}},
-        )
-        client.execute()
-    finally:
-        os.environ.clear()
-        os.environ.update(old)
-    text = "".join(o.get("text", "") for o in nb.cells[-1].outputs)
-    return set(json.loads(text[text.index("KERNELS") + len("KERNELS") :]))
+NOTEBOOK = "06_head_eye_explorer.ipynb"
 
 
 @pytest.mark.slow
 @pytest.mark.timeout(1800)
-def test_the_explorer_list_is_what_notebook_06_calls(tmp_path, shared_data):
-    """Run the notebook in a fresh kernel (real and synthetic data); list its kernels."""
-    env = {
-        "PYTHONPATH": str(REPO),
-        "RBM_NB_DATA_DIR": str(shared_data / "rbm-data"),
-    }
-    real = _run_notebook(tmp_path, env, synthetic=False)
-    synthetic = _run_notebook(tmp_path, env, synthetic=True)
+def test_the_explorer_list_is_what_notebook_06_calls(executed_notebook, shared_data):
+    """Run the notebook in a fresh kernel (real and synthetic data); list its kernels.
+
+    The two executions are test_notebooks.py's (one per session, see
+    tests/notebook_runs.py), which end by listing the kernels their process
+    called.
+    """
+    from notebook_runs import kernels_called
+
+    assert (shared_data / "rbm-data").is_dir()
+    executed_notebook.prefetch(NOTEBOOK, "synthetic")  # both at once when alone
+    real = kernels_called(executed_notebook(NOTEBOOK, "real"))
+    synthetic = kernels_called(executed_notebook(NOTEBOOK, "synthetic"))
     listed = set(_warmup.EXPLORER)
     assert real | synthetic == listed, (
         f"called but not in EXPLORER: {sorted((real | synthetic) - listed)}; "
@@ -115,7 +85,12 @@ _COMPILE = textwrap.dedent(
 )
 
 
-def _python(code: str, cache: Path, *args: str) -> str:
+def _start(code: str, cache: Path, *args: str) -> subprocess.Popen:
+    """Run ``code`` in a fresh interpreter with ``cache`` as numba's cache.
+
+    Its output goes to files beside the cache (read by :func:`_outputs`): a
+    pipe nobody reads while another process is waited for could fill up.
+    """
     # one thread: the notebook's calls take the serial kernels (EXPLORER), while
     # a plain process on several cores launches the parallel twins for the
     # workload's whole-recording lookups, which the warm-up compiles later
@@ -125,15 +100,35 @@ def _python(code: str, cache: Path, *args: str) -> str:
         "PYTHONPATH": str(REPO),
         "RBM_NB_NUM_THREADS": "1",
     }
-    done = subprocess.run(
-        [sys.executable, "-c", code, *args],
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=1500,
-    )
-    assert done.returncode == 0, done.stdout + done.stderr
-    return done.stdout
+    cache.mkdir(exist_ok=True)
+    n = len(list(cache.parent.glob(f"{cache.name}-*.out")))
+    out = cache.parent / f"{cache.name}-{n}.out"
+    with open(out, "w") as stdout:
+        process = subprocess.Popen(
+            [sys.executable, "-c", code, *args],
+            env=env,
+            stdout=stdout,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )
+    process.output = out  # type: ignore[attr-defined]
+    return process
+
+
+def _outputs(processes: list[subprocess.Popen]) -> list[str]:
+    """Wait for every process (stopping the rest if one fails); their output."""
+    try:
+        for process in processes:
+            process.wait(timeout=1500)
+    finally:
+        for process in processes:
+            if process.poll() is None:
+                process.kill()
+                process.wait()
+    outputs = [process.output.read_text() for process in processes]
+    for process, out in zip(processes, outputs, strict=True):
+        assert process.returncode == 0, out
+    return outputs
 
 
 def _result(out: str) -> dict:
@@ -149,16 +144,26 @@ def test_results_are_the_same_bits_whatever_order_kernels_compiled_in(tmp_path):
     Kernels share non-inlined helpers (numba caches those separately and
     links a cached one as machine code, an uncached one as IR), so the
     order could in principle change what the optimiser sees.
+
+    The three compiles are independent (one cache folder each), so they run
+    side by side: on CI's two cores that halves the test's time, and the
+    bits do not depend on what else runs.
     """
     order = list(_warmup.EXPLORER)
-    results = {}
-    for label, names in (("warm-up order", order), ("reversed", order[::-1])):
-        cache = tmp_path / label.replace(" ", "-")
-        _python(_COMPILE, cache, *names)
-        results[label] = _result(_python(_WORKLOAD, cache))
-        assert results[label]["compiled"] == 0, (label, results[label])
-    # compiled on first use by the process that computes (no cache before)
-    results["first use"] = _result(_python(_WORKLOAD, tmp_path / "first-use"))
+    orders = {"warm-up order": order, "reversed": order[::-1]}
+    caches = {label: tmp_path / label.replace(" ", "-") for label in orders}
+    # compiled in the given order into an empty cache; and compiled on first
+    # use by the process that computes (no cache before)
+    compiled = _outputs(
+        [_start(_COMPILE, caches[label], *names) for label, names in orders.items()]
+        + [_start(_WORKLOAD, tmp_path / "first-use")]
+    )
+    results = {"first use": _result(compiled[-1])}
     assert results["first use"]["compiled"] > 0
+    # the same workload loading each order's kernels from its cache
+    loaded = _outputs([_start(_WORKLOAD, caches[label]) for label in orders])
+    for label, out in zip(orders, loaded, strict=True):
+        results[label] = _result(out)
+        assert results[label]["compiled"] == 0, (label, results[label])
     digests = {label: r["sha256"] for label, r in results.items()}
     assert len(set(digests.values())) == 1, digests

@@ -15,12 +15,17 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-import nbformat
 import pytest
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow, pytest.mark.timeout(600)]
 
-from browser_support import REPO, JupyterLab, block_other_ports, save  # noqa: E402
+from browser_support import (  # noqa: E402
+    REPO,
+    new_context,
+    open_notebook,
+    save,
+    write_notebook,
+)
 
 REAL_DATA = (
     Path(os.environ.get("RBM_NB_SHARED", REPO.parent / "shared")) / "data" / "rbm-data"
@@ -73,37 +78,22 @@ def run_cell(page, index: int, marker: str) -> None:
 
 @pytest.mark.parametrize("app", ["lab", "notebook"])
 def test_the_3d_view_holds_one_webgl_context_and_releases_it(
-    app, browser, tmp_path, monkeypatch
+    app, browser, jupyter_server, tmp_path
 ):
-    from playwright.sync_api import TimeoutError as PlaywrightTimeout
-
-    if REAL_DATA.is_dir():
-        monkeypatch.setenv("RBM_NB_DATA_DIR", str(REAL_DATA))
-    nb = nbformat.v4.new_notebook()
-    nb.cells = [nbformat.v4.new_code_cell(SHOW), nbformat.v4.new_code_cell(CLOSE)]
-    nb.metadata["kernelspec"] = {
-        "name": "python3",
-        "display_name": "Python 3",
-        "language": "python",
-    }
-    nbformat.write(nb, tmp_path / "contexts.ipynb")
-    (tmp_path / "home").mkdir()
-    server = JupyterLab(
-        tmp_path / "home", [tmp_path / "contexts.ipynb"], app=app, proxy=False
+    server = jupyter_server(app)
+    env = {"RBM_NB_DATA_DIR": str(REAL_DATA)} if REAL_DATA.is_dir() else {}
+    name = server.add_notebook(
+        write_notebook(
+            tmp_path / "contexts.ipynb", [SHOW, CLOSE], server.kernel_with_env(env)
+        )
     )
-    context = browser.new_context(viewport={"width": 1200, "height": 900})
+    context, blocked = new_context(
+        browser, server, viewport={"width": 1200, "height": 900}
+    )
     context.add_init_script(COUNT_CONTEXTS)
-    blocked = block_other_ports(context, server.port)
     page = context.new_page()
     try:
-        page.goto(server.notebook_url("contexts.ipynb"), timeout=120000)
-        page.wait_for_selector(".jp-Notebook .jp-CodeCell", timeout=120000)
-        try:
-            page.locator(".jp-Dialog").get_by_role(
-                "button", name="Select", exact=True
-            ).click(timeout=10000)
-        except PlaywrightTimeout:
-            pass
+        open_notebook(page, server, name)
         assert page.evaluate("window.rbmWebGL()")["made"] == 0
         run_cell(page, 0, "SCENE-READY")
         page.wait_for_function(
@@ -140,7 +130,4 @@ def test_the_3d_view_holds_one_webgl_context_and_releases_it(
         print(server.log_text())
         raise
     finally:
-        try:
-            context.close()
-        finally:
-            server.stop()
+        context.close()

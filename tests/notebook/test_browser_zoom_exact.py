@@ -23,13 +23,18 @@ import os
 import shutil
 from pathlib import Path
 
-import nbformat
 import numpy as np
 import pytest
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow, pytest.mark.timeout(900)]
 
-from browser_support import REPO, JupyterLab, block_other_ports, save  # noqa: E402
+from browser_support import (  # noqa: E402
+    REPO,
+    new_context,
+    open_notebook,
+    save,
+    write_notebook,
+)
 
 REAL_DATA = (
     Path(os.environ.get("RBM_NB_SHARED", REPO.parent / "shared")) / "data" / "rbm-data"
@@ -77,44 +82,28 @@ BUSY = (
 
 
 @pytest.fixture(params=["lab", "notebook"])
-def zoomed(request, browser, tmp_path, monkeypatch):
+def zoomed(request, browser, jupyter_server, tmp_path):
     from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
     app = request.param
-    if REAL_DATA.is_dir():
-        monkeypatch.setenv("RBM_NB_DATA_DIR", str(REAL_DATA))
-    nb = nbformat.v4.new_notebook()
+    server = jupyter_server(app)
+    env = {"RBM_NB_DATA_DIR": str(REAL_DATA)} if REAL_DATA.is_dir() else {}
     expected = tmp_path / "expected.npy"
-    nb.cells = [
-        nbformat.v4.new_code_cell(SETUP.replace("EXPECTED", repr(str(expected)))),
-        nbformat.v4.new_code_cell(BUSY),
-    ]
-    nb.metadata["kernelspec"] = {
-        "name": "python3",
-        "display_name": "Python 3",
-        "language": "python",
-    }
-    nbformat.write(nb, tmp_path / "zoom.ipynb")
-    (tmp_path / "home").mkdir()
-    server = JupyterLab(
-        tmp_path / "home", [tmp_path / "zoom.ipynb"], app=app, proxy=False
+    name = server.add_notebook(
+        write_notebook(
+            tmp_path / "zoom.ipynb",
+            [SETUP.replace("EXPECTED", repr(str(expected))), BUSY],
+            server.kernel_with_env(env),
+        )
     )
-    context = browser.new_context(viewport={"width": 1200, "height": 1000})
-    blocked = block_other_ports(context, server.port)
+    context, blocked = new_context(
+        browser, server, viewport={"width": 1200, "height": 1000}
+    )
     page = context.new_page()
-    page.errors = []
-    page.on("pageerror", lambda err: page.errors.append((str(err), err.stack or "")))
     page.app, page.expected, page.blocked = app, expected, blocked
     page.jupyter_static = f"{server.base}static/"
     try:
-        page.goto(server.notebook_url("zoom.ipynb"), timeout=120000)
-        page.wait_for_selector(".jp-Notebook .jp-CodeCell", timeout=120000)
-        try:
-            page.locator(".jp-Dialog").get_by_role(
-                "button", name="Select", exact=True
-            ).click(timeout=10000)
-        except PlaywrightTimeout:
-            pass
+        open_notebook(page, server, name)
         cell = page.locator(".jp-Notebook .jp-CodeCell").first
         for _ in range(20):
             cell.locator(".jp-InputArea-editor").click()
@@ -146,10 +135,7 @@ def zoomed(request, browser, tmp_path, monkeypatch):
         print(server.log_text())
         raise
     finally:
-        try:
-            context.close()
-        finally:
-            server.stop()
+        context.close()
 
 
 def shot(page, name: str, locator) -> None:

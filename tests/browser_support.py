@@ -429,6 +429,14 @@ def run_cell(page, index: int) -> None:
     raise AssertionError(f"cell {index} did not start running")
 
 
+def run_until(page, index: int, marker: str, timeout: float = 400000) -> str:
+    """Run code cell ``index`` and wait for an output holding ``marker``; its text."""
+    run_cell(page, index)
+    done = page.locator(".jp-OutputArea-output", has_text=marker)
+    done.wait_for(timeout=timeout)
+    return done.inner_text()
+
+
 def prompt(page, index: int) -> str:
     return (
         page.locator(".jp-Notebook .jp-CodeCell")

@@ -23,6 +23,7 @@ from browser_support import (  # noqa: E402
     REPO,
     new_context,
     open_notebook,
+    run_until,
     save,
     write_notebook,
 )
@@ -58,24 +59,6 @@ COUNT_CONTEXTS = """(() => {
 })();"""
 
 
-def run_cell(page, index: int, marker: str) -> None:
-    from playwright.sync_api import TimeoutError as PlaywrightTimeout
-
-    cell = page.locator(".jp-Notebook .jp-CodeCell").nth(index)
-    done = page.locator(".jp-OutputArea-output", has_text=marker)
-    for _ in range(20):
-        cell.locator(".jp-InputArea-editor").click()
-        page.keyboard.press("Shift+Enter")
-        try:
-            done.wait_for(timeout=15000)
-            return
-        except PlaywrightTimeout:
-            if "*" in cell.locator(".jp-InputPrompt").inner_text():
-                done.wait_for(timeout=300000)
-                return
-    raise AssertionError(f"cell {index} did not print {marker}")
-
-
 @pytest.mark.parametrize("app", ["lab", "notebook"])
 def test_the_3d_view_holds_one_webgl_context_and_releases_it(
     app, browser, jupyter_server, tmp_path
@@ -95,7 +78,7 @@ def test_the_3d_view_holds_one_webgl_context_and_releases_it(
     try:
         open_notebook(page, server, name)
         assert page.evaluate("window.rbmWebGL()")["made"] == 0
-        run_cell(page, 0, "SCENE-READY")
+        run_until(page, 0, "SCENE-READY")
         page.wait_for_function(
             """() => { const el = document.querySelector('.rbm-scene');
                        return el && el.rbmView && el.rbmView.frames > 0
@@ -118,7 +101,7 @@ def test_the_3d_view_holds_one_webgl_context_and_releases_it(
         assert view["canvases"] == 1, view
         if view["software"]:
             assert view["antialias"] is False, view
-        run_cell(page, 1, "SCENE-CLOSED")
+        run_until(page, 1, "SCENE-CLOSED")
         page.wait_for_function(
             "() => document.querySelector('.rbm-scene') === null", timeout=60000
         )

@@ -27,6 +27,7 @@ from browser_support import (  # noqa: E402
     new_context,
     open_notebook,
     our_errors,
+    run_until,
     save,
     write_notebook,
 )
@@ -64,7 +65,6 @@ widgets.VBox([scene.widget, player])
 
 @pytest.fixture(params=["lab", "notebook"])
 def streamed(request, browser, jupyter_server, tmp_path):
-    from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
     app = request.param
     server = jupyter_server(app)
@@ -85,21 +85,7 @@ def streamed(request, browser, jupyter_server, tmp_path):
     page.server = server
     try:
         open_notebook(page, server, name)
-        cell = page.locator(".jp-Notebook .jp-CodeCell").first
-        for _ in range(20):
-            cell.locator(".jp-InputArea-editor").click()
-            page.keyboard.press("Shift+Enter")
-            try:
-                page.locator(".jp-OutputArea-output", has_text="STREAM-READY").wait_for(
-                    timeout=15000
-                )
-                break
-            except PlaywrightTimeout:
-                if "*" in cell.locator(".jp-InputPrompt").inner_text():
-                    page.locator(
-                        ".jp-OutputArea-output", has_text="STREAM-READY"
-                    ).wait_for(timeout=400000)
-                    break
+        run_until(page, 0, "STREAM-READY")
         page.wait_for_function(
             """() => { const el = document.querySelector('.rbm-scene');
                        return el && el.rbmView && el.rbmView.store.stream

@@ -32,6 +32,7 @@ from browser_support import (  # noqa: E402
     REPO,
     new_context,
     open_notebook,
+    run_until,
     save,
     write_notebook,
 )
@@ -83,7 +84,6 @@ BUSY = (
 
 @pytest.fixture(params=["lab", "notebook"])
 def zoomed(request, browser, jupyter_server, tmp_path):
-    from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
     app = request.param
     server = jupyter_server(app)
@@ -104,24 +104,7 @@ def zoomed(request, browser, jupyter_server, tmp_path):
     page.jupyter_static = f"{server.base}static/"
     try:
         open_notebook(page, server, name)
-        cell = page.locator(".jp-Notebook .jp-CodeCell").first
-        for _ in range(20):
-            cell.locator(".jp-InputArea-editor").click()
-            page.keyboard.press("Shift+Enter")
-            try:
-                page.locator(".jp-OutputArea-output", has_text="ZOOM-READY").wait_for(
-                    timeout=15000
-                )
-                break
-            except PlaywrightTimeout:
-                if "*" in cell.locator(".jp-InputPrompt").inner_text():
-                    page.locator(
-                        ".jp-OutputArea-output", has_text="ZOOM-READY"
-                    ).wait_for(timeout=400000)
-                    break
-        page.ready_text = page.locator(
-            ".jp-OutputArea-output", has_text="ZOOM-READY"
-        ).inner_text()
+        page.ready_text = run_until(page, 0, "ZOOM-READY")
         page.wait_for_function(
             """() => { const ts = document.querySelector('.rbm-ts');
                        const sc = document.querySelector('.rbm-scene');

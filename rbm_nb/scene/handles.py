@@ -146,6 +146,20 @@ class FrameHandle(SceneHandle):
         return np.eye(3) * self._style["scale"]
 
 
+def segment_points(stretches) -> np.ndarray:
+    """Line-segment vertices (2k, 3) float32 of unbroken stretches of a path.
+
+    Segments, not one polyline: a stretch ends where samples are missing. A
+    stretch of one sample becomes a segment of zero length (a dot).
+    """
+    ends = []
+    for piece in stretches:
+        if len(piece) == 1:
+            piece = np.vstack([piece, piece])
+        ends.append(np.repeat(piece, 2, axis=0)[1:-1])
+    return np.vstack(ends).astype(np.float32) if ends else np.zeros((0, 3), np.float32)
+
+
 class PathHandle(SceneHandle):
     """The trajectory of a frame in its base, as a line.
 
@@ -204,15 +218,9 @@ class PathHandle(SceneHandle):
     def _objects(self):
         g = _geometry()
         stretches, _ = self.stretches()
-        # segments, not one polyline: a stretch ends where samples are missing
-        ends = []
-        for piece in stretches:
-            if len(piece) == 1:
-                piece = np.vstack([piece, piece])
-            ends.append(np.repeat(piece, 2, axis=0)[1:-1])
-        pts = (
-            np.vstack(ends).astype(np.float32) if ends else np.zeros((2, 3), np.float32)
-        )
+        pts = segment_points(stretches)
+        if len(pts) == 0:  # meshcat draws no line of no vertices: one empty segment
+            pts = np.zeros((2, 3), np.float32)
         line = g.LineSegments(
             g.PointsGeometry(np.ascontiguousarray(pts.T)),
             g.LineBasicMaterial(color=color_int(self._style["color"])),

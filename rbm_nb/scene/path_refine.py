@@ -34,7 +34,7 @@ import numpy as np
 
 from ..widgets._latest_only import LatestOnly
 from .decimate import PATH_TOLERANCE, refine_region
-from .handles import PathHandle
+from .handles import PathHandle, segment_points
 
 #: points in one answer, at most (240 kB of float32 segment ends)
 MAX_POINTS = 10_000
@@ -184,14 +184,7 @@ class PathRefiner:
         if isinstance(request, str):
             return self._refused(head, request)
         stretches, error = self._refined(path, request)
-        ends = []
-        for piece in stretches:
-            if len(piece) == 1:
-                piece = np.vstack([piece, piece])
-            ends.append(np.repeat(piece, 2, axis=0)[1:-1])
-        pts = (
-            np.vstack(ends).astype(np.float32) if ends else np.zeros((0, 3), np.float32)
-        )
+        pts = segment_points(stretches)
         head.update(
             path=path.handle.name,
             node=path.handle.geom_path,

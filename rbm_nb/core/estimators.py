@@ -23,17 +23,11 @@ from typing import Any
 
 import numpy as np
 
-from .._door import dask_blocks as _dask
-from .._door.dask_blocks import GRADIENT_HALO, SPLINE_HALO
-from .._door.series import series as _series
-from .._door.series import velocity_options as _velocity_options
-from .._door.shapes import along_axis
-from .._door.unpack import ArrayInput, dim_axis, kernel_array
-from .._door.unpack import is_dataarray as _is_dataarray
-from .._door.validation import check_tolerance, check_unit_norms, is_scalar
+from .._door.estimators import velocity_arguments, vector_pairs
+from .._door.unpack import ArrayInput, kernel_array
+from .._door.validation import check_tolerance, is_scalar
 from .._engine.velocity import angular_series as _angular_series
 from .._engine.velocity import linear_series as _linear_series
-from .._engine.velocity import lowpass_reach as _lowpass_reach
 from .._kernels import conversions as _kc
 from .._kernels import quaternion as _qk
 from .coordinates import _replace_dim
@@ -50,32 +44,6 @@ __all__ = [
 # ---------------------------------------------------------------------------
 # public velocity estimators
 # ---------------------------------------------------------------------------
-
-
-def _to_series(data, axis, time_axis):
-    moved = np.moveaxis(data, (time_axis, axis), (0, -1))
-    return moved.reshape(moved.shape[0], -1, moved.shape[-1]), moved.shape
-
-
-def _from_series(series, moved_shape, axis, time_axis, width):
-    out = series.reshape(moved_shape[:-1] + (width,))
-    return np.moveaxis(out, (0, -1), (time_axis, axis))
-
-
-def _lazy_estimate(eager, arr, dim, axis, timestamps, time_axis, halo, **options):
-    """A velocity estimate of dask-backed data, chunk by chunk with a halo (see _dask)."""
-    if options.get("outlier_thresh") is not None:
-        # its value, before the graph is built (rejection is lazy, see _dask)
-        _velocity_options(options["outlier_thresh"], None)
-    if options.get("cutoff") is not None:
-        # the value of cutoff, before it sets the halo; the series' length is
-        # checked by each chunk's eager call, which reads the whole halo
-        _velocity_options(None, options["cutoff"])
-        halo = max(halo, _lowpass_reach(options["cutoff"]))
-    quaternions = options.pop("quaternions", False)
-    return _dask.estimate(
-        eager, arr, dim, axis, timestamps, time_axis, halo, quaternions, **options
-    )
 
 
 def estimate_linear_velocity(
@@ -141,17 +109,15 @@ def estimate_linear_velocity(
            [1., 0., 0.],
            [1., 0., 0.]])
     """
-    if _dask.is_dask(arr):
-        return _lazy_estimate(
-            estimate_linear_velocity, arr, dim, axis, timestamps, time_axis,
-            GRADIENT_HALO, outlier_thresh=outlier_thresh, cutoff=cutoff,
-        )  # fmt: skip
-    data, axis, time_axis, t = _series(arr, dim, axis, timestamps, time_axis)
-    _velocity_options(outlier_thresh, cutoff, data.shape[time_axis])
-    series, moved_shape = _to_series(data, axis, time_axis)
-    v = _linear_series(series, t, outlier_thresh, cutoff)
-    out = _from_series(v, moved_shape, axis, time_axis, data.shape[axis])
-    if _is_dataarray(arr):
+    args = velocity_arguments(
+        estimate_linear_velocity, arr, dim, axis, timestamps, time_axis,
+        outlier_thresh, cutoff,
+    )  # fmt: skip
+    if args.lazy is not None:
+        return args.lazy
+    v = _linear_series(args.rows, args.t, outlier_thresh, cutoff)
+    out = args.result(v, args.rows.shape[-1])
+    if args.dataarray:
         return arr.copy(data=out)
     return out
 
@@ -219,42 +185,27 @@ def estimate_angular_velocity(
            [0. , 0. , 0.1],
            [0. , 0. , 0.1]])
     """
-    if _dask.is_dask(arr):
-        halo = SPLINE_HALO if mode == "quaternion" else GRADIENT_HALO
-        return _lazy_estimate(
-            estimate_angular_velocity, arr, dim, axis, timestamps, time_axis,
-            halo, quaternions=True, mode=mode, outlier_thresh=outlier_thresh,
-            cutoff=cutoff,
-        )  # fmt: skip
-    data, axis, time_axis, t = _series(arr, dim, axis, timestamps, time_axis)
-    if data.shape[axis] != 4:
-        raise ValueError(
-            f"arr must have length 4 (w, x, y, z) along axis {axis}, got shape {data.shape}"
-        )
-    _velocity_options(outlier_thresh, cutoff, data.shape[time_axis], mode)
-    check_unit_norms(np.moveaxis(data, (time_axis, axis), (0, -1)), "arr")
-    series, moved_shape = _to_series(data, axis, time_axis)
-    w = _angular_series(series, t, mode, outlier_thresh, cutoff)
-    out = _from_series(w, moved_shape, axis, time_axis, 3)
-    if not _is_dataarray(arr):
+    args = velocity_arguments(
+        estimate_angular_velocity, arr, dim, axis, timestamps, time_axis,
+        outlier_thresh, cutoff, mode,
+    )  # fmt: skip
+    if args.lazy is not None:
+        return args.lazy
+    w = _angular_series(args.rows, args.t, mode, outlier_thresh, cutoff)
+    out = args.result(w, 3)
+    if not args.dataarray:
         return out
     import xarray as xr
 
-    coords, dims = _replace_dim(dict(arr.coords), tuple(arr.dims), axis, "cartesian", 3)
+    coords, dims = _replace_dim(
+        dict(arr.coords), tuple(arr.dims), args.axis, "cartesian", 3
+    )
     return xr.DataArray(out, coords, dims, arr.name, dict(arr.attrs))
 
 
 # ---------------------------------------------------------------------------
 # rotations and transforms between vector sets
 # ---------------------------------------------------------------------------
-
-
-def _vectors(v, axis, name: str) -> tuple[np.ndarray, int]:
-    """Finite float64 vectors with x, y, z along ``axis`` (kept in place)."""
-    data = v.values if _is_dataarray(v) else v
-    ax = -1 if axis is None else axis
-    moved, ax = along_axis(data, name, ax, 3, "x, y, z", finite=True)
-    return np.moveaxis(moved, -1, ax), ax
 
 
 def shortest_arc_rotation(
@@ -291,9 +242,8 @@ def shortest_arc_rotation(
     >>> shortest_arc_rotation([1.0, 0, 0], [0, 1.0, 0]).round(6)
     array([0.707107, 0.      , 0.      , 0.707107])
     """
-    axis = dim_axis(v1, dim, axis, "v1")
-    a, ax1 = _vectors(v1, axis, "v1")
-    b, ax2 = _vectors(v2, axis, "v2")
+    pair = vector_pairs(v1, v2, dim, axis)
+    a, b, ax1, ax2, axis = pair.a, pair.b, pair.axis1, pair.axis2, pair.axis
     am, bm = np.moveaxis(a, ax1, -1), np.moveaxis(b, ax2, -1)
     try:
         am, bm = np.broadcast_arrays(am, bm)
@@ -333,7 +283,7 @@ def shortest_arc_rotation(
         else q.ndim + (-1 if axis is None else axis)
     )
     out = np.moveaxis(q, -1, min(max(pos, 0), q.ndim - 1))
-    if _is_dataarray(v1) and out.shape == a.shape[:ax1] + (4,) + a.shape[ax1 + 1 :]:
+    if pair.dataarray and out.shape == a.shape[:ax1] + (4,) + a.shape[ax1 + 1 :]:
         import xarray as xr
 
         coords, dims = _replace_dim(
@@ -341,26 +291,6 @@ def shortest_arc_rotation(
         )
         return xr.DataArray(out, coords, dims, v1.name, dict(v1.attrs))
     return out
-
-
-def _point_rows(v1, v2, dim, axis, same_shape: bool) -> tuple[np.ndarray, np.ndarray]:
-    axis = dim_axis(v1, dim, axis, "v1")
-    a, ax1 = _vectors(v1, axis, "v1")
-    b, ax2 = _vectors(v2, axis, "v2")
-    if a.ndim < 2:
-        raise ValueError(
-            f"v1 must be an array of vectors with at least 2 dimensions, got shape {a.shape}"
-        )
-    rows1 = np.moveaxis(a, ax1, -1).reshape(-1, 3)
-    rows2 = np.moveaxis(b, ax2, -1).reshape(-1, 3)
-    if same_shape and a.shape != b.shape:
-        raise ValueError(
-            f"v1 and v2 must have the same shape, got {a.shape} and {b.shape}"
-        )
-    for rows, name in ((rows1, "v1"), (rows2, "v2")):
-        if not np.all(np.isfinite(rows)):
-            raise ValueError(f"{name} must be finite")
-    return rows1, rows2
 
 
 def _rotation_from_covariance(h: np.ndarray) -> np.ndarray:
@@ -449,11 +379,12 @@ def best_fit_rotation(
     >>> best_fit_rotation([[1.0, 0, 0], [0, 1, 0]], [[0, 1.0, 0], [-1, 0, 0]]).round(6)
     array([0.707107, 0.      , 0.      , 0.707107])
     """
-    p1, p2 = _point_rows(v1, v2, dim, axis, same_shape=True)
+    pair = vector_pairs(v1, v2, dim, axis, rows="same")
+    p1, p2 = pair.rows1, pair.rows2
     h = p1.T @ p2
     _check_rank(h, "the vectors of v1 or v2")
     rotation = _quaternion(_rotation_from_covariance(h))
-    if _is_dataarray(v1):
+    if pair.dataarray:
         return _rotation_dataarray(rotation)
     return rotation
 
@@ -496,14 +427,15 @@ def best_fit_transform(
     >>> t.round(6), r.round(6) + 0.0  # + 0.0 turns -0.0 into 0.0
     (array([1., 2., 3.]), array([1., 0., 0., 0.]))
     """
-    p1, p2 = _point_rows(v1, v2, dim, axis, same_shape=True)
+    pair = vector_pairs(v1, v2, dim, axis, rows="same")
+    p1, p2 = pair.rows1, pair.rows2
     if len(p1) < 3:
         raise ValueError(
             f"v1 and v2 need at least 3 points to fix a rigid transform, got {len(p1)}"
         )
     translation, r = _fit_transform(p1, p2, check=True)
     rotation = _quaternion(r)
-    if _is_dataarray(v1):
+    if pair.dataarray:
         return _transform_dataarrays(translation, rotation)
     return translation, rotation
 
@@ -560,7 +492,8 @@ def iterative_closest_point(
     """
     from scipy.spatial import cKDTree
 
-    p1, p2 = _point_rows(v1, v2, dim, axis, same_shape=False)
+    pair = vector_pairs(v1, v2, dim, axis, rows="any")
+    p1, p2 = pair.rows1, pair.rows2
     for rows, name in ((p1, "v1"), (p2, "v2")):
         if len(rows) < 3:
             raise ValueError(f"{name} needs at least 3 points for ICP, got {len(rows)}")
@@ -613,6 +546,6 @@ def iterative_closest_point(
 
     translation, r = _fit_transform(p1, moved, check=False)
     rotation = _quaternion(r)
-    if _is_dataarray(v1):
+    if pair.dataarray:
         return _transform_dataarrays(translation, rotation)
     return translation, rotation

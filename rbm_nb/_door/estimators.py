@@ -1,0 +1,166 @@
+"""The estimators' one door call each: a velocity's series, a pair of vector sets.
+
+:func:`velocity_arguments` is what :func:`rbm_nb.estimate_linear_velocity` and
+:func:`rbm_nb.estimate_angular_velocity` call: it routes dask-backed data to
+the chunked estimate (:func:`rbm_nb._door.dask_blocks.estimate`), and checks
+everything else once (the series' rules in :mod:`rbm_nb._door.series`, the
+options, the quaternions' axis and norms) before handing back a frozen
+:class:`VelocityArguments` laid out as the engine takes it.
+:func:`vector_pairs` does the same for the rotations between vector sets
+(``shortest_arc_rotation``, ``best_fit_rotation``, ``best_fit_transform``,
+``iterative_closest_point``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .._engine.velocity import lowpass_reach
+from . import dask_blocks as _dask
+from .series import series, velocity_options
+from .shapes import along_axis
+from .unpack import dim_axis, is_dataarray
+from .validation import check_unit_norms
+
+__all__ = ["VelocityArguments", "velocity_arguments", "VectorPair", "vector_pairs"]
+
+
+@dataclass(frozen=True, slots=True)
+class VelocityArguments:
+    """A checked velocity estimate's input, or its lazy result.
+
+    ``rows`` is the series as (time, series, components) float64, ``t`` its
+    seconds; ``moved_shape``, ``axis`` and ``time_axis`` put the result back
+    in the argument's layout. For dask-backed data only ``lazy`` is set.
+    """
+
+    rows: Any
+    t: Any
+    moved_shape: tuple
+    axis: int
+    time_axis: int
+    dataarray: bool
+    lazy: Any = None
+
+    def result(self, out: np.ndarray, width: int) -> np.ndarray:
+        """The engine's (time, series, width) output in the argument's layout."""
+        out = out.reshape(self.moved_shape[:-1] + (width,))
+        return np.moveaxis(out, (0, -1), (self.time_axis, self.axis))
+
+
+def velocity_arguments(
+    eager: Callable,
+    arr: Any,
+    dim: Any,
+    axis: Any,
+    timestamps: Any,
+    time_axis: Any,
+    outlier_thresh: Any,
+    cutoff: Any,
+    mode: Any = None,
+) -> VelocityArguments:
+    """The one door call of a velocity estimator; ``mode`` only for angular ones.
+
+    ``eager`` is the estimator itself: dask-backed data is estimated chunk by
+    chunk with it (see :func:`rbm_nb._door.dask_blocks.estimate`).
+    """
+    angular = mode is not None
+    if _dask.is_dask(arr):
+        return _lazy(
+            eager, arr, dim, axis, timestamps, time_axis, outlier_thresh, cutoff, mode
+        )
+    data, axis, time_axis, t = series(arr, dim, axis, timestamps, time_axis)
+    if angular and data.shape[axis] != 4:
+        raise ValueError(
+            f"arr must have length 4 (w, x, y, z) along axis {axis}, got shape {data.shape}"
+        )
+    velocity_options(outlier_thresh, cutoff, data.shape[time_axis], mode)
+    moved = np.moveaxis(data, (time_axis, axis), (0, -1))
+    if angular:
+        check_unit_norms(moved, "arr")
+    rows = moved.reshape(moved.shape[0], -1, moved.shape[-1])
+    return VelocityArguments(
+        rows, t, moved.shape, axis, time_axis, is_dataarray(arr)
+    )
+
+
+def _lazy(eager, arr, dim, axis, timestamps, time_axis, outlier_thresh, cutoff, mode):
+    """A velocity estimate of dask-backed data, chunk by chunk with a halo."""
+    if mode is None:
+        halo = _dask.GRADIENT_HALO
+        options: dict[str, Any] = {}
+    else:
+        halo = _dask.SPLINE_HALO if mode == "quaternion" else _dask.GRADIENT_HALO
+        options = {"mode": mode}
+    if outlier_thresh is not None:
+        # its value, before the graph is built (rejection is lazy, see _dask)
+        velocity_options(outlier_thresh, None)
+    if cutoff is not None:
+        # the value of cutoff, before it sets the halo; the series' length is
+        # checked by each chunk's eager call, which reads the whole halo
+        velocity_options(None, cutoff)
+        halo = max(halo, lowpass_reach(cutoff))
+    lazy = _dask.estimate(
+        eager, arr, dim, axis, timestamps, time_axis, halo, mode is not None,
+        **options, outlier_thresh=outlier_thresh, cutoff=cutoff,
+    )  # fmt: skip
+    return VelocityArguments(None, None, (), 0, 0, is_dataarray(arr), lazy)
+
+
+@dataclass(frozen=True, slots=True)
+class VectorPair:
+    """Two checked vector arguments: finite float64, x, y, z along ``axis1``/``axis2``.
+
+    ``axis`` is the axis as the caller gave it (or the DataArray's ``dim``);
+    ``rows1``/``rows2`` the vectors as (n, 3) rows, when asked for.
+    """
+
+    a: np.ndarray
+    b: np.ndarray
+    axis1: int
+    axis2: int
+    axis: Any
+    dataarray: bool
+    rows1: Any = None
+    rows2: Any = None
+
+
+def vector_pairs(
+    v1: Any, v2: Any, dim: Any, axis: Any, rows: str | None = None
+) -> VectorPair:
+    """The one door call of the rotations between vector sets.
+
+    ``rows``: None (vectors kept in their layout), "same" (as rows, of the
+    same shape: corresponding vectors) or "any" (as rows, of any sizes).
+    """
+    axis = dim_axis(v1, dim, axis, "v1")
+    a, ax1 = _vectors(v1, axis, "v1")
+    b, ax2 = _vectors(v2, axis, "v2")
+    rows1 = rows2 = None
+    if rows is not None:
+        if a.ndim < 2:
+            raise ValueError(
+                f"v1 must be an array of vectors with at least 2 dimensions, got shape {a.shape}"
+            )
+        rows1 = np.moveaxis(a, ax1, -1).reshape(-1, 3)
+        rows2 = np.moveaxis(b, ax2, -1).reshape(-1, 3)
+        if rows == "same" and a.shape != b.shape:
+            raise ValueError(
+                f"v1 and v2 must have the same shape, got {a.shape} and {b.shape}"
+            )
+        for flat, name in ((rows1, "v1"), (rows2, "v2")):
+            if not np.all(np.isfinite(flat)):
+                raise ValueError(f"{name} must be finite")
+    return VectorPair(a, b, ax1, ax2, axis, is_dataarray(v1), rows1, rows2)
+
+
+def _vectors(v, axis, name: str) -> tuple[np.ndarray, int]:
+    """Finite float64 vectors with x, y, z along ``axis`` (kept in place)."""
+    data = v.values if is_dataarray(v) else v
+    ax = -1 if axis is None else axis
+    moved, ax = along_axis(data, name, ax, 3, "x, y, z", finite=True)
+    return np.moveaxis(moved, -1, ax), ax

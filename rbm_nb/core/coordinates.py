@@ -12,10 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from .._door import dask_blocks as _dask
-from .._door import shapes as _shapes
-from .._door.unpack import ArrayInput, dim_axis, resolve_axis
-from .._door.unpack import is_dataarray as _is_dataarray
+from .._door.coordinates import components, coordinate_change
+from .._door.unpack import ArrayInput
 
 # system name -> (dimension name, axis labels) per dimensionality
 _SYSTEM_AXES: dict[tuple[str, int], tuple[str, list[str]]] = {
@@ -52,11 +50,14 @@ def cartesian_to_polar(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     >>> cartesian_to_polar([0.0, 2.0])
     array([2.        , 1.57079633])
     """
-    if _dask.is_dask(arr):
-        return _dask.elementwise(
-            cartesian_to_polar, getattr(arr, "data", arr), axis, axis=axis
-        )
-    arr, axis = _shapes.along_axis(arr, "arr", axis, 2, "x, y")
+    args = components(cartesian_to_polar, arr, axis, 2, "x, y")
+    if args.lazy is not None:
+        return args.lazy
+    return _polar(args.data, args.axis)
+
+
+def _polar(arr: np.ndarray, axis: int) -> np.ndarray:
+    """The math of :func:`cartesian_to_polar` on checked coordinates (last axis)."""
     x, y = arr[..., 0], arr[..., 1]
     return np.stack((np.hypot(x, y), np.arctan2(y, x)), axis=axis)
 
@@ -86,11 +87,14 @@ def polar_to_cartesian(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     >>> polar_to_cartesian([2.0, 0.0])
     array([2., 0.])
     """
-    if _dask.is_dask(arr):
-        return _dask.elementwise(
-            polar_to_cartesian, getattr(arr, "data", arr), axis, axis=axis
-        )
-    arr, axis = _shapes.along_axis(arr, "arr", axis, 2, "r, phi")
+    args = components(polar_to_cartesian, arr, axis, 2, "r, phi")
+    if args.lazy is not None:
+        return args.lazy
+    return _cartesian_2d(args.data, args.axis)
+
+
+def _cartesian_2d(arr: np.ndarray, axis: int) -> np.ndarray:
+    """The math of :func:`polar_to_cartesian` on checked coordinates (last axis)."""
     r, phi = arr[..., 0], arr[..., 1]
     return np.stack((r * np.cos(phi), r * np.sin(phi)), axis=axis)
 
@@ -122,11 +126,14 @@ def cartesian_to_spherical(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     >>> cartesian_to_spherical([0.0, 0.0, 2.0])
     array([2., 0., 0.])
     """
-    if _dask.is_dask(arr):
-        return _dask.elementwise(
-            cartesian_to_spherical, getattr(arr, "data", arr), axis, axis=axis
-        )
-    arr, axis = _shapes.along_axis(arr, "arr", axis, 3, "x, y, z")
+    args = components(cartesian_to_spherical, arr, axis, 3, "x, y, z")
+    if args.lazy is not None:
+        return args.lazy
+    return _spherical(args.data, args.axis)
+
+
+def _spherical(arr: np.ndarray, axis: int) -> np.ndarray:
+    """The math of :func:`cartesian_to_spherical` on checked coordinates (last axis)."""
     x, y, z = arr[..., 0], arr[..., 1], arr[..., 2]
     rho = np.hypot(x, y)
     # arctan2 rather than arccos(z / r): defined at the origin and accurate near
@@ -159,11 +166,14 @@ def spherical_to_cartesian(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     >>> spherical_to_cartesian([1.0, np.pi / 2, 0.0]).round(12)
     array([1., 0., 0.])
     """
-    if _dask.is_dask(arr):
-        return _dask.elementwise(
-            spherical_to_cartesian, getattr(arr, "data", arr), axis, axis=axis
-        )
-    arr, axis = _shapes.along_axis(arr, "arr", axis, 3, "r, theta, phi")
+    args = components(spherical_to_cartesian, arr, axis, 3, "r, theta, phi")
+    if args.lazy is not None:
+        return args.lazy
+    return _cartesian_3d(args.data, args.axis)
+
+
+def _cartesian_3d(arr: np.ndarray, axis: int) -> np.ndarray:
+    """The math of :func:`spherical_to_cartesian` on checked coordinates (last axis)."""
     r, theta, phi = arr[..., 0], arr[..., 1], arr[..., 2]
     rho = r * np.sin(theta)
     return np.stack(
@@ -171,12 +181,14 @@ def spherical_to_cartesian(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     )
 
 
+# (outof, into) -> the math, the number of coordinates and what they are
 _CONVERTERS = {
-    ("cartesian", "polar"): cartesian_to_polar,
-    ("polar", "cartesian"): polar_to_cartesian,
-    ("cartesian", "spherical"): cartesian_to_spherical,
-    ("spherical", "cartesian"): spherical_to_cartesian,
+    ("cartesian", "polar"): (_polar, 2, "x, y"),
+    ("polar", "cartesian"): (_cartesian_2d, 2, "r, phi"),
+    ("cartesian", "spherical"): (_spherical, 3, "x, y, z"),
+    ("spherical", "cartesian"): (_cartesian_3d, 3, "r, theta, phi"),
 }
+_SYSTEMS = {pair: (n, what) for pair, (_, n, what) in _CONVERTERS.items()}
 
 
 def _replace_dim(
@@ -198,12 +210,6 @@ def _replace_dim(
     coords = {k: c for k, c in coords.items() if old_dim not in c.dims}
     coords[new_dim] = labels
     return coords, dims
-
-
-def _resolve_dim_axis(arr: Any, dim: str | None, axis: int | None) -> int:
-    """The axis of a DataArray (or array) meant by ``dim`` or ``axis``."""
-    ax = dim_axis(arr, dim, axis)
-    return resolve_axis(-1 if ax is None else ax, np.ndim(arr), "axis")
 
 
 def transform_coordinates(
@@ -254,39 +260,14 @@ def transform_coordinates(
     >>> transform_coordinates([1.0, 1.0], "polar", outof="cartesian")
     array([1.41421356, 0.78539816])
     """
-    if _dask.is_dask(arr):
-        if not _is_dataarray(arr):
-            return _dask.elementwise(
-                transform_coordinates, arr, -1 if axis is None else axis,
-                into=into, outof=outof, axis=axis,
-            )  # fmt: skip
-        core = arr.dims[_resolve_dim_axis(arr, dim, axis)]
-        return _dask.elementwise(
-            transform_coordinates, arr, core, into=into, outof=outof, dim=core,
-            replace_dim=replace_dim,
-        )  # fmt: skip
-    is_da = _is_dataarray(arr)
-    ax = _resolve_dim_axis(arr, dim, axis)
-    attrs = dict(arr.attrs) if is_da else None
-    if outof is None:
-        if attrs is None or "coordinate_system" not in attrs:
-            raise ValueError(
-                "outof must be given unless arr is a DataArray whose attrs contain "
-                "'coordinate_system'"
-            )
-        outof = attrs["coordinate_system"]
-    try:
-        convert = _CONVERTERS[(outof, into)]
-    except KeyError:
-        known = ", ".join(f"{a} -> {b}" for a, b in _CONVERTERS)
-        raise ValueError(
-            f"cannot transform coordinates from {outof!r} into {into!r}; "
-            f"supported: {known}"
-        ) from None
-
-    data = arr.values if is_da else arr
-    out = convert(data, axis=ax)
-    if not is_da or attrs is None:
+    args = coordinate_change(
+        transform_coordinates, arr, into, outof, dim, axis, replace_dim, _SYSTEMS
+    )
+    if args.lazy is not None:
+        return args.lazy
+    ax, attrs = args.axis, args.attrs
+    out = _CONVERTERS[(args.outof, into)][0](args.data, ax)
+    if not args.dataarray or attrs is None:
         return out
 
     import xarray as xr

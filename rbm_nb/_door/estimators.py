@@ -83,9 +83,7 @@ def velocity_arguments(
     if angular:
         check_unit_norms(moved, "arr")
     rows = moved.reshape(moved.shape[0], -1, moved.shape[-1])
-    return VelocityArguments(
-        rows, t, moved.shape, axis, time_axis, is_dataarray(arr)
-    )
+    return VelocityArguments(rows, t, moved.shape, axis, time_axis, is_dataarray(arr))
 
 
 def _lazy(eager, arr, dim, axis, timestamps, time_axis, outlier_thresh, cutoff, mode):

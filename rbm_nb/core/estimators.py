@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from .._door.estimators import velocity_arguments, vector_pairs
+from .._door.estimators import vector_pairs, velocity_arguments
 from .._door.unpack import ArrayInput, kernel_array
 from .._door.validation import check_tolerance, is_scalar
 from .._engine.velocity import angular_series as _angular_series

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from .._door import dask_blocks as _dask
-from .._door import shapes as _shapes
+from .._door import quaternions as _door
 from .._door.unpack import ArrayInput, float_array, kernel_array, resolve_axis
 from .._door.unpack import is_dataarray as _is_dataarray
 from .._door.validation import (
@@ -26,7 +26,6 @@ from .._door.validation import (
 )
 from .._engine import time as _time
 from .._infra import parallel as _parallel
-from .._infra.config import UNIT_QUATERNION_TOLERANCE
 from .._kernels import quaternion as _qk
 from .._kernels import rotations as _rk
 from .._kernels import squad_walk as _sw
@@ -40,20 +39,11 @@ __all__ = ["from_euler_angles", "qinterp", "qinv", "qmean", "qmul", "rotate_vect
 # ---------------------------------------------------------------------------
 
 
-def _is_quaternion_dtype(arr: np.ndarray) -> bool:
-    return arr.dtype.name == "quaternion"
-
-
-def _split(q: Any, qaxis: int, name: str) -> tuple[np.ndarray, bool]:
-    """Quaternions as a float array with the components last, and whether
-    the input was of quaternion dtype (whose ``qaxis`` is then ignored)."""
-    arr = np.asarray(q)
-    if _is_quaternion_dtype(arr):
-        import quaternion
-
-        return quaternion.as_float_array(arr), True
-    moved, _ = _shapes.along_axis(arr, name, qaxis, 4, "w, x, y, z", "qaxis")
-    return moved, False
+# the door's rules, under the names the functions below (and accessors) use
+_split = _door.split
+_broadcast = _door.broadcast
+_check_times = _door.check_times
+_fast_times = _door.fast_times
 
 
 def _join(out: np.ndarray, was_quaternion: bool, qpos: int) -> np.ndarray:
@@ -78,15 +68,6 @@ def _rows(arr: np.ndarray, shape: tuple[int, ...], width: int) -> np.ndarray:
             return kernel_array(arr.reshape(1, width))
         arr = np.broadcast_to(arr, shape + (width,))
     return kernel_array(arr.reshape(-1, width))
-
-
-def _broadcast(a: tuple[int, ...], b: tuple[int, ...], what: str) -> tuple[int, ...]:
-    try:
-        return tuple(np.broadcast_shapes(a, b))
-    except ValueError:
-        raise ValueError(
-            f"{what}: shapes {a} and {b} cannot be broadcast together"
-        ) from None
 
 
 def _like(template: Any, data: np.ndarray) -> Any:
@@ -133,29 +114,16 @@ def qinv(q: ArrayInput, qaxis: int = -1) -> Any:
     >>> qinv([0.0, 0.0, 0.0, 2.0])
     array([ 0. , -0. , -0. , -0.5])
     """
-    if _dask.is_dask(q):
+    args = _door.inverse(q, qaxis)
+    if args.lazy:
         core = q.dims[qaxis] if _is_dataarray(q) else qaxis
         return _dask.elementwise(qinv, q, core, fill=(1.0, 0.0, 0.0, 0.0), qaxis=qaxis)
-    if _is_plain_rows(q, qaxis):
+    if args.plain:
         # (n, 4) float64: one pass, no copies (infinities and zeros counted)
-        return _qinv_rows(q, q)
-    template = q if _is_dataarray(q) else None
-    qf, was_quaternion = _split(q, qaxis, "q")
-    out = _qinv_rows(kernel_array(qf.reshape(-1, 4)), qf)
-    return _like(template, _join(out.reshape(qf.shape), was_quaternion, qaxis))
-
-
-def _is_plain_rows(q: Any, qaxis: Any) -> bool:
-    """Whether ``q`` is a C-contiguous float64 ndarray of shape (n, 4) with
-    the components along ``qaxis`` (the kernels take it as it is)."""
-    return (
-        type(q) is np.ndarray
-        and type(qaxis) is int
-        and qaxis in (-1, 1)
-        and q.dtype == np.float64
-        and q.ndim == 2
-        and q.shape[1] == 4
-        and q.flags.c_contiguous
+        return _qinv_rows(args.rows, q)
+    out = _qinv_rows(args.rows, args.qf)
+    return _like(
+        args.template, _join(out.reshape(args.qf.shape), args.was_quaternion, qaxis)
     )
 
 
@@ -223,38 +191,26 @@ def qmul(*q, qaxis: int = -1) -> Any:
     >>> qmul([0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0])
     array([0., 0., 0., 1.])
     """
-    if len(q) < 2:
-        raise ValueError(f"qmul needs at least 2 quaternion arrays, got {len(q)}")
-    if any(_dask.is_dask(x) for x in q):
+    args = _door.product(q, qaxis)
+    if args.lazy:
         return _lazy_qmul(q, qaxis)
-    if (
-        len(q) == 2
-        and _is_plain_rows(q[0], qaxis)
-        and _is_plain_rows(q[1], qaxis)
-        and (q[0].shape[0] == q[1].shape[0] or 1 in (q[0].shape[0], q[1].shape[0]))
-    ):
+    if args.plain:
         # (n|1, 4) x (n|1, 4) float64: one pass, no copies
-        out, infs = _qmul_rows(kernel_array(q[0]), kernel_array(q[1]))
+        out, infs = _qmul_rows(*args.parts)
         if not infs:
             return out
-        # the general path below names the infinity
-    kinds = {_is_quaternion_dtype(np.asarray(x)) for x in q}
-    if len(kinds) > 1:
-        raise ValueError(
-            "q: either all or none of the arrays must be of quaternion dtype"
-        )
-    parts = [_split(x, qaxis, f"q[{i}]")[0] for i, x in enumerate(q)]
-    result = parts[0]
-    for i, nxt in enumerate(parts[1:], start=1):
-        shape = _broadcast(result.shape[:-1], nxt.shape[:-1], f"q[{i}]")
+        # the general checks name the infinity
+        args = _door.product(q, qaxis, general=True)
+    result = args.parts[0]
+    for nxt, shape in zip(args.parts[1:], args.shapes[1:], strict=True):
         if 0 in shape:  # the kernel reuses a single row for any length, even 0
             result = np.empty(shape + (4,))
             continue
         out, _ = _qmul_rows(_rows(result, shape, 4), _rows(nxt, shape, 4))
         result = out.reshape(shape + (4,))
-    out = _join(result, kinds.pop(), qaxis)
-    for x in q:
-        if _is_dataarray(x) and x.shape == out.shape:
+    out = _join(result, args.was_quaternion, qaxis)
+    for x in args.dataarrays:
+        if x.shape == out.shape:
             return x.copy(data=out)
     return out
 
@@ -373,35 +329,6 @@ def _reduced_like(
 # ---------------------------------------------------------------------------
 
 
-def _time_values(t_in: Any, t_out: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Both time arrays as float64 seconds on ``t_in[0]`` (see :mod:`rbm_nb._engine.time`)."""
-    return _time.seconds_pair(t_in, t_out)
-
-
-def _check_times(t_in: np.ndarray, t_out: np.ndarray, n: int) -> None:
-    if t_in.ndim != 1 or t_in.shape[0] != n:
-        raise ValueError(
-            f"t_in must be one-dimensional with one time per sample ({n}), got shape {t_in.shape}"
-        )
-    if n == 0:
-        raise ValueError("q has no samples to interpolate along axis")
-    if not np.all(np.isfinite(t_in)):
-        raise ValueError("t_in must be finite")
-    if np.any(np.diff(t_in) <= 0):
-        raise ValueError("t_in must be strictly increasing")
-    if t_out.ndim > 1:
-        raise ValueError(
-            f"t_out must be a scalar or one-dimensional, got shape {t_out.shape}"
-        )
-    if not np.all(np.isfinite(t_out)):
-        raise ValueError("t_out must be finite")
-    if t_out.size and (t_out.min() < t_in[0] or t_out.max() > t_in[-1]):
-        raise ValueError(
-            f"t_out must lie within the range of t_in [{t_in[0]}, {t_in[-1]}], got "
-            f"[{t_out.min()}, {t_out.max()}] (squad cannot extrapolate)"
-        )
-
-
 def _squad_rows(q: np.ndarray, t_in: np.ndarray, t_out: np.ndarray) -> np.ndarray:
     """Squad of one stored series (n, 4) at ``t_out`` -> (m, 4), in one pass
     (sign continuity and the stored signs included), on both cores when long."""
@@ -421,48 +348,6 @@ def _squad_series(
     for b in range(series.shape[1]):
         out[:, b, :] = _squad_rows(kernel_array(series[:, b, :]), t_in, t_out)
     return out
-
-
-def _fast_times(t_in: Any, t_out: Any) -> tuple[np.ndarray, np.ndarray] | None:
-    """Both time arrays as seconds on ``t_in[0]`` when they are plain 1-D
-    float64 or datetime64[ns] arrays (one pass each), else None."""
-    if type(t_in) is not np.ndarray or type(t_out) is not np.ndarray:
-        return None
-    if t_in.ndim != 1 or t_out.ndim != 1 or t_in.dtype != t_out.dtype:
-        return None
-    if t_in.dtype == np.float64 or (
-        t_in.dtype == np.dtype("datetime64[ns]") and t_in.size
-    ):
-        # a NaT becomes NaN, which the caller's one-pass check sends to the
-        # general path (that names it)
-        return _time.seconds_pair(t_in, t_out)
-    return None
-
-
-def _qinterp_fast(q: Any, t_in: Any, t_out: Any, axis: Any, qaxis: Any):
-    """qinterp of a C-contiguous float64 (n, 4) array with 1-D times along
-    axis 0, checked in one pass per array; None if it is not that case or
-    the input is bad (the general path then names what is wrong)."""
-    if not (
-        type(q) is np.ndarray
-        and type(axis) is int
-        and type(qaxis) is int
-        and axis in (0, -2)
-        and qaxis in (-1, 1)
-        and q.dtype == np.float64
-        and q.ndim == 2
-        and q.shape[1] == 4
-        and q.flags.c_contiguous
-    ):
-        return None
-    times = _fast_times(t_in, t_out)
-    if times is None or times[0].shape[0] != q.shape[0]:
-        return None
-    q = kernel_array(q)
-    tol = UNIT_QUATERNION_TOLERANCE
-    if _sw.squad_input_fault(q, times[0], times[1], tol) != 0:
-        return None
-    return _squad_rows(q, times[0], times[1])
 
 
 def _squad_along(
@@ -522,47 +407,19 @@ def qinterp(
     >>> qinterp(q, [0.0, 1.0], [0.5]).round(6)
     array([[0.707107, 0.      , 0.      , 0.707107]])
     """
-    if _dask.is_dask(q) and not _is_dataarray(q):
-        import xarray as xr
-
-        ax = resolve_axis(axis, q.ndim, "axis")
-        qa = resolve_axis(qaxis, q.ndim, "qaxis")
-        dims = [f"dim_{k}" for k in range(q.ndim)]
-        dims[ax] = "time"
-        wrapped = xr.DataArray(q, {"time": np.asarray(t_in)}, dims)
-        out = _qinterp_dataarray(wrapped, "time", dims[qa], t_out, out_of_range="raise")
-        return out.data
-    if _is_dataarray(q):
-        dim = q.dims[resolve_axis(axis, q.ndim, "axis")]
-        qdim = q.dims[resolve_axis(qaxis, q.ndim, "qaxis")]
-        return _qinterp_dataarray(q, dim, qdim, t_out, t_in=t_in, out_of_range="raise")
-    fast = _qinterp_fast(q, t_in, t_out, axis, qaxis)
-    if fast is not None:
-        return fast
-    arr = np.asarray(q)
-    qf, was_quaternion = _split(arr, qaxis, "q")
-    ax = resolve_axis(axis, arr.ndim, "axis")
-    qpos = -1
-    if not was_quaternion:
-        qpos = resolve_axis(qaxis, arr.ndim, "qaxis")
-        # axis counts the axes of q without qaxis when both name the same
-        # axis (qinterp(q.T, ..., qaxis=0) with the default axis=0), as in
-        # rigid-body-motion; otherwise it counts all axes of q
-        ax_without_q = ax - 1 if ax > qpos else ax
-    else:
-        ax_without_q = ax
-    if ax_without_q >= qf.ndim - 1:
-        raise ValueError(
-            f"axis={axis} and qaxis={qaxis} refer to the same axis of q, and q of "
-            f"shape {arr.shape} has no axis {axis} besides its quaternion axis"
+    args = _door.interpolation(q, t_in, t_out, axis, qaxis)
+    if args.kind == "dataarray":
+        out = _qinterp_dataarray(
+            args.q, args.dim, args.qdim, t_out, t_in=args.t_in, out_of_range="raise"
         )
-    t_in_f, t_out_f = _time_values(t_in, t_out)
-    _check_times(t_in_f, t_out_f.reshape(-1), qf.shape[ax_without_q])
-    check_unit_norms(qf, "q")
-    out = _squad_along(qf, ax_without_q, t_in_f, t_out_f)
-    if t_out_f.ndim == 0 and ax < qpos:
+        return out.data if args.dask else out
+    if args.kind == "rows":
+        return _squad_rows(args.q, args.t_in, args.t_out)
+    out = _squad_along(args.q, args.axis, args.t_in, args.t_out)
+    qpos = args.qpos
+    if args.t_out.ndim == 0 and args.given_axis < qpos:
         qpos -= 1  # the sampled axis is gone
-    return _join(out, was_quaternion, qpos)
+    return _join(out, args.was_quaternion, qpos)
 
 
 def _qinterp_dataarray(
@@ -605,7 +462,9 @@ def _qinterp_dataarray(
             f"got shape {t_out_values.shape}"
         )
     times = _fast_times(np.asarray(getattr(t_in, "values", t_in)), t_out_values)
-    t_in_f, t_out_f = times if times is not None else _time_values(t_in, t_out_values)
+    t_in_f, t_out_f = (
+        times if times is not None else _time.seconds_pair(t_in, t_out_values)
+    )
     flat_out = t_out_f.reshape(-1)
     inside = None  # None: every time is inside the sampled range
     if out_of_range == "nan" and t_in_f.ndim == 1 and t_in_f.size:
@@ -763,43 +622,19 @@ def rotate_vectors(
     >>> rotate_vectors([0.0, 0.0, 0.0, 2.0], [1.0, 0.0, 0.0]).round(12)
     array([-1.,  0.,  0.])
     """
-    if _dask.is_dask(q) or _dask.is_dask(v):
+    args = _door.rotation(q, v, axis, qaxis, one_to_one)
+    if args.lazy:
         return _lazy_rotate_vectors(q, v, axis, qaxis, one_to_one)
-    qa = np.asarray(q)
-    va = v.values if _is_dataarray(v) else v
-    va = float_array(va, "v")
-    template = v if _is_dataarray(v) else None
-    # Common case first: (n, 4) x (n, 3) contiguous float64, no copies at all
-    # and one pass (infinities and zero quaternions are counted by the kernel).
-    if (
-        one_to_one
-        and qa.ndim == 2
-        and va.ndim == 2
-        and qa.dtype == np.float64
-        and qa.shape[1] == 4
-        and va.shape[1] == 3
-        and (axis == -1 or axis == 1)
-        and (qaxis == -1 or qaxis == 1)
-        and qa.flags.c_contiguous
-        and (qa.shape[0] == va.shape[0] or qa.shape[0] == 1 or va.shape[0] == 1)
-    ):
-        return _like(template, _rotate_rows(kernel_array(qa), va, qa, va))
-    vm, vax = _shapes.along_axis(va, "v", axis, 3, "x, y, z")
-    qf, _ = _split(qa, qaxis, "q")
-    q_shape = qf.shape[:-1]
-    v_shape = vm.shape[:-1]
-    if one_to_one and q_shape:
-        if len(q_shape) != len(v_shape):
-            raise ValueError(
-                f"one_to_one rotation needs one quaternion per vector: q has shape "
-                f"{q_shape} (without qaxis) and v has shape {v_shape} (without axis); "
-                f"use one_to_one=False to rotate every vector by every quaternion"
-            )
-        shape = _broadcast(q_shape, v_shape, "q and v")
+    template = args.template
+    if args.kind == "rows":
+        return _like(template, _rotate_rows(args.q, args.v, args.q, args.v))
+    qf, vm, vax = args.q, args.v, args.vax
+    if args.kind == "broadcast":
+        shape = args.shape
         out = _rotate_rows(_rows(qf, shape, 4), _rows(vm, shape, 3), qf, vm)
         out = np.moveaxis(out.reshape(shape + (3,)), -1, vax)
         return _like(template, out)
-
+    q_shape, v_shape = qf.shape[:-1], args.shape
     q_rows = kernel_array(qf.reshape(-1, 4))
     v_rows = kernel_array(vm.reshape(-1, 3))
     if not q_shape:

@@ -11,6 +11,7 @@ that every facade words the same mistake the same way:
 * :func:`rows`: the same flattened to C-contiguous ``(n, *tail)`` rows plus
   the leading shape they came from (``finite=True``: and no NaN or
   infinity, naming the first bad row by its index in the argument);
+* :func:`rows_within`: rows of matrices and the tolerance they are tested with;
 * :func:`paired_rows`: two such arguments over their broadcast leading shape;
 * :func:`last_axis`: numbers with a last axis of length ``size``;
 * :func:`one_or_many`: one row ``(width,)`` or ``(N, width)`` rows;
@@ -30,11 +31,12 @@ from typing import Any
 import numpy as np
 
 from .unpack import float_array, kernel_array, moveaxis, resolve_axis
-from .validation import check_last_axis, check_no_inf
+from .validation import check_last_axis, check_no_inf, check_tolerance
 
 __all__ = [
     "with_tail",
     "rows",
+    "rows_within",
     "paired_rows",
     "last_axis",
     "one_or_many",
@@ -81,6 +83,16 @@ def rows(
         if bad.any():
             raise ValueError(f"{name}{where(lead, int(np.argmax(bad)))} is not finite")
     return flat, lead
+
+
+def rows_within(
+    value: Any, name: str, tail: tuple[int, ...], tol: Any
+) -> tuple[np.ndarray, tuple, float]:
+    """:func:`rows` of matrices to be tested against a tolerance ``tol``
+    (checked first, as a finite number >= 0), and ``tol`` as a float."""
+    tol = check_tolerance(tol)
+    flat, lead = rows(value, name, tail)
+    return flat, lead, tol
 
 
 def paired_rows(

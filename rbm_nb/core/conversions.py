@@ -44,7 +44,6 @@ from itertools import product
 import numpy as np
 
 from .._door import shapes as _shapes
-from .._door.validation import check_tolerance
 from .._infra.config import UNIT_QUATERNION_TOLERANCE
 from .._kernels import conversions as _kc
 
@@ -226,9 +225,8 @@ def quaternion_from_matrix(matrix, *, tol: float = MATRIX_TOLERANCE) -> np.ndarr
     >>> quaternion_from_matrix([[0, -1, 0], [1, 0, 0], [0, 0, 1]]).round(6)
     array([0.707107, 0.      , 0.      , 0.707107])
     """
-    check_tolerance(tol)
-    rows, lead = _shapes.rows(matrix, "matrix", (3, 3))
-    out, n_invalid = _kc.quaternion_from_matrix(rows, float(tol))
+    rows, lead, tol = _shapes.rows_within(matrix, "matrix", (3, 3), tol)
+    out, n_invalid = _kc.quaternion_from_matrix(rows, tol)
     if n_invalid:
         _report_matrices("matrix", rows, lead, tol)
     return out.reshape(lead + (4,))
@@ -576,9 +574,8 @@ def transform_from_homogeneous(
     >>> t, r
     (array([0., 0., 0.]), array([1., 0., 0., 0.]))
     """
-    check_tolerance(tol)
-    rows, lead = _shapes.rows(matrix, "matrix", (4, 4))
-    t, q, n_invalid = _kc.transform_from_homogeneous(rows, float(tol))
+    rows, lead, tol = _shapes.rows_within(matrix, "matrix", (4, 4), tol)
+    t, q, n_invalid = _kc.transform_from_homogeneous(rows, tol)
     if n_invalid:
         _report_matrices("matrix", rows, lead, tol)
     return t.reshape(lead + (3,)), q.reshape(lead + (4,))

@@ -43,8 +43,6 @@ Deliberate differences from spatialmath
 
 from __future__ import annotations
 
-import numbers
-
 import numpy as np
 
 from .._door import poses as _poses
@@ -193,34 +191,8 @@ def tr2delta(T0, T1=None) -> np.ndarray:
     array([0.01 , 0.   , 0.   , 0.   , 0.   , 0.002])
     """
     k = _kernels()
-    if T1 is None:
-        rows, lead = _poses.poses(T0, "T0", _ROTATION_TOLERANCE, rotation=False)
-        return k.tr2delta(np.eye(4)[None], rows).reshape(lead + (6,))
-    a, a_lead = _poses.poses(T0, "T0", _ROTATION_TOLERANCE, rotation=False)
-    b, b_lead = _poses.poses(T1, "T1", _ROTATION_TOLERANCE, rotation=False)
-    lead = _broadcast(a_lead, b_lead, "T0", "T1")
-    # a single pose on either side is reused by the kernel; anything else
-    # is broadcast explicitly
-    if a_lead != b_lead and len(a) != 1 and len(b) != 1:
-        a = _expand(a, a_lead, lead)
-        b = _expand(b, b_lead, lead)
-    return k.tr2delta(a, b).reshape(lead + (6,))
-
-
-def _broadcast(a: tuple, b: tuple, a_name: str, b_name: str) -> tuple:
-    try:
-        return np.broadcast_shapes(a, b)
-    except ValueError:
-        raise ValueError(
-            f"the leading shapes of {a_name} {a} and {b_name} {b} do not broadcast"
-        ) from None
-
-
-def _expand(rows: np.ndarray, lead: tuple, target: tuple) -> np.ndarray:
-    """Rows of a stack broadcast from leading shape ``lead`` to ``target``."""
-    tail = rows.shape[1:]
-    full = np.broadcast_to(rows.reshape(lead + tail), target + tail)
-    return np.ascontiguousarray(full).reshape((-1,) + tail)
+    args = _poses.delta_input(T0, T1, _ROTATION_TOLERANCE)
+    return k.tr2delta(args.a, args.b).reshape(args.lead + (6,))
 
 
 def delta2tr(d) -> np.ndarray:
@@ -277,13 +249,10 @@ def tr2adjoint(T) -> np.ndarray:
            [ 0.,  0., -1.],
            [ 0.,  1.,  0.]])
     """
-    arr = float_array(T, "T")
-    if arr.shape[-2:] == (3, 3):
-        rows, lead = _shapes.rows(arr, "T", (3, 3), finite=True)
-        _poses.rotation_blocks(rows, lead, "T", _ROTATION_TOLERANCE)
-        return rows.reshape(lead + (3, 3)).copy()
-    rows, lead = _poses.poses(arr, "T", _ROTATION_TOLERANCE)
-    return _kernels().tr2adjoint(rows).reshape(lead + (6, 6))
+    args = _poses.adjoint_input(T, _ROTATION_TOLERANCE)
+    if args.rotation_only:
+        return args.rows.reshape(args.lead + (3, 3)).copy()
+    return _kernels().tr2adjoint(args.rows).reshape(args.lead + (6, 6))
 
 
 # ---------------------------------------------------------------------------
@@ -535,9 +504,9 @@ def trnorm(T) -> np.ndarray:
     >>> bool(np.allclose(R1.T @ R1, np.eye(3)))
     True
     """
-    arr = float_array(T, "T")
-    tail = (3, 3) if arr.shape[-2:] == (3, 3) else (4, 4)
-    rows, lead = _shapes.rows(arr, "T", tail, finite=True)
+    args = _poses.normalisable(T)
+    rows, lead = args.rows, args.lead
+    tail = (3, 3) if args.rotation_only else (4, 4)
     out, bad = _kernels().trnorm(rows)
     if bad >= 0:
         raise ValueError(
@@ -545,21 +514,6 @@ def trnorm(T) -> np.ndarray:
             "parallel or zero"
         )
     return out.reshape(lead + tail)
-
-
-def _fractions(s) -> np.ndarray:
-    """``s`` as an array of fractions; an integer > 1 is a number of steps."""
-    if isinstance(s, numbers.Integral) and not isinstance(s, bool) and int(s) > 1:
-        return np.linspace(0.0, 1.0, int(s))
-    arr = float_array(s, "s")
-    if not np.isfinite(arr).all() or (arr < 0).any() or (arr > 1).any():
-        flat = arr.reshape(-1)
-        i = int(np.argmax(~np.isfinite(flat) | (flat < 0) | (flat > 1)))
-        raise ValueError(
-            f"s must lie in [0, 1] (or be an integer number of steps > 1); "
-            f"s{_shapes.where(arr.shape, i)} = {flat[i]!r}"
-        )
-    return arr
 
 
 def trinterp(start, end, s, shortest: bool = True) -> np.ndarray:
@@ -608,54 +562,12 @@ def trinterp(start, end, s, shortest: bool = True) -> np.ndarray:
            [2. , 2.5, 3. ],
            [4. , 5. , 6. ]])
     """
-    end_arr = float_array(end, "end")
-    rotation_only = end_arr.shape[-2:] == (3, 3)
-    if rotation_only:
-        end_arr = _embed(end_arr)
-    end_rows, end_lead = _poses.poses(end_arr, "end", _ROTATION_TOLERANCE)
-    if start is None:
-        start_rows, start_lead = np.eye(4)[None], ()
-    else:
-        start_arr = float_array(start, "start")
-        if (start_arr.shape[-2:] == (3, 3)) != rotation_only:
-            raise ValueError(
-                f"start and end must both be rotations (3, 3) or both poses "
-                f"(4, 4), got shapes {start_arr.shape} and {end_arr.shape}"
-            )
-        start_rows, start_lead = _poses.poses(
-            _embed(start_arr) if rotation_only else start_arr,
-            "start",
-            _ROTATION_TOLERANCE,
-        )
-    frac = _fractions(s)
-    lead = _broadcast(start_lead, end_lead, "start", "end")
-    lead = _broadcast(lead, frac.shape, "the poses", "s")
-    # a stack whose leading shape is the result's, or a single value, is
-    # passed as is (the kernel reuses single rows); anything else is expanded
-    a = _rows_for(start_rows, start_lead, lead)
-    b = _rows_for(end_rows, end_lead, lead)
-    f = _rows_for(np.ascontiguousarray(frac.reshape(-1)), frac.shape, lead)
-    out = _kernels().trinterp(
-        kernel_array(a), kernel_array(b), kernel_array(f), bool(shortest)
-    )
+    args = _poses.interpolation_input(start, end, s, _ROTATION_TOLERANCE)
+    lead, rotation_only = args.lead, args.rotation_only
+    out = _kernels().trinterp(args.a, args.b, args.f, bool(shortest))
     if rotation_only:
         return np.ascontiguousarray(out[:, :3, :3]).reshape(lead + (3, 3))
     return out.reshape(lead + (4, 4))
-
-
-def _rows_for(rows: np.ndarray, lead: tuple, target: tuple) -> np.ndarray:
-    """``rows`` as the kernel wants them for a result of leading shape ``target``."""
-    if lead == target or len(rows) == 1:
-        return rows
-    return _expand(rows, lead, target)
-
-
-def _embed(rot: np.ndarray) -> np.ndarray:
-    """Rotation matrices (..., 3, 3) as poses (..., 4, 4) without translation."""
-    out = np.zeros(rot.shape[:-2] + (4, 4))
-    out[..., :3, :3] = rot
-    out[..., 3, 3] = 1.0
-    return out
 
 
 # ---------------------------------------------------------------------------

@@ -14,13 +14,12 @@ from __future__ import annotations
 
 from typing import Any
 
-from .._door import xarray as _xarray
-from .._door.series import velocity_options
+from .._door import lookups as _door
 from .._engine import at_time as _at_time
 from .._engine import chain as _chain
 from .._engine import twist as _twist
 from .conversions import homogeneous_from_transform
-from .frames import FrameLike, ReferenceFrame, resolve_frame
+from .frames import FrameLike, resolve_frame
 from .rigid_transform import Transform
 
 __all__ = [
@@ -103,8 +102,8 @@ def lookup_transform(
     ):
         # the common call, in a handful of operations (widgets and the
         # tf2-style Transformer make it all the time, often on static chains)
-        to_frame = resolve_frame(into, "into")  # named first, as lookup_at does
-        t, r, _ = _chain.lookup_transform(resolve_frame(outof, "outof"), to_frame)
+        pair = _door.frames(resolve_frame, outof, into)
+        t, r, _ = _chain.lookup_transform(pair.outof, pair.into)
         return t, r
     return lookup_at(
         outof,
@@ -134,18 +133,16 @@ def lookup_at(
     (translation, rotation[, timestamps]), matrices[, timestamps],
     Transform[, timestamps], or Dataset
     """
-    if (as_matrix or as_transform) and (as_dataset or (as_matrix and as_transform)):
-        chosen = [k for k, v in (("as_matrix", as_matrix), ("as_transform", as_transform),
-                                 ("as_dataset", as_dataset)) if v]  # fmt: skip
-        raise ValueError(f"choose at most one of {', '.join(chosen)}")
-    into = resolve_frame(into, "into")
-    outof = resolve_frame(outof, "outof")
+    pair = _door.transform_frames(
+        resolve_frame, outof, into, as_matrix, as_transform, as_dataset
+    )
+    outof, into = pair.outof, pair.into
     if time is None:
         t, r, timestamps = _chain.lookup_transform(outof, into)
     else:
         t, r, timestamps = _at_time.transform_at_times(outof, into, time)
     if as_dataset:
-        return _xarray.transform_dataset(t, r, outof.name, timestamps)
+        return pair.dataset(t, r, timestamps)
     out: Any
     if as_matrix:
         out = homogeneous_from_transform(t, r)
@@ -179,33 +176,13 @@ def lookup_pose(
     timestamps : ndarray, shape (n,) or None, if ``return_timestamps``
     ds : xarray.Dataset, if ``as_dataset``
     """
-    reference = resolve_frame(reference, "reference")
-    frame = resolve_frame(frame, "frame")
-    position, orientation, timestamps = _chain.lookup_transform(frame, reference)
+    pair = _door.frames(resolve_frame, frame, reference, ("frame", "reference"))
+    position, orientation, timestamps = _chain.lookup_transform(pair.outof, pair.into)
     if as_dataset:
-        return _xarray.transform_dataset(
-            position, orientation, reference.name, timestamps, pose=True
-        )
+        return pair.dataset(position, orientation, timestamps, pose=True)
     if return_timestamps:
         return position, orientation, timestamps
     return position, orientation
-
-
-def _public_frames(
-    frame: FrameLike, reference: FrameLike | None, represent_in: FrameLike | None
-) -> tuple[ReferenceFrame, ReferenceFrame, ReferenceFrame]:
-    frame = resolve_frame(frame, "frame")
-    if reference is None:
-        if frame.parent is None:
-            raise ValueError(
-                f"frame {frame.name!r} has no parent; pass the reference frame explicitly"
-            )
-        reference = frame.parent
-    reference = resolve_frame(reference, "reference")
-    represent_in = resolve_frame(
-        represent_in if represent_in is not None else reference, "represent_in"
-    )
-    return frame, reference, represent_in
 
 
 def lookup_twist(
@@ -257,19 +234,15 @@ def lookup_twist(
     nowhere else, and nothing is differenced across it (nor across a gap
     longer than a frame's ``max_gap``).
     """
-    frame, reference, represent_in = _public_frames(frame, reference, represent_in)
-    linear, angular, timestamps = _twist.lookup_twist(
-        frame,
-        reference,
-        represent_in,
-        outlier_thresh,
-        cutoff,
-        velocity_options(outlier_thresh, cutoff, mode=mode),
+    args = _door.velocity_frames(
+        resolve_frame, frame, reference, represent_in, outlier_thresh, cutoff, mode
     )
+    linear, angular, timestamps = _twist.lookup_twist(
+        args.frame, args.reference, args.represent_in, outlier_thresh, cutoff,
+        args.mode,
+    )  # fmt: skip
     if as_dataset:
-        return _xarray.twist_dataset(
-            linear, angular, frame.name, reference.name, represent_in.name, timestamps
-        )
+        return args.twist_dataset(linear, angular, timestamps)
     if return_timestamps:
         return linear, angular, timestamps
     return linear, angular
@@ -294,15 +267,14 @@ def lookup_linear_velocity(
     linear : ndarray, shape (n, 3), or DataArray
     timestamps : ndarray, shape (n,), if ``return_timestamps``
     """
-    frame, reference, represent_in = _public_frames(frame, reference, represent_in)
-    velocity_options(outlier_thresh, cutoff)
+    args = _door.velocity_frames(
+        resolve_frame, frame, reference, represent_in, outlier_thresh, cutoff
+    )
     linear, timestamps = _twist.lookup_linear_velocity(
-        frame, reference, represent_in, outlier_thresh, cutoff
+        args.frame, args.reference, args.represent_in, outlier_thresh, cutoff
     )
     if as_dataarray:
-        return _xarray.velocity_dataarray(
-            linear, "linear", frame.name, reference.name, represent_in.name, timestamps
-        )
+        return args.dataarray(linear, "linear", timestamps)
     if return_timestamps:
         return linear, timestamps
     return linear
@@ -328,24 +300,15 @@ def lookup_angular_velocity(
     angular : ndarray, shape (n, 3), or DataArray
     timestamps : ndarray, shape (n,), if ``return_timestamps``
     """
-    frame, reference, represent_in = _public_frames(frame, reference, represent_in)
-    angular, timestamps = _twist.lookup_angular_velocity(
-        frame,
-        reference,
-        represent_in,
-        outlier_thresh,
-        cutoff,
-        velocity_options(outlier_thresh, cutoff, mode=mode),
+    args = _door.velocity_frames(
+        resolve_frame, frame, reference, represent_in, outlier_thresh, cutoff, mode
     )
+    angular, timestamps = _twist.lookup_angular_velocity(
+        args.frame, args.reference, args.represent_in, outlier_thresh, cutoff,
+        args.mode,
+    )  # fmt: skip
     if as_dataarray:
-        return _xarray.velocity_dataarray(
-            angular,
-            "angular",
-            frame.name,
-            reference.name,
-            represent_in.name,
-            timestamps,
-        )
+        return args.dataarray(angular, "angular", timestamps)
     if return_timestamps:
         return angular, timestamps
     return angular

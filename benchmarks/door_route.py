@@ -14,19 +14,28 @@ lower layer calling a higher one back. Routes:
 
 With ``--facades``, the other facades' routes too (issue 32, item 2): per
 call, its stays, modules, climbs, the *door calls* (calls from a facade
-module of ``rbm_nb.core`` into ``rbm_nb._door``), the *own checks* (calls
+module of ``rbm_nb.core`` into a function or a class constructor of
+``rbm_nb._door``; a method of a value the door returned, such as
+``args.result(out)``, is the facade using that value, as
+``tests/core/test_one_door_call.py`` counts), the *own checks* (calls
 of the facade module's private helpers whose name says they check or
 unpack: ``_check*``, ``_unpack``, ``_as_*``, ``_split``, ``_checked``,
 ``_poses``, ``_vectors``; the facades' ``_rows`` are layout helpers) and
 the depth of the first kernel.
 
-Run: ``PYTHONPATH=. python benchmarks/door_route.py [--tree] [--facades]``
-(``--tree`` also prints each route's call tree). Run it from another
-checkout to compare (it traces the rbm_nb on ``sys.path``).
+Run: ``PYTHONPATH=. python benchmarks/door_route.py [--tree] [--facades]
+[--only-facades] [--compare OTHER_CHECKOUT]`` (``--tree`` also prints each
+route's call tree; ``--only-facades`` skips the transform_points routes;
+``--compare`` runs the facades' door-call count in the other checkout too, in
+a subprocess on its rbm_nb, and prints before -> after per facade). It
+traces the rbm_nb on ``sys.path``.
 """
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
 import sys
 from pathlib import Path
 
@@ -101,6 +110,7 @@ def _facade_calls() -> list[tuple[str, object]]:
     t = np.arange(50) * 0.01
     x = rng.normal(size=(50, 3))
     q = rbm.quaternion_from_euler(rng.normal(size=(50, 3)) * 0.1, "xyz")
+    poses = rbm.homogeneous_from_transform(x[:5], q[:5])
     directions = xr.DataArray(
         np.tile([0.0, 0.0, 1.0], (50, 1)), dims=("time", "cartesian_axis"),
         coords={"time": t}, attrs={"representation_frame": "world"},
@@ -110,17 +120,35 @@ def _facade_calls() -> list[tuple[str, object]]:
         ("estimate_linear_velocity", lambda: rbm.estimate_linear_velocity(x, timestamps=t)),
         ("estimate_angular_velocity", lambda: rbm.estimate_angular_velocity(q, timestamps=t)),
         ("shortest_arc_rotation", lambda: rbm.shortest_arc_rotation(x, x[::-1])),
+        ("best_fit_rotation", lambda: rbm.best_fit_rotation(x, x[::-1])),
+        ("best_fit_transform", lambda: rbm.best_fit_transform(x, x + 1)),
+        ("iterative_closest_point", lambda: rbm.iterative_closest_point(x, x + 0.01)),
         ("quaternion_from_matrix", lambda: rbm.quaternion_from_matrix(np.eye(3))),
         ("matrix_from_quaternion", lambda: rbm.matrix_from_quaternion(q)),
+        ("transform_from_homogeneous", lambda: rbm.transform_from_homogeneous(poses)),
+        ("euler_from_quaternion", lambda: rbm.euler_from_quaternion(q, "xyz")),
         ("se3.skew", lambda: rbm.se3.skew(x)),
         ("se3.tr2adjoint", lambda: rbm.se3.tr2adjoint(np.eye(4))),
+        ("se3.tr2delta", lambda: rbm.se3.tr2delta(poses, poses)),
+        ("se3.trnorm", lambda: rbm.se3.trnorm(poses)),
+        ("se3.trinterp", lambda: rbm.se3.trinterp(poses[0], poses[1], 0.5)),
+        ("se3.rotvelxform", lambda: rbm.se3.rotvelxform(x[0])),
         ("cartesian_to_spherical", lambda: rbm.cartesian_to_spherical(x)),
         ("transform_coordinates", lambda: rbm.transform_coordinates(x, "spherical", "cartesian")),
+        ("qinv", lambda: rbm.qinv(q)),
         ("qmul", lambda: rbm.qmul(q, q)),
+        ("qmean", lambda: rbm.qmean(q)),
         ("rotate_vectors", lambda: rbm.rotate_vectors(q, x)),
         ("qinterp", lambda: rbm.qinterp(q, t, t[1:-1] + 0.001)),
+        ("from_euler_angles", lambda: rbm.from_euler_angles(x)),
         ("Transform.apply", lambda: transform.apply(x)),
+        ("Transform.from_matrix", lambda: rbm.Transform.from_matrix(np.eye(4))),
         ("gaze.angles", lambda: rbm.gaze.angles(directions, "world")),
+        ("transform_points", lambda: rbm.transform_points(x[:1], "world", "eye")),
+        ("lookup_transform", lambda: rbm.lookup_transform("eye", "world")),
+        ("lookup_pose", lambda: rbm.lookup_pose("eye", "world")),
+        ("lookup_twist", lambda: rbm.lookup_twist("head", "world")),
+        ("lookup_linear_velocity", lambda: rbm.lookup_linear_velocity("head", "world")),
         ("lookup_angular_velocity", lambda: rbm.lookup_angular_velocity("head", "world")),
     ]  # fmt: skip
 
@@ -134,10 +162,13 @@ def _facade_figures(route) -> tuple[int, int, int | None]:
         del stack[depth:]
         module = _module_of(name)
         caller = stack[-1] if stack else None
+        qualname = name.split(" ")[0][len(module) + 1 :]
+        entry = "." not in qualname or qualname.endswith(".__init__")
         if (
             caller
             and caller.startswith("rbm_nb.core.")
             and module.startswith("rbm_nb._door")
+            and entry
         ):
             door += 1
         function = name.split(" ")[0].rsplit(".", 1)[-1]
@@ -149,23 +180,57 @@ def _facade_figures(route) -> tuple[int, int, int | None]:
     return door, own, kernel
 
 
-def facades(importers) -> None:
+def _door_counts(importers) -> dict[str, list]:
+    """label -> [stays, modules, climbs, door calls, own checks, kernel depth]."""
     _register(True)
-    print("\nfacades: stays, modules, climbs, door calls, own checks, kernel depth")
+    out = {}
     for label, call in _facade_calls():
         call()  # compile, fill the caches
         route = _route(call)
         stays, modules, n_climbs, _ = _figures(route, importers)
-        door, own, kernel = _facade_figures(route)
+        out[label] = [stays, modules, n_climbs, *_facade_figures(route)]
+    return out
+
+
+def facades(importers, other: str | None = None) -> None:
+    counts = _door_counts(importers)
+    before = {}
+    if other is not None:
+        env = dict(os.environ, PYTHONPATH=str(Path(other).resolve()))
+        done = subprocess.run(
+            [sys.executable, __file__, "--door-json"], env=env, cwd=other,
+            capture_output=True, text=True, check=True,
+        )  # fmt: skip
+        before = json.loads(done.stdout.strip().splitlines()[-1])
+        print(f"\nbefore: rbm_nb at {other}")
+    print("\nfacades: stays, modules, climbs, door calls, own checks, kernel depth")
+    for label, (stays, modules, n_climbs, door, own, kernel) in counts.items():
+        was = f"{before[label][3]:2d} -> " if label in before else ""
         print(
             f"  {label:27s} {stays:4d} stays {modules:3d} modules {n_climbs:2d} climbs "
-            f"{door:2d} door calls {own:2d} own checks  kernel at {kernel}"
+            f"{was}{door:2d} door calls {own:2d} own checks  kernel at {kernel}"
+        )
+    if before:
+        many = [k for k, v in counts.items() if v[3] != 1]
+        was_many = [k for k, v in before.items() if v[3] != 1]
+        print(
+            f"facades not at one door call: {len(was_many)} of {len(before)} before, "
+            f"{len(many)} of {len(counts)} now ({', '.join(many) or 'none'})"
         )
 
 
 def main() -> None:
     tree = "--tree" in sys.argv
     importers = _importers()
+    if "--door-json" in sys.argv:  # the --compare subprocess
+        print(json.dumps(_door_counts(importers)))
+        return
+    other = None
+    if "--compare" in sys.argv:
+        other = sys.argv[sys.argv.index("--compare") + 1]
+    if "--only-facades" in sys.argv:
+        facades(importers, other)
+        return
     p = np.array([[0.1, 0.2, 0.3]])
     routes = []
     for label, moving in (("static chain", False), ("moving chain", True)):
@@ -188,7 +253,7 @@ def main() -> None:
             for d, n in route:
                 print(f"{'  ' * d}{n}")
     if "--facades" in sys.argv:
-        facades(importers)
+        facades(importers, other)
 
 
 if __name__ == "__main__":

@@ -23,7 +23,7 @@ from .._kernels import squad_walk as _sw
 from . import dask_blocks as _dask
 from .shapes import along_axis
 from .unpack import float_array, is_dataarray, kernel_array, resolve_axis
-from .validation import check_unit_norms
+from .validation import check_finite, check_missing_rows, check_unit_norms
 
 __all__ = [
     "split",
@@ -39,6 +39,10 @@ __all__ = [
     "interpolation",
     "Rotation",
     "rotation",
+    "Mean",
+    "mean",
+    "EulerAngles",
+    "euler_angles",
 ]
 
 
@@ -361,3 +365,116 @@ def rotation(q: Any, v: Any, axis: Any, qaxis: Any, one_to_one: Any) -> Rotation
         return Rotation("broadcast", qf, vm, vax, shape, template)
     kind = "each" if not q_shape else "outer"
     return Rotation(kind, qf, vm, vax, v_shape, template)
+
+
+# ---------------------------------------------------------------------------
+# qmean
+# ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class Mean:
+    """Checked quaternions to average: ``groups`` (g, n, 4), one group per
+    kept index (``keep_shape``); the result's quaternion axis ``qpos``; a
+    DataArray ``template`` and its quaternion dimension ``qdim``."""
+
+    groups: np.ndarray
+    keep_shape: tuple
+    reduce_axes: tuple
+    ndim: int
+    was_quaternion: bool
+    qpos: int
+    template: Any
+    qdim: Any
+
+
+def mean(q: Any, axis: Any, qaxis: Any) -> Mean:
+    """The one door call of :func:`rbm_nb.qmean`."""
+    template = q if is_dataarray(q) else None
+    qf, was_quaternion = split(q, qaxis, "q")
+    nd = qf.ndim - 1
+    reduce_axes = _reduce_axes(axis, nd)
+    keep_axes = tuple(a for a in range(nd) if a not in reduce_axes)
+    moved = np.transpose(qf, keep_axes + reduce_axes + (nd,))
+    keep_shape = moved.shape[: len(keep_axes)]
+    check_unit_norms(qf, "q")
+    groups = moved.reshape(int(np.prod(keep_shape)), -1, 4)
+    if groups.shape[1] == 0:
+        raise ValueError(f"q has no quaternions to average along axis={axis!r}")
+    qpos = -1
+    if not was_quaternion:
+        qin = resolve_axis(qaxis, qf.ndim, "qaxis")
+        qpos = qin - sum(1 for a in reduce_axes if a < qin)
+    qdim = None
+    if template is not None and not was_quaternion:
+        qdim = template.dims[resolve_axis(qaxis, template.ndim, "qaxis")]
+    return Mean(
+        groups, keep_shape, reduce_axes, qf.ndim, was_quaternion, qpos, template, qdim
+    )
+
+
+def _reduce_axes(axis: Any, ndim: int) -> tuple[int, ...]:
+    if axis is None:
+        return tuple(range(ndim))
+    axes = (axis,) if np.ndim(axis) == 0 else tuple(axis)
+    out = tuple(sorted({resolve_axis(a, ndim, "axis") for a in axes}))
+    if len(out) != len(axes):
+        raise ValueError(f"axis contains repeated axes: {axis!r}")
+    return out
+
+
+# ---------------------------------------------------------------------------
+# from_euler_angles
+# ---------------------------------------------------------------------------
+
+_ANGLE_NAMES = {"r": "roll", "p": "pitch", "y": "yaw"}
+
+
+@dataclass(frozen=True, slots=True)
+class EulerAngles:
+    """Checked roll/pitch/yaw angles (``angles``: key "r", "p" or "y" -> array),
+    their broadcast ``shape`` and the result's quaternion axis ``axis``."""
+
+    angles: dict
+    shape: tuple
+    axis: int
+
+
+def euler_angles(
+    rpy: Any, roll: Any, pitch: Any, yaw: Any, axis: Any, return_quaternion: bool
+) -> EulerAngles:
+    """The one door call of :func:`rbm_nb.from_euler_angles` (a quaternion
+    dtype result has no axis to place)."""
+    angles: dict[str, np.ndarray] = {}
+    if rpy is not None:
+        if roll is not None or pitch is not None or yaw is not None:
+            raise ValueError("give either rpy or roll/pitch/yaw, not both")
+        arr = float_array(rpy, "rpy")
+        if arr.ndim == 0:
+            raise ValueError(
+                "rpy must have an axis of length 3 (roll, pitch, yaw), got a scalar"
+            )
+        ax = resolve_axis(axis, arr.ndim, "axis")
+        if arr.shape[ax] != 3:
+            raise ValueError(
+                f"rpy must have length 3 (roll, pitch, yaw) along axis={axis}, got shape {arr.shape}"
+            )
+        arr = np.moveaxis(arr, ax, -1)
+        # a row of NaN only is a missing sample (an untracked frame) and
+        # stays NaN; a partly NaN row or an infinity is a mistake
+        check_missing_rows(arr, "rpy")
+        angles = {"r": arr[..., 0], "p": arr[..., 1], "y": arr[..., 2]}
+    else:
+        for key, value in (("r", roll), ("p", pitch), ("y", yaw)):
+            if value is not None:
+                name = _ANGLE_NAMES[key]
+                angles[key] = float_array(value, name)
+                check_finite(angles[key], name, row_axis=False)
+        if not angles:
+            raise ValueError("give at least one of rpy, roll, pitch or yaw")
+    shape: tuple[int, ...] = ()
+    for key, value in angles.items():
+        shape = broadcast(shape, value.shape, _ANGLE_NAMES[key])
+    if return_quaternion:
+        return EulerAngles(angles, shape, -1)
+    return EulerAngles(angles, shape, resolve_axis(axis, len(shape) + 1, "axis"))

@@ -19,10 +19,7 @@ from .._door import quaternions as _door
 from .._door.unpack import ArrayInput, float_array, kernel_array, resolve_axis
 from .._door.unpack import is_dataarray as _is_dataarray
 from .._door.validation import (
-    check_finite,
-    check_missing_rows,
     check_no_inf,
-    check_unit_norms,
 )
 from .._engine import time as _time
 from .._infra import parallel as _parallel
@@ -224,16 +221,6 @@ def _qmul_rows(p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, int]:
     return out, infs
 
 
-def _resolve_reduce_axes(axis: Any, ndim: int) -> tuple[int, ...]:
-    if axis is None:
-        return tuple(range(ndim))
-    axes = (axis,) if np.ndim(axis) == 0 else tuple(axis)
-    out = tuple(sorted({resolve_axis(a, ndim, "axis") for a in axes}))
-    if len(out) != len(axes):
-        raise ValueError(f"axis contains repeated axes: {axis!r}")
-    return out
-
-
 def qmean(q: ArrayInput, axis: int | None = None, qaxis: int = -1) -> Any:
     """Mean rotation of quaternions (Markley's eigenvector method).
 
@@ -275,17 +262,8 @@ def qmean(q: ArrayInput, axis: int | None = None, qaxis: int = -1) -> Any:
     out permuted) and mixes up groups when ``axis`` leaves several; this
     implementation returns the actual eigenvector.
     """
-    template = q if _is_dataarray(q) else None
-    qf, was_quaternion = _split(q, qaxis, "q")
-    nd = qf.ndim - 1
-    reduce_axes = _resolve_reduce_axes(axis, nd)
-    keep_axes = tuple(a for a in range(nd) if a not in reduce_axes)
-    moved = np.transpose(qf, keep_axes + reduce_axes + (nd,))
-    keep_shape = moved.shape[: len(keep_axes)]
-    check_unit_norms(qf, "q")
-    groups = moved.reshape(int(np.prod(keep_shape)), -1, 4)
-    if groups.shape[1] == 0:
-        raise ValueError(f"q has no quaternions to average along axis={axis!r}")
+    args = _door.mean(q, axis, qaxis)
+    groups, keep_shape, reduce_axes = args.groups, args.keep_shape, args.reduce_axes
     outer = np.einsum("gni,gnj->gij", groups, groups) / groups.shape[1]
     finite = np.isfinite(outer).all(axis=(1, 2))
     outer[~finite] = np.eye(4)
@@ -297,25 +275,16 @@ def qmean(q: ArrayInput, axis: int | None = None, qaxis: int = -1) -> Any:
     first_nonzero = np.argmax(mean != 0.0, axis=1)
     mean *= np.sign(mean[np.arange(len(mean)), first_nonzero])[:, None]
     mean[~finite] = np.nan
-    qpos = -1
-    if not was_quaternion:
-        qin = resolve_axis(qaxis, qf.ndim, "qaxis")
-        qpos = qin - sum(1 for a in reduce_axes if a < qin)
-    out = _join(mean.reshape(keep_shape + (4,)), was_quaternion, qpos)
-    if (
-        template is not None
-        and not was_quaternion
-        and out.ndim == qf.ndim - len(reduce_axes)
-    ):
-        return _reduced_like(template, out, qaxis, reduce_axes)
+    out = _join(mean.reshape(keep_shape + (4,)), args.was_quaternion, args.qpos)
+    if args.qdim is not None and out.ndim == args.ndim - len(reduce_axes):
+        return _reduced_like(args.template, out, args.qdim, reduce_axes)
     return out
 
 
 def _reduced_like(
-    template: Any, out: np.ndarray, qaxis: int, reduce_axes: tuple[int, ...]
+    template: Any, out: np.ndarray, qdim: Any, reduce_axes: tuple[int, ...]
 ):
     """A DataArray for a reduction of ``template`` (its qdim kept, others dropped)."""
-    qdim = template.dims[resolve_axis(qaxis, template.ndim, "qaxis")]
     other = [d for d in template.dims if d != qdim]
     dropped = {other[a]: 0 for a in reduce_axes}
     reduced = template.isel(dropped, drop=True)
@@ -706,42 +675,8 @@ def from_euler_angles(
         raise ValueError(
             f"order must be a permutation of 'r', 'p' and 'y', got {order!r}"
         )
-    angles: dict[str, np.ndarray] = {}
-    if rpy is not None:
-        if roll is not None or pitch is not None or yaw is not None:
-            raise ValueError("give either rpy or roll/pitch/yaw, not both")
-        arr = float_array(rpy, "rpy")
-        if arr.ndim == 0:
-            raise ValueError(
-                "rpy must have an axis of length 3 (roll, pitch, yaw), got a scalar"
-            )
-        ax = resolve_axis(axis, arr.ndim, "axis")
-        if arr.shape[ax] != 3:
-            raise ValueError(
-                f"rpy must have length 3 (roll, pitch, yaw) along axis={axis}, got shape {arr.shape}"
-            )
-        arr = np.moveaxis(arr, ax, -1)
-        # a row of NaN only is a missing sample (an untracked frame) and
-        # stays NaN; a partly NaN row or an infinity is a mistake
-        check_missing_rows(arr, "rpy")
-        angles = {"r": arr[..., 0], "p": arr[..., 1], "y": arr[..., 2]}
-    else:
-        for key, value, name in (
-            ("r", roll, "roll"),
-            ("p", pitch, "pitch"),
-            ("y", yaw, "yaw"),
-        ):
-            if value is not None:
-                angles[key] = float_array(value, name)
-                check_finite(angles[key], name, row_axis=False)
-        if not angles:
-            raise ValueError("give at least one of rpy, roll, pitch or yaw")
-    shape: tuple[int, ...] = ()
-    for key, value in angles.items():
-        shape = _broadcast(
-            shape, value.shape, {"r": "roll", "p": "pitch", "y": "yaw"}[key]
-        )
-
+    args = _door.euler_angles(rpy, roll, pitch, yaw, axis, return_quaternion)
+    angles, shape = args.angles, args.shape
     result = None
     for key in order:
         if key not in angles:
@@ -755,4 +690,4 @@ def from_euler_angles(
     quats = result.reshape(shape + (4,))
     if return_quaternion:
         return _join(quats, True, -1)
-    return np.moveaxis(quats, -1, resolve_axis(axis, quats.ndim, "axis"))
+    return np.moveaxis(quats, -1, args.axis)

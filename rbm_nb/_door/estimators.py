@@ -23,10 +23,18 @@ from .._engine.velocity import lowpass_reach
 from . import dask_blocks as _dask
 from .series import series, velocity_options
 from .shapes import along_axis
-from .unpack import dim_axis, is_dataarray
-from .validation import check_unit_norms
+from .unpack import dim_axis, is_dataarray, kernel_array
+from .validation import check_tolerance, check_unit_norms, is_scalar
 
-__all__ = ["VelocityArguments", "velocity_arguments", "VectorPair", "vector_pairs"]
+__all__ = [
+    "VelocityArguments",
+    "velocity_arguments",
+    "VectorPair",
+    "vector_pairs",
+    "ClosestPoint",
+    "closest_point_input",
+    "check_rank",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -125,15 +133,22 @@ class VectorPair:
     dataarray: bool
     rows1: Any = None
     rows2: Any = None
+    covariance: Any = None
+    centroids: Any = None
 
 
 def vector_pairs(
-    v1: Any, v2: Any, dim: Any, axis: Any, rows: str | None = None
-) -> VectorPair:
+    v1: Any, v2: Any, dim: Any, axis: Any, rows: str | None = None,
+    fit: str | None = None,
+) -> VectorPair:  # fmt: skip
     """The one door call of the rotations between vector sets.
 
     ``rows``: None (vectors kept in their layout), "same" (as rows, of the
     same shape: corresponding vectors) or "any" (as rows, of any sizes).
+    ``fit`` (with ``rows="same"``): "rotation" or "transform", the
+    least-squares fit the rows are for; their ``covariance`` (about the
+    ``centroids`` for a transform) is then computed and refused if the
+    vectors are collinear, and the transform's at least 3 points.
     """
     axis = dim_axis(v1, dim, axis, "v1")
     a, ax1 = _vectors(v1, axis, "v1")
@@ -153,7 +168,21 @@ def vector_pairs(
         for flat, name in ((rows1, "v1"), (rows2, "v2")):
             if not np.all(np.isfinite(flat)):
                 raise ValueError(f"{name} must be finite")
-    return VectorPair(a, b, ax1, ax2, axis, is_dataarray(v1), rows1, rows2)
+    h = centroids = None
+    if fit == "rotation":
+        h = rows1.T @ rows2
+        check_rank(h, "the vectors of v1 or v2")
+    elif fit == "transform":
+        if len(rows1) < 3:
+            raise ValueError(
+                f"v1 and v2 need at least 3 points to fix a rigid transform, got {len(rows1)}"
+            )
+        centroids = rows1.mean(axis=0), rows2.mean(axis=0)
+        h = (rows1 - centroids[0]).T @ (rows2 - centroids[1])
+        check_rank(h, "the points of v1 or v2 (after removing their centroids)")
+    return VectorPair(
+        a, b, ax1, ax2, axis, is_dataarray(v1), rows1, rows2, h, centroids
+    )
 
 
 def _vectors(v, axis, name: str) -> tuple[np.ndarray, int]:
@@ -162,3 +191,75 @@ def _vectors(v, axis, name: str) -> tuple[np.ndarray, int]:
     ax = -1 if axis is None else axis
     moved, ax = along_axis(data, name, ax, 3, "x, y, z", finite=True)
     return np.moveaxis(moved, -1, ax), ax
+
+
+@dataclass(frozen=True, slots=True)
+class ClosestPoint:
+    """Checked input of ICP: point rows ``p1``, ``p2``; ``init``: the initial
+    guess (translation (3,), rotation (4,)) or None; the loop's limits."""
+
+    p1: np.ndarray
+    p2: np.ndarray
+    dataarray: bool
+    init: Any
+    max_iterations: int
+    tolerance: float
+
+
+def closest_point_input(
+    v1: Any, v2: Any, dim: Any, axis: Any, init_transform: Any,
+    max_iterations: Any, tolerance: Any,
+) -> ClosestPoint:  # fmt: skip
+    """The one door call of :func:`rbm_nb.iterative_closest_point`."""
+    pair = vector_pairs(v1, v2, dim, axis, rows="any")
+    p1, p2 = pair.rows1, pair.rows2
+    for rows, name in ((p1, "v1"), (p2, "v2")):
+        if len(rows) < 3:
+            raise ValueError(f"{name} needs at least 3 points for ICP, got {len(rows)}")
+    centred = p1 - p1.mean(axis=0)
+    check_rank(centred.T @ centred, "the points of v1")
+    if (
+        not is_scalar(max_iterations)
+        or not np.isfinite(max_iterations)
+        or int(max_iterations) != max_iterations
+        or max_iterations < 0
+    ):
+        raise ValueError(
+            f"max_iterations must be a non-negative integer, got {max_iterations!r}"
+        )
+    check_tolerance(tolerance, "tolerance")
+    init = None
+    if init_transform is not None:
+        try:
+            t0, r0 = init_transform
+        except (TypeError, ValueError):
+            raise ValueError(
+                "init_transform must be a (translation, rotation) tuple"
+            ) from None
+        t0 = np.asarray(getattr(t0, "values", t0), dtype=float)
+        r0 = np.asarray(getattr(r0, "values", r0), dtype=float)
+        if t0.shape != (3,) or r0.shape != (4,):
+            raise ValueError(
+                f"init_transform must hold a translation of shape (3,) and a rotation of "
+                f"shape (4,), got {t0.shape} and {r0.shape}"
+            )
+        if not (np.isfinite(t0).all() and np.isfinite(r0).all()):
+            raise ValueError(
+                f"init_transform is not finite: translation {t0.tolist()}, "
+                f"rotation {r0.tolist()}"
+            )
+        if not np.any(r0):
+            raise ValueError("init_transform: the rotation is a zero quaternion")
+        init = (t0, kernel_array(r0[None]))
+    return ClosestPoint(p1, p2, pair.dataarray, init, int(max_iterations), tolerance)
+
+
+def check_rank(h: np.ndarray, what: str) -> None:
+    """Refuse a covariance ``h`` of collinear (or zero) vectors: the rotation
+    about their line is undetermined."""
+    s = np.linalg.svd(h, compute_uv=False)
+    if not s[1] > 1e-10 * s[0]:
+        raise ValueError(
+            f"{what} are collinear (or all zero): the rotation about their common "
+            f"line is undetermined"
+        )

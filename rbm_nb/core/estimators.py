@@ -23,9 +23,12 @@ from typing import Any
 
 import numpy as np
 
-from .._door.estimators import vector_pairs, velocity_arguments
-from .._door.unpack import ArrayInput, kernel_array
-from .._door.validation import check_tolerance, is_scalar
+from .._door.estimators import (
+    closest_point_input,
+    vector_pairs,
+    velocity_arguments,
+)
+from .._door.unpack import ArrayInput
 from .._engine.velocity import angular_series as _angular_series
 from .._engine.velocity import linear_series as _linear_series
 from .._kernels import conversions as _kc
@@ -303,15 +306,6 @@ def _rotation_from_covariance(h: np.ndarray) -> np.ndarray:
     return r
 
 
-def _check_rank(h: np.ndarray, what: str) -> None:
-    s = np.linalg.svd(h, compute_uv=False)
-    if not s[1] > 1e-10 * s[0]:
-        raise ValueError(
-            f"{what} are collinear (or all zero): the rotation about their common "
-            f"line is undetermined"
-        )
-
-
 def _quaternion(r: np.ndarray) -> np.ndarray:
     # r comes from an SVD: orthonormal with det +1 to rounding, so the
     # validity count of the kernel (tolerance 1: nothing is counted) is unused
@@ -319,11 +313,12 @@ def _quaternion(r: np.ndarray) -> np.ndarray:
     return q[0]
 
 
-def _fit_transform(p1: np.ndarray, p2: np.ndarray, check: bool):
+def _fit_transform(p1: np.ndarray, p2: np.ndarray):
     c1, c2 = p1.mean(axis=0), p2.mean(axis=0)
-    h = (p1 - c1).T @ (p2 - c2)
-    if check:
-        _check_rank(h, "the points of v1 or v2 (after removing their centroids)")
+    return _transform_from_covariance((p1 - c1).T @ (p2 - c2), c1, c2)
+
+
+def _transform_from_covariance(h: np.ndarray, c1: np.ndarray, c2: np.ndarray):
     r = _rotation_from_covariance(h)
     return c2 - r @ c1, r
 
@@ -379,11 +374,8 @@ def best_fit_rotation(
     >>> best_fit_rotation([[1.0, 0, 0], [0, 1, 0]], [[0, 1.0, 0], [-1, 0, 0]]).round(6)
     array([0.707107, 0.      , 0.      , 0.707107])
     """
-    pair = vector_pairs(v1, v2, dim, axis, rows="same")
-    p1, p2 = pair.rows1, pair.rows2
-    h = p1.T @ p2
-    _check_rank(h, "the vectors of v1 or v2")
-    rotation = _quaternion(_rotation_from_covariance(h))
+    pair = vector_pairs(v1, v2, dim, axis, rows="same", fit="rotation")
+    rotation = _quaternion(_rotation_from_covariance(pair.covariance))
     if pair.dataarray:
         return _rotation_dataarray(rotation)
     return rotation
@@ -427,13 +419,8 @@ def best_fit_transform(
     >>> t.round(6), r.round(6) + 0.0  # + 0.0 turns -0.0 into 0.0
     (array([1., 2., 3.]), array([1., 0., 0., 0.]))
     """
-    pair = vector_pairs(v1, v2, dim, axis, rows="same")
-    p1, p2 = pair.rows1, pair.rows2
-    if len(p1) < 3:
-        raise ValueError(
-            f"v1 and v2 need at least 3 points to fix a rigid transform, got {len(p1)}"
-        )
-    translation, r = _fit_transform(p1, p2, check=True)
+    pair = vector_pairs(v1, v2, dim, axis, rows="same", fit="transform")
+    translation, r = _transform_from_covariance(pair.covariance, *pair.centroids)
     rotation = _quaternion(r)
     if pair.dataarray:
         return _transform_dataarrays(translation, rotation)
@@ -492,60 +479,28 @@ def iterative_closest_point(
     """
     from scipy.spatial import cKDTree
 
-    pair = vector_pairs(v1, v2, dim, axis, rows="any")
-    p1, p2 = pair.rows1, pair.rows2
-    for rows, name in ((p1, "v1"), (p2, "v2")):
-        if len(rows) < 3:
-            raise ValueError(f"{name} needs at least 3 points for ICP, got {len(rows)}")
-    _check_rank((p1 - p1.mean(axis=0)).T @ (p1 - p1.mean(axis=0)), "the points of v1")
-    if (
-        not is_scalar(max_iterations)
-        or not np.isfinite(max_iterations)
-        or int(max_iterations) != max_iterations
-        or max_iterations < 0
-    ):
-        raise ValueError(
-            f"max_iterations must be a non-negative integer, got {max_iterations!r}"
-        )
-    check_tolerance(tolerance, "tolerance")
-
+    args = closest_point_input(
+        v1, v2, dim, axis, init_transform, max_iterations, tolerance
+    )
+    p1, p2 = args.p1, args.p2
     moved = p1.copy()
-    if init_transform is not None:
-        try:
-            t0, r0 = init_transform
-        except (TypeError, ValueError):
-            raise ValueError(
-                "init_transform must be a (translation, rotation) tuple"
-            ) from None
-        t0 = np.asarray(getattr(t0, "values", t0), dtype=float)
-        r0 = np.asarray(getattr(r0, "values", r0), dtype=float)
-        if t0.shape != (3,) or r0.shape != (4,):
-            raise ValueError(
-                f"init_transform must hold a translation of shape (3,) and a rotation of "
-                f"shape (4,), got {t0.shape} and {r0.shape}"
-            )
-        if not (np.isfinite(t0).all() and np.isfinite(r0).all()):
-            raise ValueError(
-                f"init_transform is not finite: translation {t0.tolist()}, "
-                f"rotation {r0.tolist()}"
-            )
-        if not np.any(r0):
-            raise ValueError("init_transform: the rotation is a zero quaternion")
-        moved = _qk.rotate_vectors(kernel_array(r0[None]), moved) + t0
+    if args.init is not None:
+        t0, r0 = args.init
+        moved = _qk.rotate_vectors(r0, moved) + t0
 
     tree = cKDTree(p2)
     prev_error = 0.0
-    for _ in range(int(max_iterations)):
+    for _ in range(args.max_iterations):
         distances, idx = tree.query(moved, 1)
-        t, r = _fit_transform(moved, p2[idx], check=False)
+        t, r = _fit_transform(moved, p2[idx])
         moved = moved @ r.T + t
         error = float(np.mean(distances))
         if abs(prev_error - error) < tolerance:
             break
         prev_error = error
 
-    translation, r = _fit_transform(p1, moved, check=False)
+    translation, r = _fit_transform(p1, moved)
     rotation = _quaternion(r)
-    if pair.dataarray:
+    if args.dataarray:
         return _transform_dataarrays(translation, rotation)
     return translation, rotation

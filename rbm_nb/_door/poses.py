@@ -20,6 +20,7 @@ import numpy as np
 from .._kernels import se3 as _se3
 from .shapes import rows, where
 from .unpack import float_array, kernel_array
+from .validation import check_tolerance
 
 __all__ = [
     "rotation_blocks",
@@ -30,6 +31,7 @@ __all__ = [
     "PosePairs",
     "delta_input",
     "interpolation_input",
+    "rates_input",
 ]
 
 
@@ -208,3 +210,23 @@ def _fractions(s: Any) -> np.ndarray:
             f"s{where(arr.shape, i)} = {flat[i]!r}"
         )
     return arr
+
+
+def rates_input(value: Any, tol: Any, tolerance: float) -> PoseRows:
+    """``rotvelxform``'s ``Γ``: angle triples (..., 3), or rotation matrices
+    (..., 3, 3) (``rotation_only``) within ``tolerance``; after its ``tol``."""
+    check_tolerance(tol)
+    arr = float_array(value, "Γ")
+    if arr.shape[-2:] != (3, 3):
+        flat, lead = rows(arr, "Γ", (3,), finite=True)
+        return PoseRows(flat, lead, False)
+    flat, lead = rows(arr, "Γ", (3, 3), finite=True)
+    try:
+        rotation_blocks(flat, lead, "Γ", tolerance)
+    except ValueError as err:
+        # the likely mistake: a stack of exactly three angle triples
+        raise ValueError(
+            f"{err}. A trailing (3, 3) shape is read as rotation matrices (as in "
+            "spatialmath); to pass three angle triples, give them shape (3, 1, 3)"
+        ) from None
+    return PoseRows(flat, lead, True)

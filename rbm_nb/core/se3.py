@@ -47,8 +47,7 @@ import numpy as np
 
 from .._door import poses as _poses
 from .._door import shapes as _shapes
-from .._door.unpack import float_array, kernel_array
-from .._door.validation import check_tolerance
+from .._door.unpack import kernel_array
 from .._kernels import se3
 from . import conversions
 
@@ -270,16 +269,8 @@ def _representation(representation) -> int:
         ) from None
 
 
-def _angles_of_rotations(rot: np.ndarray, lead: tuple, code: int) -> np.ndarray:
-    """spatialmath's ``r2x``: the angle triple of each rotation matrix."""
-    try:
-        _poses.rotation_blocks(rot, lead, "Γ", _ROTATION_TOLERANCE)
-    except ValueError as err:
-        # the likely mistake: a stack of exactly three angle triples
-        raise ValueError(
-            f"{err}. A trailing (3, 3) shape is read as rotation matrices (as in "
-            "spatialmath); to pass three angle triples, give them shape (3, 1, 3)"
-        ) from None
+def _angles_of_rotations(rot: np.ndarray, code: int) -> np.ndarray:
+    """spatialmath's ``r2x``: the angle triple of each (checked) rotation matrix."""
     q = conversions.quaternion_from_matrix(rot)
     if code == 4:
         return conversions.rotation_vector_from_quaternion(q)
@@ -358,13 +349,12 @@ def rotvelxform(
     rbm_nb.core.se3.SingularityError: rotvelxform(inverse=True, representation='rpy/xyz') is singular at Γ: pitch = 90°, where cos(pitch) = 0 (pitch = ±90°)
     """
     code = _representation(representation)
-    check_tolerance(tol)
-    arr = float_array(Γ, "Γ")
-    if arr.shape[-2:] == (3, 3):
-        rot, lead = _shapes.rows(arr, "Γ", (3, 3), finite=True)
-        angles = kernel_array(_angles_of_rotations(rot, lead, code))
+    args = _poses.rates_input(Γ, tol, _ROTATION_TOLERANCE)
+    lead = args.lead
+    if args.rotation_only:
+        angles = kernel_array(_angles_of_rotations(args.rows, code))
     else:
-        angles, lead = _shapes.rows(arr, "Γ", (3,), finite=True)
+        angles = args.rows
     out, bad = _kernels().rotvelxform(angles, code, bool(inverse), float(tol))
     if bad >= 0:
         what, why = _SINGULAR_WHAT[code]

@@ -104,53 +104,10 @@ _OWN_CHECKS = ("_check", "_unpack", "_as_", "_split", "_checked", "_poses",
 
 
 def _facade_calls() -> list[tuple[str, object]]:
-    import xarray as xr
+    """The calls ``tests/core/test_one_door_call.py`` holds to one door call."""
+    from test_one_door_call import FACADE_CALLS
 
-    rng = np.random.default_rng(0)
-    t = np.arange(50) * 0.01
-    x = rng.normal(size=(50, 3))
-    q = rbm.quaternion_from_euler(rng.normal(size=(50, 3)) * 0.1, "xyz")
-    poses = rbm.homogeneous_from_transform(x[:5], q[:5])
-    directions = xr.DataArray(
-        np.tile([0.0, 0.0, 1.0], (50, 1)), dims=("time", "cartesian_axis"),
-        coords={"time": t}, attrs={"representation_frame": "world"},
-    )  # fmt: skip
-    transform = rbm.Transform([1.0, 0, 0], [1.0, 0, 0, 0])
-    return [
-        ("estimate_linear_velocity", lambda: rbm.estimate_linear_velocity(x, timestamps=t)),
-        ("estimate_angular_velocity", lambda: rbm.estimate_angular_velocity(q, timestamps=t)),
-        ("shortest_arc_rotation", lambda: rbm.shortest_arc_rotation(x, x[::-1])),
-        ("best_fit_rotation", lambda: rbm.best_fit_rotation(x, x[::-1])),
-        ("best_fit_transform", lambda: rbm.best_fit_transform(x, x + 1)),
-        ("iterative_closest_point", lambda: rbm.iterative_closest_point(x, x + 0.01)),
-        ("quaternion_from_matrix", lambda: rbm.quaternion_from_matrix(np.eye(3))),
-        ("matrix_from_quaternion", lambda: rbm.matrix_from_quaternion(q)),
-        ("transform_from_homogeneous", lambda: rbm.transform_from_homogeneous(poses)),
-        ("euler_from_quaternion", lambda: rbm.euler_from_quaternion(q, "xyz")),
-        ("se3.skew", lambda: rbm.se3.skew(x)),
-        ("se3.tr2adjoint", lambda: rbm.se3.tr2adjoint(np.eye(4))),
-        ("se3.tr2delta", lambda: rbm.se3.tr2delta(poses, poses)),
-        ("se3.trnorm", lambda: rbm.se3.trnorm(poses)),
-        ("se3.trinterp", lambda: rbm.se3.trinterp(poses[0], poses[1], 0.5)),
-        ("se3.rotvelxform", lambda: rbm.se3.rotvelxform(x[0])),
-        ("cartesian_to_spherical", lambda: rbm.cartesian_to_spherical(x)),
-        ("transform_coordinates", lambda: rbm.transform_coordinates(x, "spherical", "cartesian")),
-        ("qinv", lambda: rbm.qinv(q)),
-        ("qmul", lambda: rbm.qmul(q, q)),
-        ("qmean", lambda: rbm.qmean(q)),
-        ("rotate_vectors", lambda: rbm.rotate_vectors(q, x)),
-        ("qinterp", lambda: rbm.qinterp(q, t, t[1:-1] + 0.001)),
-        ("from_euler_angles", lambda: rbm.from_euler_angles(x)),
-        ("Transform.apply", lambda: transform.apply(x)),
-        ("Transform.from_matrix", lambda: rbm.Transform.from_matrix(np.eye(4))),
-        ("gaze.angles", lambda: rbm.gaze.angles(directions, "world")),
-        ("transform_points", lambda: rbm.transform_points(x[:1], "world", "eye")),
-        ("lookup_transform", lambda: rbm.lookup_transform("eye", "world")),
-        ("lookup_pose", lambda: rbm.lookup_pose("eye", "world")),
-        ("lookup_twist", lambda: rbm.lookup_twist("head", "world")),
-        ("lookup_linear_velocity", lambda: rbm.lookup_linear_velocity("head", "world")),
-        ("lookup_angular_velocity", lambda: rbm.lookup_angular_velocity("head", "world")),
-    ]  # fmt: skip
+    return FACADE_CALLS
 
 
 def _facade_figures(route) -> tuple[int, int, int | None]:

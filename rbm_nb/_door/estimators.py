@@ -153,7 +153,8 @@ def vector_pairs(
     axis = dim_axis(v1, dim, axis, "v1")
     a, ax1 = _vectors(v1, axis, "v1")
     b, ax2 = _vectors(v2, axis, "v2")
-    rows1 = rows2 = None
+    rows1: Any = None
+    rows2: Any = None
     if rows is not None:
         if a.ndim < 2:
             raise ValueError(
@@ -168,7 +169,8 @@ def vector_pairs(
         for flat, name in ((rows1, "v1"), (rows2, "v2")):
             if not np.all(np.isfinite(flat)):
                 raise ValueError(f"{name} must be finite")
-    h = centroids = None
+    h: Any = None
+    centroids: Any = None
     if fit == "rotation":
         h = rows1.T @ rows2
         check_rank(h, "the vectors of v1 or v2")

@@ -14,6 +14,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from .._engine import chain as _chain
 from . import xarray as _xarray
 from .series import velocity_options
 
@@ -88,7 +89,8 @@ def velocity_frames(
     mode: Any = None,
 ) -> VelocityFrames:
     """Frame, reference (default: the frame's parent) and representation frame
-    (default: the reference) resolved, then the velocity options checked."""
+    (default: the reference) resolved, then the velocity options checked and
+    a static chain refused."""
     frame = resolve(frame, "frame")
     if reference is None:
         if frame.parent is None:
@@ -101,4 +103,11 @@ def velocity_frames(
         represent_in if represent_in is not None else reference, "represent_in"
     )
     mode = velocity_options(outlier_thresh, cutoff, mode=mode)
+    # known before anything is computed: a chain whose frames all have no
+    # timestamps has no velocity (the engine would find it after the lookup)
+    if _chain.static_transform(frame, reference) is not None:
+        raise ValueError(
+            f"the transform between {frame.name!r} and {reference.name!r} is static; "
+            f"a velocity needs timestamps (pass allow_static=True for zeros)"
+        )
     return VelocityFrames(frame, reference, represent_in, mode)

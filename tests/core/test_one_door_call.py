@@ -156,3 +156,28 @@ def test_the_count_sees_several_door_calls():
              {**vars(conversions), "_s": shapes})  # fmt: skip
 
     assert door_calls(two_calls) == 2
+
+
+@pytest.mark.parametrize(
+    "lookup",
+    [rbm.lookup_linear_velocity, rbm.lookup_angular_velocity, rbm.lookup_twist],
+    ids=["linear", "angular", "twist"],
+)
+def test_a_static_chain_is_refused_before_the_engine_runs(lookup, monkeypatch):
+    # known from the frames alone: the door says so, the engine is not asked
+    from rbm_nb._engine import chain, twist
+
+    _register_moving()
+
+    def not_called(*args, **kwargs):
+        raise AssertionError("the engine was asked")
+
+    monkeypatch.setattr(twist, "_moving_lookup", not_called)
+    monkeypatch.setattr(twist, "_chain_rates", not_called)
+    monkeypatch.setattr(chain, "lookup", not_called)
+    with pytest.raises(ValueError) as err:
+        lookup("eye", "head")
+    assert str(err.value) == (
+        "the transform between 'eye' and 'head' is static; a velocity needs "
+        "timestamps (pass allow_static=True for zeros)"
+    )

@@ -9,7 +9,13 @@ length; ``poses``: rotation and homogeneous matrices), the velocity
 estimators' series and every velocity's options (``series``), coordinates
 and quaternions checked (``validation``), xarray results (``xarray``), frame paths through the tree
 (``frame_paths``) and the blocks a lazy dask computation runs
-(``dask_blocks``). Timestamps become the engine's tracks
+(``dask_blocks``). Each facade of :mod:`rbm_nb.core` makes one call here
+and gets a frozen, checked value back: ``inputs.arguments`` (transforms),
+``estimators`` (velocity series, vector pairs, ICP), ``coordinates``,
+``quaternions`` (qinv, qmul, qmean, qinterp, rotate_vectors,
+from_euler_angles), ``poses`` (the se3 functions), ``shapes`` (the
+conversions) and ``lookups`` (frames resolved, options checked, a static
+chain refused for a velocity); ``tests/core/test_one_door_call.py`` counts. Timestamps become the engine's tracks
 (:mod:`rbm_nb._engine.time`) here too. Below it, ``_engine`` and ``_kernels``
 check what only the data can tell (time ranges, sampling), nothing else.
 """

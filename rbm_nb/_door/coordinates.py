@@ -12,8 +12,7 @@ value: the float64 data with the coordinate axis moved last, and the axis
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -24,8 +23,7 @@ from .unpack import dim_axis, is_dataarray, resolve_axis
 __all__ = ["Components", "components", "CoordinateChange", "coordinate_change"]
 
 
-@dataclass(frozen=True, slots=True)
-class Components:
+class Components(NamedTuple):
     """Checked coordinates: ``data`` with the coordinate axis last, its ``axis``
     in the argument; or, for dask-backed data, only the ``lazy`` result."""
 
@@ -45,8 +43,7 @@ def components(
     return Components(data, ax)
 
 
-@dataclass(frozen=True, slots=True)
-class CoordinateChange:
+class CoordinateChange(NamedTuple):
     """A checked change of coordinate system (or, for dask, its ``lazy`` result).
 
     ``data`` holds the coordinates last, ``axis`` is their axis in ``arr``;

@@ -14,8 +14,7 @@ options, the quaternions' axis and norms) before handing back a frozen
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -37,8 +36,7 @@ __all__ = [
 ]
 
 
-@dataclass(frozen=True, slots=True)
-class VelocityArguments:
+class VelocityArguments(NamedTuple):
     """A checked velocity estimate's input, or its lazy result.
 
     ``rows`` is the series as (time, series, components) float64, ``t`` its
@@ -117,8 +115,7 @@ def _lazy(eager, arr, dim, axis, timestamps, time_axis, outlier_thresh, cutoff, 
     return VelocityArguments(None, None, (), 0, 0, is_dataarray(arr), lazy)
 
 
-@dataclass(frozen=True, slots=True)
-class VectorPair:
+class VectorPair(NamedTuple):
     """Two checked vector arguments: finite float64, x, y, z along ``axis1``/``axis2``.
 
     ``axis`` is the axis as the caller gave it (or the DataArray's ``dim``);
@@ -195,8 +192,7 @@ def _vectors(v, axis, name: str) -> tuple[np.ndarray, int]:
     return np.moveaxis(moved, -1, ax), ax
 
 
-@dataclass(frozen=True, slots=True)
-class ClosestPoint:
+class ClosestPoint(NamedTuple):
     """Checked input of ICP: point rows ``p1``, ``p2``; ``init``: the initial
     guess (translation (3,), rotation (4,)) or None; the loop's limits."""
 

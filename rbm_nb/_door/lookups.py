@@ -11,18 +11,23 @@ engine's answer (a Dataset, a DataArray).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 from .._engine import chain as _chain
 from . import xarray as _xarray
 from .series import velocity_options
 
-__all__ = ["Frames", "frames", "transform_frames", "VelocityFrames", "velocity_frames"]
+__all__ = [
+    "Frames",
+    "frames",
+    "pose_frames",
+    "transform_frames",
+    "VelocityFrames",
+    "velocity_frames",
+]
 
 
-@dataclass(frozen=True, slots=True)
-class Frames:
+class Frames(NamedTuple):
     """Two resolved frames: the transform maps points wrt ``outof`` to ``into``."""
 
     outof: Any
@@ -36,12 +41,17 @@ class Frames:
         return _xarray.transform_dataset(t, r, frame.name, timestamps)
 
 
-def frames(
-    resolve: Callable, outof: Any, into: Any, names: tuple[str, str] = ("outof", "into")
-) -> Frames:
-    """Both frames resolved, ``into`` first (its name is ``names[1]``)."""
-    to_frame = resolve(into, names[1])
-    return Frames(resolve(outof, names[0]), to_frame)
+def frames(resolve: Callable, outof: Any, into: Any) -> tuple[Any, Any]:
+    """``(outof, into)`` resolved, ``into`` first: ``lookup_transform``'s common
+    call, a few µs in all, so a plain pair rather than a :class:`Frames`."""
+    to_frame = resolve(into, "into")
+    return resolve(outof, "outof"), to_frame
+
+
+def pose_frames(resolve: Callable, frame: Any, reference: Any) -> Frames:
+    """``lookup_pose``'s frames: ``reference`` resolved first."""
+    to_frame = resolve(reference, "reference")
+    return Frames(resolve(frame, "frame"), to_frame)
 
 
 def transform_frames(
@@ -57,11 +67,11 @@ def transform_frames(
         chosen = [k for k, v in (("as_matrix", as_matrix), ("as_transform", as_transform),
                                  ("as_dataset", as_dataset)) if v]  # fmt: skip
         raise ValueError(f"choose at most one of {', '.join(chosen)}")
-    return frames(resolve, outof, into)
+    to_frame = resolve(into, "into")
+    return Frames(resolve(outof, "outof"), to_frame)
 
 
-@dataclass(frozen=True, slots=True)
-class VelocityFrames:
+class VelocityFrames(NamedTuple):
     """The frames of a velocity lookup, resolved, and its checked ``mode``."""
 
     frame: Any

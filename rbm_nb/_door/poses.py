@@ -12,8 +12,7 @@ named by its index in the argument (:func:`rbm_nb._door.shapes.where`).
 from __future__ import annotations
 
 import numbers
-from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -75,8 +74,7 @@ def poses(
 # ---------------------------------------------------------------------------
 
 
-@dataclass(frozen=True, slots=True)
-class PoseRows:
+class PoseRows(NamedTuple):
     """Checked matrices as C-contiguous float64 rows ``(n, *tail)`` and the
     leading shape they came from; ``rotation_only``: the argument held
     rotations (3, 3), not poses (4, 4)."""
@@ -105,8 +103,7 @@ def normalisable(value: Any) -> PoseRows:
     return PoseRows(flat, lead, rotation_only)
 
 
-@dataclass(frozen=True, slots=True)
-class PosePairs:
+class PosePairs(NamedTuple):
     """Two stacks of poses (``a``, ``b``: (n, 4, 4) rows, a single pose or
     a stack of the result's leading shape ``lead``), and for ``trinterp``
     the fractions ``f`` as rows of that shape too."""

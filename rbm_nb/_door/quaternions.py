@@ -12,8 +12,7 @@ the facade hands to the kernels as it is.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -130,8 +129,7 @@ def fast_times(t_in: Any, t_out: Any) -> tuple[np.ndarray, np.ndarray] | None:
 # ---------------------------------------------------------------------------
 
 
-@dataclass(frozen=True, slots=True)
-class Inverse:
+class Inverse(NamedTuple):
     """``rows`` (n, 4) to invert; ``plain``: they are the argument itself (the
     kernel counts its faults); else ``qf`` (components last) and how to join."""
 
@@ -159,8 +157,7 @@ def inverse(q: Any, qaxis: Any) -> Inverse:
 # ---------------------------------------------------------------------------
 
 
-@dataclass(frozen=True, slots=True)
-class Product:
+class Product(NamedTuple):
     """Checked factors of a Hamilton product.
 
     ``plain``: two plain row arrays (``parts``) for the one-pass kernel;
@@ -212,8 +209,7 @@ def product(q: tuple, qaxis: Any, general: bool = False) -> Product:
 # ---------------------------------------------------------------------------
 
 
-@dataclass(frozen=True, slots=True)
-class Interpolation:
+class Interpolation(NamedTuple):
     """A checked squad interpolation, by ``kind``:
 
     * "dataarray" (also a plain dask array, wrapped as one in ``q``): ``dim``
@@ -305,8 +301,7 @@ def _fast_rows(q, t_in, t_out, axis, qaxis) -> Interpolation | None:
 # ---------------------------------------------------------------------------
 
 
-@dataclass(frozen=True, slots=True)
-class Rotation:
+class Rotation(NamedTuple):
     """Checked quaternions and vectors to rotate, by ``kind``:
 
     * "rows": plain (n|1, 4) and (n|1, 3) rows for the one-pass kernel;
@@ -372,8 +367,7 @@ def rotation(q: Any, v: Any, axis: Any, qaxis: Any, one_to_one: Any) -> Rotation
 # ---------------------------------------------------------------------------
 
 
-@dataclass(frozen=True, slots=True)
-class Mean:
+class Mean(NamedTuple):
     """Checked quaternions to average: ``groups`` (g, n, 4), one group per
     kept index (``keep_shape``); the result's quaternion axis ``qpos``; a
     DataArray ``template`` and its quaternion dimension ``qdim``."""
@@ -430,8 +424,7 @@ def _reduce_axes(axis: Any, ndim: int) -> tuple[int, ...]:
 _ANGLE_NAMES = {"r": "roll", "p": "pitch", "y": "yaw"}
 
 
-@dataclass(frozen=True, slots=True)
-class EulerAngles:
+class EulerAngles(NamedTuple):
     """Checked roll/pitch/yaw angles (``angles``: key "r", "p" or "y" -> array),
     their broadcast ``shape`` and the result's quaternion axis ``axis``."""
 

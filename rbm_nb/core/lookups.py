@@ -102,8 +102,7 @@ def lookup_transform(
     ):
         # the common call, in a handful of operations (widgets and the
         # tf2-style Transformer make it all the time, often on static chains)
-        pair = _door.frames(resolve_frame, outof, into)
-        t, r, _ = _chain.lookup_transform(pair.outof, pair.into)
+        t, r, _ = _chain.lookup_transform(*_door.frames(resolve_frame, outof, into))
         return t, r
     return lookup_at(
         outof,
@@ -176,7 +175,7 @@ def lookup_pose(
     timestamps : ndarray, shape (n,) or None, if ``return_timestamps``
     ds : xarray.Dataset, if ``as_dataset``
     """
-    pair = _door.frames(resolve_frame, frame, reference, ("frame", "reference"))
+    pair = _door.pose_frames(resolve_frame, frame, reference)
     position, orientation, timestamps = _chain.lookup_transform(pair.outof, pair.into)
     if as_dataset:
         return pair.dataset(position, orientation, timestamps, pose=True)

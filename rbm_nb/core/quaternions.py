@@ -32,19 +32,12 @@ __all__ = ["from_euler_angles", "qinterp", "qinv", "qmean", "qmul", "rotate_vect
 
 
 # ---------------------------------------------------------------------------
-# input handling shared by the public functions
+# result layout shared by the public functions
 # ---------------------------------------------------------------------------
 
 
-# the door's rules, under the names the functions below (and accessors) use
-_split = _door.split
-_broadcast = _door.broadcast
-_check_times = _door.check_times
-_fast_times = _door.fast_times
-
-
 def _join(out: np.ndarray, was_quaternion: bool, qpos: int) -> np.ndarray:
-    """Inverse of :func:`_split` for a result with the components last:
+    """Inverse of :func:`rbm_nb._door.quaternions.split` for a result with the components last:
     they move to position ``qpos`` of the result (negative counts from the end)."""
     if was_quaternion:
         import quaternion
@@ -430,7 +423,7 @@ def _qinterp_dataarray(
             f"the new coordinate for {dim!r} must be a scalar or one-dimensional, "
             f"got shape {t_out_values.shape}"
         )
-    times = _fast_times(np.asarray(getattr(t_in, "values", t_in)), t_out_values)
+    times = _door.fast_times(np.asarray(getattr(t_in, "values", t_in)), t_out_values)
     t_in_f, t_out_f = (
         times if times is not None else _time.seconds_pair(t_in, t_out_values)
     )
@@ -440,7 +433,7 @@ def _qinterp_dataarray(
         inside = (flat_out >= t_in_f[0]) & (flat_out <= t_in_f[-1])
         if inside.all():
             inside = None
-    _check_times(
+    _door.check_times(
         t_in_f, flat_out if inside is None else flat_out[inside], da.sizes[dim]
     )
 

@@ -162,10 +162,12 @@ def facades(importers, other: str | None = None) -> None:
         print(f"\nbefore: rbm_nb at {other}")
     print("\nfacades: stays, modules, climbs, door calls, own checks, kernel depth")
     for label, (stays, modules, n_climbs, door, own, kernel) in counts.items():
-        was = f"{before[label][3]:2d} -> " if label in before else ""
+        b = before.get(label)
+        was = [f"{b[k]:3d} -> " if b else "" for k in range(4)]
         print(
-            f"  {label:27s} {stays:4d} stays {modules:3d} modules {n_climbs:2d} climbs "
-            f"{was}{door:2d} door calls {own:2d} own checks  kernel at {kernel}"
+            f"  {label:34s} {was[0]}{stays:3d} stays {was[1]}{modules:2d} modules "
+            f"{was[2]}{n_climbs:2d} climbs {was[3]}{door:2d} door calls "
+            f"{own:2d} own checks  kernel at {kernel}"
         )
     if before:
         many = [k for k, v in counts.items() if v[3] != 1]

@@ -316,21 +316,24 @@ def resample_frame(frame, target: Target):
     if same is not None:
         # the stored values, with their signs (the reference returns them),
         # NaN only where the sample itself is missing
-        return frame.t[same], frame.rotation[same]
+        return frame.samples.rows(same)
+    # (read once: with missing rows each read is a masked copy)
+    t, rotation = frame.t, frame.rotation
     if frame.discrete:
         # float seconds on one origin keep the order of the exact keys
         t_out = tt.base_in(track.origin)
         return (
-            kr.hold_last(track.base, frame.t, t_out),
-            kr.hold_last(track.base, frame.rotation, t_out),
+            kr.hold_last(track.base, t, t_out),
+            kr.hold_last(track.base, rotation, t_out),
         )
     t_out = tt.base_in(track.origin)
     if len(track) < 2:
-        return frame.t, frame.rotation
+        return t, rotation
     a_coef, b_coef, seg = _squad_coefficients(frame)
     rot = kq.squad_evaluate(frame.r, track.base, a_coef, b_coef, seg, t_out)
-    stored_signs(rot, frame.r, frame.rotation, track.base, t_out)
-    trans = kr.interp_linear(track.base, frame.t, t_out)
+    stored_signs(rot, frame.r, rotation, track.base, t_out)
+    del rotation
+    trans = kr.interp_linear(track.base, t, t_out)
     if frame.max_gap is not None:
         in_gap = in_long_gap(track.base, t_out, frame.max_gap)
         trans[in_gap] = np.nan
@@ -534,10 +537,12 @@ def lookup(frame, to_frame, rotation_only: bool = False):
         # a frame into its parent at its own times is its samples themselves
         # (views); the caller gets copies, never the frame's memory (which
         # may be the user's own read-only arrays, see core/frames.py)
-        first = steps[0][0]
-        if np.may_share_memory(t, first.t):
+        kept = steps[0][0].samples
+        if np.may_share_memory(t, kept.stored_t):
             t = t.copy()
-        if np.may_share_memory(r, first.rotation) or np.may_share_memory(r, first.r):
+        if np.may_share_memory(r, kept.stored_rotation) or np.may_share_memory(
+            r, kept.r
+        ):
             r = r.copy()
     n = len(target)
     # composed rows of a chain that does not move here, once (r: the fused

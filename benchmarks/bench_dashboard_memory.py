@@ -119,7 +119,9 @@ if trace:
     snap = tracemalloc.take_snapshot()
     tracemalloc.stop()
     import inspect
-    lines, first = inspect.getsourcelines(explorer._unconfident)
+    # (trees before the mask made NaN copies in _confident)
+    masker = getattr(explorer, "_unconfident", None) or explorer._confident
+    lines, first = inspect.getsourcelines(masker)
     masking = range(first, first + len(lines))
     groups = {{"tables": 0, "frames": 0, "engine": 0, "scene": 0, "plots": 0, "other": 0}}
     def group(tb):

@@ -191,3 +191,28 @@ def test_explorer_eye_frames_keep_the_frozen_recording():
             same_bits(a, b)
         else:
             np.testing.assert_array_equal(a, b)
+
+
+def test_explorer_frames_keep_only_unit_rotations_seconds_and_mask():
+    """What registering the explorer's frames keeps, beside a frozen recording:
+    per sample the unit rotations (4 floats), the float seconds (1) and, for
+    the eyes, a mask byte -- no copy of the poses or the times."""
+    import gc
+    import tracemalloc
+
+    head, left, right, _ = recording()
+    data = [freeze_dataset(ds.copy(deep=True)) for ds in (head, left, right)]
+    explorer.register_head_eye_frames(data[0], data[1], data[2])  # warm
+    frames.clear_registry()
+    gc.collect()
+    tracemalloc.start()
+    explorer.register_head_eye_frames(*data)
+    gc.collect()
+    kept, _ = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    n_head, n_eyes = (
+        data[0].sizes["time"],
+        data[1].sizes["time"] + data[2].sizes["time"],
+    )
+    allowed = n_head * 5 * 8 + n_eyes * (5 * 8 + 1) + 256 * 1024  # + small objects
+    assert kept <= allowed, (kept, allowed)

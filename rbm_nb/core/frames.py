@@ -1101,8 +1101,9 @@ def _masked_samples(label, track, translation, rotation, inverse, mask) -> Sampl
             raise ValueError(_shape_message(label, what, arr.shape, (n, cols)))
     masked = []
     for arr in (t_in, q_in):
-        copy = np.array(arr, dtype=np.float64, order="C")
-        copy[mask] = np.nan
+        copy = np.ascontiguousarray(
+            np.where(mask[:, None], np.nan, arr), dtype=np.float64
+        )
         copy.setflags(write=False)  # frozen: _prepared keeps it, no second copy
         masked.append(copy)
     t = _frozen_rows(translation, 3) if translation is not None else None

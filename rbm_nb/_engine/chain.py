@@ -317,23 +317,23 @@ def resample_frame(frame, target: Target):
         # the stored values, with their signs (the reference returns them),
         # NaN only where the sample itself is missing
         return frame.samples.rows(same)
-    # (read once: with missing rows each read is a masked copy)
-    t, rotation = frame.t, frame.rotation
     if frame.discrete:
         # float seconds on one origin keep the order of the exact keys
         t_out = tt.base_in(track.origin)
         return (
-            kr.hold_last(track.base, t, t_out),
-            kr.hold_last(track.base, rotation, t_out),
+            kr.hold_last(track.base, frame.t, t_out),
+            kr.hold_last(track.base, frame.rotation, t_out),
         )
     t_out = tt.base_in(track.origin)
     if len(track) < 2:
-        return t, rotation
+        return frame.t, frame.rotation
     a_coef, b_coef, seg = _squad_coefficients(frame)
     rot = kq.squad_evaluate(frame.r, track.base, a_coef, b_coef, seg, t_out)
-    stored_signs(rot, frame.r, rotation, track.base, t_out)
-    del rotation
-    trans = kr.interp_linear(track.base, t, t_out)
+    # the rotations as kept, without the missing rows' NaN: r is NaN in
+    # those rows, so their products are NaN and never negative, as with the
+    # masked rotations (one masked copy less per call)
+    stored_signs(rot, frame.r, frame.samples.stored_rotation, track.base, t_out)
+    trans = kr.interp_linear(track.base, frame.t, t_out)
     if frame.max_gap is not None:
         in_gap = in_long_gap(track.base, t_out, frame.max_gap)
         trans[in_gap] = np.nan

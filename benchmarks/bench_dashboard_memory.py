@@ -31,17 +31,21 @@ dashboard under ``tracemalloc`` and splits what the build keeps (allocated,
 not necessarily resident) by the innermost rbm_nb module that allocated it:
 ``tables`` (the engine's squad tables: allocated whole per moving frame,
 resident only where rows were computed -- untouched pages cost no RSS),
-``frames`` (``core/frames.py``, ``_door``, the frames' time copies and the
-explorer's confidence-masked eye arrays the frames keep), ``engine`` (the
+``frames`` (``core/frames.py``, ``_door``, the frames' time copies and,
+in trees that mask by copying, the explorer's confidence-masked eye arrays), ``engine`` (the
 rest of ``rbm_nb/_engine``, ``rbm_nb/_kernels``: lookup results, chains),
 ``scene`` (``rbm_nb/scene``: tracks), ``plots`` (``rbm_nb/widgets``,
 ``core/gaze``, the explorer's series), ``other`` (the rest, and allocations
 outside rbm_nb).
 
+The recording is tiled as the tree's loader gives it: read-only where
+``rbm_nb.data.load_example`` returns frozen datasets (then frames keep the
+arrays and, for the eyes' low-confidence samples, a mask beside them),
+writeable where it returns them as ``xarray`` loads them (trees before
+issue 35's loaders; frames copy what they keep).
 ``--read-only``: the recording's arrays are handed over read-only (owned
-by nobody who can write them, as :mod:`rbm_nb._infra.frozen` defines it), so
-frames keep them instead of copies; by default they are writeable, as
-``xarray`` loads them, and frames copy what they keep.
+by nobody who can write them, as :mod:`rbm_nb._infra.frozen` defines it)
+whatever the loader gives.
 
 ``--compare TREE`` runs the same lengths in another checkout (e.g.
 ``/work/main``) in the same run and prints its table and the ratios;
@@ -115,7 +119,9 @@ if trace:
     snap = tracemalloc.take_snapshot()
     tracemalloc.stop()
     import inspect
-    lines, first = inspect.getsourcelines(explorer._confident)
+    # (trees before the mask made NaN copies in _confident)
+    masker = getattr(explorer, "_unconfident", None) or explorer._confident
+    lines, first = inspect.getsourcelines(masker)
     masking = range(first, first + len(lines))
     groups = {{"tables": 0, "frames": 0, "engine": 0, "scene": 0, "plots": 0, "other": 0}}
     def group(tb):

@@ -10,6 +10,8 @@ prints, per output, max |a - b| and whether the two are identical bit for
 bit (NaN where NaN). Exits 1 if any output differs.
 
 Run:  .venv/bin/python benchmarks/same_bits_real.py OTHER_TREE
+(with ``SAME_BITS_FROZEN=1`` both trees get the recording read-only, as the
+loaders return it)
 """
 
 from __future__ import annotations
@@ -38,6 +40,16 @@ def dump(out: str) -> None:
         xr.open_dataset(DATA / f"{name}.nc").load()
         for name in ("head", "left_eye", "right_eye")
     )
+    if os.environ.get("SAME_BITS_FROZEN"):
+        # read-only down to the memory, as load_example returns them: frames
+        # keep these arrays (and the eyes' low-confidence mask) in trees
+        # that can
+        for ds in (head, left, right):
+            for var in ds.variables.values():
+                node = np.asarray(var.values)
+                while isinstance(node, np.ndarray):
+                    node.setflags(write=False)
+                    node = node.base
     rbm.clear_registry()
     register_head_eye_frames(head, left, right, ros_eyes=True)
     rng = np.random.default_rng(0)

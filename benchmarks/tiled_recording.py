@@ -36,10 +36,28 @@ def tiled(datasets, hours: float):
             for name, var in ds.data_vars.items()
         }
         coords = {name: ds[name] for name in ds.coords if name != "time"}
-        out.append(
-            xr.Dataset(data_vars, coords={**coords, "time": time}, attrs=ds.attrs)
+        tiled_ds = xr.Dataset(
+            data_vars, coords={**coords, "time": time}, attrs=ds.attrs
         )
+        if _read_only(ds):
+            _freeze(tiled_ds)  # as the loader gave the recording: read-only
+        out.append(tiled_ds)
     return out
+
+
+def _read_only(ds) -> bool:
+    return all(not var.values.flags.writeable for var in ds.data_vars.values())
+
+
+def _freeze(ds) -> None:
+    """Every array of ``ds`` read-only down to its owner (what the loaders do,
+    ``rbm_nb._infra.frozen.freeze_dataset``; written out here so that
+    ``--compare`` runs this file against trees without it)."""
+    for var in ds.variables.values():
+        node = np.asarray(var.values)
+        while isinstance(node, np.ndarray):
+            node.setflags(write=False)
+            node = node.base
 
 
 def tiled_head_eye(hours: float):

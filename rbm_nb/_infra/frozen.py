@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["is_frozen", "kernel_alias"]
+__all__ = ["is_frozen", "kernel_alias", "freeze_dataset"]
 
 
 def is_frozen(arr: Any) -> bool:
@@ -65,3 +65,26 @@ def kernel_alias(arr: np.ndarray) -> np.ndarray:
     if arr.flags.writeable:
         return arr
     return np.asarray(_Alias(arr))
+
+
+def _freeze(arr: np.ndarray) -> None:
+    """Make ``arr`` and every array it views read-only (down to the owner)."""
+    node: Any = arr
+    while isinstance(node, np.ndarray):
+        node.setflags(write=False)
+        node = node.base
+
+
+def freeze_dataset(ds: Any) -> Any:
+    """Make every array of a freshly loaded xarray Dataset frozen; returns ``ds``.
+
+    For loaders that made ``ds`` and hold its only reference: nobody else
+    can write its memory, so once it is read-only frames keep its arrays
+    instead of copies (:func:`is_frozen`). The time coordinate's memory is
+    the pandas index's own array, which pandas never writes (an index is
+    immutable); it is marked read-only too. A user who wants to change the
+    data works on ``ds.copy(deep=True)``, which is writeable.
+    """
+    for var in ds.variables.values():
+        _freeze(np.asarray(var.values))
+    return ds

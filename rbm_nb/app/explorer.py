@@ -143,23 +143,17 @@ def is_synthetic(ds) -> bool:
     return "synthetic" in str(ds.attrs.get("source", ""))
 
 
-def _confident(eye, min_confidence: float | None):
-    """The eye's pose with samples below ``min_confidence`` marked missing (NaN)."""
+def _unconfident(eye, min_confidence: float | None):
+    """The rows of ``eye`` below ``min_confidence`` (bool, one per sample), or None.
+
+    The frame treats them as missing (NaN) and keeps the recording's own
+    arrays beside this mask where nobody can write them (the loaders' are
+    read-only): no masked copies of the eye's pose.
+    """
     if min_confidence is None or "confidence" not in eye:
-        return eye
+        return None
     low = (eye.confidence < min_confidence).values
-    if not low.any():
-        return eye
-    # shallow: the new position and orientation replace the copy's variables,
-    # the rest (times, confidence) is the caller's, read and never written
-    masked = eye.copy(deep=False)
-    for var in ("position", "orientation"):
-        values = masked[var].values.copy()
-        values[low] = np.nan
-        # ours alone and never written again: the frame keeps it, no copy
-        values.setflags(write=False)
-        masked[var] = (masked[var].dims, values, masked[var].attrs)
-    return masked
+    return low if low.any() else None
 
 
 def register_head_eye_frames(
@@ -210,13 +204,14 @@ def register_head_eye_frames(
     )
     for name, eye in zip(EYES, (left_eye, right_eye), strict=True):
         ReferenceFrame.from_dataset(
-            _confident(eye, min_confidence),
+            eye,
             "position",
             "orientation",
             "time",
             parent="pupil/scene_cam",
             name=f"pupil/{name}",
             max_gap=max_gap,
+            missing=_unconfident(eye, min_confidence),
         ).register(update=True)
         if ros_eyes:
             ReferenceFrame.from_rotation_matrix(

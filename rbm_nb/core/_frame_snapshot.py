@@ -70,7 +70,9 @@ class FrameValue:
     @property
     def nbytes(self) -> int:
         s = self.samples
-        arrays = [s.t, s.r, s.rotation]
+        arrays = [s.stored_t, s.r, s.stored_rotation]
+        if s.missing_rows is not None:
+            arrays.append(s.missing_rows)
         if s.track is not None:
             arrays += [s.track.values, s.track.key, s.track.base]
         return sum(a.nbytes for a in arrays)
@@ -107,9 +109,11 @@ class FrameValue:
             track.values[rows], track.key[rows], track.base[rows], track.origin,
             track.kind,
         )  # fmt: skip
+        mask = s.missing_rows
         samples = Samples(
-            cut, s.t[rows], s.r[rows], s.rotation[rows], s.missing_rotations
-        )
+            cut, s.stored_t[rows], s.r[rows], s.stored_rotation[rows],
+            s.missing_rotations, None if mask is None else mask[rows],
+        )  # fmt: skip
         return replace(self, samples=samples)
 
 

@@ -409,6 +409,12 @@ class ReferenceFrame:
         The longest gap between two samples (in seconds) that lookups
         interpolate across; times inside a longer gap get NaN. Default None:
         no limit.
+    missing : array_like of bool, shape (n,), optional
+        Rows of a moving frame to treat as missing samples, as if they were
+        NaN (e.g. samples below a confidence threshold). The same results as
+        NaN-masked copies, without making them: arrays nobody can write any
+        more (read-only down to their memory, as :func:`rbm_nb.data.load_example`
+        returns them) are kept as they are, with this mask beside them.
 
     Raises
     ------
@@ -428,6 +434,7 @@ class ReferenceFrame:
         inverse: bool = False,
         discrete: bool = False,
         max_gap: float | None = None,
+        missing: Any = None,
     ) -> None:
         _check_name(name)
         self._parent: ReferenceFrame | None = None
@@ -439,6 +446,7 @@ class ReferenceFrame:
                 ("translation", translation),
                 ("rotation", rotation),
                 ("timestamps", timestamps),
+                ("missing", missing),
             ):
                 if value is not None:
                     raise ValueError(
@@ -449,7 +457,9 @@ class ReferenceFrame:
             samples = Samples(None, np.zeros((1, 3)), identity, identity)
         else:
             parent = resolve_frame(parent, "parent")
-            samples = _samples(name, translation, rotation, timestamps, inverse)
+            samples = _samples(
+                name, translation, rotation, timestamps, inverse, missing
+            )
         _check_discrete(name, samples, discrete)
         # everything the engine reads, as one immutable value (made again,
         # with the frames below, whenever the frame changes: _remake)
@@ -685,6 +695,7 @@ class ReferenceFrame:
         inverse: bool = False,
         discrete: bool = False,
         max_gap: float | None = None,
+        missing: Any = None,
     ) -> ReferenceFrame:
         """A moving frame from variables of an xarray Dataset.
 
@@ -702,6 +713,10 @@ class ReferenceFrame:
         max_gap : float, optional
             The longest gap (seconds) interpolated across, as for
             :class:`ReferenceFrame`; NaN rows (missing samples) are accepted.
+        missing : array_like of bool, shape (n,), optional
+            Rows to treat as missing, as for :class:`ReferenceFrame` (the
+            dataset's arrays are kept, not masked copies, when the dataset
+            is read-only as the loaders return it).
         """
         return cls(
             name,
@@ -712,6 +727,7 @@ class ReferenceFrame:
             inverse=inverse,
             discrete=discrete,
             max_gap=max_gap,
+            missing=missing,
         )
 
     @classmethod
@@ -1024,7 +1040,7 @@ def _checked_max_gap(name: str | None, max_gap: Any) -> float | None:
     return float(max_gap)
 
 
-def _samples(name, translation, rotation, timestamps, inverse) -> Samples:
+def _samples(name, translation, rotation, timestamps, inverse, missing=None) -> Samples:
     """A moving or static frame's arrays, checked once and prepared for the engine."""
     label = f"frame {name!r}: " if name is not None else ""
     track: _time.Track | None = None
@@ -1034,6 +1050,82 @@ def _samples(name, translation, rotation, timestamps, inverse) -> Samples:
             f"{label}timestamps",
             copy=not is_frozen(getattr(timestamps, "values", timestamps)),
         )
+    elif missing is not None:
+        raise ValueError(f"{label}missing given without timestamps (a static frame)")
+    if missing is not None:
+        assert track is not None
+        mask = _missing_mask(missing, len(track), label)
+        if mask is not None:
+            return _masked_samples(label, track, translation, rotation, inverse, mask)
+    return _prepared(label, track, translation, rotation, inverse)
+
+
+def _missing_mask(missing: Any, n: int, label: str) -> np.ndarray | None:
+    """``missing`` as a private frozen bool array of n rows, or None if no row is set."""
+    values = getattr(missing, "values", missing)
+    mask = np.asarray(values)
+    if mask.dtype != np.bool_ or mask.shape != (n,):
+        raise ValueError(
+            f"{label}missing must be a bool array of shape ({n},) (one per "
+            f"timestamp), got {mask.dtype} of shape {mask.shape}"
+        )
+    if not mask.any():
+        return None
+    if not is_frozen(mask):
+        mask = mask.copy()  # the caller may change theirs later
+        mask.setflags(write=False)
+    return mask
+
+
+def _masked_samples(label, track, translation, rotation, inverse, mask) -> Samples:
+    """A moving frame's samples with the rows in ``mask`` missing (as if NaN).
+
+    The samples are prepared from copies with those rows NaN, as a caller
+    masking its arrays would make them, so every number the engine computes
+    is the same. Where the caller's arrays are frozen the frame then keeps
+    them and ``mask`` instead of the masked copies (which go at once): the
+    engine applies the mask whenever it reads them (:class:`Samples`).
+    """
+    n = len(track)
+    t_in = (
+        np.zeros((n, 3))
+        if translation is None
+        else float_array(translation, f"{label}translation")
+    )
+    q_in = None if rotation is None else float_array(rotation, f"{label}rotation")
+    if q_in is None:
+        q_in = np.zeros((n, 4))
+        q_in[:, 0] = 1.0
+    for arr, what, cols in ((t_in, "translation", 3), (q_in, "rotation", 4)):
+        if arr.shape != (n, cols):
+            raise ValueError(_shape_message(label, what, arr.shape, (n, cols)))
+    masked = []
+    for arr in (t_in, q_in):
+        copy = np.ascontiguousarray(
+            np.where(mask[:, None], np.nan, arr), dtype=np.float64
+        )
+        copy.setflags(write=False)  # frozen: _prepared keeps it, no second copy
+        masked.append(copy)
+    t = _frozen_rows(translation, 3) if translation is not None else None
+    q = _frozen_rows(rotation, 4) if rotation is not None else None
+    if t is not None and q is not None and not inverse:
+        shared = _shared_samples(track, masked[0], masked[1])
+        if shared is not None:
+            return Samples(
+                track,
+                kernel_alias(t),
+                shared.r,
+                kernel_alias(q),
+                shared.missing_rotations,
+                mask,
+            )
+    # the masked copies, kept as any frame's (or a bad row named)
+    return _prepared(label, track, masked[0], masked[1], inverse)
+
+
+def _prepared(label, track, translation, rotation, inverse) -> Samples:
+    """:func:`_samples` once the times are a Track (or None: static)."""
+    if track is not None:
         if not inverse:
             shared = _shared_samples(track, translation, rotation)
             if shared is not None:

@@ -8,6 +8,7 @@ import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
 
+from .._infra.frozen import freeze_dataset
 from ..io._files import load_netcdf
 from ..ros.writer import RosbagWriter
 from .fetch import ExampleDataStore, ExampleDataUnavailable, cache_dir, example_data
@@ -110,7 +111,9 @@ def load_example(
     Returns
     -------
     xarray.Dataset or pathlib.Path
-        The dataset, loaded into memory; for "rosbag" the path of the bag.
+        The dataset, loaded into memory and read-only (frames then keep its
+        arrays instead of copies; ``ds.copy(deep=True)`` is a writeable
+        copy); for "rosbag" the path of the bag.
 
     Raises
     ------
@@ -143,7 +146,7 @@ def load_example(
             )
             _CHOICES[name] = DataChoice(name, "own", path, reason)
             warnings.warn(f"{name}: {reason}.", UserWarning, stacklevel=2)
-            return dataset
+            return freeze_dataset(dataset)
         reason = f"The real {name} recording is unavailable, using the synthetic one instead. "
         reason += f"{own} " if own else ""
         reason += str(err)
@@ -151,7 +154,7 @@ def load_example(
         warnings.warn(reason, UserWarning, stacklevel=2)
         return _synthetic(name, store, seed)
     _CHOICES[name] = DataChoice(name, "real", Path(path), "the registered example file")
-    return path if name == "rosbag" else load_netcdf(path)
+    return path if name == "rosbag" else freeze_dataset(load_netcdf(path))
 
 
 def _own_recording(name: str, store: ExampleDataStore):
@@ -194,7 +197,7 @@ def _synthetic(name: str, store: ExampleDataStore, seed: int):
         if not path.is_file():
             write_synthetic_rosbag(path, seed=seed)
         return path
-    return getattr(_synthetic_recording(seed), name).copy(deep=True)
+    return freeze_dataset(getattr(_synthetic_recording(seed), name).copy(deep=True))
 
 
 @functools.lru_cache(maxsize=2)

@@ -305,6 +305,10 @@ def test_synthetic_source_needs_no_network_and_gives_copies(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         eye = load_example("left_eye", source="synthetic", store=store)
+    # read-only (frames keep it instead of copies); a deep copy is the user's
+    with pytest.raises(ValueError, match="read-only"):
+        eye.orientation.values[:] = 0.0
+    eye = eye.copy(deep=True)
     eye.orientation.values[:] = 0.0
     again = load_example("left_eye", source="synthetic", store=store)
     q = again.orientation.values

@@ -15,6 +15,8 @@ Each object lives at ``/rbm/<anchor>/<name>`` in the meshcat tree::
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from .commands import color_int
@@ -171,16 +173,33 @@ class PathHandle(SceneHandle):
 
     kind = "path"
 
-    def __init__(self, scene, name, frame, base, style, samples: np.ndarray):
+    def __init__(
+        self,
+        scene,
+        name,
+        frame,
+        base,
+        style,
+        samples: np.ndarray | Callable[[], np.ndarray],
+    ):
         super().__init__(scene, name, frame, base, style)
-        # the track's own positions, NaN rows where samples are missing (not a copy)
-        self.samples = samples
+        # the positions, NaN rows where samples are missing: an array, or
+        # what looks them up (a long recording's path is not kept whole:
+        # looked up when the line is simplified and when the view refines it)
+        self._samples = samples
         self._shown: tuple[tuple, list[np.ndarray], float] | None = None
+
+    @property
+    def samples(self) -> np.ndarray:
+        """Every recorded position, shape (n, 3), NaN rows where missing."""
+        source = self._samples
+        return source() if callable(source) else source
 
     @property
     def positions(self) -> np.ndarray:
         """The recorded positions that are not missing, shape (n, 3)."""
-        return self.samples[~np.isnan(self.samples).any(axis=1)]
+        samples = self.samples
+        return samples[~np.isnan(samples).any(axis=1)]
 
     def _validate_style(self, style):
         color_int(style["color"], "add_path: color")

@@ -206,7 +206,7 @@ class PathRefiner:
     def _refined(self, path: _Path, request: dict):
         key = (
             path.handle.name,
-            id(path.handle.samples),
+            id(path.handle),
             request["level"],
             tuple(request["lo"].tolist()),
             tuple(request["hi"].tolist()),

@@ -143,7 +143,7 @@ class PlayerLink:
         track = self._context.state.tracks.get(path)
         if track is None:
             return None
-        seconds = float(track.sample_times()[index])
+        seconds = float(track.seconds_of([index])[0])
         self.pin(path, seconds)
         return seconds
 

@@ -20,6 +20,7 @@ import umsgpack
 from .._engine.time import check_compatible
 from . import commands
 from .commands import Message, TransformPacker
+from .looked_up import even_rows
 from .tracks import SceneTrack, moving_span
 
 ROOT = "/rbm"
@@ -311,4 +312,4 @@ def _decimate(n: int, max_samples: int | None) -> np.ndarray | None:
         return None
     if max_samples < 2:
         raise ValueError(f"max_samples must be at least 2, got {max_samples}")
-    return np.unique(np.linspace(0, n - 1, max_samples).round().astype(np.int64))
+    return even_rows(n, max_samples)

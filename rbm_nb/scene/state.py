@@ -57,7 +57,6 @@ class SceneState:
         self.tracks: dict[str, SceneTrack] = {}
         self.pins: dict[str, float] = {}
         self.kind: str | None = None
-        self._timeline: tuple[np.ndarray, np.ndarray | None] | None = None
 
     # -- changes --------------------------------------------------------------------
     def set_object(self, path: str, obj) -> Message:
@@ -82,7 +81,6 @@ class SceneState:
         check_compatible([self.kind, track.kind], what)
         self.kind = track.kind
         self.tracks[path] = track
-        self._timeline = None
 
     def delete(self, path: str) -> Message:
         """Forget everything at or below ``path``."""
@@ -91,7 +89,6 @@ class SceneState:
                 del table[key]
         for prop in [k for k in self.properties if _under(k[0], path)]:
             del self.properties[prop]
-        self._timeline = None
         if not self.tracks:
             self.kind = None
         return commands.delete(path)
@@ -112,17 +109,15 @@ class SceneState:
         regular grid from the earliest to the latest sample at the finest
         mean sampling interval. None when nothing moves.
         """
-        if self._timeline is not None:
-            return self._timeline
         tracks = list(self.tracks.values())
         if not tracks:
             return None
-        # the axis is the player's (kept by it): made here on request, once
+        # the axis is the player's (kept by it): made on request, not kept
+        # here (an hour of the explorer's recording: 10 MB)
         times = [t.sample_times() for t in tracks]  # add_track keeps moving ones only
         first = times[0]
         if all(s is first or np.array_equal(s, first) for s in times):
-            self._timeline = (first, tracks[0].original_timestamps)
-            return self._timeline
+            return first, tracks[0].original_timestamps
         spans = [moving_span(t) for t in tracks]
         start = min(first for first, _ in spans)
         end = max(last for _, last in spans)
@@ -136,8 +131,15 @@ class SceneState:
         else:
             n = int(np.ceil((end - start) / min(steps) - 1e-9)) + 1
             seconds = np.linspace(start, end, n)
-        self._timeline = (seconds, None)
-        return self._timeline
+        return seconds, None
+
+    def span(self) -> tuple[float, float] | None:
+        """Float seconds of the earliest and the latest sample (None while
+        nothing moves): the ends of :meth:`timeline`, without making it."""
+        if not self.tracks:
+            return None
+        spans = [moving_span(t) for t in self.tracks.values()]
+        return min(s for s, _ in spans), max(e for _, e in spans)
 
     @property
     def origin(self) -> float:

@@ -15,6 +15,8 @@ bounding-box diagonal: 1/2000, half a pixel when the whole path spans a view
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 import numpy as np
 
 from .._kernels.simplify import split_worst_first
@@ -99,6 +101,80 @@ def simplify_path(
         if not fresh.all():
             points, gap_after = points[fresh], gap_after[fresh]
             slack = float(np.sqrt(3.0) * cell)
+    return _simplified(points, gap_after, tolerance, slack, max_points)
+
+
+def simplify_path_blocks(
+    blocks: Iterable[np.ndarray],
+    low: np.ndarray,
+    high: np.ndarray,
+    tolerance: float | None = None,
+    max_points: int = 1000,
+) -> tuple[list[np.ndarray], float]:
+    """:func:`simplify_path` of a path handed over in blocks, same result.
+
+    The grid-cell pass runs block by block (it compares each sample with
+    the one before), so only the samples it keeps are ever held at once.
+
+    Parameters
+    ----------
+    blocks : iterable of ndarray, shape (k, 3)
+        The samples in time order, in consecutive blocks (NaN rows missing).
+    low, high : ndarray, shape (3,)
+        Lowest and highest coordinates of the samples that are not missing
+        (the default tolerance is :data:`PATH_TOLERANCE` of their diagonal).
+    tolerance, max_points
+        As :func:`simplify_path`.
+    """
+    if tolerance is None:
+        tolerance = PATH_TOLERANCE * float(np.linalg.norm(high - low))
+    cell = CELL_SHARE * tolerance
+    kept: list[np.ndarray] = []
+    kept_gaps: list[np.ndarray] = []
+    # the last sample seen, held back until it is known whether a gap follows
+    last: np.ndarray | None = None
+    last_fresh = True
+    gap_pending = False  # missing rows since ``last``
+    dropped = False
+    for block in blocks:
+        present = ~np.isnan(block).any(axis=1)
+        rows = np.flatnonzero(present)
+        if len(rows) == 0:
+            gap_pending |= len(block) > 0 and last is not None
+            continue
+        points = block[rows]
+        gaps = np.zeros(len(rows), dtype=bool)  # gaps[k]: missing rows after points[k]
+        gaps[:-1] = np.diff(rows) > 1
+        if last is not None:
+            points = np.vstack([last, points])
+            gaps = np.r_[gap_pending or rows[0] > 0, gaps]
+        fresh = np.ones(len(points), dtype=bool)
+        if cell > 0:
+            cells = np.floor(points / cell)
+            fresh[1:] = (cells[1:] != cells[:-1]).any(axis=1) | gaps[:-1]
+        if last is not None:
+            fresh[0] = last_fresh
+        fresh[:-1] |= gaps[:-1]
+        # all but the last: its fate waits for what follows
+        keep = fresh[:-1]
+        dropped |= not keep.all()
+        kept.append(points[:-1][keep])
+        kept_gaps.append(gaps[:-1][keep])
+        last, last_fresh = points[-1], bool(fresh[-1])
+        gap_pending = rows[-1] < len(block) - 1
+    if last is None:
+        return [], 0.0
+    points = np.vstack([*kept, last[np.newaxis]])
+    gap_after = np.r_[np.concatenate(kept_gaps) if kept_gaps else [], False].astype(
+        bool
+    )
+    # (a pass over two samples or fewer drops none, as simplify_path skips it)
+    slack = float(np.sqrt(3.0) * cell) if dropped else 0.0
+    return _simplified(points, gap_after, tolerance, slack, max_points)
+
+
+def _simplified(points, gap_after, tolerance: float, slack: float, max_points: int):
+    """The worst-first simplification of ``points`` after the cell pass."""
     runs = _runs(points, gap_after, tolerance, max_points)
     tolerance -= slack
     keep = np.zeros(len(points), dtype=bool)

@@ -15,13 +15,14 @@ Each object lives at ``/rbm/<anchor>/<name>`` in the meshcat tree::
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Iterator
+from typing import Protocol
 
 import numpy as np
 
 from .commands import color_int
 from .commands import meshcat_geometry as _geometry
-from .decimate import simplify_path
+from .decimate import simplify_path, simplify_path_blocks
 from .meshes import mesh_geometry
 
 
@@ -148,6 +149,18 @@ class FrameHandle(SceneHandle):
         return np.eye(3) * self._style["scale"]
 
 
+class PathSource(Protocol):
+    """What a path's positions come from when they are not an array (a
+    :class:`~rbm_nb.scene.looked_up.LookedUpTrack`)."""
+
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, int] | None: ...
+
+    def blocks(self) -> Iterator[np.ndarray]: ...
+
+    def positions_with_gaps(self) -> np.ndarray: ...
+
+
 def segment_points(stretches) -> np.ndarray:
     """Line-segment vertices (2k, 3) float32 of unbroken stretches of a path.
 
@@ -180,12 +193,13 @@ class PathHandle(SceneHandle):
         frame,
         base,
         style,
-        samples: np.ndarray | Callable[[], np.ndarray],
+        samples: np.ndarray | PathSource,
     ):
         super().__init__(scene, name, frame, base, style)
-        # the positions, NaN rows where samples are missing: an array, or
-        # what looks them up (a long recording's path is not kept whole:
-        # looked up when the line is simplified and when the view refines it)
+        # the positions, NaN rows where samples are missing: an array, or the
+        # track that looks them up (a long recording's path is not kept
+        # whole: simplified block by block, looked up whole only when the
+        # view asks for it finer)
         self._samples = samples
         self._shown: tuple[tuple, list[np.ndarray], float] | None = None
 
@@ -193,7 +207,9 @@ class PathHandle(SceneHandle):
     def samples(self) -> np.ndarray:
         """Every recorded position, shape (n, 3), NaN rows where missing."""
         source = self._samples
-        return source() if callable(source) else source
+        return (
+            source if isinstance(source, np.ndarray) else source.positions_with_gaps()
+        )
 
     @property
     def positions(self) -> np.ndarray:
@@ -223,11 +239,20 @@ class PathHandle(SceneHandle):
         """The unbroken pieces of the line drawn, and the largest error (m) left."""
         key = (self._style["max_points"], self._style.get("tolerance"))
         if self._shown is None or self._shown[0] != key:
-            stretches, error = simplify_path(
-                self.samples, self._style.get("tolerance"), self._style["max_points"]
-            )
+            stretches, error = self._simplified()
             self._shown = (key, stretches, error)
         return self._shown[1], self._shown[2]
+
+    def _simplified(self) -> tuple[list[np.ndarray], float]:
+        tolerance, max_points = self._style.get("tolerance"), self._style["max_points"]
+        source = self._samples
+        if isinstance(source, np.ndarray):
+            return simplify_path(source, tolerance, max_points)
+        bounds = source.bounds
+        if bounds is None:  # every sample missing
+            return [], 0.0
+        low, high = bounds[0], bounds[1]
+        return simplify_path_blocks(source.blocks(), low, high, tolerance, max_points)
 
     def shown_positions(self) -> np.ndarray:
         """The points drawn (every stretch, in order), shape (m, 3)."""

@@ -86,7 +86,7 @@ class Placements:
             frame,
             base,
             style,
-            track.positions_with_gaps,
+            track,
         )
         return Placement(handle, PoseTrack(np.zeros(3), IDENTITY, name="path"))
 

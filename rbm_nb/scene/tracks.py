@@ -12,6 +12,7 @@ the rows of a window or of chosen indices (:meth:`PoseTrack.take`), bounds.
 from __future__ import annotations
 
 import functools
+from collections.abc import Iterator
 from typing import Any, Literal
 
 import numpy as np
@@ -203,6 +204,10 @@ class PoseTrack:
         if self.scale is not None:
             m[:3, :3] *= self.scale[index]
         return m
+
+    def blocks(self) -> Iterator[np.ndarray]:
+        """The translations, as one block (they are held)."""
+        yield self.translation.reshape(-1, 3)
 
     def positions_with_gaps(self) -> np.ndarray:
         """Every sample's translation, shape (n, 3), NaN where missing (held)."""

@@ -17,6 +17,7 @@ import pytest
 
 import rbm_nb as rbm
 from rbm_nb.scene import Scene, stream
+from rbm_nb.scene.decimate import simplify_path, simplify_path_blocks
 from rbm_nb.scene.looked_up import BLOCK_ROWS
 from rbm_nb.scene.state import SceneState
 from rbm_nb.scene.tracks import PoseTrack
@@ -170,3 +171,59 @@ def test_a_scene_keeps_a_bounded_share_of_a_long_recording():
     assert long <= 4 * chunk, (long / 1e6, long_poses / 1e6)
     # not proportional to the recording: within a block's worth of the short one
     assert long - short <= BLOCK_ROWS * 64, (short / 1e6, long / 1e6)
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_a_path_simplified_block_by_block_is_the_one_simplified_whole(seed):
+    """The naive twin: :func:`simplify_path` of the whole array."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(0, 3000))
+    points = np.cumsum(rng.normal(scale=rng.choice([1e-3, 1e-2, 0.1]), size=(n, 3)), 0)
+    for _ in range(int(rng.integers(0, 8))):  # runs of missing samples
+        if n:
+            first = int(rng.integers(0, n))
+            points[first : first + int(rng.integers(1, 40))] = np.nan
+    if n and seed % 5 == 0:
+        points[: int(rng.integers(0, n))] = np.nan  # missing from the start
+    if n and seed % 5 == 1:
+        points[int(rng.integers(0, n)) :] = np.nan  # ... and to the end
+    tolerance = [None, 0.0, 0.05, 1e-4][seed % 4]
+    max_points = [2, 50, 1000][seed % 3]
+    present = points[~np.isnan(points).any(axis=1)]
+    low = present.min(axis=0) if len(present) else np.zeros(3)
+    high = present.max(axis=0) if len(present) else np.zeros(3)
+    size = [1, 2, 3, 7, 64, 4096][seed % 6]
+    blocks = (points[i : i + size] for i in range(0, n, size))
+    got = simplify_path_blocks(blocks, low, high, tolerance, max_points)
+    want = simplify_path(points, tolerance, max_points)
+    assert got[1] == want[1]
+    assert len(got[0]) == len(want[0])
+    for piece, reference in zip(got[0], want[0], strict=True):
+        np.testing.assert_array_equal(piece, reference)
+
+
+def test_a_long_path_is_simplified_without_its_positions_held_whole():
+    """Drawing the path looks its samples up and simplifies them block by
+    block: its peak is that of simplifying the whole array less at least
+    the array itself (real head, 1 h: 54 MB instead of 83 MB)."""
+    register_head_eye(3600.0)
+    scene = Scene("world", grid=False)
+    scene.add_frame("head", base="head")  # the anchor, summarised
+    track = scene.state.tracks["/rbm/anchor_head"]
+    whole = len(track) * 3 * 8
+    tracemalloc.start()
+    try:
+        path = scene.add_path("head", max_points=500)
+        _, peak = tracemalloc.get_traced_memory()
+        tracemalloc.reset_peak()
+        reference = simplify_path(track.positions_with_gaps(), None, 500)
+        _, peak_whole = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert peak <= peak_whole - whole, (peak / 1e6, peak_whole / 1e6, whole / 1e6)
+    stretches, error = path.stretches()
+    assert error == reference[1]
+    for piece, want in zip(stretches, reference[0], strict=True):
+        np.testing.assert_array_equal(piece, want)
+    scene.close()
+    rbm.clear_registry()

@@ -152,6 +152,6 @@ def test_a_path_of_a_frame_with_objects_drawn_in_it_reuses_their_poses():
     # no second lookup: the path's samples are the anchor's poses, looked up
     # by the anchor's track when the line is drawn
     anchor = scene.state.tracks["/rbm/anchor_body"]
-    assert path._samples.__self__ is anchor
+    assert path._samples is anchor
     np.testing.assert_array_equal(path.samples, np.c_[ts, ts, ts])
     scene.close()

@@ -230,9 +230,52 @@ def refine_region(
     near[1:] |= inside[:-1]
     near[:-1] |= inside[1:]
     rows = np.flatnonzero(near)
+    return _refined(samples[rows], rows, tolerance, max_points)
+
+
+def refine_region_blocks(
+    blocks: Iterable[np.ndarray],
+    low: np.ndarray,
+    high: np.ndarray,
+    tolerance: float,
+    max_points: int,
+) -> tuple[list[np.ndarray], float]:
+    """:func:`refine_region` of a path handed over in consecutive blocks
+    (same result): only the samples near the box are ever held."""
+    picked: list[np.ndarray] = []
+    picked_rows: list[np.ndarray] = []
+    offset = 0
+    # the previous block's last row, whether it was inside, and picked
+    previous: np.ndarray | None = None
+    previous_inside = previous_picked = False
+    for block in blocks:
+        if len(block) == 0:
+            continue
+        inside = np.asarray(((block >= low) & (block <= high)).all(axis=1))
+        near = inside.copy()
+        near[1:] |= inside[:-1]
+        near[:-1] |= inside[1:]
+        near[0] |= previous_inside
+        if previous is not None and inside[0] and not previous_picked:
+            picked.append(previous[np.newaxis])
+            picked_rows.append(np.array([offset - 1]))
+        rows = np.flatnonzero(near)
+        picked.append(block[rows])
+        picked_rows.append(rows + offset)
+        previous = block[-1]
+        previous_inside, previous_picked = bool(inside[-1]), bool(near[-1])
+        offset += len(block)
+    if not picked:
+        return [], 0.0
+    return _refined(
+        np.vstack(picked), np.concatenate(picked_rows), tolerance, max_points
+    )
+
+
+def _refined(picked: np.ndarray, rows: np.ndarray, tolerance: float, max_points: int):
+    """The line through the samples ``picked`` (rows ``rows`` of the path)."""
     if rows.size == 0:
         return [], 0.0
-    picked = samples[rows]
     # rows left out between two picked ones: a break, as a missing sample is
     breaks = np.flatnonzero(np.diff(rows) > 1) + 1
     if breaks.size:

@@ -22,7 +22,12 @@ import numpy as np
 
 from .commands import color_int
 from .commands import meshcat_geometry as _geometry
-from .decimate import simplify_path, simplify_path_blocks
+from .decimate import (
+    refine_region,
+    refine_region_blocks,
+    simplify_path,
+    simplify_path_blocks,
+)
 from .meshes import mesh_geometry
 
 
@@ -253,6 +258,24 @@ class PathHandle(SceneHandle):
             return [], 0.0
         low, high = bounds[0], bounds[1]
         return simplify_path_blocks(source.blocks(), low, high, tolerance, max_points)
+
+    def extent(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Lowest and highest recorded position (None when every sample is missing)."""
+        source = self._samples
+        if not isinstance(source, np.ndarray):
+            bounds = source.bounds
+            return None if bounds is None else (bounds[0], bounds[1])
+        points = self.positions
+        return (points.min(axis=0), points.max(axis=0)) if len(points) else None
+
+    def refined(self, low, high, tolerance: float, max_points: int):
+        """The line through the box ``[low, high]`` at ``tolerance``
+        (:func:`~rbm_nb.scene.decimate.refine_region`), from the samples'
+        blocks when they are looked up."""
+        source = self._samples
+        if isinstance(source, np.ndarray):
+            return refine_region(source, low, high, tolerance, max_points)
+        return refine_region_blocks(source.blocks(), low, high, tolerance, max_points)
 
     def shown_positions(self) -> np.ndarray:
         """The points drawn (every stretch, in order), shape (m, 3)."""

@@ -17,7 +17,12 @@ import pytest
 
 import rbm_nb as rbm
 from rbm_nb.scene import Scene, stream
-from rbm_nb.scene.decimate import simplify_path, simplify_path_blocks
+from rbm_nb.scene.decimate import (
+    refine_region,
+    refine_region_blocks,
+    simplify_path,
+    simplify_path_blocks,
+)
 from rbm_nb.scene.looked_up import BLOCK_ROWS
 from rbm_nb.scene.state import SceneState
 from rbm_nb.scene.tracks import PoseTrack
@@ -227,3 +232,29 @@ def test_a_long_path_is_simplified_without_its_positions_held_whole():
         np.testing.assert_array_equal(piece, want)
     scene.close()
     rbm.clear_registry()
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_a_region_refined_block_by_block_is_the_one_refined_whole(seed):
+    """The naive twin: :func:`refine_region` of the whole array."""
+    rng = np.random.default_rng(100 + seed)
+    n = int(rng.integers(1, 3000))
+    points = np.cumsum(rng.normal(scale=0.01, size=(n, 3)), axis=0)
+    for _ in range(int(rng.integers(0, 8))):
+        first = int(rng.integers(0, n))
+        points[first : first + int(rng.integers(1, 40))] = np.nan
+    present = points[~np.isnan(points).any(axis=1)]
+    if not len(present):
+        present = np.zeros((1, 3))
+    centre = present[int(rng.integers(0, len(present)))]
+    half = rng.uniform(0.01, 0.3)
+    low, high = centre - half, centre + half
+    tolerance = [0.0, 1e-3, 0.02][seed % 3]
+    size = [1, 2, 5, 64, 4096][seed % 5]
+    blocks = (points[i : i + size] for i in range(0, n, size))
+    got = refine_region_blocks(blocks, low, high, tolerance, 300)
+    want = refine_region(points, low, high, tolerance, 300)
+    assert got[1] == want[1]
+    assert len(got[0]) == len(want[0])
+    for piece, reference in zip(got[0], want[0], strict=True):
+        np.testing.assert_array_equal(piece, reference)

@@ -15,19 +15,11 @@ Each object lives at ``/rbm/<anchor>/<name>`` in the meshcat tree::
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from typing import Protocol
-
 import numpy as np
 
+from . import path_source
 from .commands import color_int
 from .commands import meshcat_geometry as _geometry
-from .decimate import (
-    refine_region,
-    refine_region_blocks,
-    simplify_path,
-    simplify_path_blocks,
-)
 from .meshes import mesh_geometry
 
 
@@ -154,18 +146,6 @@ class FrameHandle(SceneHandle):
         return np.eye(3) * self._style["scale"]
 
 
-class PathSource(Protocol):
-    """What a path's positions come from when they are not an array (a
-    :class:`~rbm_nb.scene.looked_up.LookedUpTrack`)."""
-
-    @property
-    def bounds(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, int] | None: ...
-
-    def blocks(self) -> Iterator[np.ndarray]: ...
-
-    def positions_with_gaps(self) -> np.ndarray: ...
-
-
 def segment_points(stretches) -> np.ndarray:
     """Line-segment vertices (2k, 3) float32 of unbroken stretches of a path.
 
@@ -198,7 +178,7 @@ class PathHandle(SceneHandle):
         frame,
         base,
         style,
-        samples: np.ndarray | PathSource,
+        samples: path_source.Samples,
     ):
         super().__init__(scene, name, frame, base, style)
         # the positions, NaN rows where samples are missing: an array, or the
@@ -211,10 +191,7 @@ class PathHandle(SceneHandle):
     @property
     def samples(self) -> np.ndarray:
         """Every recorded position, shape (n, 3), NaN rows where missing."""
-        source = self._samples
-        return (
-            source if isinstance(source, np.ndarray) else source.positions_with_gaps()
-        )
+        return path_source.every_sample(self._samples)
 
     @property
     def positions(self) -> np.ndarray:
@@ -249,33 +226,19 @@ class PathHandle(SceneHandle):
         return self._shown[1], self._shown[2]
 
     def _simplified(self) -> tuple[list[np.ndarray], float]:
-        tolerance, max_points = self._style.get("tolerance"), self._style["max_points"]
-        source = self._samples
-        if isinstance(source, np.ndarray):
-            return simplify_path(source, tolerance, max_points)
-        bounds = source.bounds
-        if bounds is None:  # every sample missing
-            return [], 0.0
-        low, high = bounds[0], bounds[1]
-        return simplify_path_blocks(source.blocks(), low, high, tolerance, max_points)
+        style = self._style
+        return path_source.simplified(
+            self._samples, style.get("tolerance"), style["max_points"]
+        )
 
     def extent(self) -> tuple[np.ndarray, np.ndarray] | None:
         """Lowest and highest recorded position (None when every sample is missing)."""
-        source = self._samples
-        if not isinstance(source, np.ndarray):
-            bounds = source.bounds
-            return None if bounds is None else (bounds[0], bounds[1])
-        points = self.positions
-        return (points.min(axis=0), points.max(axis=0)) if len(points) else None
+        return path_source.extent(self._samples)
 
     def refined(self, low, high, tolerance: float, max_points: int):
         """The line through the box ``[low, high]`` at ``tolerance``
-        (:func:`~rbm_nb.scene.decimate.refine_region`), from the samples'
-        blocks when they are looked up."""
-        source = self._samples
-        if isinstance(source, np.ndarray):
-            return refine_region(source, low, high, tolerance, max_points)
-        return refine_region_blocks(source.blocks(), low, high, tolerance, max_points)
+        (:func:`~rbm_nb.scene.decimate.refine_region`)."""
+        return path_source.refined(self._samples, low, high, tolerance, max_points)
 
     def shown_positions(self) -> np.ndarray:
         """The points drawn (every stretch, in order), shape (m, 3)."""

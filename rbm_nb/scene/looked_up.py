@@ -61,6 +61,8 @@ class LookedUpTrack:
         self._source = target.source
         self.kind = self._times.kind
         self._ns = self._times.is_datetime
+        # the coarse copy's rows and samples (gathered by the bounds' pass)
+        self._coarse: tuple[np.ndarray, tuple] | None = None
         self._hidden_after, self._hidden_keys = self._hidden_rows(gap)
         # row position of each hidden row (a_k + 1 + k), and its float seconds
         self._hidden_rows_at = (
@@ -73,8 +75,6 @@ class LookedUpTrack:
         """Original indices followed by a gap longer than ``gap``, and the
         sort key of the hidden row after each."""
         none = np.zeros(0, dtype=np.int64)
-        # the coarse copy's rows and samples (made with the bounds)
-        self._coarse: tuple[np.ndarray, tuple] | None = None
         if gap is None or len(self._times) < 2:
             return none, self._times.key[:0].copy()
         after = np.zeros(0, dtype=np.int64)

@@ -16,7 +16,7 @@ import re
 from .commands import Message
 from .context import SceneContext
 from .state import ROOT
-from .tracks import PoseTrack
+from .tracks import PoseTrack, SceneTrack
 
 #: the anchor of objects drawn in the scene's base
 ROOT_ANCHOR = f"{ROOT}/root"
@@ -41,7 +41,7 @@ class Anchors:
             return ROOT_ANCHOR
         return f"{ROOT}/anchor_{slug(base.name)}"
 
-    def pose(self, frame, base) -> PoseTrack:
+    def pose(self, frame, base) -> SceneTrack:
         """The pose of ``frame`` in ``base`` over time.
 
         The one an anchor holds already (objects drawn in ``frame``), else
@@ -53,7 +53,7 @@ class Anchors:
                 return held
         return PoseTrack.lookup(frame, base)
 
-    def acquire(self, base, track: PoseTrack) -> tuple[str, list[Message]]:
+    def acquire(self, base, track: SceneTrack) -> tuple[str, list[Message]]:
         """One more object hangs from ``base``'s anchor, whose pose is ``track``
         (from :meth:`pose`); returns the anchor's path and the commands that
         create it."""
@@ -83,7 +83,7 @@ class Anchors:
             return []
         return [self._context.state.delete(path)]
 
-    def place(self, path: str, track: PoseTrack) -> list[Message]:
+    def place(self, path: str, track: SceneTrack) -> list[Message]:
         """Put the node at ``path`` where ``track`` says: fixed, or following it."""
         state = self._context.state
         if track.static:

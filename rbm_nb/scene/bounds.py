@@ -15,7 +15,7 @@ import numpy as np
 
 from .handles import PathHandle, PointsHandle, SceneHandle
 from .state import SceneState
-from .tracks import PoseTrack
+from .tracks import SceneTrack
 
 #: largest distance from the scene's origin (metres) an object may reach: far
 #: beyond any tracked volume, far inside float32 (the browser's numbers) and
@@ -43,7 +43,7 @@ class Bounds:
         )
 
     @classmethod
-    def of_track(cls, track: PoseTrack) -> Bounds | None:
+    def of_track(cls, track: SceneTrack) -> Bounds | None:
         """The track's samples that are not missing (None when all are)."""
         summary = track.bounds
         return None if summary is None else cls(*summary)
@@ -72,12 +72,15 @@ def _reach(bounds: Bounds | None) -> float:
     return 0.0 if bounds is None else bounds.reach()
 
 
-def _track_reach(track: PoseTrack | None) -> float:
+def _track_reach(track: SceneTrack | None) -> float:
     return _reach(None if track is None else Bounds.of_track(track))
 
 
 def check_reach(
-    handle: SceneHandle, carrier: PoseTrack, inner: PoseTrack | None, anchor: PoseTrack
+    handle: SceneHandle,
+    carrier: SceneTrack,
+    inner: SceneTrack | None,
+    anchor: SceneTrack,
 ) -> None:
     """Refuse an object reaching beyond :data:`MAX_COORDINATE` from the origin.
 
@@ -95,7 +98,7 @@ def check_reach(
 
 
 def handle_bounds(
-    handle: SceneHandle, state: SceneState, anchor: PoseTrack | None
+    handle: SceneHandle, state: SceneState, anchor: SceneTrack | None
 ) -> Bounds | None:
     """Where ``handle`` reaches in the scene's base, roughly: its geometry at
     the mean of its pose, and every position its pose and its anchor take."""

@@ -15,6 +15,8 @@ bounding-box diagonal: 1/2000, half a pixel when the whole path spans a view
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 import numpy as np
 
 from .._kernels.simplify import split_worst_first
@@ -99,6 +101,80 @@ def simplify_path(
         if not fresh.all():
             points, gap_after = points[fresh], gap_after[fresh]
             slack = float(np.sqrt(3.0) * cell)
+    return _simplified(points, gap_after, tolerance, slack, max_points)
+
+
+def simplify_path_blocks(
+    blocks: Iterable[np.ndarray],
+    low: np.ndarray,
+    high: np.ndarray,
+    tolerance: float | None = None,
+    max_points: int = 1000,
+) -> tuple[list[np.ndarray], float]:
+    """:func:`simplify_path` of a path handed over in blocks, same result.
+
+    The grid-cell pass runs block by block (it compares each sample with
+    the one before), so only the samples it keeps are ever held at once.
+
+    Parameters
+    ----------
+    blocks : iterable of ndarray, shape (k, 3)
+        The samples in time order, in consecutive blocks (NaN rows missing).
+    low, high : ndarray, shape (3,)
+        Lowest and highest coordinates of the samples that are not missing
+        (the default tolerance is :data:`PATH_TOLERANCE` of their diagonal).
+    tolerance, max_points
+        As :func:`simplify_path`.
+    """
+    if tolerance is None:
+        tolerance = PATH_TOLERANCE * float(np.linalg.norm(high - low))
+    cell = CELL_SHARE * tolerance
+    kept: list[np.ndarray] = []
+    kept_gaps: list[np.ndarray] = []
+    # the last sample seen, held back until it is known whether a gap follows
+    last: np.ndarray | None = None
+    last_fresh = True
+    gap_pending = False  # missing rows since ``last``
+    dropped = False
+    for block in blocks:
+        present = ~np.isnan(block).any(axis=1)
+        rows = np.flatnonzero(present)
+        if len(rows) == 0:
+            gap_pending |= len(block) > 0 and last is not None
+            continue
+        points = block[rows]
+        gaps = np.zeros(len(rows), dtype=bool)  # gaps[k]: missing rows after points[k]
+        gaps[:-1] = np.diff(rows) > 1
+        if last is not None:
+            points = np.vstack([last, points])
+            gaps = np.r_[gap_pending or rows[0] > 0, gaps]
+        fresh = np.ones(len(points), dtype=bool)
+        if cell > 0:
+            cells = np.floor(points / cell)
+            fresh[1:] = (cells[1:] != cells[:-1]).any(axis=1) | gaps[:-1]
+        if last is not None:
+            fresh[0] = last_fresh
+        fresh[:-1] |= gaps[:-1]
+        # all but the last: its fate waits for what follows
+        keep = fresh[:-1]
+        dropped |= not keep.all()
+        kept.append(points[:-1][keep])
+        kept_gaps.append(gaps[:-1][keep])
+        last, last_fresh = points[-1], bool(fresh[-1])
+        gap_pending = rows[-1] < len(block) - 1
+    if last is None:
+        return [], 0.0
+    points = np.vstack([*kept, last[np.newaxis]])
+    gap_after = np.r_[np.concatenate(kept_gaps) if kept_gaps else [], False].astype(
+        bool
+    )
+    # (a pass over two samples or fewer drops none, as simplify_path skips it)
+    slack = float(np.sqrt(3.0) * cell) if dropped else 0.0
+    return _simplified(points, gap_after, tolerance, slack, max_points)
+
+
+def _simplified(points, gap_after, tolerance: float, slack: float, max_points: int):
+    """The worst-first simplification of ``points`` after the cell pass."""
     runs = _runs(points, gap_after, tolerance, max_points)
     tolerance -= slack
     keep = np.zeros(len(points), dtype=bool)
@@ -154,9 +230,52 @@ def refine_region(
     near[1:] |= inside[:-1]
     near[:-1] |= inside[1:]
     rows = np.flatnonzero(near)
+    return _refined(samples[rows], rows, tolerance, max_points)
+
+
+def refine_region_blocks(
+    blocks: Iterable[np.ndarray],
+    low: np.ndarray,
+    high: np.ndarray,
+    tolerance: float,
+    max_points: int,
+) -> tuple[list[np.ndarray], float]:
+    """:func:`refine_region` of a path handed over in consecutive blocks
+    (same result): only the samples near the box are ever held."""
+    picked: list[np.ndarray] = []
+    picked_rows: list[np.ndarray] = []
+    offset = 0
+    # the previous block's last row, whether it was inside, and picked
+    previous: np.ndarray | None = None
+    previous_inside = previous_picked = False
+    for block in blocks:
+        if len(block) == 0:
+            continue
+        inside = np.asarray(((block >= low) & (block <= high)).all(axis=1))
+        near = inside.copy()
+        near[1:] |= inside[:-1]
+        near[:-1] |= inside[1:]
+        near[0] |= previous_inside
+        if previous is not None and inside[0] and not previous_picked:
+            picked.append(previous[np.newaxis])
+            picked_rows.append(np.array([offset - 1]))
+        rows = np.flatnonzero(near)
+        picked.append(block[rows])
+        picked_rows.append(rows + offset)
+        previous = block[-1]
+        previous_inside, previous_picked = bool(inside[-1]), bool(near[-1])
+        offset += len(block)
+    if not picked:
+        return [], 0.0
+    return _refined(
+        np.vstack(picked), np.concatenate(picked_rows), tolerance, max_points
+    )
+
+
+def _refined(picked: np.ndarray, rows: np.ndarray, tolerance: float, max_points: int):
+    """The line through the samples ``picked`` (rows ``rows`` of the path)."""
     if rows.size == 0:
         return [], 0.0
-    picked = samples[rows]
     # rows left out between two picked ones: a break, as a missing sample is
     breaks = np.flatnonzero(np.diff(rows) > 1) + 1
     if breaks.size:

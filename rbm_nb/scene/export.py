@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from .._infra.atomic import atomic_path
+from .tracks import moving_span
 
 _TEMPLATE = """<!DOCTYPE html>
 <html>
@@ -155,12 +156,12 @@ def export_note(scene, max_frames: int | None) -> str:
         shown = []
         span = 0.0
         for track in tracks:
-            seconds = track.sample_times()
-            duration = float(seconds[-1] - seconds[0])
+            first, last = moving_span(track)
+            duration = last - first
             span = max(span, duration)
             if duration <= 0:
                 continue
-            n = len(seconds)
+            n = len(track)
             kept = n if max_frames is None else min(n, max_frames)
             recorded.append((n - 1) / duration)
             shown.append((kept - 1) / duration)

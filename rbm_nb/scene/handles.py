@@ -17,9 +17,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import path_source
 from .commands import color_int
 from .commands import meshcat_geometry as _geometry
-from .decimate import simplify_path
 from .meshes import mesh_geometry
 
 
@@ -171,16 +171,33 @@ class PathHandle(SceneHandle):
 
     kind = "path"
 
-    def __init__(self, scene, name, frame, base, style, samples: np.ndarray):
+    def __init__(
+        self,
+        scene,
+        name,
+        frame,
+        base,
+        style,
+        samples: path_source.Samples,
+    ):
         super().__init__(scene, name, frame, base, style)
-        # the track's own positions, NaN rows where samples are missing (not a copy)
-        self.samples = samples
+        # the positions, NaN rows where samples are missing: an array, or the
+        # track that looks them up (a long recording's path is not kept
+        # whole: simplified block by block, looked up whole only when the
+        # view asks for it finer)
+        self._samples = samples
         self._shown: tuple[tuple, list[np.ndarray], float] | None = None
+
+    @property
+    def samples(self) -> np.ndarray:
+        """Every recorded position, shape (n, 3), NaN rows where missing."""
+        return path_source.every_sample(self._samples)
 
     @property
     def positions(self) -> np.ndarray:
         """The recorded positions that are not missing, shape (n, 3)."""
-        return self.samples[~np.isnan(self.samples).any(axis=1)]
+        samples = self.samples
+        return samples[~np.isnan(samples).any(axis=1)]
 
     def _validate_style(self, style):
         color_int(style["color"], "add_path: color")
@@ -204,11 +221,24 @@ class PathHandle(SceneHandle):
         """The unbroken pieces of the line drawn, and the largest error (m) left."""
         key = (self._style["max_points"], self._style.get("tolerance"))
         if self._shown is None or self._shown[0] != key:
-            stretches, error = simplify_path(
-                self.samples, self._style.get("tolerance"), self._style["max_points"]
-            )
+            stretches, error = self._simplified()
             self._shown = (key, stretches, error)
         return self._shown[1], self._shown[2]
+
+    def _simplified(self) -> tuple[list[np.ndarray], float]:
+        style = self._style
+        return path_source.simplified(
+            self._samples, style.get("tolerance"), style["max_points"]
+        )
+
+    def extent(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Lowest and highest recorded position (None when every sample is missing)."""
+        return path_source.extent(self._samples)
+
+    def refined(self, low, high, tolerance: float, max_points: int):
+        """The line through the box ``[low, high]`` at ``tolerance``
+        (:func:`~rbm_nb.scene.decimate.refine_region`)."""
+        return path_source.refined(self._samples, low, high, tolerance, max_points)
 
     def shown_positions(self) -> np.ndarray:
         """The points drawn (every stretch, in order), shape (m, 3)."""

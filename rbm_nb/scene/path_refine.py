@@ -33,7 +33,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..widgets._latest_only import LatestOnly
-from .decimate import PATH_TOLERANCE, refine_region
+from .decimate import PATH_TOLERANCE
 from .handles import PathHandle, segment_points
 
 #: points in one answer, at most (240 kB of float32 segment ends)
@@ -64,9 +64,9 @@ class _Path:
 
     def __init__(self, handle: PathHandle):
         self.handle = handle
-        points = handle.positions
-        self.low = points.min(axis=0) if len(points) else np.zeros(3)
-        self.high = points.max(axis=0) if len(points) else np.zeros(3)
+        extent = handle.extent()
+        self.low: np.ndarray = np.zeros(3) if extent is None else extent[0]
+        self.high: np.ndarray = np.zeros(3) if extent is None else extent[1]
         self.diagonal = float(np.linalg.norm(self.high - self.low))
         _, self.error = handle.stretches()
         tolerance = handle.style.get("tolerance")
@@ -206,15 +206,14 @@ class PathRefiner:
     def _refined(self, path: _Path, request: dict):
         key = (
             path.handle.name,
-            id(path.handle.samples),
+            id(path.handle),
             request["level"],
             tuple(request["lo"].tolist()),
             tuple(request["hi"].tolist()),
         )
         hit = self._cache.get(key)
         if hit is None:
-            hit = refine_region(
-                path.handle.samples,
+            hit = path.handle.refined(
                 request["lo"],
                 request["hi"],
                 request["tolerance"],

@@ -28,7 +28,7 @@ from .handles import (
     _points_array,
 )
 from .objects import SceneObjects
-from .tracks import PoseTrack
+from .tracks import PoseTrack, SceneTrack
 
 IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
 H = TypeVar("H", bound=SceneHandle)
@@ -37,8 +37,8 @@ H = TypeVar("H", bound=SceneHandle)
 @dataclass
 class Placement(Generic[H]):
     handle: H
-    carrier: PoseTrack
-    inner: PoseTrack | None = None
+    carrier: SceneTrack
+    inner: SceneTrack | None = None
     offset: np.ndarray | None = None
 
 
@@ -86,7 +86,7 @@ class Placements:
             frame,
             base,
             style,
-            track.translation,
+            track,
         )
         return Placement(handle, PoseTrack(np.zeros(3), IDENTITY, name="path"))
 

@@ -54,12 +54,12 @@ class PlayerLink:
         seconds = epoch_seconds(t, state.kind, "Scene.set_time: t")
         if not math.isfinite(seconds):
             raise ValueError(f"Scene.set_time: t must be finite, got {t!r}")
-        timeline = state.timeline()
-        if timeline is not None and self.player is None:
+        span = state.span()
+        if span is not None and self.player is None:
             # after the last sample every object stays as it was then, and
             # before the first all moving ones are hidden: times beyond show
             # nothing new, so 1e300 s is kept to the span (and one span before)
-            start, end = float(timeline[0][0]), float(timeline[0][-1])
+            start, end = span
             seconds = min(max(seconds, start - max(end - start, 1.0)), end)
         with context.lock:
             self.own_time = seconds
@@ -87,7 +87,7 @@ class PlayerLink:
         """A Player over ``scene``'s time axis, linked to it."""
         context = self._context
         context.check_open()
-        if context.state.timeline() is None:
+        if not context.state.tracks:
             raise ValueError(
                 f"Scene {context.name!r} has no moving objects, there is nothing to play; "
                 "add a moving frame first"
@@ -143,7 +143,7 @@ class PlayerLink:
         track = self._context.state.tracks.get(path)
         if track is None:
             return None
-        seconds = float(track.sample_times()[index])
+        seconds = float(track.seconds_of([index])[0])
         self.pin(path, seconds)
         return seconds
 

@@ -92,6 +92,8 @@ class FramePublisher:
         self._track = self.scene._track(self.handle.pose_path)
         if self._track is None:
             track = PoseTrack.lookup(self.frame, self.base)
+            # no track at the pose's node: nothing on the chain moves
+            assert isinstance(track, PoseTrack)
             self.translation, self.rotation, self.timestamps = (
                 track.translation,
                 track.rotation,
@@ -99,10 +101,10 @@ class FramePublisher:
             )
             self._seconds: np.ndarray | None = None
         else:
-            self.translation = self._track.translation
-            self.rotation = self._track.rotation
+            # the publisher's own arrays (its API exposes them): the scene's
+            # track looks its samples up per window and keeps none
+            self._seconds, self.translation, self.rotation, _ = self._track.take(None)
             self.timestamps = self._track.original_timestamps
-            self._seconds = self._track.sample_times()
         self.timestamps_kind = None if self._track is None else self._track.kind
         self.idx = 0
         self.stopped = True

@@ -20,7 +20,8 @@ import umsgpack
 from .._engine.time import check_compatible
 from . import commands
 from .commands import Message, TransformPacker
-from .tracks import PoseTrack
+from .looked_up import even_rows
+from .tracks import SceneTrack, moving_span
 
 ROOT = "/rbm"
 
@@ -40,7 +41,7 @@ class SceneState:
         ``set_transform`` commands of nodes that do not move, by path.
     properties : dict of (str, str) to Message
         ``set_property`` commands by (path, property).
-    tracks : dict of str to PoseTrack
+    tracks : dict of str to PoseTrack or LookedUpTrack
         Poses over time of the nodes that move, by path.
     pins : dict of str to float
         Nodes shown at their own time (float seconds) instead of the scene's
@@ -53,10 +54,9 @@ class SceneState:
         self.objects: dict[str, Message] = {}
         self.statics: dict[str, Message] = {}
         self.properties: dict[tuple[str, str], Message] = {}
-        self.tracks: dict[str, PoseTrack] = {}
+        self.tracks: dict[str, SceneTrack] = {}
         self.pins: dict[str, float] = {}
         self.kind: str | None = None
-        self._timeline: tuple[np.ndarray, np.ndarray | None] | None = None
 
     # -- changes --------------------------------------------------------------------
     def set_object(self, path: str, obj) -> Message:
@@ -74,14 +74,13 @@ class SceneState:
         self.properties[(path, key)] = message
         return message
 
-    def add_track(self, path: str, track: PoseTrack, what: str = "scene") -> None:
+    def add_track(self, path: str, track: SceneTrack, what: str = "scene") -> None:
         """Make the node at ``path`` follow ``track`` (a moving one)."""
         if track.static:
             raise ValueError(f"{what}: the track of {path!r} does not move")
         check_compatible([self.kind, track.kind], what)
         self.kind = track.kind
         self.tracks[path] = track
-        self._timeline = None
 
     def delete(self, path: str) -> Message:
         """Forget everything at or below ``path``."""
@@ -90,7 +89,6 @@ class SceneState:
                 del table[key]
         for prop in [k for k in self.properties if _under(k[0], path)]:
             del self.properties[prop]
-        self._timeline = None
         if not self.tracks:
             self.kind = None
         return commands.delete(path)
@@ -111,36 +109,45 @@ class SceneState:
         regular grid from the earliest to the latest sample at the finest
         mean sampling interval. None when nothing moves.
         """
-        if self._timeline is not None:
-            return self._timeline
         tracks = list(self.tracks.values())
         if not tracks:
             return None
+        # the axis is the player's (kept by it): made on request, not kept
+        # here (an hour of the explorer's recording: 10 MB)
         times = [t.sample_times() for t in tracks]  # add_track keeps moving ones only
         first = times[0]
         if all(s is first or np.array_equal(s, first) for s in times):
-            self._timeline = (first, tracks[0].original_timestamps)
-            return self._timeline
-        start = min(float(s[0]) for s in times)
-        end = max(float(s[-1]) for s in times)
+            return first, tracks[0].original_timestamps
+        spans = [moving_span(t) for t in tracks]
+        start = min(first for first, _ in spans)
+        end = max(last for _, last in spans)
         steps = [
-            float(s[-1] - s[0]) / (len(s) - 1)
-            for s in times
-            if len(s) > 1 and s[-1] > s[0]
+            (last - first) / (len(t) - 1)
+            for t, (first, last) in zip(tracks, spans, strict=True)
+            if len(t) > 1 and last > first
         ]
         if not steps or end <= start:
             seconds = np.unique(np.concatenate(times))
         else:
             n = int(np.ceil((end - start) / min(steps) - 1e-9)) + 1
             seconds = np.linspace(start, end, n)
-        self._timeline = (seconds, None)
-        return self._timeline
+        return seconds, None
+
+    def span(self) -> tuple[float, float] | None:
+        """Float seconds of the earliest and the latest sample (None while
+        nothing moves): the ends of :meth:`timeline`, without making it."""
+        if not self.tracks:
+            return None
+        spans = [moving_span(t) for t in self.tracks.values()]
+        return min(s for s, _ in spans), max(e for _, e in spans)
 
     @property
     def origin(self) -> float:
         """Float seconds of the scene's time 0 (its first sample; 0 while nothing moves)."""
-        timeline = self.timeline()
-        return 0.0 if timeline is None else float(timeline[0][0])
+        # the earliest sample (the timeline's first time), without the timeline
+        if not self.tracks:
+            return 0.0
+        return min(moving_span(track)[0] for track in self.tracks.values())
 
     def pose_at(self, path: str, seconds: float) -> np.ndarray | None:
         """The (4, 4) transform of the node at ``path`` at ``seconds``.
@@ -205,6 +212,8 @@ class SceneState:
         buffers : list of bytes
         """
         origin = self.origin if origin is None else float(origin)
+        # a looked-up track without max_samples looks every sample up now (a
+        # short recording: a long one streams, see scene/stream.py)
         picks = [
             (path, track, _decimate(len(track), max_samples))
             for path, track in self.tracks.items()
@@ -215,10 +224,10 @@ class SceneState:
         """Bytes of the packed tracks per second of recording (all tracks)."""
         total = 0.0
         for track in self.tracks.values():
-            seconds = track.sample_times()
-            span = float(seconds[-1] - seconds[0])
+            first, last = moving_span(track)
+            span = last - first
             if span > 0:
-                total += _sample_bytes(track) * (len(seconds) - 1) / span
+                total += _sample_bytes(track) * (len(track) - 1) / span
         return total
 
     def payload_bytes(self) -> int:
@@ -228,9 +237,7 @@ class SceneState:
     def chunk_count(self, chunk_seconds: float, origin: float | None = None) -> int:
         """How many chunks of ``chunk_seconds`` cover the tracks from ``origin``."""
         origin = self.origin if origin is None else float(origin)
-        end = max(
-            (float(t.sample_times()[-1]) for t in self.tracks.values()), default=origin
-        )
+        end = max((moving_span(t)[1] for t in self.tracks.values()), default=origin)
         return int(math.floor(max(end - origin, 0.0) / chunk_seconds)) + 1
 
     def track_chunk(
@@ -243,18 +250,18 @@ class SceneState:
         the last one at or before its start, so the latest sample at or
         before any time in the span is in the chunk, and the pose shown at a
         chunk's boundary is the recording's own. Slices of the tracks (views)
-        are converted as :meth:`track_payload` does.
+        are converted as :meth:`track_payload` does; tracks looked up from
+        frames look the chunk's samples up now (they keep none).
         """
         origin = self.origin if origin is None else float(origin)
         start = origin + index * chunk_seconds
         end = origin + (index + 1) * chunk_seconds
         picks = []
         for path, track in self.tracks.items():
-            seconds = track.sample_times()
-            lo = max(int(np.searchsorted(seconds, start, side="right")) - 1, 0)
+            lo = max(track.search(start, side="right") - 1, 0)
             # the browser looks up t + 1e-6 (scene.js): a sample that close
             # after the span's end is shown inside it
-            hi = int(np.searchsorted(seconds, end + CHUNK_SLACK, side="right"))
+            hi = track.search(end + CHUNK_SLACK, side="right")
             picks.append((path, track, slice(lo, max(hi, lo))))
         return _pack(picks, origin)
 
@@ -263,7 +270,7 @@ class SceneState:
 CHUNK_SLACK = 1e-5
 
 
-def _sample_bytes(track: PoseTrack) -> int:
+def _sample_bytes(track: SceneTrack) -> int:
     """Bytes per packed sample: time, xyz and xyzw (and scale)."""
     return 8 + 12 + 16 + (4 if track.scale is not None else 0)
 
@@ -274,8 +281,7 @@ def _pack(picks, origin: float) -> tuple[list[dict], list[bytes]]:
     buffers: list[bytes] = []
     shared: list[tuple[np.ndarray, int]] = []
     for path, track, index in picks:
-        all_seconds = track.sample_times()
-        seconds = all_seconds if index is None else all_seconds[index]
+        seconds, translation, rotation, scale = track.take(index)
         times = None
         for known, at in shared:
             if known is seconds or (
@@ -289,20 +295,16 @@ def _pack(picks, origin: float) -> tuple[list[dict], list[bytes]]:
                 np.ascontiguousarray(seconds - origin, dtype="<f8").tobytes()
             )
             shared.append((seconds, times))
-
-        def pick(a, index=index):
-            return a if index is None else a[index]
-
         entry = {"path": path, "times": times, "n": int(len(seconds))}
         entry["translation"] = len(buffers)
-        buffers.append(pick(track.translation).astype("<f4").tobytes())
-        xyzw = pick(track.rotation)[:, [1, 2, 3, 0]]
+        buffers.append(translation.astype("<f4").tobytes())
+        xyzw = rotation[:, [1, 2, 3, 0]]
         entry["rotation"] = len(buffers)
         buffers.append(np.ascontiguousarray(xyzw, dtype="<f4").tobytes())
         entry["scale"] = None
-        if track.scale is not None:
+        if scale is not None:
             entry["scale"] = len(buffers)
-            buffers.append(pick(track.scale).astype("<f4").tobytes())
+            buffers.append(scale.astype("<f4").tobytes())
         meta.append(entry)
     return meta, buffers
 
@@ -312,4 +314,4 @@ def _decimate(n: int, max_samples: int | None) -> np.ndarray | None:
         return None
     if max_samples < 2:
         raise ValueError(f"max_samples must be at least 2, got {max_samples}")
-    return np.unique(np.linspace(0, n - 1, max_samples).round().astype(np.int64))
+    return even_rows(n, max_samples)

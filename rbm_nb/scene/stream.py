@@ -17,12 +17,13 @@ import math
 
 import numpy as np
 
+# samples per track in the coarse copy sent with a streamed scene's content
+# (defined with the tracks, which gather it when they are summarised)
+from .looked_up import COARSE_SAMPLES  # noqa: F401 (documented here)
 from .state import SceneState
 
 #: bytes of poses above which a scene streams them (below: one message, as before)
 STREAM_ABOVE = 2_000_000
-#: samples per track in the coarse copy sent with a streamed scene's content
-COARSE_SAMPLES = 2000
 #: bytes per chunk aimed at (all tracks): the chunk's length in seconds follows
 CHUNK_BYTES = 400_000
 #: bounds of a chunk's length in seconds

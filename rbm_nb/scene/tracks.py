@@ -1,23 +1,29 @@
-"""Poses over time, looked up once and sampled per player step.
+"""Poses over time, sampled per player step.
 
 A scene object is placed by the transform of its frame into the scene's base.
-That transform is looked up once for the whole recording when the object is
-added and kept as a :class:`PoseTrack`; each step then picks the latest sample at
-or before the player's time with a binary search.
+When that transform moves it is a :class:`~rbm_nb.scene.looked_up.LookedUpTrack`:
+the frames' values, its samples looked up per window when asked for (never
+kept whole). Poses the user hands in (moving points and vectors) and static
+ones are a :class:`PoseTrack` holding its arrays. Both answer the same
+questions: how many rows, the rows before a time (:meth:`PoseTrack.search`),
+the rows of a window or of chosen indices (:meth:`PoseTrack.take`), bounds.
 """
 
 from __future__ import annotations
 
 import functools
-from typing import Any
+from collections.abc import Iterator
+from typing import Any, Literal
 
 import numpy as np
 
+from .._engine import chain as _chain
 from .._engine.time import TimeBase, as_track, check_compatible
 from ..core import lookups
 from .commands import pose_matrix
+from .looked_up import TIME_TOLERANCE, LookedUpTrack
 
-TIME_TOLERANCE = 1e-9  # seconds
+__all__ = ["PoseTrack", "LookedUpTrack", "SceneTrack", "TIME_TOLERANCE"]
 
 
 class PoseTrack:
@@ -108,17 +114,32 @@ class PoseTrack:
         self.scale: np.ndarray | None = scale
 
     @classmethod
-    def lookup(cls, frame, base, name: str | None = None) -> PoseTrack:
-        """The transform of ``frame`` into ``base`` (points in frame -> base)."""
+    def lookup(cls, frame, base, name: str | None = None) -> PoseTrack | LookedUpTrack:
+        """The transform of ``frame`` into ``base`` (points in frame -> base).
+
+        Static: a :class:`PoseTrack`. Moving: a :class:`LookedUpTrack`, which
+        looks its samples up per window (the scene keeps no copy of them).
+        """
         label = name or f"pose of {frame.name!r} in {base.name!r}"
         if frame is base:
             return cls(np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0]), name=label)
+        if _chain.static_transform(frame.data, base.data) is not None:
+            t, r = lookups.lookup_transform(outof=frame, into=base)
+            return cls(np.asarray(t).reshape(3), np.asarray(r).reshape(4), name=label)
+        return LookedUpTrack(frame, base, _max_gap(frame, base), label)
+
+    @classmethod
+    def looked_up_whole(cls, frame, base, name: str | None = None) -> PoseTrack:
+        """The transform of a moving ``frame`` into ``base``, every sample
+        held (what :meth:`lookup` kept before it looked up per window: the
+        tests' reference)."""
+        label = name or f"pose of {frame.name!r} in {base.name!r}"
         t, r, ts = lookups.lookup_transform(
             outof=frame, into=base, return_timestamps=True
         )
         t, r = np.asarray(t), np.asarray(r)
         if ts is None:
-            return cls(t.reshape(3), r.reshape(4), name=label)
+            raise ValueError(f"{label}: does not move")
         gap = _max_gap(frame, base)
         if gap is not None:
             t, r, ts = _hidden_across_gaps(t, r, np.asarray(ts), gap)
@@ -156,6 +177,25 @@ class PoseTrack:
             return 0
         return int(np.searchsorted(self.seconds, t + TIME_TOLERANCE, side="right")) - 1
 
+    def search(self, x: float, side: Literal["left", "right"] = "left") -> int:
+        """Rows before float second ``x`` (``np.searchsorted`` on the rows' seconds)."""
+        return int(np.searchsorted(self.sample_times(), x, side=side))
+
+    def seconds_of(self, rows) -> np.ndarray:
+        """Float seconds of ``rows`` (indices), shape (k,)."""
+        return self.sample_times()[np.atleast_1d(np.asarray(rows, dtype=np.int64))]
+
+    def take(self, index):
+        """Seconds, translation, rotation and scale (or None) of rows
+        ``index``: None (all), a slice or indices (views where they can be)."""
+        seconds = self.sample_times()
+
+        def pick(a):
+            return a if index is None else a[index]
+
+        scale = None if self.scale is None else pick(self.scale)
+        return pick(seconds), pick(self.translation), pick(self.rotation), scale
+
     def matrix(self, index: int = 0) -> np.ndarray:
         """Homogeneous (4, 4) matrix of sample ``index``."""
         if self.seconds is None:
@@ -164,6 +204,14 @@ class PoseTrack:
         if self.scale is not None:
             m[:3, :3] *= self.scale[index]
         return m
+
+    def blocks(self) -> Iterator[np.ndarray]:
+        """The translations, as one block (they are held)."""
+        yield self.translation.reshape(-1, 3)
+
+    def positions_with_gaps(self) -> np.ndarray:
+        """Every sample's translation, shape (n, 3), NaN where missing (held)."""
+        return self.translation.reshape(-1, 3)
 
     def positions(self) -> np.ndarray:
         """The translations of the samples that are not missing, as (n, 3)."""
@@ -201,6 +249,16 @@ class PoseTrack:
 
     def check_kind(self, kind: str | None, what: str) -> None:
         check_compatible([kind, self.kind], what)
+
+
+#: what a scene's node follows: poses held, or looked up per window
+SceneTrack = PoseTrack | LookedUpTrack
+
+
+def moving_span(track: SceneTrack) -> tuple[float, float]:
+    """Float seconds of the first and last row of a moving track."""
+    first, last = track.seconds_of([0, -1])
+    return float(first), float(last)
 
 
 def _fresh(arr: np.ndarray) -> bool:

@@ -57,7 +57,8 @@ explorer.register_head_eye_frames(head, left, right)
 scene = explorer.explorer_scene()
 player = scene.player()
 track = scene.state.tracks["{ANCHOR}"]
-np.save(EXPECTED, np.c_[track.sample_times() - scene.state.origin, track.translation])
+seconds, translation, _, _ = track.take(None)  # every sample, looked up whole
+np.save(EXPECTED, np.c_[seconds - scene.state.origin, translation])
 print("STREAM-READY", note[:40])
 widgets.VBox([scene.widget, player])
 """

@@ -149,6 +149,9 @@ def test_a_path_of_a_frame_with_objects_drawn_in_it_reuses_their_poses():
     scene = Scene("world", grid=False)
     scene.add_frame("body", base="body")  # an object that moves with the body
     path = scene.add_path("body")
-    # no second lookup: the path's samples are the anchor's poses themselves
-    assert path.samples is scene.state.tracks["/rbm/anchor_body"].translation
+    # no second lookup: the path's samples are the anchor's poses, looked up
+    # by the anchor's track when the line is drawn
+    anchor = scene.state.tracks["/rbm/anchor_body"]
+    assert path._samples is anchor
+    np.testing.assert_array_equal(path.samples, np.c_[ts, ts, ts])
     scene.close()

@@ -1,8 +1,9 @@
-"""A scene's track of a long recording holds one copy of its poses (issue 35).
+"""A track holding a whole lookup holds one copy of its poses (issue 35).
 
-Measured with tracemalloc (allocations, not time): looking a frame up for a
-scene makes the lookup's arrays, and the track keeps those, marking missing
-rows in them, instead of copying them (which held two copies at the peak).
+Measured with tracemalloc (allocations, not time): a track made of a whole
+lookup (``PoseTrack.looked_up_whole``, the reference the scene's per-window
+tracks are tested against) keeps the lookup's arrays, marking missing rows
+in them, instead of copying them (which held two copies at the peak).
 """
 
 from __future__ import annotations
@@ -35,9 +36,9 @@ def test_track_of_a_lookup_keeps_the_lookup_arrays():
     n = 400_000  # 2,000 s at 200 Hz: 22 MB of poses
     register_walk(n)
     frame, base = rbm.registry["walker"], rbm.registry["world"]
-    PoseTrack.lookup(frame, base)  # kernels and caches warm
+    PoseTrack.looked_up_whole(frame, base)  # kernels and caches warm
     tracemalloc.start()
-    track = PoseTrack.lookup(frame, base)
+    track = PoseTrack.looked_up_whole(frame, base)
     kept, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     poses = track.translation.nbytes + track.rotation.nbytes

@@ -213,13 +213,11 @@ def angles(
     x, y, z = local @ right, local @ fwd, local @ upv
     azimuth = np.degrees(np.arctan2(x, y))
     elevation = np.degrees(np.arctan2(z, np.hypot(x, y)))
-    import xarray as xr
-
-    return xr.DataArray(
+    return _on_times_of(
+        directions,
         np.column_stack([azimuth, elevation]),
-        dims=("time", "angle"),
-        coords={"time": times, "angle": ["azimuth", "elevation"]},
-        attrs={"long_name": "Gaze angles", "units": "deg", "reference_frame": ref.name},
+        ("angle", ["azimuth", "elevation"]),
+        {"long_name": "Gaze angles", "units": "deg", "reference_frame": ref.name},
     )
 
 
@@ -263,7 +261,9 @@ def rates(angles: xr.DataArray, *, window: float = 0.02) -> xr.DataArray:
     out = np.full(values.shape, np.nan)
     for k in range(values.shape[1]):
         out[:, k] = _windowed_slope(t, values[:, k], float(window))
-    result = arr.copy(data=out.reshape(arr.shape))
+    # a shallow copy: the result shares the angles' time index (a deep copy
+    # would hold a second copy of every timestamp for as long as it lives)
+    result = arr.copy(deep=False, data=out.reshape(arr.shape))
     result.attrs = {"long_name": "Gaze angular velocity", "units": "deg/s"}
     return result.transpose(*angles.dims)
 
@@ -395,6 +395,34 @@ def _insert_gap_rows(times, values, max_gap):
         np.insert(t, at, middle),
         np.insert(values, at, np.full((gaps.size, values.shape[1]), np.nan), axis=0),
     )
+
+
+def _on_times_of(directions, values, column, attrs):
+    """``values`` (n, 2) as a DataArray along ``directions``' time and ``column``.
+
+    Built from a shallow copy of ``directions``, so the result shares its
+    time index: a new DataArray would copy every timestamp (xarray's
+    constructor deep-copies index coordinates), and the explorer's plots
+    keep these results for as long as the dashboard lives.
+    """
+    import xarray as xr
+
+    dim, labels = column
+    if "time" not in directions.indexes:  # no time coordinate to share
+        return xr.DataArray(
+            values,
+            dims=("time", dim),
+            coords={"time": directions["time"].values, dim: labels},
+            attrs=attrs,
+        )
+    template = directions.transpose("time", "cartesian_axis").isel(
+        cartesian_axis=slice(0, values.shape[1])
+    )
+    template = template.drop_vars([c for c in template.coords if c != "time"])
+    out = template.copy(deep=False, data=values).rename(cartesian_axis=dim)
+    out = out.assign_coords({dim: labels})
+    out.name, out.attrs = None, attrs
+    return out
 
 
 def _vectors_dataarray(values, times, frame_name):

@@ -146,10 +146,13 @@ def directions(
             possible = sight[:, 2] >= np.cos(np.radians(float(max_angle)))
             sight[~possible] = np.nan
         out[valid] = _represent(sight, times[valid], eye.parent, target)
+    sampled = times
     if max_gap is not None:
         times, out = _insert_gap_rows(times, out, float(max_gap))
     name = target.name if isinstance(target, ReferenceFrame) else str(into)
-    return _vectors_dataarray(out, times, name)
+    # on the confidence's own times (no row inserted): share its time index
+    like = confidence if _is_dataarray(confidence) and times is sampled else None
+    return _vectors_dataarray(out, times, name, like)
 
 
 def angles(
@@ -425,19 +428,30 @@ def _on_times_of(directions, values, column, attrs):
     return out
 
 
-def _vectors_dataarray(values, times, frame_name):
+def _vectors_dataarray(values, times, frame_name, like=None):
+    """The line-of-sight DataArray; on ``like``'s time index when given (1-d,
+    along ``time``, with the same times): a shallow copy of it shares the
+    index, where a new DataArray would copy every timestamp."""
     import xarray as xr
 
-    return xr.DataArray(
-        values,
-        dims=("time", "cartesian_axis"),
-        coords={"time": times, "cartesian_axis": np.array(["x", "y", "z"])},
-        attrs={
-            "long_name": "Line of sight",
-            "units": "1",
-            "representation_frame": frame_name,
-        },
-    )
+    axes = np.array(["x", "y", "z"])
+    attrs = {
+        "long_name": "Line of sight",
+        "units": "1",
+        "representation_frame": frame_name,
+    }
+    if like is None or "time" not in like.indexes:
+        return xr.DataArray(
+            values,
+            dims=("time", "cartesian_axis"),
+            coords={"time": times, "cartesian_axis": axes},
+            attrs=attrs,
+        )
+    template = like.drop_vars([c for c in like.coords if c != "time"])
+    out = template.expand_dims(cartesian_axis=3, axis=1).copy(deep=False, data=values)
+    out = out.assign_coords(cartesian_axis=axes)
+    out.name, out.attrs = None, attrs
+    return out
 
 
 def _signed_axis(spec, name: str):

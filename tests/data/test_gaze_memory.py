@@ -85,3 +85,29 @@ def test_angles_of_directions_without_a_time_coordinate():
         rbm.clear_registry()
     np.testing.assert_array_equal(out["time"].values, np.arange(4))
     np.testing.assert_allclose(out.values, 0.0)
+
+
+def test_directions_share_the_confidence_time_index(sight):
+    confidence = xr.DataArray(
+        np.linspace(0.0, 1.0, N),
+        dims="time",
+        coords={"time": sight["time"].values, "extra": ("time", np.arange(N))},
+        name="confidence",
+    )
+    out, kept = _kept(lambda: gaze.directions("eye", "camera", confidence=confidence))
+    assert np.shares_memory(_time_index_data(out), _time_index_data(confidence))
+    assert out.dims == ("time", "cartesian_axis") and out.name is None
+    assert list(out.coords) == ["time", "cartesian_axis"]
+    assert list(out["cartesian_axis"].values) == ["x", "y", "z"]
+    assert out.attrs["representation_frame"] == "camera"
+    np.testing.assert_array_equal(out.values[confidence.values < 0.6], np.nan)
+    expected = gaze.directions("eye", "camera").values
+    trusted = confidence.values >= 0.6
+    np.testing.assert_array_equal(out.values[trusted], expected[trusted])
+    times = confidence["time"].values.nbytes
+    assert kept < out.values.nbytes + 0.1 * times, (kept, out.values.nbytes)
+    # rows inserted in a gap: new times, so a new index
+    gapped = confidence.isel(time=np.r_[0:1000, 2000:N])
+    out = gaze.directions("eye", "camera", confidence=gapped, max_gap=0.5)
+    assert out.sizes["time"] == gapped.sizes["time"] + 1
+    assert np.isnan(out.values[1000]).all()

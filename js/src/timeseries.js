@@ -305,6 +305,32 @@ async function render({ model, el }) {
     return exactAnswer.samples[i];
   }
   let onCursor = () => {};
+  // The hover dot of each line sits on the sample the readout shows: the
+  // kernel's exact sample once it has come, else the one uPlot picked (a
+  // kept sample of the overview). Out of sight (uPlot's own -10 px) where
+  // that sample has no value.
+  function hoverDot(i) {
+    return (u, si) => {
+      const size = u.cursor.points.size(u, si);
+      const exact = exactFor(i, cursorTime(u));
+      const idx = u.cursor.idxs ? u.cursor.idxs[si] : u.cursor.idx;
+      let x = null;
+      let y = null;
+      if (exact) {
+        x = exact.x;
+        y = exact.values[si - 1];
+      } else if (idx !== null && idx !== undefined) {
+        x = u.data[0][idx];
+        y = u.data[si][idx];
+      }
+      if (x === null || x === undefined || y === null || y === undefined || !Number.isFinite(y)) {
+        return { left: -10 - size / 2, top: -10 - size / 2, width: size, height: size };
+      }
+      const left = u.valToPos(x, "x");
+      const top = u.valToPos(y, u.series[si].scale);
+      return { left: left - size / 2, top: top - size / 2, width: size, height: size };
+    };
+  }
 
   const width = () => Math.max(200, (body.clientWidth || el.clientWidth || 800) - 4);
   const height = model.get("panel_height");
@@ -372,6 +398,7 @@ async function render({ model, el }) {
         },
       ],
       cursor: {
+        points: { bbox: hoverDot(i) },
         sync: { key: syncKey, filters: { pub: (type) => type === "mousemove" || type === "mouseleave" } },
         drag: { x: true, y: false, setScale: true, dist: 5 },
         bind: {
@@ -645,7 +672,12 @@ async function render({ model, el }) {
   root.rbmExact = { asked: 0, answered: 0, cached: 0, latencyMs: [], shown: null };
   function showExact() {
     charts.forEach((u) => {
-      if (u.cursor.idx !== null && u.cursor.idx !== undefined) u.setLegend({ idx: u.cursor.idx });
+      if (u.cursor.idx === null || u.cursor.idx === undefined) return;
+      // uPlot fills the legend and places the hover dots (hoverDot) only for
+      // a series whose index under the cursor changed: forget them, and put
+      // the cursor where it is
+      u.cursor.idxs.fill(null);
+      u.setCursor({ left: u.cursor.left, top: u.cursor.top }, false, false);
     });
     const readout = charts.map((u) => {
       const p = u.rbmPanel;

@@ -146,10 +146,13 @@ def directions(
             possible = sight[:, 2] >= np.cos(np.radians(float(max_angle)))
             sight[~possible] = np.nan
         out[valid] = _represent(sight, times[valid], eye.parent, target)
+    sampled = times
     if max_gap is not None:
         times, out = _insert_gap_rows(times, out, float(max_gap))
     name = target.name if isinstance(target, ReferenceFrame) else str(into)
-    return _vectors_dataarray(out, times, name)
+    # on the confidence's own times (no row inserted): share its time index
+    like = confidence if _is_dataarray(confidence) and times is sampled else None
+    return _vectors_dataarray(out, times, name, like)
 
 
 def angles(
@@ -213,13 +216,11 @@ def angles(
     x, y, z = local @ right, local @ fwd, local @ upv
     azimuth = np.degrees(np.arctan2(x, y))
     elevation = np.degrees(np.arctan2(z, np.hypot(x, y)))
-    import xarray as xr
-
-    return xr.DataArray(
+    return _on_times_of(
+        directions,
         np.column_stack([azimuth, elevation]),
-        dims=("time", "angle"),
-        coords={"time": times, "angle": ["azimuth", "elevation"]},
-        attrs={"long_name": "Gaze angles", "units": "deg", "reference_frame": ref.name},
+        ("angle", ["azimuth", "elevation"]),
+        {"long_name": "Gaze angles", "units": "deg", "reference_frame": ref.name},
     )
 
 
@@ -263,7 +264,9 @@ def rates(angles: xr.DataArray, *, window: float = 0.02) -> xr.DataArray:
     out = np.full(values.shape, np.nan)
     for k in range(values.shape[1]):
         out[:, k] = _windowed_slope(t, values[:, k], float(window))
-    result = arr.copy(data=out.reshape(arr.shape))
+    # a shallow copy: the result shares the angles' time index (a deep copy
+    # would hold a second copy of every timestamp for as long as it lives)
+    result = arr.copy(deep=False, data=out.reshape(arr.shape))
     result.attrs = {"long_name": "Gaze angular velocity", "units": "deg/s"}
     return result.transpose(*angles.dims)
 
@@ -397,19 +400,58 @@ def _insert_gap_rows(times, values, max_gap):
     )
 
 
-def _vectors_dataarray(values, times, frame_name):
+def _on_times_of(directions, values, column, attrs):
+    """``values`` (n, 2) as a DataArray along ``directions``' time and ``column``.
+
+    Built from a shallow copy of ``directions``, so the result shares its
+    time index: a new DataArray would copy every timestamp (xarray's
+    constructor deep-copies index coordinates), and the explorer's plots
+    keep these results for as long as the dashboard lives.
+    """
     import xarray as xr
 
-    return xr.DataArray(
-        values,
-        dims=("time", "cartesian_axis"),
-        coords={"time": times, "cartesian_axis": np.array(["x", "y", "z"])},
-        attrs={
-            "long_name": "Line of sight",
-            "units": "1",
-            "representation_frame": frame_name,
-        },
+    dim, labels = column
+    if "time" not in directions.indexes:  # no time coordinate to share
+        return xr.DataArray(
+            values,
+            dims=("time", dim),
+            coords={"time": directions["time"].values, dim: labels},
+            attrs=attrs,
+        )
+    template = directions.transpose("time", "cartesian_axis").isel(
+        cartesian_axis=slice(0, values.shape[1])
     )
+    template = template.drop_vars([c for c in template.coords if c != "time"])
+    out = template.copy(deep=False, data=values).rename(cartesian_axis=dim)
+    out = out.assign_coords({dim: labels})
+    out.name, out.attrs = None, attrs
+    return out
+
+
+def _vectors_dataarray(values, times, frame_name, like=None):
+    """The line-of-sight DataArray; on ``like``'s time index when given (1-d,
+    along ``time``, with the same times): a shallow copy of it shares the
+    index, where a new DataArray would copy every timestamp."""
+    import xarray as xr
+
+    axes = np.array(["x", "y", "z"])
+    attrs = {
+        "long_name": "Line of sight",
+        "units": "1",
+        "representation_frame": frame_name,
+    }
+    if like is None or "time" not in like.indexes:
+        return xr.DataArray(
+            values,
+            dims=("time", "cartesian_axis"),
+            coords={"time": times, "cartesian_axis": axes},
+            attrs=attrs,
+        )
+    template = like.drop_vars([c for c in like.coords if c != "time"])
+    out = template.expand_dims(cartesian_axis=3, axis=1).copy(deep=False, data=values)
+    out = out.assign_coords(cartesian_axis=axes)
+    out.name, out.attrs = None, attrs
+    return out
 
 
 def _signed_axis(spec, name: str):

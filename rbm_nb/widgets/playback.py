@@ -14,6 +14,8 @@ change of speed, seek or pause re-anchors, so the time never jumps.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .._engine.time import TIE
@@ -22,6 +24,68 @@ from .._engine.time import TIE
 #: seconds from its first sample computed from exact keys, so half a
 #: nanosecond is enough (the time module's one rule, :data:`~rbm_nb._engine.time.TIE`).
 TOLERANCE = TIE
+
+
+class SampleTimes:
+    """Seconds from the first sample, counted from exact keys when asked.
+
+    A Player over hours of samples used to keep three per-sample arrays (a
+    copy of its timestamps, their float seconds, and those seconds again from
+    the first sample). This keeps only the keys it is given (int64 ns, or
+    float seconds) and computes the seconds of the samples it is asked about,
+    with the very arithmetic those arrays were made with, so every answer is
+    the same to the last bit.
+
+    Parameters
+    ----------
+    key : ndarray, shape (n,)
+        Sorted exact keys: int64 nanoseconds or float64 seconds.
+    scale : float
+        Keys per second (1e9 for ns keys, 1.0 for seconds).
+    """
+
+    __slots__ = ("key", "_origin", "_scale")
+
+    def __init__(self, key: np.ndarray, scale: float) -> None:
+        self.key = key
+        self._origin = key[0]
+        self._scale = float(scale)
+
+    def __len__(self) -> int:
+        return int(self.key.shape[0])
+
+    def at(self, index: int) -> float:
+        """Seconds from the first sample of sample ``index``."""
+        return float((self.key[index] - self._origin) / self._scale)
+
+    def array(self) -> np.ndarray:
+        """Every sample's seconds from the first (a new array: for callers that ask)."""
+        return (self.key - self._origin) / self._scale
+
+    def last_at_or_before(self, t: float) -> int:
+        """Index of the last sample whose seconds are at most ``t`` (-1: none).
+
+        The keys are searched near ``t``'s own key, then the answer is made
+        exact against :meth:`at` (a step over a run of repeated keys at most).
+        """
+        n, t = len(self), float(t)
+        if math.isnan(t) or t == math.inf:
+            return n - 1  # as searchsorted on the seconds puts them
+        if t == -math.inf:
+            return -1
+        guess = float(self._origin) + t * self._scale
+        if self.key.dtype.kind in "iu":
+            # clamped: a far time must not overflow the int64 keys
+            guess = min(max(guess, -9.2e18), 9.2e18)
+            target: float | int = math.floor(guess)
+        else:
+            target = guess
+        i = int(np.searchsorted(self.key, target, side="right")) - 1
+        while i + 1 < n and self.at(i + 1) <= t:
+            i = int(np.searchsorted(self.key, self.key[i + 1], side="right")) - 1
+        while i >= 0 and self.at(i) > t:
+            i = int(np.searchsorted(self.key, self.key[i], side="left")) - 1
+        return i
 
 
 class Playback:
@@ -41,17 +105,23 @@ class Playback:
     playing : bool
     """
 
-    def __init__(self, seconds, *, speed: float = 1.0, loop: bool = False):
-        seconds = np.ascontiguousarray(seconds, dtype=np.float64)
-        if seconds.ndim != 1 or seconds.size == 0:
-            raise ValueError(
-                f"Playback: seconds must be a non-empty 1-D array, got shape {seconds.shape}"
-            )
-        if not np.isfinite(seconds).all() or (np.diff(seconds) < 0).any():
-            raise ValueError("Playback: seconds must be finite and sorted")
-        self.origin = float(seconds[0])
-        self.relative = seconds - self.origin
-        self.duration = float(self.relative[-1])
+    def __init__(self, seconds, *, speed: float = 1.0, loop: bool = False) -> None:
+        if isinstance(seconds, SampleTimes):
+            # the Player's keys, validated by the time rule: no float copy
+            self.origin = 0.0
+            self.samples = seconds
+        else:
+            seconds = np.ascontiguousarray(seconds, dtype=np.float64)
+            if seconds.ndim != 1 or seconds.size == 0:
+                raise ValueError(
+                    "Playback: seconds must be a non-empty 1-D array, got shape "
+                    f"{seconds.shape}"
+                )
+            if not np.isfinite(seconds).all() or (np.diff(seconds) < 0).any():
+                raise ValueError("Playback: seconds must be finite and sorted")
+            self.origin = float(seconds[0])
+            self.samples = SampleTimes(seconds - self.origin, 1.0)
+        self.duration = self.samples.at(len(self.samples) - 1)
         self.speed = check_speed(speed, "Playback")
         self.loop = bool(loop)
         self.playing = False
@@ -62,7 +132,12 @@ class Playback:
     # -- samples ------------------------------------------------------------------
     @property
     def n(self) -> int:
-        return len(self.relative)
+        return len(self.samples)
+
+    @property
+    def relative(self) -> np.ndarray:
+        """Every sample's seconds from the first (computed on each call)."""
+        return self.samples.array()
 
     def clamp(self, t: float) -> float:
         """``t`` limited to ``[0, duration]``; refuses non-finite times."""
@@ -73,12 +148,12 @@ class Playback:
 
     def index_at(self, t: float) -> int:
         """Index of the latest sample at or before ``t`` (seconds from the start; 0 before it)."""
-        i = int(np.searchsorted(self.relative, t + TOLERANCE, side="right")) - 1
+        i = self.samples.last_at_or_before(t + TOLERANCE)
         return min(max(i, 0), self.n - 1)
 
     def time_of(self, index: int) -> float:
         """Seconds from the start of sample ``index`` (clipped to the axis)."""
-        return float(self.relative[int(np.clip(index, 0, self.n - 1))])
+        return self.samples.at(int(np.clip(index, 0, self.n - 1)))
 
     @property
     def index(self) -> int:

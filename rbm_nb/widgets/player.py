@@ -52,10 +52,11 @@ import numpy as np
 import traitlets
 
 from .._engine.time import TimeBase, as_track, check_compatible, latest_index
+from .._infra.frozen import is_frozen
 from ..core import frames
 from ._frontend import FrontendGuard
 from ._timebase import format_time
-from .playback import Playback, check_speed
+from .playback import Playback, SampleTimes, check_speed
 
 STATIC = Path(__file__).resolve().parent / "static"
 
@@ -254,19 +255,24 @@ class Player(FrontendGuard, anywidget.AnyWidget):
         raw, what = _resolve_timestamps(timestamps)
         # exact keys (int64 ns for datetime64) and second 0: the samples'
         # seconds from the start come from int64 differences, so stamps 1 ns
-        # apart stay two samples at any epoch
-        self._track = as_track(raw, what, repeats=True)
-        self._base = TimeBase.of(self._track)
-        self.timestamps_kind = self._track.kind
-        self._raw = self._track.values
-        relative = self._base.seconds(self._track)
-        if not np.isfinite(relative[-1]):  # e.g. -1e308 to 1e308: the span overflows
-            first, last = self._track.values[0], self._track.values[-1]
+        # apart stay two samples at any epoch. Kept are the keys alone (a view
+        # of timestamps nobody can change any more, else a copy); seconds are
+        # counted from them when asked (playback.SampleTimes)
+        given = np.asarray(getattr(raw, "values", raw))
+        track = as_track(raw, what, copy=not is_frozen(given), repeats=True)
+        self._base = TimeBase.of(track)
+        self.timestamps_kind = track.kind
+        self._raw = track.values
+        samples = SampleTimes(track.key, 1.0 if track.kind == "numeric" else 1e9)
+        del track  # its float seconds: not kept
+        if not np.isfinite(samples.at(len(samples) - 1)):
+            # e.g. -1e308 to 1e308: the span overflows
+            first, last = self._raw[0], self._raw[-1]
             raise ValueError(
                 f"Player: the timestamps run from {first:.6g} to {last:.6g} s, a span "
                 "too long to play (not finite)"
             )
-        self.playback = Playback(relative, speed=speed, loop=loop)
+        self.playback = Playback(samples, speed=speed, loop=loop)
         self.step = int(step)
         self._links: list[_Link] = []
         self._callbacks: list[Callable[[float], Any]] = []

@@ -162,6 +162,37 @@ def legend(page) -> list[str]:
     )
 
 
+def hover_dots(page, x: float | None = None, values=None) -> list:
+    """Each line's hover dot: [its centre as drawn, where the sample is] (CSS px).
+
+    The sample is ``(x, values)``, default the one uPlot's cursor picked in
+    the data here (for an overview, its kept sample).
+    """
+    return page.evaluate(
+        """([x, values]) => {
+          const u = document.querySelector('.rbm-ts').rbmCharts[0];
+          const over = u.over.getBoundingClientRect();
+          const pts = Array.from(u.root.querySelectorAll('.u-cursor-pt'));
+          return pts.map((pt, k) => {
+            const si = k + 1;
+            const r = pt.getBoundingClientRect();
+            const sx = x === null ? u.data[0][u.cursor.idx] : x;
+            const sy = x === null ? u.data[si][u.cursor.idx] : values[k];
+            return [[r.left + r.width / 2 - over.left, r.top + r.height / 2 - over.top],
+                    [u.valToPos(sx, 'x'), u.valToPos(sy, u.series[si].scale)]];
+          });
+        }""",
+        [x, None if values is None else [float(v) for v in values]],
+    )
+
+
+def dots_at(dots) -> bool:
+    """Whether every dot is drawn on its sample (to the pixel uPlot rounds to)."""
+    return bool(dots) and all(
+        abs(a[0] - b[0]) <= 1.5 and abs(a[1] - b[1]) <= 1.5 for a, b in dots
+    )
+
+
 def exact_shown(page, t: float) -> bool:
     return page.evaluate(
         "(t) => { const s = document.querySelector('.rbm-ts').rbmExact.shown;"
@@ -193,6 +224,8 @@ def test_hovering_over_a_long_overview_shows_the_exact_recording_value(zoomed):
     shot(page, "readout_waiting", page.locator(".rbm-ts"))
     assert waiting and all(v.startswith("\u2248") for v in waiting), waiting
     assert not exact_shown(page, t)
+    # the hover dots sit on the sample the readout shows: the kept one, yet
+    assert dots_at(hover_dots(page)), hover_dots(page)
     # once the kernel's worker is free, the recording's own sample arrives
     page.wait_for_function(
         "(t) => { const s = document.querySelector('.rbm-ts').rbmExact.shown;"
@@ -207,6 +240,13 @@ def test_hovering_over_a_long_overview_shows_the_exact_recording_value(zoomed):
     assert panel["x"] == want[0]
     np.testing.assert_array_equal(panel["values"], want[1:])
     assert not any(v.startswith("\u2248") for v in legend(page))
+    # ... and now on the recording's own sample, as the readout
+    dots = hover_dots(page, want[0], want[1:])
+    assert dots_at(dots), dots
+    kept_dots = hover_dots(page)  # where the kept sample is
+    moved = [
+        not dots_at([[a, k[1]]]) for (a, _), k in zip(dots, kept_dots, strict=True)
+    ]
     # the overview's kept sample there was not the recording's at that time
     kept = chart(page, "[u.data[0][u.cursor.idx], u.data[1][u.cursor.idx]]")
     print(
@@ -229,6 +269,12 @@ def test_hovering_over_a_long_overview_shows_the_exact_recording_value(zoomed):
         want = nearest(table, t)
         assert got["panels"][0]["x"] == want[0]
         np.testing.assert_array_equal(got["panels"][0]["values"], want[1:])
+        dots = hover_dots(page, want[0], want[1:])
+        assert dots_at(dots), (t, dots)
+        moved += [
+            not dots_at([[a, k[1]]])
+            for (a, _), k in zip(dots, hover_dots(page), strict=True)
+        ]
         kept = chart(page, "[u.data[0][u.cursor.idx], u.data[1][u.cursor.idx]]")
         if kept[0] != want[0]:
             differed.append(
@@ -239,6 +285,13 @@ def test_hovering_over_a_long_overview_shows_the_exact_recording_value(zoomed):
                     round(kept[1] - want[1], 4),
                 )
             )
+    # how often the dots left the overview's kept sample for the exact one by
+    # more than a pixel and a half (this recording: 1-2 px at most, so not
+    # asserted; the bundle before drew them on the kept sample, 1.9 px off
+    # at t = 1701 s in JupyterLab, and failed the check above)
+    print(
+        f"{page.app}: hover dots moved off the kept sample: {sum(moved)} of {len(moved)}"
+    )
     print(
         f"{page.app}: the overview's kept sample was not the recording's nearest at "
         f"{len(differed)} of 9 cursor times (nudge px, t, dt s, dx m): {differed}"

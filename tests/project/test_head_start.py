@@ -1,0 +1,47 @@
+"""The slow subprocess checks that start with the session (head_start.py)."""
+
+from __future__ import annotations
+
+import ast
+import os
+import subprocess
+import sys
+
+import pytest
+from conftest import TESTS
+from head_start import CHRT, HEAD_STARTS, NICE, Job, Run, low_priority
+
+
+def test_each_head_start_is_a_fixture_some_test_takes():
+    """A renamed fixture would silently stop the head start (its tests would
+    then start the work themselves, minutes later)."""
+    taken = set()
+    for path in TESTS.glob("*/test_*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.FunctionDef):
+                taken.update(arg.arg for arg in node.args.args)
+    for fixture in HEAD_STARTS:
+        assert fixture in taken, f"no test or fixture takes {fixture}"
+
+
+def test_background_commands_run_at_low_priority(tmp_path):
+    code = "import os; print(os.sched_getscheduler(0), os.nice(0))"
+    ours = int(subprocess.check_output([sys.executable, "-c", code]).split()[1])
+    run = Run(low_priority([sys.executable, "-c", code]), tmp_path, "priority")
+    returncode, out, err = run.finish(timeout=60)
+    assert returncode == 0, err
+    policy, nice = map(int, out.split())
+    if CHRT is not None:
+        assert policy == os.SCHED_IDLE, out
+    else:
+        assert nice == min(ours + NICE, 19), out
+
+
+def test_a_job_hands_its_value_or_its_error_to_the_test_that_waits():
+    assert Job("value", lambda: 42).result(timeout=30) == 42
+
+    def fail():
+        raise AssertionError("the build failed: the reason")
+
+    with pytest.raises(AssertionError, match="the build failed: the reason"):
+        Job("failing", fail).result(timeout=30)

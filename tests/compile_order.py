@@ -18,7 +18,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
-from head_start import BACKGROUND, low_priority
+from head_start import BACKGROUND, low_priority, wait_promoting
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -98,7 +98,9 @@ def _outputs(processes: list[subprocess.Popen]) -> list[str]:
     """Wait for every process (stopping the rest if one fails); their output."""
     try:
         for process in processes:
-            process.wait(timeout=1500)
+            # started with the session in the idle class: promoted while awaited
+            if not wait_promoting(lambda s, p=process: _exited(p, s), 1500):
+                raise subprocess.TimeoutExpired(process.args, 1500)
     finally:
         for process in processes:
             if process.poll() is None:
@@ -108,6 +110,14 @@ def _outputs(processes: list[subprocess.Popen]) -> list[str]:
     for process, out in zip(processes, outputs, strict=True):
         assert process.returncode == 0, out
     return outputs
+
+
+def _exited(process: subprocess.Popen, seconds: float) -> bool:
+    try:
+        process.wait(timeout=seconds)
+    except subprocess.TimeoutExpired:
+        return False
+    return True
 
 
 def _result(out: str) -> dict:

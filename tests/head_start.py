@@ -13,11 +13,13 @@ in three orders (``explorer_compiles`` of compile_order.py, awaited by
 of these session fixtures before the first test when a selected test uses
 it (:data:`HEAD_STARTS`), so they run on the idle core during the session.
 
-They run at the lowest priority (Linux's idle scheduling class): when the foreground tests want both
-cores (two notebooks executing, a browser test's kernel and chromium), the
-background gives way rather than slowing tests that wait on a page with a
-timeout. What each check asserts is unchanged; only the wall-clock guards
-inside the background runs are longer (a run that waited behind the
+They run in Linux's idle scheduling class: when the foreground tests want
+both cores (two notebooks executing, a browser test's kernel and chromium),
+the background gives way rather than slowing tests that wait on a page with
+a timeout. A test that waits for background work moves it back to the
+normal class (:func:`promote_background`): it is then what the session
+waits for. What each check asserts is unchanged; only the wall-clock
+guards inside the background runs are longer (a run that waited behind the
 foreground must not fail for it), and their tests still bound the wait.
 """
 
@@ -29,6 +31,7 @@ import subprocess
 import sys
 import tarfile
 import threading
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -56,6 +59,47 @@ def low_priority(command: list[str]) -> list[str]:
     return ["nice", "-n", str(NICE), *command]
 
 
+def promote_background() -> int:
+    """Move every idle-class thread under this process to the normal class.
+
+    Called while a test waits for background work: that work is then what
+    the session waits for, and in the idle class any other process on the
+    machine (another session, a build) would hold it back indefinitely.
+    Processes the background starts later begin idle-class again, so a
+    waiting test calls this every few seconds. Returns how many threads moved.
+    """
+    if not hasattr(os, "SCHED_IDLE"):
+        return 0  # the nice fallback: nothing to undo
+    import psutil
+
+    moved = 0
+    for process in psutil.Process().children(recursive=True):
+        try:
+            threads = [t.id for t in process.threads()]
+        except psutil.Error:
+            continue  # gone meanwhile
+        for tid in threads:
+            try:
+                if os.sched_getscheduler(tid) == os.SCHED_IDLE:
+                    os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
+                    moved += 1
+            except OSError:
+                pass  # gone meanwhile, or not ours to change
+    return moved
+
+
+def wait_promoting(done: Callable[[float], bool], timeout: float) -> bool:
+    """``done(seconds)`` (wait up to that long; finished?) in slices of a few
+    seconds until it says True or ``timeout`` passes, promoting the background
+    before each slice. Returns the last answer."""
+    deadline = time.monotonic() + timeout
+    while True:
+        promote_background()
+        left = deadline - time.monotonic()
+        if done(max(0.0, min(5.0, left))) or left <= 0:
+            return done(0.0)
+
+
 class Job:
     """``work()`` in a thread from now on; ``result()`` waits for it and
     returns its value or raises what it raised (in the test that asks)."""
@@ -75,9 +119,12 @@ class Job:
         except BaseException as error:  # noqa: BLE001 -- re-raised by result()
             self._error = error
 
+    def _joined(self, seconds: float) -> bool:
+        self._thread.join(seconds)
+        return not self._thread.is_alive()
+
     def result(self, timeout: float) -> Any:
-        self._thread.join(timeout)
-        if self._thread.is_alive():
+        if not wait_promoting(self._joined, timeout):
             pytest.fail(f"{self.name} did not finish within {timeout} s")
         if self._error is not None:
             raise self._error
@@ -117,10 +164,15 @@ class Run:
             )
         BACKGROUND.add(self.process.pid)
 
-    def finish(self, timeout: float) -> tuple[int, str, str]:
+    def _exited(self, seconds: float) -> bool:
         try:
-            self.process.wait(timeout=timeout)
+            self.process.wait(timeout=seconds)
         except subprocess.TimeoutExpired:
+            return False
+        return True
+
+    def finish(self, timeout: float) -> tuple[int, str, str]:
+        if not wait_promoting(self._exited, timeout):
             self.process.kill()
             self.process.wait()
         return self.process.returncode, self.out.read_text(), self.err.read_text()
@@ -272,6 +324,7 @@ class PackagingRuns:
     tests (minutes of both cores) when the test that checks them is."""
 
     def __init__(self, root: Path, shared: Path, venv: bool, sdist_tests: bool):
+        self._root = root
         self._runs: list[tuple[list[str], Run]] = []
         self._stopped = threading.Event()
         self.dists = Job("python -m build", lambda: self._build(root / "dist"))
@@ -308,9 +361,27 @@ class PackagingRuns:
         return runs, account
 
     def stop(self) -> None:
+        """Stop what still runs (a session stopped early: -x, Ctrl-C): the
+        sdist's tests, and the build or install a thread is waiting on (every
+        command of theirs names a path under the root)."""
+        import psutil
+
         self._stopped.set()
         for _, run in self._runs:
             run.stop()
+        ours = []
+        for process in psutil.Process().children(recursive=True):
+            try:
+                if any(str(self._root) in arg for arg in process.cmdline()):
+                    ours += [process, *process.children(recursive=True)]
+            except psutil.Error:
+                pass  # gone meanwhile
+        for process in ours:
+            try:
+                process.kill()
+            except psutil.Error:
+                pass
+        psutil.wait_procs(ours, timeout=30)
 
 
 SDIST_TEST = "test_sdist_fast_tests_pass_against_its_own_tree"

@@ -10,6 +10,7 @@ each order's kernels in a fresh process and compares the bits.
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import subprocess
@@ -18,7 +19,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
-from head_start import BACKGROUND, low_priority, wait_promoting
+from head_start import BACKGROUND, low_priority, running, wait_promoting
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -99,7 +100,8 @@ def _outputs(processes: list[subprocess.Popen]) -> list[str]:
     try:
         for process in processes:
             # started with the session in the idle class: promoted while awaited
-            if not wait_promoting(lambda s, p=process: _exited(p, s), 1500):
+            mine = functools.partial(running, [process.pid])
+            if not wait_promoting(functools.partial(_exited, process), 1500, mine):
                 raise subprocess.TimeoutExpired(process.args, 1500)
     finally:
         for process in processes:

@@ -17,7 +17,7 @@ They run in Linux's idle scheduling class: when the foreground tests want
 both cores (two notebooks executing, a browser test's kernel and chromium),
 the background gives way rather than slowing tests that wait on a page with
 a timeout. A test that waits for background work moves it back to the
-normal class (:func:`promote_background`): it is then what the session
+normal class (:func:`promote`): it is then what the session
 waits for. What each check asserts is unchanged; only the wall-clock
 guards inside the background runs are longer (a run that waited behind the
 foreground must not fail for it), and their tests still bound the wait.
@@ -25,6 +25,7 @@ foreground must not fail for it), and their tests still bound the wait.
 
 from __future__ import annotations
 
+import functools
 import os
 import shutil
 import subprocess
@@ -59,42 +60,78 @@ def low_priority(command: list[str]) -> list[str]:
     return ["nice", "-n", str(NICE), *command]
 
 
-def promote_background() -> int:
-    """Move every idle-class thread under this process to the normal class.
+def promote(roots: Callable[[], list]) -> int:
+    """Move the idle-class threads of ``roots()`` (psutil processes) and of
+    their descendants to the normal class.
 
     Called while a test waits for background work: that work is then what
     the session waits for, and in the idle class any other process on the
-    machine (another session, a build) would hold it back indefinitely.
-    Processes the background starts later begin idle-class again, so a
-    waiting test calls this every few seconds. Returns how many threads moved.
+    machine (another session, a build) would hold it back indefinitely. Only
+    the awaited work: the other background runs keep to the idle core.
+    Processes it starts later begin idle-class again, so a waiting test calls
+    this every few seconds. Returns how many threads moved.
     """
     if not hasattr(os, "SCHED_IDLE"):
         return 0  # the nice fallback: nothing to undo
     import psutil
 
     moved = 0
-    for process in psutil.Process().children(recursive=True):
+    for root in roots():
         try:
-            threads = [t.id for t in process.threads()]
+            tree = [root, *root.children(recursive=True)]
         except psutil.Error:
             continue  # gone meanwhile
-        for tid in threads:
+        for process in tree:
             try:
-                if os.sched_getscheduler(tid) == os.SCHED_IDLE:
-                    os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
-                    moved += 1
-            except OSError:
-                pass  # gone meanwhile, or not ours to change
+                threads = [t.id for t in process.threads()]
+            except psutil.Error:
+                continue
+            for tid in threads:
+                try:
+                    if os.sched_getscheduler(tid) == os.SCHED_IDLE:
+                        os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
+                        moved += 1
+                except OSError:
+                    pass  # gone meanwhile, or not ours to change
     return moved
 
 
-def wait_promoting(done: Callable[[float], bool], timeout: float) -> bool:
+def running(pids: list[int]) -> list:
+    """The psutil processes of ``pids`` that still run."""
+    import psutil
+
+    found = []
+    for pid in pids:
+        try:
+            found.append(psutil.Process(pid))
+        except psutil.Error:
+            pass
+    return found
+
+
+def processes_naming(marker: str) -> list:
+    """This process's descendants with ``marker`` in their command line."""
+    import psutil
+
+    found = []
+    for process in psutil.Process().children(recursive=True):
+        try:
+            if any(marker in arg for arg in process.cmdline()):
+                found.append(process)
+        except psutil.Error:
+            pass  # gone meanwhile
+    return found
+
+
+def wait_promoting(
+    done: Callable[[float], bool], timeout: float, roots: Callable[[], list]
+) -> bool:
     """``done(seconds)`` (wait up to that long; finished?) in slices of a few
-    seconds until it says True or ``timeout`` passes, promoting the background
+    seconds until it says True or ``timeout`` passes, promoting ``roots()``
     before each slice. Returns the last answer."""
     deadline = time.monotonic() + timeout
     while True:
-        promote_background()
+        promote(roots)
         left = deadline - time.monotonic()
         if done(max(0.0, min(5.0, left))) or left <= 0:
             return done(0.0)
@@ -104,8 +141,9 @@ class Job:
     """``work()`` in a thread from now on; ``result()`` waits for it and
     returns its value or raises what it raised (in the test that asks)."""
 
-    def __init__(self, name: str, work: Callable[[], Any]):
+    def __init__(self, name: str, work: Callable[[], Any], marker: str):
         self.name = name
+        self.marker = marker  # in the command line of every process it starts
         self._value: Any = None
         self._error: BaseException | None = None
         self._thread = threading.Thread(
@@ -124,7 +162,8 @@ class Job:
         return not self._thread.is_alive()
 
     def result(self, timeout: float) -> Any:
-        if not wait_promoting(self._joined, timeout):
+        mine = functools.partial(processes_naming, self.marker)
+        if not wait_promoting(self._joined, timeout, mine):
             pytest.fail(f"{self.name} did not finish within {timeout} s")
         if self._error is not None:
             raise self._error
@@ -172,7 +211,8 @@ class Run:
         return True
 
     def finish(self, timeout: float) -> tuple[int, str, str]:
-        if not wait_promoting(self._exited, timeout):
+        mine = functools.partial(running, [self.process.pid])
+        if not wait_promoting(self._exited, timeout, mine):
             self.process.kill()
             self.process.wait()
         return self.process.returncode, self.out.read_text(), self.err.read_text()
@@ -327,14 +367,16 @@ class PackagingRuns:
         self._root = root
         self._runs: list[tuple[list[str], Run]] = []
         self._stopped = threading.Event()
-        self.dists = Job("python -m build", lambda: self._build(root / "dist"))
+        # every command of theirs names a path under root
+        marker = str(root)
+        self.dists = Job("python -m build", lambda: self._build(root / "dist"), marker)
         self.venv: Job | None = None
         self.sdist_tests: Job | None = None
         if venv or sdist_tests:
-            self.venv = Job("the venv from the wheel", lambda: self._venv(root))
+            self.venv = Job("the venv", lambda: self._venv(root), marker)
         if sdist_tests:
             self.sdist_tests = Job(
-                "the sdist's fast tests", lambda: self._sdist(root, shared)
+                "the sdist's fast tests", lambda: self._sdist(root, shared), marker
             )
 
     @staticmethod
@@ -370,10 +412,9 @@ class PackagingRuns:
         for _, run in self._runs:
             run.stop()
         ours = []
-        for process in psutil.Process().children(recursive=True):
+        for process in processes_naming(str(self._root)):
             try:
-                if any(str(self._root) in arg for arg in process.cmdline()):
-                    ours += [process, *process.children(recursive=True)]
+                ours += [process, *process.children(recursive=True)]
             except psutil.Error:
                 pass  # gone meanwhile
         for process in ours:

@@ -37,23 +37,29 @@ def test_background_commands_run_at_low_priority():
 
 
 def test_a_job_hands_its_value_or_its_error_to_the_test_that_waits():
-    assert Job("value", lambda: 42).result(timeout=30) == 42
+    assert Job("value", lambda: 42, "no process").result(timeout=30) == 42
 
     def fail():
         raise AssertionError("the build failed: the reason")
 
     with pytest.raises(AssertionError, match="the build failed: the reason"):
-        Job("failing", fail).result(timeout=30)
+        Job("failing", fail, "no process").result(timeout=30)
 
 
 def test_a_run_that_a_test_waits_for_leaves_the_idle_class(tmp_path):
     """Awaited, background work is what the session waits for: another
-    process on the machine must not hold it back (head_start.promote_background)."""
+    process on the machine must not hold it back (head_start.promote)."""
     if CHRT is None or not hasattr(os, "SCHED_IDLE"):
         pytest.skip("no idle scheduling class here (the nice fallback stays)")
     # the policy after the first promotions (one every 5 s while waiting)
     code = "import os, time; time.sleep(6.5); print(os.sched_getscheduler(0))"
     run = Run(low_priority([sys.executable, "-c", code]), tmp_path, "promoted")
-    returncode, out, err = run.finish(timeout=60)
-    assert returncode == 0, err
-    assert int(out) == os.SCHED_OTHER, out
+    # background work nobody waits for keeps to the idle class
+    other = Run(low_priority([sys.executable, "-c", code]), tmp_path, "other")
+    try:
+        returncode, out, err = run.finish(timeout=60)
+        assert returncode == 0, err
+        assert int(out) == os.SCHED_OTHER, out
+        assert os.sched_getscheduler(other.process.pid) == os.SCHED_IDLE
+    finally:
+        other.stop()

@@ -44,6 +44,10 @@ SHARED = Path(os.environ.get("RBM_NB_SHARED", REPO.parent / "shared"))
 SHARED_DATA = SHARED / "data"
 ORACLE = "rigid_body_motion"
 
+# the session fixtures of the slow subprocess checks (see head_start.py)
+from compile_order import explorer_compiles  # noqa: E402, F401
+from head_start import HEAD_STARTS, checked_runs, packaging_runs  # noqa: E402, F401
+
 
 class _ReclaimAccessorAfterOracle(importlib.abc.MetaPathFinder):
     """Make ``DataArray.rbm`` ours again right after the oracle is imported.
@@ -99,6 +103,17 @@ def shared_data() -> Path:
             "(or RBM_NB_SHARED naming a folder with data/)"
         )
     return SHARED_DATA
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _head_starts(request):
+    """Start the slow subprocess checks of the selected tests before the first
+    test, so that they run on the core the session leaves idle (head_start.py)."""
+    items = request.session.items
+    used = {name for item in items for name in getattr(item, "fixturenames", ())}
+    for fixture in HEAD_STARTS:
+        if fixture in used:
+            request.getfixturevalue(fixture)
 
 
 @pytest.fixture

@@ -7,6 +7,7 @@ import shutil
 import subprocess
 import sys
 import sysconfig
+from collections.abc import Sequence
 from pathlib import Path
 
 from conftest import REPO
@@ -44,10 +45,13 @@ def run(cmd: list[str], *, timeout: float, **kwargs) -> subprocess.CompletedProc
     return result
 
 
-def build_dists(out: Path) -> tuple[Path, Path]:
-    """``python -m build`` (isolated, uv as installer): the wheel and the sdist."""
+def build_dists(out: Path, prefix: Sequence[str] = ()) -> tuple[Path, Path]:
+    """``python -m build`` (isolated, uv as installer): the wheel and the sdist.
+
+    ``prefix``: a command to run it under (head_start.low_priority)."""
+    build = [sys.executable, "-m", "build", "--installer", "uv", "-o", str(out)]
     run(
-        [sys.executable, "-m", "build", "--installer", "uv", "-o", str(out), str(REPO)],
+        [*prefix, *build, str(REPO)],
         timeout=600,
         env=clean_env(
             PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"

@@ -16,7 +16,7 @@ import warnings
 from pathlib import Path
 
 import pytest
-from packaging_support import build_dists, clean_env, make_venv, run, site_packages, uv
+from packaging_support import clean_env, make_venv, run, site_packages, uv
 
 pytestmark = pytest.mark.slow  # builds a wheel and a venv, compiles a kernel
 
@@ -55,13 +55,16 @@ def _can_mount_read_only(tmp: Path) -> str | None:
 
 
 @pytest.fixture(scope="module")
-def installed(tmp_path_factory):
-    """A venv with the wheel installed (dependencies from this environment)."""
+def installed(tmp_path_factory, packaging_runs):
+    """A venv with the wheel installed (dependencies from this environment).
+
+    The wheel is test_packaging.py's (head_start.packaging_runs: built once,
+    from the start of the session)."""
     root = tmp_path_factory.mktemp("numba-cache")
     why = _can_mount_read_only(root)
     if why:
         pytest.skip(f"cannot make site-packages read-only: {why}")
-    wheel, _ = build_dists(root / "dist")
+    wheel, _ = packaging_runs.dists.result(timeout=3600)
     python = make_venv(root / "venv", see_this_env=True)
     run(
         [

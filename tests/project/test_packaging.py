@@ -1,9 +1,12 @@
 """rbm_nb as a user gets it: the wheel and the sdist, installed in a fresh venv.
 
-One module-scoped build (``python -m build``) and one fresh venv (uv, the exact
-pins of .ci/constraints.txt, dependencies downloaded or taken from uv's cache)
-with the wheel installed non-editable; then the user's first commands, the
-demo from the wheel, and the sdist's own fast tests.
+One build (``python -m build``) and one fresh venv (uv, the exact pins of
+.ci/constraints.txt, dependencies downloaded or taken from uv's cache) with
+the wheel installed non-editable; then the user's first commands, the demo
+from the wheel, and the sdist's own fast tests. The build, the venv and the
+sdist's tests are the session fixture ``packaging_runs`` of head_start.py:
+they start with the session when these tests are selected, at low priority
+on the core the other tests leave idle, and are awaited here.
 """
 
 from __future__ import annotations
@@ -16,18 +19,11 @@ import tarfile
 import time
 import urllib.request
 import zipfile
-from pathlib import Path
 
 import pytest
-from conftest import REPO, SHARED
-from packaging_support import (
-    build_dists,
-    clean_env,
-    make_venv,
-    run,
-    seed_numba_cache,
-    uv,
-)
+from conftest import REPO
+from head_start import SDIST_SELECTION, SDIST_TEST, user_env
+from packaging_support import run
 
 import rbm_nb
 
@@ -37,42 +33,15 @@ EXPLORER = "06_head_eye_explorer.ipynb"
 
 
 @pytest.fixture(scope="module")
-def dists(tmp_path_factory):
-    return build_dists(tmp_path_factory.mktemp("dist"))
+def dists(packaging_runs):
+    return packaging_runs.dists.result(timeout=3600)
 
 
 @pytest.fixture(scope="module")
-def venv(dists, tmp_path_factory):
+def venv(packaging_runs):
     """A fresh venv with rbm_nb[all,lab,dev] from the wheel (not editable)."""
-    wheel, _ = dists
-    root = tmp_path_factory.mktemp("venv")
-    python = make_venv(root / "venv", see_this_env=False)
-    run(
-        [
-            uv(),
-            "pip",
-            "install",
-            "--quiet",
-            "--python",
-            str(python),
-            "-c",
-            str(REPO / ".ci" / "constraints.txt"),
-            f"rbm_nb[all,lab,dev] @ {wheel.as_uri()}",
-        ],
-        timeout=1800,
-        env=clean_env(),
-    )
-    return python
-
-
-def _user_env(root: Path, python: Path) -> dict[str, str]:
-    """A user's shell: the venv's bin on PATH, HOME of their own, no repo."""
-    home = root / "home"
-    home.mkdir(exist_ok=True)
-    env = clean_env(HOME=str(home), MPLBACKEND="Agg")
-    env.pop("XDG_DATA_HOME", None)
-    env["PATH"] = f"{python.parent}{os.pathsep}{env['PATH']}"
-    return env
+    assert packaging_runs.venv is not None  # made when this module's tests run
+    return packaging_runs.venv.result(timeout=3600)
 
 
 def test_wheel_and_sdist_contents(dists):
@@ -105,7 +74,7 @@ def test_wheel_and_sdist_contents(dists):
 
 
 def test_version_and_text_demo_from_the_wheel(venv, tmp_path):
-    env = _user_env(tmp_path, venv)
+    env = user_env(tmp_path, venv)
     rbm_nb_cmd = str(venv.parent / "rbm-nb")
     version = run([rbm_nb_cmd, "--version"], timeout=60, env=env, cwd=tmp_path)
     assert version.stdout.strip() == f"rbm-nb {rbm_nb.__version__}"
@@ -122,7 +91,7 @@ def test_version_and_text_demo_from_the_wheel(venv, tmp_path):
 
 
 def test_demo_from_the_wheel_serves_a_writable_copy_of_the_explorer(venv, tmp_path):
-    env = _user_env(tmp_path, venv)
+    env = user_env(tmp_path, venv)
     env["JUPYTER_RUNTIME_DIR"] = str(tmp_path / "runtime")
     process = subprocess.Popen(
         [str(venv.parent / "rbm-nb"), "demo", "--no-browser", "--port", "0"],
@@ -168,59 +137,17 @@ def test_demo_from_the_wheel_serves_a_writable_copy_of_the_explorer(venv, tmp_pa
         process.wait(timeout=30)
 
 
-def test_sdist_fast_tests_pass_against_its_own_tree(dists, venv, tmp_path):
+def test_sdist_fast_tests_pass_against_its_own_tree(packaging_runs):
     """Unpacked sdist + the venv: warm-up, then pytest -m "not slow and not browser"
-    (in two processes at once)."""
-    _, sdist = dists
-    with tarfile.open(sdist) as tar:
-        tar.extractall(tmp_path, filter="data")
-    (src,) = tmp_path.glob("rbm_nb-*")
-    env = _user_env(tmp_path, venv)
-    env["RBM_NB_SHARED"] = str(SHARED)  # the real recordings of this machine
-    # as .ci/setup.sh does: fill numba's cache before the tests (from this
-    # checkout's, which saves compiling every kernel a second time: 2.5 min)
-    seeded = seed_numba_cache(src)
-    warm = run(
-        [str(venv), "-m", "rbm_nb._kernels._warmup"], timeout=1800, env=env, cwd=src
-    )
-    print(f"sdist: {seeded} numba cache files seeded;", warm.stdout + warm.stderr)
-    # The fast selection in two processes side by side, one per core of CI's
-    # two: the frame core's tests, and every other layer with the docstring
-    # examples (about half the time each). The checks that run last in a
-    # session (tests/test_*.py: what numba compiled) run in both.
-    layers = sorted(
-        p.name for p in (src / "tests").iterdir() if any(p.glob("test_*.py"))
-    )
-    assert "core" in layers, layers
-    last = [str(p.relative_to(src)) for p in sorted(src.glob("tests/test_*.py"))]
-    halves = (
-        ["tests/core", *last],
-        [*(f"tests/{name}" for name in layers if name != "core"), "rbm_nb", *last],
-    )
-    command = [str(venv), "-m", "pytest", "-q", "-p", "no:cacheprovider"]
-    command += ["-m", "not slow and not browser"]
-    logs = [tmp_path / f"half{k}.log" for k in range(len(halves))]
-    runs = []
-    try:
-        for paths, log in zip(halves, logs, strict=True):
-            with log.open("w") as sink:  # the child keeps its own copy open
-                runs.append(
-                    subprocess.Popen(
-                        [*command, *paths],
-                        stdout=sink,
-                        stderr=subprocess.STDOUT,
-                        env=env,
-                        cwd=src,
-                    )
-                )
-        codes = [process.wait(timeout=1800) for process in runs]
-    finally:
-        for process in runs:
-            process.kill()
-            process.wait()
-    for paths, log, code in zip(halves, logs, codes, strict=True):
-        out = log.read_text()
+    (in two processes at once; head_start._start_sdist_tests)."""
+    # started when a test named SDIST_TEST is selected: this one
+    assert packaging_runs.sdist_tests is not None, f"{SDIST_TEST} is not this test"
+    runs, account = packaging_runs.sdist_tests.result(timeout=3600)
+    print(account)
+    assert runs, "the sdist's tests did not start"
+    for paths, sdist_run in runs:
+        code, out, _ = sdist_run.finish(timeout=1800)  # stderr goes to out
         summary = out.strip().splitlines()[-1] if out.strip() else ""
-        print(f"sdist: pytest {' '.join(paths)}: {summary}")
+        print(f"sdist: pytest -m {SDIST_SELECTION!r} {' '.join(paths)}: {summary}")
         assert code == 0, f"pytest {' '.join(paths)}:\n{out[-6000:]}"
         assert " passed" in summary and "error" not in summary, summary

@@ -7,11 +7,10 @@ coordinates), so each result used to hold its own copy of the eye's clock.
 
 from __future__ import annotations
 
-import tracemalloc
-
 import numpy as np
 import pytest
 import xarray as xr
+from memory_support import kept_by
 
 import rbm_nb as rbm
 from rbm_nb.core import gaze
@@ -41,17 +40,8 @@ def sight():
     rbm.clear_registry()
 
 
-def _kept(make):
-    tracemalloc.start()
-    before = tracemalloc.get_traced_memory()[0]
-    out = make()
-    kept = tracemalloc.get_traced_memory()[0] - before
-    tracemalloc.stop()
-    return out, kept
-
-
 def test_angles_share_the_directions_time_index(sight):
-    angles, kept = _kept(lambda: gaze.angles(sight, "camera"))
+    angles, kept = kept_by(lambda: gaze.angles(sight, "camera"))
     assert np.shares_memory(_time_index_data(angles), _time_index_data(sight))
     assert angles.dims == ("time", "angle")
     assert list(angles["angle"].values) == ["azimuth", "elevation"]
@@ -64,7 +54,7 @@ def test_angles_share_the_directions_time_index(sight):
 
 def test_rates_share_the_angles_time_index(sight):
     angles = gaze.angles(sight, "camera")
-    rate, kept = _kept(lambda: gaze.rates(angles))
+    rate, kept = kept_by(lambda: gaze.rates(angles))
     assert np.shares_memory(_time_index_data(rate), _time_index_data(angles))
     times = angles["time"].values.nbytes
     assert kept < rate.values.nbytes + 0.1 * times, (kept, rate.values.nbytes)
@@ -94,7 +84,7 @@ def test_directions_share_the_confidence_time_index(sight):
         coords={"time": sight["time"].values, "extra": ("time", np.arange(N))},
         name="confidence",
     )
-    out, kept = _kept(lambda: gaze.directions("eye", "camera", confidence=confidence))
+    out, kept = kept_by(lambda: gaze.directions("eye", "camera", confidence=confidence))
     assert np.shares_memory(_time_index_data(out), _time_index_data(confidence))
     assert out.dims == ("time", "cartesian_axis") and out.name is None
     assert list(out.coords) == ["time", "cartesian_axis"]

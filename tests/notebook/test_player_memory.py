@@ -8,10 +8,9 @@ exactly as the arrays did.
 
 from __future__ import annotations
 
-import tracemalloc
-
 import numpy as np
 import pytest
+from memory_support import kept_by
 
 from rbm_nb.widgets import Player
 from rbm_nb.widgets.playback import TOLERANCE, SampleTimes
@@ -29,12 +28,7 @@ def _stamps(frozen: bool) -> np.ndarray:
 def _kept(make):
     # the first Player loads its bundle and widget machinery: not the data's
     Player(_stamps(frozen=False)[:10]).close()
-    tracemalloc.start()
-    before = tracemalloc.get_traced_memory()[0]
-    out = make()
-    kept = tracemalloc.get_traced_memory()[0] - before
-    tracemalloc.stop()
-    return out, kept
+    return kept_by(make)
 
 
 def test_a_player_over_frozen_stamps_keeps_no_per_sample_array():

@@ -34,6 +34,8 @@ EXPLORER = "06_head_eye_explorer.ipynb"
 # this file is rbm_nb/app/cli.py: the clone is two folders up, the package one
 CLONE_NOTEBOOKS = Path(__file__).resolve().parents[2] / "notebooks"
 PACKAGED_NOTEBOOKS = Path(__file__).resolve().parents[1] / "_notebooks"
+# a Jupyter config folder whose labconfig/ holds the demo's default settings
+LAB_DEFAULTS = Path(__file__).resolve().parent
 
 
 def _text_demo() -> int:
@@ -158,6 +160,16 @@ def _lab_demo(args) -> int:
         "--ServerApp.port_retries=0",
         f"--ServerApp.open_browser={not args.no_browser}",
         f"--LabApp.default_url=/lab/tree/{EXPLORER}",
+        # notebook_shim's server extension only carries old NotebookApp
+        # settings over, and on the way reads the deprecated ServerApp.token
+        # trait: jupyter-server then warns a newcomer about a setting nobody
+        # made (the token comes as IdentityProvider reads it, JUPYTER_TOKEN;
+        # Voila's import turns traitlets' DeprecationWarnings back on, so a
+        # PYTHONWARNINGS filter cannot hide it)
+        "--ServerApp.jpserver_extensions={'notebook_shim': False}",
+        # no request out for news or a newer release
+        "--LabApp.news_url=None",
+        "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate",
     ]
     if hasattr(os, "geteuid") and os.geteuid() == 0:
         command.append("--allow-root")  # containers and CI machines run as root
@@ -165,6 +177,12 @@ def _lab_demo(args) -> int:
     # (/proc/<pid>/cmdline), an environment only by its owner
     env = {k: v for k, v in os.environ.items() if k != "JUPYTER_TOKEN_FILE"}
     env["JUPYTER_TOKEN"] = token
+    # and no "official Jupyter news?" question on the first screen: JupyterLab
+    # asks until a setting says no, and layers defaults from a labconfig
+    # folder on the config path (the user's own settings still win)
+    env["JUPYTER_CONFIG_PATH"] = os.pathsep.join(
+        p for p in (str(LAB_DEFAULTS), os.environ.get("JUPYTER_CONFIG_PATH")) if p
+    )
     # the server takes over this process (and its signals: Ctrl-C, SIGTERM, SIGHUP)
     os.execve(command[0], command, env)
     return 0  # pragma: no cover

@@ -11,6 +11,7 @@ The one-line refusals of bad CLI options are rows of the bad-input table.
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import signal
@@ -142,6 +143,41 @@ def test_demo_token_is_not_on_the_command_line(tmp_path):
         assert _status(f"{contents}&token={token}") == 200
     finally:
         _stop_group(process)
+
+
+def test_demo_first_screen_has_no_warning_and_no_news_question(tmp_path):
+    # what a newcomer saw first: jupyter-server's "ServerApp.token config is
+    # deprecated" (about a setting the demo does not make) and JupyterLab's
+    # "Would you like to get notified about official Jupyter news?"
+    process = _start(["demo", "--no-browser", "--port", "0"], tmp_path)
+    lines = []
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            line = process.stdout.readline()
+            lines.append(line)
+            # the server says so once every extension is loaded
+            if "is running at" in line or (not line and process.poll() is not None):
+                break
+        text = "".join(lines)
+        assert "is running at" in text, text
+        url = re.search(r"http://\S+token=\w+", text).group(0)
+        base, token = url.split("/lab/")[0], url.split("token=")[1]
+        _wait_listening(base, process)
+        # JupyterLab asks about news while this setting is "none"
+        plugin = "@jupyterlab/apputils-extension:notification"
+        request = urllib.request.Request(
+            f"{base}/lab/api/settings/{plugin}",
+            headers={"Authorization": f"token {token}"},
+        )
+        with urllib.request.urlopen(request, timeout=60) as response:
+            # (the server folds default overrides into the schema's defaults)
+            defaults = json.load(response)["schema"]["properties"]
+    finally:
+        _stop_group(process)
+    assert "Warning" not in text, text
+    assert defaults["fetchNews"]["default"] == "false"
+    assert defaults["checkForUpdates"]["default"] is False
 
 
 @pytest.mark.timeout(300)

@@ -55,6 +55,8 @@ __all__ = [
     "epoch_seconds",
     "ns_keys",
     "from_epoch_seconds",
+    "time_key",
+    "key_seconds",
 ]
 
 _NS_PER_S = 1e9
@@ -637,3 +639,45 @@ def ns_keys(values: Any, name: str = "timestamps") -> np.ndarray:
             f"{name} must be datetime64 or timedelta64, got dtype {arr.dtype}"
         )
     return key
+
+
+# the ns keys a number of seconds may reach (NaT, the int64 minimum, excluded)
+_KEY_RANGE = (int(_NAT) + 1, int(np.iinfo(np.int64).max))
+_TWO_63 = 2.0**63
+
+
+def time_key(t: Any, kind: str | None, name: str = "time") -> int | float:
+    """One time as the exact key of data of ``kind``: where a time enters a view.
+
+    ``kind`` is that of the data the time is compared with (a
+    :class:`Track`'s). For ``"datetime64"``/``"timedelta64"`` data the key
+    is int nanoseconds: a datetime64 (or pandas Timestamp) exactly, a number
+    as float seconds since the epoch (what JavaScript and
+    :func:`epoch_seconds` hand out), rounded to the ns once and kept within
+    int64. For numeric data (or ``kind`` None) a number is its own key.
+    NaT, NaN, inf and mixed kinds are refused naming ``name``.
+    """
+    key, t_kind = _scalar(t, name)
+    if t_kind == "numeric":
+        if kind is None or kind == "numeric":
+            return float(key)
+        low, high = _KEY_RANGE
+        ns = float(key) * _NS_PER_S
+        if not -_TWO_63 < ns < _TWO_63:  # beyond what int64 holds: its ends
+            return high if ns > 0 else low
+        return min(max(round(ns), low), high)
+    check_compatible([kind, t_kind], name)
+    return int(key)
+
+
+def key_seconds(key: Any, kind: str | None) -> Any:
+    """Keys of data of ``kind`` as float data seconds (epoch seconds for datetime64).
+
+    The other way of :func:`time_key`: for a value that leaves the exact
+    world (a public float time, a message to JavaScript).
+    """
+    if kind is None or kind == "numeric":
+        return np.asarray(key, dtype=np.float64)[()] if np.ndim(key) else float(key)
+    if np.ndim(key):
+        return np.asarray(key, dtype=np.int64) / _NS_PER_S
+    return int(key) / _NS_PER_S

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from .._infra.atomic import atomic_path
-from .tracks import moving_span
+from .tracks import duration as track_duration
 
 _TEMPLATE = """<!DOCTYPE html>
 <html>
@@ -156,8 +156,7 @@ def export_note(scene, max_frames: int | None) -> str:
         shown = []
         span = 0.0
         for track in tracks:
-            first, last = moving_span(track)
-            duration = last - first
+            duration = track_duration(track)
             span = max(span, duration)
             if duration <= 0:
                 continue

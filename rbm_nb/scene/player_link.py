@@ -13,6 +13,8 @@ and :attr:`PlayerLink.time` hands one back.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from .._engine.time import check_compatible, key_seconds, time_key
@@ -141,16 +143,36 @@ class PlayerLink:
         )
         self.player = player
         self._unpin()  # the player drives everything from now on
+        self._view.sync("_player_shift", self.player_shift())
         self._view.sync("player", player)
 
     def detach(self, player) -> None:
         if self.player is player:
             self.player = None
             self._view.sync("player", None)
+            self._view.sync("_player_shift", None)
+
+    def player_shift(self) -> float | None:
+        """Seconds from the scene's second 0 to the player's (None: no player).
+
+        The JS boundary of the player link: the view shows this plus the
+        player's ``time``. Counted from the two int64 ns keys (exact), not
+        from the two float epoch seconds the browser has (``_origin`` and the
+        player's ``origin``, ~0.24 µs coarse each).
+        """
+        player: Any = self.player
+        timebase = getattr(player, "timebase", None)
+        if player is None or timebase is None:
+            return None
+        state = self._context.state
+        if not state.tracks:
+            return float(player.origin) - state.origin
+        return timebase.shift_to(state.base)
 
     def show_in(self, widget) -> None:
         """Give a new view the player, or the time shown."""
         if self.player is not None:
+            widget._player_shift = self.player_shift()
             widget.player = self.player
         elif self.own_key is not None:
             widget.time = self._seconds(self.own_key)

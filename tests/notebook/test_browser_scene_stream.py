@@ -115,7 +115,7 @@ def seek(page, t: float) -> None:
     view(
         page,
         f"""(() => {{ const p = v.player;
-            const x = {t} + Number(v.model.get('_origin')) - Number(p.get('origin'));
+            const x = {t} - Number(v.model.get('_player_shift'));
             p.set('time', x); p.save_changes(); }})()""",
     )
 

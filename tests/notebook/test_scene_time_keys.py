@@ -115,3 +115,25 @@ def test_tracks_one_nanosecond_apart_do_not_share_an_axis():
     np.testing.assert_array_equal(
         np.frombuffer(buffers[meta[1]["times"]], dtype="<f8"), (ns(b) - ns(a[0])) / 1e9
     )
+
+
+@pytest.mark.usefixtures("recording_comm")
+def test_a_player_on_another_clock_is_shifted_exactly():
+    from rbm_nb.widgets import Player
+
+    head = TODAY + np.arange(50) * np.timedelta64(5, "ms")
+    eye = head + np.timedelta64(700_001, "ns")  # its clock starts 0.7 ms + 1 ns later
+    rbm.register_frame("world")
+    with Scene("world", grid=False) as scene:
+        points = np.c_[np.arange(50.0), np.zeros(50), np.zeros(50)]
+        scene.add_points(points, timestamps=head, label="head")
+        widget = scene.widget
+        player = Player(eye)
+        player.link(scene)
+        # what the browser adds the player's time to: int64 ns subtracted first
+        assert widget._player_shift == 700_001 / 1e9
+        # the float epoch seconds the browser had differ from it
+        assert player.origin - widget._origin != 700_001 / 1e9
+        player.unlink(scene)
+        assert widget._player_shift is None
+        player.close()

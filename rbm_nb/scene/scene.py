@@ -300,14 +300,16 @@ class Scene:
     # -- time -------------------------------------------------------------------
     @property
     def timestamps_kind(self) -> str | None:
-        """``"datetime"`` or ``"float"`` for the moving objects' timestamps; None if static."""
+        """``"datetime64"``, ``"timedelta64"`` or ``"numeric"`` for the moving
+        objects' timestamps (the core's kinds of time); None if static."""
         return self.state.kind
 
     def set_time(self, t) -> None:
         """Show every object as it is at ``t``.
 
-        ``t`` is float seconds (epoch seconds for datetime data) or a
-        datetime64 value. With a linked player this moves the player (and so
+        ``t`` is float seconds (epoch seconds for datetime data, rounded to
+        the ns) or a datetime64 value (exact to the ns: samples 1 ns apart
+        are told apart). With a linked player this moves the player (and so
         every view following it). Without one, ``t`` is kept between one
         span before the first sample (all moving objects hidden) and the last
         sample (every object as it was last).

@@ -96,7 +96,12 @@ def build_document(
         widget,
         esm_index,
         esm,
-        {"player": f"IPY_MODEL_{player.model_id}", "height": 520},
+        {
+            "player": f"IPY_MODEL_{player.model_id}",
+            # the page's player may not be the one the scene follows
+            "_player_shift": scene._link.shift_to(player),
+            "height": 520,
+        },
     )
     content, buffers = scene._snapshot_message(max_samples=max_frames)
     scene_spec["messages"].append(

@@ -153,14 +153,18 @@ class PlayerLink:
             self._view.sync("_player_shift", None)
 
     def player_shift(self) -> float | None:
-        """Seconds from the scene's second 0 to the player's (None: no player).
+        """:meth:`shift_to` the linked player (None: no player)."""
+        return self.shift_to(self.player)
+
+    def shift_to(self, player: Any) -> float | None:
+        """Seconds from the scene's second 0 to ``player``'s.
 
         The JS boundary of the player link: the view shows this plus the
         player's ``time``. Counted from the two int64 ns keys (exact), not
         from the two float epoch seconds the browser has (``_origin`` and the
-        player's ``origin``, ~0.24 µs coarse each).
+        player's ``origin``, ~0.24 µs coarse each). None without a player
+        (or one with no time base).
         """
-        player: Any = self.player
         timebase = getattr(player, "timebase", None)
         if player is None or timebase is None:
             return None

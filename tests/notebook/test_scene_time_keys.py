@@ -136,4 +136,10 @@ def test_a_player_on_another_clock_is_shifted_exactly():
         assert player.origin - widget._origin != 700_001 / 1e9
         player.unlink(scene)
         assert widget._player_shift is None
+        # an HTML export with that player counts from its second 0 too
+        from rbm_nb.scene.export import build_document
+
+        document = build_document(scene, player=player)
+        state = document["models"][0]["state"]
+        assert state["_player_shift"] == 700_001 / 1e9
         player.close()

@@ -143,3 +143,24 @@ def test_a_player_on_another_clock_is_shifted_exactly():
         state = document["models"][0]["state"]
         assert state["_player_shift"] == 700_001 / 1e9
         player.close()
+
+
+@pytest.mark.usefixtures("recording_comm")
+@pytest.mark.parametrize(
+    "first", [TODAY, LAST - np.timedelta64(1, "s")], ids=["2020", "2262"]
+)
+def test_a_samples_own_epoch_float_finds_that_sample(first):
+    # Scene.time and JavaScript hand out float epoch seconds: ~0.24 us (2020)
+    # to ~1 us (2262) coarse; set back, each still shows its own sample
+    stamps = first + np.arange(200) * np.timedelta64(5_000_001, "ns")
+    rbm.register_frame("world")
+    with Scene("world", grid=False) as scene:
+        points = np.c_[np.arange(200.0), np.zeros(200), np.zeros(200)]
+        scene.add_points(points, timestamps=stamps, label="dot")
+        widget = scene.widget
+        exact = (ns(stamps) - ns(stamps[0])) / 1e9
+        for k in range(200):
+            scene.set_time(float(ns(stamps[k])) / 1e9)
+            shown = int(np.searchsorted(exact, widget.time + 1e-6, side="right")) - 1
+            assert shown == k
+            assert abs(widget.time - exact[k]) < 5e-6  # within an ulp of the float

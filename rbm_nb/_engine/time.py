@@ -584,9 +584,11 @@ def latest_index(track: Track, base: TimeBase, t: float) -> int:
 def epoch_seconds(t: Any, kind: str | None = None, name: str = "time") -> Any:
     """Times as float data seconds (since the Unix epoch for datetime64).
 
-    For the views whose axis still counts from the epoch (the scene, the
-    tf2-style :class:`~rbm_nb.ros.transformer.Transformer`): ~0.25 µs coarse
-    at today's epochs; every other view counts from a :class:`TimeBase`.
+    The door out to callers that asked for float epoch seconds (the
+    tf2-style :class:`~rbm_nb.ros.transformer.Transformer`, whose API is
+    tf2's; ``Scene.time``): ~0.25 µs coarse at today's epochs. Every view
+    counts from exact keys and a :class:`TimeBase`; :func:`time_key` is the
+    way back in.
     ``t`` is one time (returns a float) or an array in any order (returns
     float64 values); NaT, NaN and inf are refused naming the index. ``kind``
     is the kind of the data ``t`` is compared with (None: any); numbers are

@@ -307,9 +307,9 @@ class Scene:
     def set_time(self, t) -> None:
         """Show every object as it is at ``t``.
 
-        ``t`` is float seconds (epoch seconds for datetime data, rounded to
-        the ns) or a datetime64 value (exact to the ns: samples 1 ns apart
-        are told apart). With a linked player this moves the player (and so
+        ``t`` is float seconds (epoch seconds for datetime data: the latest
+        sample whose epoch float is at or before ``t``) or a datetime64
+        value (exact to the ns: samples 1 ns apart are told apart). With a linked player this moves the player (and so
         every view following it). Without one, ``t`` is kept between one
         span before the first sample (all moving objects hidden) and the last
         sample (every object as it was last).

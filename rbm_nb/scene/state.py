@@ -162,8 +162,9 @@ class SceneState:
     def origin(self) -> float:
         """Second 0 as float data seconds (epoch seconds for datetime data).
 
-        For the browser only (the widget's ``_origin``: the player link
-        counts from it) and callers that asked for a float; ~0.24 µs
+        For the browser only (the widget's ``_origin``, which the player
+        link falls back on without ``_player_shift``) and callers that
+        asked for a float; ~0.24 µs
         coarse at today's epochs. Everything in the kernel counts from
         :attr:`base`.
         """

@@ -386,7 +386,7 @@ class View {
     model.on("change:height", () => {
       this.root.style.height = `${model.get("height")}px`;
     });
-    for (const name of ["time", "_origin", "_pins"]) {
+    for (const name of ["time", "_origin", "_player_shift", "_pins"]) {
       model.on(`change:${name}`, () => {
         this.posesDirty = true;
       });
@@ -419,6 +419,12 @@ class View {
   /** Seconds from the scene's origin that should be shown now. */
   currentTime() {
     if (this.player) {
+      // the kernel counts the shift between the two second 0s exactly (int64
+      // ns); subtracting the two float epoch seconds here lost ~0.24 us
+      const shift = this.model.get("_player_shift");
+      if (shift !== null && shift !== undefined) {
+        return Number(shift) + Number(this.player.get("time"));
+      }
       const origin = Number(this.player.get("origin")) || 0;
       return origin + Number(this.player.get("time")) - (Number(this.model.get("_origin")) || 0);
     }

@@ -34,6 +34,7 @@ a time within :data:`TIE` of a sample is that sample.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -55,6 +56,8 @@ __all__ = [
     "epoch_seconds",
     "ns_keys",
     "from_epoch_seconds",
+    "time_key",
+    "key_seconds",
 ]
 
 _NS_PER_S = 1e9
@@ -581,9 +584,11 @@ def latest_index(track: Track, base: TimeBase, t: float) -> int:
 def epoch_seconds(t: Any, kind: str | None = None, name: str = "time") -> Any:
     """Times as float data seconds (since the Unix epoch for datetime64).
 
-    For the views whose axis still counts from the epoch (the scene, the
-    tf2-style :class:`~rbm_nb.ros.transformer.Transformer`): ~0.25 µs coarse
-    at today's epochs; every other view counts from a :class:`TimeBase`.
+    The door out to callers that asked for float epoch seconds (the
+    tf2-style :class:`~rbm_nb.ros.transformer.Transformer`, whose API is
+    tf2's; ``Scene.time``): ~0.25 µs coarse at today's epochs. Every view
+    counts from exact keys and a :class:`TimeBase`; :func:`time_key` is the
+    way back in.
     ``t`` is one time (returns a float) or an array in any order (returns
     float64 values); NaT, NaN and inf are refused naming the index. ``kind``
     is the kind of the data ``t`` is compared with (None: any); numbers are
@@ -637,3 +642,54 @@ def ns_keys(values: Any, name: str = "timestamps") -> np.ndarray:
             f"{name} must be datetime64 or timedelta64, got dtype {arr.dtype}"
         )
     return key
+
+
+# the ns keys a number of seconds may reach (NaT, the int64 minimum, excluded)
+_KEY_RANGE = (int(_NAT) + 1, int(np.iinfo(np.int64).max))
+_TWO_63 = 2.0**63
+
+
+def time_key(t: Any, kind: str | None, name: str = "time") -> int | float:
+    """One time as the exact key of data of ``kind``: where a time enters a view.
+
+    ``kind`` is that of the data the time is compared with (a
+    :class:`Track`'s). For ``"datetime64"``/``"timedelta64"`` data the key
+    is int nanoseconds: a datetime64 (or pandas Timestamp) exactly; a number
+    is float seconds since the epoch (what JavaScript and
+    :func:`epoch_seconds` hand out), which stands for every nanosecond that
+    rounds to it (~0.24 µs of them today, as :data:`TIE` for float seconds):
+    its key is the last of them, so "the latest sample at or before" a
+    sample's own epoch float is that sample. Kept within int64. For numeric
+    data (or ``kind`` None) a number is its own key. NaT, NaN, inf and mixed
+    kinds are refused naming ``name``.
+    """
+    key, t_kind = _scalar(t, name)
+    if t_kind == "numeric":
+        if kind is None or kind == "numeric":
+            return float(key)
+        low, high = _KEY_RANGE
+        seconds = float(key)
+        if not -_TWO_63 < seconds * _NS_PER_S < _TWO_63:  # beyond int64: its ends
+            return high if seconds > 0 else low
+        # whole seconds apart from the fraction: the nearest ns of the
+        # float's exact value (``seconds * 1e9`` alone is 256 ns coarse
+        # today), then the last ns of its half-ulp
+        whole = math.floor(seconds)
+        ns = whole * 1_000_000_000 + round((seconds - whole) * _NS_PER_S)
+        ns += int(math.ulp(seconds) / 2 * _NS_PER_S)
+        return min(max(ns, low), high)
+    check_compatible([kind, t_kind], name)
+    return int(key)
+
+
+def key_seconds(key: Any, kind: str | None) -> Any:
+    """Keys of data of ``kind`` as float data seconds (epoch seconds for datetime64).
+
+    The other way of :func:`time_key`: for a value that leaves the exact
+    world (a public float time, a message to JavaScript).
+    """
+    if kind is None or kind == "numeric":
+        return np.asarray(key, dtype=np.float64)[()] if np.ndim(key) else float(key)
+    if np.ndim(key):
+        return np.asarray(key, dtype=np.int64) / _NS_PER_S
+    return int(key) / _NS_PER_S

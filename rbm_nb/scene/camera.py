@@ -17,6 +17,7 @@ from .bounds import MAX_COORDINATE, Bounds
 from .handles import _points_array
 from .objects import SceneObjects
 from .state import SceneState
+from .timekeys import seconds_from
 
 #: the direction the camera looks from (towards -x, +y, -z: the usual 3/4 view)
 VIEW_DIRECTION = np.array([1.0, -1.4, 1.0]) / np.linalg.norm([1.0, -1.4, 1.0])
@@ -81,23 +82,23 @@ class Camera:
             )
         self.place(p, t, auto=False)
 
-    def focus(
-        self, name: str, objects: SceneObjects, state: SceneState, seconds, distance
-    ):
-        """Look at the frame ``name`` (drawn in ``objects``) as it is at
-        ``seconds``, from ``distance`` metres (ten times its triad's size by
-        default)."""
+    def focus(self, name: str, objects: SceneObjects, state: SceneState, key, distance):
+        """Look at the frame ``name`` (drawn in ``objects``) as it is at time
+        ``key`` (the scene's exact key), from ``distance`` metres (ten times
+        its triad's size by default)."""
         objects.drawn(name, "Scene.focus")
         paths = objects.frame_paths()
         if distance is None:
             distance = 10.0 * objects.triad_at(paths[name]).style["scale"]
         distance = camera_distance(distance)
-        pose = state.world_pose(paths[name], seconds)
+        pose = state.world_pose(paths[name], key)
         if pose is None:  # not started yet or missing now: where it is last
             pose = state.world_pose(paths[name], math.inf)
         if pose is None:
+            seconds = float(seconds_from(state.base, np.array([key]))[0])
             raise ValueError(
-                f"Scene.focus: frame {name!r} has no pose at the time shown ({seconds:g} s) "
+                f"Scene.focus: frame {name!r} has no pose at the time shown "
+                f"({seconds:g} s from the first sample) "
                 "nor at its last sample: its samples there are missing"
             )
         target = pose[:3, 3]

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from .._infra.atomic import atomic_path
-from .tracks import moving_span
+from .tracks import duration as track_duration
 
 _TEMPLATE = """<!DOCTYPE html>
 <html>
@@ -96,7 +96,12 @@ def build_document(
         widget,
         esm_index,
         esm,
-        {"player": f"IPY_MODEL_{player.model_id}", "height": 520},
+        {
+            "player": f"IPY_MODEL_{player.model_id}",
+            # the page's player may not be the one the scene follows
+            "_player_shift": scene._link.shift_to(player),
+            "height": 520,
+        },
     )
     content, buffers = scene._snapshot_message(max_samples=max_frames)
     scene_spec["messages"].append(
@@ -156,8 +161,7 @@ def export_note(scene, max_frames: int | None) -> str:
         shown = []
         span = 0.0
         for track in tracks:
-            first, last = moving_span(track)
-            duration = last - first
+            duration = track_duration(track)
             span = max(span, duration)
             if duration <= 0:
                 continue

@@ -24,6 +24,7 @@ import numpy as np
 from .._engine import chain as _chain
 from .._engine.time import TimeBase, check_compatible
 from .commands import pose_matrix
+from .timekeys import at_or_before
 
 #: rows looked up at once by a whole-recording pass (~0.25 MB of float64 poses)
 BLOCK_ROWS = 1 << 12
@@ -33,11 +34,6 @@ JOIN_ROWS = 2048
 #: samples per track in the coarse copy sent with a streamed scene's content
 #: (``stream.COARSE_SAMPLES``): gathered by the blockwise pass at build and kept
 COARSE_SAMPLES = 2000
-#: keys (ns) around a float second searched exactly: a float epoch second is
-#: within ~0.25 µs of its nanoseconds, far inside this margin
-_NS_MARGIN = 10_000
-#: seconds a time may lie after a sample and still find it (see PoseTrack)
-TIME_TOLERANCE = 1e-9
 
 
 class LookedUpTrack:
@@ -64,11 +60,10 @@ class LookedUpTrack:
         # the coarse copy's rows and samples (gathered by the bounds' pass)
         self._coarse: tuple[np.ndarray, tuple] | None = None
         self._hidden_after, self._hidden_keys = self._hidden_rows(gap)
-        # row position of each hidden row (a_k + 1 + k), and its float seconds
+        # row position of each hidden row (a_k + 1 + k)
         self._hidden_rows_at = (
             self._hidden_after + 1 + np.arange(len(self._hidden_after))
         )
-        self._hidden_seconds = self._to_seconds(self._hidden_keys)
 
     # -- time axis ----------------------------------------------------------
     def _hidden_rows(self, gap: float | None) -> tuple[np.ndarray, np.ndarray]:
@@ -98,45 +93,30 @@ class LookedUpTrack:
             keys = key[after] + gap
         return after.astype(np.int64), keys
 
-    def _to_seconds(self, keys: np.ndarray) -> np.ndarray:
-        """Float data seconds (epoch seconds for datetimes) of sort keys."""
-        if self._ns:
-            return keys / 1e9
-        return np.asarray(keys, dtype=np.float64)
-
     def __len__(self) -> int:
         return len(self._times) + len(self._hidden_after)
 
     @property
-    def start(self) -> float:
-        return float(self._to_seconds(self._times.key[:1])[0])
+    def start(self) -> int | float:
+        """Key of the first row."""
+        return self._times.key[0].item()
 
     @property
-    def end(self) -> float:
-        last = float(self._to_seconds(self._times.key[-1:])[0])
-        if len(self._hidden_seconds):
-            last = max(last, float(self._hidden_seconds[-1]))
+    def end(self) -> int | float:
+        """Key of the last row (a hidden one after the last sample, if any)."""
+        last = self._times.key[-1].item()
+        if len(self._hidden_keys):
+            last = max(last, self._hidden_keys[-1].item())
         return last
 
-    def _search_samples(self, x: float, side: Literal["left", "right"]) -> int:
-        """How many samples lie before float second ``x`` (``side`` as
-        ``np.searchsorted``), without converting the whole axis."""
-        key = self._times.key
-        if not self._ns:
-            return int(np.searchsorted(key, x, side=side))
-        near = int(np.floor(x * 1e9))
-        lo = int(np.searchsorted(key, near - _NS_MARGIN, side="left"))
-        hi = int(np.searchsorted(key, near + _NS_MARGIN, side="right"))
-        return lo + int(np.searchsorted(key[lo:hi] / 1e9, x, side=side))
+    def search(self, key: int | float, side: Literal["left", "right"] = "left") -> int:
+        """Rows before time ``key`` (as ``np.searchsorted`` on the rows' keys)."""
+        hidden = int(np.searchsorted(self._hidden_keys, key, side=side))
+        return int(np.searchsorted(self._times.key, key, side=side)) + hidden
 
-    def search(self, x: float, side: Literal["left", "right"] = "left") -> int:
-        """Rows before float second ``x`` (as ``np.searchsorted`` on the rows' seconds)."""
-        hidden = int(np.searchsorted(self._hidden_seconds, x, side=side))
-        return self._search_samples(x, side) + hidden
-
-    def index_at(self, t: float) -> int:
-        """Row of the latest sample at or before ``t``; -1 before the start."""
-        return self.search(t + TIME_TOLERANCE, side="right") - 1
+    def index_at(self, key: int | float) -> int:
+        """Row of the latest sample at or before time ``key``; -1 before the start."""
+        return self.search(at_or_before(key, self.kind), side="right") - 1
 
     def _split(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """For each row: whether it is hidden, and its sample (or hidden row) index."""
@@ -147,20 +127,26 @@ class LookedUpTrack:
         hidden[inside] = at[k[inside]] == rows[inside]
         return hidden, np.where(hidden, k, rows - k)
 
-    def seconds_of(self, rows) -> np.ndarray:
-        """Float seconds of ``rows`` (indices), shape (k,)."""
+    def keys_of(self, rows) -> np.ndarray:
+        """Exact keys of ``rows`` (indices), shape (k,)."""
         rows = np.atleast_1d(np.asarray(rows, dtype=np.int64))
         rows = np.where(rows < 0, rows + len(self), rows)
         hidden, index = self._split(rows)
-        out = np.empty(len(rows))
-        out[~hidden] = self._to_seconds(self._times.key[index[~hidden]])
-        out[hidden] = self._hidden_seconds[index[hidden]]
+        out = np.empty(len(rows), dtype=self._times.key.dtype)
+        out[~hidden] = self._times.key[index[~hidden]]
+        out[hidden] = self._hidden_keys[index[hidden]]
         return out
 
-    def sample_times(self) -> np.ndarray:
-        """Float seconds of every row, shape (n,): a whole-recording array,
+    def sample_keys(self) -> np.ndarray:
+        """Exact keys of every row, shape (n,): a whole-recording array,
         made on request (the player's axis, publishers), not kept."""
-        return self.seconds_of(np.arange(len(self)))
+        if not len(self._hidden_after):
+            keys = (
+                self._times.key.view()
+            )  # a view of the frame's keys: not theirs to change
+            keys.flags.writeable = False
+            return keys
+        return self.keys_of(np.arange(len(self)))
 
     @property
     def original_timestamps(self) -> np.ndarray:
@@ -190,7 +176,7 @@ class LookedUpTrack:
         return t, r
 
     def window(self, lo: int, hi: int):
-        """Seconds, translation, rotation and scale (None) of rows ``lo:hi``."""
+        """Keys, translation, rotation and scale (None) of rows ``lo:hi``."""
         lo, hi = max(lo, 0), min(hi, len(self))
         hi = max(hi, lo)
         first_hidden = int(np.searchsorted(self._hidden_rows_at, lo, side="left"))
@@ -199,24 +185,23 @@ class LookedUpTrack:
             # no hidden row inside: the samples themselves, one lookup
             first = lo - first_hidden
             t, r = self._samples(first, first + hi - lo)
-            seconds = self._to_seconds(self._times.key[first : first + hi - lo])
-            return seconds, t, r, None
+            return self._times.key[first : first + hi - lo], t, r, None
         rows = np.arange(lo, hi)
         hidden, index = self._split(rows)
         samples = index[~hidden]
-        seconds = np.empty(hi - lo)
+        keys = np.empty(hi - lo, dtype=self._times.key.dtype)
         t = np.full((hi - lo, 3), np.nan)
         r = np.full((hi - lo, 4), np.nan)
         if len(samples):
             first, last = int(samples[0]), int(samples[-1]) + 1
             st, sr = self._samples(first, last)
             t[~hidden], r[~hidden] = st, sr
-            seconds[~hidden] = self._to_seconds(self._times.key[first:last])
-        seconds[hidden] = self._hidden_seconds[index[hidden]]
-        return seconds, t, r, None
+            keys[~hidden] = self._times.key[first:last]
+        keys[hidden] = self._hidden_keys[index[hidden]]
+        return keys, t, r, None
 
     def take(self, index):
-        """Seconds, translation, rotation and scale of rows ``index``: None
+        """Keys, translation, rotation and scale of rows ``index``: None
         (all), a slice, or increasing indices (looked up in windows of
         nearby rows, at the samples' own times, so that they are the stored
         ones)."""
@@ -232,7 +217,7 @@ class LookedUpTrack:
         return self._gather(rows)
 
     def _gather(self, rows: np.ndarray):
-        seconds = np.empty(len(rows))
+        keys = np.empty(len(rows), dtype=self._times.key.dtype)
         t = np.empty((len(rows), 3))
         r = np.empty((len(rows), 4))
         i = 0
@@ -247,9 +232,9 @@ class LookedUpTrack:
             lo = int(rows[i])
             ws, wt, wr, _ = self.window(lo, int(rows[j - 1]) + 1)
             at = rows[i:j] - lo
-            seconds[i:j], t[i:j], r[i:j] = ws[at], wt[at], wr[at]
+            keys[i:j], t[i:j], r[i:j] = ws[at], wt[at], wr[at]
             i = j
-        return seconds, t, r, None
+        return keys, t, r, None
 
     def matrix(self, index: int = 0) -> np.ndarray:
         _, t, r, _ = self.take([index])
@@ -293,14 +278,14 @@ class LookedUpTrack:
         count = 0
         picks = even_rows(len(self), COARSE_SAMPLES)
         coarse = (
-            np.empty(len(picks)),
+            np.empty(len(picks), dtype=self._times.key.dtype),
             np.empty((len(picks), 3)),
             np.empty((len(picks), 4)),
         )
-        for lo, (seconds, points, rotations, _) in self._windows():
+        for lo, (keys, points, rotations, _) in self._windows():
             first, last = np.searchsorted(picks, [lo, lo + len(points)])
             at = picks[first:last] - lo
-            for out, values in zip(coarse, (seconds, points, rotations), strict=True):
+            for out, values in zip(coarse, (keys, points, rotations), strict=True):
                 out[first:last] = values[at]
             present = ~np.isnan(points[:, 0])
             n = int(present.sum())

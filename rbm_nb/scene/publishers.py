@@ -14,8 +14,9 @@ import weakref
 
 import numpy as np
 
-from .._engine.time import epoch_seconds
+from .._engine.time import time_key
 from .scene import Scene, _resolve, default_scene
+from .timekeys import KEYS_PER_SECOND
 from .tracks import PoseTrack
 
 # frame name -> publishers listening for it (``subscribe=``), per scene
@@ -23,13 +24,14 @@ _listeners: dict[tuple[int, str], list] = {}
 _listeners_lock = threading.Lock()
 
 
-def _notify(scene: Scene, frame_name: str, seconds: float) -> None:
+def _notify(scene: Scene, frame_name: str, key: int | float | None) -> None:
+    """Tell the subscribers of ``frame_name`` that it shows time ``key`` now."""
     with _listeners_lock:
         refs = list(_listeners.get((id(scene), frame_name), ()))
     for ref in refs:
         publisher = ref()
         if publisher is not None and not publisher.scene.closed:
-            publisher._on_published(seconds)
+            publisher._on_published(key)
 
 
 class FramePublisher:
@@ -99,11 +101,11 @@ class FramePublisher:
                 track.rotation,
                 None,
             )
-            self._seconds: np.ndarray | None = None
+            self._keys: np.ndarray | None = None
         else:
             # the publisher's own arrays (its API exposes them): the scene's
             # track looks its samples up per window and keeps none
-            self._seconds, self.translation, self.rotation, _ = self._track.take(None)
+            self._keys, self.translation, self.rotation, _ = self._track.take(None)
             self.timestamps = self._track.original_timestamps
         self.timestamps_kind = None if self._track is None else self._track.kind
         self.idx = 0
@@ -123,7 +125,7 @@ class FramePublisher:
     def publish(self, idx: int | None = None) -> None:
         """Show sample ``idx`` (``self.idx`` by default) of the transform."""
         idx = self.idx if idx is None else idx
-        seconds = None
+        key = None
         if self._track is not None:
             n = len(self._track)
             if (
@@ -137,8 +139,8 @@ class FramePublisher:
             idx = int(idx) % n
             for handle in (self.handle, self.pose_handle):
                 if handle is not None:
-                    seconds = self.scene._show_handle_index(handle, idx)
-        self._published(seconds)
+                    key = self.scene._show_handle_index(handle, idx)
+        self._published(key)
 
     def set_time(self, t) -> None:
         """Show the latest sample at or before ``t`` (for Player links)."""
@@ -146,27 +148,26 @@ class FramePublisher:
             self.publish()
             return
 
-        idx = self._track.index_at(epoch_seconds(t, self.timestamps_kind))
+        key = time_key(t, self.timestamps_kind, f"{type(self).__name__}.set_time: t")
+        idx = self._track.index_at(key)
         if idx >= 0:
             self.publish(idx)
 
-    def _published(self, seconds: float | None) -> None:
-        if seconds is not None:
-            self.scene._sync_anchor(self.frame, seconds)
-        _notify(
-            self.scene,
-            self.frame.name,
-            seconds if seconds is not None else float("nan"),
-        )
+    def _published(self, key: int | float | None) -> None:
+        if key is not None:
+            self.scene._sync_anchor(self.frame, key)
+        _notify(self.scene, self.frame.name, key)
 
-    def _on_published(self, seconds: float) -> None:
-        if self._seconds is None or not np.isfinite(seconds):
+    def _on_published(self, key: int | float | None) -> None:
+        keys = self._keys
+        # (one scene's tracks share one kind of time: add_track checks it)
+        if keys is None or key is None:
             self.publish()
             return
-        idx = int(np.searchsorted(self._seconds, seconds))
+        # the nearest sample, compared exactly (Python ints for ns keys)
+        idx = int(np.searchsorted(keys, key))
         if idx > 0 and (
-            idx == len(self._seconds)
-            or seconds - self._seconds[idx - 1] <= self._seconds[idx] - seconds
+            idx == len(keys) or key - keys[idx - 1].item() <= keys[idx].item() - key
         ):
             idx -= 1
         self.publish(idx)
@@ -188,30 +189,31 @@ class FramePublisher:
             return None
         self._stop = threading.Event()
         self.stopped = False
-        seconds = self._track.sample_times()
+        keys = self._track.sample_keys()
         if block:
-            self._loop(self._stop, seconds)
+            self._loop(self._stop, keys)
             return None
         self._thread = threading.Thread(
             target=self._loop,
-            args=(self._stop, seconds),
+            args=(self._stop, keys),
             daemon=True,
             name=f"rbm_nb-{type(self).__name__}",
         )
         self._thread.start()
         return self._thread
 
-    def _loop(self, stop: threading.Event, seconds: np.ndarray) -> None:
+    def _loop(self, stop: threading.Event, keys: np.ndarray) -> None:
+        per_second = KEYS_PER_SECOND[self.timestamps_kind or "numeric"]
         try:
             if self.subscribe_to is not None:
                 stop.wait()
                 return
             while not stop.is_set():
                 self.publish()
-                nxt = (self.idx + 1) % len(seconds)
-                dt = float(seconds[nxt] - seconds[self.idx]) if nxt > 0 else 0.0
+                nxt = (self.idx + 1) % len(keys)
+                dt = (keys[nxt] - keys[self.idx]) / per_second if nxt > 0 else 0.0
                 self.idx = nxt
-                stop.wait(max(dt, 0.0))
+                stop.wait(max(float(dt), 0.0))
         finally:
             self.stopped = True
 

@@ -300,14 +300,16 @@ class Scene:
     # -- time -------------------------------------------------------------------
     @property
     def timestamps_kind(self) -> str | None:
-        """``"datetime"`` or ``"float"`` for the moving objects' timestamps; None if static."""
+        """``"datetime64"``, ``"timedelta64"`` or ``"numeric"`` for the moving
+        objects' timestamps (the core's kinds of time); None if static."""
         return self.state.kind
 
     def set_time(self, t) -> None:
         """Show every object as it is at ``t``.
 
-        ``t`` is float seconds (epoch seconds for datetime data) or a
-        datetime64 value. With a linked player this moves the player (and so
+        ``t`` is float seconds (epoch seconds for datetime data: the latest
+        sample whose epoch float is at or before ``t``) or a datetime64
+        value (exact to the ns: samples 1 ns apart are told apart). With a linked player this moves the player (and so
         every view following it). Without one, ``t`` is kept between one
         span before the first sample (all moving objects hidden) and the last
         sample (every object as it was last).
@@ -369,7 +371,7 @@ class Scene:
                 if self._camera_part.value is None:
                     self._camera_part.fit(self._assembly.bounds())
                 widget = self._view.open(
-                    lambda: self.time,
+                    self._link.time_key,
                     self._objects.checked_frame_name,
                     lambda: self.handles,
                 )
@@ -435,7 +437,10 @@ class Scene:
             Camera distance in metres (ten times the triad's size by default).
         """
         name = _resolve(frame, "Scene.focus: frame").name
-        t = self.time if self.time is not None else self.state.origin
+        t = self._link.time_key()
+        if t is None:
+            span = self.state.span()
+            t = 0.0 if span is None else span[0]
         self._context.check_open()
         with self._context.lock:
             self._camera_part.focus(name, self._objects, self.state, t, distance)
@@ -577,15 +582,15 @@ class Scene:
     def _track(self, path: str):
         return self.state.tracks.get(path)
 
-    def _show_handle_index(self, handle: SceneHandle, index: int) -> float | None:
+    def _show_handle_index(self, handle: SceneHandle, index: int) -> int | float | None:
         """Show ``handle``'s pose at sample ``index`` of its own track (publishers)."""
         return self._link.pin_sample(handle.pose_path, index)
 
-    def _sync_anchor(self, frame, seconds: float) -> None:
-        """Move anchors based on ``frame`` (objects expressed in it) to ``seconds``."""
+    def _sync_anchor(self, frame, key: int | float) -> None:
+        """Move anchors based on ``frame`` (objects expressed in it) to time ``key``."""
         path = self._anchors.moving_path(frame)
         if path is not None:
-            self._link.pin(path, seconds)
+            self._link.pin(path, key)
 
     # read by tests and benchmarks written before the split
     @property

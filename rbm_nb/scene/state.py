@@ -8,6 +8,11 @@ widget, an HTML export); tests check it directly.
 
 Paths follow meshcat's tree (``/rbm/root/<name>/pose/geom``); a track's pose
 is the transform of its node relative to its parent node.
+
+Times are exact keys (:mod:`rbm_nb.scene.timekeys`): the timeline, second 0
+(:attr:`SceneState.base`), pins, chunk boundaries and every search. Float
+seconds are made only where tracks are packed for the browser, counted
+from second 0 by int64 subtraction.
 """
 
 from __future__ import annotations
@@ -17,11 +22,12 @@ import math
 import numpy as np
 import umsgpack
 
-from .._engine.time import check_compatible
+from .._engine.time import TimeBase, check_compatible
 from . import commands
 from .commands import Message, TransformPacker
 from .looked_up import even_rows
-from .tracks import SceneTrack, moving_span
+from .timekeys import base_of, key_after, seconds_from
+from .tracks import SceneTrack, duration, moving_span
 
 ROOT = "/rbm"
 
@@ -43,10 +49,10 @@ class SceneState:
         ``set_property`` commands by (path, property).
     tracks : dict of str to PoseTrack or LookedUpTrack
         Poses over time of the nodes that move, by path.
-    pins : dict of str to float
-        Nodes shown at their own time (float seconds) instead of the scene's
-        (what the publishers do).
-    kind : {"datetime", "float"} or None
+    pins : dict of str to int or float
+        Nodes shown at their own time (a key) instead of the scene's (what
+        the publishers do).
+    kind : {"datetime64", "timedelta64", "numeric"} or None
         How the tracks' timestamps were given (None while nothing moves).
     """
 
@@ -55,7 +61,7 @@ class SceneState:
         self.statics: dict[str, Message] = {}
         self.properties: dict[tuple[str, str], Message] = {}
         self.tracks: dict[str, SceneTrack] = {}
-        self.pins: dict[str, float] = {}
+        self.pins: dict[str, int | float] = {}
         self.kind: str | None = None
 
     # -- changes --------------------------------------------------------------------
@@ -103,18 +109,19 @@ class SceneState:
         return messages
 
     def timeline(self) -> tuple[np.ndarray, np.ndarray | None] | None:
-        """The scene's time axis as float seconds, and as given when shared.
+        """The scene's time axis as exact keys, and as given when shared.
 
         When every track has the same timestamps these are the axis; else a
         regular grid from the earliest to the latest sample at the finest
-        mean sampling interval. None when nothing moves.
+        mean sampling interval (ns keys: rounded to the ns). None when
+        nothing moves.
         """
         tracks = list(self.tracks.values())
         if not tracks:
             return None
         # the axis is the player's (kept by it): made on request, not kept
         # here (an hour of the explorer's recording: 10 MB)
-        times = [t.sample_times() for t in tracks]  # add_track keeps moving ones only
+        times = [t.sample_keys() for t in tracks]  # add_track keeps moving ones only
         first = times[0]
         if all(s is first or np.array_equal(s, first) for s in times):
             return first, tracks[0].original_timestamps
@@ -127,30 +134,44 @@ class SceneState:
             if len(t) > 1 and last > first
         ]
         if not steps or end <= start:
-            seconds = np.unique(np.concatenate(times))
-        else:
-            n = int(np.ceil((end - start) / min(steps) - 1e-9)) + 1
-            seconds = np.linspace(start, end, n)
-        return seconds, None
+            return np.unique(np.concatenate(times)), None
+        n = int(np.ceil((end - start) / min(steps) - 1e-9)) + 1
+        if self.kind == "numeric":
+            return np.linspace(start, end, n), None
+        # ns keys: the grid's steps counted from the first key (a span of
+        # up to 104 days is exact in float64 ns), each rounded to the ns
+        offsets = np.round(np.linspace(0.0, float(end - start), n)).astype(np.int64)
+        return start + offsets, None
 
-    def span(self) -> tuple[float, float] | None:
-        """Float seconds of the earliest and the latest sample (None while
-        nothing moves): the ends of :meth:`timeline`, without making it."""
+    def span(self) -> tuple[int | float, int | float] | None:
+        """Keys of the earliest and the latest sample (None while nothing
+        moves): the ends of :meth:`timeline`, without making it."""
         if not self.tracks:
             return None
         spans = [moving_span(t) for t in self.tracks.values()]
         return min(s for s, _ in spans), max(e for _, e in spans)
 
     @property
-    def origin(self) -> float:
-        """Float seconds of the scene's time 0 (its first sample; 0 while nothing moves)."""
+    def base(self) -> TimeBase:
+        """The scene's second 0: its earliest sample (0.0 while nothing moves)."""
         # the earliest sample (the timeline's first time), without the timeline
-        if not self.tracks:
-            return 0.0
-        return min(moving_span(track)[0] for track in self.tracks.values())
+        span = self.span()
+        return base_of(None if span is None else span[0], self.kind)
 
-    def pose_at(self, path: str, seconds: float) -> np.ndarray | None:
-        """The (4, 4) transform of the node at ``path`` at ``seconds``.
+    @property
+    def origin(self) -> float:
+        """Second 0 as float data seconds (epoch seconds for datetime data).
+
+        For the browser only (the widget's ``_origin``, which the player
+        link falls back on without ``_player_shift``) and callers that
+        asked for a float; ~0.24 µs
+        coarse at today's epochs. Everything in the kernel counts from
+        :attr:`base`.
+        """
+        return self.base.origin
+
+    def pose_at(self, path: str, key: int | float) -> np.ndarray | None:
+        """The (4, 4) transform of the node at ``path`` at time ``key``.
 
         Pinned nodes use their own time. None when the node is hidden because
         its track has not started yet or its sample there is missing. A node neither static nor moving is at
@@ -159,7 +180,7 @@ class SceneState:
         track = self.tracks.get(path)
         if track is None:
             return self.static_pose(path)
-        index = track.index_at(self.pins.get(path, seconds))
+        index = track.index_at(self.pins.get(path, key))
         if index < 0 or track.missing(index):
             return None
         return track.matrix(index)
@@ -175,24 +196,25 @@ class SceneState:
         matrix = umsgpack.unpackb(message.data)["matrix"]
         return np.asarray(matrix, dtype=float).reshape(4, 4).T
 
-    def world_pose(self, path: str, seconds: float) -> np.ndarray | None:
-        """Transform of ``path`` into the scene's base (product along the tree)."""
+    def world_pose(self, path: str, key: int | float) -> np.ndarray | None:
+        """Transform of ``path`` into the scene's base at time ``key`` (product along the tree)."""
         parts = path.strip("/").split("/")
         matrix = np.eye(4)
         for i in range(1, len(parts) + 1):
             node = "/" + "/".join(parts[:i])
-            pose = self.pose_at(node, seconds)
+            pose = self.pose_at(node, key)
             if pose is None:
                 return None
             matrix = matrix @ pose
         return matrix
 
     def track_payload(
-        self, max_samples: int | None = None, origin: float | None = None
+        self, max_samples: int | None = None, base: TimeBase | None = None
     ) -> tuple[list[dict], list[bytes]]:
         """The tracks as binary buffers for a viewer.
 
-        Times are float64 seconds from ``origin`` (the scene's by default);
+        Times are float64 seconds from ``base`` (the scene's second 0 by
+        default), counted from the exact keys;
         translations, rotations ``(x, y, z, w)`` (three.js order) and scales
         are float32 (a float32 coordinate 1 km from the origin is within
         0.06 mm: invisible on screen). Tracks with equal timestamps share one
@@ -211,21 +233,20 @@ class SceneState:
             buffer indices (``scale`` may be None).
         buffers : list of bytes
         """
-        origin = self.origin if origin is None else float(origin)
+        base = self.base if base is None else base
         # a looked-up track without max_samples looks every sample up now (a
         # short recording: a long one streams, see scene/stream.py)
         picks = [
             (path, track, _decimate(len(track), max_samples))
             for path, track in self.tracks.items()
         ]
-        return _pack(picks, origin)
+        return _pack(picks, base)
 
     def bytes_per_second(self) -> float:
         """Bytes of the packed tracks per second of recording (all tracks)."""
         total = 0.0
         for track in self.tracks.values():
-            first, last = moving_span(track)
-            span = last - first
+            span = duration(track)
             if span > 0:
                 total += _sample_bytes(track) * (len(track) - 1) / span
         return total
@@ -234,36 +255,39 @@ class SceneState:
         """Bytes of every sample of every track, as :meth:`track_payload` packs them."""
         return sum(_sample_bytes(t) * len(t) for t in self.tracks.values())
 
-    def chunk_count(self, chunk_seconds: float, origin: float | None = None) -> int:
-        """How many chunks of ``chunk_seconds`` cover the tracks from ``origin``."""
-        origin = self.origin if origin is None else float(origin)
-        end = max((moving_span(t)[1] for t in self.tracks.values()), default=origin)
-        return int(math.floor(max(end - origin, 0.0) / chunk_seconds)) + 1
+    def chunk_count(self, chunk_seconds: float) -> int:
+        """How many chunks of ``chunk_seconds`` cover the tracks from second 0."""
+        span = self.span()
+        if span is None:
+            return 1
+        end = float(seconds_from(self.base, np.array([span[1]]))[0])
+        return int(math.floor(max(end, 0.0) / chunk_seconds)) + 1
 
     def track_chunk(
-        self, index: int, chunk_seconds: float, origin: float | None = None
+        self, index: int, chunk_seconds: float
     ) -> tuple[list[dict], list[bytes]]:
         """Every sample of every track for browser times in one chunk.
 
         Chunk ``index`` serves the times ``[index, index + 1) * chunk_seconds``
-        (seconds from ``origin``): it holds the samples inside that span and
+        (seconds from second 0): it holds the samples inside that span and
         the last one at or before its start, so the latest sample at or
         before any time in the span is in the chunk, and the pose shown at a
         chunk's boundary is the recording's own. Slices of the tracks (views)
         are converted as :meth:`track_payload` does; tracks looked up from
         frames look the chunk's samples up now (they keep none).
         """
-        origin = self.origin if origin is None else float(origin)
-        start = origin + index * chunk_seconds
-        end = origin + (index + 1) * chunk_seconds
+        base = self.base
+        # the span's ends as keys: searched exactly, whatever the epoch
+        start = key_after(base, index * chunk_seconds)
+        end = key_after(base, (index + 1) * chunk_seconds + CHUNK_SLACK)
         picks = []
         for path, track in self.tracks.items():
             lo = max(track.search(start, side="right") - 1, 0)
             # the browser looks up t + 1e-6 (scene.js): a sample that close
             # after the span's end is shown inside it
-            hi = track.search(end + CHUNK_SLACK, side="right")
+            hi = track.search(end, side="right")
             picks.append((path, track, slice(lo, max(hi, lo))))
-        return _pack(picks, origin)
+        return _pack(picks, base)
 
 
 #: seconds past a chunk's end still served with it (scene.js looks up t + 1e-6)
@@ -275,27 +299,28 @@ def _sample_bytes(track: SceneTrack) -> int:
     return 8 + 12 + 16 + (4 if track.scale is not None else 0)
 
 
-def _pack(picks, origin: float) -> tuple[list[dict], list[bytes]]:
+def _pack(picks, base: TimeBase) -> tuple[list[dict], list[bytes]]:
     """Pack ``(path, track, index or slice or None)`` as buffers (see ``track_payload``)."""
     meta: list[dict] = []
     buffers: list[bytes] = []
     shared: list[tuple[np.ndarray, int]] = []
     for path, track, index in picks:
-        seconds, translation, rotation, scale = track.take(index)
+        keys, translation, rotation, scale = track.take(index)
         times = None
         for known, at in shared:
-            if known is seconds or (
-                known.shape == seconds.shape and np.array_equal(known, seconds)
+            if known is keys or (
+                known.shape == keys.shape and np.array_equal(known, keys)
             ):
                 times = at
                 break
         if times is None:
             times = len(buffers)
+            # the JS boundary: float seconds from second 0, counted exactly
             buffers.append(
-                np.ascontiguousarray(seconds - origin, dtype="<f8").tobytes()
+                np.ascontiguousarray(seconds_from(base, keys), dtype="<f8").tobytes()
             )
-            shared.append((seconds, times))
-        entry = {"path": path, "times": times, "n": int(len(seconds))}
+            shared.append((keys, times))
+        entry = {"path": path, "times": times, "n": int(len(keys))}
         entry["translation"] = len(buffers)
         buffers.append(translation.astype("<f4").tobytes())
         xyzw = rotation[:, [1, 2, 3, 0]]

@@ -7,6 +7,13 @@ kept whole). Poses the user hands in (moving points and vectors) and static
 ones are a :class:`PoseTrack` holding its arrays. Both answer the same
 questions: how many rows, the rows before a time (:meth:`PoseTrack.search`),
 the rows of a window or of chosen indices (:meth:`PoseTrack.take`), bounds.
+
+Times are the core's exact keys (:mod:`rbm_nb._engine.time`): int64
+nanoseconds for datetime64/timedelta64 timestamps, float seconds for
+numbers. A time given as a float epoch second becomes a key once, where it
+enters (:func:`~rbm_nb._engine.time.time_key`); seconds for the browser are
+counted from the scene's second 0 where a message is packed
+(:mod:`rbm_nb.scene.state`).
 """
 
 from __future__ import annotations
@@ -21,9 +28,23 @@ from .._engine import chain as _chain
 from .._engine.time import TimeBase, as_track, check_compatible
 from ..core import lookups
 from .commands import pose_matrix
-from .looked_up import TIME_TOLERANCE, LookedUpTrack
+from .looked_up import LookedUpTrack
+from .timekeys import KEYS_PER_SECOND, at_or_before
 
-__all__ = ["PoseTrack", "LookedUpTrack", "SceneTrack", "TIME_TOLERANCE"]
+__all__ = ["PoseTrack", "LookedUpTrack", "SceneTrack", "moving_span", "duration"]
+
+
+class _Times:
+    """A track's timestamps as given and their exact keys."""
+
+    __slots__ = ("values", "key")
+
+    def __init__(self, values: np.ndarray, key: np.ndarray) -> None:
+        self.values = values
+        self.key = key
+
+    def __len__(self) -> int:
+        return int(self.key.shape[0])
 
 
 class PoseTrack:
@@ -58,9 +79,10 @@ class PoseTrack:
         owned: bool = False,
     ):
         self.name = name
-        # float seconds and the timestamps as given; None for a static pose
-        self.seconds: np.ndarray | None
-        self.original_timestamps: np.ndarray | None
+        # the timestamps as given and their exact keys (a view of them for
+        # datetime64[ns]); None for a static pose. The Track's float seconds
+        # are not kept: nothing here interpolates
+        self._times: _Times | None
         self.kind: str | None
         # rows with data, when some are missing (None: all of them)
         self._present: np.ndarray | None = None
@@ -72,18 +94,13 @@ class PoseTrack:
                     f"{name}: a static pose needs translation (3,) and rotation (4,), "
                     f"got {t.shape} and {r.shape}"
                 )
-            self.seconds = None
+            self._times = None
             self.kind = None
-            self.original_timestamps = None
         else:
-            _track = as_track(
-                timestamps, f"{name} timestamps", copy=False, repeats=True
-            )
-            self.seconds, self.kind = _track.epoch_seconds(), _track.kind
-            self.original_timestamps = np.asarray(
-                getattr(timestamps, "values", timestamps)
-            )
-            n = len(self.seconds)
+            track = as_track(timestamps, f"{name} timestamps", copy=False, repeats=True)
+            self._times = _Times(track.values, track.key)
+            self.kind = track.kind
+            n = len(self._times)
             if t.shape != (n, 3) or r.shape != (n, 4):
                 raise ValueError(
                     f"{name}: {n} timestamps need translation ({n}, 3) and rotation ({n}, 4), "
@@ -91,7 +108,7 @@ class PoseTrack:
                 )
         if np.isinf(t).any() or np.isinf(r).any():
             raise ValueError(f"{name}: translation and rotation must not be infinite")
-        if self.seconds is None:
+        if self._times is None:
             if np.isnan(t).any() or np.isnan(r).any():
                 raise ValueError(f"{name}: a static pose must not be NaN")
         else:
@@ -109,7 +126,7 @@ class PoseTrack:
         self.rotation = np.ascontiguousarray(r)
         if scale is not None:
             scale = np.ascontiguousarray(scale, dtype=np.float64)
-            if self.seconds is None or scale.shape != (len(self.seconds),):
+            if self._times is None or scale.shape != (len(self._times),):
                 raise ValueError(f"{name}: scale must have one value per timestamp")
         self.scale: np.ndarray | None = scale
 
@@ -148,57 +165,64 @@ class PoseTrack:
 
     @property
     def static(self) -> bool:
-        return self.seconds is None
+        return self._times is None
 
-    def sample_times(self) -> np.ndarray:
-        """Float seconds of the samples, shape (n,), of a track that moves."""
-        if self.seconds is None:
+    @property
+    def original_timestamps(self) -> np.ndarray | None:
+        """The timestamps as given (None for a static pose)."""
+        return None if self._times is None else self._times.values
+
+    def sample_keys(self) -> np.ndarray:
+        """Exact keys of the samples, shape (n,), of a track that moves."""
+        if self._times is None:
             raise ValueError(f"{self.name}: a static pose has no sample times")
-        return self.seconds
+        return self._times.key
 
     def __len__(self) -> int:
-        return 1 if self.seconds is None else len(self.seconds)
+        return 1 if self._times is None else len(self._times)
 
     @property
-    def start(self) -> float | None:
-        return None if self.seconds is None else float(self.seconds[0])
+    def start(self) -> int | float | None:
+        """Key of the first sample (None for a static pose)."""
+        return None if self._times is None else self._times.key[0].item()
 
     @property
-    def end(self) -> float | None:
-        return None if self.seconds is None else float(self.seconds[-1])
+    def end(self) -> int | float | None:
+        """Key of the last sample (None for a static pose)."""
+        return None if self._times is None else self._times.key[-1].item()
 
-    def index_at(self, t: float) -> int:
-        """Index of the latest sample at or before ``t``; -1 before the start.
+    def index_at(self, key: int | float) -> int:
+        """Index of the latest sample at or before time ``key``; -1 before the start.
 
-        Times within a nanosecond of a sample count as equal to it, so that
-        ``0.3`` finds the sample stored as ``0.30000000000000004``.
+        The core's rule (:func:`~rbm_nb.scene.timekeys.at_or_before`): ns
+        keys exact, a float time within half a nanosecond of a sample is it.
         """
-        if self.seconds is None:
+        if self._times is None:
             return 0
-        return int(np.searchsorted(self.seconds, t + TIME_TOLERANCE, side="right")) - 1
+        return self.search(at_or_before(key, self.kind), side="right") - 1
 
-    def search(self, x: float, side: Literal["left", "right"] = "left") -> int:
-        """Rows before float second ``x`` (``np.searchsorted`` on the rows' seconds)."""
-        return int(np.searchsorted(self.sample_times(), x, side=side))
+    def search(self, key: int | float, side: Literal["left", "right"] = "left") -> int:
+        """Rows before time ``key`` (``np.searchsorted`` on the rows' keys)."""
+        return int(np.searchsorted(self.sample_keys(), key, side=side))
 
-    def seconds_of(self, rows) -> np.ndarray:
-        """Float seconds of ``rows`` (indices), shape (k,)."""
-        return self.sample_times()[np.atleast_1d(np.asarray(rows, dtype=np.int64))]
+    def keys_of(self, rows) -> np.ndarray:
+        """Exact keys of ``rows`` (indices), shape (k,)."""
+        return self.sample_keys()[np.atleast_1d(np.asarray(rows, dtype=np.int64))]
 
     def take(self, index):
-        """Seconds, translation, rotation and scale (or None) of rows
+        """Keys, translation, rotation and scale (or None) of rows
         ``index``: None (all), a slice or indices (views where they can be)."""
-        seconds = self.sample_times()
+        keys = self.sample_keys()
 
         def pick(a):
             return a if index is None else a[index]
 
         scale = None if self.scale is None else pick(self.scale)
-        return pick(seconds), pick(self.translation), pick(self.rotation), scale
+        return pick(keys), pick(self.translation), pick(self.rotation), scale
 
     def matrix(self, index: int = 0) -> np.ndarray:
         """Homogeneous (4, 4) matrix of sample ``index``."""
-        if self.seconds is None:
+        if self._times is None:
             return pose_matrix(self.translation, self.rotation)
         m = pose_matrix(self.translation[index], self.rotation[index])
         if self.scale is not None:
@@ -216,7 +240,7 @@ class PoseTrack:
     def positions(self) -> np.ndarray:
         """The translations of the samples that are not missing, as (n, 3)."""
         points = self.translation.reshape(-1, 3)
-        if self.seconds is None:
+        if self._times is None:
             return points[~np.isnan(points).any(axis=1)]
         if self._present is None:
             return points.copy()
@@ -255,10 +279,17 @@ class PoseTrack:
 SceneTrack = PoseTrack | LookedUpTrack
 
 
-def moving_span(track: SceneTrack) -> tuple[float, float]:
-    """Float seconds of the first and last row of a moving track."""
-    first, last = track.seconds_of([0, -1])
-    return float(first), float(last)
+def moving_span(track: SceneTrack) -> tuple[int | float, int | float]:
+    """Keys of the first and last row of a moving track (int ns or float s)."""
+    first, last = track.keys_of([0, -1])
+    return first.item(), last.item()
+
+
+def duration(track: SceneTrack) -> float:
+    """Seconds from the first to the last row of a moving track (exact keys
+    subtracted before any division)."""
+    first, last = moving_span(track)
+    return (last - first) / KEYS_PER_SECOND[track.kind or "numeric"]
 
 
 def _fresh(arr: np.ndarray) -> bool:

@@ -1,6 +1,7 @@
 """The view's synced traits, each computed from the part that owns it.
 
-The widget shows the time base (``_origin``), the camera (``_camera``), where
+The widget shows the time base (``_origin``, and ``_player_shift`` to a
+linked player's), the camera (``_camera``), where
 each frame's triad is (``_frames``, ``_labels``), the legend (``_legend``)
 and the objects pinned to their own time (``_pins``). :class:`ViewTraits`
 sets them from the scene's parts whenever one changes; without a widget it
@@ -18,7 +19,7 @@ from .player_link import PlayerLink
 from .view import ViewLink
 
 #: the traits that follow the content (refreshed after each change of it)
-CONTENT_TRAITS = ("_origin", "_frames", "_labels", "_legend")
+CONTENT_TRAITS = ("_origin", "_player_shift", "_frames", "_labels", "_legend")
 ALL_TRAITS = ("_camera", *CONTENT_TRAITS, "_pins")
 
 
@@ -48,6 +49,8 @@ class ViewTraits:
         """The value of trait ``name`` now."""
         if name == "_origin":
             return self._context.state.origin
+        if name == "_player_shift":
+            return self._link.player_shift()
         if name == "_camera":
             return dict(self._camera.value or {})
         if name == "_frames":

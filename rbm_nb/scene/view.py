@@ -13,11 +13,15 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
+import numpy as np
+
+from .._engine.time import TimeBase
 from . import stream
 from .commands import Message
 from .context import SceneContext
 from .path_refine import PathRefiner
 from .state import SceneState
+from .timekeys import seconds_from
 
 if TYPE_CHECKING:  # the widget module needs the notebook extras at import
     from .widget import SceneWidget
@@ -32,17 +36,20 @@ class ViewLink:
         # the chunking last sent to a live view (None: poses went whole)
         self.stream: dict | None = None
         self._generation = 0
+        # second 0 of the times last sent (exact: a move by less than a float
+        # epoch second's ~0.24 µs still re-bases the view)
+        self._sent_base: TimeBase | None = None
         # answers the view's requests for finer paths where it zooms in
         self.path_refiner: PathRefiner | None = None
 
     def open(
         self,
-        time_shown: Callable[[], float | None],
+        time_shown: Callable[[], int | float | None],
         check_frame: Callable,
         handles: Callable[[], dict],
     ) -> SceneWidget:
-        """Create the widget (once). ``time_shown()`` is the scene's time in
-        float seconds (where a stream starts); ``check_frame(name, trait)``
+        """Create the widget (once). ``time_shown()`` is the scene's time as
+        a key (where a stream starts); ``check_frame(name, trait)``
         what ``selected`` and ``follow`` accept; ``handles()`` the objects by
         name, whose paths the view may ask for finer."""
         if self.widget is None:
@@ -82,9 +89,10 @@ class ViewLink:
         widget, state = self.widget, self._context.state
         if widget is None or not widget.ready:
             return
-        origin = state.origin
+        origin = state.origin  # the JS boundary: second 0 as a float epoch second
         if (
             widget._origin != origin  # the time base moved
+            or self._sent_base != state.base
             or self.stream is not None  # chunks of the old content are stale
             or stream.streams(state, self._context.max_samples)
         ):
@@ -94,7 +102,7 @@ class ViewLink:
         sub = SceneState()
         sub.tracks = {p: state.tracks[p] for p in paths}
         meta, buffers = sub.track_payload(
-            max_samples=self._context.max_samples, origin=origin
+            max_samples=self._context.max_samples, base=state.base
         )
         widget.push(
             {"type": "tracks", "tracks": meta, "remove": list(removed)}, buffers
@@ -105,7 +113,10 @@ class ViewLink:
         state = self._context.state
         with self._context.lock:
             commands_ = [m.data for m in state.snapshot()]
-            meta, buffers = state.track_payload(max_samples=max_samples)
+            self._sent_base = state.base
+            meta, buffers = state.track_payload(
+                max_samples=max_samples, base=self._sent_base
+            )
             offset = len(commands_)
             for entry in meta:
                 for key in ("times", "translation", "rotation", "scale"):
@@ -114,8 +125,8 @@ class ViewLink:
             content = {"type": "snapshot", "commands": offset, "tracks": meta}
             return content, commands_ + buffers
 
-    def live_snapshot_message(self, seconds: float | None) -> tuple[dict, list]:
-        """The content message for a live view showing ``seconds``: poses
+    def live_snapshot_message(self, key: int | float | None) -> tuple[dict, list]:
+        """The content message for a live view showing time ``key``: poses
         whole, or a coarse copy and the chunking when they are long."""
         context = self._context
         with context.lock:
@@ -123,7 +134,9 @@ class ViewLink:
                 self.stream = None
                 return self.snapshot_message(context.max_samples)
             content, buffers = self.snapshot_message(stream.COARSE_SAMPLES)
-            at = None if seconds is None else seconds - context.state.origin
+            at = None
+            if key is not None:
+                at = float(seconds_from(context.state.base, np.array([key]))[0])
             self._generation += 1
             self.stream = stream.plan(context.state, at, self._generation)
             content["stream"] = self.stream

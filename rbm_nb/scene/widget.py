@@ -89,6 +89,11 @@ class SceneWidget(FrontendGuard, anywidget.AnyWidget):
     labels = traitlets.Bool(True).tag(sync=True)
     height = traitlets.Int(480).tag(sync=True)
     _origin = traitlets.Float(0.0).tag(sync=True)
+    # seconds from the scene's second 0 to its player's, counted exactly from
+    # their int64 ns keys in the kernel (None: no player); the view shows
+    # ``_player_shift + player.time`` (float epoch seconds subtracted in the
+    # browser were ~0.24 µs coarse)
+    _player_shift = traitlets.Float(None, allow_none=True).tag(sync=True)
     _camera = traitlets.Dict().tag(sync=True)
     _frames = traitlets.Dict().tag(sync=True)
     _labels = traitlets.Dict().tag(sync=True)

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from .._engine.time import epoch_seconds, from_epoch_seconds
+from .._engine.time import TimeBase
 
 
 @dataclass(frozen=True)
@@ -45,15 +45,6 @@ class Window:
         return result.isel(time=np.flatnonzero(keep))
 
 
-def _seconds_as(reference: Any, seconds: float) -> Any:
-    """``seconds`` in the unit of ``reference`` (timedelta64 for datetime64 times)."""
-    if isinstance(reference, (np.datetime64,)) or (
-        hasattr(reference, "dtype") and np.dtype(reference.dtype).kind == "M"
-    ):
-        return from_epoch_seconds(seconds, "timedelta64")[()]
-    return seconds
-
-
 def split(start: Any, stop: Any, length: float, margin: float) -> list[Window]:
     """Windows of ``length`` seconds covering ``[start, stop]``.
 
@@ -73,15 +64,25 @@ def split(start: Any, stop: Any, length: float, margin: float) -> list[Window]:
             f"margin must be a non-negative number of seconds, got {margin!r}"
         )
     start, stop = _as_scalar(start), _as_scalar(stop)
-    step = _seconds_as(start, length)
-    pad = _seconds_as(start, margin)
-    span = stop - start
-    count = max(1, math.ceil(_in_seconds(span) / length))
+    # the time rule's second 0 at the start: window edges are counted from
+    # it in seconds and made exact keys (datetime64[ns] rounded to the ns)
+    # by the time module, so no edge drifts with k and no epoch float is made
+    base = TimeBase.of(np.array([start]), "start")
+    span = base.at(stop, "stop")  # seconds, from the int64 difference
+    count = max(1, math.ceil(span / length))
     windows = []
     for k in range(count):
-        lo = start + k * step
-        hi = stop if k == count - 1 else start + (k + 1) * step
-        windows.append(Window(lo, hi, lo - pad, hi + pad, last=k == count - 1))
+        last = k == count - 1
+        lo, hi = k * length, span if last else (k + 1) * length
+        windows.append(
+            Window(
+                base.value(lo) if k else start,
+                stop if last else base.value(hi),
+                base.value(lo - margin),
+                base.value(hi + margin),
+                last=last,
+            )
+        )
     return windows
 
 
@@ -90,7 +91,3 @@ def _as_scalar(value: Any) -> Any:
     if isinstance(value, np.generic):
         return value
     return np.float64(value)
-
-
-def _in_seconds(span: Any) -> float:
-    return float(epoch_seconds(span, name="span"))

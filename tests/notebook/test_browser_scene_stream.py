@@ -57,8 +57,9 @@ explorer.register_head_eye_frames(head, left, right)
 scene = explorer.explorer_scene()
 player = scene.player()
 track = scene.state.tracks["{ANCHOR}"]
-seconds, translation, _, _ = track.take(None)  # every sample, looked up whole
-np.save(EXPECTED, np.c_[seconds - scene.state.origin, translation])
+keys, translation, _, _ = track.take(None)  # every sample, looked up whole
+seconds = (keys - scene.state.base.t0_ns) / 1e9  # from the scene's second 0
+np.save(EXPECTED, np.c_[seconds, translation])
 print("STREAM-READY", note[:40])
 widgets.VBox([scene.widget, player])
 """
@@ -114,7 +115,7 @@ def seek(page, t: float) -> None:
     view(
         page,
         f"""(() => {{ const p = v.player;
-            const x = {t} + Number(v.model.get('_origin')) - Number(p.get('origin'));
+            const x = {t} - Number(v.model.get('_player_shift'));
             p.set('time', x); p.save_changes(); }})()""",
     )
 

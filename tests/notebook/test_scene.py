@@ -71,7 +71,9 @@ def transforms(scene):
 
     Nodes hidden because their data has not started yet are left out.
     """
-    t = scene.time if scene.time is not None else scene.state.origin
+    t = scene._link.time_key()  # the time shown, as the scene's exact key
+    if t is None:
+        t = scene.state.span()[0] if scene.state.tracks else 0.0
     out = {}
     for path in [*scene.state.statics, *scene.state.tracks]:
         matrix = scene.state.pose_at(path, t)
@@ -636,10 +638,11 @@ def test_guide_1_6_visualisation_cells_run_without_ros():
     }
     assert player.step == 2 and player.speed == 0.5
     player.seek(3000)  # the eye follows the head to the nearest of its own samples
-    eye_seconds = tf_head_left_eye._seconds
+    eye_keys = tf_head_left_eye._keys  # exact int64 ns of the eye's samples
     pinned = scene.state.pins[tf_head_left_eye.handle.pose_path]
-    nearest = np.argmin(np.abs(eye_seconds - player.data_time))
-    assert pinned == eye_seconds[nearest]
+    shown = int(np.datetime64(player.time_value, "ns").astype(np.int64))
+    nearest = np.argmin(np.abs(eye_keys - shown))
+    assert pinned == eye_keys[nearest]
     tf_head_left_eye.stop()
     player.close()
     master.shutdown()

@@ -44,8 +44,9 @@ def test_track_of_a_lookup_keeps_the_lookup_arrays():
     poses = track.translation.nbytes + track.rotation.nbytes
     assert np.isnan(track.translation[::50]).all()
     assert np.isnan(track.rotation[::50]).all()
-    # what the track holds: poses, float seconds and the timestamps
-    own = poses + track.seconds.nbytes + track.original_timestamps.nbytes
+    # what the track holds: poses, the timestamps and their exact keys (int64
+    # ns: a copy here, the stamps are datetime64[ms]; no float seconds beside)
+    own = poses + track.original_timestamps.nbytes + track.sample_keys().nbytes
     assert kept <= own * 1.05 + 1e6
     # one copy of the poses at a time (the lookup's, marked in place), with
     # the masks and time conversions (~1/3 of the poses) as temporaries

@@ -99,7 +99,7 @@ def parts() -> None:
         bench_fused.register(rbm, frames)
         h = head()
         table = FU._table(h)
-        table.rows[...] = kf.squad_table(h.data.r, h.data.rotation, h.data.track.base)
+        table.rows[...] = kf.squad_table(h.data.signs, h.data.rotation, h.data.track.base)
         table.update()  # (complete: the scan is outside the timing)
         times["first call, head table already complete"].append(lookup())
     steady = min(times["steady state"])

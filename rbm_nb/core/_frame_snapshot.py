@@ -70,7 +70,8 @@ class FrameValue:
     @property
     def nbytes(self) -> int:
         s = self.samples
-        arrays = [s.stored_t, s.r, s.stored_rotation]
+        kept = s.signs if s.signs is not None else s.unit
+        arrays = [s.stored_t, kept, s.stored_rotation]
         if s.missing_rows is not None:
             arrays.append(s.missing_rows)
         if s.track is not None:
@@ -111,8 +112,9 @@ class FrameValue:
         )  # fmt: skip
         mask = s.missing_rows
         samples = Samples(
-            cut, s.stored_t[rows], s.r[rows], s.stored_rotation[rows],
+            cut, s.stored_t[rows], None, s.stored_rotation[rows],
             s.missing_rotations, None if mask is None else mask[rows],
+            s.signs[rows],
         )  # fmt: skip
         return replace(self, samples=samples)
 

@@ -30,6 +30,7 @@ from ._jit import F1, F2, S1, helper
 from ._prefetch import prefetch
 from .chain_rows import (
     _ACC,
+    _CODE,
     _GATHERED,
     _GENERAL,
     _NEG,
@@ -48,6 +49,7 @@ from .chain_rows import (
     _compose_rows,
     _compose_static_rows,
     _own_rows,
+    _signed_unit_rows,
     _squad_rows,
     _wide_rows,
 )
@@ -204,12 +206,11 @@ def _moving_rows(
                         tz = tr[i, 2] + tau * (tr[i + 1, 2] - tr[i, 2])
                     work[_TH1 + b] = c[i, 4]
                     work[_TH2 + b] = c[i, 9]
-                    uw, ux, uy, uz = signed_unit_row(rp, sg, i)
-                    work[_P + b] = uw
-                    work[_P + BLOCK + b] = ux
-                    work[_P + 2 * BLOCK + b] = uy
-                    work[_P + 3 * BLOCK + b] = uz
+                    # r[i] as stored, and its code: made unit and signed
+                    # for the whole block at once (_signed_unit_rows)
+                    work[_CODE + b] = sg[i]
                     for e in range(4):
+                        work[_P + e * BLOCK + b] = rp[i, e]
                         work[_U1 + e * BLOCK + b] = c[i, 5 + e]
                         work[_Q + e * BLOCK + b] = c[i, e]
                         work[_U2 + e * BLOCK + b] = c[i, 10 + e]
@@ -256,7 +257,10 @@ def _moving_rows(
         work[_STEP + 6 * BLOCK + b] = qz
     for b in range(nb, BLOCK):  # past the end of a short last block
         work[_PATH + b] = 0.0
-    wide = _squad_rows(work) if gathered > 0 else 0
+    wide = 0
+    if gathered > 0:
+        _signed_unit_rows(work)
+        wide = _squad_rows(work)
     if wide >= _WIDE_ROWS:
         wide = _wide_rows(work)
     if wide > 0:

@@ -99,7 +99,7 @@ def parts() -> None:
         bench_fused.register(rbm, frames)
         h = head()
         table = FU._table(h)
-        table.rows[...] = kf.squad_table(h.data.r, h.data.rotation, h.data.track.base)
+        table.rows[...] = kf.squad_table(h.data.signs, h.data.rotation, h.data.track.base)
         table.update()  # (complete: the scan is outside the timing)
         times["first call, head table already complete"].append(lookup())
     steady = min(times["steady state"])
@@ -124,7 +124,7 @@ def _staged_fill():
         kst._block_arcs,
         kst._block_store,
     )
-    source = "def staged_block(stage, r, rp, t, c, i0, i1, s):\n    m = i1 - i0\n"
+    source = "def staged_block(stage, sg, rp, t, c, i0, i1, s):\n    m = i1 - i0\n"
     for stage_helper in stages:
         fn = ast.parse(textwrap.dedent(inspect.getsource(stage_helper.py_func))).body[0]
         body = fn.body[1:] if isinstance(fn.body[0], ast.Expr) else fn.body
@@ -148,13 +148,13 @@ def _staged_fill():
     rows, width = kst._S_ROWS, kst.FILL_BLOCK
 
     @numba.njit(error_model="numpy", nogil=True)
-    def fill(stage, r, rp, t, c):
-        n = r.shape[0]
+    def fill(stage, sg, rp, t, c):
+        n = sg.shape[0]
         s = np.zeros((rows, width + 3))
         i = 1
         while i < n - 2:
             j = min(i + width, n - 2)
-            block(stage, r, rp, t, c, i, j, s)
+            block(stage, sg, rp, t, c, i, j, s)
             i = j
 
     return fill
@@ -168,18 +168,18 @@ def fill_loops() -> None:
     _, (frames, *_rest) = bench_fused.workload()
     bench_fused.register(rbm, frames)
     h = F.resolve_frame("head")
-    r, rp, t = h.data.r, h.data.rotation, h.data.track.base
+    sg, rp, t = h.data.signs, h.data.rotation, h.data.track.base
     fill = _staged_fill()
     table = np.zeros((len(t), kf.TABLE_COLUMNS))
-    fill(len(FILL_LOOPS), r, rp, t, table)
-    whole = kf.squad_table(r, rp, t)
+    fill(len(FILL_LOOPS), sg, rp, t, table)
+    whole = kf.squad_table(sg, rp, t)
     if not np.array_equal(table[1:-2], whole[1:-2]):
         raise SystemExit("the staged copy no longer fills what squad_table fills")
 
     def best(stage: int) -> float:
-        return bench_fused.best(lambda: fill(stage, r, rp, t, table), REPEATS)
+        return bench_fused.best(lambda: fill(stage, sg, rp, t, table), REPEATS)
 
-    t_whole = bench_fused.best(lambda: kf.squad_table(r, rp, t), REPEATS)
+    t_whole = bench_fused.best(lambda: kf.squad_table(sg, rp, t), REPEATS)
     print(
         f"\n== the head table's fill, loop by loop ({len(t)} segments, "
         f"table memory already touched, best of {REPEATS})"

@@ -164,8 +164,9 @@ def _squad_coefficients(frame: FrameData):
     coefficients = _COEFFICIENTS.get(frame.samples)
     if coefficients is None:
         assert frame.track is not None  # (splines are for moving frames)
-        a_coef, b_coef = kq.squad_coefficients(frame.r, frame.track.base)
-        seg = kq.squad_segments(frame.r, a_coef, b_coef)
+        r = frame.r  # (made from the kept rotations: once here)
+        a_coef, b_coef = kq.squad_coefficients(r, frame.track.base)
+        seg = kq.squad_segments(r, a_coef, b_coef)
         coefficients = _COEFFICIENTS.setdefault(frame.samples, (a_coef, b_coef, seg))
     return coefficients
 
@@ -328,11 +329,12 @@ def resample_frame(frame, target: Target):
     if len(track) < 2:
         return frame.t, frame.rotation
     a_coef, b_coef, seg = _squad_coefficients(frame)
-    rot = kq.squad_evaluate(frame.r, track.base, a_coef, b_coef, seg, t_out)
+    r = frame.r  # (a moving frame's is made at each read: once per call)
+    rot = kq.squad_evaluate(r, track.base, a_coef, b_coef, seg, t_out)
     # the rotations as kept, without the missing rows' NaN: r is NaN in
     # those rows, so their products are NaN and never negative, as with the
     # masked rotations (one masked copy less per call)
-    stored_signs(rot, frame.r, frame.samples.stored_rotation, track.base, t_out)
+    stored_signs(rot, r, frame.samples.stored_rotation, track.base, t_out)
     trans = kr.interp_linear(track.base, frame.t, t_out)
     if frame.max_gap is not None:
         in_gap = in_long_gap(track.base, t_out, frame.max_gap)
@@ -540,8 +542,8 @@ def lookup(frame, to_frame, rotation_only: bool = False):
         kept = steps[0][0].samples
         if np.may_share_memory(t, kept.stored_t):
             t = t.copy()
-        if np.may_share_memory(r, kept.stored_rotation) or np.may_share_memory(
-            r, kept.r
+        if np.may_share_memory(r, kept.stored_rotation) or (
+            kept.unit is not None and np.may_share_memory(r, kept.unit)
         ):
             r = r.copy()
     n = len(target)

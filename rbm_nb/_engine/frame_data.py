@@ -23,6 +23,8 @@ from typing import Any
 
 import numpy as np
 
+from .._kernels import signed_rows as _signed
+from .._kernels._arrays import kernel_array
 from . import time as _time
 
 __all__ = ["Samples", "FrameData"]
@@ -52,7 +54,13 @@ class Samples(_Frozen):
     t : ndarray, shape (n|1, 3)
         Translations (NaN rows: missing samples).
     r : ndarray, shape (n|1, 4)
-        Unit rotations, sign-continuous for a moving frame (interpolation).
+        Unit rotations, sign-continuous for a moving frame (interpolation):
+        kept for a static frame; made at each read for a moving frame from
+        ``rotation`` and ``signs`` (the fused kernels make each row as they
+        read it, ``_kernels.signed_rows``).
+    signs : ndarray of int8, shape (n,), or None
+        A moving frame's sign code per sample (``_kernels.signed_rows``):
+        all it keeps of ``r``, 1 byte per sample instead of 32. None: static.
     rotation : ndarray, shape (n|1, 4)
         The rotations as given (returned at the frame's own times).
     missing_rotations : bool
@@ -83,7 +91,8 @@ class Samples(_Frozen):
     __slots__ = (
         "track",
         "stored_t",
-        "r",
+        "unit",
+        "signs",
         "stored_rotation",
         "missing_rotations",
         "missing_rows",
@@ -92,21 +101,41 @@ class Samples(_Frozen):
 
     track: _time.Track | None
     stored_t: np.ndarray
-    r: np.ndarray
+    unit: np.ndarray | None
+    signs: np.ndarray | None
     stored_rotation: np.ndarray
     missing_rotations: bool
     missing_rows: np.ndarray | None
 
     def __init__(
-        self, track, t, r, rotation, missing_rotations=False, missing_rows=None
+        self,
+        track,
+        t,
+        r,
+        rotation,
+        missing_rotations=False,
+        missing_rows=None,
+        signs=None,
     ) -> None:
         setter = object.__setattr__
         setter(self, "track", track)
         setter(self, "stored_t", t)
-        setter(self, "r", r)
         setter(self, "stored_rotation", rotation)
         setter(self, "missing_rotations", bool(missing_rotations))
         setter(self, "missing_rows", missing_rows)
+        if track is not None and signs is None:
+            # a moving frame that made its unit rows itself: kept as codes
+            signs = _sign_codes(self.rotation, r)
+        setter(self, "unit", None if signs is not None else r)
+        setter(self, "signs", signs)
+
+    @property
+    def r(self) -> np.ndarray:
+        """The unit, sign-continuous rotations (a moving frame's: a new array)."""
+        if self.unit is not None:
+            return self.unit
+        assert self.signs is not None  # (set for every moving frame)
+        return _signed.signed_unit_rows(kernel_array(self.rotation), self.signs)
 
     @property
     def t(self) -> np.ndarray:
@@ -136,11 +165,24 @@ class Samples(_Frozen):
         return Samples, (
             self.track,
             self.stored_t,
-            self.r,
+            self.unit,
             self.stored_rotation,
             self.missing_rotations,
             self.missing_rows,
+            self.signs,
         )
+
+
+def _sign_codes(rotation: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """The sign codes that make ``r`` from ``rotation`` (every row, bit for bit)."""
+    codes = np.empty(len(r), dtype=np.int8)
+    bad = _signed.sign_codes(kernel_array(rotation), kernel_array(r), codes)
+    if bad >= 0:  # not a user's mistake: r was made from rotation
+        raise RuntimeError(
+            f"unit rotation row {bad} is not the stored row {bad} normalised "
+            f"and signed: {r[bad]} from {rotation[bad]}"
+        )
+    return codes
 
 
 def _masked(values: np.ndarray, mask: np.ndarray | None) -> np.ndarray:
@@ -169,7 +211,7 @@ class FrameData(_Frozen):
         "discrete",
         "max_gap",
         "track",
-        "r",
+        "signs",
         "missing_rotations",
         "__weakref__",
     )
@@ -180,7 +222,7 @@ class FrameData(_Frozen):
     discrete: bool
     max_gap: float | None
     track: _time.Track | None
-    r: np.ndarray
+    signs: np.ndarray | None
     missing_rotations: bool
 
     def __init__(
@@ -198,7 +240,7 @@ class FrameData(_Frozen):
         setter(self, "discrete", bool(discrete))
         setter(self, "max_gap", max_gap)
         setter(self, "track", samples.track)
-        setter(self, "r", samples.r)
+        setter(self, "signs", samples.signs)
         setter(self, "missing_rotations", samples.missing_rotations)
 
     @property
@@ -210,6 +252,11 @@ class FrameData(_Frozen):
     def rotation(self) -> np.ndarray:
         """The samples' rotations as given (:attr:`Samples.rotation`)."""
         return self.samples.rotation
+
+    @property
+    def r(self) -> np.ndarray:
+        """The unit, sign-continuous rotations (:attr:`Samples.r`)."""
+        return self.samples.r
 
     def __reduce__(self):
         return FrameData, (

@@ -44,8 +44,9 @@ _NS_PER_S = 1e9
 _EMPTY_TIMES = np.zeros(1)
 _EMPTY_T = np.zeros((1, 3))
 _EMPTY_R = np.array([[1.0, 0.0, 0.0, 0.0]])
+_EMPTY_SIGNS = np.ones(1, dtype=np.int8)
 _EMPTY_TABLE = np.ones((1, kf.TABLE_COLUMNS))
-_EMPTY_SLOT = (_EMPTY_TIMES, _EMPTY_T, _EMPTY_R, _EMPTY_R, _EMPTY_TABLE)
+_EMPTY_SLOT = (_EMPTY_TIMES, _EMPTY_T, _EMPTY_SIGNS, _EMPTY_R, _EMPTY_TABLE)
 _TABLE_LOCK = threading.Lock()
 # prefill_chain takes the chain kernels' arguments up to the target times
 _PREFILL_ARGS = len(kf.CHAIN) + 1
@@ -164,7 +165,7 @@ class Plan:
         out: list[Any] = []
         for frame, table in zip(self.frames, self.tables, strict=True):
             c = table.rows if table is not None else _EMPTY_TABLE
-            out.append((frame.track.base, frame.t, frame.r, frame.rotation, c))
+            out.append((frame.track.base, frame.t, frame.signs, frame.rotation, c))
         out += [_EMPTY_SLOT] * (kf.SLOTS - len(self.frames))
         return kf.pack_slots(out)
 

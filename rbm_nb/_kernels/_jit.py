@@ -50,6 +50,7 @@ __all__ = [
     "F2",
     "F3",
     "I1",
+    "S1",
     "B2",
     "RF1",
     "RI1",
@@ -64,6 +65,7 @@ F1 = "float64[::1]"
 F2 = "float64[:, ::1]"
 F3 = "float64[:, :, ::1]"
 I1 = "int64[::1]"
+S1 = "int8[::1]"  # one sign code per sample (signed_rows)
 B2 = "boolean[:, ::1]"
 # read-only C-contiguous arrays, for the few kernels that only read an
 # argument users often hand over read-only (timestamps from an xarray or

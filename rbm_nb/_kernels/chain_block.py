@@ -7,8 +7,9 @@ the block's rows through each step in turn (the passes of
 :mod:`.chain_rows`), leaving the block's transforms in the scratch.
 
 A moving frame's arrays come in five tuples indexed by slot, one per
-quantity (:data:`SLOT_TYPES`): sample times, translations, rotations free
-of sign flips, rotations as stored, squad table. Changing :data:`SLOTS`
+quantity (:data:`SLOT_TYPES`): sample times, translations, the sign codes
+of the rotations free of sign flips (each row made from the stored one as
+it is read: :mod:`.signed_rows`), rotations as stored, squad table. Changing :data:`SLOTS`
 changes every kernel's declared signature with it.
 
 For each row, a moving step finds the frame's segment (:func:`gallop`,
@@ -25,10 +26,11 @@ from __future__ import annotations
 
 import math
 
-from ._jit import F1, F2, helper
+from ._jit import F1, F2, S1, helper
 from ._prefetch import prefetch
 from .chain_rows import (
     _ACC,
+    _CODE,
     _GATHERED,
     _GENERAL,
     _NEG,
@@ -47,12 +49,14 @@ from .chain_rows import (
     _compose_rows,
     _compose_static_rows,
     _own_rows,
+    _signed_unit_rows,
     _squad_rows,
     _wide_rows,
 )
 from .quaternion import _qslerp1, _qslerp_unit1, _sincos
 from .scalar import SINCOS_LIMIT
 from .search import gallop
+from .signed_rows import signed_unit_row
 from .squad_table import _DONE, _UNIT, RUN, TABLE_COLUMNS, _fill_run
 
 __all__ = ["SLOTS", "SLOT_TYPES", "STATIC", "SQUAD", "CONSTANT", "HELD"]
@@ -66,12 +70,12 @@ CONSTANT = 2
 HELD = 3
 
 # the declared types of the slot arguments: per quantity a tuple of SLOTS
-# arrays (times, t, r, p, c). Tuples of arrays of one type: numba's prange
+# arrays (times, t, s, p, c). Tuples of arrays of one type: numba's prange
 # passes them to its threads (a tuple of per-slot tuples it refuses).
 SLOT_TYPES = (
     f"UniTuple({F1}, {SLOTS})",
     f"UniTuple({F2}, {SLOTS})",
-    f"UniTuple({F2}, {SLOTS})",
+    f"UniTuple({S1}, {SLOTS})",
     f"UniTuple({F2}, {SLOTS})",
     f"UniTuple({F2}, {SLOTS})",
 )
@@ -79,7 +83,7 @@ SLOT_TYPES = (
 
 @helper
 def _chain_block(
-    plan, statics, offsets, gaps, own, slot_times, slot_t, slot_r, slot_p, slot_c,
+    plan, statics, offsets, gaps, own, slot_times, slot_t, slot_s, slot_p, slot_c,
     target, j0, j1, work, cur, rotation_only,
 ):  # fmt: skip
     """The chain at target[j0:j1], into the scratch ``work`` (WORK * BLOCK,).
@@ -114,7 +118,7 @@ def _chain_block(
             _compose_static_rows(work, statics, slot, inverse, first, rotation_only)
             continue
         # the slot's arrays, picked once per block
-        times, tr, r = slot_times[slot], slot_t[slot], slot_r[slot]
+        times, tr, sg = slot_times[slot], slot_t[slot], slot_s[slot]
         rp, c = slot_p[slot], slot_c[slot]
         off = offsets[slot]
         into = _ACC if first else _STEP
@@ -130,7 +134,7 @@ def _chain_block(
                 _compose_rows(work, inverse, False)
             continue
         i, filled = _moving_rows(
-            kind, own[slot], gaps[slot], off, times, tr, r, rp, c,
+            kind, own[slot], gaps[slot], off, times, tr, sg, rp, c,
             target, j0, nb, work, cur[slot], rotation_only,
         )  # fmt: skip
         cur[slot] = i
@@ -141,7 +145,7 @@ def _chain_block(
 
 @helper
 def _moving_rows(
-    kind, own, gap, off, times, tr, r, rp, c, target, j0, nb, work, i, rotation_only
+    kind, own, gap, off, times, tr, sg, rp, c, target, j0, nb, work, i, rotation_only
 ):
     """A moving frame at target[j0:j0+nb] + off, into the step's rows.
 
@@ -169,10 +173,10 @@ def _moving_rows(
                     g = i + AHEAD
                     prefetch(c, TABLE_COLUMNS * g)
                     prefetch(c, TABLE_COLUMNS * g + 8)
-                    prefetch(r, 4 * g)
+                    prefetch(rp, 4 * g)
                     prefetch(tr, 3 * g)
                 if c[i, _DONE] == 0.0:  # first use of the segment
-                    computed += _fill_run(r, rp, times, c, i, RUN)
+                    computed += _fill_run(sg, rp, times, c, i, RUN)
                 # the usual row, in few operations and branches: inside the
                 # samples, not a sample time of the frame's own times nor
                 # inside a gap, its segment's table row unit (the same
@@ -202,8 +206,11 @@ def _moving_rows(
                         tz = tr[i, 2] + tau * (tr[i + 1, 2] - tr[i, 2])
                     work[_TH1 + b] = c[i, 4]
                     work[_TH2 + b] = c[i, 9]
+                    # r[i] as stored, and its code: made unit and signed
+                    # for the whole block at once (_signed_unit_rows)
+                    work[_CODE + b] = sg[i]
                     for e in range(4):
-                        work[_P + e * BLOCK + b] = r[i, e]
+                        work[_P + e * BLOCK + b] = rp[i, e]
                         work[_U1 + e * BLOCK + b] = c[i, 5 + e]
                         work[_Q + e * BLOCK + b] = c[i, e]
                         work[_U2 + e * BLOCK + b] = c[i, 10 + e]
@@ -237,7 +244,7 @@ def _moving_rows(
                 tx = ty = tz = qw = qx = qy = qz = math.nan
             else:
                 tx, ty, tz, qw, qx, qy, qz, filled = _squad_row(
-                    t, i, k, times, tr, r, rp, c, rotation_only
+                    t, i, k, times, tr, sg, rp, c, rotation_only
                 )
                 computed += filled
         work[_PATH + b] = 0.0  # (evaluated here)
@@ -250,7 +257,10 @@ def _moving_rows(
         work[_STEP + 6 * BLOCK + b] = qz
     for b in range(nb, BLOCK):  # past the end of a short last block
         work[_PATH + b] = 0.0
-    wide = _squad_rows(work) if gathered > 0 else 0
+    wide = 0
+    if gathered > 0:
+        _signed_unit_rows(work)
+        wide = _squad_rows(work)
     if wide >= _WIDE_ROWS:
         wide = _wide_rows(work)
     if wide > 0:
@@ -259,7 +269,7 @@ def _moving_rows(
 
 
 @helper(inline=True)
-def _squad_row(t, i, k, times, tr, r, rp, c, rotation_only):
+def _squad_row(t, i, k, times, tr, sg, rp, c, rotation_only):
     """A continuous frame at t by the scalar route, any segment, any time.
 
     Linear translation and squad rotation in segment g (``i``, or the last
@@ -274,7 +284,7 @@ def _squad_row(t, i, k, times, tr, r, rp, c, rotation_only):
         k = n - 2
     g = i if i >= 0 else n - 1
     if c[g, _DONE] == 0.0:  # first use of the segment
-        computed += _fill_run(r, rp, times, c, g, RUN)
+        computed += _fill_run(sg, rp, times, c, g, RUN)
     if g < n - 1:
         dt = times[g + 1] - times[g]
     else:
@@ -293,21 +303,18 @@ def _squad_row(t, i, k, times, tr, r, rp, c, rotation_only):
         ty = tr[k, 1] + w * (tr[k + 1, 1] - tr[k, 1])
         tz = tr[k, 2] + w * (tr[k + 1, 2] - tr[k, 2])
     # the sign of the stored sample the segment starts from
-    neg = (
-        r[k, 0] * rp[k, 0]
-        + r[k, 1] * rp[k, 1]
-        + r[k, 2] * rp[k, 2]
-        + r[k, 3] * rp[k, 3]
-    ) < 0.0
+    kw, kx, ky, kz = signed_unit_row(rp, sg, k)
+    neg = (kw * rp[k, 0] + kx * rp[k, 1] + ky * rp[k, 2] + kz * rp[k, 3]) < 0.0
+    rw, rx, ry, rz = signed_unit_row(rp, sg, g)
     # (rows inside the samples with a unit segment took the short route,
     # into the squad pass; here the rest, by the scalar route, which the
     # squad pass equals bit for bit: tests/core/test_fused_rows.py)
     if abs(c[g, _DONE]) == _UNIT:
         sn, cs = _sincos(tau * c[g, 4])
-        s1w = cs * r[g, 0] + sn * c[g, 5]
-        s1x = cs * r[g, 1] + sn * c[g, 6]
-        s1y = cs * r[g, 2] + sn * c[g, 7]
-        s1z = cs * r[g, 3] + sn * c[g, 8]
+        s1w = cs * rw + sn * c[g, 5]
+        s1x = cs * rx + sn * c[g, 6]
+        s1y = cs * ry + sn * c[g, 7]
+        s1z = cs * rz + sn * c[g, 8]
         sn, cs = _sincos(tau * c[g, 9])
         s2w = cs * c[g, 0] + sn * c[g, 10]
         s2x = cs * c[g, 1] + sn * c[g, 11]
@@ -315,12 +322,10 @@ def _squad_row(t, i, k, times, tr, r, rp, c, rotation_only):
         s2z = cs * c[g, 3] + sn * c[g, 13]
     else:  # not unit: b in columns 4:8
         if g < n - 1:
-            nw, nx, ny, nz = r[g + 1, 0], r[g + 1, 1], r[g + 1, 2], r[g + 1, 3]
+            nw, nx, ny, nz = signed_unit_row(rp, sg, g + 1)
         else:
             nw, nx, ny, nz = c[n - 1, 4], c[n - 1, 5], c[n - 1, 6], c[n - 1, 7]
-        s1w, s1x, s1y, s1z = _qslerp1(
-            r[g, 0], r[g, 1], r[g, 2], r[g, 3], nw, nx, ny, nz, tau
-        )
+        s1w, s1x, s1y, s1z = _qslerp1(rw, rx, ry, rz, nw, nx, ny, nz, tau)
         s2w, s2x, s2y, s2z = _qslerp1(
             c[g, 0], c[g, 1], c[g, 2], c[g, 3], c[g, 4], c[g, 5], c[g, 6], c[g, 7],
             tau,

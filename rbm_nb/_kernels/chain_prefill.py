@@ -176,7 +176,7 @@ def _fill_pieces(plan, sizes, lo, hi, last, pieces_wanted):
 
 @kernel(I1, F2, F1, F1, I1, *SLOT_TYPES, F1, options=PARALLEL_KERNEL)
 def prefill_chain(
-    plan, statics, offsets, gaps, own, slot_times, slot_t, slot_r, slot_p, slot_c,
+    plan, statics, offsets, gaps, own, slot_times, slot_t, slot_s, slot_p, slot_c,
     target,
 ):  # fmt: skip
     """Compute every squad table row a call at these target times will read.
@@ -227,7 +227,7 @@ def prefill_chain(
     for p in prange(pieces.shape[0]):
         slot = pieces[p, 0]
         computed += _fill_range(
-            slot_r[slot], slot_p[slot], slot_times[slot], slot_c[slot],
+            slot_s[slot], slot_p[slot], slot_times[slot], slot_c[slot],
             pieces[p, 1], pieces[p, 2],
         )  # fmt: skip
     return computed, filled

@@ -85,7 +85,9 @@ _STEP = 7 * BLOCK  # 7:14 the step's transform at each row
 _TAU = 14 * BLOCK  # squad's fraction τ of the row's segment g
 _TH1 = 15 * BLOCK  # θ of the great circle r[g] -> r[g+1] (table column 4)
 _TH2 = 16 * BLOCK  # θ of the great circle a[g] -> b[g] (table column 9)
-_P = 17 * BLOCK  # 17:21 r[g]; after the squad pass the inner slerp r[g] -> r[g+1]
+# 17:21 r[g] (gathered as stored, made unit and signed by _signed_unit_rows);
+# after the squad pass the inner slerp r[g] -> r[g+1]
+_P = 17 * BLOCK
 _U1 = 21 * BLOCK  # 21:25 u of the first great circle (table columns 5:9)
 _Q = 25 * BLOCK  # 25:29 a[g]; after the squad pass the inner slerp a[g] -> b[g]
 _U2 = 29 * BLOCK  # 29:33 u of the second great circle (table columns 10:14)
@@ -93,7 +95,8 @@ _NEG = 33 * BLOCK  # 1.0 where the result takes the opposite sign (the stored sa
 # 1.0 rows gathered for the squad pass, 0.0 rows already evaluated; the
 # squad pass turns 1.0 into 2.0 where the outer slerp needs the general route
 _PATH = 34 * BLOCK
-WORK = 35
+_CODE = 35 * BLOCK  # the sign code of r[g] (signed_rows), as a float
+WORK = 36
 _GATHERED = 1.0
 _GENERAL = 2.0
 
@@ -206,6 +209,27 @@ def _arc_rows(work, theta, start, u):
             work[start + e * BLOCK + b] = (
                 cs * work[start + e * BLOCK + b] + sn * work[u + e * BLOCK + b]
             )
+
+
+@helper(options=EXACT_VECTOR_KERNEL)
+def _signed_unit_rows(work):
+    """The gathered rows' r[g] (rows _P), from the stored rows gathered there
+    and their sign codes (row _CODE): ``signed_rows.signed_unit_row``'s
+    operations, in a loop LLVM vectorises (one row at a time as they were
+    gathered cost 11 % of a lookup through the head/eye chain). Rows not
+    gathered keep their values but for a sign (finite stays finite)."""
+    for b in range(BLOCK):
+        w, x = work[_P + b], work[_P + BLOCK + b]
+        y, z = work[_P + 2 * BLOCK + b], work[_P + 3 * BLOCK + b]
+        code = work[_CODE + b]
+        norm = math.sqrt(w * w + x * x + y * y + z * z)
+        as_is = (abs(code) == 2.0) | (work[_PATH + b] != _GATHERED)
+        d = 1.0 if (norm == 1.0) | (norm != norm) | as_is else norm
+        sign = -1.0 if code < 0.0 else 1.0
+        work[_P + b] = sign * (w / d)
+        work[_P + BLOCK + b] = sign * (x / d)
+        work[_P + 2 * BLOCK + b] = sign * (y / d)
+        work[_P + 3 * BLOCK + b] = sign * (z / d)
 
 
 @helper(options=EXACT_VECTOR_KERNEL)

@@ -45,11 +45,12 @@ own : int64 (SLOTS,)
 gaps : float64 (SLOTS,)
     Each slot's ``max_gap`` (inf: none): target times strictly inside a
     longer gap between two samples get NaN.
-slot_times, slot_t, slot_r, slot_p, slot_c : tuples of SLOTS arrays
+slot_times, slot_t, slot_s, slot_p, slot_c : tuples of SLOTS arrays
     One tuple per quantity, indexed by slot (``chain_block.SLOT_TYPES``):
-    a moving frame's sample times (n,), translations (n, 3), rotations
-    free of sign flips (``unflip``) (n, 4), rotations as stored (with their
-    signs) (n, 4) and its squad table (n, 15) (:mod:`.squad_table`; any
+    a moving frame's sample times (n,), translations (n, 3), the int8 sign
+    codes (n,) that make its rotations free of sign flips (``unflip``)
+    from the rotations as stored (:mod:`.signed_rows`), rotations as stored
+    (with their signs) (n, 4) and its squad table (n, 15) (:mod:`.squad_table`; any
     (1, 15) array for a frame that is not interpolated by squad). Unused
     slots get any arrays of these types. :func:`pack_slots` builds them
     from per-frame tuples.
@@ -109,7 +110,7 @@ CHAIN = (I1, F2, F1, F1, I1, *SLOT_TYPES)
 def pack_slots(
     frames: Sequence[tuple[np.ndarray, ...]],
 ) -> tuple[tuple[np.ndarray, ...], ...]:
-    """The slot arguments from SLOTS per-frame tuples (times, t, r, p, c)."""
+    """The slot arguments from SLOTS per-frame tuples (times, t, s, p, c)."""
     return tuple(zip(*frames, strict=True))
 
 
@@ -133,7 +134,7 @@ def pack_slots(
 
 def _lookup_body(chunks: int) -> Callable[..., Any]:
     def body(
-        plan, statics, offsets, gaps, own, slot_times, slot_t, slot_r, slot_p, slot_c,
+        plan, statics, offsets, gaps, own, slot_times, slot_t, slot_s, slot_p, slot_c,
         target, rotation_only,
     ):  # fmt: skip
         m = target.shape[0]
@@ -150,7 +151,7 @@ def _lookup_body(chunks: int) -> Callable[..., Any]:
                 j1 = min(j0 + BLOCK, bounds[ch + 1])
                 computed += _chain_block(
                     plan, statics, offsets, gaps, own,
-                    slot_times, slot_t, slot_r, slot_p, slot_c,
+                    slot_times, slot_t, slot_s, slot_p, slot_c,
                     target, j0, j1, work, cur_c, rotation_only,
                 )  # fmt: skip
                 _store_lookup(work, t_out, r_out, j0, j1, rotation_only)
@@ -161,7 +162,7 @@ def _lookup_body(chunks: int) -> Callable[..., Any]:
 
 def _transform_body(chunks: int) -> Callable[..., Any]:
     def body(
-        plan, statics, offsets, gaps, own, slot_times, slot_t, slot_r, slot_p, slot_c,
+        plan, statics, offsets, gaps, own, slot_times, slot_t, slot_s, slot_p, slot_c,
         target, data, mode,
     ):  # fmt: skip
         m = target.shape[0]
@@ -178,7 +179,7 @@ def _transform_body(chunks: int) -> Callable[..., Any]:
                 j1 = min(j0 + BLOCK, bounds[ch + 1])
                 computed += _chain_block(
                     plan, statics, offsets, gaps, own,
-                    slot_times, slot_t, slot_r, slot_p, slot_c,
+                    slot_times, slot_t, slot_s, slot_p, slot_c,
                     target, j0, j1, work, cur_c, rotation_only,
                 )  # fmt: skip
                 _apply_block(work, data, out, j0, j1, mode)

@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from .._infra.config import EXACT_VECTOR_KERNEL
-from ._jit import F1, F2, B, F, helper, kernel
+from ._jit import F1, F2, S1, B, F, helper, kernel
 
 # Coordinates beyond this are refused with the infinities: no physical
 # position comes near (the observable universe is ~1e27 m), and sums and
@@ -216,6 +216,67 @@ def moving_samples(t, q, tol, t_out, q_out, r_out):
             sign = -1.0 if d < 0.0 else 1.0
             w, x, y, z = sign * w, sign * x, sign * y, sign * z
             rb[4 * i], rb[4 * i + 1], rb[4 * i + 2], rb[4 * i + 3] = w, x, y, z
+            if not math.isnan(w + x + y + z):
+                pw, px, py, pz = w, x, y, z
+                have = True
+    return bad, missing
+
+
+@kernel(F2, F2, F, S1, options=EXACT_VECTOR_KERNEL)
+def moving_signs(t, q, tol, codes):
+    """:func:`moving_samples`' checks of a frame that keeps ``t`` and ``q``
+    themselves, and the sign codes of its unit rows (``signed_rows``).
+
+    The frame keeps the caller's arrays (nobody can change them) and one
+    byte per sample instead of copies and the unit rows: ``codes`` (n,)
+    gets +1 or -1, the sign ``moving_samples`` gives the row in ``r_out``,
+    found by the same operations, so that ``signed_rows.signed_unit_row``
+    makes that row bit for bit.
+
+    Returns
+    -------
+    bad, missing : int
+        As :func:`moving_samples`.
+    """
+    n = q.shape[0]
+    tf, qf = t.reshape(-1), q.reshape(-1)
+    unit = np.empty(4 * _SAMPLES_BLOCK)
+    bad = 0
+    missing = 0
+    have = False
+    pw = px = py = pz = 0.0
+    for start in range(0, n, _SAMPLES_BLOCK):
+        m = min(_SAMPLES_BLOCK, n - start)
+        tb = tf[3 * start : 3 * (start + m)]
+        qb = qf[4 * start : 4 * (start + m)]
+        for i in range(m):
+            x, y, z = tb[3 * i], tb[3 * i + 1], tb[3 * i + 2]
+            nan = (x != x) + (y != y) + (z != z)
+            inf = (abs(x) > MAX_COORDINATE) + (abs(y) > MAX_COORDINATE)
+            inf += abs(z) > MAX_COORDINATE
+            bad += ((nan != 0) & (nan != 3)) | (inf != 0)
+        for i in range(m):
+            w, x, y, z = qb[4 * i], qb[4 * i + 1], qb[4 * i + 2], qb[4 * i + 3]
+            nan = (w != w) + (x != x) + (y != y) + (z != z)
+            inf = (abs(w) > MAX_COORDINATE) + (abs(x) > MAX_COORDINATE)
+            inf += (abs(y) > MAX_COORDINATE) + (abs(z) > MAX_COORDINATE)
+            bad += ((nan != 0) & (nan != 4)) | (inf != 0)
+            missing += nan == 4
+            norm = math.sqrt(w * w + x * x + y * y + z * z)
+            bad += abs(norm - 1.0) > tol
+            d = 1.0 if (norm == 1.0) | (norm != norm) else norm
+            unit[4 * i], unit[4 * i + 1] = w / d, x / d
+            unit[4 * i + 2], unit[4 * i + 3] = y / d, z / d
+        # moving_samples' sign pass, keeping the sign instead of the row
+        cb = codes[start : start + m]
+        for i in range(m):
+            w, x, y, z = unit[4 * i], unit[4 * i + 1], unit[4 * i + 2], unit[4 * i + 3]
+            d = 0.0
+            if have:
+                d = pw * w + px * x + py * y + pz * z
+            sign = -1.0 if d < 0.0 else 1.0
+            cb[i] = -1 if d < 0.0 else 1
+            w, x, y, z = sign * w, sign * x, sign * y, sign * z
             if not math.isnan(w + x + y + z):
                 pw, px, py, pz = w, x, y, z
                 have = True

@@ -18,7 +18,7 @@ import math
 import numpy as np
 
 from .._infra.config import EXACT_VECTOR_KERNEL
-from ._jit import F1, F2, helper, kernel  # noqa: E741
+from ._jit import F1, F2, S1, helper, kernel  # noqa: E741
 from .quaternion import _EPS, _SQRT2, _is_unit, _qexp1, _qinv1, _qlog1, _qmul1
 from .scalar import (
     SERIES_ANGLE,
@@ -28,6 +28,7 @@ from .scalar import (
     cos_small,
     sinc_small,
 )
+from .signed_rows import signed_unit_row
 
 __all__ = ["TABLE_COLUMNS", "RUN", "squad_table"]
 
@@ -131,18 +132,17 @@ RUN = 256
 
 
 @helper(inline=True)
-def _log_step(r, i):
+def _log_step(sg, rp, i):
     """log(r[i]⁻¹ r[i+1]), as :func:`quaternion.squad_coefficients` forms it."""
-    n = r.shape[0]
+    n = sg.shape[0]
     if i < 0 or i > n - 2:
         return 0.0, 0.0, 0.0, 0.0  # not used by any row
     # r[i]⁻¹ with one division, not _qinv1's four (within an ulp of it)
-    w, x, y, z = r[i, 0], r[i, 1], r[i, 2], r[i, 3]
+    w, x, y, z = signed_unit_row(rp, sg, i)
     k = 1.0 / (w * w + x * x + y * y + z * z)
     iw, ix, iy, iz = w * k, -x * k, -y * k, -z * k
-    nw, nx, ny, nz = _qmul1(
-        iw, ix, iy, iz, r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3]
-    )
+    bw, bx, by, bz = signed_unit_row(rp, sg, i + 1)
+    nw, nx, ny, nz = _qmul1(iw, ix, iy, iz, bw, bx, by, bz)
     return _qlog_table(nw, nx, ny, nz)
 
 
@@ -154,34 +154,20 @@ def _inv_interval(t, k):
     return 1.0 / (t[k + 1] - t[k])
 
 
-@helper(inline=True)
-def _first_half(r, i):
-    """Whether r[i]·r[i+1] > 0 (the arc between them is under π/2)."""
-    return (
-        r[i, 0] * r[i + 1, 0]
-        + r[i, 1] * r[i + 1, 1]
-        + r[i, 2] * r[i + 1, 2]
-        + r[i, 3] * r[i + 1, 3]
-    ) > 0.0
-
-
 @helper
-def _stored_sign(r, rp, i):
+def _stored_sign(rw, rx, ry, rz, rp, i):
     """-1.0 where the stored sample i is -r[i], else 1.0 (the chain's test)."""
-    dot = (
-        r[i, 0] * rp[i, 0]
-        + r[i, 1] * rp[i, 1]
-        + r[i, 2] * rp[i, 2]
-        + r[i, 3] * rp[i, 3]
-    )
+    dot = rw * rp[i, 0] + rx * rp[i, 1] + ry * rp[i, 2] + rz * rp[i, 3]
     return -1.0 if dot < 0.0 else 1.0
 
 
 @helper
-def _table_row(r, rp, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, rb):
+def _table_row(sg, rp, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, rb):
     """Fill row i of the squad table of (r, t) (n >= 2) into ``c``.
 
-    ``rp``: the rotations as stored, for the sign in the state column.
+    ``rp``: the rotations as stored, ``sg`` their sign codes: the samples
+    r (:func:`.signed_rows.signed_unit_row`), and the sign in the state
+    column.
 
     Row i of ``squad_coefficients`` (a, b) and ``squad_segments`` to within
     4 ulp, from samples i-1 .. i+2, the logs p = L[i-1], l = L[i],
@@ -193,11 +179,16 @@ def _table_row(r, rp, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, 
     route does not cover, and inlining its exact routes (exp, log and
     great circles) into every caller multiplied compile time.
     """
-    n = r.shape[0]
+    n = sg.shape[0]
+    # samples i and i+1 (r1 is not read for the last row)
+    rw, rx, ry, rz = signed_unit_row(rp, sg, i)
+    r1w = r1x = r1y = r1z = 0.0
+    if i < n - 1:
+        r1w, r1x, r1y, r1z = signed_unit_row(rp, sg, i + 1)
     # a[i]; a missing sample i-1 (a NaN log p) starts a run: the end rule,
     # as at the first sample (``quaternion.squad_coefficients``)
     if i == 0 or i == n - 1 or math.isnan(pw):
-        aw, ax, ay, az = r[i, 0], r[i, 1], r[i, 2], r[i, 3]
+        aw, ax, ay, az = rw, rx, ry, rz
     else:
         ew, ex, ey, ez = _qexp_table(
             (-lw + pw * ra) * 0.25,
@@ -205,7 +196,7 @@ def _table_row(r, rp, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, 
             (-ly + py * ra) * 0.25,
             (-lz + pz * ra) * 0.25,
         )
-        aw, ax, ay, az = _qmul1(r[i, 0], r[i, 1], r[i, 2], r[i, 3], ew, ex, ey, ez)
+        aw, ax, ay, az = _qmul1(rw, rx, ry, rz, ew, ex, ey, ez)
     # b[i], and the sample the segment ends at; a missing sample i+2 (a
     # NaN log n) ends the run at i+1
     if i < n - 2 and not math.isnan(nw):
@@ -215,22 +206,17 @@ def _table_row(r, rp, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, 
             (ny * rb - ly) * -0.25,
             (nz * rb - lz) * -0.25,
         )
-        bw, bx, by, bz = _qmul1(
-            r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3], ew, ex, ey, ez
-        )
+        bw, bx, by, bz = _qmul1(r1w, r1x, r1y, r1z, ew, ex, ey, ez)
     elif i <= n - 2:
-        bw, bx, by, bz = r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3]
+        bw, bx, by, bz = r1w, r1x, r1y, r1z
     else:
-        # the virtual sample past the end: r[n-1] r[n-2]⁻¹ r[n-1]
-        iw, ix, iy, iz = _qinv1(r[n - 2, 0], r[n - 2, 1], r[n - 2, 2], r[n - 2, 3])
-        w, x, y, z = _qmul1(
-            r[n - 1, 0], r[n - 1, 1], r[n - 1, 2], r[n - 1, 3], iw, ix, iy, iz
-        )
-        bw, bx, by, bz = _qmul1(
-            w, x, y, z, r[n - 1, 0], r[n - 1, 1], r[n - 1, 2], r[n - 1, 3]
-        )
+        # the virtual sample past the end: r[n-1] r[n-2]⁻¹ r[n-1] (i is n-1)
+        iw, ix, iy, iz = signed_unit_row(rp, sg, n - 2)
+        iw, ix, iy, iz = _qinv1(iw, ix, iy, iz)
+        w, x, y, z = _qmul1(rw, rx, ry, rz, iw, ix, iy, iz)
+        bw, bx, by, bz = _qmul1(w, x, y, z, rw, rx, ry, rz)
     if i < n - 1:
-        ew, ex, ey, ez = r[i + 1, 0], r[i + 1, 1], r[i + 1, 2], r[i + 1, 3]
+        ew, ex, ey, ez = r1w, r1x, r1y, r1z
     else:
         ew, ex, ey, ez = bw, bx, by, bz
     c[i, 0] = aw
@@ -238,29 +224,29 @@ def _table_row(r, rp, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, 
     c[i, 2] = ay
     c[i, 3] = az
     unit = (
-        _is_unit(r[i, 0], r[i, 1], r[i, 2], r[i, 3])
+        _is_unit(rw, rx, ry, rz)
         and _is_unit(ew, ex, ey, ez)
         and _is_unit(aw, ax, ay, az)
         and _is_unit(bw, bx, by, bz)
     )
     if unit:
         theta2 = lx * lx + ly * ly + lz * lz
-        if i < n - 1 and theta2 > 0.0 and abs(lw) < _TINY and _first_half(r, i):
+        # (r[i]·r[i+1] > 0: the arc between them is under π/2)
+        first_half = (rw * r1w + rx * r1x + ry * r1y + rz * r1z) > 0.0
+        if i < n - 1 and theta2 > 0.0 and abs(lw) < _TINY and first_half:
             # r[i+1] = r[i] exp(l) with |l| < π/2 (r[i]·r[i+1] > 0, no flip):
             # the arc is θ = |l| along u = r[i] (0, l / θ), which the log has
             # all but worked out (within 4 ulp of _geodesic_table's atan)
             theta = math.sqrt(theta2)
             k = 1.0 / theta
-            ow, ox, oy, oz = _qmul1(
-                r[i, 0], r[i, 1], r[i, 2], r[i, 3], 0.0, lx * k, ly * k, lz * k
-            )
+            ow, ox, oy, oz = _qmul1(rw, rx, ry, rz, 0.0, lx * k, ly * k, lz * k)
             c[i, 4] = theta
             c[i, 5] = ow
             c[i, 6] = ox
             c[i, 7] = oy
             c[i, 8] = oz
         else:
-            g = _geodesic_table(r[i, 0], r[i, 1], r[i, 2], r[i, 3], ew, ex, ey, ez)
+            g = _geodesic_table(rw, rx, ry, rz, ew, ex, ey, ez)
             c[i, 4] = g[0]
             c[i, 5] = g[1]
             c[i, 6] = g[2]
@@ -272,7 +258,7 @@ def _table_row(r, rp, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, 
         c[i, 11] = g[2]
         c[i, 12] = g[3]
         c[i, 13] = g[4]
-        c[i, _DONE] = _UNIT * _stored_sign(r, rp, i)
+        c[i, _DONE] = _UNIT * _stored_sign(rw, rx, ry, rz, rp, i)
     else:
         c[i, 4] = bw
         c[i, 5] = bx
@@ -280,7 +266,7 @@ def _table_row(r, rp, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra, 
         c[i, 7] = bz
         for k in range(8, 14):
             c[i, k] = 0.0
-        c[i, _DONE] = _NOT_UNIT * _stored_sign(r, rp, i)
+        c[i, _DONE] = _NOT_UNIT * _stored_sign(rw, rx, ry, rz, rp, i)
 
 
 # Rows are filled in blocks: the samples, logs and intervals a block reads
@@ -329,7 +315,7 @@ def _control_point_series(rw, rx, ry, rz, ew, ex, ey, ez):
 
 
 @helper(options=EXACT_VECTOR_KERNEL)
-def _fill_block(r, rp, t, c, i0, i1, s):
+def _fill_block(sg, rp, t, c, i0, i1, s):
     """Rows i0..i1-1 of the table (1 <= i0, i1 <= n - 2, i1 - i0 <= FILL_BLOCK).
 
     ``s``: scratch of shape (_S_ROWS, FILL_BLOCK + 3). In stages, each a few
@@ -337,19 +323,22 @@ def _fill_block(r, rp, t, c, i0, i1, s):
     them): samples and logs, control points, great circles, the rows.
     """
     m = i1 - i0
-    _block_logs(r, t, s, i0, m)
+    _block_logs(sg, rp, t, s, i0, m)
     _block_control_points(s, m)
     _block_arcs(s, m)
-    _block_store(r, rp, c, s, i0, m)
+    _block_store(sg, rp, c, s, i0, m)
 
 
 @helper(inline=True, options=EXACT_VECTOR_KERNEL)
-def _block_logs(r, t, s, i0, m):
+def _block_logs(sg, rp, t, s, i0, m):
     """Samples i0-1 .. i0+m+1, their intervals and the logs between them, into ``s``."""
     # gather samples i0-1 .. i1+1 (index k: sample i0 - 1 + k)
-    for j in range(4):
-        for k in range(m + 3):
-            s[_S_Q + j, k] = r[i0 - 1 + k, j]
+    for k in range(m + 3):
+        w, x, y, z = signed_unit_row(rp, sg, i0 - 1 + k)
+        s[_S_Q, k] = w
+        s[_S_Q + 1, k] = x
+        s[_S_Q + 2, k] = y
+        s[_S_Q + 3, k] = z
     for k in range(m + 2):
         s[_S_DT, k] = t[i0 + k] - t[i0 - 1 + k]
     for k in range(m + 2):
@@ -379,7 +368,7 @@ def _block_logs(r, t, s, i0, m):
         s[_S_LBAD, k] = 0.0 if fast else 1.0
     for k in range(m + 2):
         if s[_S_LBAD, k] != 0.0:
-            lw, lx, ly, lz = _log_step(r, i0 - 1 + k)
+            lw, lx, ly, lz = _log_step(sg, rp, i0 - 1 + k)
             s[_S_L, k] = lw
             s[_S_L + 1, k] = lx
             s[_S_L + 2, k] = ly
@@ -506,14 +495,14 @@ def _block_arcs(s, m):
 
 
 @helper(inline=True, options=EXACT_VECTOR_KERNEL)
-def _block_store(r, rp, c, s, i0, m):
+def _block_store(sg, rp, c, s, i0, m):
     """The block's rows into the table: by the vector route where it held,
     else by :func:`_table_row`."""
     for b in range(m):
         i = i0 + b
         if s[_S_BAD, b] != 0.0:
             _table_row(
-                r, rp, c, i,
+                sg, rp, c, i,
                 s[_S_L, b], s[_S_L + 1, b], s[_S_L + 2, b], s[_S_L + 3, b],
                 s[_S_L, b + 1], s[_S_L + 1, b + 1], s[_S_L + 2, b + 1],
                 s[_S_L + 3, b + 1],
@@ -526,37 +515,33 @@ def _block_store(r, rp, c, s, i0, m):
                 c[i, j] = s[_S_OUT + j, b]
             # (_stored_sign written out: a helper taking the arrays would
             # count references once per row)
-            dot = (
-                r[i, 0] * rp[i, 0]
-                + r[i, 1] * rp[i, 1]
-                + r[i, 2] * rp[i, 2]
-                + r[i, 3] * rp[i, 3]
-            )
+            rw, rx, ry, rz = signed_unit_row(rp, sg, i)
+            dot = rw * rp[i, 0] + rx * rp[i, 1] + ry * rp[i, 2] + rz * rp[i, 3]
             c[i, _DONE] = -_UNIT if dot < 0.0 else _UNIT
 
 
 @helper
-def _fill_row(r, rp, t, c, i):
+def _fill_row(sg, rp, t, c, i):
     """Row i of the table alone (its three logs computed here)."""
-    n = r.shape[0]
-    pw, px, py, pz = _log_step(r, i - 1)
-    lw, lx, ly, lz = _log_step(r, i)
-    nw, nx, ny, nz = _log_step(r, i + 1)
+    n = sg.shape[0]
+    pw, px, py, pz = _log_step(sg, rp, i - 1)
+    lw, lx, ly, lz = _log_step(sg, rp, i)
+    nw, nx, ny, nz = _log_step(sg, rp, i + 1)
     dt = t[i + 1] - t[i] if i < n - 1 else 0.0
     _table_row(
-        r, rp, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz,
+        sg, rp, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz,
         dt * _inv_interval(t, i - 1), dt * _inv_interval(t, i + 1),
     )  # fmt: skip
 
 
 @helper
-def _fill_run(r, rp, t, c, g, count):
+def _fill_run(sg, rp, t, c, g, count):
     """Compute row g of the table and the missing rows after it (``count`` at most).
 
     Stops before the first row already computed. Returns the number of
     rows computed.
     """
-    n = r.shape[0]
+    n = sg.shape[0]
     end = min(g + count, n)
     stop = g + 1
     while stop < end and c[stop, _DONE] == 0.0:
@@ -565,35 +550,35 @@ def _fill_run(r, rp, t, c, g, count):
     i = g
     while i < stop:
         if i == 0 or i >= n - 2:
-            _fill_row(r, rp, t, c, i)
+            _fill_row(sg, rp, t, c, i)
             i += 1
         else:
             j = min(i + FILL_BLOCK, stop, n - 2)
-            _fill_block(r, rp, t, c, i, j, s)
+            _fill_block(sg, rp, t, c, i, j, s)
             i = j
     return stop - g
 
 
-@kernel(F2, F2, F1)
-def squad_table(r, p, t):
+@kernel(S1, F2, F1)
+def squad_table(sg, p, t):
     """The whole squad table of rotations r (n >= 2) at strictly increasing t.
 
-    ``r``: the rotations free of sign flips (``unflip``) of ``p``, the
-    rotations as stored.
+    ``sg``: the sign codes (:mod:`.signed_rows`) that make r, the rotations
+    free of sign flips (``unflip``), from ``p``, the rotations as stored.
 
     Returns
     -------
     ndarray, shape (n, 15)
         See the module docstring; every row computed.
     """
-    n = r.shape[0]
+    n = sg.shape[0]
     c = np.zeros((n, TABLE_COLUMNS))
-    _fill_run(r, p, t, c, 0, n)
+    _fill_run(sg, p, t, c, 0, n)
     return c
 
 
 @helper
-def _fill_range(r, rp, t, c, a, b):
+def _fill_range(sg, rp, t, c, a, b):
     """Compute the missing rows of ``c[a:b]`` (nothing outside). Returns their number."""
     done = 0
     i = a
@@ -601,7 +586,7 @@ def _fill_range(r, rp, t, c, a, b):
         if c[i, _DONE] != 0.0:
             i += 1
             continue
-        k = _fill_run(r, rp, t, c, i, b - i)
+        k = _fill_run(sg, rp, t, c, i, b - i)
         done += k
         i += k
     return done

@@ -102,7 +102,7 @@ _STATE = 21
 @helper
 def _evaluate(
     plan, statics, offsets, gaps, own,
-    slot_times, slot_t, slot_r, slot_p, slot_c,
+    slot_times, slot_t, slot_s, slot_p, slot_c,
     target, j0, j1, base, rows, work, cur,
 ):  # fmt: skip
     """The chain's rotations at target[j0:j1] into ``rows[j - base]`` (w, x, y, z)."""
@@ -111,7 +111,7 @@ def _evaluate(
         k1 = min(k0 + BLOCK, j1)
         computed += _chain_block(
             plan, statics, offsets, gaps, own,
-            slot_times, slot_t, slot_r, slot_p, slot_c,
+            slot_times, slot_t, slot_s, slot_p, slot_c,
             target, k0, k1, work, cur, True,
         )  # fmt: skip
         for b in range(k1 - k0):
@@ -303,7 +303,7 @@ def _buffers(n):
 def _rates_body(chunks: int) -> Callable[..., Any]:
     def body(
         plan, statics, offsets, gaps, own,
-        slot_times, slot_t, slot_r, slot_p, slot_c,
+        slot_times, slot_t, slot_s, slot_p, slot_c,
         target, axes,
     ):  # fmt: skip
         n = target.shape[0]
@@ -328,7 +328,7 @@ def _rates_body(chunks: int) -> Callable[..., Any]:
                         cur_c = np.full(SLOTS, -1, dtype=np.int64)
                         computed += _evaluate(
                             plan, statics, offsets, gaps, own,
-                            slot_times, slot_t, slot_r, slot_p, slot_c,
+                            slot_times, slot_t, slot_s, slot_p, slot_c,
                             target, a, b, s0, both[r % 2], work_c, cur_c,
                         )  # fmt: skip
                 elif item == chunks and r >= 1:

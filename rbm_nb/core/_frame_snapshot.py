@@ -70,7 +70,9 @@ class FrameValue:
     @property
     def nbytes(self) -> int:
         s = self.samples
-        arrays = [s.stored_t, s.r, s.stored_rotation]
+        arrays = [s.stored_t, s.stored_rotation]
+        # a moving frame's sign codes, a static frame's unit rotation
+        arrays += [a for a in (s.signs, s.unit) if a is not None]
         if s.missing_rows is not None:
             arrays.append(s.missing_rows)
         if s.track is not None:
@@ -110,9 +112,11 @@ class FrameValue:
             track.kind,
         )  # fmt: skip
         mask = s.missing_rows
+        assert s.signs is not None  # (every moving frame's)
         samples = Samples(
-            cut, s.stored_t[rows], s.r[rows], s.stored_rotation[rows],
+            cut, s.stored_t[rows], None, s.stored_rotation[rows],
             s.missing_rotations, None if mask is None else mask[rows],
+            s.signs[rows],
         )  # fmt: skip
         return replace(self, samples=samples)
 

@@ -44,7 +44,6 @@ from .._engine import time as _time
 from .._engine import transform as _transform
 from .._engine import twist as _twist
 from .._engine.frame_data import FrameData, Samples
-from .._infra import memory as _memory
 from .._infra.config import UNIT_QUATERNION_TOLERANCE
 from .._infra.frozen import is_frozen, kernel_alias
 from .._kernels import quaternion as kq
@@ -1114,10 +1113,11 @@ def _masked_samples(label, track, translation, rotation, inverse, mask) -> Sampl
             return Samples(
                 track,
                 kernel_alias(t),
-                shared.r,
+                None,
                 kernel_alias(q),
                 shared.missing_rotations,
                 mask,
+                shared.signs,
             )
     # the masked copies, kept as any frame's (or a bad row named)
     return _prepared(label, track, masked[0], masked[1], inverse)
@@ -1208,32 +1208,28 @@ def _shared_samples(track, translation, rotation) -> Samples | None:
 
     Translations (n, 3) and rotations (n, 4) that nobody can change any more
     (:func:`rbm_nb._infra.frozen.is_frozen`: read-only down to their memory)
-    are kept as they are; only the unit, sign-continuous rotations
-    interpolation needs are made (by the same kernel and checks as a copied
-    frame's, so every value is the same bit for bit). At 3 h of the
-    explorer's recording this is 7 of the 11 floats a frame kept per sample.
-    None (copy as before) for anything else, or if a row fails a check (the
-    caller's checks then name it).
+    are kept as they are, with one sign code per sample from which the
+    kernels make the unit, sign-continuous rotations interpolation needs
+    (``_kernels.signed_rows``; the checks and arithmetic of a copied frame's,
+    so every value is the same bit for bit). At 3 h of the explorer's
+    recording a frame keeps 1 byte per sample beside the caller's 56 (it
+    kept 11 floats, then 4). None (copy as before) for anything else, or if
+    a row fails a check (the caller's checks then name it).
     """
     n = len(track)
     t = _frozen_rows(translation, 3)
     q = _frozen_rows(rotation, 4)
     if n < 2 or t is None or q is None or t.shape[0] != n or q.shape[0] != n:
         return None
-    # the kernel's copies of t and q go to scratch, dropped at once
-    scratch = np.empty(7 * n)
-    r = _memory.zeros((n, 4))
-    bad, missing = _rows.moving_samples(
-        kernel_alias(t),
-        kernel_alias(q),
-        UNIT_QUATERNION_TOLERANCE,
-        scratch[: 3 * n].reshape(n, 3),
-        scratch[3 * n :].reshape(n, 4),
-        r,
+    signs = np.empty(n, dtype=np.int8)
+    bad, missing = _rows.moving_signs(
+        kernel_alias(t), kernel_alias(q), UNIT_QUATERNION_TOLERANCE, signs
     )
     if bad:
         return None
-    return Samples(track, kernel_alias(t), r, kernel_alias(q), bool(missing))
+    return Samples(
+        track, kernel_alias(t), None, kernel_alias(q), bool(missing), None, signs
+    )
 
 
 def _transform_call(

@@ -17,6 +17,7 @@ import rbm_nb as rbm
 from rbm_nb._engine import chain as _chain
 from rbm_nb._engine import fused as _fused
 from rbm_nb._engine import time as _time
+from rbm_nb._engine.frame_data import _sign_codes
 from rbm_nb._kernels import fused as kf
 from rbm_nb._kernels import quaternion as kq
 from rbm_nb._kernels import resample as kr
@@ -295,7 +296,8 @@ def test_squad_table_equals_the_engine_coefficients():
         seg = kq.squad_segments(r, a, b)
         # stored with some signs flipped (r is their unflipped series)
         sign = np.where(rng.uniform(size=n) < 0.4, -1.0, 1.0)
-        table = kf.squad_table(r, sign[:, None] * r, t)
+        stored = sign[:, None] * r
+        table = kf.squad_table(_sign_codes(stored, r), stored, t)
         # exp/log by short series for small arcs: within a few ulp of 1
         tol = 4 * np.finfo(float).eps
         np.testing.assert_allclose(table[:, 0:4], a, rtol=0, atol=tol)
@@ -347,10 +349,11 @@ def test_squad_table_of_repeated_samples():
     assert 0.25 < steps.mean() < 0.35 and np.any(steps[1:] & steps[:-1])
     t = np.cumsum(rng.uniform(0.004, 0.006, n))
     stored = np.where(rng.uniform(size=n) < 0.3, -1.0, 1.0)[:, None] * r
-    table = kf.squad_table(r, stored, t)
+    codes = _sign_codes(stored, r)
+    table = kf.squad_table(codes, stored, t)
     one_by_one = np.zeros_like(table)
     for i in range(n):
-        kst._fill_row(r, stored, t, one_by_one, i)
+        kst._fill_row(codes, stored, t, one_by_one, i)
     np.testing.assert_array_equal(table.view(np.int64), one_by_one.view(np.int64))
     a, b = kq.squad_coefficients(r, t)
     seg = kq.squad_segments(r, a, b)
@@ -420,7 +423,8 @@ def test_exp_and_log_near_the_identity_are_within_4_ulp_of_libm():
     # further off, which no zero step of unit samples gives)
     units = rng.normal(size=(2000, 4))
     units /= np.linalg.norm(units, axis=1, keepdims=True)
-    ws = np.array([kst._log_step(np.array([q, q]), 0)[0] for q in units])
+    as_is = np.array([2, 2], dtype=np.int8)  # the rows themselves (signed_rows)
+    ws = np.array([kst._log_step(as_is, np.array([q, q]), 0)[0] for q in units])
     assert np.all(np.abs(ws) < 8 * 2.0**-52)  # log |q⁻¹ q|: zero to a few ulp
     own = np.array([kq._qmul1(*kq._qinv1(*q), *q)[0] for q in units])
     assert np.all(np.abs(own - 1.0) <= 4 * 2.0**-52)
@@ -467,7 +471,7 @@ def test_squad_rows_are_computed_only_for_the_segments_used():
     # a run stops before rows already there
     _fused.lookup(plan, _chain.Target(_time.as_track(np.array([5.0]))), [False])
     assert computed() == run | set(range(500, 555))
-    full = kf.squad_table(m.data.r, m.data.rotation, m.data.track.base)
+    full = kf.squad_table(m.data.signs, m.data.rotation, m.data.track.base)
     rows = sorted(computed())
     np.testing.assert_array_equal(table.rows[rows], full[rows])
     assert not table.complete
@@ -481,11 +485,11 @@ def test_squad_rows_are_computed_only_for_the_segments_used():
 def _one_slot(times, t, r, kind):
     plan = np.array([kind, 0, 0], dtype=np.int64)
     statics = np.zeros((1, 7))
-    r_u = kq.unflip(r)
+    codes = _sign_codes(r, kq.unflip(r))
     table = np.zeros((len(times), kf.TABLE_COLUMNS))
-    empty = (np.zeros(1), np.zeros((1, 3)), np.zeros((1, 4)), np.zeros((1, 4)))
+    empty = (np.zeros(1), np.zeros((1, 3)), np.ones(1, dtype=np.int8), np.zeros((1, 4)))
     empty = empty + (np.ones((1, kf.TABLE_COLUMNS)),)
-    return plan, statics, kf.pack_slots([(times, t, r_u, r, table), empty, empty])
+    return plan, statics, kf.pack_slots([(times, t, codes, r, table), empty, empty])
 
 
 def _expected_nan_rows(times, bad, target, window, at_samples):

@@ -16,6 +16,7 @@ import numba
 import numpy as np
 import pytest
 
+from rbm_nb._engine.frame_data import _sign_codes
 from rbm_nb._kernels import chain_rows as kr
 from rbm_nb._kernels import fused as kf
 from rbm_nb._kernels.quaternion import _qslerp_unit1, _sincos
@@ -222,7 +223,7 @@ def test_own_runs_give_the_scalar_own_rule_bit_for_bit(missing):
     target = times[start : n - 3]
     results = []
     for own in (start + 1, start + 2):
-        slots = kf.pack_slots([(times, t, r, r, table), empty, empty])
+        slots = kf.pack_slots([(times, t, _sign_codes(r, r), r, table), empty, empty])
         got = kf.lookup_chain(
             plan, np.zeros((1, 7)), np.zeros(kf.SLOTS), np.full(kf.SLOTS, np.inf),
             np.array([own, 0, 0]), *slots, target, False,

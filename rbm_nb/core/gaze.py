@@ -232,7 +232,8 @@ def rates(angles: xr.DataArray, *, window: float = 0.02) -> xr.DataArray:
     Raises
     ------
     ValueError
-        If ``angles`` has no ``time`` dimension or ``window`` is not positive.
+        If ``angles`` has no ``time`` dimension, its times are out of order
+        or ``window`` is not positive.
     """
     args = _door.rate_arguments(angles, window)
     values = args.values

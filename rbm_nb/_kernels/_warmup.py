@@ -100,10 +100,8 @@ EXPLORER: tuple[str, ...] = (
     "resample.transform_blocks",
     "fused.lookup_chain",
     "rows.infinities",
-    "rows.first_bad_row",
     "rows.moving_signs",
     "rotations.rotate_vectors_into",
-    "rotations.first_zero_row",
     "velocity_fused.body_rates",
     "conversions.quaternion_from_matrix",
     # the scene's head path, simplified when the dashboard is built

@@ -23,6 +23,7 @@ import numpy as np
 
 from .._engine.time import epoch_seconds
 from .._infra.progress import make_bar
+from .._infra.time_index import dataarray_on
 from ..core import frames, gaze
 from ..core import frames as registry
 from ..core.frames import ReferenceFrame
@@ -79,6 +80,9 @@ EXAMPLE_FRAMES = HeadEyeFrames()
 # Pupil Core's usual threshold: below it the pupil detection is not trusted
 MIN_CONFIDENCE = 0.6
 # the eye tracker's gaps longer than this are not bridged by interpolation
+# (the eye frames') nor drawn across (the plots': their series say so in
+# attrs["max_gap"], instead of a NaN row inserted in each pause, which
+# would make a new copy of every eye timestamp)
 MAX_EYE_GAP = 0.1
 # per eye, the same in the 3D view and the plots (legible on both)
 GAZE_COLORS = {"left_eye": "#e69f00", "right_eye": "#0094d6"}
@@ -234,9 +238,13 @@ def gaze_angles(
     forward, y left, z up) by :mod:`rbm_nb.gaze`: samples below
     ``min_confidence``, beyond ``max_angle`` degrees from the scene camera's
     straight-ahead (see :data:`rbm_nb.gaze.OCULOMOTOR_RANGE`) and missing
-    ones are NaN, so plots show them as gaps. Without ``name`` they are
-    computed from the dataset's orientations alone, in the eye tracker's
-    image axes (x right, y down, z forward in the image; no masking).
+    ones are NaN, so plots show them as gaps. The result is on the eye's
+    own times (its time index is the dataset's, not a copy); pauses of the
+    eye tracker longer than :data:`MAX_EYE_GAP` are named in
+    ``attrs["max_gap"]``, which :class:`~rbm_nb.widgets.TimeSeries` draws
+    as gaps. Without ``name`` they are computed from the dataset's
+    orientations alone, in the eye tracker's image axes (x right, y down, z
+    forward in the image; no masking).
 
     Returns
     -------
@@ -251,11 +259,10 @@ def gaze_angles(
             frames.head,
             confidence=eye.confidence if confident else None,
             min_confidence=min_confidence,
-            max_gap=MAX_EYE_GAP,
             max_angle=max_angle,
         )
         out = gaze.angles(sight, frames.head, forward="x", up="z")
-        out.attrs = {"long_name": "Gaze angles", "units": "deg"}
+        out.attrs = {"long_name": "Gaze angles", "units": "deg", "max_gap": MAX_EYE_GAP}
         return out
 
     eye = eye.dropna("time")
@@ -287,12 +294,21 @@ def head_yaw_rate(*, world: str | None = None, frames: HeadEyeFrames = EXAMPLE_F
     a turn to the left is positive, as the gaze yaw of
     :func:`gaze_yaw`. Register the frames first.
     """
-    omega = lookup_angular_velocity(
-        frames.head, world or frames.world, represent_in=frames.head, as_dataarray=True
+    omega, times = lookup_angular_velocity(
+        frames.head,
+        world or frames.world,
+        represent_in=frames.head,
+        return_timestamps=True,
     )
-    rate = np.degrees(omega.sel(cartesian_axis="z", drop=True))
-    rate.attrs = {"long_name": "Head yaw rate (+ left)", "units": "deg/s"}
-    return rate
+    # one new array, the plotted one; on the frame's own times (the head
+    # dataset's, which nobody can change): no copy of the time index
+    return dataarray_on(
+        np.degrees(omega[:, 2]),
+        times,
+        ("time",),
+        attrs={"long_name": "Head yaw rate (+ left)", "units": "deg/s"},
+        name="angular_velocity",
+    )
 
 
 def gaze_yaw(
@@ -309,20 +325,36 @@ def gaze_yaw(
     share one clock in the example data; otherwise each keeps its own times
     and the other's column is NaN there.
     """
-    import xarray as xr
-
-    columns = []
-    for name, eye in zip(EYES, (left_eye, right_eye), strict=True):
-        azimuth = gaze_angles(eye, name, max_angle=max_angle, frames=frames).sel(
-            angle="azimuth", drop=True
-        )
-        columns.append(-azimuth.expand_dims(eye=[name.replace("_", " ")], axis=1))
-    out = xr.concat(columns, dim="eye", join="outer")
-    out.attrs = {
+    labels = [name.replace("_", " ") for name in EYES]
+    attrs = {
         "long_name": "Gaze yaw in head (+ left)",
         "units": "deg",
         "colors": [GAZE_COLORS[eye] for eye in EYES],
+        "max_gap": MAX_EYE_GAP,
     }
+    first = gaze_angles(left_eye, EYES[0], max_angle=max_angle, frames=frames)
+    # the one (n, 2) array kept, on the first eye's time index (a shallow
+    # copy shares it); each eye's column is written in place
+    yaw = first.copy(deep=False, data=np.empty(first.shape)).rename(angle="eye")
+    yaw = yaw.assign_coords(eye=labels)
+    yaw.name, yaw.attrs = None, attrs
+    np.negative(first.sel(angle="azimuth").values, out=yaw.values[:, 0])
+    del first  # its angles: not kept
+    second = gaze_angles(right_eye, EYES[1], max_angle=max_angle, frames=frames)
+    if not second.indexes["time"].equals(yaw.indexes["time"]):
+        return _outer_yaw(yaw, second, attrs)
+    np.negative(second.sel(angle="azimuth").values, out=yaw.values[:, 1])
+    return yaw
+
+
+def _outer_yaw(yaw, right, attrs):
+    """The eyes on two clocks: each keeps its times, NaN in the other's column."""
+    import xarray as xr
+
+    label = str(yaw["eye"].values[1])
+    right = -right.sel(angle="azimuth", drop=True).expand_dims(eye=[label], axis=1)
+    out = xr.concat([yaw.isel(eye=[0]), right], dim="eye", join="outer")
+    out.attrs = attrs
     return out
 
 
@@ -352,6 +384,7 @@ def explorer_series(
     yaw = gaze_yaw(left_eye, right_eye, max_angle=max_angle, frames=frames)
     rate = gaze.rates(yaw)
     rate.attrs["colors"] = yaw.attrs["colors"]
+    rate.attrs["max_gap"] = yaw.attrs["max_gap"]
     return {
         "head yaw rate": head_yaw_rate(frames=frames),
         "gaze yaw": yaw,

@@ -32,12 +32,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
-from .._door.unpack import is_dataarray as _is_dataarray
-from .._door.xarray import check_directions
+from .._door import gaze as _door
+from .._engine import transform as _engine_transform
 from .._engine.time import sort_keys
-from .frames import ReferenceFrame, resolve_frame
-from .quaternions import rotate_vectors
-from .transforms import transform_vectors
+from .._engine.transform import Blocks
+from .._infra.time_index import dataarray_on
+from .._kernels import quaternion as _qk
+from .._kernels._arrays import kernel_array
+from .frames import resolve_frame
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -52,9 +54,9 @@ __all__ = ["directions", "angles", "rates", "OCULOMOTOR_RANGE"]
 # head. An eye tracker's sample further out than this from the line-of-sight
 # axis of the eye's parent frame is a mis-detection, not an eye position.
 OCULOMOTOR_RANGE = 50.0
-# the eye frame's axis that is the line of sight (camera convention)
-_LINE_OF_SIGHT = np.array([0.0, 0.0, 1.0])
-_AXES = {"x": 0, "y": 1, "z": 2}
+# the eye frame's axis that is the line of sight (camera convention), as the
+# one row of vectors the rotation kernel takes
+_LINE_OF_SIGHT = np.array([[0.0, 0.0, 1.0]])
 
 
 def directions(
@@ -119,40 +121,26 @@ def directions(
         shape, or ``min_confidence``/``max_gap`` is not a finite number
         (``max_gap`` positive, ``max_angle`` in (0, 180]).
     """
-    eye = resolve_frame(eye_frame, "eye_frame")
-    target = resolve_frame(into, "into")
-    if eye.parent is None:
-        raise ValueError(
-            f"eye_frame {eye.name!r} is a root frame; it has no orientation to look along"
-        )
-    min_confidence = _finite_number(min_confidence, "min_confidence")
-    if max_gap is not None and _finite_number(max_gap, "max_gap") <= 0:
-        raise ValueError(f"max_gap must be positive (seconds), got {max_gap!r}")
-    if max_angle is not None and not 0 < _finite_number(max_angle, "max_angle") <= 180:
-        raise ValueError(f"max_angle must be in (0, 180] degrees, got {max_angle!r}")
-
-    times, rotation = _eye_samples(eye, confidence)
-    valid = np.isfinite(rotation).all(axis=1)
-    if confidence is not None:
-        valid &= _confidence_values(confidence, times, eye) >= min_confidence
-
+    args = _door.sight(
+        resolve_frame, eye_frame, into, confidence, min_confidence, max_gap, max_angle
+    )
+    times, valid = args.times, args.valid
     out = np.full((len(times), 3), np.nan)
     if valid.any():
-        q = rotation[valid]
+        q = args.rotation[valid]
         q = q / np.linalg.norm(q, axis=1, keepdims=True)
-        sight = rotate_vectors(q, _LINE_OF_SIGHT, one_to_one=False)
-        if max_angle is not None:
+        sight = _line_of_sight(q)
+        if args.max_angle is not None:
             # the angle from the parent's z axis, where the eye looks ahead
-            possible = sight[:, 2] >= np.cos(np.radians(float(max_angle)))
+            possible = sight[:, 2] >= np.cos(np.radians(args.max_angle))
             sight[~possible] = np.nan
-        out[valid] = _represent(sight, times[valid], eye.parent, target)
+        out[valid] = _represent(sight, args.track, args.eye.parent, args.into)
     sampled = times
-    if max_gap is not None:
-        times, out = _insert_gap_rows(times, out, float(max_gap))
-    name = target.name if isinstance(target, ReferenceFrame) else str(into)
+    if args.max_gap is not None:
+        times, out = _insert_gap_rows(times, out, args.max_gap)
     # on the confidence's own times (no row inserted): share its time index
-    like = confidence if _is_dataarray(confidence) and times is sampled else None
-    return _vectors_dataarray(out, times, name, like)
+    like = args.like if times is sampled else None
+    return _vectors_dataarray(out, times, args.into.name, like)
 
 
 def angles(
@@ -191,23 +179,14 @@ def angles(
         If ``directions`` lacks the dims or frame attribute, ``forward`` and
         ``up`` are not two different axes, or a frame is not registered.
     """
-    check_directions(directions)
-    f_axis, f_sign = _signed_axis(forward, "forward")
-    u_axis, u_sign = _signed_axis(up, "up")
-    if f_axis == u_axis:
-        raise ValueError(
-            f"forward ({forward!r}) and up ({up!r}) must be different axes"
-        )
-    ref = resolve_frame(reference, "reference")
-    source = resolve_frame(
-        directions.attrs["representation_frame"], "directions' frame"
-    )
-    times = directions["time"].values
-    values = np.asarray(directions.transpose("time", "cartesian_axis").values, float)
-    valid = np.isfinite(values).all(axis=1)
+    args = _door.angle_arguments(resolve_frame, directions, reference, forward, up)
+    values, valid = args.values, args.valid
     local = np.full(values.shape, np.nan)
     if valid.any():
-        local[valid] = _represent(values[valid], times[valid], source, ref)
+        local[valid] = _represent(
+            values[valid], args.track, args.source, args.reference
+        )
+    (f_axis, f_sign), (u_axis, u_sign) = args.forward, args.up
     fwd = np.zeros(3)
     fwd[f_axis] = f_sign
     upv = np.zeros(3)
@@ -220,7 +199,11 @@ def angles(
         directions,
         np.column_stack([azimuth, elevation]),
         ("angle", ["azimuth", "elevation"]),
-        {"long_name": "Gaze angles", "units": "deg", "reference_frame": ref.name},
+        {
+            "long_name": "Gaze angles",
+            "units": "deg",
+            "reference_frame": args.reference.name,
+        },
     )
 
 
@@ -249,24 +232,17 @@ def rates(angles: xr.DataArray, *, window: float = 0.02) -> xr.DataArray:
     Raises
     ------
     ValueError
-        If ``angles`` has no ``time`` dimension or ``window`` is not positive.
+        If ``angles`` has no ``time`` dimension, its times are out of order
+        or ``window`` is not positive.
     """
-    if not _is_dataarray(angles) or "time" not in angles.dims:
-        raise ValueError("angles must be a DataArray with a 'time' dimension")
-    if _finite_number(window, "window") <= 0:
-        raise ValueError(f"window must be positive (seconds), got {window!r}")
-    arr = angles.transpose("time", ...)
-    keys = sort_keys(arr["time"].values, "angles time")
-    scale = 1e9 if np.issubdtype(arr["time"].dtype, np.datetime64) else 1.0
-    # from the first time: epoch seconds as floats would round to 0.2 us
-    t = (keys - keys[0]) / scale if len(keys) else keys / scale
-    values = np.asarray(arr.values, dtype=float).reshape(len(t), -1)
+    args = _door.rate_arguments(angles, window)
+    values = args.values
     out = np.full(values.shape, np.nan)
     for k in range(values.shape[1]):
-        out[:, k] = _windowed_slope(t, values[:, k], float(window))
+        out[:, k] = _windowed_slope(args.t, values[:, k], args.window)
     # a shallow copy: the result shares the angles' time index (a deep copy
     # would hold a second copy of every timestamp for as long as it lives)
-    result = arr.copy(deep=False, data=out.reshape(arr.shape))
+    result = args.arr.copy(deep=False, data=out.reshape(args.arr.shape))
     result.attrs = {"long_name": "Gaze angular velocity", "units": "deg/s"}
     return result.transpose(*angles.dims)
 
@@ -291,97 +267,33 @@ def _windowed_slope(t, y, window):
 # -- helpers ----------------------------------------------------------------
 
 
-def _finite_number(value, name: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.number)):
-        raise ValueError(f"{name} must be a number, got {value!r}")
-    if not np.isfinite(value):
-        raise ValueError(f"{name} must be finite, got {value!r}")
-    return float(value)
+def _line_of_sight(q: np.ndarray) -> np.ndarray:
+    """The eye's z axis rotated by unit quaternions ``q`` (m, 4): (m, 3).
+
+    The kernel :func:`rbm_nb.rotate_vectors` runs for ``one_to_one=False``,
+    called directly: ``q`` is the door's checked rotation, normalised here.
+    """
+    out = _qk.rotate_vectors_outer(kernel_array(q), _LINE_OF_SIGHT)
+    return out.reshape(len(q), 3)
 
 
-def _eye_samples(eye, confidence):
-    """Times of the result and the eye's rotation (n, 4) at them (NaN if missing)."""
-    own = eye.timestamps
-    if _is_dataarray(confidence):
-        if "time" not in confidence.dims or confidence.ndim != 1:
-            raise ValueError(
-                f"confidence must be a 1-d DataArray along 'time', got dims {confidence.dims}"
-            )
-        if "time" not in confidence.coords:
-            raise ValueError(
-                "confidence has a 'time' dimension but no 'time' coordinate"
-            )
-        times = np.asarray(confidence["time"].values)
-    elif own is not None:
-        times = np.asarray(own)
-    else:
-        raise ValueError(
-            f"eye_frame {eye.name!r} is static; pass confidence as a DataArray with "
-            f"a 'time' coordinate to give the sample times"
-        )
-    if own is None:
-        return times, np.broadcast_to(eye.rotation, (len(times), 4)).copy()
-    rotation = np.asarray(eye.rotation, dtype=float)
-    if times is own or (len(times) == len(own) and np.array_equal(times, own)):
-        return times, rotation.copy()
-    index = _match(np.asarray(own), times, eye.name)
-    out = np.full((len(times), 4), np.nan)
-    found = index >= 0
-    out[found] = rotation[index[found]]
-    return times, out
+def _represent(vectors, track, outof, into) -> np.ndarray:
+    """Vectors (n, 3) given in ``outof`` at ``track``'s times, represented in ``into``.
 
-
-def _match(own, times, name) -> np.ndarray:
-    """Index into ``own`` of each of ``times`` (exact sample), -1 where none."""
-    own, times = np.asarray(own), np.asarray(times)
-    is_datetime = np.issubdtype(own.dtype, np.datetime64)
-    if is_datetime != np.issubdtype(times.dtype, np.datetime64):
-        raise ValueError(
-            f"confidence times ({times.dtype}) and the timestamps of eye_frame "
-            f"{name!r} ({own.dtype}) must both be datetime64 or both numeric"
-        )
-    a = sort_keys(own, f"timestamps of eye_frame {name!r}")
-    b = sort_keys(times, "confidence times")
-    if len(a) == 0:
-        return np.full(len(b), -1)
-    # datetime64 keys are exact ns; numeric ones may have been through float
-    tol = 0 if is_datetime else 1e-9 * max(1.0, float(np.max(np.abs(a))))
-    j = np.clip(np.searchsorted(a, b), 0, len(a) - 1)
-    left = np.maximum(j - 1, 0)
-    best = np.where(np.abs(a[left] - b) <= np.abs(a[j] - b), left, j)
-    return np.where(np.abs(a[best] - b) <= tol, best, -1)
-
-
-def _confidence_values(confidence, times, eye) -> np.ndarray:
-    if _is_dataarray(confidence):
-        values = np.asarray(confidence.values, dtype=float)
-    else:
-        try:
-            values = np.asarray(confidence, dtype=float)
-        except (TypeError, ValueError):
-            raise ValueError("confidence must be an array of numbers") from None
-        if values.shape != (len(times),):
-            raise ValueError(
-                f"confidence must have shape ({len(times)},) like the timestamps of "
-                f"eye_frame {eye.name!r}, got {values.shape}"
-            )
-    # NaN confidence compares False: such samples are dropped
-    return np.where(np.isnan(values), -np.inf, values)
-
-
-def _represent(vectors, times, outof, into) -> np.ndarray:
-    """Vectors (n, 3) given in ``outof`` at ``times``, represented in ``into``."""
-    if outof is into:
+    ``track`` is None when ``outof`` is ``into``. NaN at the times the frames
+    between them do not cover: the engine keeps only the run of times that
+    every moving frame on the way covers.
+    """
+    if track is None:
         return vectors
-    import xarray as xr
-
-    arr = xr.DataArray(vectors, dims=("time", "cartesian_axis"), coords={"time": times})
-    moved = transform_vectors(arr, into=into, outof=outof, timestamps="time")
+    moved, times = _engine_transform.transform(
+        outof, "vectors", Blocks.of_rows(vectors, track), into
+    )
+    if len(moved) == len(vectors):
+        return moved
     out = np.full(vectors.shape, np.nan)
-    # the core keeps only the times covered by every moving frame on the way
-    index = _match(np.asarray(times), moved["time"].values, "eye")
-    found = index >= 0
-    out[index[found]] = moved.transpose("time", "cartesian_axis").values[found]
+    # the result's times are some of the given ones (the same values)
+    out[np.searchsorted(track.values, times)] = moved
     return out
 
 
@@ -431,9 +343,9 @@ def _on_times_of(directions, values, column, attrs):
 def _vectors_dataarray(values, times, frame_name, like=None):
     """The line-of-sight DataArray; on ``like``'s time index when given (1-d,
     along ``time``, with the same times): a shallow copy of it shares the
-    index, where a new DataArray would copy every timestamp."""
-    import xarray as xr
-
+    index, where a new DataArray would copy every timestamp. Else on
+    ``times`` themselves when nobody can change them (the frames' are such):
+    see :mod:`rbm_nb._infra.time_index`."""
     axes = np.array(["x", "y", "z"])
     attrs = {
         "long_name": "Line of sight",
@@ -441,26 +353,12 @@ def _vectors_dataarray(values, times, frame_name, like=None):
         "representation_frame": frame_name,
     }
     if like is None or "time" not in like.indexes:
-        return xr.DataArray(
-            values,
-            dims=("time", "cartesian_axis"),
-            coords={"time": times, "cartesian_axis": axes},
+        return dataarray_on(
+            values, times, ("time", "cartesian_axis"), {"cartesian_axis": axes},
             attrs=attrs,
-        )
+        )  # fmt: skip
     template = like.drop_vars([c for c in like.coords if c != "time"])
     out = template.expand_dims(cartesian_axis=3, axis=1).copy(deep=False, data=values)
     out = out.assign_coords(cartesian_axis=axes)
     out.name, out.attrs = None, attrs
     return out
-
-
-def _signed_axis(spec, name: str):
-    if not isinstance(spec, str):
-        raise ValueError(f"{name} must be an axis like 'z' or '-y', got {spec!r}")
-    sign = -1.0 if spec.startswith("-") else 1.0
-    letter = spec.lstrip("+-")
-    if letter not in _AXES or len(spec) - len(letter) > 1:
-        raise ValueError(
-            f"{name} must be one of x, y, z with an optional sign, got {spec!r}"
-        )
-    return _AXES[letter], sign

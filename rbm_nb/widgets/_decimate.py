@@ -10,8 +10,10 @@ plus the gap row; only recorded samples are kept, never an average.
 Nothing here copies a whole series: the kept rows are chosen with temporaries
 of one component at a time and only the kept rows are gathered. Pauses in the
 timestamps are not written into the series either (that was a copy of every
-array): ``pause_rows`` finds them once, and a NaN row is put between the two
-kept rows on each side of a pause only in what is sent.
+array): ``pause_rows`` finds them once, ``pause_sides`` keeps both rows of
+each column's first pause (as M4 keeps its first missing sample), and a NaN
+row is put between the two kept rows on each side of a pause only in what is
+sent.
 """
 
 from __future__ import annotations
@@ -125,6 +127,24 @@ def _extremes(y: np.ndarray, starts: np.ndarray) -> list[np.ndarray]:
         first_missing = np.minimum.reduceat(np.where(missing, index, n), starts)
         out.append(first_missing[first_missing < n])
     return out
+
+
+def pause_sides(
+    x: np.ndarray, pauses: np.ndarray, lo: float, hi: float, width: int
+) -> np.ndarray:
+    """The rows on both sides of the first pause in each of ``width`` columns.
+
+    ``pauses`` are rows ``i`` after which the timestamps ``x`` pause (see
+    :func:`pause_rows`); kept with ``i + 1``, such a pause draws as a gap in
+    the decimated rows as in the full series (at most two rows per column,
+    whatever the number of pauses). Rows past the end of ``x`` are left out.
+    """
+    if pauses.size == 0:
+        return np.empty(0, dtype=np.int64)
+    column = np.floor((x[pauses] - lo) / (hi - lo) * width)
+    first = pauses[np.unique(column, return_index=True)[1]]
+    rows = np.r_[first, first + 1]
+    return rows[rows < x.shape[0]]
 
 
 def gathered(

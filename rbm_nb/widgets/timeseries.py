@@ -8,7 +8,8 @@ on 5e6 stay apart); zoom, pan, hover values, click-to-seek and the cursor all ru
 in the browser, so it keeps following playback while the kernel is busy.
 
 Gaps are drawn as gaps: NaN values break the line, and so does a pause in the
-timestamps longer than ``gap`` (a NaN row is inserted there before sending).
+timestamps longer than ``gap``, or than a series' own ``attrs["max_gap"]``
+(a NaN row is inserted there before sending; the series is not changed).
 
 A panel longer than ``max_points`` rows goes as its min/max (M4) overview at
 ``overview_width`` pixel columns (``_decimate.py``): only recorded samples,
@@ -51,7 +52,7 @@ from ipywidgets import Widget, widget_serialization
 
 from .._engine.time import TIE, TimeBase, as_track, check_compatible
 from ._decimate import GAP_FACTOR as GAP_FACTOR  # re-exported: the docs name it here
-from ._decimate import Cancelled, gathered, m4_rows, pause_rows
+from ._decimate import Cancelled, gathered, m4_rows, pause_rows, pause_sides
 from ._frontend import FrontendGuard
 from ._latest_only import LatestOnly
 from ._timebase import format_time
@@ -154,12 +155,16 @@ class _Series:
         self.components = components or [label]
         # a DataArray may name its components' colours (attrs["colors"], one
         # CSS colour per component), so a plot matches the 3D view's
-        colors = getattr(source, "attrs", {}).get("colors")
+        attrs = getattr(source, "attrs", {})
+        colors = attrs.get("colors")
         self.colors = (
             [str(c) for c in colors]
             if isinstance(colors, (list, tuple)) and len(colors) == values.shape[1]
             else None
         )
+        # and the longest pause its samples bridge (seconds): longer ones are
+        # gaps, drawn without a NaN row stored in the series
+        self.max_gap = _max_gap(attrs.get("max_gap"), label)
 
     def raw_of(self, base: TimeBase, t: float, side: str) -> int | float:
         """``t`` seconds of ``base`` in raw units (ns rounded outward by ``side``)."""
@@ -176,6 +181,17 @@ class _Series:
         i0 = max(int(np.searchsorted(self.raw, lo, side="left")) - 1, 0)
         i1 = min(int(np.searchsorted(self.raw, hi, side="right")) + 1, self.raw.size)
         return i0, i1
+
+
+def _max_gap(value, label: str) -> float | None:
+    if value is None:
+        return None
+    if isinstance(value, bool) or not 0 < _number(value) < math.inf:
+        raise ValueError(
+            f"TimeSeries: series {label!r} has attrs['max_gap'] = {value!r}; expected "
+            "a positive number of seconds"
+        )
+    return float(value)
 
 
 #: bounds of a panel's height in pixels
@@ -229,7 +245,9 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
     gap : float, optional
         Pauses in the timestamps longer than this (seconds) are drawn as gaps.
         Default: ``GAP_FACTOR`` times each panel's median sample interval.
-        ``numpy.inf`` joins every pause.
+        ``numpy.inf`` joins every pause. A DataArray whose ``attrs["max_gap"]``
+        (seconds) is shorter has its longer pauses drawn as gaps too (the
+        explorer's gaze series say so instead of storing a NaN row in each).
     max_points : int or None, default ``WINDOW_POINTS``
         A panel with more samples than this goes as its min/max overview at
         ``overview_width`` pixel columns (per column: its first and last
@@ -371,6 +389,11 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
             if gap is not None and s.kind != "numeric":
                 gap *= 1e9  # raw units: ns
             pauses, used = pause_rows(s.raw, gap)
+            if s.max_gap is not None:
+                limit = s.max_gap * (1.0 if s.kind == "numeric" else 1e9)
+                if used is None or limit < used:
+                    # the series bridges no pause longer than its own max_gap
+                    pauses, used = pause_rows(s.raw, limit)
             if used is not None and s.kind != "numeric":
                 used /= 1e9
             self._pauses.append(pauses)
@@ -426,18 +449,18 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         i0, i1 = s.rows_in(self._data_base, start, end)
         limit = max(WINDOW_POINTS, self._max_points or 0)
         raw, values = s.raw[i0:i1], s.values[i0:i1]
+        pauses = self._pauses[panel]
+        pauses = pauses[(pauses >= i0) & (pauses < i1)] - i0
         if width is None or i1 - i0 <= limit:
             rows = np.arange(i1 - i0)
             full = True
         else:
-            lo = s.raw_of(self._data_base, start, "low")
-            hi = s.raw_of(self._data_base, end, "high")
-            rows = m4_rows(
-                raw, values, float(lo), float(max(hi, lo + 1)), width, cancelled
-            )
+            lo = float(s.raw_of(self._data_base, start, "low"))
+            hi = float(max(s.raw_of(self._data_base, end, "high"), lo + 1))
+            rows = m4_rows(raw, values, lo, hi, width, cancelled)
+            # each column's first pause with both its sides: drawn as a gap
+            rows = np.union1d(rows, pause_sides(raw, pauses, lo, hi, width))
             full = False
-        pauses = self._pauses[panel]
-        pauses = pauses[(pauses >= i0) & (pauses < i1)] - i0
         x = self._data_base.seconds(s.timestamps[i0:i1][rows])
         return (*gathered(x, values, rows, pauses), full)
 

@@ -101,3 +101,27 @@ def test_directions_share_the_confidence_time_index(sight):
     out = gaze.directions("eye", "camera", confidence=gapped, max_gap=0.5)
     assert out.sizes["time"] == gapped.sizes["time"] + 1
     assert np.isnan(out.values[1000]).all()
+
+
+def test_directions_on_the_eyes_own_frozen_times_share_them():
+    # no confidence: the result is along the eye frame's timestamps; read-only
+    # ones (the loaders' are) are the time index, not two copies of it
+    stamps = np.datetime64("2020-02-02", "ns") + np.arange(N) * np.timedelta64(
+        2_941_176, "ns"
+    )
+    stamps.setflags(write=False)
+    rbm.clear_registry()
+    rbm.register_frame("camera")
+    pitch = np.deg2rad(20.0 * np.sin(np.arange(N) / 500.0))
+    rbm.register_frame(
+        "eye", parent="camera", rotation=rbm.from_euler_angles(pitch=pitch),
+        timestamps=stamps,
+    )  # fmt: skip
+    try:
+        frame_times = rbm.registry["eye"].timestamps
+        out, kept = kept_by(lambda: gaze.directions("eye", "camera"))
+        assert np.shares_memory(_time_index_data(out), frame_times)
+        assert np.shares_memory(out["time"].values, frame_times)
+        assert kept < out.values.nbytes + 0.1 * stamps.nbytes, (kept, out.values.nbytes)
+    finally:
+        rbm.clear_registry()

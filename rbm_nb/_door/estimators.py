@@ -20,7 +20,7 @@ import numpy as np
 
 from .._engine.velocity import lowpass_reach
 from . import dask_blocks as _dask
-from .series import series, velocity_options
+from .series import enough_samples, series, velocity_options
 from .shapes import along_axis
 from .unpack import dim_axis, is_dataarray, kernel_array
 from .validation import check_tolerance, check_unit_norms, is_scalar
@@ -88,6 +88,7 @@ def velocity_arguments(
     moved = np.moveaxis(data, (time_axis, axis), (0, -1))
     if angular:
         check_unit_norms(moved, "arr")
+    enough_samples(moved.shape[0])
     rows = moved.reshape(moved.shape[0], -1, moved.shape[-1])
     return VelocityArguments(rows, t, moved.shape, axis, time_axis, is_dataarray(arr))
 

@@ -133,7 +133,7 @@ def lookup_at(
     Transform[, timestamps], or Dataset
     """
     pair = _door.transform_frames(
-        resolve_frame, outof, into, as_matrix, as_transform, as_dataset
+        resolve_frame, outof, into, as_matrix, as_transform, as_dataset, time
     )
     outof, into = pair.outof, pair.into
     if time is None:

@@ -17,6 +17,7 @@ from matplotlib.patches import FancyArrowPatch
 from mpl_toolkits.mplot3d import Axes3D, proj3d
 
 from .._door import shapes as _shapes
+from .._door.lookups import reference_or_parent
 from .._infra.config import UNIT_QUATERNION_TOLERANCE
 from .._kernels import conversions as _kc
 from .frames import resolve_frame
@@ -360,13 +361,9 @@ def trajectory(
     """
 
     frame = resolve_frame(frame, "trajectory: frame")
-    if reference is None:
-        if frame.parent is None:
-            raise ValueError(
-                f"trajectory: frame {frame.name!r} is a root; give a reference frame"
-            )
-        reference = frame.parent
-    reference = resolve_frame(reference, "trajectory: reference")
+    reference = resolve_frame(
+        reference_or_parent(frame, reference, "trajectory: "), "trajectory: reference"
+    )
     position, orientation, ts = lookup_pose(frame, reference, return_timestamps=True)
     if ts is None:
         raise ValueError(

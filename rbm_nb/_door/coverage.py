@@ -73,11 +73,55 @@ def samples(frames: Sequence[Any], arrays: Sequence[Any] = ()) -> int:
 
 def chain_samples(outof: Any, into: Any, arrays: Sequence[Any] = ()) -> int:
     """:func:`samples` of the chain from ``outof`` to ``into`` (resolved frames)
-    and ``arrays``; a static chain without arrays costs one cached look-up."""
+    and ``arrays`` (Tracks or None).
+
+    The chain's own part (its samples, the span of its continuous frames,
+    their kinds of time) is found once and kept with the cached chain, so
+    that a lookup checks in a look-up and one array inside that span in a
+    few comparisons; anything else takes :func:`samples`' whole rule.
+    """
     steps = _chain.chain(outof, into)
-    if steps.static is not None and not arrays:
-        return 0
+    covered = steps.covered
+    if covered is None:
+        frames = [f for f, _ in steps]
+        # the whole rule first: its message names the arrays too
+        count = samples(frames, arrays)
+        try:
+            steps.covered = _chain_part(frames)
+        except ValueError:
+            # frames without a sample of their own in their common span
+            # may still be sampled by an array inside it: not kept
+            pass
+        return count
+    count, first, last, kinds = covered
+    if not arrays:
+        return count
+    if len(arrays) == 1:
+        track = arrays[0]
+        if track is None:
+            return count
+        if not kinds or kinds == (track.kind,):
+            if first is None:
+                # no continuous frame: the array samples, unlimited
+                return len(track)
+            key = track.key
+            if key[0] >= first and key[-1] <= last:
+                # the array (which samples) lies inside the frames' span
+                return len(track)
     return samples([f for f, _ in steps], arrays)
+
+
+def _chain_part(frames: Sequence[Any]) -> tuple[int, Any, Any, tuple]:
+    """(samples, first and last key of the continuous frames' common span or
+    None, the kinds of time) of a chain's frames, checked by :func:`samples`."""
+    count = samples(frames)
+    continuous = [f.track for f in frames if f.track is not None and not f.discrete]
+    kinds = tuple(sorted({f.track.kind for f in frames if f.track is not None}))
+    if not continuous:
+        return count, None, None, kinds
+    first = max(t.key[0] for t in continuous)
+    last = min(t.key[-1] for t in continuous)
+    return count, first, last, kinds
 
 
 def _track(outof: Any, into: Any, arrays: Sequence[Any] = ()) -> Any:

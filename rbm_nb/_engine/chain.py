@@ -73,17 +73,20 @@ class Chain(list):
     inverted) down to ``into``. ``static`` is the composed transform
     (t (1, 3), r (1, 4)) when no frame of the chain moves, ``rows`` its rows
     t (3,) and r (4,), kept for lookup_transform's copies; ``plan`` is the
-    fused plan (:func:`fused_plan`), made at the first call that needs it.
+    fused plan (:func:`fused_plan`), made at the first call that needs it;
+    ``covered`` what the door found of the chain's times
+    (:func:`rbm_nb._door.coverage.chain_samples`), kept with it.
     (A list, so that the loops over a chain run at list speed.)
     """
 
-    __slots__ = ("static", "rows", "plan")
+    __slots__ = ("static", "rows", "plan", "covered")
 
     def __init__(self, steps: list) -> None:
         super().__init__(steps)
         self.static: Any = None
         self.rows: Any = None
         self.plan: Any = _UNPLANNED
+        self.covered: Any = None
         if all(f.track is None for f, _ in steps):
             self.static = compose(steps, Target(None))
             self.rows = self.static[0][0], self.static[1][0]

@@ -153,3 +153,27 @@ def test_one_parent_default_for_velocities_and_trajectory(tree):
     assert str(lookup.value) == (
         "frame 'world' has no parent; pass the reference frame explicitly"
     )
+
+
+def test_the_chain_part_kept_with_the_chain_decides_as_the_whole_rule(tree):
+    # the door keeps the chain's own span with the cached chain: later
+    # calls must decide as the whole rule does, inside and outside the span
+    inside = rbm.transform_points(
+        np.zeros((3, 3)), "world", "moving", timestamps=[1.0, 2.0, 3.0]
+    )
+    assert inside.shape == (3, 3)
+    with pytest.raises(ValueError) as err:
+        rbm.transform_points(
+            np.zeros((5, 3)), "world", "moving", timestamps=np.arange(20.0, 25.0)
+        )
+    assert str(err.value) == NO_OVERLAP
+    # 'moving' has no sample within 'short''s span, an array may: twice, so
+    # that the second call finds what the first kept
+    for _ in range(2):
+        out = rbm.transform_points(
+            np.zeros((1, 3)), "short", "moving", timestamps=[5.05]
+        )
+        assert out.shape == (1, 3)
+        with pytest.raises(ValueError) as err:
+            rbm.lookup_transform("moving", "short")
+        assert str(err.value) == NO_SAMPLE

@@ -13,7 +13,6 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
-from .._engine import chain as _chain
 from . import coverage as _coverage
 from . import xarray as _xarray
 from .series import velocity_options
@@ -160,14 +159,13 @@ def method_velocity_frames(
 def _moving(frame: Any, reference: Any, outlier_thresh: Any, cutoff: Any,
             allow_static: bool) -> None:  # fmt: skip
     """Refuse a velocity lookup of the chain the engine could not estimate."""
-    # known before anything is computed: a chain whose frames all have no
-    # timestamps has no velocity
-    if _chain.static_transform(frame, reference) is not None:
+    n = _coverage.chain_samples(frame, reference)
+    if n == 0:
+        # no frame of the chain has timestamps: there is no velocity
         if allow_static:
             return
         raise ValueError(
             f"the transform between {frame.name!r} and {reference.name!r} is static; "
             f"a velocity needs timestamps (pass allow_static=True for zeros)"
         )
-    n = _coverage.chain_samples(frame, reference)
     _coverage.velocity_samples(n, outlier_thresh, cutoff)

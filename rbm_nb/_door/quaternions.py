@@ -19,6 +19,7 @@ import numpy as np
 from .._engine import time as _time
 from .._infra.config import UNIT_QUATERNION_TOLERANCE
 from .._kernels import squad_walk as _sw
+from ..errors import UnsupportedError
 from . import dask_blocks as _dask
 from .shapes import along_axis
 from .unpack import float_array, is_dataarray, kernel_array, resolve_axis
@@ -209,6 +210,82 @@ def product(q: tuple, qaxis: Any, general: bool = False) -> Product:
 # ---------------------------------------------------------------------------
 
 
+class SampledDataArray(NamedTuple):
+    """A DataArray's squad along ``dim``, checked: ``lazy`` (dask-backed,
+    interpolated chunk by chunk, ``da`` carrying ``t_in`` as its coordinate),
+    or ``data`` (components last, float64) sampled along axis ``ax`` at
+    ``t_in`` (seconds), to be interpolated to ``t_out`` (flat seconds; the
+    given values ``t_out_values``), only where ``inside`` (None: everywhere)."""
+
+    lazy: bool
+    da: Any
+    dim: Any
+    qdim: Any
+    data: Any = None
+    ax: int = 0
+    t_in: Any = None
+    t_out: Any = None
+    inside: Any = None
+    t_out_values: Any = None
+
+
+def dataarray_interpolation(
+    da: Any, dim: Any, qdim: Any, t_out: Any, t_in: Any = None,
+    out_of_range: str = "raise",
+) -> SampledDataArray:  # fmt: skip
+    """The one door call of a DataArray's squad (``qinterp`` of a DataArray,
+    the ``.rbm.qinterp`` accessor): dims, times and values checked.
+
+    ``t_in`` defaults to the coordinate of ``dim``; ``out_of_range="nan"``
+    leaves times outside the sampled range out (NaN there) instead of
+    refusing them.
+    """
+    if dim not in da.dims:
+        raise ValueError(
+            f"{dim!r} is not a dimension of this DataArray {tuple(da.dims)}"
+        )
+    if _dask.is_dask(da) and qdim in da.dims and dim != qdim:
+        if t_in is not None:
+            da = da.assign_coords({dim: np.asarray(getattr(t_in, "values", t_in))})
+        return SampledDataArray(True, da, dim, qdim)
+    if qdim not in da.dims:
+        raise ValueError(
+            f"qdim {qdim!r} is not a dimension of this DataArray {tuple(da.dims)}"
+        )
+    if dim == qdim:
+        raise ValueError(f"cannot interpolate along the quaternion dimension {qdim!r}")
+    if da.sizes[qdim] != 4:
+        raise ValueError(
+            f"dimension {qdim!r} must have length 4 (w, x, y, z), got {da.sizes[qdim]}"
+        )
+    if t_in is None:
+        if dim not in da.coords:
+            raise ValueError(f"dimension {dim!r} has no coordinate to interpolate from")
+        t_in = da.coords[dim].values
+    t_out_values = np.asarray(getattr(t_out, "values", t_out))
+    if t_out_values.ndim > 1:
+        raise UnsupportedError(
+            f"the new coordinate for {dim!r} must be a scalar or one-dimensional, "
+            f"got shape {t_out_values.shape}"
+        )
+    times = fast_times(np.asarray(getattr(t_in, "values", t_in)), t_out_values)
+    t_in_f, t_out_f = (
+        times if times is not None else _time.seconds_pair(t_in, t_out_values)
+    )
+    flat_out = t_out_f.reshape(-1)
+    inside = None  # None: every time is inside the sampled range
+    if out_of_range == "nan" and t_in_f.ndim == 1 and t_in_f.size:
+        inside = (flat_out >= t_in_f[0]) & (flat_out <= t_in_f[-1])
+        if inside.all():
+            inside = None
+    check_times(t_in_f, flat_out if inside is None else flat_out[inside], da.sizes[dim])
+    data = np.moveaxis(float_array(da.values, "q"), da.dims.index(qdim), -1)
+    ax = [d for d in da.dims if d != qdim].index(dim)
+    return SampledDataArray(
+        False, da, dim, qdim, data, ax, t_in_f, flat_out, inside, t_out_values
+    )
+
+
 class Interpolation(NamedTuple):
     """A checked squad interpolation, by ``kind``:
 
@@ -231,6 +308,7 @@ class Interpolation(NamedTuple):
     dim: Any = None
     qdim: Any = None
     dask: bool = False
+    sampled: Any = None  # "dataarray": its SampledDataArray
 
 
 def interpolation(
@@ -245,13 +323,13 @@ def interpolation(
         dims = [f"dim_{k}" for k in range(q.ndim)]
         dims[ax] = "time"
         wrapped = xr.DataArray(q, {"time": np.asarray(t_in)}, dims)
-        return Interpolation(
-            "dataarray", wrapped, None, t_out, dim="time", qdim=dims[qa], dask=True
-        )
+        sampled = dataarray_interpolation(wrapped, "time", dims[qa], t_out)
+        return Interpolation("dataarray", wrapped, dask=True, sampled=sampled)
     if is_dataarray(q):
         dim = q.dims[resolve_axis(axis, q.ndim, "axis")]
         qdim = q.dims[resolve_axis(qaxis, q.ndim, "qaxis")]
-        return Interpolation("dataarray", q, t_in, t_out, dim=dim, qdim=qdim)
+        sampled = dataarray_interpolation(q, dim, qdim, t_out, t_in)
+        return Interpolation("dataarray", q, sampled=sampled)
     fast = _fast_rows(q, t_in, t_out, axis, qaxis)
     if fast is not None:
         return fast

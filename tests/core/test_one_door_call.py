@@ -83,6 +83,7 @@ _POINTS = xr.DataArray(
     ("time", "cartesian_axis"),
     attrs={"coordinate_system": "cartesian"},
 )
+_QUATERNIONS = xr.DataArray(_Q, {"time": _T}, ("time", "quaternion_axis"))
 _DIRECTIONS = xr.DataArray(
     np.tile([0.0, 0.0, 1.0], (50, 1)), dims=("time", "cartesian_axis"),
     coords={"time": _T}, attrs={"representation_frame": "world"},
@@ -124,6 +125,8 @@ FACADE_CALLS = [
     ("qmean", lambda: rbm.qmean(_Q)),
     ("rotate_vectors", lambda: rbm.rotate_vectors(_Q, _X)),
     ("qinterp", lambda: rbm.qinterp(_Q, _T, _T[1:-1] + 0.001)),
+    ("qinterp DataArray", lambda: rbm.qinterp(_QUATERNIONS, _T, _T[1:-1] + 0.001)),
+    ("qinterp accessor", lambda: _QUATERNIONS.rbm.qinterp(time=_T[1:-1] + 0.001)),
     ("from_euler_angles", lambda: rbm.from_euler_angles(_X)),
     ("Transform.apply", lambda: _TRANSFORM.apply(_X)),
     ("Transform.from_matrix", lambda: rbm.Transform.from_matrix(np.eye(4))),

@@ -241,10 +241,12 @@ def lookup_twist(
     )
     linear, angular, timestamps = _twist.lookup_twist(
         args.frame, args.reference, args.represent_in, outlier_thresh, cutoff,
-        args.mode,
+        args.mode, as_track=as_dataset,
     )  # fmt: skip
     if as_dataset:
-        return args.twist_dataset(linear, angular, timestamps)
+        # the Track's own times: the Dataset's index holds them, immutable,
+        # no copy (the arrays' callers get one)
+        return args.twist_dataset(linear, angular, timestamps.values)
     if return_timestamps:
         return linear, angular, timestamps
     return linear, angular

@@ -267,17 +267,7 @@ def vectors(
     -------
     lines : Line3DCollection
     """
-    arr = _shapes.one_or_many(arr, "vectors: arr", 3)
-    if base is None:
-        tails = np.zeros_like(arr)
-    else:
-        tails = _shapes.one_or_many(base, "vectors: base", 3)
-        if len(tails) == 1 and len(arr) > 1:
-            tails = np.repeat(tails, len(arr), axis=0)
-        if tails.shape != arr.shape:
-            raise ValueError(
-                f"vectors: base must have shape (3,) or {arr.shape}, got {np.shape(base)}"
-            )
+    arr, tails = _shapes.with_tails(arr, base, "vectors", 3)
     ax = _axes_3d(ax, figsize)
     lines = ax.quiver(
         tails[:, 0], tails[:, 1], tails[:, 2], arr[:, 0], arr[:, 1], arr[:, 2], **kwargs

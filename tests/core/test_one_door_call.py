@@ -189,3 +189,22 @@ def test_a_static_chain_is_refused_before_the_engine_runs(lookup, monkeypatch):
         "the transform between 'eye' and 'head' is static; a velocity needs "
         "timestamps (pass allow_static=True for zeros)"
     )
+
+
+def test_plot_vectors_with_a_base_calls_the_door_once():
+    # (not in FACADE_CALLS: its result is an artist, not arrays to compare)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from rbm_nb.core import plot
+
+    fig = plt.figure()
+    ax = fig.add_subplot(projection="3d")
+    try:
+        for base in (_X[0], _X[:5]):
+            plot.vectors(_X[:5], base=base, ax=ax)
+            assert door_calls(lambda b=base: plot.vectors(_X[:5], base=b, ax=ax)) == 1
+    finally:
+        plt.close(fig)

@@ -12,6 +12,8 @@ the facade hands to the kernels as it is.
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -139,18 +141,36 @@ class Inverse(NamedTuple):
     qf: Any = None
     was_quaternion: bool = False
     template: Any = None
-    lazy: bool = False
+    lazy: Any = None
 
 
-def inverse(q: Any, qaxis: Any) -> Inverse:
-    """The one door call of :func:`rbm_nb.qinv`; ``lazy`` for dask-backed ``q``."""
+def inverse(q: Any, qaxis: Any, invert: Callable | None = None) -> Inverse:
+    """The one door call of :func:`rbm_nb.qinv`.
+
+    For dask-backed ``q``, ``lazy`` is the lazy result: each chunk comes
+    through this door again (from here, not from the facade) and is
+    inverted by ``invert(checked, chunk, qaxis)``, the facade's eager step
+    on a checked value.
+    """
     if _dask.is_dask(q):
-        return Inverse(None, False, lazy=True)
+        assert invert is not None  # (the facade hands its eager step)
+        core = q.dims[qaxis] if is_dataarray(q) else qaxis
+        block = functools.partial(_inverse_block, qaxis=qaxis, invert=invert)
+        return Inverse(
+            None,
+            False,
+            lazy=_dask.elementwise(block, q, core, fill=(1.0, 0.0, 0.0, 0.0)),
+        )
     if is_plain_rows(q, qaxis):
         return Inverse(q, True)
     template = q if is_dataarray(q) else None
     qf, was_quaternion = split(q, qaxis, "q")
     return Inverse(kernel_array(qf.reshape(-1, 4)), False, qf, was_quaternion, template)
+
+
+def _inverse_block(block: Any, qaxis: Any, invert: Callable) -> Any:
+    """One chunk of a lazy qinv: checked here, inverted by the facade's step."""
+    return invert(inverse(block, qaxis), block, qaxis)
 
 
 # ---------------------------------------------------------------------------

@@ -142,7 +142,9 @@ def one_or_many(value: Any, name: str, width: int) -> np.ndarray:
     return arr
 
 
-def with_tails(value: Any, base: Any, name: str, width: int) -> tuple:
+def with_tails(
+    value: Any, base: Any, name: str, width: int
+) -> tuple[np.ndarray, np.ndarray]:
     """``plot.vectors``' arrows: :func:`one_or_many` rows ``(N, width)`` of
     ``value`` and their tails ``(N, width)`` (``base``: one row, broadcast,
     or one per row; None: the origin); ``name`` starts the messages."""

@@ -103,10 +103,14 @@ def qinv(q: ArrayInput, qaxis: int = -1) -> Any:
     >>> qinv([0.0, 0.0, 0.0, 2.0])
     array([ 0. , -0. , -0. , -0.5])
     """
-    args = _door.inverse(q, qaxis)
-    if args.lazy:
-        core = q.dims[qaxis] if _is_dataarray(q) else qaxis
-        return _dask.elementwise(qinv, q, core, fill=(1.0, 0.0, 0.0, 0.0), qaxis=qaxis)
+    args = _door.inverse(q, qaxis, _inverted)
+    if args.lazy is not None:
+        return args.lazy
+    return _inverted(args, q, qaxis)
+
+
+def _inverted(args, q, qaxis) -> Any:
+    """qinv of a checked value (:class:`_door.quaternions.Inverse`) of ``q``."""
     if args.plain:
         # (n, 4) float64: one pass, no copies (infinities and zeros counted)
         return _qinv_rows(args.rows, q)

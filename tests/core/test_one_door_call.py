@@ -215,13 +215,25 @@ def _lazy_calls():
 
     q = dsa.from_array(_Q, chunks=(25, 4))
     qda = xr.DataArray(q, {"time": _T}, ("time", "quaternion_axis"))
+    x = dsa.from_array(_X, chunks=(25, 3))
+    xda = xr.DataArray(x, {"time": _T}, ("time", "cartesian_axis"))
     return [
         ("qinv dask", lambda: rbm.qinv(q).compute()),
         ("qinv dask DataArray", lambda: rbm.qinv(qda).compute()),
-    ]
+        ("cartesian_to_spherical dask", lambda: rbm.cartesian_to_spherical(x).compute()),
+        ("cartesian_to_spherical dask DataArray",
+         lambda: rbm.cartesian_to_spherical(xda).compute()),
+        ("spherical_to_cartesian dask", lambda: rbm.spherical_to_cartesian(x).compute()),
+    ]  # fmt: skip
 
 
-@pytest.mark.parametrize("index", range(2), ids=["qinv dask", "qinv dask DataArray"])
+_LAZY_IDS = [
+    "qinv dask", "qinv dask DataArray", "cartesian_to_spherical dask",
+    "cartesian_to_spherical dask DataArray", "spherical_to_cartesian dask",
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("index", range(len(_LAZY_IDS)), ids=_LAZY_IDS)
 def test_a_lazy_call_enters_the_door_once_with_all_its_chunks(index):
     # the chunks come through the door from the door's own block entry,
     # not from the facade again (issue 32, item 2: the dask path starts at

@@ -224,12 +224,20 @@ def _lazy_calls():
         ("cartesian_to_spherical dask DataArray",
          lambda: rbm.cartesian_to_spherical(xda).compute()),
         ("spherical_to_cartesian dask", lambda: rbm.spherical_to_cartesian(x).compute()),
+        ("estimate_linear_velocity dask DataArray",
+         lambda: rbm.estimate_linear_velocity(xda).compute()),
+        ("estimate_linear_velocity dask cutoff",
+         lambda: rbm.estimate_linear_velocity(x, timestamps=_T, cutoff=0.3).compute()),
+        ("estimate_angular_velocity dask DataArray",
+         lambda: rbm.estimate_angular_velocity(qda).compute()),
     ]  # fmt: skip
 
 
 _LAZY_IDS = [
     "qinv dask", "qinv dask DataArray", "cartesian_to_spherical dask",
     "cartesian_to_spherical dask DataArray", "spherical_to_cartesian dask",
+    "estimate_linear_velocity dask DataArray", "estimate_linear_velocity dask cutoff",
+    "estimate_angular_velocity dask DataArray",
 ]  # fmt: skip
 
 

@@ -89,6 +89,14 @@ _DIRECTIONS = xr.DataArray(
     coords={"time": _T}, attrs={"representation_frame": "world"},
 )  # fmt: skip
 
+# trajectories for ape/rpe: a Dataset and a tuple (the registered "head" too)
+_TRAJ = (_T, np.c_[_T, np.sin(_T), _T * _T], _Q)
+_TRAJ_DS = xr.Dataset(
+    {"position": (("time", "cartesian_axis"), _TRAJ[1] + 0.01 * _X),
+     "orientation": (("time", "quaternion_axis"), _Q)},
+    coords={"time": _T},
+)  # fmt: skip
+
 # (label, call): the calls a user makes most, on plain arrays unless named;
 # benchmarks/door_route.py --facades traces the same list
 FACADE_CALLS = [
@@ -143,6 +151,19 @@ FACADE_CALLS = [
     ("lookup_twist", lambda: rbm.lookup_twist("head", "world")),
     ("lookup_linear_velocity", lambda: rbm.lookup_linear_velocity("head", "world")),
     ("lookup_angular_velocity", lambda: rbm.lookup_angular_velocity("head", "world")),
+    ("evaluation.ape", lambda: rbm.evaluation.ape(_TRAJ, _TRAJ_DS)),
+    ("evaluation.ape sim3 full",
+     lambda: rbm.evaluation.ape(_TRAJ, _TRAJ_DS, align=True, correct_scale=True,
+                                pose_relation="full")),
+    ("evaluation.ape frame",
+     lambda: rbm.evaluation.ape("head", _TRAJ_DS, pose_relation="angle_deg")),
+    ("evaluation.rpe", lambda: rbm.evaluation.rpe(_TRAJ, _TRAJ_DS, delta=2)),
+    ("evaluation.rpe degrees all pairs",
+     lambda: rbm.evaluation.rpe("head", _TRAJ, delta=5, delta_unit="degrees",
+                                pairs_from_reference=True,
+                                all_pairs=True, pose_relation="angle_deg")),
+    ("evaluation.umeyama_alignment",
+     lambda: rbm.evaluation.umeyama_alignment(_X, _X[::-1], with_scale=True)),
 ]  # fmt: skip
 
 

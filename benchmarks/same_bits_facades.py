@@ -31,6 +31,20 @@ def _arrays(value) -> list[np.ndarray]:
         return [np.asarray(value[k].values) for k in sorted(value.data_vars)]
     if hasattr(value, "values") and hasattr(value, "dims"):
         return [np.asarray(value.values)]
+    if hasattr(value, "aligned_estimate"):  # an ape/rpe TrajectoryError
+        trajectories = (value.reference, value.estimate, value.aligned_estimate)
+        alignment = value.alignment or {}
+        return [
+            *_arrays(value.error),
+            np.array(sorted(value.stats.items()), dtype=object)[:, 1].astype(float),
+            *[
+                a
+                for t in trajectories
+                for a in (t.timestamps, t.positions, t.orientations)
+            ],
+            *[np.asarray(alignment[k]) for k in sorted(alignment)],
+            *([] if value.pairs is None else [value.pairs]),
+        ]
     if hasattr(value, "as_matrix"):  # a Transform
         return [np.asarray(value.as_matrix())]
     return [np.asarray(value)]

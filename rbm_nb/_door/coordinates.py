@@ -11,6 +11,7 @@ value: the float64 data with the coordinate axis moved last, and the axis
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Mapping
 from typing import Any, NamedTuple
 
@@ -33,14 +34,30 @@ class Components(NamedTuple):
 
 
 def components(
-    eager: Callable, arr: Any, axis: Any, length: int, what: str
+    convert: Callable, arr: Any, axis: Any, length: int, what: str
 ) -> Components:
-    """``arr`` with an axis of ``length`` coordinates (``what``) at ``axis``."""
+    """``arr`` with an axis of ``length`` coordinates (``what``) at ``axis``.
+
+    ``convert(data, axis)`` is the converter's math on checked coordinates:
+    dask-backed data is converted chunk by chunk, each chunk checked here
+    (:func:`_converted_block`), not by the facade again.
+    """
     if _dask.is_dask(arr):
-        lazy = _dask.elementwise(eager, getattr(arr, "data", arr), axis, axis=axis)
+        block = functools.partial(
+            _converted_block, convert=convert, length=length, what=what
+        )
+        lazy = _dask.elementwise(block, getattr(arr, "data", arr), axis, axis=axis)
         return Components(None, 0, lazy)
     data, ax = along_axis(arr, "arr", axis, length, what)
     return Components(data, ax)
+
+
+def _converted_block(
+    block: Any, axis: Any, convert: Callable, length: int, what: str
+) -> Any:
+    """One chunk of a lazy conversion: checked as an eager call's argument."""
+    data, ax = along_axis(block, "arr", axis, length, what)
+    return convert(data, ax)
 
 
 class CoordinateChange(NamedTuple):

@@ -48,6 +48,7 @@ from .._engine.time import as_track, seconds
 from .._kernels import differences as dk
 from .._kernels import quaternion as qk
 from .._kernels import rotations as rk
+from .coverage import combined
 from .unpack import kernel_array, resolve_axis
 
 # samples of not-a-knot spline influence kept on each side: 0.268**32 < 1e-18
@@ -806,6 +807,8 @@ def velocity_transform(
     """
     series = _TimeSeries.of(arr, dim, axis, timestamps, time_axis)
     whole = series.arr[series.time_dim].values
+    # the whole array's matchings, before the graph is built
+    combined(frame, to_frame, as_track(whole), [t for _, t in extras])
     context = VelocityContext(
         snapshot([frame, to_frame]),
         tuple(extras),

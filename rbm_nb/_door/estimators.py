@@ -13,6 +13,7 @@ options, the quaternions' axis and norms) before handing back a frozen
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
@@ -20,7 +21,7 @@ import numpy as np
 
 from .._engine.velocity import lowpass_reach
 from . import dask_blocks as _dask
-from .series import series, velocity_options
+from .series import enough_samples, series, velocity_options
 from .shapes import along_axis
 from .unpack import dim_axis, is_dataarray, kernel_array
 from .validation import check_tolerance, check_unit_norms, is_scalar
@@ -59,7 +60,7 @@ class VelocityArguments(NamedTuple):
 
 
 def velocity_arguments(
-    eager: Callable,
+    estimate: Callable,
     arr: Any,
     dim: Any,
     axis: Any,
@@ -71,11 +72,14 @@ def velocity_arguments(
 ) -> VelocityArguments:
     """The one door call of a velocity estimator; ``mode`` only for angular ones.
 
-    ``eager`` is the estimator itself: dask-backed data is estimated chunk by
-    chunk with it (see :func:`rbm_nb._door.dask_blocks.estimate`).
+    ``estimate(args, arr, outlier_thresh, cutoff, mode)`` is the estimator's
+    step on a checked series: dask-backed data is estimated chunk by chunk
+    with it (see :func:`rbm_nb._door.dask_blocks.estimate`), each chunk
+    checked here (:func:`_estimate_block`), not by the facade again.
     """
     angular = mode is not None
     if _dask.is_dask(arr):
+        eager = functools.partial(_estimate_block, estimate=estimate)
         return _lazy(
             eager, arr, dim, axis, timestamps, time_axis, outlier_thresh, cutoff, mode
         )
@@ -88,8 +92,22 @@ def velocity_arguments(
     moved = np.moveaxis(data, (time_axis, axis), (0, -1))
     if angular:
         check_unit_norms(moved, "arr")
+    enough_samples(moved.shape[0])
     rows = moved.reshape(moved.shape[0], -1, moved.shape[-1])
     return VelocityArguments(rows, t, moved.shape, axis, time_axis, is_dataarray(arr))
+
+
+def _estimate_block(
+    block: Any, dim: Any = None, axis: Any = None, timestamps: Any = None,
+    cutoff: Any = None, mode: Any = None, *, estimate: Callable,
+) -> Any:  # fmt: skip
+    """One chunk (with its halo) of a lazy estimate, as an eager call: checked
+    here, estimated by the estimator's step (outliers are rejected lazily
+    over the whole series, so none here)."""
+    args = velocity_arguments(
+        estimate, block, dim, axis, timestamps, None, None, cutoff, mode
+    )
+    return estimate(args, block, None, cutoff, mode)
 
 
 def _lazy(eager, arr, dim, axis, timestamps, time_axis, outlier_thresh, cutoff, mode):

@@ -38,6 +38,7 @@ from .._engine import transform as _engine_transform
 from .._engine import twist as _twist
 from .._engine.transform import SIZES, Blocks
 from .._kernels.rows import MAX_COORDINATE
+from .coverage import chain_samples, combined
 from .unpack import Unpacked, float_array, kernel_array, moveaxis, resolve_axis, unpack
 from .validation import check_whole_rows, normalize_quaternions
 from .xarray import wrap
@@ -217,6 +218,7 @@ def arguments(
     time_axis: Any,
     attr: str,
     resolve: Callable,
+    velocity: bool = False,
 ) -> Arguments | ShortWay:
     """Everything a public transform checks, once, for an eager call.
 
@@ -224,6 +226,9 @@ def arguments(
     vectors); ``attr`` the DataArray attribute naming the frame they are in
     now (``outof``'s default). On the short way (``rows`` set) a plain (3,)
     or (n, 3) array goes through a static chain without being laid out.
+    The array's and the chain's times must share a sample, unless
+    ``velocity`` (a change of a velocity's frames, whose terms the caller
+    checks first: :func:`rbm_nb._door.coverage.velocity_transform`).
     """
     if type(arr) is np.ndarray and outof is not None:
         # a plain array (most calls): no attrs to read outof from
@@ -244,6 +249,8 @@ def arguments(
             source = resolve(outof, "outof")
             to_frame = resolve(into, "into")
         laid_out = _blocks_of(unpacked, kind, unpacked.timestamps)
+        if not velocity:
+            chain_samples(source, to_frame, [laid_out.track])
         return Arguments(source, to_frame, unpacked, None, laid_out, None, None)
     unpacked = unpack(
         arr, dim=dim, axis=axis, time_axis=time_axis, timestamps=timestamps
@@ -252,6 +259,8 @@ def arguments(
     source = _source(resolve, outof, attrs, attr)
     to_frame = resolve(into, "into")
     laid_out = _blocks_of(unpacked, kind, unpacked.timestamps)
+    if not velocity:
+        chain_samples(source, to_frame, [laid_out.track])
     return Arguments(source, to_frame, unpacked, attrs, laid_out, None, None)
 
 
@@ -266,6 +275,7 @@ def method_arguments(
         if short is not None:
             return short
     laid_out = blocks(arr, SIZES[kind], axis, time_axis, timestamps, kind)
+    chain_samples(frame, to_frame, [laid_out.track])
     return Arguments(frame, to_frame, None, None, laid_out, None, None)
 
 
@@ -325,6 +335,8 @@ def transform_block(block, frames, kind: str, dim, time_dim, attr, origin):
     unpacked = unpack(block, dim=dim, timestamps=time_dim)
     laid_out = _blocks_of(unpacked, kind, _track_from(unpacked.timestamps, origin))
     with _task_values(frames) as (outof, into):
+        # a chunk's times may miss the chain's span where the whole array's do not
+        chain_samples(outof, into, [laid_out.track])
         out, ts_out = _engine_transform.transform(outof, kind, laid_out, into)
     attrs = dict(unpacked.attrs)
     attrs[attr] = attrs["representation_frame"] = into.name
@@ -342,6 +354,9 @@ def velocity_block(block, context, what: str, dim, time_dim, origin):
     unpacked = unpack(block, dim=dim, timestamps=time_dim)
     laid_out = _blocks_of(unpacked, "vectors", _track_from(unpacked.timestamps, origin))
     with _task_values(context.frames) as (frame, to_frame):
+        # the matchings of velocity_parts: the chunk with the chain, then
+        # with the terms looked up around it
+        combined(frame, to_frame, laid_out.track, [t for _, t in context.extras])
         rotated, matched, final = _twist.velocity_parts(
             laid_out, frame, to_frame, context.extras, context.interpolated
         )

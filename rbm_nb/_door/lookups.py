@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
-from .._engine import chain as _chain
+from . import coverage as _coverage
 from . import xarray as _xarray
 from .series import velocity_options
 
@@ -24,6 +24,8 @@ __all__ = [
     "transform_frames",
     "VelocityFrames",
     "velocity_frames",
+    "method_velocity_frames",
+    "reference_or_parent",
 ]
 
 
@@ -45,13 +47,17 @@ def frames(resolve: Callable, outof: Any, into: Any) -> tuple[Any, Any]:
     """``(outof, into)`` resolved, ``into`` first: ``lookup_transform``'s common
     call, a few µs in all, so a plain pair rather than a :class:`Frames`."""
     to_frame = resolve(into, "into")
-    return resolve(outof, "outof"), to_frame
+    outof = resolve(outof, "outof")
+    _coverage.chain_samples(outof, to_frame)
+    return outof, to_frame
 
 
 def pose_frames(resolve: Callable, frame: Any, reference: Any) -> Frames:
     """``lookup_pose``'s frames: ``reference`` resolved first."""
     to_frame = resolve(reference, "reference")
-    return Frames(resolve(frame, "frame"), to_frame)
+    pair = Frames(resolve(frame, "frame"), to_frame)
+    _coverage.chain_samples(pair.outof, pair.into)
+    return pair
 
 
 def transform_frames(
@@ -61,14 +67,19 @@ def transform_frames(
     as_matrix: bool,
     as_transform: bool,
     as_dataset: bool,
+    time: Any = None,
 ) -> Frames:
-    """:func:`frames` for ``lookup_at``, after its result options (at most one)."""
+    """:func:`frames` for ``lookup_at``, after its result options (at most one);
+    at the frames' own times (``time`` None) their spans must share a sample."""
     if (as_matrix or as_transform) and (as_dataset or (as_matrix and as_transform)):
         chosen = [k for k, v in (("as_matrix", as_matrix), ("as_transform", as_transform),
                                  ("as_dataset", as_dataset)) if v]  # fmt: skip
         raise ValueError(f"choose at most one of {', '.join(chosen)}")
     to_frame = resolve(into, "into")
-    return Frames(resolve(outof, "outof"), to_frame)
+    pair = Frames(resolve(outof, "outof"), to_frame)
+    if time is None:
+        _coverage.chain_samples(pair.outof, pair.into)
+    return pair
 
 
 class VelocityFrames(NamedTuple):
@@ -100,24 +111,61 @@ def velocity_frames(
 ) -> VelocityFrames:
     """Frame, reference (default: the frame's parent) and representation frame
     (default: the reference) resolved, then the velocity options checked and
-    a static chain refused."""
+    a static chain refused, and the chain's samples checked (their spans
+    must share some, as many as the filter needs)."""
     frame = resolve(frame, "frame")
-    if reference is None:
-        if frame.parent is None:
-            raise ValueError(
-                f"frame {frame.name!r} has no parent; pass the reference frame explicitly"
-            )
-        reference = frame.parent
-    reference = resolve(reference, "reference")
+    reference = resolve(reference_or_parent(frame, reference), "reference")
     represent_in = resolve(
         represent_in if represent_in is not None else reference, "represent_in"
     )
     mode = velocity_options(outlier_thresh, cutoff, mode=mode)
-    # known before anything is computed: a chain whose frames all have no
-    # timestamps has no velocity (the engine would find it after the lookup)
-    if _chain.static_transform(frame, reference) is not None:
+    _moving(frame, reference, outlier_thresh, cutoff, False)
+    return VelocityFrames(frame, reference, represent_in, mode)
+
+
+def reference_or_parent(frame: Any, reference: Any, where: str = "") -> Any:
+    """``reference``, or by default the parent of ``frame`` (a resolved frame):
+    the one rule of the velocities and ``plot.trajectory``; ``where`` starts
+    the message (e.g. "trajectory: ")."""
+    if reference is not None:
+        return reference
+    if frame.parent is None:
+        raise ValueError(
+            f"{where}frame {frame.name!r} has no parent; pass the reference frame "
+            f"explicitly"
+        )
+    return frame.parent
+
+
+def method_velocity_frames(
+    frame: Any,
+    reference: Any,
+    represent_in: Any,
+    outlier_thresh: Any,
+    cutoff: Any,
+    allow_static: bool,
+) -> tuple[Any, Any]:
+    """``(reference, represent_in)`` of a frame's velocity method (resolved
+    frames or None; both default to the frame's parent), the chain checked
+    as for :func:`velocity_frames` (a static one only if not ``allow_static``:
+    then the velocity is zero)."""
+    if represent_in is None:
+        represent_in = reference_or_parent(frame, None)
+    reference = reference_or_parent(frame, reference)
+    _moving(frame, reference, outlier_thresh, cutoff, allow_static)
+    return reference, represent_in
+
+
+def _moving(frame: Any, reference: Any, outlier_thresh: Any, cutoff: Any,
+            allow_static: bool) -> None:  # fmt: skip
+    """Refuse a velocity lookup of the chain the engine could not estimate."""
+    n = _coverage.chain_samples(frame, reference)
+    if n == 0:
+        # no frame of the chain has timestamps: there is no velocity
+        if allow_static:
+            return
         raise ValueError(
             f"the transform between {frame.name!r} and {reference.name!r} is static; "
             f"a velocity needs timestamps (pass allow_static=True for zeros)"
         )
-    return VelocityFrames(frame, reference, represent_in, mode)
+    _coverage.velocity_samples(n, outlier_thresh, cutoff)

@@ -12,6 +12,8 @@ the facade hands to the kernels as it is.
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -19,6 +21,7 @@ import numpy as np
 from .._engine import time as _time
 from .._infra.config import UNIT_QUATERNION_TOLERANCE
 from .._kernels import squad_walk as _sw
+from ..errors import UnsupportedError
 from . import dask_blocks as _dask
 from .shapes import along_axis
 from .unpack import float_array, is_dataarray, kernel_array, resolve_axis
@@ -138,18 +141,36 @@ class Inverse(NamedTuple):
     qf: Any = None
     was_quaternion: bool = False
     template: Any = None
-    lazy: bool = False
+    lazy: Any = None
 
 
-def inverse(q: Any, qaxis: Any) -> Inverse:
-    """The one door call of :func:`rbm_nb.qinv`; ``lazy`` for dask-backed ``q``."""
+def inverse(q: Any, qaxis: Any, invert: Callable | None = None) -> Inverse:
+    """The one door call of :func:`rbm_nb.qinv`.
+
+    For dask-backed ``q``, ``lazy`` is the lazy result: each chunk comes
+    through this door again (from here, not from the facade) and is
+    inverted by ``invert(checked, chunk, qaxis)``, the facade's eager step
+    on a checked value.
+    """
     if _dask.is_dask(q):
-        return Inverse(None, False, lazy=True)
+        assert invert is not None  # (the facade hands its eager step)
+        core = q.dims[qaxis] if is_dataarray(q) else qaxis
+        block = functools.partial(_inverse_block, qaxis=qaxis, invert=invert)
+        return Inverse(
+            None,
+            False,
+            lazy=_dask.elementwise(block, q, core, fill=(1.0, 0.0, 0.0, 0.0)),
+        )
     if is_plain_rows(q, qaxis):
         return Inverse(q, True)
     template = q if is_dataarray(q) else None
     qf, was_quaternion = split(q, qaxis, "q")
     return Inverse(kernel_array(qf.reshape(-1, 4)), False, qf, was_quaternion, template)
+
+
+def _inverse_block(block: Any, qaxis: Any, invert: Callable) -> Any:
+    """One chunk of a lazy qinv: checked here, inverted by the facade's step."""
+    return invert(inverse(block, qaxis), block, qaxis)
 
 
 # ---------------------------------------------------------------------------
@@ -209,6 +230,82 @@ def product(q: tuple, qaxis: Any, general: bool = False) -> Product:
 # ---------------------------------------------------------------------------
 
 
+class SampledDataArray(NamedTuple):
+    """A DataArray's squad along ``dim``, checked: ``lazy`` (dask-backed,
+    interpolated chunk by chunk, ``da`` carrying ``t_in`` as its coordinate),
+    or ``data`` (components last, float64) sampled along axis ``ax`` at
+    ``t_in`` (seconds), to be interpolated to ``t_out`` (flat seconds; the
+    given values ``t_out_values``), only where ``inside`` (None: everywhere)."""
+
+    lazy: bool
+    da: Any
+    dim: Any
+    qdim: Any
+    data: Any = None
+    ax: int = 0
+    t_in: Any = None
+    t_out: Any = None
+    inside: Any = None
+    t_out_values: Any = None
+
+
+def dataarray_interpolation(
+    da: Any, dim: Any, qdim: Any, t_out: Any, t_in: Any = None,
+    out_of_range: str = "raise",
+) -> SampledDataArray:  # fmt: skip
+    """The one door call of a DataArray's squad (``qinterp`` of a DataArray,
+    the ``.rbm.qinterp`` accessor): dims, times and values checked.
+
+    ``t_in`` defaults to the coordinate of ``dim``; ``out_of_range="nan"``
+    leaves times outside the sampled range out (NaN there) instead of
+    refusing them.
+    """
+    if dim not in da.dims:
+        raise ValueError(
+            f"{dim!r} is not a dimension of this DataArray {tuple(da.dims)}"
+        )
+    if _dask.is_dask(da) and qdim in da.dims and dim != qdim:
+        if t_in is not None:
+            da = da.assign_coords({dim: np.asarray(getattr(t_in, "values", t_in))})
+        return SampledDataArray(True, da, dim, qdim)
+    if qdim not in da.dims:
+        raise ValueError(
+            f"qdim {qdim!r} is not a dimension of this DataArray {tuple(da.dims)}"
+        )
+    if dim == qdim:
+        raise ValueError(f"cannot interpolate along the quaternion dimension {qdim!r}")
+    if da.sizes[qdim] != 4:
+        raise ValueError(
+            f"dimension {qdim!r} must have length 4 (w, x, y, z), got {da.sizes[qdim]}"
+        )
+    if t_in is None:
+        if dim not in da.coords:
+            raise ValueError(f"dimension {dim!r} has no coordinate to interpolate from")
+        t_in = da.coords[dim].values
+    t_out_values = np.asarray(getattr(t_out, "values", t_out))
+    if t_out_values.ndim > 1:
+        raise UnsupportedError(
+            f"the new coordinate for {dim!r} must be a scalar or one-dimensional, "
+            f"got shape {t_out_values.shape}"
+        )
+    times = fast_times(np.asarray(getattr(t_in, "values", t_in)), t_out_values)
+    t_in_f, t_out_f = (
+        times if times is not None else _time.seconds_pair(t_in, t_out_values)
+    )
+    flat_out = t_out_f.reshape(-1)
+    inside = None  # None: every time is inside the sampled range
+    if out_of_range == "nan" and t_in_f.ndim == 1 and t_in_f.size:
+        inside = (flat_out >= t_in_f[0]) & (flat_out <= t_in_f[-1])
+        if inside.all():
+            inside = None
+    check_times(t_in_f, flat_out if inside is None else flat_out[inside], da.sizes[dim])
+    data = np.moveaxis(float_array(da.values, "q"), da.dims.index(qdim), -1)
+    ax = [d for d in da.dims if d != qdim].index(dim)
+    return SampledDataArray(
+        False, da, dim, qdim, data, ax, t_in_f, flat_out, inside, t_out_values
+    )
+
+
 class Interpolation(NamedTuple):
     """A checked squad interpolation, by ``kind``:
 
@@ -231,6 +328,7 @@ class Interpolation(NamedTuple):
     dim: Any = None
     qdim: Any = None
     dask: bool = False
+    sampled: Any = None  # "dataarray": its SampledDataArray
 
 
 def interpolation(
@@ -245,13 +343,13 @@ def interpolation(
         dims = [f"dim_{k}" for k in range(q.ndim)]
         dims[ax] = "time"
         wrapped = xr.DataArray(q, {"time": np.asarray(t_in)}, dims)
-        return Interpolation(
-            "dataarray", wrapped, None, t_out, dim="time", qdim=dims[qa], dask=True
-        )
+        sampled = dataarray_interpolation(wrapped, "time", dims[qa], t_out)
+        return Interpolation("dataarray", wrapped, dask=True, sampled=sampled)
     if is_dataarray(q):
         dim = q.dims[resolve_axis(axis, q.ndim, "axis")]
         qdim = q.dims[resolve_axis(qaxis, q.ndim, "qaxis")]
-        return Interpolation("dataarray", q, t_in, t_out, dim=dim, qdim=qdim)
+        sampled = dataarray_interpolation(q, dim, qdim, t_out, t_in)
+        return Interpolation("dataarray", q, sampled=sampled)
     fast = _fast_rows(q, t_in, t_out, axis, qaxis)
     if fast is not None:
         return fast

@@ -24,7 +24,7 @@ from .._kernels._arrays import is_scalar
 from .unpack import dim_axis, is_dataarray, kernel_array, moveaxis, resolve_axis
 from .validation import check_no_inf
 
-__all__ = ["Series", "series", "velocity_options"]
+__all__ = ["Series", "series", "enough_samples", "velocity_options"]
 
 
 class Series:
@@ -114,6 +114,15 @@ def series(arr: Any, dim: Any, axis: Any, timestamps: Any, time_axis: Any) -> Se
     # NaN rows are missing samples (gaps); infinities are mistakes
     check_no_inf(moveaxis(data, (time_axis, axis), (0, -1)), "arr")
     return Series(data, axis, time_axis, t)
+
+
+def enough_samples(n: int) -> None:
+    """A velocity reads two samples at least (numpy's gradient, the spline's
+    derivative): refuse fewer, as the door knows ``n`` before the engine."""
+    if n < 2:
+        raise ValueError(
+            f"arr needs at least 2 samples to estimate a velocity, got {n}"
+        )
 
 
 def velocity_options(

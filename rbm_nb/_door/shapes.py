@@ -40,6 +40,7 @@ __all__ = [
     "paired_rows",
     "last_axis",
     "one_or_many",
+    "with_tails",
     "along_axis",
     "where",
 ]
@@ -139,6 +140,25 @@ def one_or_many(value: Any, name: str, width: int) -> np.ndarray:
             f"{name} must have shape ({width},) or (N, {width}), got {np.shape(value)}"
         )
     return arr
+
+
+def with_tails(
+    value: Any, base: Any, name: str, width: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """``plot.vectors``' arrows: :func:`one_or_many` rows ``(N, width)`` of
+    ``value`` and their tails ``(N, width)`` (``base``: one row, broadcast,
+    or one per row; None: the origin); ``name`` starts the messages."""
+    arr = one_or_many(value, f"{name}: arr", width)
+    if base is None:
+        return arr, np.zeros_like(arr)
+    tails = one_or_many(base, f"{name}: base", width)
+    if len(tails) == 1 and len(arr) > 1:
+        tails = np.repeat(tails, len(arr), axis=0)
+    if tails.shape != arr.shape:
+        raise ValueError(
+            f"{name}: base must have shape ({width},) or {arr.shape}, got {np.shape(base)}"
+        )
+    return arr, tails
 
 
 def along_axis(

@@ -73,17 +73,20 @@ class Chain(list):
     inverted) down to ``into``. ``static`` is the composed transform
     (t (1, 3), r (1, 4)) when no frame of the chain moves, ``rows`` its rows
     t (3,) and r (4,), kept for lookup_transform's copies; ``plan`` is the
-    fused plan (:func:`fused_plan`), made at the first call that needs it.
+    fused plan (:func:`fused_plan`), made at the first call that needs it;
+    ``covered`` what the door found of the chain's times
+    (:func:`rbm_nb._door.coverage.chain_samples`), kept with it.
     (A list, so that the loops over a chain run at list speed.)
     """
 
-    __slots__ = ("static", "rows", "plan")
+    __slots__ = ("static", "rows", "plan", "covered")
 
     def __init__(self, steps: list) -> None:
         super().__init__(steps)
         self.static: Any = None
         self.rows: Any = None
         self.plan: Any = _UNPLANNED
+        self.covered: Any = None
         if all(f.track is None for f, _ in steps):
             self.static = compose(steps, Target(None))
             self.rows = self.static[0][0], self.static[1][0]
@@ -183,17 +186,14 @@ def match(frames, arrays=(), arrays_first=True) -> Target:
     arrays_first : bool
         Whether arrays take precedence over frames in defining the sampling.
 
-    Raises
-    ------
-    ValueError
-        If datetime64 and numeric timestamps meet, or the time ranges of
-        the participants do not overlap.
+    The door refused participants of different kinds of time or whose time
+    ranges share no sample of the sampling track
+    (:func:`rbm_nb._door.coverage.samples`): nothing is checked here.
     """
     array_tracks = [a for a in arrays if a is not None]
     continuous = [f.track for f in frames if f.track is not None and not f.discrete]
     discrete = [f.track for f in frames if f.track is not None and f.discrete]
     ranged = continuous + array_tracks
-    _time.check_compatible(ranged + discrete)
 
     ordered = array_tracks + continuous if arrays_first else continuous + array_tracks
     if not ordered:
@@ -208,66 +208,10 @@ def match(frames, arrays=(), arrays_first=True) -> Target:
     last = min(t.key[-1] for t in ranged)
     lo = int(np.searchsorted(source.key, first, side="left"))
     hi = int(np.searchsorted(source.key, last, side="right"))
-    if hi <= lo:
-        if first <= last:
-            raise ValueError(_no_sample_message(frames, arrays, source, first, last))
-        raise ValueError(_no_overlap_message(frames, arrays, ranged))
+    assert hi > lo, "a call the door lets through covers some time (_door.coverage)"
     if lo == 0 and hi == len(source):
         return Target(source, source)
     return Target(source.slice(lo, hi), source)
-
-
-def _spans(frames, arrays) -> list[str]:
-    parts = []
-    for f in frames:
-        if f.track is not None and not f.discrete:
-            parts.append(f"frame {f.name!r}: {_span(f.track)}")
-    for k, a in enumerate(arrays):
-        if a is not None:
-            parts.append(f"array {k}: {_span(a)}")
-    return parts
-
-
-def _no_overlap_message(frames, arrays, ranged) -> str:
-    parts = _spans(frames, arrays)
-    return (
-        "the time ranges do not overlap, so there is no time at which the "
-        "transformation and the data are both defined (" + "; ".join(parts) + ")"
-    )
-
-
-def _no_sample_message(frames, arrays, source, first, last) -> str:
-    """The ranges overlap, but the sampling track has no sample inside."""
-    names = [f"frame {f.name!r}" for f in frames if f.track is source]
-    names += [f"array {k}" for k, a in enumerate(arrays) if a is source]
-    who = names[0] if names else "the sampling"
-    lo = int(np.searchsorted(source.key, first, side="left"))
-    around = []
-    if lo > 0:
-        around.append(f"the last one before is {source.values[lo - 1]}")
-    if lo < len(source):
-        around.append(f"the first one after is {source.values[lo]}")
-    return (
-        f"the time ranges overlap only from {_value(source, first)} to "
-        f"{_value(source, last)}, and none of the {len(source)} samples of {who} "
-        f"(which defines the timestamps of the result) falls within it "
-        f"({'; '.join(around)}); nothing can be returned ("
-        + "; ".join(_spans(frames, arrays))
-        + ")"
-    )
-
-
-def _value(track, key):
-    """A sort key as the user's kind of time (datetime64 or a number)."""
-    if track.kind == "datetime64":
-        return np.datetime64(int(key), "ns")
-    if track.kind == "timedelta64":
-        return np.timedelta64(int(key), "ns")
-    return key
-
-
-def _span(track) -> str:
-    return f"{track.values[0]} to {track.values[-1]}"
 
 
 def _same_times(track, target_track) -> slice | None:
@@ -309,10 +253,8 @@ def resample_frame(frame, target: Target):
     if track is None:
         return frame.t, frame.rotation
     tt = target.track
-    if tt is None:
-        raise ValueError(
-            f"frame {frame.name!r} is timestamped; it has no single static transform"
-        )
+    # (a target is static only where no frame of the chain has times)
+    assert tt is not None, f"frame {frame.name!r} is timestamped; the target is not"
     same = _same_times(track, tt)
     if same is not None:
         # the stored values, with their signs (the reference returns them),
@@ -423,8 +365,8 @@ def resample_array(data: np.ndarray, track, target: Target, quaternions: bool):
     if track is None:
         return data
     tt = target.track
-    if tt is None:
-        raise ValueError("a timestamped array cannot be matched to a static transform")
+    # (a timestamped array makes the target timestamped: see match)
+    assert tt is not None, "a timestamped array was matched to a static target"
     same = _same_times(track, tt)
     if same is not None:
         return data[same]

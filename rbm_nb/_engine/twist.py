@@ -29,7 +29,6 @@ from . import velocity as _velocity
 from .transform import Blocks, track_of, transform
 
 __all__ = [
-    "defaults",
     "lookup_linear_velocity",
     "lookup_angular_velocity",
     "lookup_twist",
@@ -42,27 +41,12 @@ __all__ = [
 ]
 
 
-def defaults(frame, reference, represent_in):
-    """``reference`` and ``represent_in``, both defaulting to the frame's parent."""
-    if reference is None or represent_in is None:
-        if frame.parent is None:
-            raise ValueError(
-                f"frame {frame.name!r} has no parent; pass the reference frame explicitly"
-            )
-    reference = reference if reference is not None else frame.parent
-    represent_in = represent_in if represent_in is not None else frame.parent
-    return reference, represent_in
-
-
 def _moving_lookup(frame, reference, allow_static, rotation_only=False):
     t, r, target = _chain.lookup(frame, reference, rotation_only)
     if target.track is None:
-        if allow_static:
-            return None
-        raise ValueError(
-            f"the transform between {frame.name!r} and {reference.name!r} is static; "
-            f"a velocity needs timestamps (pass allow_static=True for zeros)"
-        )
+        # (the door refuses a static chain unless allow_static: zeros)
+        assert allow_static, "the door refuses a static chain's velocity"
+        return None
     return t, r, target, _breaks(frame, reference, target)
 
 
@@ -163,7 +147,6 @@ def lookup_linear_velocity(
     as_track=False,
 ):
     """Linear velocity (n, 3) of ``frame`` wrt ``reference`` and its timestamps."""
-    reference, represent_in = defaults(frame, reference, represent_in)
     looked_up = _moving_lookup(frame, reference, allow_static)
     if looked_up is None:
         return np.zeros(3), None
@@ -185,7 +168,6 @@ def lookup_angular_velocity(
 ):
     """Angular velocity (n, 3) of ``frame`` wrt ``reference`` and its timestamps
     (``mode`` checked by the caller)."""
-    reference, represent_in = defaults(frame, reference, represent_in)
     if (
         mode == "quaternion"
         and outlier_thresh is None
@@ -237,7 +219,6 @@ def lookup_twist(
 ):
     """Linear and angular velocity (n, 3) each of ``frame`` and their timestamps
     (``mode`` checked by the caller)."""
-    reference, represent_in = defaults(frame, reference, represent_in)
     looked_up = _moving_lookup(frame, reference, allow_static)
     if looked_up is None:
         return np.zeros(3), np.zeros(3), None
@@ -295,12 +276,7 @@ def velocity_terms(
         )
         return [(angular, ang_ts)]
     if what == "reference_frame":
-        # v_M/R' = v_M/R + v_R/R' + w_R/R' x t_M/R
-        if moving_frame is None:
-            raise ValueError(
-                "moving_frame must be given to transform the reference frame of a "
-                "linear velocity (its position enters the three-term formula)"
-            )
+        # v_M/R' = v_M/R + v_R/R' + w_R/R' x t_M/R (moving_frame given: the door)
         linear_v, angular, twist_ts = lookup_twist(
             frame, to_frame, to_frame, outlier_thresh, cutoff, "quaternion", True,
             as_track=True,
@@ -308,12 +284,7 @@ def velocity_terms(
         lin_ts = ang_ts = twist_ts
         translation, _, trans_target = _chain.lookup(moving_frame, frame)
     else:
-        # v_M'/R = v_M/R + v_M'/M + w_M/R x t_M'/M
-        if reference_frame is None:
-            raise ValueError(
-                "reference_frame must be given to transform the moving frame of a "
-                "linear velocity (its angular velocity enters the three-term formula)"
-            )
+        # v_M'/R = v_M/R + v_M'/M + w_M/R x t_M'/M (reference_frame given: the door)
         linear_v, lin_ts = lookup_linear_velocity(
             to_frame, frame, to_frame, outlier_thresh, cutoff, True, as_track=True
         )

@@ -18,7 +18,6 @@ entry points used by the velocity lookups and by
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 
@@ -62,19 +61,6 @@ def lowpass_reach(cutoff: float) -> int:
     _, poles, _ = butter(_BUTTER_ORDER, cutoff, output="zpk")
     radius = float(np.max(np.abs(poles)))
     return FILTER_PADLEN + int(math.ceil(math.log(1e-16) / math.log(radius)))
-
-
-def _enough_for_filter(cutoff: Any, n: int) -> None:
-    """The low-pass filter pads by FILTER_PADLEN samples on each side.
-
-    The options' values are checked at the door
-    (:func:`rbm_nb._door.series.velocity_options`); how many samples a
-    lookup's series has is known only here, once the chain is evaluated.
-    """
-    if cutoff is not None and n <= FILTER_PADLEN:
-        raise ValueError(
-            f"cutoff: the low-pass filter needs more than {FILTER_PADLEN} samples, got {n}"
-        )
 
 
 # Velocities divide by sampling intervals and by their products (numpy's
@@ -200,11 +186,7 @@ def linear_series(
     breaks: np.ndarray | None = None,
     what: str = "timestamps",
 ) -> np.ndarray:
-    n = x.shape[0]
-    if n < 2:
-        raise ValueError(
-            f"arr needs at least 2 samples to estimate a velocity, got {n}"
-        )
+    n = x.shape[0]  # at least 2 (_door.series.enough_samples)
     check_intervals(t, what)
     flat = kernel_array(x.reshape(n, -1))
     if (breaks is None or not breaks.any()) and not _dk.nan_rows(flat).any():
@@ -233,13 +215,7 @@ def angular_series(
     breaks: np.ndarray | None = None,
     what: str = "timestamps",
 ) -> np.ndarray:
-    n, nb, _ = q.shape
-    if n < 2:
-        # the spline derivative reads two samples at least (no kernel is
-        # called with less)
-        raise ValueError(
-            f"arr needs at least 2 samples to estimate a velocity, got {n}"
-        )
+    n, nb, _ = q.shape  # at least 2 (_door.series.enough_samples)
     check_intervals(t, what)
     # no zero row: the door refuses quaternions far from unit norm
     # (_door.validation.check_unit_norms) and frames' rotations are unit
@@ -268,10 +244,6 @@ def angular_series(
         if need_rv:
             rv[:, b, :] = _rk.rotation_vectors(qb)
         if mode == "rotation_vector":
-            if n < 2:
-                raise ValueError(
-                    f"arr needs at least 2 samples to estimate a velocity, got {n}"
-                )
             w[:, b, :] = _gradient_by_runs(rv[:, b, :], t, breaks)
             continue
         missing = _dk.nan_rows(qb)
@@ -326,7 +298,6 @@ def linear_velocity(
     """
     x = np.asarray(arr, dtype=np.float64)
     t = _time.seconds(timestamps, x.shape[0])
-    _enough_for_filter(cutoff, x.shape[0])
     return linear_series(
         x.reshape(x.shape[0], 1, -1), t, outlier_thresh, cutoff, breaks, what
     ).reshape(x.shape)
@@ -360,7 +331,6 @@ def angular_velocity(
     """
     qa = np.asarray(q, dtype=np.float64)  # (n, 4): the engine's own lookups
     t = _time.seconds(timestamps, qa.shape[0])
-    _enough_for_filter(cutoff, qa.shape[0])
     return angular_series(
         qa[:, None, :], t, mode, outlier_thresh, cutoff, breaks, what
     )[:, 0, :]

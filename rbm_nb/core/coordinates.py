@@ -50,7 +50,7 @@ def cartesian_to_polar(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     >>> cartesian_to_polar([0.0, 2.0])
     array([2.        , 1.57079633])
     """
-    args = components(cartesian_to_polar, arr, axis, 2, "x, y")
+    args = components(_polar, arr, axis, 2, "x, y")
     if args.lazy is not None:
         return args.lazy
     return _polar(args.data, args.axis)
@@ -87,7 +87,7 @@ def polar_to_cartesian(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     >>> polar_to_cartesian([2.0, 0.0])
     array([2., 0.])
     """
-    args = components(polar_to_cartesian, arr, axis, 2, "r, phi")
+    args = components(_cartesian_2d, arr, axis, 2, "r, phi")
     if args.lazy is not None:
         return args.lazy
     return _cartesian_2d(args.data, args.axis)
@@ -126,7 +126,7 @@ def cartesian_to_spherical(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     >>> cartesian_to_spherical([0.0, 0.0, 2.0])
     array([2., 0., 0.])
     """
-    args = components(cartesian_to_spherical, arr, axis, 3, "x, y, z")
+    args = components(_spherical, arr, axis, 3, "x, y, z")
     if args.lazy is not None:
         return args.lazy
     return _spherical(args.data, args.axis)
@@ -166,7 +166,7 @@ def spherical_to_cartesian(arr: ArrayInput, axis: int = -1) -> np.ndarray:
     >>> spherical_to_cartesian([1.0, np.pi / 2, 0.0]).round(12)
     array([1., 0., 0.])
     """
-    args = components(spherical_to_cartesian, arr, axis, 3, "r, theta, phi")
+    args = components(_cartesian_3d, arr, axis, 3, "r, theta, phi")
     if args.lazy is not None:
         return args.lazy
     return _cartesian_3d(args.data, args.axis)

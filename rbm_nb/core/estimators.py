@@ -113,11 +113,15 @@ def estimate_linear_velocity(
            [1., 0., 0.]])
     """
     args = velocity_arguments(
-        estimate_linear_velocity, arr, dim, axis, timestamps, time_axis,
-        outlier_thresh, cutoff,
-    )  # fmt: skip
+        _linear, arr, dim, axis, timestamps, time_axis, outlier_thresh, cutoff
+    )
     if args.lazy is not None:
         return args.lazy
+    return _linear(args, arr, outlier_thresh, cutoff)
+
+
+def _linear(args, arr, outlier_thresh, cutoff, mode=None):
+    """:func:`estimate_linear_velocity` of a checked series (``args``) of ``arr``."""
     v = _linear_series(args.rows, args.t, outlier_thresh, cutoff)
     out = args.result(v, args.rows.shape[-1])
     if args.dataarray:
@@ -189,11 +193,15 @@ def estimate_angular_velocity(
            [0. , 0. , 0.1]])
     """
     args = velocity_arguments(
-        estimate_angular_velocity, arr, dim, axis, timestamps, time_axis,
-        outlier_thresh, cutoff, mode,
-    )  # fmt: skip
+        _angular, arr, dim, axis, timestamps, time_axis, outlier_thresh, cutoff, mode
+    )
     if args.lazy is not None:
         return args.lazy
+    return _angular(args, arr, outlier_thresh, cutoff, mode)
+
+
+def _angular(args, arr, outlier_thresh, cutoff, mode):
+    """:func:`estimate_angular_velocity` of a checked series (``args``) of ``arr``."""
     w = _angular_series(args.rows, args.t, mode, outlier_thresh, cutoff)
     out = args.result(w, 3)
     if not args.dataarray:

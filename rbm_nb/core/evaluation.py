@@ -44,21 +44,21 @@ matched poses.
 
 from __future__ import annotations
 
-import numbers
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._door.unpack import float_array, kernel_array
-from .._door.validation import normalize_quaternions
-from .._door.xarray import transform_dataset
+from .._door import evaluation as _door
+from .._door.evaluation import POSE_RELATIONS, Trajectory
+from .._infra import parallel as _parallel
+from .._kernels import conversions as _kc
 from .._kernels import evaluation as k
+from .._kernels import rotations as _rk
+from .._kernels._arrays import kernel_array
 from .._kernels.evaluation import absolute_pose_errors, relative_pose_errors
-from .conversions import quaternion_from_matrix
-from .frames import ReferenceFrame, register_frame, resolve_frame
-from .lookups import lookup_pose, lookup_transform
-from .quaternions import qmul
+from .conversions import MATRIX_TOLERANCE
+from .frames import register_frame, resolve_frame
 
 if TYPE_CHECKING:  # xarray is imported where a DataArray is made
     import xarray as xr
@@ -71,178 +71,6 @@ __all__ = [
     "rpe",
     "umeyama_alignment",
 ]
-
-#: Canonical pose relation -> unit of the error.
-POSE_RELATIONS = {
-    "translation": "m",
-    "rotation": "",
-    "full": "",
-    "angle_deg": "deg",
-    "angle_rad": "rad",
-    "point_distance": "m",
-    "point_distance_error_ratio": "%",
-}
-
-# evo's enum values and member names
-_ALIASES = {
-    "translation part": "translation",
-    "translation_part": "translation",
-    "rotation part": "rotation",
-    "rotation_part": "rotation",
-    "full transformation": "full",
-    "full_transformation": "full",
-    "rotation angle in degrees": "angle_deg",
-    "rotation_angle_deg": "angle_deg",
-    "rotation angle in radians": "angle_rad",
-    "rotation_angle_rad": "angle_rad",
-    "point distance": "point_distance",
-    "point distance error ratio": "point_distance_error_ratio",
-}
-
-_DELTA_UNITS = ("frames", "meters", "degrees", "radians")
-
-
-# ---------------------------------------------------------------------------
-# trajectories
-# ---------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class Trajectory:
-    """Poses over time: what :func:`ape` and :func:`rpe` compare.
-
-    Attributes
-    ----------
-    timestamps : ndarray, shape (n,)
-        Strictly increasing, numeric (seconds) or datetime64.
-    positions : ndarray, shape (n, 3)
-    orientations : ndarray, shape (n, 4)
-        Unit quaternions ``w, x, y, z``.
-    name : str
-    """
-
-    timestamps: np.ndarray
-    positions: np.ndarray
-    orientations: np.ndarray
-    name: str = "trajectory"
-    # the moving frame the poses come from and the frame they are wrt
-    _frames: tuple = field(default=(), repr=False, compare=False)
-
-    def __len__(self) -> int:
-        return len(self.timestamps)
-
-    def to_dataset(self, frame_name: str | None = None):
-        """The trajectory as an rbm-style Dataset (position, orientation, time)."""
-        return transform_dataset(
-            self.positions, self.orientations, frame_name, self.timestamps, pose=True
-        )
-
-
-def _unit(q) -> np.ndarray:
-    """Orientations of a frame or lookup as unit quaternions.
-
-    Frames hand back recorded quaternions as given (|q| - 1 up to the unit
-    tolerance, ~1e-4 in recordings); the error kernels rotate with them, so
-    they get the unit quaternions the frame itself computes with.
-    """
-    return normalize_quaternions(float_array(q, "orientations"), "orientations", True)
-
-
-def _from_frame(value, name: str, frame) -> Trajectory:
-    moving = resolve_frame(value, name)
-    if moving.timestamps is None:
-        raise ValueError(
-            f"{name}: frame {moving.name!r} is static; a trajectory needs a moving frame"
-        )
-    if frame is None:
-        if moving.parent is None:
-            raise ValueError(f"{name}: frame {moving.name!r} is a root; pass frame=")
-        into = moving.parent
-    else:
-        into = resolve_frame(frame, "frame")
-    assert isinstance(moving, ReferenceFrame)
-    p, q, t = lookup_pose(moving, into, return_timestamps=True)
-    return Trajectory(
-        np.asarray(t), np.asarray(p), _unit(q), moving.name or name, (moving, into)
-    )
-
-
-def _from_arrays(t, p, q, name: str) -> Trajectory:
-    t = np.asarray(getattr(t, "values", t))
-    if t.ndim != 1 or t.dtype.kind not in "iufM":
-        raise ValueError(
-            f"{name}: timestamps must be a 1-d numeric or datetime64 array, "
-            f"got shape {t.shape} and dtype {t.dtype}"
-        )
-    if len(t) < 2:
-        raise ValueError(f"{name}: a trajectory needs at least 2 poses, got {len(t)}")
-    root = ReferenceFrame(f"{name} world")
-    # the frame validates shapes, finiteness, unit norms and increasing times
-    moving = ReferenceFrame(name, parent=root, translation=p, rotation=q, timestamps=t)
-    return Trajectory(
-        np.asarray(moving.timestamps), np.asarray(moving.translation),
-        _unit(moving.rotation), name, (moving, root),
-    )  # fmt: skip
-
-
-def _trajectory(value, name: str, frame) -> Trajectory:
-    if isinstance(value, Trajectory):
-        return _from_arrays(value.timestamps, value.positions, value.orientations, name)
-    if isinstance(value, (str, ReferenceFrame)):
-        return _from_frame(value, name, frame)
-    if type(value).__name__ == "Dataset" and type(value).__module__.startswith(
-        "xarray"
-    ):
-        missing = [v for v in ("position", "orientation") if v not in value.data_vars]
-        if missing:
-            raise ValueError(
-                f"{name}: the Dataset has no {' or '.join(missing)} variable "
-                f"(expected position (time, cartesian_axis) and orientation "
-                f"(time, quaternion_axis); has {sorted(value.data_vars)})"
-            )
-        dim = value["position"].dims[0]
-        if dim not in value.coords:
-            raise ValueError(
-                f"{name}: the Dataset has no coordinate for dimension {dim!r}"
-            )
-        return _from_arrays(
-            value[dim].values,
-            value["position"].transpose(dim, ...).values,
-            value["orientation"].transpose(dim, ...).values,
-            name,
-        )
-    if isinstance(value, (tuple, list)) and len(value) == 3:
-        timestamps, positions, quaternions = value
-        return _from_arrays(timestamps, positions, quaternions, name)
-    raise TypeError(
-        f"{name} must be a frame name, a ReferenceFrame, an xarray Dataset with "
-        f"position/orientation or a (timestamps, positions, quaternions) tuple, "
-        f"got {type(value).__name__}"
-    )
-
-
-def _match(ref: Trajectory, est: Trajectory) -> tuple[Trajectory, Trajectory]:
-    """Reference poses inside the estimate's time span, and the estimate there."""
-    if (ref.timestamps.dtype.kind == "M") != (est.timestamps.dtype.kind == "M"):
-        raise ValueError(
-            "reference and estimate timestamps must both be datetime64 or both "
-            f"numeric, got {ref.timestamps.dtype} and {est.timestamps.dtype}"
-        )
-    t = ref.timestamps
-    inside = (t >= est.timestamps[0]) & (t <= est.timestamps[-1])
-    if inside.sum() < 2:
-        raise ValueError(
-            f"reference ({t[0]} to {t[-1]}) and estimate ({est.timestamps[0]} to "
-            f"{est.timestamps[-1]}) overlap in {int(inside.sum())} reference "
-            "timestamp(s); at least 2 are needed"
-        )
-    times = t[inside]
-    moving, into = est._frames
-    p, q = lookup_transform(moving, into, time=times)
-    matched_ref = Trajectory(
-        times, ref.positions[inside], ref.orientations[inside], ref.name, ref._frames
-    )
-    return matched_ref, Trajectory(times, p, _unit(q), est.name, est._frames)
 
 
 # ---------------------------------------------------------------------------
@@ -284,12 +112,13 @@ def umeyama_alignment(source, target, *, with_scale: bool = False):
     >>> float(round(s, 12)), t.round(12) + 0.0
     (2.0, array([1., 2., 3.]))
     """
-    x = np.asarray(source, dtype=float)
-    y = np.asarray(target, dtype=float)
-    if x.ndim != 2 or x.shape[1] != 3 or x.shape != y.shape:
-        raise ValueError(
-            f"source and target must both have shape (n, 3), got {x.shape} and {y.shape}"
-        )
+    x, y = _door.umeyama_points(source, target)
+    return _fit(x, y, with_scale)
+
+
+def _fit(x: np.ndarray, y: np.ndarray, with_scale: bool):
+    """Umeyama's fit of checked (n, 3) points (the estimate's matched positions
+    in ``ape``/``rpe``, NaN rows of a recording's missing samples included)."""
     n = len(x)
     mean_x, mean_y = x.mean(axis=0), y.mean(axis=0)
     xc, yc = x - mean_x, y - mean_y
@@ -320,26 +149,29 @@ def _apply(traj: Trajectory, rotation, translation, scale) -> Trajectory:
     # goes through BLAS, whose threads make it erratic on a loaded machine
     pos = traj.positions
     p = scale * sum(pos[:, [k]] * rotation[:, k] for k in range(3)) + translation
-    q = qmul(quaternion_from_matrix(rotation), traj.orientations)
-    return Trajectory(traj.timestamps, p, np.asarray(q), traj.name, traj._frames)
+    return traj._with_poses(p, _rotated(rotation, traj.orientations))
 
 
-def _align(ref, est, est_full, align, correct_scale, n_to_align):
-    if not (align or correct_scale):
-        if n_to_align is not None:
-            raise ValueError("n_to_align needs align=True or correct_scale=True")
+def _rotated(rotation: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """``qmul(quaternion_from_matrix(rotation), q)`` by the kernels those call.
+
+    ``rotation`` is the fit's ``U V^T``, orthonormal to rounding, so no
+    matrix is invalid; ``q`` holds the trajectory's unit quaternions.
+    """
+    matrix = kernel_array(np.reshape(rotation, (1, 3, 3)))
+    head, _ = _kc.quaternion_from_matrix(matrix, float(MATRIX_TOLERANCE))
+    rows = kernel_array(q)
+    out = np.empty((len(rows), 4))
+    _parallel.launch(_rk.qmul_into, _rk.qmul_into_parallel, len(rows), head, rows, out)
+    return out
+
+
+def _align(ref, est, est_full, n_to_align, align, correct_scale):
+    if n_to_align is None:
         return est, est_full, None
-    n = len(ref)
-    if n_to_align is not None:
-        if not isinstance(n_to_align, numbers.Integral) or isinstance(n_to_align, bool):
-            raise ValueError(f"n_to_align must be an integer, got {n_to_align!r}")
-        if not 3 <= int(n_to_align) <= n:
-            raise ValueError(
-                f"n_to_align must lie between 3 and the {n} matched poses, got {n_to_align}"
-            )
-        n = int(n_to_align)
-    rotation, translation, scale = umeyama_alignment(
-        est.positions[:n], ref.positions[:n], with_scale=correct_scale
+    n = n_to_align
+    rotation, translation, scale = _fit(
+        est.positions[:n], ref.positions[:n], correct_scale
     )
     if not align:  # scale only (evo's correct_only_scale)
         rotation, translation = np.eye(3), np.zeros(3)
@@ -354,20 +186,6 @@ def _align(ref, est, est_full, align, correct_scale, n_to_align):
 # ---------------------------------------------------------------------------
 # errors
 # ---------------------------------------------------------------------------
-
-
-def _relation(pose_relation, metric: str) -> str:
-    rel = _ALIASES.get(pose_relation, pose_relation)
-    if rel not in POSE_RELATIONS or (
-        metric == "APE" and rel == "point_distance_error_ratio"
-    ):
-        valid = [
-            r
-            for r in POSE_RELATIONS
-            if metric == "RPE" or r != "point_distance_error_ratio"
-        ]
-        raise ValueError(f"pose_relation must be one of {valid}, got {pose_relation!r}")
-    return rel
 
 
 def _from_parts(rel: str, trans: np.ndarray, angle: np.ndarray) -> np.ndarray:
@@ -526,13 +344,6 @@ def _result(metric, rel, values, times, ref, est, alignment, est_full, pairs=Non
     )  # fmt: skip
 
 
-def _inputs(reference, estimate, frame):
-    ref = _trajectory(reference, "reference", frame)
-    est_full = _trajectory(estimate, "estimate", frame)
-    ref, est = _match(ref, est_full)
-    return ref, est, est_full
-
-
 def ape(
     reference,
     estimate,
@@ -586,10 +397,13 @@ def ape(
     >>> round(ape((t, p, q), (t, p + [0.1, 0, 0], q), align=True).stats["max"], 12)
     0.0
     """
-    rel = _relation(pose_relation, "APE")
-    ref, est, est_full = _inputs(reference, estimate, frame)
+    args = _door.evaluation_inputs(
+        resolve_frame, "APE", reference, estimate, frame, pose_relation, align,
+        correct_scale, n_to_align,
+    )  # fmt: skip
+    rel, ref = args.relation, args.reference
     est, est_full, alignment = _align(
-        ref, est, est_full, align, correct_scale, n_to_align
+        ref, args.estimate, args.estimate_full, args.n_to_align, align, correct_scale
     )
     if rel in ("translation", "point_distance"):
         d = est.positions - ref.positions
@@ -600,13 +414,12 @@ def ape(
     return _result("APE", rel, values, ref.timestamps, ref, est, alignment, est_full)
 
 
-def _pairs(traj: Trajectory, delta, delta_unit, rel_delta_tol, all_pairs) -> np.ndarray:
+def _pairs(
+    traj: Trajectory, delta, delta_unit, radians, rel_delta_tol, all_pairs
+) -> np.ndarray:
+    """Index pairs of a checked ``delta`` (``radians``: an angle's, else None)."""
     n = len(traj)
     if delta_unit == "frames":
-        if isinstance(delta, bool) or not float(delta).is_integer() or delta < 1:
-            raise ValueError(
-                f"delta must be a positive integer for frames, got {delta!r}"
-            )
         step = int(delta)
         if all_pairs:
             i = np.arange(max(n - step, 0))
@@ -620,12 +433,6 @@ def _pairs(traj: Trajectory, delta, delta_unit, rel_delta_tol, all_pairs) -> np.
                 p, float(delta), float(float(delta) * rel_delta_tol)
             )
         return k.path_pairs(p, float(delta))
-    radians = np.deg2rad(delta) if delta_unit == "degrees" else float(delta)
-    if not 0 <= radians <= np.pi:
-        raise ValueError(
-            f"delta must be an angle in [0, 180] degrees, got {delta!r} {delta_unit}"
-        )
-    radians = float(radians)
     tol = float(radians * rel_delta_tol)
     return (
         k.all_angle_pairs(q, radians, tol) if all_pairs else k.angle_pairs(q, radians)
@@ -700,25 +507,19 @@ def rpe(
     >>> rpe((t, p, q), (t, drift, q), delta=2).error.values.round(12)
     array([0.2, 0.2])
     """
-    rel = _relation(pose_relation, "RPE")
-    if delta_unit not in _DELTA_UNITS:
-        raise ValueError(
-            f"delta_unit must be one of {list(_DELTA_UNITS)}, got {delta_unit!r}"
-        )
-    if (
-        not isinstance(delta, numbers.Real)
-        or not np.isfinite(float(delta))
-        or delta <= 0
-    ):
-        raise ValueError(f"delta must be a positive number, got {delta!r}")
-    ref, est, est_full = _inputs(reference, estimate, frame)
+    args = _door.evaluation_inputs(
+        resolve_frame, "RPE", reference, estimate, frame, pose_relation, align,
+        correct_scale, n_to_align, delta, delta_unit,
+    )  # fmt: skip
+    rel, ref = args.relation, args.reference
     est, est_full, alignment = _align(
-        ref, est, est_full, align, correct_scale, n_to_align
+        ref, args.estimate, args.estimate_full, args.n_to_align, align, correct_scale
     )
     pairs = _pairs(
         ref if pairs_from_reference else est,
         delta,
         delta_unit,
+        args.radians,
         rel_delta_tol,
         all_pairs,
     )

@@ -25,8 +25,10 @@ from typing import Any, TypeAlias
 
 import numpy as np
 
+from .._door import coverage as _coverage
 from .._door import frame_paths as _frame_paths
 from .._door import inputs as _inputs
+from .._door import lookups as _lookups
 from .._door.series import velocity_options
 from .._door.unpack import ArrayInput, float_array, kernel_array
 from .._door.validation import (
@@ -846,14 +848,14 @@ class ReferenceFrame:
         Both default to the parent frame. Returns ``(linear, angular)``
         with shape (n, 3) each, plus the timestamps if ``return_timestamps``.
         """
+        reference = _optional(reference, "reference")
+        represent_in = _optional(represent_in, "represent_in")
+        mode = velocity_options(outlier_thresh, cutoff, mode=mode)
+        reference, represent_in = _lookups.method_velocity_frames(
+            self, reference, represent_in, outlier_thresh, cutoff, allow_static
+        )
         linear, angular, ts = _twist.lookup_twist(
-            self,
-            _optional(reference, "reference"),
-            _optional(represent_in, "represent_in"),
-            outlier_thresh,
-            cutoff,
-            velocity_options(outlier_thresh, cutoff, mode=mode),
-            allow_static,
+            self, reference, represent_in, outlier_thresh, cutoff, mode, allow_static
         )
         return (linear, angular, ts) if return_timestamps else (linear, angular)
 
@@ -868,13 +870,16 @@ class ReferenceFrame:
     ) -> Any:
         """Linear velocity of this frame wrt ``reference``, shape (n, 3)."""
         velocity_options(outlier_thresh, cutoff)
-        linear, ts = _twist.lookup_linear_velocity(
+        reference, represent_in = _lookups.method_velocity_frames(
             self,
             _optional(reference, "reference"),
             _optional(represent_in, "represent_in"),
             outlier_thresh,
             cutoff,
             allow_static,
+        )
+        linear, ts = _twist.lookup_linear_velocity(
+            self, reference, represent_in, outlier_thresh, cutoff, allow_static
         )
         return (linear, ts) if return_timestamps else linear
 
@@ -889,14 +894,14 @@ class ReferenceFrame:
         return_timestamps: bool = False,
     ) -> Any:
         """Angular velocity of this frame wrt ``reference``, shape (n, 3)."""
+        reference = _optional(reference, "reference")
+        represent_in = _optional(represent_in, "represent_in")
+        mode = velocity_options(outlier_thresh, cutoff, mode=mode)
+        reference, represent_in = _lookups.method_velocity_frames(
+            self, reference, represent_in, outlier_thresh, cutoff, allow_static
+        )
         angular, ts = _twist.lookup_angular_velocity(
-            self,
-            _optional(reference, "reference"),
-            _optional(represent_in, "represent_in"),
-            outlier_thresh,
-            cutoff,
-            velocity_options(outlier_thresh, cutoff, mode=mode),
-            allow_static,
+            self, reference, represent_in, outlier_thresh, cutoff, mode, allow_static
         )
         return (angular, ts) if return_timestamps else angular
 
@@ -978,6 +983,9 @@ class ReferenceFrame:
         to_frame = resolve_frame(to_frame, "to_frame")
         check_what(what)
         blocks = _inputs.blocks(arr, 3, axis, time_axis, timestamps, "vectors")
+        _coverage.velocity_transform(
+            self, to_frame, blocks.track, what, False, cutoff=cutoff
+        )
         out, ts = _twist.transform_angular_velocity(
             self, blocks, to_frame, what, cutoff
         )
@@ -1001,15 +1009,14 @@ class ReferenceFrame:
         to_frame = resolve_frame(to_frame, "to_frame")
         check_what(what)
         blocks = _inputs.blocks(arr, 3, axis, time_axis, timestamps, "vectors")
+        moving = _optional(moving_frame, "moving_frame")
+        reference = _optional(reference_frame, "reference_frame")
+        _coverage.velocity_transform(
+            self, to_frame, blocks.track, what, True, moving, reference,
+            outlier_thresh, cutoff,
+        )  # fmt: skip
         out, ts = _twist.transform_linear_velocity(
-            self,
-            blocks,
-            to_frame,
-            what,
-            _optional(moving_frame, "moving_frame"),
-            _optional(reference_frame, "reference_frame"),
-            outlier_thresh,
-            cutoff,
+            self, blocks, to_frame, what, moving, reference, outlier_thresh, cutoff
         )
         return (out, ts) if return_timestamps else out
 

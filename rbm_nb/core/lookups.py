@@ -18,6 +18,9 @@ from .._door import lookups as _door
 from .._engine import at_time as _at_time
 from .._engine import chain as _chain
 from .._engine import twist as _twist
+from .._infra.config import UNIT_QUATERNION_TOLERANCE
+from .._kernels import conversions as _kc
+from .._kernels._arrays import kernel_array
 from .conversions import homogeneous_from_transform
 from .frames import FrameLike, resolve_frame
 from .rigid_transform import Transform
@@ -133,7 +136,7 @@ def lookup_at(
     Transform[, timestamps], or Dataset
     """
     pair = _door.transform_frames(
-        resolve_frame, outof, into, as_matrix, as_transform, as_dataset
+        resolve_frame, outof, into, as_matrix, as_transform, as_dataset, time
     )
     outof, into = pair.outof, pair.into
     if time is None:
@@ -144,7 +147,7 @@ def lookup_at(
         return pair.dataset(t, r, timestamps)
     out: Any
     if as_matrix:
-        out = homogeneous_from_transform(t, r)
+        out = _matrices(t, r)
     elif as_transform:
         out = Transform(t, r)
     else:
@@ -238,10 +241,12 @@ def lookup_twist(
     )
     linear, angular, timestamps = _twist.lookup_twist(
         args.frame, args.reference, args.represent_in, outlier_thresh, cutoff,
-        args.mode,
+        args.mode, as_track=as_dataset,
     )  # fmt: skip
     if as_dataset:
-        return args.twist_dataset(linear, angular, timestamps)
+        # the Track's own times: the Dataset's index holds them, immutable,
+        # no copy (the arrays' callers get one)
+        return args.twist_dataset(linear, angular, timestamps.values)
     if return_timestamps:
         return linear, angular, timestamps
     return linear, angular
@@ -311,3 +316,19 @@ def lookup_angular_velocity(
     if return_timestamps:
         return angular, timestamps
     return angular
+
+
+def _matrices(t: Any, r: Any) -> Any:
+    """Homogeneous matrices of the engine's (t, r), (3,)/(4,) or (n, 3)/(n, 4):
+    the conversion kernel, as ``homogeneous_from_transform`` calls it after
+    its door (the engine's rows need none)."""
+    lead = t.shape[:-1]
+    out, bad_q, bad_t = _kc.homogeneous_from_transform(
+        kernel_array(t.reshape(-1, 3)),
+        kernel_array(r.reshape(-1, 4)),
+        UNIT_QUATERNION_TOLERANCE,
+    )
+    if bad_q or bad_t:
+        # a missing sample (NaN row): the conversion's own refusal, as before
+        return homogeneous_from_transform(t, r)
+    return out.reshape(lead + (4, 4))

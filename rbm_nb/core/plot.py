@@ -17,6 +17,7 @@ from matplotlib.patches import FancyArrowPatch
 from mpl_toolkits.mplot3d import Axes3D, proj3d
 
 from .._door import shapes as _shapes
+from .._door.lookups import reference_or_parent
 from .._infra.config import UNIT_QUATERNION_TOLERANCE
 from .._kernels import conversions as _kc
 from .frames import resolve_frame
@@ -266,17 +267,7 @@ def vectors(
     -------
     lines : Line3DCollection
     """
-    arr = _shapes.one_or_many(arr, "vectors: arr", 3)
-    if base is None:
-        tails = np.zeros_like(arr)
-    else:
-        tails = _shapes.one_or_many(base, "vectors: base", 3)
-        if len(tails) == 1 and len(arr) > 1:
-            tails = np.repeat(tails, len(arr), axis=0)
-        if tails.shape != arr.shape:
-            raise ValueError(
-                f"vectors: base must have shape (3,) or {arr.shape}, got {np.shape(base)}"
-            )
+    arr, tails = _shapes.with_tails(arr, base, "vectors", 3)
     ax = _axes_3d(ax, figsize)
     lines = ax.quiver(
         tails[:, 0], tails[:, 1], tails[:, 2], arr[:, 0], arr[:, 1], arr[:, 2], **kwargs
@@ -360,13 +351,9 @@ def trajectory(
     """
 
     frame = resolve_frame(frame, "trajectory: frame")
-    if reference is None:
-        if frame.parent is None:
-            raise ValueError(
-                f"trajectory: frame {frame.name!r} is a root; give a reference frame"
-            )
-        reference = frame.parent
-    reference = resolve_frame(reference, "trajectory: reference")
+    reference = resolve_frame(
+        reference_or_parent(frame, reference, "trajectory: "), "trajectory: reference"
+    )
     position, orientation, ts = lookup_pose(frame, reference, return_timestamps=True)
     if ts is None:
         raise ValueError(

@@ -21,7 +21,6 @@ from .._door.unpack import is_dataarray as _is_dataarray
 from .._door.validation import (
     check_no_inf,
 )
-from .._engine import time as _time
 from .._infra import parallel as _parallel
 from .._kernels import quaternion as _qk
 from .._kernels import rotations as _rk
@@ -104,10 +103,14 @@ def qinv(q: ArrayInput, qaxis: int = -1) -> Any:
     >>> qinv([0.0, 0.0, 0.0, 2.0])
     array([ 0. , -0. , -0. , -0.5])
     """
-    args = _door.inverse(q, qaxis)
-    if args.lazy:
-        core = q.dims[qaxis] if _is_dataarray(q) else qaxis
-        return _dask.elementwise(qinv, q, core, fill=(1.0, 0.0, 0.0, 0.0), qaxis=qaxis)
+    args = _door.inverse(q, qaxis, _inverted)
+    if args.lazy is not None:
+        return args.lazy
+    return _inverted(args, q, qaxis)
+
+
+def _inverted(args, q, qaxis) -> Any:
+    """qinv of a checked value (:class:`_door.quaternions.Inverse`) of ``q``."""
     if args.plain:
         # (n, 4) float64: one pass, no copies (infinities and zeros counted)
         return _qinv_rows(args.rows, q)
@@ -371,9 +374,7 @@ def qinterp(
     """
     args = _door.interpolation(q, t_in, t_out, axis, qaxis)
     if args.kind == "dataarray":
-        out = _qinterp_dataarray(
-            args.q, args.dim, args.qdim, t_out, t_in=args.t_in, out_of_range="raise"
-        )
+        out = _sampled_dataarray(args.sampled, t_out, "raise")
         return out.data if args.dask else out
     if args.kind == "rows":
         return _squad_rows(args.q, args.t_in, args.t_out)
@@ -391,54 +392,24 @@ def _qinterp_dataarray(
     interpolated linearly (numbers) or take the nearest value (anything else).
 
     ``out_of_range="nan"`` gives NaN outside the sampled range (as
-    ``DataArray.interp`` does) instead of raising.
+    ``DataArray.interp`` does) instead of raising. (The accessor's entry, and
+    each chunk's on the lazy path.)
     """
+    args = _door.dataarray_interpolation(da, dim, qdim, t_out, t_in, out_of_range)
+    return _sampled_dataarray(args, t_out, out_of_range)
+
+
+def _sampled_dataarray(args, t_out, out_of_range: str):
+    """The squad of a checked DataArray (:class:`_door.quaternions.SampledDataArray`)."""
     import xarray as xr
 
-    if dim not in da.dims:
-        raise ValueError(
-            f"{dim!r} is not a dimension of this DataArray {tuple(da.dims)}"
-        )
-    if _dask.is_dask(da) and qdim in da.dims and dim != qdim:
-        if t_in is not None:
-            da = da.assign_coords({dim: np.asarray(getattr(t_in, "values", t_in))})
+    da, dim, qdim = args.da, args.dim, args.qdim
+    if args.lazy:
         return _dask.qinterp(_qinterp_dataarray, da, dim, qdim, t_out, out_of_range)
-    if qdim not in da.dims:
-        raise ValueError(
-            f"qdim {qdim!r} is not a dimension of this DataArray {tuple(da.dims)}"
-        )
-    if dim == qdim:
-        raise ValueError(f"cannot interpolate along the quaternion dimension {qdim!r}")
-    if da.sizes[qdim] != 4:
-        raise ValueError(
-            f"dimension {qdim!r} must have length 4 (w, x, y, z), got {da.sizes[qdim]}"
-        )
-    if t_in is None:
-        if dim not in da.coords:
-            raise ValueError(f"dimension {dim!r} has no coordinate to interpolate from")
-        t_in = da.coords[dim].values
-    t_out_values = np.asarray(getattr(t_out, "values", t_out))
-    if t_out_values.ndim > 1:
-        raise UnsupportedError(
-            f"the new coordinate for {dim!r} must be a scalar or one-dimensional, "
-            f"got shape {t_out_values.shape}"
-        )
-    times = _door.fast_times(np.asarray(getattr(t_in, "values", t_in)), t_out_values)
-    t_in_f, t_out_f = (
-        times if times is not None else _time.seconds_pair(t_in, t_out_values)
-    )
-    flat_out = t_out_f.reshape(-1)
-    inside = None  # None: every time is inside the sampled range
-    if out_of_range == "nan" and t_in_f.ndim == 1 and t_in_f.size:
-        inside = (flat_out >= t_in_f[0]) & (flat_out <= t_in_f[-1])
-        if inside.all():
-            inside = None
-    _door.check_times(
-        t_in_f, flat_out if inside is None else flat_out[inside], da.sizes[dim]
-    )
-
-    data = np.moveaxis(float_array(da.values, "q"), da.dims.index(qdim), -1)
-    ax = [d for d in da.dims if d != qdim].index(dim)
+    data, ax, t_in_f, flat_out, inside = (
+        args.data, args.ax, args.t_in, args.t_out, args.inside
+    )  # fmt: skip
+    t_out_values = args.t_out_values
     if inside is None:
         values = _squad_along(data, ax, t_in_f, flat_out)
     else:

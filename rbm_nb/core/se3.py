@@ -48,6 +48,8 @@ import numpy as np
 from .._door import poses as _poses
 from .._door import shapes as _shapes
 from .._door.unpack import kernel_array
+from .._infra.config import UNIT_QUATERNION_TOLERANCE
+from .._kernels import conversions as _kc
 from .._kernels import se3
 from . import conversions
 
@@ -270,16 +272,22 @@ def _representation(representation) -> int:
 
 
 def _angles_of_rotations(rot: np.ndarray, code: int) -> np.ndarray:
-    """spatialmath's ``r2x``: the angle triple of each (checked) rotation matrix."""
-    q = conversions.quaternion_from_matrix(rot)
+    """spatialmath's ``r2x``: the angle triple of each rotation matrix (rows
+    (n, 3, 3) the door checked: rotations, so the conversion kernels are
+    called directly, as the public conversions call them after their door)."""
+    q, invalid = _kc.quaternion_from_matrix(rot, conversions.MATRIX_TOLERANCE)
+    if invalid:
+        # (not a rotation within the conversions' own test: their message)
+        conversions.quaternion_from_matrix(rot)
     if code == 4:
-        return conversions.rotation_vector_from_quaternion(q)
-    if code == 3:
-        return conversions.euler_from_quaternion(q, "zyz")
+        out, _ = _kc.rotation_vector_from_quaternion(q, UNIT_QUATERNION_TOLERANCE)
+        return out
     # RPY (roll, pitch, yaw) about (z, y, x) of "xyz" etc. are the intrinsic
     # Euler angles of the reversed sequence, read backwards.
-    order = {0: "xyz", 1: "zyx", 2: "yxz"}[code]
-    return np.ascontiguousarray(conversions.euler_from_quaternion(q, order)[:, ::-1])
+    order = {0: "xyz", 1: "zyx", 2: "yxz", 3: "zyz"}[code]
+    i, j, k = ("xyz".index(c) for c in order)
+    out, _ = _kc.euler_from_quaternion(q, i, j, k, False, UNIT_QUATERNION_TOLERANCE)
+    return out if code == 3 else np.ascontiguousarray(out[:, ::-1])
 
 
 _SINGULAR_WHAT = {

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from .._door import coverage as _coverage
 from .._door import dask_blocks as _dask
 from .._door import inputs as _inputs
 from .._door.series import velocity_options as _velocity_options
@@ -53,8 +54,9 @@ def _transform(
             return_timestamps, velocity,
         )  # fmt: skip
     args = _inputs.arguments(
-        kind, arr, into, outof, dim, axis, timestamps, time_axis, attr, resolve_frame
-    )
+        kind, arr, into, outof, dim, axis, timestamps, time_axis, attr, resolve_frame,
+        velocity is not None,
+    )  # fmt: skip
     if args.rows is not None:  # the short way: a static chain, plain rows
         out = _engine_transform.transform_static(kind, args.static, args.rows)
         out = out.reshape(args.shape)
@@ -73,13 +75,21 @@ def _transform(
 
 def _velocity(args, what, linear, options):
     if not linear:
+        _coverage.velocity_transform(
+            args.outof, args.into, args.blocks.track, what, False,
+            cutoff=options["cutoff"],
+        )  # fmt: skip
         return _twist.transform_angular_velocity(
             args.outof, args.blocks, args.into, what, options["cutoff"]
         )
+    moving = _optional(options["moving_frame"], "moving_frame")
+    reference = _optional(options["reference_frame"], "reference_frame")
+    _coverage.velocity_transform(
+        args.outof, args.into, args.blocks.track, what, True, moving, reference,
+        options["outlier_thresh"], options["cutoff"],
+    )  # fmt: skip
     return _twist.transform_linear_velocity(
-        args.outof, args.blocks, args.into, what,
-        _optional(options["moving_frame"], "moving_frame"),
-        _optional(options["reference_frame"], "reference_frame"),
+        args.outof, args.blocks, args.into, what, moving, reference,
         options["outlier_thresh"], options["cutoff"],
     )  # fmt: skip
 
@@ -99,10 +109,14 @@ def _lazy_transform(
     if velocity is not None and attr != "representation_frame":
         # the frames' velocities are estimated once, not per chunk
         linear, options = velocity
+        moving = _optional(options.get("moving_frame"), "moving_frame")
+        reference = _optional(options.get("reference_frame"), "reference_frame")
+        _coverage.velocity_terms(
+            source, to_frame, attr, linear, moving, reference,
+            options.get("outlier_thresh"), options["cutoff"],
+        )  # fmt: skip
         extras = _twist.velocity_terms(
-            linear, source, to_frame, attr,
-            _optional(options.get("moving_frame"), "moving_frame"),
-            _optional(options.get("reference_frame"), "reference_frame"),
+            linear, source, to_frame, attr, moving, reference,
             options.get("outlier_thresh"), options["cutoff"],
         )  # fmt: skip
         return _dask.velocity_transform(

@@ -83,9 +83,18 @@ _POINTS = xr.DataArray(
     ("time", "cartesian_axis"),
     attrs={"coordinate_system": "cartesian"},
 )
+_QUATERNIONS = xr.DataArray(_Q, {"time": _T}, ("time", "quaternion_axis"))
 _DIRECTIONS = xr.DataArray(
     np.tile([0.0, 0.0, 1.0], (50, 1)), dims=("time", "cartesian_axis"),
     coords={"time": _T}, attrs={"representation_frame": "world"},
+)  # fmt: skip
+
+# trajectories for ape/rpe: a Dataset and a tuple (the registered "head" too)
+_TRAJ = (_T, np.c_[_T, np.sin(_T), _T * _T], _Q)
+_TRAJ_DS = xr.Dataset(
+    {"position": (("time", "cartesian_axis"), _TRAJ[1] + 0.01 * _X),
+     "orientation": (("time", "quaternion_axis"), _Q)},
+    coords={"time": _T},
 )  # fmt: skip
 
 # (label, call): the calls a user makes most, on plain arrays unless named;
@@ -113,6 +122,7 @@ FACADE_CALLS = [
     ("se3.trnorm", lambda: rbm.se3.trnorm(_POSES)),
     ("se3.trinterp", lambda: rbm.se3.trinterp(_POSES[0], _POSES[1], 0.5)),
     ("se3.rotvelxform", lambda: rbm.se3.rotvelxform(_X[0])),
+    ("se3.rotvelxform matrices", lambda: rbm.se3.rotvelxform(np.eye(3))),
     ("se3.qlog", lambda: rbm.se3.qlog(_Q)),
     ("cartesian_to_spherical", lambda: rbm.cartesian_to_spherical(_X)),
     ("transform_coordinates", lambda: rbm.transform_coordinates(_X, "spherical", "cartesian")),
@@ -123,6 +133,8 @@ FACADE_CALLS = [
     ("qmean", lambda: rbm.qmean(_Q)),
     ("rotate_vectors", lambda: rbm.rotate_vectors(_Q, _X)),
     ("qinterp", lambda: rbm.qinterp(_Q, _T, _T[1:-1] + 0.001)),
+    ("qinterp DataArray", lambda: rbm.qinterp(_QUATERNIONS, _T, _T[1:-1] + 0.001)),
+    ("qinterp accessor", lambda: _QUATERNIONS.rbm.qinterp(time=_T[1:-1] + 0.001)),
     ("from_euler_angles", lambda: rbm.from_euler_angles(_X)),
     ("Transform.apply", lambda: _TRANSFORM.apply(_X)),
     ("Transform.from_matrix", lambda: rbm.Transform.from_matrix(np.eye(4))),
@@ -131,10 +143,27 @@ FACADE_CALLS = [
     ("transform_vectors", lambda: rbm.transform_vectors(_X, "world", "eye")),
     ("transform_quaternions", lambda: rbm.transform_quaternions(_Q[:1], "world", "eye")),
     ("lookup_transform", lambda: rbm.lookup_transform("eye", "world")),
+    ("lookup_transform as_matrix",
+     lambda: rbm.lookup_transform("eye", "world", as_matrix=True)),
+    ("lookup_transform as_matrix moving",
+     lambda: rbm.lookup_transform("head", "world", as_matrix=True)),
     ("lookup_pose", lambda: rbm.lookup_pose("eye", "world")),
     ("lookup_twist", lambda: rbm.lookup_twist("head", "world")),
     ("lookup_linear_velocity", lambda: rbm.lookup_linear_velocity("head", "world")),
     ("lookup_angular_velocity", lambda: rbm.lookup_angular_velocity("head", "world")),
+    ("evaluation.ape", lambda: rbm.evaluation.ape(_TRAJ, _TRAJ_DS)),
+    ("evaluation.ape sim3 full",
+     lambda: rbm.evaluation.ape(_TRAJ, _TRAJ_DS, align=True, correct_scale=True,
+                                pose_relation="full")),
+    ("evaluation.ape frame",
+     lambda: rbm.evaluation.ape("head", _TRAJ_DS, pose_relation="angle_deg")),
+    ("evaluation.rpe", lambda: rbm.evaluation.rpe(_TRAJ, _TRAJ_DS, delta=2)),
+    ("evaluation.rpe degrees all pairs",
+     lambda: rbm.evaluation.rpe("head", _TRAJ, delta=5, delta_unit="degrees",
+                                pairs_from_reference=True,
+                                all_pairs=True, pose_relation="angle_deg")),
+    ("evaluation.umeyama_alignment",
+     lambda: rbm.evaluation.umeyama_alignment(_X, _X[::-1], with_scale=True)),
 ]  # fmt: skip
 
 
@@ -181,3 +210,63 @@ def test_a_static_chain_is_refused_before_the_engine_runs(lookup, monkeypatch):
         "the transform between 'eye' and 'head' is static; a velocity needs "
         "timestamps (pass allow_static=True for zeros)"
     )
+
+
+def test_plot_vectors_with_a_base_calls_the_door_once():
+    # (not in FACADE_CALLS: its result is an artist, not arrays to compare)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from rbm_nb.core import plot
+
+    fig = plt.figure()
+    ax = fig.add_subplot(projection="3d")
+    try:
+        for base in (_X[0], _X[:5]):
+            plot.vectors(_X[:5], base=base, ax=ax)
+            assert door_calls(lambda b=base: plot.vectors(_X[:5], base=b, ax=ax)) == 1
+    finally:
+        plt.close(fig)
+
+
+def _lazy_calls():
+    import dask.array as dsa
+
+    q = dsa.from_array(_Q, chunks=(25, 4))
+    qda = xr.DataArray(q, {"time": _T}, ("time", "quaternion_axis"))
+    x = dsa.from_array(_X, chunks=(25, 3))
+    xda = xr.DataArray(x, {"time": _T}, ("time", "cartesian_axis"))
+    return [
+        ("qinv dask", lambda: rbm.qinv(q).compute()),
+        ("qinv dask DataArray", lambda: rbm.qinv(qda).compute()),
+        ("cartesian_to_spherical dask", lambda: rbm.cartesian_to_spherical(x).compute()),
+        ("cartesian_to_spherical dask DataArray",
+         lambda: rbm.cartesian_to_spherical(xda).compute()),
+        ("spherical_to_cartesian dask", lambda: rbm.spherical_to_cartesian(x).compute()),
+        ("estimate_linear_velocity dask DataArray",
+         lambda: rbm.estimate_linear_velocity(xda).compute()),
+        ("estimate_linear_velocity dask cutoff",
+         lambda: rbm.estimate_linear_velocity(x, timestamps=_T, cutoff=0.3).compute()),
+        ("estimate_angular_velocity dask DataArray",
+         lambda: rbm.estimate_angular_velocity(qda).compute()),
+    ]  # fmt: skip
+
+
+_LAZY_IDS = [
+    "qinv dask", "qinv dask DataArray", "cartesian_to_spherical dask",
+    "cartesian_to_spherical dask DataArray", "spherical_to_cartesian dask",
+    "estimate_linear_velocity dask DataArray", "estimate_linear_velocity dask cutoff",
+    "estimate_angular_velocity dask DataArray",
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("index", range(len(_LAZY_IDS)), ids=_LAZY_IDS)
+def test_a_lazy_call_enters_the_door_once_with_all_its_chunks(index):
+    # the chunks come through the door from the door's own block entry,
+    # not from the facade again (issue 32, item 2: the dask path starts at
+    # the same door); computed inside the count, so each chunk is seen
+    label, call = _lazy_calls()[index]
+    call()
+    assert door_calls(call) == 1, label

@@ -21,6 +21,7 @@ from typing import Literal
 
 import numpy as np
 
+from .._door import coverage as _coverage
 from .._engine import chain as _chain
 from .._engine.time import TimeBase, check_compatible
 from .commands import pose_matrix
@@ -50,6 +51,9 @@ class LookedUpTrack:
 
     def __init__(self, frame, base, gap: float | None, name: str):
         self.name = name
+        # frames that share no time are refused here, as every lookup's door
+        # refuses them (the engine's match takes that as given)
+        _coverage.chain_samples(frame.data, base.data)
         self._steps = _chain.chain(frame.data, base.data)
         target = _chain.match([f for f, _ in self._steps])
         # the chain's timestamps: a Track of views of a frame's own times

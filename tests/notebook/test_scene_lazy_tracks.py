@@ -258,3 +258,22 @@ def test_a_region_refined_block_by_block_is_the_one_refined_whole(seed):
     assert len(got[0]) == len(want[0])
     for piece, reference in zip(got[0], want[0], strict=True):
         np.testing.assert_array_equal(piece, reference)
+
+
+def test_frames_that_share_no_time_are_refused_by_name():
+    # the engine's matching takes the door's refusal as given; a scene
+    # looking poses up must refuse such frames as the lookups do
+    rbm.clear_registry()
+    rbm.register_frame("world")
+    q = np.tile([1.0, 0.0, 0.0, 0.0], (10, 1))
+    early, late = np.arange(10) * 0.1, 100 + np.arange(10) * 0.1
+    rbm.register_frame(
+        "a", translation=np.zeros((10, 3)), rotation=q, timestamps=early, parent="world"
+    )
+    rbm.register_frame(
+        "b", translation=np.ones((10, 3)), rotation=q, timestamps=late, parent="a"
+    )
+    scene = Scene("world")
+    with pytest.raises(ValueError, match=r"do not overlap.*frame 'b'.*frame 'a'"):
+        scene.add_frame("b")
+    rbm.clear_registry()

@@ -822,7 +822,9 @@ class ReferenceFrame:
         r : ndarray, shape (4,) or (n, 4)
         ts : ndarray, shape (n,), or None if static
         """
-        return _chain.lookup_transform(self, resolve_frame(to_frame, "to_frame"))
+        to = resolve_frame(to_frame, "to_frame")
+        _coverage.chain_samples(self, to)  # frames that share no time: refused
+        return _chain.lookup_transform(self, to)
 
     def get_transformation(self, to_frame: FrameLike) -> Any:
         """Deprecated alias of :meth:`lookup_transform`."""

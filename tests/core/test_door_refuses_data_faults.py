@@ -71,6 +71,8 @@ CASES = [
          np.zeros((5, 3)), "moving", timestamps=np.arange(20.0, 25.0)), NO_OVERLAP),
     ("lookup_transform no sample", lookups._chain, ["lookup_transform"],
      lambda: rbm.lookup_transform("moving", "short"), NO_SAMPLE),
+    ("frame.lookup_transform no sample", frames._chain, ["lookup_transform"],
+     lambda: _frame("moving").lookup_transform("short"), NO_SAMPLE),
     ("lookup_pose no sample", lookups._chain, ["lookup_transform"],
      lambda: rbm.lookup_pose("moving", "short"), NO_SAMPLE),
     ("lookup_linear_velocity no sample", twist, ["lookup_linear_velocity"],

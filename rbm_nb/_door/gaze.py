@@ -18,6 +18,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .._engine import time as _time
+from .coverage import chain_samples
 from .unpack import is_dataarray
 from .xarray import check_directions
 
@@ -84,6 +85,8 @@ def sight(
     track = None
     if eye.parent is not target and valid.any():
         track = _valid_track(times, valid)
+        # the eye's samples and the frames to ``into`` must share time
+        chain_samples(eye.parent, target, [track])
     like = confidence if is_dataarray(confidence) else None
     return Sight(
         eye,
@@ -132,6 +135,8 @@ def angle_arguments(
     values = np.asarray(directions.transpose("time", "cartesian_axis").values, float)
     valid = np.isfinite(values).all(axis=1)
     track = _valid_track(times, valid) if source is not ref and valid.any() else None
+    if track is not None:
+        chain_samples(source, ref, [track])
     return AngleArguments(
         directions, source, ref, times, values, valid, track,
         (f_axis, f_sign), (u_axis, u_sign),

@@ -19,7 +19,7 @@ from bad_input_cases import setup_tree
 import rbm_nb as rbm
 from rbm_nb._engine import transform as engine_transform
 from rbm_nb._engine import twist
-from rbm_nb.core import estimators, frames, lookups
+from rbm_nb.core import estimators, frames, gaze, lookups
 
 
 def _not_asked(*args, **kwargs):
@@ -45,6 +45,11 @@ NO_OVERLAP = (
     "transformation and the data are both defined (frame 'moving': 0.0 to 9.0; "
     "array 0: 20.0 to 24.0)"
 )
+GAZE_NO_OVERLAP = (
+    "the time ranges do not overlap, so there is no time at which the "
+    "transformation and the data are both defined (frame 'late': 20.0 to 24.0; "
+    "frame 'moving': 0.0 to 9.0; array 0: 20.0 to 24.0)"
+)
 TWO_SAMPLES = "arr needs at least 2 samples to estimate a velocity, got 1"
 # the engine's last matching (the array with the looked-up terms) named them
 # arrays 0..3: the door's check gives its message unchanged
@@ -55,6 +60,20 @@ LEVER = (
     "0: 0.0 to 9.0; array 1: 0.0 to 9.0; array 2: 0.0 to 9.0; array 3: 5.01 to 5.09)"
 )
 FILTER = "cutoff: the low-pass filter needs more than 24 samples, got 10"
+
+
+def _register_late_eye():
+    """A head and its eye at 20..24 s, after every sample of 'moving'."""
+    q = np.tile([1.0, 0.0, 0.0, 0.0], (5, 1))
+    late = np.arange(20.0, 25.0)
+    rbm.register_frame(
+        "late",
+        translation=np.zeros((5, 3)),
+        rotation=q,
+        timestamps=late,
+        parent="world",
+    )
+    rbm.register_frame("late_eye", rotation=q, timestamps=late, parent="late")
 
 
 def _frame(name):
@@ -126,6 +145,12 @@ CASES = [
     ("estimate_angular_velocity one sample", estimators, ["_angular_series"],
      lambda: rbm.estimate_angular_velocity(np.array([[1.0, 0, 0, 0]]), timestamps=[0.0]),
      TWO_SAMPLES),
+    ("gaze.directions no overlap", gaze._engine_transform, ["transform"],
+     lambda: rbm.gaze.directions("late_eye", "moving"), GAZE_NO_OVERLAP),
+    ("gaze.angles no overlap", gaze._engine_transform, ["transform"],
+     # (the directions in the eye's own head: no engine call)
+     lambda: rbm.gaze.angles(rbm.gaze.directions("late_eye", "late"), "moving"),
+     GAZE_NO_OVERLAP),
 ]  # fmt: skip
 
 
@@ -135,6 +160,7 @@ CASES = [
 def test_refused_before_the_engine_runs(
     tree, monkeypatch, module, names, call, message
 ):
+    _register_late_eye()
     for name in names:
         monkeypatch.setattr(module, name, _not_asked)
     with pytest.raises(ValueError) as err:

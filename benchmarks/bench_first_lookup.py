@@ -92,14 +92,16 @@ def parts() -> None:
 
         bench_fused.register(rbm, frames)
         t0 = time.perf_counter()
-        FU._table(head()).rows[:, 0] = 0.0  # one write per page (and cache line)
+        FU.table_of(head().data).rows[:, 0] = 0.0  # one write per page (and cache line)
         times["  fault-in of the head table alone"].append(time.perf_counter() - t0)
         times["first call, head table memory already faulted in"].append(lookup())
 
         bench_fused.register(rbm, frames)
         h = head()
-        table = FU._table(h)
-        table.rows[...] = kf.squad_table(h.data.signs, h.data.rotation, h.data.track.base)
+        table = FU.table_of(h.data)
+        table.rows[...] = kf.squad_table(
+            h.data.signs, h.data.rotation, h.data.track.base
+        )
         table.update()  # (complete: the scan is outside the timing)
         times["first call, head table already complete"].append(lookup())
     steady = min(times["steady state"])

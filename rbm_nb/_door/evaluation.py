@@ -375,6 +375,10 @@ def _check_complete(traj: Trajectory, name: str) -> None:
     error or an alignment over them would be NaN (or an SVD that does not
     converge), not a number of the trajectories.
     """
+    # one sum per array first (a NaN row makes it NaN): the row-wise test,
+    # a reduction along the short axis, costs ~2 ms on a 66k-pose recording
+    if not (np.isnan(traj.positions.sum()) or np.isnan(traj.orientations.sum())):
+        return
     missing = np.isnan(traj.positions).any(axis=1) | np.isnan(traj.orientations).any(
         axis=1
     )

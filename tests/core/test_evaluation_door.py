@@ -91,3 +91,41 @@ def test_a_frame_with_missing_samples_is_refused():
 def test_complete_trajectories_still_give_numbers():
     result = ape((_T, _P, _Q), (_T, _P + [0.1, 0.0, 0.0], _Q), align=True)
     assert np.isfinite(result.error.values).all()
+
+
+def _message(call) -> str:
+    with pytest.raises(ValueError) as info:
+        call()
+    return str(info.value)
+
+
+@pytest.mark.parametrize(
+    "t, p, q",
+    [
+        (_T, _P[:, :2], _Q),
+        (_T, _P[:-1], _Q),
+        (_T, _P, _Q[:, :3]),
+        (_T, _P, _with_row(_Q, 2, 2.0)),
+        (_T, _P, _with_row(_Q, 2, 0.0)),
+        (_T, _with_row(_P, 4, np.inf), _Q),
+        (_T, _with_row(_P, (4, 1), np.nan), _Q),
+        (_T[::-1], _P, _Q),
+        (_with_row(_T, 3, np.nan), _P, _Q),
+        (_with_row(_T, 3, 2.0), _P, _Q),
+    ],
+    ids=["p-columns", "p-rows", "q-columns", "q-norm", "q-zero", "p-inf",
+         "p-part-nan", "t-decreasing", "t-nan", "t-repeated"],
+)  # fmt: skip
+def test_array_trajectories_are_refused_as_a_frame_of_them_is(t, p, q):
+    """The door checks array trajectories itself (no ReferenceFrame is built):
+    its messages stay those of a frame made of the same arrays."""
+    as_frame = _message(
+        lambda: rbm.ReferenceFrame(
+            "estimate",
+            parent=rbm.ReferenceFrame("estimate world"),
+            translation=p,
+            rotation=q,
+            timestamps=t,
+        )  # fmt: skip
+    )
+    assert _message(lambda: ape((_T, _P, _Q), (t, p, q))) == as_frame

@@ -362,7 +362,34 @@ def _match(ref: Trajectory, est: Trajectory) -> tuple[Trajectory, Trajectory]:
     matched_ref = Trajectory(
         times, ref.positions[inside], ref.orientations[inside], ref.name, ref._frames
     )
-    return matched_ref, Trajectory(times, p, _unit(q), est.name, est._frames)
+    matched_est = Trajectory(times, p, _unit(q), est.name, est._frames)
+    _check_complete(matched_ref, "reference")
+    _check_complete(matched_est, "estimate")
+    return matched_ref, matched_est
+
+
+def _check_complete(traj: Trajectory, name: str) -> None:
+    """Refuse a matched pose that is missing (a NaN row of a frame or array).
+
+    Frames keep NaN rows as missing samples and lookups hand them on; an
+    error or an alignment over them would be NaN (or an SVD that does not
+    converge), not a number of the trajectories.
+    """
+    # one sum per array first (a NaN row makes it NaN): the row-wise test,
+    # a reduction along the short axis, costs ~2 ms on a 66k-pose recording
+    if not (np.isnan(traj.positions.sum()) or np.isnan(traj.orientations.sum())):
+        return
+    missing = np.isnan(traj.positions).any(axis=1) | np.isnan(traj.orientations).any(
+        axis=1
+    )
+    if missing.any():
+        i = int(np.argmax(missing))
+        raise ValueError(
+            f"{name}: {int(missing.sum())} of the {len(traj)} matched poses are "
+            f"missing (NaN), the first at time {traj.timestamps[i]} (matched pose "
+            f"{i}): ape and rpe compare complete poses; drop or fill the missing "
+            "samples first"
+        )
 
 
 def evaluation_inputs(

@@ -289,7 +289,7 @@ def test_bad_frames():
         rbm.plot.reference_frame("nobody")
     with pytest.raises(ValueError, match="arrow_len"):
         rbm.plot.reference_frame("world", arrow_len=0)
-    with pytest.raises(ValueError, match="root"):
+    with pytest.raises(ValueError, match="has no parent; pass the reference frame"):
         rbm.plot.trajectory("world")
     with pytest.raises(ValueError, match="does not move"):
         rbm.plot.trajectory("on_body", "body")

@@ -146,19 +146,33 @@ def with_tails(
     value: Any, base: Any, name: str, width: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """``plot.vectors``' arrows: :func:`one_or_many` rows ``(N, width)`` of
-    ``value`` and their tails ``(N, width)`` (``base``: one row, broadcast,
-    or one per row; None: the origin); ``name`` starts the messages."""
+    ``value`` and their tails ``(N, width)`` (see :func:`tails`); ``name``
+    starts the messages."""
     arr = one_or_many(value, f"{name}: arr", width)
+    return arr, tails(base, len(arr), name, width)
+
+
+def triads(value: Any, base: Any, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """``plot.quaternions``' input: quaternion rows ``(N, 4)`` of ``value`` and
+    the triads' origins ``(N, 3)`` (see :func:`tails`)."""
+    q = one_or_many(value, f"{name}: arr", 4)
+    return q, tails(base, len(q), name, 3)
+
+
+def tails(base: Any, n: int, name: str, width: int) -> np.ndarray:
+    """Where ``n`` arrows start: ``base`` as one row (broadcast) or one per
+    arrow, ``(n, width)``; None: the origin."""
     if base is None:
-        return arr, np.zeros_like(arr)
-    tails = one_or_many(base, f"{name}: base", width)
-    if len(tails) == 1 and len(arr) > 1:
-        tails = np.repeat(tails, len(arr), axis=0)
-    if tails.shape != arr.shape:
+        return np.zeros((n, width))
+    rows = one_or_many(base, f"{name}: base", width)
+    if len(rows) == 1 and n > 1:
+        rows = np.repeat(rows, n, axis=0)
+    if rows.shape != (n, width):
         raise ValueError(
-            f"{name}: base must have shape ({width},) or {arr.shape}, got {np.shape(base)}"
+            f"{name}: base must have shape ({width},) or {(n, width)}, "
+            f"got {np.shape(base)}"
         )
-    return arr, tails
+    return rows
 
 
 def along_axis(

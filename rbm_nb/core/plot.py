@@ -268,7 +268,11 @@ def vectors(
     lines : Line3DCollection
     """
     arr, tails = _shapes.with_tails(arr, base, "vectors", 3)
-    ax = _axes_3d(ax, figsize)
+    return _arrows(_axes_3d(ax, figsize), arr, tails, **kwargs)
+
+
+def _arrows(ax: Axes3D, arr: np.ndarray, tails: np.ndarray, **kwargs: Any) -> Any:
+    """Arrows ``arr`` (N, 3) from ``tails`` (N, 3), checked, on ``ax``."""
     lines = ax.quiver(
         tails[:, 0], tails[:, 1], tails[:, 2], arr[:, 0], arr[:, 1], arr[:, 2], **kwargs
     )
@@ -303,12 +307,12 @@ def quaternions(
     lines : list of Line3DCollection
         The x, y and z arrows.
     """
-    q = _shapes.one_or_many(arr, "quaternions: arr", 4)
+    q, tails = _shapes.triads(arr, base, "quaternions")
     axes = _rotation_matrices(q)  # columns are the rotated unit axes
     kwargs.setdefault("length", 0.5)
     ax = _axes_3d(ax, figsize)
     return [
-        vectors(axes[:, :, i], base, ax, color=color, **kwargs)
+        _arrows(ax, np.ascontiguousarray(axes[:, :, i]), tails, color=color, **kwargs)
         for i, color in enumerate(("r", "g", "b"))
     ]
 

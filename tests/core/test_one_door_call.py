@@ -231,6 +231,26 @@ def test_plot_vectors_with_a_base_calls_the_door_once():
         plt.close(fig)
 
 
+def test_plot_quaternions_with_a_base_calls_the_door_once():
+    # (it drew three plot.vectors, each through the door again: 4 calls)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from rbm_nb.core import plot
+
+    fig = plt.figure()
+    ax = fig.add_subplot(projection="3d")
+    try:
+        for base in (None, _X[0], _X[:5]):
+            plot.quaternions(_Q[:5], base=base, ax=ax)
+            calls = door_calls(lambda b=base: plot.quaternions(_Q[:5], base=b, ax=ax))
+            assert calls == 1
+    finally:
+        plt.close(fig)
+
+
 def _lazy_calls():
     import dask.array as dsa
 

@@ -153,9 +153,12 @@ def with_tails(
 
 
 def triads(value: Any, base: Any, name: str) -> tuple[np.ndarray, np.ndarray]:
-    """``plot.quaternions``' input: quaternion rows ``(N, 4)`` of ``value`` and
-    the triads' origins ``(N, 3)`` (see :func:`tails`)."""
+    """``plot.quaternions``' input: finite, non-zero quaternion rows ``(N, 4)``
+    of ``value`` and the triads' origins ``(N, 3)`` (see :func:`tails`)."""
     q = one_or_many(value, f"{name}: arr", 4)
+    # (any non-zero norm: the kernel normalises)
+    if not np.isfinite(q).all() or not np.einsum("ij,ij->i", q, q).all():
+        raise ValueError(f"{name} must be finite and non-zero")
     return q, tails(base, len(q), name, 3)
 
 

@@ -129,11 +129,9 @@ def _set_axes_equal(ax) -> None:
 
 
 def _rotation_matrices(q: np.ndarray) -> np.ndarray:
-    """(n, 3, 3) rotation matrices of (n, 4) quaternions (w, x, y, z)."""
+    """(n, 3, 3) rotation matrices of (n, 4) finite, non-zero quaternions
+    (w, x, y, z): a frame's, or checked by ``_door.shapes.triads``."""
     q = np.array(q, dtype=np.float64, order="C").reshape(-1, 4)
-    norms = np.linalg.norm(q, axis=1)
-    if np.any(norms == 0) or not np.isfinite(q).all():
-        raise ValueError("quaternions must be finite and non-zero")
     # any non-zero norm is accepted here (the kernel normalises); its
     # validity count against the unit tolerance is not needed
     matrices, _ = _kc.matrix_from_quaternion(q, UNIT_QUATERNION_TOLERANCE)

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 # the unpacking half lives in the door; these names stay importable from here
+from .._infra.time_index import time_coordinates
 from .unpack import Unpacked, is_dataarray, unpack
 
 if TYPE_CHECKING:
@@ -129,7 +130,7 @@ def transform_dataset(
                 linear: (["time", "cartesian_axis"], translation),
                 angular: (["time", "quaternion_axis"], rotation),
             },
-            _time_coords(
+            time_coordinates(
                 timestamps,
                 cartesian_axis=["x", "y", "z"],
                 quaternion_axis=["w", "x", "y", "z"],
@@ -183,7 +184,7 @@ def twist_dataset(
             "angular_velocity": (["time", "cartesian_axis"], angular),
             "linear_velocity": (["time", "cartesian_axis"], linear),
         },
-        _time_coords(timestamps, cartesian_axis=["x", "y", "z"]),
+        time_coordinates(timestamps, cartesian_axis=["x", "y", "z"]),
     )
     for kind in ("angular", "linear"):
         ds[f"{kind}_velocity"].attrs.update(
@@ -209,21 +210,6 @@ def velocity_dataarray(
     # coordinates, the time index included)
     ds = xr.Dataset(
         {name: (("time", "cartesian_axis"), velocity, attrs)},
-        _time_coords(timestamps, cartesian_axis=["x", "y", "z"]),
+        time_coordinates(timestamps, cartesian_axis=["x", "y", "z"]),
     )
     return ds[name]
-
-
-def _time_coords(timestamps: Any, **others: Any) -> xr.Coordinates:
-    """Coordinates whose ``time`` index holds ``timestamps`` themselves.
-
-    pandas 3 copies an array made into an index unless told not to (an hour
-    of the head's 200 Hz rates: 6 MB more per result); the index is
-    immutable, so the result's times need no copy of their own.
-    """
-    import pandas as pd
-    import xarray as xr
-
-    index = pd.Index(np.asarray(timestamps), copy=False, name="time")
-    coords = xr.Coordinates.from_xindex(xr.indexes.PandasIndex(index, "time"))
-    return coords.assign(others)

@@ -24,7 +24,7 @@ from .frozen import is_frozen
 if TYPE_CHECKING:
     import xarray as xr
 
-__all__ = ["dataarray_on"]
+__all__ = ["dataarray_on", "time_coordinates"]
 
 
 def dataarray_on(
@@ -59,13 +59,7 @@ def dataarray_on(
         return xr.DataArray(
             values, coords={"time": times, **other}, dims=dims, attrs=attrs, name=name
         )
-    import pandas as pd
-    from xarray.indexes import PandasIndex
-
-    index = PandasIndex(pd.Index(times, copy=False), "time")
-    shared = xr.Coordinates(
-        coords={"time": xr.Variable("time", times)}, indexes={"time": index}
-    )
+    shared = time_coordinates(times)
     # a Dataset keeps the coordinates it is given; the DataArray constructor
     # would deep-copy them
     key = "__values__"
@@ -73,3 +67,19 @@ def dataarray_on(
     out = ds[key]
     out.name, out.attrs = name, dict(attrs or {})
     return out
+
+
+def time_coordinates(times: Any, **others: Any) -> xr.Coordinates:
+    """Coordinates whose ``time`` index holds ``times`` themselves, and ``others``.
+
+    For times nobody will change (frozen, or a result's own): pandas 3 copies
+    an array made into an index unless told not to, and the index is
+    immutable, so it needs no copy of its own. Hand them to a Dataset (the
+    DataArray constructor deep-copies its coordinates).
+    """
+    import pandas as pd
+    import xarray as xr
+
+    index = pd.Index(np.asarray(times), copy=False, name="time")
+    coords = xr.Coordinates.from_xindex(xr.indexes.PandasIndex(index, "time"))
+    return coords.assign(others)

@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import collections
 import os
+import statistics
 import subprocess
 import sys
 from pathlib import Path
@@ -67,21 +68,31 @@ def run(tree: Path, child: str = CHILD) -> dict[str, float]:
 def compare(
     description: str, child: str = CHILD, header: str = "call", unit: str = " ms"
 ) -> None:
-    """Parse OTHER_TREE/--rounds, run ``child`` in both trees in turns, print ratios."""
+    """Parse OTHER_TREE/--rounds, run ``child`` in both trees in turns, print ratios.
+
+    Per call: the best time of each tree over all rounds and their ratio
+    (``min``), and the ratio of the trees' median round (``median``: each
+    round's value is that process's best), which a machine shared with
+    other jobs moves less than a single lucky round.
+    """
     parser = argparse.ArgumentParser(description=description)
     parser.add_argument("other", type=Path, help="another checkout of the repository")
     parser.add_argument("--rounds", type=int, default=4)
     args = parser.parse_args()
-    best: dict[str, dict[str, float]] = collections.defaultdict(dict)
+    rounds: dict[str, dict[str, list[float]]] = collections.defaultdict(
+        lambda: collections.defaultdict(list)
+    )
     for _ in range(args.rounds):
         for name, tree in (("other", args.other.resolve()), ("this", REPO)):
             for label, value in run(tree, child).items():
-                best[label][name] = min(best[label].get(name, float("inf")), value)
-    print(f"{header:40s} {'other':>11s} {'this':>11s}  this/other")
-    for label, d in best.items():
+                rounds[label][name].append(value)
+    print(f"{header:40s} {'other':>11s} {'this':>11s}  this/other (min, median)")
+    for label, d in rounds.items():
+        other, this = min(d["other"]), min(d["this"])
+        median = statistics.median(d["this"]) / statistics.median(d["other"])
         print(
-            f"{label:40s} {d['other']:8.3f}{unit} {d['this']:8.3f}{unit}"
-            f"  {d['this'] / d['other']:.3f}"
+            f"{label:40s} {other:8.3f}{unit} {this:8.3f}{unit}"
+            f"  {this / other:.3f}  {median:.3f}"
         )
 
 

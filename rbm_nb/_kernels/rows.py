@@ -142,6 +142,50 @@ def unit_rows(q, tol, allow_nan):
 _SAMPLES_BLOCK = 256
 
 
+@helper(inline=True, options=EXACT_VECTOR_KERNEL)
+def _checked_block(tb, qb, m, tol, unit):
+    """The registration checks of one block of ``m`` rows, and its unit rows.
+
+    ``tb`` (3 m,) and ``qb`` (4 m,) are the block's translations and
+    rotations, flat; ``unit`` (4 m, or longer) gets the rotations divided
+    by their norms as ``unit_rows`` makes them (rows of norm 1 and NaN rows
+    as they are). Shared by :func:`moving_samples` and :func:`moving_signs`
+    (inlined: each of its two loops is one LLVM vectorises).
+
+    Returns
+    -------
+    bad : int
+        How many rows of ``tb`` or ``qb`` are partly NaN or hold an
+        infinity, plus how many finite rows of ``qb`` are not of unit norm
+        within ``tol``.
+    missing : int
+        How many rows of ``qb`` are all NaN (missing samples).
+    """
+    bad = 0
+    missing = 0
+    for i in range(m):
+        x, y, z = tb[3 * i], tb[3 * i + 1], tb[3 * i + 2]
+        nan = (x != x) + (y != y) + (z != z)
+        inf = (abs(x) > MAX_COORDINATE) + (abs(y) > MAX_COORDINATE)
+        inf += abs(z) > MAX_COORDINATE
+        bad += ((nan != 0) & (nan != 3)) | (inf != 0)
+    for i in range(m):
+        w, x, y, z = qb[4 * i], qb[4 * i + 1], qb[4 * i + 2], qb[4 * i + 3]
+        nan = (w != w) + (x != x) + (y != y) + (z != z)
+        inf = (abs(w) > MAX_COORDINATE) + (abs(x) > MAX_COORDINATE)
+        inf += (abs(y) > MAX_COORDINATE) + (abs(z) > MAX_COORDINATE)
+        bad += ((nan != 0) & (nan != 4)) | (inf != 0)
+        missing += nan == 4
+        norm = math.sqrt(w * w + x * x + y * y + z * z)
+        # NaN rows pass (missing samples): NaN > tol is false
+        bad += abs(norm - 1.0) > tol
+        # unit_rows: rows of norm 1 and NaN rows as they are
+        d = 1.0 if (norm == 1.0) | (norm != norm) else norm
+        unit[4 * i], unit[4 * i + 1] = w / d, x / d
+        unit[4 * i + 2], unit[4 * i + 3] = y / d, z / d
+    return bad, missing
+
+
 @kernel(F2, F2, F, F2, F2, F2, options=EXACT_VECTOR_KERNEL)
 def moving_samples(t, q, tol, t_out, q_out, r_out):
     """A moving frame's private arrays and every registration check, in one pass.
@@ -182,26 +226,9 @@ def moving_samples(t, q, tol, t_out, q_out, r_out):
         m = min(_SAMPLES_BLOCK, n - start)
         tb = tf[3 * start : 3 * (start + m)]
         qb = qf[4 * start : 4 * (start + m)]
-        for i in range(m):
-            x, y, z = tb[3 * i], tb[3 * i + 1], tb[3 * i + 2]
-            nan = (x != x) + (y != y) + (z != z)
-            inf = (abs(x) > MAX_COORDINATE) + (abs(y) > MAX_COORDINATE)
-            inf += abs(z) > MAX_COORDINATE
-            bad += ((nan != 0) & (nan != 3)) | (inf != 0)
-        for i in range(m):
-            w, x, y, z = qb[4 * i], qb[4 * i + 1], qb[4 * i + 2], qb[4 * i + 3]
-            nan = (w != w) + (x != x) + (y != y) + (z != z)
-            inf = (abs(w) > MAX_COORDINATE) + (abs(x) > MAX_COORDINATE)
-            inf += (abs(y) > MAX_COORDINATE) + (abs(z) > MAX_COORDINATE)
-            bad += ((nan != 0) & (nan != 4)) | (inf != 0)
-            missing += nan == 4
-            norm = math.sqrt(w * w + x * x + y * y + z * z)
-            # NaN rows pass (missing samples): NaN > tol is false
-            bad += abs(norm - 1.0) > tol
-            # unit_rows: rows of norm 1 and NaN rows as they are
-            d = 1.0 if (norm == 1.0) | (norm != norm) else norm
-            unit[4 * i], unit[4 * i + 1] = w / d, x / d
-            unit[4 * i + 2], unit[4 * i + 3] = y / d, z / d
+        block_bad, block_missing = _checked_block(tb, qb, m, tol, unit)
+        bad += block_bad
+        missing += block_missing
         to[3 * start : 3 * (start + m)] = tb
         qo[4 * start : 4 * (start + m)] = qb
         # unflip's signs (each row's depends on the row before): negated is a
@@ -249,24 +276,9 @@ def moving_signs(t, q, tol, codes):
         m = min(_SAMPLES_BLOCK, n - start)
         tb = tf[3 * start : 3 * (start + m)]
         qb = qf[4 * start : 4 * (start + m)]
-        for i in range(m):
-            x, y, z = tb[3 * i], tb[3 * i + 1], tb[3 * i + 2]
-            nan = (x != x) + (y != y) + (z != z)
-            inf = (abs(x) > MAX_COORDINATE) + (abs(y) > MAX_COORDINATE)
-            inf += abs(z) > MAX_COORDINATE
-            bad += ((nan != 0) & (nan != 3)) | (inf != 0)
-        for i in range(m):
-            w, x, y, z = qb[4 * i], qb[4 * i + 1], qb[4 * i + 2], qb[4 * i + 3]
-            nan = (w != w) + (x != x) + (y != y) + (z != z)
-            inf = (abs(w) > MAX_COORDINATE) + (abs(x) > MAX_COORDINATE)
-            inf += (abs(y) > MAX_COORDINATE) + (abs(z) > MAX_COORDINATE)
-            bad += ((nan != 0) & (nan != 4)) | (inf != 0)
-            missing += nan == 4
-            norm = math.sqrt(w * w + x * x + y * y + z * z)
-            bad += abs(norm - 1.0) > tol
-            d = 1.0 if (norm == 1.0) | (norm != norm) else norm
-            unit[4 * i], unit[4 * i + 1] = w / d, x / d
-            unit[4 * i + 2], unit[4 * i + 3] = y / d, z / d
+        block_bad, block_missing = _checked_block(tb, qb, m, tol, unit)
+        bad += block_bad
+        missing += block_missing
         # moving_samples' sign pass, keeping the sign instead of the row
         cb = codes[start : start + m]
         for i in range(m):

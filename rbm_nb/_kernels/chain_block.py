@@ -30,7 +30,7 @@ from ._jit import F1, F2, S1, helper
 from ._prefetch import prefetch
 from .chain_rows import (
     _ACC,
-    _CODE,
+    _DIV,
     _GATHERED,
     _GENERAL,
     _NEG,
@@ -57,7 +57,7 @@ from .quaternion import _qslerp1, _qslerp_unit1, _sincos
 from .scalar import SINCOS_LIMIT
 from .search import gallop
 from .signed_rows import signed_unit_row
-from .squad_table import _DONE, _UNIT, RUN, TABLE_COLUMNS, _fill_run
+from .squad_table import _DONE, DIVISOR_HIGH, RUN, TABLE_COLUMNS, _fill_run, is_unit
 
 __all__ = ["SLOTS", "SLOT_TYPES", "STATIC", "SQUAD", "CONSTANT", "HELD"]
 
@@ -185,16 +185,19 @@ def _moving_rows(
                 dt = times[i + 1] - ti
                 at_sample = t == ti
                 tau = (t - ti) / dt
+                # a unit row whose state holds its sample's divisor
+                # (squad_table: the usual rows of every registered frame)
+                state = c[i, _DONE]
                 if (
                     (not at_sample or own == 0)
                     and (at_sample or not dt > gap)
-                    and abs(c[i, _DONE]) == _UNIT
+                    and abs(state) < DIVISOR_HIGH
                     and abs(tau * c[i, 4]) < SINCOS_LIMIT
                     and abs(tau * c[i, 9]) < SINCOS_LIMIT
                 ):
                     work[_TAU + b] = tau
                     # the stored sample's sign
-                    work[_NEG + b] = 1.0 if c[i, _DONE] < 0.0 else 0.0
+                    work[_NEG + b] = 1.0 if state < 0.0 else 0.0
                     work[_PATH + b] = _GATHERED
                     if rotation_only:
                         tx = ty = tz = 0.0
@@ -206,9 +209,9 @@ def _moving_rows(
                         tz = tr[i, 2] + tau * (tr[i + 1, 2] - tr[i, 2])
                     work[_TH1 + b] = c[i, 4]
                     work[_TH2 + b] = c[i, 9]
-                    # r[i] as stored, and its code: made unit and signed
-                    # for the whole block at once (_signed_unit_rows)
-                    work[_CODE + b] = sg[i]
+                    # r[i] as stored, and its signed divisor: made unit and
+                    # signed for the whole block at once (_signed_unit_rows)
+                    work[_DIV + b] = state
                     for e in range(4):
                         work[_P + e * BLOCK + b] = rp[i, e]
                         work[_U1 + e * BLOCK + b] = c[i, 5 + e]
@@ -309,7 +312,7 @@ def _squad_row(t, i, k, times, tr, sg, rp, c, rotation_only):
     # (rows inside the samples with a unit segment took the short route,
     # into the squad pass; here the rest, by the scalar route, which the
     # squad pass equals bit for bit: tests/core/test_fused_rows.py)
-    if abs(c[g, _DONE]) == _UNIT:
+    if is_unit(c[g, _DONE]):
         sn, cs = _sincos(tau * c[g, 4])
         s1w = cs * rw + sn * c[g, 5]
         s1x = cs * rx + sn * c[g, 6]

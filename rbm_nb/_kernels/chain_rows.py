@@ -95,7 +95,7 @@ _NEG = 33 * BLOCK  # 1.0 where the result takes the opposite sign (the stored sa
 # 1.0 rows gathered for the squad pass, 0.0 rows already evaluated; the
 # squad pass turns 1.0 into 2.0 where the outer slerp needs the general route
 _PATH = 34 * BLOCK
-_CODE = 35 * BLOCK  # the sign code of r[g] (signed_rows), as a float
+_DIV = 35 * BLOCK  # r[g]'s signed divisor (its squad table state, squad_table)
 WORK = 36
 _GATHERED = 1.0
 _GENERAL = 2.0
@@ -214,22 +214,15 @@ def _arc_rows(work, theta, start, u):
 @helper(options=EXACT_VECTOR_KERNEL)
 def _signed_unit_rows(work):
     """The gathered rows' r[g] (rows _P), from the stored rows gathered there
-    and their sign codes (row _CODE): ``signed_rows.signed_unit_row``'s
-    operations, in a loop LLVM vectorises (one row at a time as they were
-    gathered cost 11 % of a lookup through the head/eye chain). Rows not
-    gathered keep their values but for a sign (finite stays finite)."""
+    and their signed divisors (row _DIV, the squad table's state):
+    ``signed_rows.signed_unit_row``'s row, as sign * (p / d) = p / (sign * d)
+    exactly, in a loop LLVM vectorises (the divisor read from the table, not
+    made again from the row: its square root cost 1-2 % of a lookup through
+    the head/eye chain). Rows not gathered keep their values (divided by 1)."""
     for b in range(BLOCK):
-        w, x = work[_P + b], work[_P + BLOCK + b]
-        y, z = work[_P + 2 * BLOCK + b], work[_P + 3 * BLOCK + b]
-        code = work[_CODE + b]
-        norm = math.sqrt(w * w + x * x + y * y + z * z)
-        as_is = (abs(code) == 2.0) | (work[_PATH + b] != _GATHERED)
-        d = 1.0 if (norm == 1.0) | (norm != norm) | as_is else norm
-        sign = -1.0 if code < 0.0 else 1.0
-        work[_P + b] = sign * (w / d)
-        work[_P + BLOCK + b] = sign * (x / d)
-        work[_P + 2 * BLOCK + b] = sign * (y / d)
-        work[_P + 3 * BLOCK + b] = sign * (z / d)
+        d = work[_DIV + b] if work[_PATH + b] == _GATHERED else 1.0
+        for e in range(4):
+            work[_P + e * BLOCK + b] = work[_P + e * BLOCK + b] / d
 
 
 @helper(options=EXACT_VECTOR_KERNEL)

@@ -26,20 +26,32 @@ import numpy as np
 from .._infra.config import EXACT_VECTOR_KERNEL
 from ._jit import F2, S1, helper, kernel
 
-__all__ = ["signed_unit_row", "signed_unit_rows", "sign_codes"]
+__all__ = ["unit_divisor", "signed_unit_row", "signed_unit_rows", "sign_codes"]
+
+
+@helper(inline=True)
+def unit_divisor(p, s, i):
+    """What row i of stored rows ``p`` (n, 4) with sign codes ``s`` (n,) is
+    divided by to make it unit: its norm, or 1.0 where it is taken as it is
+    (norm exactly 1, a NaN row, codes +-2)."""
+    w, x, y, z = p[i, 0], p[i, 1], p[i, 2], p[i, 3]
+    norm = math.sqrt(w * w + x * x + y * y + z * z)
+    # x / 1.0 is x (NaN payloads too): the rows unit_rows leaves as they are
+    return 1.0 if (norm == 1.0) | (norm != norm) | (abs(s[i]) == 2) else norm
 
 
 @helper(inline=True)
 def signed_unit_row(p, s, i):
     """Row i of the unit, sign-continuous rotations of stored rows ``p`` (n, 4)
     with sign codes ``s`` (n,): (w, x, y, z)."""
-    w, x, y, z = p[i, 0], p[i, 1], p[i, 2], p[i, 3]
-    code = s[i]
-    norm = math.sqrt(w * w + x * x + y * y + z * z)
-    # x / 1.0 is x (NaN payloads too): the rows unit_rows leaves as they are
-    d = 1.0 if (norm == 1.0) | (norm != norm) | (abs(code) == 2) else norm
-    sign = -1.0 if code < 0 else 1.0
-    return sign * (w / d), sign * (x / d), sign * (y / d), sign * (z / d)
+    d = unit_divisor(p, s, i)
+    sign = -1.0 if s[i] < 0 else 1.0
+    return (
+        sign * (p[i, 0] / d),
+        sign * (p[i, 1] / d),
+        sign * (p[i, 2] / d),
+        sign * (p[i, 3] / d),
+    )
 
 
 @kernel(F2, S1, options=EXACT_VECTOR_KERNEL)

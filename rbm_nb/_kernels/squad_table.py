@@ -28,22 +28,53 @@ from .scalar import (
     cos_small,
     sinc_small,
 )
-from .signed_rows import signed_unit_row
+from .signed_rows import signed_unit_row, unit_divisor
 
-__all__ = ["TABLE_COLUMNS", "RUN", "squad_table"]
+__all__ = [
+    "TABLE_COLUMNS",
+    "RUN",
+    "DIVISOR_LOW",
+    "DIVISOR_HIGH",
+    "is_unit",
+    "squad_table",
+]
 
 # squad table columns: a (0:4); for a segment of unit quaternions the great
 # circles r[i] -> r[i+1] (4:9: θ, u) and a[i] -> b[i] (9:14), else b (4:8)
 # (squad falls back to slerps, which need b and nothing else); the state
-# (14: 0.0 not computed yet, 1.0 unit, 2.0 not unit), negative where the
-# stored sample i is -r[i] (so that the usual row reads the sign its result
-# takes here rather than the stored rotations: 32 bytes less per row). 15
-# float64 per sample: b of unit segments is not kept, as the great circle
-# a -> b replaces it.
+# (14: 0.0 not computed yet, 2.0 not unit; a unit row holds its sample's
+# divisor d, ``signed_rows.unit_divisor``, where 0.5 <= d < 1.5, else 4.0),
+# negative where the stored sample i is -r[i] (so that the usual row reads
+# the sign its result takes here rather than the stored rotations: 32 bytes
+# less per row). 15 float64 per sample: b of unit segments is not kept, as
+# the great circle a -> b replaces it.
+#
+# The divisor in the state column spares the usual row a square root: it
+# makes r[i] = p[i] / state (p the stored row; the sign of a unit row's
+# state is its sign code's, as r[i]·p[i] = ±|p[i]|²/d), bit for bit the row
+# ``signed_rows.signed_unit_row`` makes.
 TABLE_COLUMNS = 15
 _DONE = 14
-_UNIT = 1.0
 _NOT_UNIT = 2.0
+# a unit row's state holds its divisor d where DIVISOR_LOW <= d < DIVISOR_HIGH
+# (every frame registered through the door: norms within 1e-2 of 1), else
+# _UNIT_FAR; none of them is _NOT_UNIT or 0.0
+DIVISOR_LOW = 0.5
+DIVISOR_HIGH = 1.5
+_UNIT_FAR = 4.0
+
+
+@helper(inline=True)
+def _unit_state(d, sign):
+    """The state of a unit row whose sample has divisor ``d`` and stored sign ``sign``."""
+    return sign * (d if (d >= DIVISOR_LOW) & (d < DIVISOR_HIGH) else _UNIT_FAR)
+
+
+@helper(inline=True)
+def is_unit(state):
+    """Whether a computed row's state (column 14) is that of a unit row."""
+    return abs(state) != _NOT_UNIT
+
 
 # below this, exp(w) is 1 + w and log(1 + d) is d - d²/2 to within an ulp
 _TINY = 2.0**-27
@@ -258,7 +289,8 @@ def _table_row(sg, rp, c, i, pw, px, py, pz, lw, lx, ly, lz, nw, nx, ny, nz, ra,
         c[i, 11] = g[2]
         c[i, 12] = g[3]
         c[i, 13] = g[4]
-        c[i, _DONE] = _UNIT * _stored_sign(rw, rx, ry, rz, rp, i)
+        sign = _stored_sign(rw, rx, ry, rz, rp, i)
+        c[i, _DONE] = _unit_state(unit_divisor(rp, sg, i), sign)
     else:
         c[i, 4] = bw
         c[i, 5] = bx
@@ -517,7 +549,8 @@ def _block_store(sg, rp, c, s, i0, m):
             # count references once per row)
             rw, rx, ry, rz = signed_unit_row(rp, sg, i)
             dot = rw * rp[i, 0] + rx * rp[i, 1] + ry * rp[i, 2] + rz * rp[i, 3]
-            c[i, _DONE] = -_UNIT if dot < 0.0 else _UNIT
+            sign = -1.0 if dot < 0.0 else 1.0
+            c[i, _DONE] = _unit_state(unit_divisor(rp, sg, i), sign)
 
 
 @helper

@@ -303,8 +303,17 @@ def test_squad_table_equals_the_engine_coefficients():
         np.testing.assert_allclose(table[:, 0:4], a, rtol=0, atol=tol)
         # unit segments keep the great circles, the others b
         unit = seg[:, 10] == 0.0
-        # the state: unit or not, negative where the stored sample is -r
-        np.testing.assert_array_equal(table[:, 14], sign * np.where(unit, 1.0, 2.0))
+        # the state: unit (the sample's divisor: stored / divisor is r bit for
+        # bit) or not (2.0), negative where the stored sample is -r
+        codes = _sign_codes(stored, r)
+        divisor = np.where(
+            np.abs(codes) == 2, 1.0, np.sqrt((stored * stored).sum(axis=1))
+        )
+        near = (divisor >= 0.5) & (divisor < 1.5)
+        state = np.where(unit, np.where(near, divisor, 4.0), 2.0)
+        np.testing.assert_array_equal(table[:, 14], sign * state)
+        near &= unit
+        np.testing.assert_array_equal(stored[near] / table[near, 14][:, None], r[near])
         got, want = table[unit, 4:14], seg[unit, 0:10]
         for theta, u in ((0, slice(1, 5)), (5, slice(6, 10))):
             np.testing.assert_allclose(got[:, theta], want[:, theta], rtol=0, atol=tol)

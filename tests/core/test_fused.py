@@ -284,6 +284,34 @@ def test_unsorted_target_times_give_the_same_rows():
     np.testing.assert_array_equal(r2, r[order])
 
 
+def test_the_usual_rows_divisor_gives_the_scalar_routes_bits():
+    """The usual row makes r[g] from the stored row and the divisor its table
+    row keeps (the state column, ``squad_table``); a unit row that keeps no
+    divisor (state 4.0) takes the scalar route, which makes r[g] from the
+    stored row and its sign code (``signed_rows.signed_unit_row``): the
+    results are the same bit for bit."""
+    rng = np.random.default_rng(11)
+    _random_tree(rng, "float")
+    calls = []
+    for outof, into in (("c", "world"), ("world", "c"), ("c", "a")):
+        _, _, steps, target = _resolved(outof, into)
+        plan, own = _plan(steps, target)
+        calls.append((plan, target, own, _fused.lookup(plan, target, own)))
+    # every unit row that keeps its divisor, told to keep none
+    tables = {id(t): t for c in calls for t in c[0].tables if t is not None}
+    kept = 0
+    for table in tables.values():
+        state = table.rows[:, 14]
+        near = (state != 0.0) & (np.abs(state) < kst.DIVISOR_HIGH)
+        kept += int(near.sum())
+        state[near] = np.sign(state[near]) * kst._UNIT_FAR
+    assert kept > 0
+    for plan, target, own, (t, r) in calls:
+        t2, r2 = _fused.lookup(plan, target, own)
+        np.testing.assert_array_equal(t2, t)
+        np.testing.assert_array_equal(r2, r)
+
+
 def test_squad_table_equals_the_engine_coefficients():
     rng = np.random.default_rng(5)
     not_unit = 0

@@ -2,8 +2,9 @@
 
 One row per sample (:data:`TABLE_COLUMNS` float64): the control point a[i]
 and the two great circles squad follows in segment i (or b[i] where the
-segment is not unit), and a state column (not computed yet, unit, not
-unit; its sign that of the stored sample). The fused chain kernels
+segment is not unit), and a state column (not computed yet, not unit, or
+unit with the divisor that makes the sample's unit row from the stored one;
+its sign that of the stored sample). The fused chain kernels
 (:mod:`.fused`) fill a row on its first use (:func:`_fill_run`, a run of
 rows at a time), :func:`squad_table` fills them all; either way each row
 holds the same values, to within 4 ulp of

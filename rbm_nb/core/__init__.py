@@ -3,7 +3,8 @@
 Reference frames and their registry (``frames``), lookups and transforms
 (``lookups``, ``transforms``), estimators, quaternion and coordinate
 utilities (``quaternions``, ``coordinates``, ``conversions``), the
-``Transform`` value type and SE(3) algebra (``rigid_transform``, ``se3``),
+``Transform`` value type and SE(3) algebra (``rigid_transform`` with its
+scikit-robot methods in ``pose_methods``, ``se3``),
 trajectory evaluation (``evaluation``), gaze geometry (``gaze``), matplotlib
 plots (``plot``) and the ``DataArray.rbm`` accessor (``accessors``).
 

@@ -8,6 +8,10 @@ into the second. The panel follows the registry (through
 ``rbm_nb.frames.on_registry_change``) and, linked to a
 :class:`~rbm_nb.widgets.Player`, the player's time. ``rbm.render_tree`` remains
 the plain-text view.
+
+The widget is a facade over its parts: ``frame_facts`` (what a row says of a
+frame), ``frame_tree_rows`` (a row's widgets, collapsing) and
+``frame_tree_details`` (the details of a selection at the time shown).
 """
 
 from __future__ import annotations
@@ -19,82 +23,28 @@ import weakref
 from typing import Any
 
 import ipywidgets as widgets
-import numpy as np
 import traitlets
 
-from .._engine.time import TimeBase, as_track, epoch_seconds
-from ..core import frames, lookups
-from ._timebase import format_time
+from .._engine.time import TimeBase, epoch_seconds
+from ..core import frames
 from .frame_details import (
     Details,
     FrameDetails,
     PairDetails,
     details_html,
     details_text,
-    pose_at,
 )
-
-ROW_CSS = (
-    "<style>.rbm-frame-tree .rbm-frame-row-text {height: auto}"
-    ".rbm-frame-tree .rbm-frame-row-text .widget-html-content "
-    "{height: auto; min-height: var(--jp-widgets-inline-height, 28px); "
-    "line-height: 16px; white-space: normal; padding: 6px 0; overflow-wrap: anywhere}"
-    "</style>"
+from .frame_facts import frame_info as frame_info  # documented here before
+from .frame_facts import frame_kind as frame_kind  # documented here before
+from .frame_tree_details import (
+    looked_up,
+    pair_details,
+    readout,
+    shown_seconds,
+    single_details,
+    time_base,
 )
-
-
-def frame_kind(frame) -> str:
-    """``root``, ``static``, ``moving`` or ``discrete``."""
-    if frame.parent is None:
-        return "root"
-    if frame.timestamps is None:
-        return "static"
-    return "discrete" if getattr(frame, "discrete", False) else "moving"
-
-
-def frame_info(frame) -> dict:
-    """Kind, sample count, time span and mean rate of a frame.
-
-    Returns
-    -------
-    dict
-        ``kind``, ``samples`` (1 for static frames), ``start`` / ``end`` (float
-        seconds, None if static), ``span`` (seconds), ``rate`` (Hz, None
-        unless moving with at least two samples) and ``time_kind``.
-    """
-    kind = frame_kind(frame)
-    info: dict[str, Any] = {
-        "kind": kind,
-        "samples": 1,
-        "start": None,
-        "end": None,
-        "span": 0.0,
-        "rate": None,
-        "time_kind": None,
-    }
-    if frame.timestamps is not None:
-        track = as_track(frame.timestamps, f"timestamps of {frame.name!r}", copy=False)
-        seconds, time_kind = track.epoch_seconds(), track.kind
-        info.update(
-            samples=len(seconds),
-            start=float(seconds[0]),
-            end=float(seconds[-1]),
-            time_kind=time_kind,
-        )
-        info["span"] = float(seconds[-1] - seconds[0])
-        if len(seconds) > 1 and info["span"] > 0:
-            info["rate"] = (len(seconds) - 1) / info["span"]
-    return info
-
-
-def _describe(info: dict) -> str:
-    if info["kind"] in ("root", "static"):
-        return info["kind"]
-    unit = "events" if info["kind"] == "discrete" else "samples"
-    text = f"{info['kind']} \u00b7 {info['samples']} {unit} \u00b7 {info['span']:.3g} s"
-    if info["rate"] is not None:
-        text += f" \u00b7 {info['rate']:.4g} Hz"
-    return text
+from .frame_tree_rows import ROW_CSS, apply_collapse, make_row
 
 
 def _registry_listener(tree_ref):
@@ -465,52 +415,15 @@ class FrameTree(widgets.VBox):
         self._apply_collapse()
 
     def _make_row(self, frame, depth: int) -> dict:
-        info = frame_info(frame)
-        has_children = any(c.name in self._registered() for c in frame.children)
-        toggle = widgets.Button(
-            icon="caret-down" if has_children else "",
-            tooltip="Collapse / expand" if has_children else "",
-            disabled=not has_children,
-            layout=widgets.Layout(
-                width="34px",
-                padding="0",
-                visibility="visible" if has_children else "hidden",
-            ),
-        )
-        button = widgets.ToggleButton(
-            value=frame.name in self.selected,
-            description=frame.name,
-            tooltip=f"Select {frame.name}",
-            # never shrink the name (long frame names like "pupil/left_eye"),
-            # let the description beside it take what room is left
-            layout=widgets.Layout(width="auto", min_width="90px", flex="0 0 auto"),
-        )
-        button.add_class("rbm-frame-node")
-        # a Label never wraps: in a narrow tree its end was hidden under the
-        # 3D view. This text wraps in the room beside the name (ROW_CSS lets
-        # it grow in height).
-        label = widgets.HTML(
-            value=html.escape(_describe(info)),
-            layout=widgets.Layout(flex="1 1 0", min_width="0"),
-        )
-        label.add_class("rbm-frame-row-text")
-        box = widgets.HBox(
-            [toggle, button, label],
-            layout=widgets.Layout(margin=f"0 0 0 {18 * depth}px", width="auto"),
-        )
         name = frame.name
-        toggle.on_click(lambda _: self._toggle_collapse(name))
-        button.observe(lambda change: self._on_click(name, change), "value")
-        return {
-            "frame": frame,
-            "depth": depth,
-            "info": info,
-            "box": box,
-            "button": button,
-            "toggle": toggle,
-            "label": label,
-            "widgets": (toggle, button, label, box),
-        }
+        return make_row(
+            frame,
+            depth,
+            selected=name in self.selected,
+            has_children=any(c.name in self._registered() for c in frame.children),
+            on_toggle=lambda: self._toggle_collapse(name),
+            on_click=lambda change: self._on_click(name, change),
+        )
 
     def _toggle_collapse(self, name: str) -> None:
         if name in self._collapsed:
@@ -519,19 +432,7 @@ class FrameTree(widgets.VBox):
             self.collapse(name)
 
     def _apply_collapse(self) -> None:
-        hidden_below: list[int] = []
-        for name in self._order:
-            row = self._rows[name]
-            depth = row["depth"]
-            while hidden_below and depth <= hidden_below[-1]:
-                hidden_below.pop()
-            row["box"].layout.display = "none" if hidden_below else None
-            if name in self._collapsed:
-                hidden_below.append(depth)
-            if row["toggle"].icon:
-                row["toggle"].icon = (
-                    "caret-right" if name in self._collapsed else "caret-down"
-                )
+        apply_collapse(self._order, self._rows, self._collapsed)
 
     def _on_click(self, name: str, change) -> None:
         if self._updating:
@@ -567,152 +468,35 @@ class FrameTree(widgets.VBox):
     # -- one time base: seconds from the start, plus the date if any ---------------
     def _time_base(self) -> TimeBase:
         """Second 0: the linked player's, else the earliest frame's first sample."""
-        player = self._player
-        if player is not None:
-            return player.timebase
-        first = None
-        for row in self._rows.values():
-            frame = row["frame"]
-            if frame.timestamps is None:
-                continue
-            stamps = np.asarray(getattr(frame.timestamps, "values", frame.timestamps))
-            seconds = row["info"]["start"]
-            if first is None or seconds < first[0]:
-                first = (seconds, stamps[:1])
-        if first is None:
-            return TimeBase(t0_s=0.0)
-        return TimeBase.of(first[1])
+        return time_base(self._player, self._rows)
 
     def format_time(self, seconds: float) -> str:
         """Data seconds (epoch seconds for datetime frames) as the shared readout."""
         base = self._time_base()
-        return _readout(base)(base.at(seconds))
+        return readout(base)(base.at(seconds))
 
     def _shown(self, base: TimeBase) -> float | None:
         """The time shown as seconds of ``base``; exact when set_time had a datetime."""
-        if self.time is None:
-            return None
-        try:
-            if self._exact is not None and self._exact[1] == self.time:
-                return base.at(self._exact[0])
-            return base.at(self.time)
-        except ValueError:  # a time of another kind than the tree's frames
-            return self.time - base.origin
+        return shown_seconds(self.time, self._exact, base)
 
     def _single_details(self, frame) -> FrameDetails:
-        info = self._rows[frame.name]["info"]
-        pose = None
-        if frame.parent is not None:
-            base = self._time_base()
-            seconds = None
-            if frame.timestamps is not None:
-                seconds = _seconds_on(
-                    base, frame.timestamps, f"timestamps of {frame.name!r}"
-                )
-            pose = pose_at(
-                f"wrt {frame.parent.name}",
-                np.asarray(frame.translation, dtype=float),
-                np.asarray(frame.rotation, dtype=float),
-                seconds,
-                self._shown(base),
-                _readout(base),
-                lambda at: self._missing_text([frame], at, base),
-            )
-        return FrameDetails(
-            name=frame.name,
-            summary=_describe(info),
-            parent=None if frame.parent is None else frame.parent.name,
-            children=tuple(c.name for c in frame.children if c.name in self._rows),
-            path=tuple(f.name for f in _path_to_root(frame)),
-            pose=pose,
+        base = None if frame.parent is None else self._time_base()
+        return single_details(
+            frame,
+            self._rows[frame.name]["info"],
+            self._rows,
+            base,
+            None if base is None else self._shown(base),
+            self._missing_reasons,
         )
 
     def _pair_details(self, a, b) -> PairDetails:
         chain = tuple(f.name for f in a.frames_between(b))
-        key = (a.name, b.name, id(a), id(b))
-        if key not in self._lookup_cache:
-            t, r, ts = lookups.lookup_transform(outof=a, into=b, return_timestamps=True)
-            track = (
-                None
-                if ts is None
-                else as_track(ts, "transform timestamps", copy=False, repeats=True)
-            )
-            self._lookup_cache[key] = (np.asarray(t), np.asarray(r), track)
-        t, r, track = self._lookup_cache[key]
+        looked = looked_up(a, b, self._lookup_cache)
         base = self._time_base()
-        seconds = (
-            None if track is None else _seconds_on(base, track, "transform timestamps")
+        return pair_details(
+            a, b, chain, looked, base, self._shown(base), self._missing_reasons
         )
-        frames = [f for f in a.frames_between(b) if f.timestamps is not None]
-        pose = pose_at(
-            f"of {a.name} in {b.name}",
-            t,
-            r,
-            seconds,
-            self._shown(base),
-            _readout(base),
-            lambda at: self._missing_text(frames, at, base),
-        )
-        return PairDetails(outof=a.name, into=b.name, chain=chain, pose=pose)
-
-    def _missing_text(self, frames, at: float, base: TimeBase) -> str:
-        """ "no sample of <frame> at <time> (missing: <why>)" for a NaN result at ``at``.
-
-        Names the moving frames of ``frames`` whose own sample at or next to
-        ``at`` has no value (the samples an interpolation there needs).
-        """
-        culprits = [f for f in frames if _missing_near(f, at, base)]
-        readout = _readout(base)
-        if not culprits:
-            return f"no sample at {readout(at)} (missing)"
-        names = ", ".join(f.name for f in culprits)
-        reasons = [
-            self._missing_reasons[f.name]
-            for f in culprits
-            if f.name in self._missing_reasons
-        ]
-        why = "; ".join(dict.fromkeys(reasons)) or "the recording has no value there"
-        return f"no sample of {names} at {readout(at)} (missing: {why})"
 
     def __repr__(self) -> str:
         return f"<FrameTree root={self.root!r} frames={len(self._order)} selected={self.selected}>"
-
-
-def _path_to_root(frame) -> list:
-    out = [frame]
-    while out[-1].parent is not None:
-        out.append(out[-1].parent)
-    return out
-
-
-def _readout(base: TimeBase):
-    """Seconds of ``base`` -> the shared readout (with the date for datetime data)."""
-    t0_ns = base.t0_ns if base.absolute else None
-    return lambda seconds: format_time(seconds, t0_ns)
-
-
-def _seconds_on(base: TimeBase, timestamps, name: str) -> np.ndarray:
-    """Sample times as seconds of ``base``, from exact keys.
-
-    A frame whose times are of another kind than the base's (a tree mixing
-    datetime64 and numeric frames) keeps its data seconds less second 0's.
-    """
-    track = as_track(timestamps, name, copy=False, repeats=True)
-    if track.kind == base.kind:
-        return base.seconds(track)
-    return track.epoch_seconds() - base.origin
-
-
-def _missing_near(frame, at: float, base: TimeBase) -> bool:
-    """Whether ``frame``'s sample at or before ``at``, or the next one, is NaN."""
-    if frame.timestamps is None:
-        return False
-    seconds = _seconds_on(base, frame.timestamps, f"timestamps of {frame.name!r}")
-    i = int(np.searchsorted(seconds, at, side="right")) - 1
-    rows = [j for j in (i, i + 1) if 0 <= j < len(seconds)]
-    for values in (frame.translation, frame.rotation):
-        values = np.asarray(values, dtype=float)
-        picked = values[rows] if values.ndim == 2 else values
-        if not np.isfinite(picked).all():
-            return True
-    return False

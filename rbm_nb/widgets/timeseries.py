@@ -38,11 +38,15 @@ Each sample is sent once. Linking a Player later (or any change of time base:
 the eye clock of the example starts 0.7 ms before the head's) sends only the
 new second 0 and ``x_shift``, the seconds the browser adds to the x it already
 holds, never the samples again.
+
+The widget is a facade over three parts: ``timeseries_panels`` (each panel's
+samples and the options, checked), ``timeseries_rows`` (a panel's rows in a
+window, as the bytes sent) and ``timeseries_requests`` (the browser's
+requests and the replies).
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 
 import anywidget
@@ -50,177 +54,33 @@ import numpy as np
 import traitlets
 from ipywidgets import Widget, widget_serialization
 
-from .._engine.time import TIE, TimeBase, as_track, check_compatible
+from .._engine.time import TIE, TimeBase, check_compatible
 from ._decimate import GAP_FACTOR as GAP_FACTOR  # re-exported: the docs name it here
-from ._decimate import Cancelled, gathered, m4_rows, pause_rows, pause_sides
+from ._decimate import Cancelled
 from ._frontend import FrontendGuard
 from ._latest_only import LatestOnly
 from ._timebase import format_time
 from .player import bundle
-
-#: Line colours of a panel's components, in order (matplotlib's tab10).
-COLORS = (
-    "#1f77b4",
-    "#ff7f0e",
-    "#2ca02c",
-    "#d62728",
-    "#9467bd",
-    "#8c564b",
-    "#e377c2",
-    "#7f7f7f",
-    "#bcbd22",
-    "#17becf",
+from .timeseries_panels import PANEL_HEIGHT as PANEL_HEIGHT  # documented here before
+from .timeseries_panels import WIDTH_RANGE as WIDTH_RANGE  # documented here before
+from .timeseries_panels import (
+    PanelSamples,
+    checked_gap,
+    checked_max_points,
+    checked_panel_height,
+    checked_width,
 )
-#: A zoomed view gets every sample in view when a panel has at most this many
-#: there (or ``max_points``, if larger): a minute of 340 Hz eye data, 0.16 MB
-#: per component; more than that comes as their M4 at the view's width (which
-#: draws the same). Also the default ``max_points``.
-WINDOW_POINTS = 20_000
-#: Pixel columns of the overview sent with the widget (a view of another width
-#: asks for its own): about a notebook's plot width.
-OVERVIEW_WIDTH = 1000
-#: bounds of a view's pixel width in a request
-WIDTH_RANGE = (10, 20_000)
-
-
-class _Series:
-    """One panel: raw timestamps, values (n, k), component names and units.
-
-    ``values`` and ``timestamps`` are the caller's arrays whenever they are
-    already float64 / datetime64[ns] (no copy); ``raw`` is the timestamps as
-    numbers to search (int64 ns, a view, or float seconds).
-    """
-
-    def __init__(self, label: str, source):
-        self.label = label
-        if isinstance(source, tuple):
-            if len(source) not in (2, 3):
-                raise ValueError(
-                    f"TimeSeries: series {label!r} must be a DataArray or a "
-                    f"(timestamps, values[, component_names]) tuple, got a tuple "
-                    f"of {len(source)}"
-                )
-            timestamps, values = source[0], np.asarray(source[1], dtype=float)
-            components = [str(c) for c in source[2]] if len(source) == 3 else None
-            self.units = ""
-        else:
-            if "time" not in getattr(source, "dims", ()):
-                raise ValueError(
-                    f"TimeSeries: series {label!r} must be a DataArray with a "
-                    f"'time' dimension, got {type(source).__name__}"
-                )
-            if source.ndim > 2:
-                raise ValueError(
-                    f"TimeSeries: series {label!r} has dims {source.dims}; expected "
-                    "'time' and at most one other dimension"
-                )
-            source = source.transpose("time", ...)
-            timestamps = source["time"].values
-            values = np.asarray(source.values, dtype=float)
-            other = [d for d in source.dims if d != "time"]
-            if other and other[0] in source.coords:
-                components = [str(c) for c in source[other[0]].values]
-            elif other:
-                components = [f"{other[0]} {i}" for i in range(source.shape[1])]
-            else:
-                components = None
-            self.units = str(source.attrs.get("units", ""))
-        # validated (1-d, finite, sorted, no NaT) by the one time rule; its
-        # exact keys (int64 ns for datetime64) are what is searched, so
-        # datetime64 data is re-based exactly
-        track = as_track(
-            timestamps, f"timestamps of series {label!r}", copy=False, repeats=True
-        )
-        self.kind = track.kind
-        self.raw = track.key
-        self.timestamps = (
-            track.values
-            if track.kind == "numeric"
-            else track.key.view(f"{track.kind}[ns]")
-        )
-        n = self.raw.size
-        if values.ndim not in (1, 2) or values.shape[0] != n:
-            raise ValueError(
-                f"TimeSeries: series {label!r} has values of shape {values.shape}, "
-                f"expected ({n},) or ({n}, k)"
-            )
-        if values.ndim == 1:
-            values = values[:, None]
-        if components is not None and len(components) != values.shape[1]:
-            raise ValueError(
-                f"TimeSeries: series {label!r} has {values.shape[1]} columns but "
-                f"{len(components)} component names"
-            )
-        self.values = values
-        self.components = components or [label]
-        # a DataArray may name its components' colours (attrs["colors"], one
-        # CSS colour per component), so a plot matches the 3D view's
-        attrs = getattr(source, "attrs", {})
-        colors = attrs.get("colors")
-        self.colors = (
-            [str(c) for c in colors]
-            if isinstance(colors, (list, tuple)) and len(colors) == values.shape[1]
-            else None
-        )
-        # and the longest pause its samples bridge (seconds): longer ones are
-        # gaps, drawn without a NaN row stored in the series
-        self.max_gap = _max_gap(attrs.get("max_gap"), label)
-
-    def raw_of(self, base: TimeBase, t: float, side: str) -> int | float:
-        """``t`` seconds of ``base`` in raw units (ns rounded outward by ``side``)."""
-        if self.kind != "numeric":
-            ns = t * 1e9
-            return (base.t0_ns or 0) + int(
-                math.floor(ns) if side == "high" else math.ceil(ns)
-            )
-        return base.t0_s + t
-
-    def rows_in(self, base: TimeBase, start: float, end: float) -> tuple[int, int]:
-        """Rows ``i0:i1`` shown in ``[start, end]`` (seconds of ``base``) and one each side."""
-        lo, hi = self.raw_of(base, start, "low"), self.raw_of(base, end, "high")
-        i0 = max(int(np.searchsorted(self.raw, lo, side="left")) - 1, 0)
-        i1 = min(int(np.searchsorted(self.raw, hi, side="right")) + 1, self.raw.size)
-        return i0, i1
-
-
-def _max_gap(value, label: str) -> float | None:
-    if value is None:
-        return None
-    if isinstance(value, bool) or not 0 < _number(value) < math.inf:
-        raise ValueError(
-            f"TimeSeries: series {label!r} has attrs['max_gap'] = {value!r}; expected "
-            "a positive number of seconds"
-        )
-    return float(value)
-
-
-#: bounds of a panel's height in pixels
-PANEL_HEIGHT = (40, 4000)
-
-
-def _number(value) -> float:
-    """``value`` as a float, or NaN when it is not a number (then refused by name)."""
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        return math.nan
-
-
-def checked_panel_height(value) -> int:
-    """``value`` as a panel height in pixels, or a ValueError naming panel_height."""
-    low, high = PANEL_HEIGHT
-    if (
-        isinstance(value, bool)
-        or not isinstance(value, (int, float, np.integer, np.floating))
-        or not np.isfinite(value)
-        or int(value) != value
-        or not low <= value <= high
-    ):
-        raise ValueError(
-            f"TimeSeries: panel_height must be a whole number of pixels in "
-            f"[{low}, {high}], got {value!r}"
-        )
-    return int(value)
+from .timeseries_requests import exact_reply, exact_time, window_reply, window_request
+from .timeseries_rows import COLORS as COLORS  # documented here before
+from .timeseries_rows import (
+    OVERVIEW_WIDTH,
+    WINDOW_POINTS,
+    float64_bytes,
+    nearest_row,
+    panel_of,
+    pauses_of,
+    rows_in_view,
+)
 
 
 class TimeSeries(FrontendGuard, anywidget.AnyWidget):
@@ -331,27 +191,14 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
                 "TimeSeries: series must be a non-empty mapping of label -> "
                 f"DataArray or (timestamps, values), got {type(series).__name__}"
             )
-        if gap is not None and not (_number(gap) > 0):
-            raise ValueError(
-                f"TimeSeries: gap must be a positive number of seconds, got {gap}"
-            )
-        if max_points is not None and (
-            isinstance(max_points, bool)
-            or not isinstance(max_points, (int, float, np.integer, np.floating))
-            or not np.isfinite(max_points)
-            or int(max_points) != max_points
-            or max_points < 10
-        ):
-            raise ValueError(
-                f"TimeSeries: max_points must be an integer >= 10, got {max_points!r}"
-            )
-        self._max_points = None if max_points is None else int(max_points)
-        self._overview_width = self._checked_width(overview_width, "overview_width")
+        gap = checked_gap(gap)
+        self._max_points = checked_max_points(max_points)
+        self._overview_width = checked_width(overview_width, "overview_width")
         panel_height = checked_panel_height(panel_height)
-        self._series = [_Series(str(k), v) for k, v in series.items()]
+        self._series = [PanelSamples(str(k), v) for k, v in series.items()]
         check_compatible([s.kind for s in self._series], "TimeSeries: series")
         self.timestamps_kind = self._series[0].kind
-        self._gap = None if gap is None else float(gap)
+        self._gap = gap
         self.gaps: list[float | None] = []
         first = min((s.timestamps[:1] for s in self._series), key=lambda a: a[0])
         self._own_base = self._base = TimeBase.of(first)
@@ -385,17 +232,7 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         """``t0_ns``, ``panels`` and ``data`` in the data's time base."""
         panels, data, self.gaps, self._pauses = [], [], [], []
         for s in self._series:
-            gap = self._gap
-            if gap is not None and s.kind != "numeric":
-                gap *= 1e9  # raw units: ns
-            pauses, used = pause_rows(s.raw, gap)
-            if s.max_gap is not None:
-                limit = s.max_gap * (1.0 if s.kind == "numeric" else 1e9)
-                if used is None or limit < used:
-                    # the series bridges no pause longer than its own max_gap
-                    pauses, used = pause_rows(s.raw, limit)
-            if used is not None and s.kind != "numeric":
-                used /= 1e9
+            pauses, used = pauses_of(s, self._gap)
             self._pauses.append(pauses)
             self.gaps.append(used)
             reduced = self._max_points is not None and s.raw.size > self._max_points
@@ -407,26 +244,9 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
                 last,
                 self._overview_width if reduced else None,
             )
-            panels.append(
-                {
-                    "label": s.label,
-                    "units": s.units,
-                    "components": s.components,
-                    "colors": s.colors
-                    or [COLORS[i % len(COLORS)] for i in range(len(s.components))],
-                    "samples": int(s.raw.size),
-                    "reduced": bool(reduced),
-                }
-            )
-            data.append(
-                {
-                    "x": np.ascontiguousarray(x, dtype=np.float64).tobytes(),
-                    "y": [
-                        np.ascontiguousarray(y[:, k], dtype=np.float64).tobytes()
-                        for k in range(y.shape[1])
-                    ],
-                }
-            )
+            panels.append(panel_of(s, reduced))
+            x_bytes, y_bytes = float64_bytes(x, y)
+            data.append({"x": x_bytes, "y": y_bytes})
         t0_ns = self._data_base.t0_ns if self._data_base.absolute else None
         return {"t0_ns": t0_ns, "panels": panels, "data": data}
 
@@ -438,31 +258,18 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         width: int | None,
         cancelled=lambda: False,
     ) -> tuple[np.ndarray, np.ndarray, bool]:
-        """Panel rows shown in ``[start, end]`` (data seconds), one each side.
-
-        Every row when ``width`` is None or there are at most ``WINDOW_POINTS``
-        (or ``max_points``), else their M4 at ``width`` columns. Returns x (data
-        seconds), y (m, k) with a NaN row in each visible pause, and whether
-        every row is there.
-        """
-        s = self._series[panel]
-        i0, i1 = s.rows_in(self._data_base, start, end)
-        limit = max(WINDOW_POINTS, self._max_points or 0)
-        raw, values = s.raw[i0:i1], s.values[i0:i1]
-        pauses = self._pauses[panel]
-        pauses = pauses[(pauses >= i0) & (pauses < i1)] - i0
-        if width is None or i1 - i0 <= limit:
-            rows = np.arange(i1 - i0)
-            full = True
-        else:
-            lo = float(s.raw_of(self._data_base, start, "low"))
-            hi = float(max(s.raw_of(self._data_base, end, "high"), lo + 1))
-            rows = m4_rows(raw, values, lo, hi, width, cancelled)
-            # each column's first pause with both its sides: drawn as a gap
-            rows = np.union1d(rows, pause_sides(raw, pauses, lo, hi, width))
-            full = False
-        x = self._data_base.seconds(s.timestamps[i0:i1][rows])
-        return (*gathered(x, values, rows, pauses), full)
+        """Panel rows shown in ``[start, end]`` (data seconds), one each side
+        (:func:`~rbm_nb.widgets.timeseries_rows.rows_in_view`)."""
+        return rows_in_view(
+            self._series[panel],
+            self._pauses[panel],
+            self._data_base,
+            start,
+            end,
+            width,
+            self._max_points,
+            cancelled,
+        )
 
     def window(
         self, start: float, end: float, width: int | None = None
@@ -480,9 +287,7 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
             raise ValueError(
                 f"TimeSeries.window: need finite start < end in seconds, got {start}, {end}"
             )
-        width = self._checked_width(
-            self._overview_width if width is None else width, "width"
-        )
+        width = checked_width(self._overview_width if width is None else width, "width")
         return self._window_rows(start, end, width)[0]
 
     def _window_rows(self, start, end, width, cancelled=lambda: False):
@@ -496,21 +301,6 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
             full.append(every)
         return out, full
 
-    @staticmethod
-    def _checked_width(value, name: str) -> int:
-        low, high = WIDTH_RANGE
-        if (
-            isinstance(value, bool)
-            or not isinstance(value, (int, float, np.integer, np.floating))
-            or not np.isfinite(value)
-            or not low <= value <= high
-        ):
-            raise ValueError(
-                f"TimeSeries: {name} must be a number of pixel columns in "
-                f"[{low}, {high}], got {value!r}"
-            )
-        return int(value)
-
     def _on_message(self, _widget, content, _buffers) -> None:
         """Queue a browser's request for the samples in view (answered off-thread).
 
@@ -523,41 +313,19 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
             return
         if content.get("type") != "window":
             return
-        start, end = _number(content.get("start")), _number(content.get("end"))
-        width = content.get("width", self._overview_width)
-        try:
-            width = self._checked_width(width, "width")
-        except ValueError:
+        request = window_request(content, self._overview_width)
+        if request is None:
             return  # a malformed request from the page: nothing to draw, no reply
-        if not (np.isfinite(start) and np.isfinite(end) and start < end):
-            return
+        start, end, width, view = request
         shift = self.x_shift
-        view = str(content.get("view", ""))
 
         def job(cancelled):
             return self._window_rows(start, end, width, cancelled)
 
         def done(result):
-            rows, full = result
-            buffers: list[bytes] = []
-            for x, y in rows:
-                buffers.append(np.ascontiguousarray(x, dtype=np.float64).tobytes())
-                buffers.extend(
-                    np.ascontiguousarray(y[:, k], dtype=np.float64).tobytes()
-                    for k in range(y.shape[1])
-                )
-            reply = {
-                "type": "window",
-                "id": content.get("id"),
-                "view": view,
-                "start": start,
-                "end": end,
-                "width": width,
-                "shift": shift,
-                "rows": [int(x.size) for x, _ in rows],
-                "full": full,
-                "whole": bool(content.get("whole")),
-            }
+            reply, buffers = window_reply(
+                content, view, start, end, width, shift, result
+            )
             self.send(reply, buffers=buffers)
 
         self._last_request = self._windows.submit(view, job, done)
@@ -569,14 +337,9 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
         is the kernel's. A time that is not a finite number gets no reply. A
         newer request from the same view cancels this one in the kernel.
         """
-        t = content.get("t")
-        if (
-            isinstance(t, bool)
-            or not isinstance(t, (int, float))
-            or not math.isfinite(t)
-        ):
+        t = exact_time(content)
+        if t is None:
             return
-        t = float(t)
         shift = self.x_shift
         view = str(content.get("view", ""))
 
@@ -584,20 +347,8 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
             return self._nearest_in_data(t - shift)
 
         def done(result):
-            buffers = [
-                np.asarray([x, *values], dtype=np.float64).tobytes()
-                for x, values in result
-            ]
-            self.send(
-                {
-                    "type": "exact",
-                    "id": content.get("id"),
-                    "view": view,
-                    "t": t,
-                    "shift": shift,
-                },
-                buffers=buffers,
-            )
+            reply, buffers = exact_reply(content, view, t, shift, result)
+            self.send(reply, buffers=buffers)
 
         self._last_exact = self._exact.submit(view, job, done)
 
@@ -629,24 +380,7 @@ class TimeSeries(FrontendGuard, anywidget.AnyWidget):
 
     def _nearest_in_data(self, t: float) -> list[tuple[float, np.ndarray]]:
         """Per panel: (seconds of the data's base, values) of the row nearest ``t``."""
-        out = []
-        for s in self._series:
-            first = float(self._data_base.seconds(s.timestamps[:1])[0])
-            last = float(self._data_base.seconds(s.timestamps[-1:])[0])
-            # past either end the end row is the nearest; clamping also keeps
-            # a huge time from overflowing the ns arithmetic
-            at = min(max(t, first), last)
-            lo = s.raw_of(self._data_base, at, "low")
-            i = int(np.searchsorted(s.raw, lo, side="left"))
-            if i >= s.raw.size or (
-                i > 0
-                and float(self._data_base.seconds(s.timestamps[i - 1 : i])[0])
-                >= 2 * at - float(self._data_base.seconds(s.timestamps[i : i + 1])[0])
-            ):
-                i -= 1
-            x = float(self._data_base.seconds(s.timestamps[i : i + 1])[0])
-            out.append((x, np.array(s.values[i], dtype=np.float64)))
-        return out
+        return [nearest_row(s, self._data_base, t) for s in self._series]
 
     @property
     def window_requests(self) -> dict:

@@ -37,8 +37,17 @@ def test_the_engine_transforms_check_nothing(name):
     assert ".._validation" not in sources, sources
 
 
-def test_the_dask_path_reads_no_private_name_of_the_engine():
-    tree = ast.parse((PACKAGE / "_door" / "dask_blocks.py").read_text())
+DASK_MODULES = sorted((PACKAGE / "_door").glob("dask_*.py"))
+
+
+def test_the_dask_path_is_the_modules_checked_here():
+    names = {p.stem for p in DASK_MODULES}
+    assert {"dask_blocks", "dask_chunks", "dask_transforms"} <= names, names
+
+
+@pytest.mark.parametrize("path", DASK_MODULES, ids=lambda p: p.stem)
+def test_the_dask_path_reads_no_private_name_of_the_engine(path):
+    tree = ast.parse(path.read_text())
     engine_aliases = set()
     private = []
     for node in ast.walk(tree):
@@ -91,7 +100,7 @@ def test_the_dask_path_calls_no_facade_back():
         if event == "call" and frame.f_back is not None:
             caller = frame.f_back.f_globals.get("__name__", "")
             callee = frame.f_globals.get("__name__", "")
-            if caller == "rbm_nb._door.dask_blocks" and callee in facades:
+            if caller.startswith("rbm_nb._door.dask_") and callee in facades:
                 calls.append(f"{callee}.{frame.f_code.co_name}")
 
     sys.setprofile(profile)

@@ -359,10 +359,13 @@ def test_interpolation_stays_between(a, b, r):
         assert to_a + to_b == pytest.approx(total, abs=1e-9)
 
 
-def test_docstring_examples_run():
+@pytest.mark.parametrize(
+    "name", ["rbm_nb.core.rigid_transform", "rbm_nb.core.pose_methods"]
+)
+def test_docstring_examples_run(name):
     import doctest
     import importlib
 
-    module = importlib.import_module("rbm_nb.core.rigid_transform")
+    module = importlib.import_module(name)
     result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
     assert result.attempted > 0 and result.failed == 0

@@ -436,7 +436,7 @@ def test_a_superseded_request_is_cancelled_in_the_kernel(monkeypatch):
             release.wait(timeout=30)
         return m4(*args, **kwargs)
 
-    monkeypatch.setattr("rbm_nb.widgets.timeseries.m4_rows", slow_m4)
+    monkeypatch.setattr("rbm_nb.widgets.timeseries_rows.m4_rows", slow_m4)
     old = {"type": "window", "view": "v", "start": 0.0, "end": 500.0, "width": 100}
     plot.comm.receive({**old, "id": 1})
     assert started.wait(timeout=30)  # the kernel is computing request 1

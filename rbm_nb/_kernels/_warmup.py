@@ -101,6 +101,7 @@ EXPLORER: tuple[str, ...] = (
     "fused.lookup_chain",
     "rows.infinities",
     "rows.moving_signs",
+    "masked_rows.masked_signs",
     "rotations.rotate_vectors_into",
     "velocity_fused.body_rates",
     "conversions.quaternion_from_matrix",

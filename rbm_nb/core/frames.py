@@ -48,6 +48,7 @@ from .._engine import twist as _twist
 from .._engine.frame_data import FrameData, Samples
 from .._infra.config import UNIT_QUATERNION_TOLERANCE
 from .._infra.frozen import is_frozen, kernel_alias
+from .._kernels import masked_rows as _masked_rows
 from .._kernels import quaternion as kq
 from .._kernels import rows as _rows
 from .conversions import quaternion_from_matrix
@@ -1088,13 +1089,34 @@ def _missing_mask(missing: Any, n: int, label: str) -> np.ndarray | None:
 def _masked_samples(label, track, translation, rotation, inverse, mask) -> Samples:
     """A moving frame's samples with the rows in ``mask`` missing (as if NaN).
 
-    The samples are prepared from copies with those rows NaN, as a caller
-    masking its arrays would make them, so every number the engine computes
-    is the same. Where the caller's arrays are frozen the frame then keeps
-    them and ``mask`` instead of the masked copies (which go at once): the
-    engine applies the mask whenever it reads them (:class:`Samples`).
+    Every number the engine computes is that of copies with those rows NaN,
+    as a caller masking its arrays would make them. Where the caller's
+    arrays are frozen the frame keeps them and ``mask`` (the engine applies
+    the mask whenever it reads them, :class:`Samples`), and one kernel pass
+    checks them and makes the sign codes as if masked
+    (``_kernels.masked_rows``): no masked copies at all. Anything else, or a
+    row that fails a check, goes through the masked copies, so the error
+    names the row as before.
     """
     n = len(track)
+    t = _frozen_rows(translation, 3) if translation is not None else None
+    q = _frozen_rows(rotation, 4) if rotation is not None else None
+    if t is not None and q is not None and not inverse and n >= 2:
+        if t.shape[0] == n and q.shape[0] == n:
+            signs = np.empty(n, dtype=np.int8)
+            t_k, q_k = kernel_alias(t), kernel_alias(q)
+            bad, missing = _masked_rows.masked_signs(
+                t_k, q_k, kernel_alias(mask), UNIT_QUATERNION_TOLERANCE, signs
+            )
+            if not bad:
+                return Samples(track, t_k, None, q_k, bool(missing), mask, signs)
+    masked = _masked_copies(label, n, translation, rotation, mask)
+    # the masked copies, kept as any frame's (or a bad row named)
+    return _prepared(label, track, masked[0], masked[1], inverse)
+
+
+def _masked_copies(label, n, translation, rotation, mask) -> list[np.ndarray]:
+    """Frozen copies of the translations and rotations with ``mask``'s rows NaN."""
     t_in = (
         np.zeros((n, 3))
         if translation is None
@@ -1114,22 +1136,7 @@ def _masked_samples(label, track, translation, rotation, inverse, mask) -> Sampl
         )
         copy.setflags(write=False)  # frozen: _prepared keeps it, no second copy
         masked.append(copy)
-    t = _frozen_rows(translation, 3) if translation is not None else None
-    q = _frozen_rows(rotation, 4) if rotation is not None else None
-    if t is not None and q is not None and not inverse:
-        shared = _shared_samples(track, masked[0], masked[1])
-        if shared is not None:
-            return Samples(
-                track,
-                kernel_alias(t),
-                None,
-                kernel_alias(q),
-                shared.missing_rotations,
-                mask,
-                shared.signs,
-            )
-    # the masked copies, kept as any frame's (or a bad row named)
-    return _prepared(label, track, masked[0], masked[1], inverse)
+    return masked
 
 
 def _prepared(label, track, translation, rotation, inverse) -> Samples:

@@ -47,10 +47,12 @@ for _ in range(repeat):
     if _ + 1 < repeat:
         del series
 digests = {{}}
-for key, da in series.items():
-    digests[key] = [da.shape, hashlib.sha256(np.ascontiguousarray(da.values).tobytes()).hexdigest()]
-np.savez({dump!r}, **{{k: v.values for k, v in series.items()}},
-         **{{"centre " + k: v for k, v in centres.items()}})
+arrays = {{**{{k: v.values for k, v in series.items()}},
+          **{{"centre " + k: v for k, v in centres.items()}}}}
+for key, values in arrays.items():
+    values = np.ascontiguousarray(values)
+    digests[key] = [values.shape, hashlib.sha256(values.tobytes()).hexdigest()]
+np.savez({dump!r}, **arrays)
 print(json.dumps({{"times": best, "digests": digests, "samples": int(left.sizes["time"])}}))
 """
 
@@ -105,7 +107,7 @@ def main() -> None:
             )
             line += f"); ratio this/other {total / base:.2f}"
             same = mine["digests"] == other["digests"]
-            line += f"\n   series bit for bit: {same}"
+            line += f"\n   series and eye centres bit for bit: {same}"
             if not same:
                 diffs = largest_difference(
                     "/tmp/series_this.npz", "/tmp/series_other.npz"

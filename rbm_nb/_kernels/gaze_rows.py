@@ -102,3 +102,42 @@ def windowed_slopes(t, values, half, min_span, out):
             span = t[b] - t[a]
             if last - 1 > first and span >= min_span:
                 out[i, c] = (values[b, c] - values[a, c]) / span
+
+
+@kernel(F2, B1, F1, F, F1, F, B, F1, F1, F1, F2, options=EXACT_VECTOR_KERNEL)
+def sight_components(
+    rotation, missing, confidence, min_confidence, axis, min_z, check, r, right,
+    forward, out,
+):  # fmt: skip
+    """``gaze.directions`` then ``gaze.angles``' components in one pass, for
+    an eye whose parent reaches the reference through static frames only.
+
+    Row ``i`` of ``rotation`` (n, 4) is a sample where it is not
+    ``missing``, finite and its ``confidence`` is at least
+    ``min_confidence``; its line of sight is made as :func:`sight_rows`
+    does (NaN beyond ``min_z`` when ``check``), represented in the
+    reference by the static rotation ``r`` (4,) as ``resample.transform_blocks``
+    does, and its components along ``right`` and ``forward`` go to
+    ``out[0, i]`` and ``out[1, i]`` (NaN for any other row, and where the
+    line of sight is NaN: ``gaze.angles`` leaves such rows NaN).
+    """
+    for i in range(rotation.shape[0]):
+        out[0, i] = out[1, i] = math.nan
+        if missing[i] or not confidence[i] >= min_confidence:
+            continue
+        w, x, y, z = rotation[i, 0], rotation[i, 1], rotation[i, 2], rotation[i, 3]
+        if not (
+            math.isfinite(w) and math.isfinite(x) and math.isfinite(y)
+            and math.isfinite(z)
+        ):  # fmt: skip
+            continue
+        norm = math.sqrt(w * w + x * x + y * y + z * z)
+        w, x, y, z = w / norm, x / norm, y / norm, z / norm
+        sx, sy, sz = _rotate1(w, x, y, z, axis[0], axis[1], axis[2])
+        if check and not sz >= min_z:
+            continue
+        vx, vy, vz = _rotate1(r[0], r[1], r[2], r[3], sx, sy, sz)
+        if not (math.isfinite(vx) and math.isfinite(vy) and math.isfinite(vz)):
+            continue
+        out[0, i] = vx * right[0] + vy * right[1] + vz * right[2]
+        out[1, i] = vx * forward[0] + vy * forward[1] + vz * forward[2]

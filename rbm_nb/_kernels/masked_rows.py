@@ -7,6 +7,8 @@ Its checks and sign codes must be those of the masked arrays a caller would
 make (``np.where(mask, nan, rows)``): :func:`masked_signs` reads the caller's
 rows and the mask in one pass instead of making those copies (two arrays of
 the recording's size at 3 h, and the passes to fill them).
+:func:`kept_translations` reads such a frame's kept rows through a static
+chain for the explorer's eye centres without a whole lookup.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import math
 
 from .._infra.config import EXACT_VECTOR_KERNEL
 from ._jit import F2, S1, F, kernel
+from .quaternion import _rotate1
 from .rows import MAX_COORDINATE
 
 # one bool per sample (True: the row is missing)
@@ -72,3 +75,39 @@ def masked_signs(t, q, mask, tol, codes):
             pw, px, py, pz = w, x, y, z
             have = True
     return bad, missing
+
+
+@kernel(F2, _MASK, F2, F2, _MASK, F2, options=EXACT_VECTOR_KERNEL)
+def kept_translations(t, mask, steps_t, steps_r, inverse, out):
+    """The translations of the rows not in ``mask`` and not NaN, carried
+    through static steps, into the first columns of ``out`` (3, n).
+
+    ``t`` (n, 3) is a moving frame's translation wrt its parent; step ``k``
+    (``steps_t[k]``, ``steps_r[k]``) maps that frame into the next one up
+    the chain, or down it where ``inverse[k]`` (its transform inverted):
+    ``resample.chain_step``'s translation arithmetic, in its order, so each
+    value is the one a lookup composes (without its rotations). Returns how
+    many columns were written (the rows kept, in order).
+    """
+    m = 0
+    for i in range(t.shape[0]):
+        if mask[i]:
+            continue
+        px, py, pz = t[i, 0], t[i, 1], t[i, 2]
+        if px != px:  # a missing sample (NaN rows are all NaN)
+            continue
+        for k in range(steps_t.shape[0]):
+            qw, qx, qy, qz = steps_r[k, 0], steps_r[k, 1], steps_r[k, 2], steps_r[k, 3]
+            if inverse[k]:
+                px, py, pz = _rotate1(
+                    qw, -qx, -qy, -qz,
+                    px - steps_t[k, 0], py - steps_t[k, 1], pz - steps_t[k, 2],
+                )  # fmt: skip
+            else:
+                px, py, pz = _rotate1(qw, qx, qy, qz, px, py, pz)
+                px += steps_t[k, 0]
+                py += steps_t[k, 1]
+                pz += steps_t[k, 2]
+        out[0, m], out[1, m], out[2, m] = px, py, pz
+        m += 1
+    return m

@@ -21,9 +21,12 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._engine import chain as _chain
 from .._engine.time import epoch_seconds
+from .._infra.frozen import kernel_alias
 from .._infra.progress import make_bar
 from .._infra.time_index import dataarray_on
+from .._kernels import masked_rows as _masked_rows
 from ..core import frames, gaze
 from ..core import frames as registry
 from ..core.frames import ReferenceFrame
@@ -31,6 +34,7 @@ from ..core.lookups import lookup_angular_velocity, lookup_transform
 from ..core.quaternions import rotate_vectors
 from ..data.load import last_choice, load_example
 from ..io._files import load_netcdf
+from . import explorer_yaw
 
 # rotation between the T265's VR axes and ROS axes (guide 1.6)
 R_T265_ROS = np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
@@ -332,6 +336,27 @@ def gaze_yaw(
         "colors": [GAZE_COLORS[eye] for eye in EYES],
         "max_gap": MAX_EYE_GAP,
     }
+    fast = explorer_yaw.yaw_columns(
+        [left_eye, right_eye],
+        [frames.eye(name) for name in EYES],
+        frames.head,
+        MIN_CONFIDENCE,
+        max_angle,
+    )
+    if fast is not None:
+        values, confidence = fast
+        # on the confidence's time index, as gaze_angles' result (a shallow
+        # copy shares it)
+        template = confidence.drop_vars([c for c in confidence.coords if c != "time"])
+        yaw = template.expand_dims(eye=len(EYES), axis=1).copy(deep=False, data=values)
+        yaw = yaw.assign_coords(eye=labels)
+        yaw.name, yaw.attrs = None, attrs
+        return yaw
+    return _yaw_by_angles(left_eye, right_eye, labels, attrs, max_angle, frames)
+
+
+def _yaw_by_angles(left_eye, right_eye, labels, attrs, max_angle, frames):
+    """:func:`gaze_yaw` through :func:`gaze_angles`, one eye after the other."""
     first = gaze_angles(left_eye, EYES[0], max_angle=max_angle, frames=frames)
     # the one (n, 2) array kept, on the first eye's time index (a shallow
     # copy shares it); each eye's column is written in place
@@ -484,9 +509,50 @@ def eye_centres(
     """Median centre of each eye in the head's axes (m), over its valid samples."""
     out = {}
     for eye in EYES:
-        translation, _ = lookup_transform(frames.eye(eye), head or frames.head)
-        out[eye] = np.nanmedian(np.atleast_2d(translation), axis=0)
+        kept = _kept_translations(frames.eye(eye), head or frames.head)
+        if kept is None:  # a chain that moves above the eye: the whole lookup
+            translation, _ = lookup_transform(frames.eye(eye), head or frames.head)
+            out[eye] = np.nanmedian(np.atleast_2d(translation), axis=0)
+        else:
+            # nanmedian's value: the median of the non-NaN values
+            out[eye] = np.array(
+                [np.median(row) if row.size else np.nan for row in kept]
+            )
     return out
+
+
+def _kept_translations(eye: str, into: str) -> np.ndarray | None:
+    """The translations (3, m) of the eye's kept samples in ``into``, or None.
+
+    A lookup composes whole transforms (every row's rotation too, and its
+    copies: ~0.5 s per eye at 3 h) where the centres need only the
+    translations of the samples that are not missing. When every frame
+    between the eye's parent and ``into`` is static, one kernel pass carries
+    the kept rows through those steps with the lookup's arithmetic (the same
+    values); else None.
+    """
+    steps = _chain.chain(registry.registry[eye], registry.registry[into])
+    first, inverse = steps[0] if steps else (None, True)
+    if first is None or inverse or first.track is None:
+        return None
+    rest = steps[1:]
+    if any(frame.track is not None for frame, _ in rest):
+        return None
+    samples = first.samples
+    n = len(samples.stored_t)
+    mask = samples.missing_rows
+    if mask is None:
+        mask = np.zeros(n, dtype=bool)
+    out = np.empty((3, n))
+    m = _masked_rows.kept_translations(
+        kernel_alias(samples.stored_t),
+        kernel_alias(mask),
+        np.array([f.t.reshape(3) for f, _ in rest]).reshape(-1, 3),
+        np.array([f.rotation.reshape(4) for f, _ in rest]).reshape(-1, 4),
+        np.array([inv for _, inv in rest], dtype=bool),
+        out,
+    )
+    return out[:, :m]
 
 
 def explorer_scene(

@@ -103,6 +103,7 @@ EXPLORER: tuple[str, ...] = (
     "masked_rows.kept_translations",
     "gaze_rows.sight_components",
     "gaze_rows.windowed_slopes",
+    "m4.column_extremes",
     "rotations.rotate_vectors_into",
     "velocity_fused.body_rates",
     "conversions.quaternion_from_matrix",

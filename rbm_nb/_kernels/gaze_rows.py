@@ -15,8 +15,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from .._infra.config import EXACT_VECTOR_KERNEL
 from ._jit import F1, F2, B, F, kernel
 from .quaternion import _rotate1
@@ -73,35 +71,29 @@ def windowed_slopes(t, values, half, min_span, out):
     ``half`` of each finite sample (times ``t``, non-decreasing), into ``out``.
 
     NaN where the sample is not finite or the samples found span less than
-    ``min_span``. ``np.searchsorted``'s answers, found by two pointers that
-    only move forward (the times are in order).
+    ``min_span``. ``np.searchsorted``'s answers among the finite samples,
+    found by two pointers that only move forward (the times are in order).
     """
     n, columns = values.shape
-    rows = np.empty(n, dtype=np.int64)
     for c in range(columns):
-        m = 0
-        for i in range(n):
-            if math.isfinite(values[i, c]):
-                rows[m] = i
-                m += 1
+        first = 0  # the first finite row with a time >= t - half
+        scan = 0  # the first row with a time > t + half
+        last = -1  # the last finite row before scan
         for i in range(n):
             out[i, c] = math.nan
-        if m < 2:
-            continue
-        first = 0
-        last = 0  # one past the last valid row with a time <= t + half
-        for k in range(m):
-            i = rows[k]
+            if not math.isfinite(values[i, c]):
+                continue
             lo = t[i] - half
             hi = t[i] + half
-            while first < m and t[rows[first]] < lo:
-                first += 1
-            while last < m and t[rows[last]] <= hi:
-                last += 1
-            a, b = rows[first], rows[last - 1]
-            span = t[b] - t[a]
-            if last - 1 > first and span >= min_span:
-                out[i, c] = (values[b, c] - values[a, c]) / span
+            while not math.isfinite(values[first, c]) or t[first] < lo:
+                first += 1  # (stops at i at the latest)
+            while scan < n and t[scan] <= hi:
+                if math.isfinite(values[scan, c]):
+                    last = scan
+                scan += 1
+            span = t[last] - t[first]
+            if last > first and span >= min_span:
+                out[i, c] = (values[last, c] - values[first, c]) / span
 
 
 @kernel(F2, B1, F1, F, F1, F, B, F1, F1, F1, F2, options=EXACT_VECTOR_KERNEL)

@@ -508,8 +508,9 @@ def eye_centres(
 ) -> dict:
     """Median centre of each eye in the head's axes (m), over its valid samples."""
     out = {}
+    buffer: list = []  # one (3, n) array for both eyes (fresh memory is slow)
     for eye in EYES:
-        kept = _kept_translations(frames.eye(eye), head or frames.head)
+        kept = _kept_translations(frames.eye(eye), head or frames.head, buffer)
         if kept is None:  # a chain that moves above the eye: the whole lookup
             translation, _ = lookup_transform(frames.eye(eye), head or frames.head)
             out[eye] = np.nanmedian(np.atleast_2d(translation), axis=0)
@@ -521,7 +522,7 @@ def eye_centres(
     return out
 
 
-def _kept_translations(eye: str, into: str) -> np.ndarray | None:
+def _kept_translations(eye: str, into: str, buffer=None) -> np.ndarray | None:
     """The translations (3, m) of the eye's kept samples in ``into``, or None.
 
     A lookup composes whole transforms (every row's rotation too, and its
@@ -529,7 +530,8 @@ def _kept_translations(eye: str, into: str) -> np.ndarray | None:
     translations of the samples that are not missing. When every frame
     between the eye's parent and ``into`` is static, one kernel pass carries
     the kept rows through those steps with the lookup's arithmetic (the same
-    values); else None.
+    values); else None. ``buffer`` (a list): the (3, n) array to write, kept
+    there for the next call.
     """
     steps = _chain.chain(registry.registry[eye], registry.registry[into])
     first, inverse = steps[0] if steps else (None, True)
@@ -543,7 +545,12 @@ def _kept_translations(eye: str, into: str) -> np.ndarray | None:
     mask = samples.missing_rows
     if mask is None:
         mask = np.zeros(n, dtype=bool)
-    out = np.empty((3, n))
+    if buffer and buffer[0].shape[1] >= n:
+        out = buffer[0]
+    else:
+        out = np.empty((3, n))
+        if buffer is not None:
+            buffer[:] = [out]
     m = _masked_rows.kept_translations(
         kernel_alias(samples.stored_t),
         kernel_alias(mask),

@@ -150,15 +150,18 @@ class Samples(_Frozen):
     def rows(self, index) -> tuple[np.ndarray, np.ndarray]:
         """``(t[index], rotation[index])`` reading only those rows.
 
-        Views of the kept arrays for a slice without ``missing_rows``;
-        otherwise new arrays.
+        Views of the kept arrays for a slice with no row in
+        ``missing_rows``; otherwise new arrays.
         """
         t = self.stored_t[index]
         rotation = self.stored_rotation[index]
         mask = self.missing_rows
         if mask is None:
             return t, rotation
-        return _masked(t, mask[index]), _masked(rotation, mask[index])
+        mask = mask[index]
+        if not mask.any():  # a window with no missing row: views, as unmasked
+            return t, rotation
+        return _masked(t, mask), _masked(rotation, mask)
 
     def __reduce__(self):
         # (pickle and copy would set the slots one by one, which is refused)

@@ -17,79 +17,45 @@ from __future__ import annotations
 import html
 import warnings
 from pathlib import Path
-from typing import NamedTuple
 
 import numpy as np
 
-from .._engine.time import epoch_seconds
+from .._engine import chain as _chain
+from .._infra.frozen import kernel_alias
 from .._infra.progress import make_bar
-from .._infra.time_index import dataarray_on
-from ..core import frames, gaze
+from .._kernels import masked_rows as _masked_rows
+from ..core import frames
 from ..core import frames as registry
-from ..core.frames import ReferenceFrame
-from ..core.lookups import lookup_angular_velocity, lookup_transform
-from ..core.quaternions import rotate_vectors
+from ..core.lookups import lookup_transform
 from ..data.load import last_choice, load_example
 from ..io._files import load_netcdf
 
-# rotation between the T265's VR axes and ROS axes (guide 1.6)
-R_T265_ROS = np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
-# rotation between the Pupil Core's camera axes (x right, y down, z forward)
-# and ROS axes (guide 1.6)
-R_PUPIL_ROS = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]])
-# pose of the Pupil Core scene camera on the T265, from the study's calibration.
-# The calibration's quaternion is printed in (x, y, z, w) order, as scipy and
-# ROS write them; guide 1.6 of rigid-body-motion passes the same four numbers
-# as (w, x, y, z), which turns the camera 180 deg about its line of sight
-# (about the T265's x axis instead of its y axis). Read that way, the eyes of
-# the real recording move *with* the head at 40 ms (gain +0.6 to +0.7 against
-# the head's yaw and pitch rates) and look away from every turn; read as
-# (x, y, z, w) they counter-rotate as the vestibulo-ocular reflex does (gain
-# -0.6 to -0.7), look into turns, and still converge (+2 deg): see
-# tests/data/test_eye_frames.py, which measures all of this.
-SCENE_CAM_TRANSLATION = (24.5e-3, -29e-3, 0.0)
-SCENE_CAM_ROTATION_XYZW = (-0.00125, -1.0, 6.3463e-05, 3.977e-06)
-SCENE_CAM_ROTATION = (
-    SCENE_CAM_ROTATION_XYZW[3],
-    *SCENE_CAM_ROTATION_XYZW[:3],
-)
-EYES = ("left_eye", "right_eye")
-
-
-class HeadEyeFrames(NamedTuple):
-    """The registered frames the explorer draws and plots, by name.
-
-    ``head`` has robotics axes (x forward, y left, z up: yaw is about z,
-    gaze yaw is positive to the left); each eye frame's z axis is its line
-    of sight. Give your own names to :func:`dashboard` (``frames=``) to
-    explore any tree registered with those conventions.
-    """
-
-    world: str = "world"
-    head: str = "head"
-    left_eye: str = "pupil/left_eye"
-    right_eye: str = "pupil/right_eye"
-
-    def eye(self, name: str) -> str:
-        """The frame of ``"left_eye"`` or ``"right_eye"``."""
-        return self.left_eye if name == "left_eye" else self.right_eye
-
-
-#: the names :func:`register_head_eye_frames` registers
-EXAMPLE_FRAMES = HeadEyeFrames()
-# Pupil Core's usual threshold: below it the pupil detection is not trusted
-MIN_CONFIDENCE = 0.6
-# the eye tracker's gaps longer than this are not bridged by interpolation
-# (the eye frames') nor drawn across (the plots': their series say so in
-# attrs["max_gap"], instead of a NaN row inserted in each pause, which
-# would make a new copy of every eye timestamp)
-MAX_EYE_GAP = 0.1
-# per eye, the same in the 3D view and the plots (legible on both)
-GAZE_COLORS = {"left_eye": "#e69f00", "right_eye": "#0094d6"}
-# samples per plotted panel and per moving object in exports: 10000 over the
-# 5.5 minutes is 30 per second, with every stretch's extremes kept; the page
-# stays under 5 MB
-PLOT_MAX_POINTS = 10000
+# the frames and the series live in their own modules; their names are the
+# explorer's (rbm_nb.explorer.<name>), as before the split
+from .explorer_frames import EXAMPLE_FRAMES as EXAMPLE_FRAMES
+from .explorer_frames import EYES as EYES
+from .explorer_frames import GAZE_COLORS as GAZE_COLORS
+from .explorer_frames import MAX_EYE_GAP as MAX_EYE_GAP
+from .explorer_frames import MIN_CONFIDENCE as MIN_CONFIDENCE
+from .explorer_frames import PLOT_MAX_POINTS as PLOT_MAX_POINTS
+from .explorer_frames import R_PUPIL_ROS as R_PUPIL_ROS
+from .explorer_frames import R_T265_ROS as R_T265_ROS
+from .explorer_frames import SCENE_CAM_ROTATION as SCENE_CAM_ROTATION
+from .explorer_frames import SCENE_CAM_ROTATION_XYZW as SCENE_CAM_ROTATION_XYZW
+from .explorer_frames import SCENE_CAM_TRANSLATION as SCENE_CAM_TRANSLATION
+from .explorer_frames import HeadEyeFrames as HeadEyeFrames
+from .explorer_frames import _unconfident as _unconfident
+from .explorer_frames import register_head_eye_frames as register_head_eye_frames
+from .explorer_series import _outer_yaw as _outer_yaw
+from .explorer_series import _seconds as _seconds
+from .explorer_series import _yaw_by_angles as _yaw_by_angles
+from .explorer_series import explorer_series as explorer_series
+from .explorer_series import gaze_angles as gaze_angles
+from .explorer_series import gaze_yaw as gaze_yaw
+from .explorer_series import guided_instants as guided_instants
+from .explorer_series import head_speed as head_speed
+from .explorer_series import head_yaw_rate as head_yaw_rate
+from .explorer_series import vor_gain as vor_gain
 
 
 def load_head_eye(source: str = "auto"):
@@ -147,326 +113,6 @@ def is_synthetic(ds) -> bool:
     return "synthetic" in str(ds.attrs.get("source", ""))
 
 
-def _unconfident(eye, min_confidence: float | None):
-    """The rows of ``eye`` below ``min_confidence`` (bool, one per sample), or None.
-
-    The frame treats them as missing (NaN) and keeps the recording's own
-    arrays beside this mask where nobody can write them (the loaders' are
-    read-only): no masked copies of the eye's pose.
-    """
-    if min_confidence is None or "confidence" not in eye:
-        return None
-    low = (eye.confidence < min_confidence).values
-    return low if low.any() else None
-
-
-def register_head_eye_frames(
-    head,
-    left_eye,
-    right_eye,
-    *,
-    world: str = "world",
-    ros_eyes: bool = False,
-    min_confidence: float | None = MIN_CONFIDENCE,
-    max_gap: float | None = MAX_EYE_GAP,
-):
-    """Register the explorer's frame tree (see the module docstring).
-
-    ``world`` is registered as a root if it is not already. Existing frames of
-    the same names are replaced, so the cell can be run again. With
-    ``ros_eyes`` each eye also gets a frame in ROS axes below it
-    (``left_eye``, ``right_eye``: x along the line of sight), as in guide 1.6.
-
-    The eye frames keep the recording's missing samples (blinks, lost
-    pupils) as missing, and samples below ``min_confidence`` become missing
-    too; with ``max_gap`` (seconds) nothing is interpolated across longer
-    gaps. So a gaze ray is drawn only where the eye tracker saw the pupil.
-    ``min_confidence=None`` keeps every sample that has data.
-    """
-    if world not in frames.registry:
-        frames.register_frame(world)
-    ReferenceFrame.from_rotation_matrix(
-        R_T265_ROS, parent=world, name="t265/world"
-    ).register(update=True)
-    ReferenceFrame.from_dataset(
-        head,
-        "position",
-        "orientation",
-        "time",
-        parent="t265/world",
-        name="t265/tracker",
-    ).register(update=True)
-    ReferenceFrame.from_rotation_matrix(
-        R_T265_ROS, parent="t265/tracker", name="head", inverse=True
-    ).register(update=True)
-    frames.register_frame(
-        "pupil/scene_cam",
-        parent="t265/tracker",
-        translation=SCENE_CAM_TRANSLATION,
-        rotation=SCENE_CAM_ROTATION,
-        update=True,
-    )
-    for name, eye in zip(EYES, (left_eye, right_eye), strict=True):
-        ReferenceFrame.from_dataset(
-            eye,
-            "position",
-            "orientation",
-            "time",
-            parent="pupil/scene_cam",
-            name=f"pupil/{name}",
-            max_gap=max_gap,
-            missing=_unconfident(eye, min_confidence),
-        ).register(update=True)
-        if ros_eyes:
-            ReferenceFrame.from_rotation_matrix(
-                R_PUPIL_ROS, parent=f"pupil/{name}", name=name
-            ).register(update=True)
-
-
-def gaze_angles(
-    eye,
-    name: str | None = None,
-    *,
-    min_confidence: float = MIN_CONFIDENCE,
-    max_angle: float | None = None,
-    frames: HeadEyeFrames = EXAMPLE_FRAMES,
-):
-    """Azimuth (right) and elevation (up) of an eye's line of sight, in degrees.
-
-    With ``name`` (``"left_eye"`` or ``"right_eye"``) and the explorer's
-    frames registered, the angles are measured in the head's axes (x
-    forward, y left, z up) by :mod:`rbm_nb.gaze`: samples below
-    ``min_confidence``, beyond ``max_angle`` degrees from the scene camera's
-    straight-ahead (see :data:`rbm_nb.gaze.OCULOMOTOR_RANGE`) and missing
-    ones are NaN, so plots show them as gaps. The result is on the eye's
-    own times (its time index is the dataset's, not a copy); pauses of the
-    eye tracker longer than :data:`MAX_EYE_GAP` are named in
-    ``attrs["max_gap"]``, which :class:`~rbm_nb.widgets.TimeSeries` draws
-    as gaps. Without ``name`` they are computed from the dataset's
-    orientations alone, in the eye tracker's image axes (x right, y down, z
-    forward in the image; no masking).
-
-    Returns
-    -------
-    xarray.DataArray, dims (time, angle)
-    """
-    import xarray as xr
-
-    if name is not None and frames.eye(name) in registry.registry:
-        confident = eye is not None and "confidence" in eye
-        sight = gaze.directions(
-            frames.eye(name),
-            frames.head,
-            confidence=eye.confidence if confident else None,
-            min_confidence=min_confidence,
-            max_angle=max_angle,
-        )
-        out = gaze.angles(sight, frames.head, forward="x", up="z")
-        out.attrs = {"long_name": "Gaze angles", "units": "deg", "max_gap": MAX_EYE_GAP}
-        return out
-
-    eye = eye.dropna("time")
-    sight = rotate_vectors(
-        eye.orientation.values, np.array([0.0, 0.0, 1.0]), one_to_one=False
-    )
-    azimuth = np.degrees(np.arctan2(sight[:, 0], sight[:, 2]))
-    elevation = np.degrees(np.arctan2(-sight[:, 1], np.hypot(sight[:, 0], sight[:, 2])))
-    return xr.DataArray(
-        np.column_stack([azimuth, elevation]),
-        dims=("time", "angle"),
-        coords={"time": eye.time, "angle": ["azimuth", "elevation"]},
-        attrs={"long_name": "Gaze angles", "units": "deg"},
-    )
-
-
-def head_speed(head):
-    """Norm of the head tracker's linear velocity, in m/s."""
-    speed = np.sqrt((head.linear_velocity**2).sum("cartesian_axis"))
-    speed.attrs = {"long_name": "Head speed", "units": "m/s"}
-    return speed
-
-
-def head_yaw_rate(*, world: str | None = None, frames: HeadEyeFrames = EXAMPLE_FRAMES):
-    """Head angular velocity about its own vertical axis, deg/s, positive left.
-
-    The z component of the angular velocity of ``head`` relative to
-    ``world`` represented in the head's axes (x forward, y left, z up), so
-    a turn to the left is positive, as the gaze yaw of
-    :func:`gaze_yaw`. Register the frames first.
-    """
-    omega, times = lookup_angular_velocity(
-        frames.head,
-        world or frames.world,
-        represent_in=frames.head,
-        return_timestamps=True,
-    )
-    # one new array, the plotted one; on the frame's own times (the head
-    # dataset's, which nobody can change): no copy of the time index
-    return dataarray_on(
-        np.degrees(omega[:, 2]),
-        times,
-        ("time",),
-        attrs={"long_name": "Head yaw rate (+ left)", "units": "deg/s"},
-        name="angular_velocity",
-    )
-
-
-def gaze_yaw(
-    left_eye,
-    right_eye,
-    *,
-    max_angle: float | None = None,
-    frames: HeadEyeFrames = EXAMPLE_FRAMES,
-):
-    """Horizontal gaze angle of both eyes in the head's axes, deg, positive left.
-
-    Dims (time, eye) with eyes ``"left eye"`` and ``"right eye"``; NaN where
-    an eye has no trusted sample (see :func:`gaze_angles`). The two eyes
-    share one clock in the example data; otherwise each keeps its own times
-    and the other's column is NaN there.
-    """
-    labels = [name.replace("_", " ") for name in EYES]
-    attrs = {
-        "long_name": "Gaze yaw in head (+ left)",
-        "units": "deg",
-        "colors": [GAZE_COLORS[eye] for eye in EYES],
-        "max_gap": MAX_EYE_GAP,
-    }
-    first = gaze_angles(left_eye, EYES[0], max_angle=max_angle, frames=frames)
-    # the one (n, 2) array kept, on the first eye's time index (a shallow
-    # copy shares it); each eye's column is written in place
-    yaw = first.copy(deep=False, data=np.empty(first.shape)).rename(angle="eye")
-    yaw = yaw.assign_coords(eye=labels)
-    yaw.name, yaw.attrs = None, attrs
-    np.negative(first.sel(angle="azimuth").values, out=yaw.values[:, 0])
-    del first  # its angles: not kept
-    second = gaze_angles(right_eye, EYES[1], max_angle=max_angle, frames=frames)
-    if not second.indexes["time"].equals(yaw.indexes["time"]):
-        return _outer_yaw(yaw, second, attrs)
-    np.negative(second.sel(angle="azimuth").values, out=yaw.values[:, 1])
-    return yaw
-
-
-def _outer_yaw(yaw, right, attrs):
-    """The eyes on two clocks: each keeps its times, NaN in the other's column."""
-    import xarray as xr
-
-    label = str(yaw["eye"].values[1])
-    right = -right.sel(angle="azimuth", drop=True).expand_dims(eye=[label], axis=1)
-    out = xr.concat([yaw.isel(eye=[0]), right], dim="eye", join="outer")
-    out.attrs = attrs
-    return out
-
-
-def explorer_series(
-    head,
-    left_eye,
-    right_eye,
-    *,
-    max_angle: float | None = None,
-    frames: HeadEyeFrames = EXAMPLE_FRAMES,
-) -> dict:
-    """The explorer's time series, for the questions notebook 06 asks.
-
-    ``"head yaw rate"`` (deg/s, in the head's axes), ``"gaze yaw"`` (deg,
-    both eyes, in the head's axes) and ``"gaze yaw rate"`` (deg/s, both
-    eyes, see :func:`rbm_nb.gaze.rates`); all positive to the left. The
-    vestibulo-ocular reflex shows as the eyes' rate opposite in sign to the
-    head's; saccades as spikes of several hundred deg/s in the eyes' rate.
-    Register the frames first (:func:`register_head_eye_frames`).
-    ``max_angle`` (degrees) flags impossible gaze, default
-    :data:`rbm_nb.gaze.OCULOMOTOR_RANGE`. The eye datasets give the
-    confidence of each sample (None: the frames' samples are all trusted);
-    ``frames`` names the registered frames.
-    """
-    if max_angle is None:
-        max_angle = gaze.OCULOMOTOR_RANGE
-    yaw = gaze_yaw(left_eye, right_eye, max_angle=max_angle, frames=frames)
-    rate = gaze.rates(yaw)
-    rate.attrs["colors"] = yaw.attrs["colors"]
-    rate.attrs["max_gap"] = yaw.attrs["max_gap"]
-    return {
-        "head yaw rate": head_yaw_rate(frames=frames),
-        "gaze yaw": yaw,
-        "gaze yaw rate": rate,
-    }
-
-
-def vor_gain(series: dict, *, max_rate: float = 60.0) -> dict:
-    """Least-squares gain of each eye's yaw rate against the head's.
-
-    Slow phases only: samples whose eye rate is above ``max_rate`` deg/s
-    (saccades) are left out. The vestibulo-ocular reflex gives a negative
-    gain, about -1 for a far target; a positive one means the eyes turn
-    with the head, which no healthy eye does while fixating.
-
-    Returns
-    -------
-    dict
-        Eye name -> gain.
-    """
-    head = series["head yaw rate"]
-    eyes = series["gaze yaw rate"]
-    t_head = _seconds(head["time"].values)
-    t_eye = _seconds(eyes["time"].values)
-    head_at_eye = np.interp(t_eye, t_head, np.nan_to_num(head.values))
-    out = {}
-    for eye in eyes["eye"].values:
-        rate = eyes.sel(eye=eye).values
-        ok = np.isfinite(rate) & (np.abs(rate) < max_rate)
-        h = head_at_eye[ok]
-        out[str(eye)] = float(np.dot(h, rate[ok]) / np.dot(h, h))
-    return out
-
-
-def guided_instants(series: dict, *, window: float = 2.0) -> dict:
-    """Instants worth a look in the explorer's series, found in the data.
-
-    ``"vor"``: the middle of the ``window``-second stretch where the head
-    turns fastest (mean absolute yaw rate) while both eyes have samples and
-    counter-rotate (a negative :func:`vor_gain` there). ``"saccade"``: the
-    fastest gaze shift both eyes make together (over 200 deg/s, same sign
-    within 20 ms: a real saccade is conjugate, a tracker glitch is in one
-    eye). Times are the series' own (datetime64 for the example data).
-    """
-    head = series["head yaw rate"]
-    eyes = series["gaze yaw rate"]
-    t_head, t_eye = _seconds(head["time"].values), _seconds(eyes["time"].values)
-    rates = eyes.transpose("time", "eye").values
-    head_at_eye = np.interp(t_eye, t_head, np.nan_to_num(head.values))
-    slow = np.isfinite(rates).all(axis=1) & (np.abs(rates) < 60.0).all(axis=1)
-    best, best_score = None, -np.inf
-    starts = np.arange(t_eye[0], t_eye[-1] - window, window / 4)
-    lo = np.searchsorted(t_eye, starts)
-    hi = np.searchsorted(t_eye, starts + window)
-    for a, b in zip(lo, hi, strict=True):
-        ok = slow[a:b]
-        if ok.sum() < 20:
-            continue
-        h = head_at_eye[a:b][ok]
-        gain = np.dot(h, rates[a:b][ok].mean(axis=1)) / max(np.dot(h, h), 1e-12)
-        score = np.abs(h).mean()
-        if gain < -0.3 and score > best_score:
-            # the row nearest the middle where both eyes have a sample
-            rows = a + np.flatnonzero(ok)
-            best, best_score = rows[np.argmin(np.abs(rows - (a + b) // 2))], score
-    both_fast = np.isfinite(rates).all(axis=1) & (np.abs(rates) > 200.0).all(axis=1)
-    both_fast &= np.sign(rates[:, 0]) == np.sign(rates[:, 1])
-    speed = np.where(both_fast, np.abs(rates).min(axis=1), -np.inf)
-    times = eyes["time"].values
-    out = {}
-    if best is not None:
-        out["vor"] = times[best]
-    if np.isfinite(speed).any():
-        out["saccade"] = times[int(np.argmax(speed))]
-    return out
-
-
-def _seconds(times) -> np.ndarray:
-    # float data seconds by the one time rule (epoch seconds for datetime64)
-    return np.asarray(epoch_seconds(np.asarray(times)), dtype=float)
-
-
 # the head model's parts, in the head's axes (x forward, y left, z up), from
 # the eyes' centre: a head of adult size (half-axes 10 x 7.8 x 11.5 cm) whose
 # front is just ahead of the eyeballs, and a nose below and between them
@@ -483,10 +129,58 @@ def eye_centres(
 ) -> dict:
     """Median centre of each eye in the head's axes (m), over its valid samples."""
     out = {}
+    buffer: list = []  # one (3, n) array for both eyes (fresh memory is slow)
     for eye in EYES:
-        translation, _ = lookup_transform(frames.eye(eye), head or frames.head)
-        out[eye] = np.nanmedian(np.atleast_2d(translation), axis=0)
+        kept = _kept_translations(frames.eye(eye), head or frames.head, buffer)
+        if kept is None:  # a chain that moves above the eye: the whole lookup
+            translation, _ = lookup_transform(frames.eye(eye), head or frames.head)
+            out[eye] = np.nanmedian(np.atleast_2d(translation), axis=0)
+        else:
+            # nanmedian's value: the median of the non-NaN values
+            out[eye] = np.array(
+                [np.median(row) if row.size else np.nan for row in kept]
+            )
     return out
+
+
+def _kept_translations(eye: str, into: str, buffer=None) -> np.ndarray | None:
+    """The translations (3, m) of the eye's kept samples in ``into``, or None.
+
+    A lookup composes whole transforms (every row's rotation too, and its
+    copies: ~0.5 s per eye at 3 h) where the centres need only the
+    translations of the samples that are not missing. When every frame
+    between the eye's parent and ``into`` is static, one kernel pass carries
+    the kept rows through those steps with the lookup's arithmetic (the same
+    values); else None. ``buffer`` (a list): the (3, n) array to write, kept
+    there for the next call.
+    """
+    steps = _chain.chain(registry.registry[eye], registry.registry[into])
+    first, inverse = steps[0] if steps else (None, True)
+    if first is None or inverse or first.track is None:
+        return None
+    rest = steps[1:]
+    if any(frame.track is not None for frame, _ in rest):
+        return None
+    samples = first.samples
+    n = len(samples.stored_t)
+    mask = samples.missing_rows
+    if mask is None:
+        mask = np.zeros(n, dtype=bool)
+    if buffer and buffer[0].shape[1] >= n:
+        out = buffer[0]
+    else:
+        out = np.empty((3, n))
+        if buffer is not None:
+            buffer[:] = [out]
+    m = _masked_rows.kept_translations(
+        kernel_alias(samples.stored_t),
+        kernel_alias(mask),
+        np.array([f.t.reshape(3) for f, _ in rest]).reshape(-1, 3),
+        np.array([f.rotation.reshape(4) for f, _ in rest]).reshape(-1, 4),
+        np.array([inv for _, inv in rest], dtype=bool),
+        out,
+    )
+    return out[:, :m]
 
 
 def explorer_scene(

@@ -36,8 +36,9 @@ from .._door import gaze as _door
 from .._engine import transform as _engine_transform
 from .._engine.time import sort_keys
 from .._engine.transform import Blocks
+from .._infra.frozen import kernel_alias
 from .._infra.time_index import dataarray_on
-from .._kernels import quaternion as _qk
+from .._kernels import gaze_rows as _gk
 from .._kernels._arrays import kernel_array
 from .frames import resolve_frame
 
@@ -54,9 +55,8 @@ __all__ = ["directions", "angles", "rates", "OCULOMOTOR_RANGE"]
 # head. An eye tracker's sample further out than this from the line-of-sight
 # axis of the eye's parent frame is a mis-detection, not an eye position.
 OCULOMOTOR_RANGE = 50.0
-# the eye frame's axis that is the line of sight (camera convention), as the
-# one row of vectors the rotation kernel takes
-_LINE_OF_SIGHT = np.array([[0.0, 0.0, 1.0]])
+# the eye frame's axis that is the line of sight (camera convention)
+_LINE_OF_SIGHT = np.array([0.0, 0.0, 1.0])
 
 
 def directions(
@@ -126,14 +126,20 @@ def directions(
     )
     times, valid = args.times, args.valid
     out = np.full((len(times), 3), np.nan)
-    if valid.any():
-        q = args.rotation[valid]
-        q = q / np.linalg.norm(q, axis=1, keepdims=True)
-        sight = _line_of_sight(q)
+    count = int(np.count_nonzero(valid))
+    if count:
+        # the valid rows' unit lines of sight in one pass (no copy of the
+        # rows); beyond max_angle from the parent's z axis (where the eye
+        # looks ahead) they are NaN
+        sight = np.empty((count, 3))
+        check = args.max_angle is not None
+        min_z = 0.0
         if args.max_angle is not None:
-            # the angle from the parent's z axis, where the eye looks ahead
-            possible = sight[:, 2] >= np.cos(np.radians(args.max_angle))
-            sight[~possible] = np.nan
+            min_z = float(np.cos(np.radians(args.max_angle)))
+        _gk.sight_rows(
+            _readable(args.rotation), np.ascontiguousarray(valid),
+            _LINE_OF_SIGHT, min_z, check, sight,
+        )  # fmt: skip
         out[valid] = _represent(sight, args.track, args.eye.parent, args.into)
     sampled = times
     if args.max_gap is not None:
@@ -181,23 +187,35 @@ def angles(
     """
     args = _door.angle_arguments(resolve_frame, directions, reference, forward, up)
     values, valid = args.values, args.valid
-    local = np.full(values.shape, np.nan)
-    if valid.any():
-        local[valid] = _represent(
-            values[valid], args.track, args.source, args.reference
-        )
+    local = values  # in the reference's axes already: read as they are
+    if args.track is not None:
+        local = np.full(values.shape, np.nan)
+        if valid.any():
+            local[valid] = _represent(
+                values[valid], args.track, args.source, args.reference
+            )
     (f_axis, f_sign), (u_axis, u_sign) = args.forward, args.up
     fwd = np.zeros(3)
     fwd[f_axis] = f_sign
     upv = np.zeros(3)
     upv[u_axis] = u_sign
     right = np.cross(fwd, upv)
-    x, y, z = local @ right, local @ fwd, local @ upv
-    azimuth = np.degrees(np.arctan2(x, y))
-    elevation = np.degrees(np.arctan2(z, np.hypot(x, y)))
+    # the components along right, forward and up in one pass; the arc
+    # tangents by numpy, in place (its own arctan2, not libm's)
+    xyz = np.empty((3, len(values)))
+    _gk.axis_components(
+        _readable(local), np.ascontiguousarray(valid), right, fwd, upv, xyz
+    )
+    elevation = np.hypot(xyz[0], xyz[1])
+    np.arctan2(xyz[2], elevation, out=elevation)
+    azimuth = np.arctan2(xyz[0], xyz[1], out=xyz[2])
+    out = np.empty((len(values), 2))
+    np.degrees(azimuth, out=out[:, 0])
+    np.degrees(elevation, out=out[:, 1])
+    del xyz, elevation
     return _on_times_of(
         directions,
-        np.column_stack([azimuth, elevation]),
+        out,
         ("angle", ["azimuth", "elevation"]),
         {
             "long_name": "Gaze angles",
@@ -236,10 +254,13 @@ def rates(angles: xr.DataArray, *, window: float = 0.02) -> xr.DataArray:
         or ``window`` is not positive.
     """
     args = _door.rate_arguments(angles, window)
-    values = args.values
-    out = np.full(values.shape, np.nan)
-    for k in range(values.shape[1]):
-        out[:, k] = _windowed_slope(args.t, values[:, k], args.window)
+    out = np.empty(args.values.shape)
+    half = args.window / 2
+    # (half the window, less a rounding error of the times)
+    min_span = args.window / 2 * (1 - 1e-9)
+    _gk.windowed_slopes(
+        kernel_array(args.t), _readable(args.values), half, min_span, out
+    )
     # a shallow copy: the result shares the angles' time index (a deep copy
     # would hold a second copy of every timestamp for as long as it lives)
     result = args.arr.copy(deep=False, data=out.reshape(args.arr.shape))
@@ -247,34 +268,17 @@ def rates(angles: xr.DataArray, *, window: float = 0.02) -> xr.DataArray:
     return result.transpose(*angles.dims)
 
 
-def _windowed_slope(t, y, window):
-    valid = np.flatnonzero(np.isfinite(y))
-    out = np.full(t.shape, np.nan)
-    if valid.size < 2:
-        return out
-    tv, yv = t[valid], y[valid]
-    first = np.searchsorted(tv, t - window / 2, side="left")
-    last = np.searchsorted(tv, t + window / 2, side="right") - 1
-    first = np.clip(first, 0, tv.size - 1)
-    last = np.clip(last, 0, tv.size - 1)
-    span = tv[last] - tv[first]
-    # (half the window, less a rounding error of the times)
-    ok = np.isfinite(y) & (last > first) & (span >= window / 2 * (1 - 1e-9))
-    out[ok] = (yv[last[ok]] - yv[first[ok]]) / span[ok]
-    return out
-
-
 # -- helpers ----------------------------------------------------------------
 
 
-def _line_of_sight(q: np.ndarray) -> np.ndarray:
-    """The eye's z axis rotated by unit quaternions ``q`` (m, 4): (m, 3).
-
-    The kernel :func:`rbm_nb.rotate_vectors` runs for ``one_to_one=False``,
-    called directly: ``q`` is the door's checked rotation, normalised here.
-    """
-    out = _qk.rotate_vectors_outer(kernel_array(q), _LINE_OF_SIGHT)
-    return out.reshape(len(q), 3)
+def _readable(arr: np.ndarray) -> np.ndarray:
+    """``arr`` for a kernel that only reads it: no copy of a read-only
+    C-contiguous float64 array (a frame's, a DataArray's), else as
+    :func:`kernel_array` makes it."""
+    arr = np.asarray(arr)
+    if arr.dtype == np.float64 and arr.flags.c_contiguous:
+        return kernel_alias(arr)
+    return kernel_array(arr)
 
 
 def _represent(vectors, track, outof, into) -> np.ndarray:

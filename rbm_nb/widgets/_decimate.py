@@ -22,6 +22,10 @@ from collections.abc import Callable
 
 import numpy as np
 
+from .._infra.frozen import kernel_alias
+from .._kernels import m4 as _m4
+from .._kernels._arrays import kernel_array
+
 #: Median sample intervals a pause must exceed to be drawn as a gap.
 GAP_FACTOR = 10.0
 
@@ -109,6 +113,15 @@ def m4_rows(
 
 def _extremes(y: np.ndarray, starts: np.ndarray) -> list[np.ndarray]:
     """Per column (rows from each of ``starts``): each component's min, max and first missing row."""
+    values = y if y.dtype == np.float64 and y.flags.c_contiguous else kernel_array(y)
+    rows = _m4.column_extremes(
+        kernel_alias(values), np.ascontiguousarray(starts, dtype=np.int64)
+    )
+    return [rows[rows >= 0]]
+
+
+def _extremes_by_numpy(y: np.ndarray, starts: np.ndarray) -> list[np.ndarray]:
+    """:func:`_extremes` by numpy (the kernel's twin, for its tests)."""
     n, k = y.shape
     counts = np.diff(np.r_[starts, n])
     index = np.arange(n)

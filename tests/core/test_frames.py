@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import rbm_nb as rbm
-from rbm_nb.core import frames
+from rbm_nb.core import frame_samples, frames
 
 
 @pytest.fixture
@@ -356,14 +356,16 @@ def test_one_pass_registration_stores_what_the_checks_one_at_a_time_do(
     t, q, ts = _recording(n, n)
     t = t if with_translation else None
     taken = []
-    one_pass = frames.moving_samples
+    one_pass = frame_samples.moving_samples
     monkeypatch.setattr(
-        frames, "moving_samples", lambda *a: taken.append(one_pass(*a)) or taken[-1]
+        frame_samples,
+        "moving_samples",
+        lambda *a: taken.append(one_pass(*a)) or taken[-1],
     )
     fused = rbm.ReferenceFrame("f", parent=rbm.ReferenceFrame("w"), translation=t,
                                rotation=q, timestamps=ts)  # fmt: skip
     assert len(taken) == 1 and taken[0] is not None  # the one-pass route ran
-    monkeypatch.setattr(frames, "moving_samples", lambda t, q: None)
+    monkeypatch.setattr(frame_samples, "moving_samples", lambda t, q: None)
     stepwise = rbm.ReferenceFrame("f", parent=rbm.ReferenceFrame("w"), translation=t,
                                   rotation=q, timestamps=ts)  # fmt: skip
     for name in ("t", "r", "rotation"):

@@ -459,6 +459,9 @@ def test_the_kernel_keeps_no_copy_of_a_long_series():
     """Values and stamps are the caller's arrays; what stays is the overview."""
     import tracemalloc
 
+    # the decimation kernel's code is loaded once per process (numba), not
+    # kept per series: loaded before measuring
+    TimeSeries({"warm": _recording(0.01)}).close()
     da = _recording(0.5)
     tracemalloc.start()
     before = tracemalloc.get_traced_memory()[0]

@@ -30,12 +30,19 @@ __all__ = ["split_worst_first"]
 B1 = "boolean[::1]"
 
 
+#: points whose deviation is computed at a time: the scratch stays in the
+#: cache (a long path's first splits read each point once from memory
+#: instead of writing and reading a copy of the whole path)
+CHUNK = 2048
+
+
 @helper
 def _deviation(points, a, b, offsets, alongs):
     """(distance, index) of the farthest of ``points[a+1:b]`` from segment a-b.
 
-    ``offsets`` (m, 3) and ``alongs`` (m,): scratch, so that a split
-    allocates nothing.
+    ``offsets`` (CHUNK, 3) and ``alongs`` (CHUNK,): scratch, so that a split
+    allocates nothing. The points are taken :data:`CHUNK` at a time: BLAS
+    computes each row's dot product on its own (the same bits in any chunk).
     """
     if b - a < 2:
         return 0.0, -1
@@ -43,37 +50,37 @@ def _deviation(points, a, b, offsets, alongs):
     start = points[a]
     direction = points[b] - start
     length2 = np.dot(direction, direction)
-    offset = offsets[:k]
-    for i in range(k):
-        for c in range(3):
-            offset[i, c] = points[a + 1 + i, c] - start[c]
-    if length2 > 0:
-        along = alongs[:k]
-        if k == 1:  # numpy's matmul takes a (1, 3) @ (3,) as ddot
-            along[0] = np.dot(offset[0], direction)
-        else:
-            np.dot(offset, direction, along)
-        for i in range(k):
-            t = along[i] / length2
-            # np.clip: a NaN stays NaN
-            if t < 0.0:
-                t = 0.0
-            elif t > 1.0:
-                t = 1.0
-            for c in range(3):
-                offset[i, c] = offset[i, c] - t * direction[c]
     best = 0.0
     at = 0
-    for i in range(k):
-        x, y, z = offset[i, 0], offset[i, 1], offset[i, 2]
-        d2 = (x * x + z * z) + y * y
-        if d2 != d2:  # np.argmax: the first NaN wins
-            best = d2
-            at = i
-            break
-        if i == 0 or d2 > best:
-            best = d2
-            at = i
+    for lo in range(0, k, CHUNK):
+        m = min(CHUNK, k - lo)
+        offset = offsets[:m]
+        for i in range(m):
+            for c in range(3):
+                offset[i, c] = points[a + 1 + lo + i, c] - start[c]
+        if length2 > 0:
+            along = alongs[:m]
+            if k == 1:  # numpy's matmul takes a (1, 3) @ (3,) as ddot
+                along[0] = np.dot(offset[0], direction)
+            else:
+                np.dot(offset, direction, along)
+            for i in range(m):
+                t = along[i] / length2
+                # np.clip: a NaN stays NaN
+                if t < 0.0:
+                    t = 0.0
+                elif t > 1.0:
+                    t = 1.0
+                for c in range(3):
+                    offset[i, c] = offset[i, c] - t * direction[c]
+        for i in range(m):
+            x, y, z = offset[i, 0], offset[i, 1], offset[i, 2]
+            d2 = (x * x + z * z) + y * y
+            if d2 != d2:  # np.argmax: the first NaN wins
+                return np.sqrt(d2), a + 1 + lo + i
+            if (lo == 0 and i == 0) or d2 > best:
+                best = d2
+                at = lo + i
     return np.sqrt(best), a + 1 + at
 
 
@@ -142,8 +149,8 @@ def split_worst_first(points, run_firsts, run_lasts, tolerance, max_points, keep
     firsts = np.empty(size, dtype=np.int64)
     lasts = np.empty(size, dtype=np.int64)
     spare = m
-    offsets = np.empty((m, 3))
-    alongs = np.empty(m)
+    offsets = np.empty((min(m, CHUNK), 3))
+    alongs = np.empty(min(m, CHUNK))
     n = 0
     for r in range(run_firsts.shape[0]):
         first, last = run_firsts[r], run_lasts[r]

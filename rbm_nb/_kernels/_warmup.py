@@ -106,6 +106,7 @@ EXPLORER: tuple[str, ...] = (
     "conversions.quaternion_from_matrix",
     # the scene's head path, simplified when the dashboard is built
     "simplify.split_worst_first",
+    "simplify.cell_pass",
     # the scene's looked-up tracks: bounds, coarse copy, the path's blocks
     "one_mover.mover_summary",
     "one_mover.mover_poses",

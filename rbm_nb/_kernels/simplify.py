@@ -22,9 +22,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import F2, I1, F, I, helper, kernel
+from ._jit import F1, F2, I1, F, I, helper, kernel
 
-__all__ = ["split_worst_first"]
+__all__ = ["cell_pass", "split_worst_first"]
 
 # the kept-point flags, written in place
 B1 = "boolean[::1]"
@@ -190,3 +190,66 @@ def split_worst_first(points, run_firsts, run_lasts, tolerance, max_points, keep
                 _sift_down(errors, ats, firsts, lasts, 0, n, spare)
                 n += 1
     return -errors[0] if n > 0 else 0.0
+
+
+@kernel(F2, F, F1)
+def cell_pass(block, cell, state):
+    """The grid-cell pass of ``scene.decimate.simplify_path_blocks`` over one
+    block: (kept samples (k, 3), whether missing rows follow each (k,)).
+
+    A sample in the grid cell of the sample before it goes, unless missing
+    rows come before or after it (``cell`` <= 0: none goes). The last
+    sample seen is held back until the next one says whether a gap follows
+    it; ``state`` carries it from block to block, updated in place:
+    ``[has_last, x, y, z, last_fresh, gap_pending, dropped]`` (flags 0/1).
+    The cells are ``floor(p / cell)`` as numpy computes them.
+    """
+    n = block.shape[0]
+    out = np.empty((n + 1, 3))
+    out_gaps = np.empty(n + 1, dtype=np.bool_)
+    k = 0
+    has_last = state[0] != 0.0
+    lx, ly, lz = state[1], state[2], state[3]
+    last_fresh = state[4] != 0.0
+    gap = state[5] != 0.0
+    dropped = state[6] != 0.0
+    for i in range(n):
+        x, y, z = block[i, 0], block[i, 1], block[i, 2]
+        if x != x or y != y or z != z:
+            if has_last:
+                gap = True
+            continue
+        if not has_last:
+            has_last = True
+            lx, ly, lz = x, y, z
+            last_fresh = True
+            gap = False
+            continue
+        fresh = True
+        if cell > 0:
+            fresh = (
+                gap
+                or np.floor(x / cell) != np.floor(lx / cell)
+                or np.floor(y / cell) != np.floor(ly / cell)
+                or np.floor(z / cell) != np.floor(lz / cell)
+            )
+        if last_fresh or gap:  # a sample next to missing rows stays
+            out[k, 0] = lx
+            out[k, 1] = ly
+            out[k, 2] = lz
+            out_gaps[k] = gap
+            k += 1
+        else:
+            dropped = True
+        lx, ly, lz = x, y, z
+        last_fresh = fresh
+        gap = False
+    state[0] = 1.0 if has_last else 0.0
+    state[1] = lx
+    state[2] = ly
+    state[3] = lz
+    state[4] = 1.0 if last_fresh else 0.0
+    state[5] = 1.0 if gap else 0.0
+    state[6] = 1.0 if dropped else 0.0
+    # copies: the block's scratch is not kept with the few samples that stay
+    return out[:k].copy(), out_gaps[:k].copy()

@@ -9,8 +9,12 @@ the playhead, the coarse copy, one pose). At the frames' own timestamps the
 engine hands the stored samples back (slices, no interpolation), so a window
 is bit for bit the rows of a whole-recording lookup.
 
-Whole-recording summaries (bounds, the path's positions) are made by
-:meth:`LookedUpTrack.blocks`: one pass in blocks of :data:`BLOCK_ROWS`.
+Whole-recording passes (bounds, the coarse copy, the path's positions) of
+a chain with one moving frame (the explorer's: head -> tracker -> world,
+eye -> scene camera -> head) compose that frame's stored rows in one kernel
+pass (:mod:`rbm_nb.scene.one_mover`, the engine's bits); other chains are
+looked up by the engine in blocks of :data:`BLOCK_ROWS`. Chunks around the
+playhead are the engine's windows either way.
 """
 
 from __future__ import annotations

@@ -109,6 +109,11 @@ EXPLORER: tuple[str, ...] = (
     "conversions.quaternion_from_matrix",
     # the scene's head path, simplified when the dashboard is built
     "simplify.split_worst_first",
+    "simplify.cell_pass",
+    # the scene's looked-up tracks: bounds, coarse copy, the path's blocks
+    "one_mover.mover_summary",
+    "one_mover.mover_poses",
+    "one_mover.mover_translations",
 )
 
 # Seconds one process takes to compile the kernel from an empty cache on this

@@ -22,20 +22,27 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import F2, I1, F, I, helper, kernel
+from ._jit import F1, F2, I1, F, I, helper, kernel
 
-__all__ = ["split_worst_first"]
+__all__ = ["cell_pass", "split_worst_first"]
 
 # the kept-point flags, written in place
 B1 = "boolean[::1]"
+
+
+#: points whose deviation is computed at a time: the scratch stays in the
+#: cache (a long path's first splits read each point once from memory
+#: instead of writing and reading a copy of the whole path)
+CHUNK = 2048
 
 
 @helper
 def _deviation(points, a, b, offsets, alongs):
     """(distance, index) of the farthest of ``points[a+1:b]`` from segment a-b.
 
-    ``offsets`` (m, 3) and ``alongs`` (m,): scratch, so that a split
-    allocates nothing.
+    ``offsets`` (CHUNK, 3) and ``alongs`` (CHUNK,): scratch, so that a split
+    allocates nothing. The points are taken :data:`CHUNK` at a time: BLAS
+    computes each row's dot product on its own (the same bits in any chunk).
     """
     if b - a < 2:
         return 0.0, -1
@@ -43,37 +50,37 @@ def _deviation(points, a, b, offsets, alongs):
     start = points[a]
     direction = points[b] - start
     length2 = np.dot(direction, direction)
-    offset = offsets[:k]
-    for i in range(k):
-        for c in range(3):
-            offset[i, c] = points[a + 1 + i, c] - start[c]
-    if length2 > 0:
-        along = alongs[:k]
-        if k == 1:  # numpy's matmul takes a (1, 3) @ (3,) as ddot
-            along[0] = np.dot(offset[0], direction)
-        else:
-            np.dot(offset, direction, along)
-        for i in range(k):
-            t = along[i] / length2
-            # np.clip: a NaN stays NaN
-            if t < 0.0:
-                t = 0.0
-            elif t > 1.0:
-                t = 1.0
-            for c in range(3):
-                offset[i, c] = offset[i, c] - t * direction[c]
     best = 0.0
     at = 0
-    for i in range(k):
-        x, y, z = offset[i, 0], offset[i, 1], offset[i, 2]
-        d2 = (x * x + z * z) + y * y
-        if d2 != d2:  # np.argmax: the first NaN wins
-            best = d2
-            at = i
-            break
-        if i == 0 or d2 > best:
-            best = d2
-            at = i
+    for lo in range(0, k, CHUNK):
+        m = min(CHUNK, k - lo)
+        offset = offsets[:m]
+        for i in range(m):
+            for c in range(3):
+                offset[i, c] = points[a + 1 + lo + i, c] - start[c]
+        if length2 > 0:
+            along = alongs[:m]
+            if k == 1:  # numpy's matmul takes a (1, 3) @ (3,) as ddot
+                along[0] = np.dot(offset[0], direction)
+            else:
+                np.dot(offset, direction, along)
+            for i in range(m):
+                t = along[i] / length2
+                # np.clip: a NaN stays NaN
+                if t < 0.0:
+                    t = 0.0
+                elif t > 1.0:
+                    t = 1.0
+                for c in range(3):
+                    offset[i, c] = offset[i, c] - t * direction[c]
+        for i in range(m):
+            x, y, z = offset[i, 0], offset[i, 1], offset[i, 2]
+            d2 = (x * x + z * z) + y * y
+            if d2 != d2:  # np.argmax: the first NaN wins
+                return np.sqrt(d2), a + 1 + lo + i
+            if (lo == 0 and i == 0) or d2 > best:
+                best = d2
+                at = lo + i
     return np.sqrt(best), a + 1 + at
 
 
@@ -142,8 +149,8 @@ def split_worst_first(points, run_firsts, run_lasts, tolerance, max_points, keep
     firsts = np.empty(size, dtype=np.int64)
     lasts = np.empty(size, dtype=np.int64)
     spare = m
-    offsets = np.empty((m, 3))
-    alongs = np.empty(m)
+    offsets = np.empty((min(m, CHUNK), 3))
+    alongs = np.empty(min(m, CHUNK))
     n = 0
     for r in range(run_firsts.shape[0]):
         first, last = run_firsts[r], run_lasts[r]
@@ -183,3 +190,66 @@ def split_worst_first(points, run_firsts, run_lasts, tolerance, max_points, keep
                 _sift_down(errors, ats, firsts, lasts, 0, n, spare)
                 n += 1
     return -errors[0] if n > 0 else 0.0
+
+
+@kernel(F2, F, F1)
+def cell_pass(block, cell, state):
+    """The grid-cell pass of ``scene.decimate.simplify_path_blocks`` over one
+    block: (kept samples (k, 3), whether missing rows follow each (k,)).
+
+    A sample in the grid cell of the sample before it goes, unless missing
+    rows come before or after it (``cell`` <= 0: none goes). The last
+    sample seen is held back until the next one says whether a gap follows
+    it; ``state`` carries it from block to block, updated in place:
+    ``[has_last, x, y, z, last_fresh, gap_pending, dropped]`` (flags 0/1).
+    The cells are ``floor(p / cell)`` as numpy computes them.
+    """
+    n = block.shape[0]
+    out = np.empty((n + 1, 3))
+    out_gaps = np.empty(n + 1, dtype=np.bool_)
+    k = 0
+    has_last = state[0] != 0.0
+    lx, ly, lz = state[1], state[2], state[3]
+    last_fresh = state[4] != 0.0
+    gap = state[5] != 0.0
+    dropped = state[6] != 0.0
+    for i in range(n):
+        x, y, z = block[i, 0], block[i, 1], block[i, 2]
+        if x != x or y != y or z != z:
+            if has_last:
+                gap = True
+            continue
+        if not has_last:
+            has_last = True
+            lx, ly, lz = x, y, z
+            last_fresh = True
+            gap = False
+            continue
+        fresh = True
+        if cell > 0:
+            fresh = (
+                gap
+                or np.floor(x / cell) != np.floor(lx / cell)
+                or np.floor(y / cell) != np.floor(ly / cell)
+                or np.floor(z / cell) != np.floor(lz / cell)
+            )
+        if last_fresh or gap:  # a sample next to missing rows stays
+            out[k, 0] = lx
+            out[k, 1] = ly
+            out[k, 2] = lz
+            out_gaps[k] = gap
+            k += 1
+        else:
+            dropped = True
+        lx, ly, lz = x, y, z
+        last_fresh = fresh
+        gap = False
+    state[0] = 1.0 if has_last else 0.0
+    state[1] = lx
+    state[2] = ly
+    state[3] = lz
+    state[4] = 1.0 if last_fresh else 0.0
+    state[5] = 1.0 if gap else 0.0
+    state[6] = 1.0 if dropped else 0.0
+    # copies: the block's scratch is not kept with the few samples that stay
+    return out[:k].copy(), out_gaps[:k].copy()

@@ -9,8 +9,12 @@ the playhead, the coarse copy, one pose). At the frames' own timestamps the
 engine hands the stored samples back (slices, no interpolation), so a window
 is bit for bit the rows of a whole-recording lookup.
 
-Whole-recording summaries (bounds, the path's positions) are made by
-:meth:`LookedUpTrack.blocks`: one pass in blocks of :data:`BLOCK_ROWS`.
+Whole-recording passes (bounds, the coarse copy, the path's positions) of
+a chain with one moving frame (the explorer's: head -> tracker -> world,
+eye -> scene camera -> head) compose that frame's stored rows in one kernel
+pass (:mod:`rbm_nb.scene.one_mover`, the engine's bits); other chains are
+looked up by the engine in blocks of :data:`BLOCK_ROWS`. Chunks around the
+playhead are the engine's windows either way.
 """
 
 from __future__ import annotations
@@ -24,11 +28,16 @@ import numpy as np
 from .._door import coverage as _coverage
 from .._engine import chain as _chain
 from .._engine.time import TimeBase, check_compatible
+from . import one_mover as _one_mover
 from .commands import pose_matrix
 from .timekeys import at_or_before
 
 #: rows looked up at once by a whole-recording pass (~0.25 MB of float64 poses)
 BLOCK_ROWS = 1 << 12
+#: rows of a whole-recording pass of a chain with one moving frame, composed
+#: by one kernel call (:mod:`rbm_nb.scene.one_mover`; ~3.7 MB of poses): a
+#: few dozen calls per hour of recording instead of hundreds
+MOVER_BLOCK_ROWS = 1 << 16
 #: picked rows this close (or closer) are looked up in one window: one call of
 #: the engine costs about as much as looking up a few thousand rows
 JOIN_ROWS = 2048
@@ -59,6 +68,10 @@ class LookedUpTrack:
         # the chain's timestamps: a Track of views of a frame's own times
         self._times = target.track
         self._source = target.source
+        # one moving frame looked up at its own samples: whole-recording
+        # passes (bounds, coarse copy, a path's blocks) compose its stored
+        # rows in one kernel pass, the same bits as the engine's windows
+        self._mover = _one_mover.plan(self._steps, self._times)
         self.kind = self._times.kind
         self._ns = self._times.is_datetime
         # the coarse copy's rows and samples (gathered by the bounds' pass)
@@ -82,8 +95,9 @@ class LookedUpTrack:
         values = self._times.values
         base = TimeBase.of(values[:1]) if self._ns else None
         found = []
-        for lo in range(0, len(key) - 1, BLOCK_ROWS):
-            hi = min(lo + BLOCK_ROWS + 1, len(key))
+        # (element by element: the block's length changes no row found)
+        for lo in range(0, len(key) - 1, MOVER_BLOCK_ROWS):
+            hi = min(lo + MOVER_BLOCK_ROWS + 1, len(key))
             chunk = values[lo:hi]
             seconds = (
                 base.seconds(chunk) if base is not None else chunk.astype(np.float64)
@@ -179,8 +193,18 @@ class LookedUpTrack:
         r[missing] = np.nan
         return t, r
 
+    def _mover_translations(self, lo: int, hi: int) -> tuple[np.ndarray, None]:
+        """:meth:`_samples`' translations, composed by the one-mover kernel
+        (same bits), and no rotations."""
+        assert self._mover is not None
+        return self._mover.translations(lo, hi), None
+
     def window(self, lo: int, hi: int):
         """Keys, translation, rotation and scale (None) of rows ``lo:hi``."""
+        return self._window(lo, hi, self._samples)
+
+    def _window(self, lo: int, hi: int, look_up):
+        """:meth:`window`, the samples looked up by ``look_up(first, last)``."""
         lo, hi = max(lo, 0), min(hi, len(self))
         hi = max(hi, lo)
         first_hidden = int(np.searchsorted(self._hidden_rows_at, lo, side="left"))
@@ -188,7 +212,7 @@ class LookedUpTrack:
         if first_hidden == last_hidden and hi > lo:
             # no hidden row inside: the samples themselves, one lookup
             first = lo - first_hidden
-            t, r = self._samples(first, first + hi - lo)
+            t, r = look_up(first, first + hi - lo)
             return self._times.key[first : first + hi - lo], t, r, None
         rows = np.arange(lo, hi)
         hidden, index = self._split(rows)
@@ -198,8 +222,10 @@ class LookedUpTrack:
         r = np.full((hi - lo, 4), np.nan)
         if len(samples):
             first, last = int(samples[0]), int(samples[-1]) + 1
-            st, sr = self._samples(first, last)
-            t[~hidden], r[~hidden] = st, sr
+            st, sr = look_up(first, last)
+            t[~hidden] = st
+            if sr is not None:  # (a path's blocks: translations alone)
+                r[~hidden] = sr
             keys[~hidden] = self._times.key[first:last]
         keys[hidden] = self._hidden_keys[index[hidden]]
         return keys, t, r, None
@@ -221,6 +247,8 @@ class LookedUpTrack:
         return self._gather(rows)
 
     def _gather(self, rows: np.ndarray):
+        if self._mover is not None:
+            return self._gather_composed(rows)
         keys = np.empty(len(rows), dtype=self._times.key.dtype)
         t = np.empty((len(rows), 3))
         r = np.empty((len(rows), 4))
@@ -240,6 +268,18 @@ class LookedUpTrack:
             i = j
         return keys, t, r, None
 
+    def _gather_composed(self, rows: np.ndarray):
+        """:meth:`_gather` by the one-mover kernel: one call at the rows' own
+        samples (the engine's values to the bit, hidden rows NaN)."""
+        assert self._mover is not None
+        hidden, index = self._split(rows)
+        t = np.full((len(rows), 3), np.nan)
+        r = np.full((len(rows), 4), np.nan)
+        shown = ~hidden
+        if shown.any():
+            t[shown], r[shown] = self._mover.poses(index[shown])
+        return self.keys_of(rows), t, r, None
+
     def matrix(self, index: int = 0) -> np.ndarray:
         _, t, r, _ = self.take([index])
         return pose_matrix(t[0], r[0])
@@ -249,7 +289,15 @@ class LookedUpTrack:
         return bool(np.isnan(t[0]).any())
 
     def blocks(self) -> Iterator[np.ndarray]:
-        """The translations of every row, in blocks of at most :data:`BLOCK_ROWS`."""
+        """The translations of every row, in consecutive blocks (of
+        :data:`BLOCK_ROWS`, or :data:`MOVER_BLOCK_ROWS` composed by the
+        one-mover kernel)."""
+        if self._mover is not None:
+            for lo in range(0, len(self), MOVER_BLOCK_ROWS):
+                yield self._window(lo, lo + MOVER_BLOCK_ROWS, self._mover_translations)[
+                    1
+                ]
+            return
         for lo in range(0, len(self), BLOCK_ROWS):
             yield self.window(lo, lo + BLOCK_ROWS)[1]
 
@@ -274,8 +322,22 @@ class LookedUpTrack:
 
     @functools.cached_property
     def bounds(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, int] | None:
-        """As :attr:`PoseTrack.bounds`, from one blockwise pass, which also
-        gathers the coarse copy (:data:`COARSE_SAMPLES` rows, evenly spaced)."""
+        """As :attr:`PoseTrack.bounds`, exact (the mean too, bit for bit: the
+        camera's target), and the coarse copy (:data:`COARSE_SAMPLES` rows,
+        evenly spaced), kept for the snapshot.
+
+        A chain with one moving frame: one kernel pass over its stored rows
+        (:mod:`rbm_nb.scene.one_mover`) and one call at the coarse rows.
+        Otherwise one blockwise pass of the engine's lookups, gathering the
+        coarse rows on the way."""
+        if self._mover is not None:
+            picks = even_rows(len(self), COARSE_SAMPLES)
+            self._coarse = (picks, self._gather_composed(picks))
+            low, high, total, count = self._mover.summary()
+            if count == 0:
+                return None
+            # (a sum in row order from 0.0, as the blockwise pass adds them)
+            return low, high, total / count, count
         low = np.full(3, np.nan)
         high = np.full(3, np.nan)
         total = np.zeros((1, 3))

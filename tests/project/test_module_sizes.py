@@ -23,8 +23,6 @@ MAX_LINES = 700
 ALLOWED = {
     # storage (Samples, _samples, _masked_samples, from_dataset) being split
     "core/frames.py": "being split (issue 35)",
-    # the explorer's parts being split out
-    "app/explorer.py": "being split (issue 35)",
 }
 
 

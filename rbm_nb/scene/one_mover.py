@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._engine import chain as _chain
+from .._infra.frozen import kernel_alias
 from .._kernels._arrays import kernel_array
 from .._kernels.one_mover import mover_poses, mover_summary, mover_translations
 
@@ -110,7 +111,9 @@ class OneMover:
 def _missing(rows: np.ndarray | None, index) -> np.ndarray:
     if rows is None:
         return _NO_ROWS
-    return np.ascontiguousarray(rows[index], dtype=bool)
+    # a frame keeps the caller's mask frozen: the kernels read it through a
+    # writeable-flagged alias (their one signature), never a copy
+    return kernel_alias(np.ascontiguousarray(rows[index]))
 
 
 def plan(steps, times) -> OneMover | None:

@@ -756,7 +756,13 @@ def test_explorer_notebook_runs_in_the_binder_jupyter_server(binder, jupyter, ti
 @pytest.mark.timeout(900)  # builds a venv with pip (about 70 s here)
 def test_warm_up_leaves_the_registry_as_it_was():
     import rbm_nb as rbm
-    from rbm_nb._kernels._warmup import kernel_dispatchers, warm_up
+    from rbm_nb._kernels._warmup import (
+        declared_kernels,
+        kernel_dispatchers,
+        key,
+        ready,
+        warm_up,
+    )
 
     rbm.register_frame("world")
     rbm.register_frame("head", parent="world", translation=(0.0, 0.0, 1.7))
@@ -766,7 +772,10 @@ def test_warm_up_leaves_the_registry_as_it_was():
     assert all(rbm.registry[name] is frame for name, frame in before.items())
     dispatchers = kernel_dispatchers()
     assert stats.kernels == len(dispatchers) > 0
-    # every kernel module is reached by some public path of the warm-up
-    modules = {d.py_func.__module__ for d in dispatchers}
-    reached = {d.py_func.__module__ for d in dispatchers if d.overloads}
-    assert reached == modules, f"the warm-up reaches no kernel of {modules - reached}"
+    # every declared signature of every kernel module is in the cache after
+    # it: compiled here or by an earlier process (the account says which; a
+    # signature already there is not loaded into this process, so what this
+    # process holds depends on the tests that ran before)
+    assert stats.compiled + stats.loaded == stats.kernels
+    missing = {k.name for k in declared_kernels() if key(k) not in ready()}
+    assert not missing, f"the warm-up left these signatures out: {sorted(missing)}"

@@ -36,7 +36,13 @@ templates_path = ["_templates"]
 autosummary_generate = True
 autosummary_ignore_module_all = False  # a module's __all__ says what is public
 autodoc_typehints = "none"  # numpydoc's Parameters sections carry the types
-autodoc_default_options = {"members": True, "show-inheritance": True}
+# inherited members too: ReferenceFrame's and Transform's methods are in base
+# classes (core.frame_*, core.pose_methods); the skip below keeps rbm_nb's own
+autodoc_default_options = {
+    "members": True,
+    "show-inheritance": True,
+    "inherited-members": True,
+}
 numpydoc_show_class_members = False  # autosummary lists them
 numpydoc_class_members_toctree = False
 numpydoc_xref_param_type = False
@@ -88,8 +94,10 @@ def _skip_foreign_members(app, what, name, obj, skip, options):
     (matplotlib, for one, writes a ``set`` method into every Artist subclass
     whose docstring uses matplotlib's private Sphinx roles.)
     """
-    module = getattr(obj, "__module__", None)
-    if what == "class" and module and not module.startswith("rbm_nb"):
+    # where the member is defined: a property's getter, a builtin's class
+    defined = getattr(obj, "fget", None) or getattr(obj, "__objclass__", None) or obj
+    module = getattr(defined, "__module__", None)
+    if what in ("class", "exception") and module and not module.startswith("rbm_nb"):
         return True
     return None
 

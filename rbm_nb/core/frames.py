@@ -10,37 +10,34 @@ them; a frame that changes (parent, name, ``discrete``, ``max_gap``) makes a
 new value for itself and the frames below it.
 
 This module is the one place where frame names are resolved
-(:func:`resolve_frame`); the methods here resolve their frame arguments and
+(:func:`resolve_frame`); the methods resolve their frame arguments and
 forward to the engine (:mod:`rbm_nb._engine`), which reads the frames'
 values, keys its caches by them, and never imports this module.
+``ReferenceFrame``'s methods come from its base classes too, one job each:
+:class:`~rbm_nb.core.frame_node.FrameNode` (walking the tree),
+:class:`~rbm_nb.core.frame_constructors.FrameConstructors` (``from_dataset``
+and the other classmethods) and
+:class:`~rbm_nb.core.frame_transforms.FrameTransforms` (lookups and
+transforms, resolving names through ``ReferenceFrame._resolve``).
 """
 
 from __future__ import annotations
 
 import difflib
 import unicodedata
-import warnings
 from collections.abc import Callable, Iterator, MutableMapping
 from typing import Any, TypeAlias
 
 import numpy as np
 
-from .._door import coverage as _coverage
 from .._door import frame_paths as _frame_paths
-from .._door import inputs as _inputs
-from .._door import lookups as _lookups
-from .._door.series import velocity_options
-from .._door.unpack import ArrayInput, float_array
-from .._door.validation import (
-    check_what,
-)
-from .._door.xarray import dataarray_coordinate, dataset_variable
+from .._door.unpack import ArrayInput
 from .._engine import chain as _chain
-from .._engine import transform as _transform
-from .._engine import twist as _twist
 from .._engine.frame_data import FrameData, Samples
-from .conversions import quaternion_from_matrix
+from .frame_constructors import FrameConstructors
+from .frame_node import FrameNode
 from .frame_samples import _check_discrete, _checked_max_gap, _samples
+from .frame_transforms import FrameTransforms
 
 __all__ = [
     "ReferenceFrame",
@@ -370,7 +367,7 @@ def _tree_lines(frame: ReferenceFrame, prefix: str = "", branch: str = ""):
 # ---------------------------------------------------------------------------
 
 
-class ReferenceFrame:
+class ReferenceFrame(FrameNode, FrameConstructors, FrameTransforms):
     """A three-dimensional reference frame, static or moving.
 
     Parameters
@@ -574,26 +571,6 @@ class ReferenceFrame:
             parent._children.append(self)
         self._remake()  # the chains through this frame changed
 
-    @property
-    def children(self) -> tuple:
-        """The frames whose parent this is, in order of attachment."""
-        return tuple(self._children)
-
-    def _path_to_root(self) -> list[ReferenceFrame]:
-        path = []
-        node: ReferenceFrame | None = self
-        while node is not None:
-            path.append(node)
-            node = node._parent
-        return path
-
-    def iter_path_reverse(self) -> Any:
-        """Iterate from this frame up to the root (inclusive)."""
-        node: ReferenceFrame | None = self
-        while node is not None:
-            yield node
-            node = node._parent
-
     def frames_between(
         self,
         to_frame: FrameLike,
@@ -612,184 +589,13 @@ class ReferenceFrame:
             include_to_frame=include_to_frame,
         )
 
-    @property
-    def path(self) -> tuple:
-        """The frames from the root down to this one."""
-        return tuple(reversed(self._path_to_root()))
-
-    @property
-    def ancestors(self) -> tuple:
-        """The frames from the root down to the parent."""
-        return self.path[:-1]
-
-    @property
-    def root(self) -> ReferenceFrame:
-        """The root of this frame's tree."""
-        return self._path_to_root()[-1]
-
-    @property
-    def depth(self) -> int:
-        """Number of edges between this frame and the root."""
-        return len(self._path_to_root()) - 1
-
-    @property
-    def descendants(self) -> tuple:
-        """Every frame below this one, depth first."""
-        out = []
-        stack = list(reversed(self._children))
-        while stack:
-            node = stack.pop()
-            out.append(node)
-            stack.extend(reversed(node._children))
-        return tuple(out)
-
-    @property
-    def height(self) -> int:
-        """Number of edges on the longest path down to a leaf."""
-        if not self._children:
-            return 0
-        return 1 + max(child.height for child in self._children)
-
-    @property
-    def is_root(self) -> bool:
-        return self._parent is None
-
-    @property
-    def is_leaf(self) -> bool:
-        return not self._children
-
-    @property
-    def leaves(self) -> tuple:
-        """The frames without children at or below this one."""
-        if not self._children:
-            return (self,)
-        return tuple(node for node in self.descendants if not node._children)
-
-    @property
-    def siblings(self) -> tuple:
-        """The other children of this frame's parent."""
-        if self._parent is None:
-            return ()
-        return tuple(c for c in self._parent._children if c is not self)
-
-    # -- construction from xarray ------------------------------------------
-
-    @classmethod
-    def from_dataset(
-        cls,
-        ds: Any,
-        translation: ArrayInput | None,
-        rotation: ArrayInput | None,
-        timestamps: Any,
-        parent: FrameLike,
-        name: str | None = None,
-        inverse: bool = False,
-        discrete: bool = False,
-        max_gap: float | None = None,
-        missing: Any = None,
-    ) -> ReferenceFrame:
-        """A moving frame from variables of an xarray Dataset.
-
-        Parameters
-        ----------
-        ds : xarray.Dataset
-        translation, rotation : str
-            Names of the variables with shape (n, 3) and (n, 4).
-        timestamps : str
-            Name of the variable or coordinate with the n timestamps.
-        parent : str or ReferenceFrame
-        name : str, optional
-        inverse, discrete : bool, default False
-            As for :class:`ReferenceFrame`.
-        max_gap : float, optional
-            The longest gap (seconds) interpolated across, as for
-            :class:`ReferenceFrame`; NaN rows (missing samples) are accepted.
-        missing : array_like of bool, shape (n,), optional
-            Rows to treat as missing, as for :class:`ReferenceFrame` (the
-            dataset's arrays are kept, not masked copies, when the dataset
-            is read-only as the loaders return it).
-        """
-        return cls(
-            name,
-            parent,
-            translation=dataset_variable(ds, translation, "translation"),
-            rotation=dataset_variable(ds, rotation, "rotation"),
-            timestamps=dataset_variable(ds, timestamps, "timestamps"),
-            inverse=inverse,
-            discrete=discrete,
-            max_gap=max_gap,
-            missing=missing,
-        )
-
-    @classmethod
-    def from_translation_dataarray(
-        cls,
-        da: Any,
-        timestamps: Any,
-        parent: FrameLike,
-        name: str | None = None,
-        inverse: bool = False,
-        discrete: bool = False,
-        max_gap: float | None = None,
-    ) -> ReferenceFrame:
-        """A moving frame (no rotation) from a translation DataArray, shape (n, 3).
-
-        ``timestamps`` names the coordinate holding the n timestamps.
-        """
-        return cls(
-            name,
-            parent,
-            translation=da.data,
-            timestamps=dataarray_coordinate(da, timestamps),
-            inverse=inverse,
-            discrete=discrete,
-            max_gap=max_gap,
-        )
-
-    @classmethod
-    def from_rotation_dataarray(
-        cls,
-        da: Any,
-        timestamps: Any,
-        parent: FrameLike,
-        name: str | None = None,
-        inverse: bool = False,
-        discrete: bool = False,
-        max_gap: float | None = None,
-    ) -> ReferenceFrame:
-        """A moving frame (no translation) from a rotation DataArray, shape (n, 4).
-
-        ``timestamps`` names the coordinate holding the n timestamps.
-        """
-        return cls(
-            name,
-            parent,
-            rotation=da.data,
-            timestamps=dataarray_coordinate(da, timestamps),
-            inverse=inverse,
-            discrete=discrete,
-            max_gap=max_gap,
-        )
-
-    @classmethod
-    def from_rotation_matrix(
-        cls,
-        mat: ArrayInput,
-        parent: FrameLike,
-        name: str | None = None,
-        inverse: bool = False,
-    ) -> ReferenceFrame:
-        """A static frame rotated by a (3, 3) rotation matrix wrt its parent."""
-        mat = float_array(mat, "mat")
-        if mat.shape != (3, 3):
-            raise ValueError(f"mat must have shape (3, 3), got {mat.shape}")
-        try:  # orthonormal and det +1, to a tolerance the message names
-            q = quaternion_from_matrix(mat)
-        except ValueError as err:
-            raise ValueError(f"mat: {err}") from None
-        return cls(name, parent, rotation=q, inverse=inverse)
-
     # -- registry ----------------------------------------------------------
+
+    @staticmethod
+    def _resolve(frame: Any, argument: str) -> ReferenceFrame:
+        """:func:`resolve_frame`, for the methods of the base classes (which
+        cannot import it: it is defined here, checking against this class)."""
+        return resolve_frame(frame, argument)
 
     def register(self, update: bool = False) -> None:
         """Register this frame under its name (``update`` replaces another)."""
@@ -801,247 +607,12 @@ class ReferenceFrame:
             raise ValueError("a frame without a name is not registered")
         _deregister(self.name)
 
-    # -- lookups and transforms (see rbm_nb.lookups / rbm_nb.transforms) ----
-
-    def lookup_transform(self, to_frame: FrameLike) -> Any:
-        """Transform from this frame to ``to_frame``.
-
-        Returns
-        -------
-        t : ndarray, shape (3,) or (n, 3)
-        r : ndarray, shape (4,) or (n, 4)
-        ts : ndarray, shape (n,), or None if static
-        """
-        to = resolve_frame(to_frame, "to_frame")
-        _coverage.chain_samples(self, to)  # frames that share no time: refused
-        return _chain.lookup_transform(self, to)
-
-    def get_transformation(self, to_frame: FrameLike) -> Any:
-        """Deprecated alias of :meth:`lookup_transform`."""
-        warnings.warn(
-            "get_transformation is deprecated, use lookup_transform instead",
-            DeprecationWarning,
-            stacklevel=2,
-        )
-        return self.lookup_transform(to_frame)
-
-    def lookup_twist(
-        self,
-        reference: FrameLike | None = None,
-        represent_in: FrameLike | None = None,
-        outlier_thresh: float | None = None,
-        cutoff: float | None = None,
-        mode: str = "quaternion",
-        allow_static: bool = False,
-        return_timestamps: bool = False,
-    ) -> Any:
-        """Linear and angular velocity of this frame wrt ``reference``.
-
-        Both default to the parent frame. Returns ``(linear, angular)``
-        with shape (n, 3) each, plus the timestamps if ``return_timestamps``.
-        """
-        reference = _optional(reference, "reference")
-        represent_in = _optional(represent_in, "represent_in")
-        mode = velocity_options(outlier_thresh, cutoff, mode=mode)
-        reference, represent_in = _lookups.method_velocity_frames(
-            self, reference, represent_in, outlier_thresh, cutoff, allow_static
-        )
-        linear, angular, ts = _twist.lookup_twist(
-            self, reference, represent_in, outlier_thresh, cutoff, mode, allow_static
-        )
-        return (linear, angular, ts) if return_timestamps else (linear, angular)
-
-    def lookup_linear_velocity(
-        self,
-        reference: FrameLike | None = None,
-        represent_in: FrameLike | None = None,
-        outlier_thresh: float | None = None,
-        cutoff: float | None = None,
-        allow_static: bool = False,
-        return_timestamps: bool = False,
-    ) -> Any:
-        """Linear velocity of this frame wrt ``reference``, shape (n, 3)."""
-        velocity_options(outlier_thresh, cutoff)
-        reference, represent_in = _lookups.method_velocity_frames(
-            self,
-            _optional(reference, "reference"),
-            _optional(represent_in, "represent_in"),
-            outlier_thresh,
-            cutoff,
-            allow_static,
-        )
-        linear, ts = _twist.lookup_linear_velocity(
-            self, reference, represent_in, outlier_thresh, cutoff, allow_static
-        )
-        return (linear, ts) if return_timestamps else linear
-
-    def lookup_angular_velocity(
-        self,
-        reference: FrameLike | None = None,
-        represent_in: FrameLike | None = None,
-        outlier_thresh: float | None = None,
-        cutoff: float | None = None,
-        mode: str = "quaternion",
-        allow_static: bool = False,
-        return_timestamps: bool = False,
-    ) -> Any:
-        """Angular velocity of this frame wrt ``reference``, shape (n, 3)."""
-        reference = _optional(reference, "reference")
-        represent_in = _optional(represent_in, "represent_in")
-        mode = velocity_options(outlier_thresh, cutoff, mode=mode)
-        reference, represent_in = _lookups.method_velocity_frames(
-            self, reference, represent_in, outlier_thresh, cutoff, allow_static
-        )
-        angular, ts = _twist.lookup_angular_velocity(
-            self, reference, represent_in, outlier_thresh, cutoff, mode, allow_static
-        )
-        return (angular, ts) if return_timestamps else angular
-
-    def transform_points(
-        self,
-        arr: ArrayInput,
-        to_frame: FrameLike,
-        axis: int | None = -1,
-        time_axis: int | None = 0,
-        timestamps: Any = None,
-        return_timestamps: bool = False,
-    ) -> Any:
-        """Points given in this frame, expressed in ``to_frame``."""
-        return _transform_call(
-            "points",
-            self,
-            arr,
-            to_frame,
-            axis,
-            time_axis,
-            timestamps,
-            return_timestamps,
-        )
-
-    def transform_vectors(
-        self,
-        arr: ArrayInput,
-        to_frame: FrameLike,
-        axis: int | None = -1,
-        time_axis: int | None = 0,
-        timestamps: Any = None,
-        return_timestamps: bool = False,
-    ) -> Any:
-        """Vectors represented in this frame, represented in ``to_frame``."""
-        return _transform_call(
-            "vectors",
-            self,
-            arr,
-            to_frame,
-            axis,
-            time_axis,
-            timestamps,
-            return_timestamps,
-        )
-
-    def transform_quaternions(
-        self,
-        arr: ArrayInput,
-        to_frame: FrameLike,
-        axis: int | None = -1,
-        time_axis: int | None = 0,
-        timestamps: Any = None,
-        return_timestamps: bool = False,
-    ) -> Any:
-        """Orientations wrt this frame, expressed wrt ``to_frame``."""
-        return _transform_call(
-            "quaternions",
-            self,
-            arr,
-            to_frame,
-            axis,
-            time_axis,
-            timestamps,
-            return_timestamps,
-        )
-
-    def transform_angular_velocity(
-        self,
-        arr: ArrayInput,
-        to_frame: FrameLike,
-        what: str = "reference_frame",
-        axis: int | None = -1,
-        time_axis: int | None = 0,
-        timestamps: Any = None,
-        return_timestamps: bool = False,
-        cutoff: float | None = None,
-    ) -> Any:
-        """Change the reference, moving or representation frame of angular velocities."""
-        to_frame = resolve_frame(to_frame, "to_frame")
-        check_what(what)
-        blocks = _inputs.blocks(arr, 3, axis, time_axis, timestamps, "vectors")
-        _coverage.velocity_transform(
-            self, to_frame, blocks.track, what, False, cutoff=cutoff
-        )
-        out, ts = _twist.transform_angular_velocity(
-            self, blocks, to_frame, what, cutoff
-        )
-        return (out, ts) if return_timestamps else out
-
-    def transform_linear_velocity(
-        self,
-        arr: ArrayInput,
-        to_frame: FrameLike,
-        what: str = "reference_frame",
-        moving_frame: FrameLike | None = None,
-        reference_frame: FrameLike | None = None,
-        axis: int | None = -1,
-        time_axis: int | None = 0,
-        timestamps: Any = None,
-        return_timestamps: bool = False,
-        outlier_thresh: float | None = None,
-        cutoff: float | None = None,
-    ) -> Any:
-        """Change the reference, moving or representation frame of linear velocities."""
-        to_frame = resolve_frame(to_frame, "to_frame")
-        check_what(what)
-        blocks = _inputs.blocks(arr, 3, axis, time_axis, timestamps, "vectors")
-        moving = _optional(moving_frame, "moving_frame")
-        reference = _optional(reference_frame, "reference_frame")
-        _coverage.velocity_transform(
-            self, to_frame, blocks.track, what, True, moving, reference,
-            outlier_thresh, cutoff,
-        )  # fmt: skip
-        out, ts = _twist.transform_linear_velocity(
-            self, blocks, to_frame, what, moving, reference, outlier_thresh, cutoff
-        )
-        return (out, ts) if return_timestamps else out
-
 
 def _check_name(name: Any) -> None:
     if name is not None and not isinstance(name, str):
         raise ValueError(f"name must be a string, got {type(name).__name__}")
     if name is not None:
         check_frame_name(name)
-
-
-def _transform_call(
-    kind, frame, arr, to_frame, axis, time_axis, timestamps, return_timestamps
-):  # fmt: skip
-    """A transform method's call: through the door, then the engine."""
-    args = _inputs.method_arguments(
-        kind, frame, arr, resolve_frame(to_frame, "to_frame"), axis, time_axis,
-        timestamps,
-    )  # fmt: skip
-    if args.rows is not None:  # a static chain, plain rows: the short way
-        out = _transform.transform_static(kind, args.static, args.rows)
-        return (
-            (out.reshape(args.shape), None)
-            if return_timestamps
-            else out.reshape(args.shape)
-        )
-    out, ts = _transform.transform(frame, kind, args.blocks, args.into)
-    return (out, ts) if return_timestamps else out
-
-
-def _optional(frame: Any, argument: str) -> ReferenceFrame | None:
-    """``resolve_frame`` for arguments that may be None (a default applies)."""
-    return None if frame is None else resolve_frame(frame, argument)
 
 
 def _read_only(arr: np.ndarray) -> np.ndarray:

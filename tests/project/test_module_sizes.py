@@ -2,28 +2,19 @@
 
 A module that long does several jobs; split it by role into modules with one
 job each (as ``rbm_nb/scene/`` and ``rbm_nb/_door/dask_*`` were). Lines are
-counted as ``wc -l`` counts them.
+counted as ``wc -l`` counts them. No module is exempt: the last one over
+(``core/frames.py``, 1051 lines) was split into ``core/frame_*.py`` bases.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
 from conftest import REPO
 
 PACKAGE = REPO / "rbm_nb"
 
 MAX_LINES = 700
-
-# Modules known to be longer, each with why it is allowed for now. Being
-# split in parallel (issue 35, the SERIES35 engineer): remove each entry when
-# that split lands -- the test below fails until it is removed, so the list
-# cannot outlive the reason.
-ALLOWED = {
-    # storage (Samples, _samples, _masked_samples, from_dataset) being split
-    "core/frames.py": "being split (issue 35)",
-}
 
 
 def line_count(path: Path) -> int:
@@ -39,10 +30,8 @@ def module_sizes(package: Path = PACKAGE) -> dict[str, int]:
     }
 
 
-def too_long(sizes: dict[str, int], allowed=ALLOWED) -> dict[str, int]:
-    return {
-        name: n for name, n in sizes.items() if n > MAX_LINES and name not in allowed
-    }
+def too_long(sizes: dict[str, int]) -> dict[str, int]:
+    return {name: n for name, n in sizes.items() if n > MAX_LINES}
 
 
 def test_the_check_sees_a_long_module(tmp_path):
@@ -50,23 +39,12 @@ def test_the_check_sees_a_long_module(tmp_path):
     (pkg / "sub").mkdir(parents=True)
     (pkg / "short.py").write_text("x = 1\n" * MAX_LINES)
     (pkg / "sub" / "long.py").write_text("x = 1\n" * (MAX_LINES + 1))
-    (pkg / "sub" / "allowed.py").write_text("x = 1\n" * (MAX_LINES + 1))
     sizes = module_sizes(pkg)
     assert sizes["short.py"] == MAX_LINES
-    assert too_long(sizes, {"sub/allowed.py": "why"}) == {"sub/long.py": MAX_LINES + 1}
+    assert too_long(sizes) == {"sub/long.py": MAX_LINES + 1}
 
 
 def test_no_module_is_over_700_lines():
     assert too_long(module_sizes()) == {}, (
         f"modules over {MAX_LINES} lines: split each by role"
-    )
-
-
-@pytest.mark.parametrize("name", sorted(ALLOWED))
-def test_each_allowed_module_is_still_too_long(name):
-    """An entry of ALLOWED goes when its module is split (then delete it there)."""
-    path = PACKAGE / name
-    assert path.is_file(), f"{name} is gone: remove it from ALLOWED"
-    assert line_count(path) > MAX_LINES, (
-        f"{name} is {line_count(path)} lines now: remove it from ALLOWED"
     )

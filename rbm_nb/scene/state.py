@@ -121,10 +121,13 @@ class SceneState:
             return None
         # the axis is the player's (kept by it): made on request, not kept
         # here (an hour of the explorer's recording: 10 MB)
-        times = [t.sample_keys() for t in tracks]  # add_track keeps moving ones only
-        first = times[0]
-        if all(s is first or np.array_equal(s, first) for s in times):
-            return first, tracks[0].original_timestamps
+        # tracks of different lengths cannot share their timestamps: their
+        # keys (a whole-recording array each) are made only when they might
+        if all(len(t) == len(tracks[0]) for t in tracks):
+            times = [t.sample_keys() for t in tracks]  # moving tracks only
+            first = times[0]
+            if all(s is first or np.array_equal(s, first) for s in times):
+                return first, tracks[0].original_timestamps
         spans = [moving_span(t) for t in tracks]
         start = min(first for first, _ in spans)
         end = max(last for _, last in spans)
@@ -134,7 +137,7 @@ class SceneState:
             if len(t) > 1 and last > first
         ]
         if not steps or end <= start:
-            return np.unique(np.concatenate(times)), None
+            return np.unique(np.concatenate([t.sample_keys() for t in tracks])), None
         n = int(np.ceil((end - start) / min(steps) - 1e-9)) + 1
         if self.kind == "numeric":
             return np.linspace(start, end, n), None

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import threading
 
 import numpy as np
 import pytest
@@ -183,3 +184,36 @@ def test_the_explorer_of_frames_names_what_is_wrong():
         explorer.dashboard(frames=explorer.HeadEyeFrames("map", "h", "a", "b"))
     with pytest.raises(ValueError, match="datasets or frames=, not both"):
         explorer.dashboard(1, 2, 3, frames=explorer.EXAMPLE_FRAMES)
+
+
+def test_the_series_are_built_beside_the_scene_and_their_errors_reach_the_caller(
+    data_dir, monkeypatch
+):
+    """The dashboard builds the plots' series on a thread of its own while the
+    scene is built; what the series raise is raised by ``dashboard``, and the
+    series it shows are the ones that thread made."""
+    data_dir("synthetic")
+    threads = []
+    made = explorer.explorer_series
+
+    def recorded(*args, **kwargs):
+        threads.append(threading.current_thread().name)
+        return made(*args, **kwargs)
+
+    monkeypatch.setattr(explorer, "explorer_series", recorded)
+    board = explorer.dashboard()
+    try:
+        assert threads and threads[0].startswith("rbm-explorer-series")
+        head, left, right, _ = explorer.load_head_eye("synthetic")
+        alone = made(head, left, right)
+        for name, series in alone.items():
+            assert board.series[name].identical(series), name
+    finally:
+        explorer.close_dashboard(board)
+
+    def fails(*args, **kwargs):
+        raise ValueError("the series could not be made")
+
+    monkeypatch.setattr(explorer, "explorer_series", fails)
+    with pytest.raises(ValueError, match="could not be made"):
+        explorer.dashboard()

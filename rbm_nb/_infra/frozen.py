@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["is_frozen", "kernel_alias", "freeze_dataset"]
+__all__ = ["is_frozen", "kernel_alias", "kernel_readable", "freeze_dataset"]
 
 
 def is_frozen(arr: Any) -> bool:
@@ -65,6 +65,20 @@ def kernel_alias(arr: np.ndarray) -> np.ndarray:
     if arr.flags.writeable:
         return arr
     return np.asarray(_Alias(arr))
+
+
+def kernel_readable(arr: Any) -> np.ndarray:
+    """``arr`` for a kernel declared on writeable arrays that only reads it.
+
+    A C-contiguous float64 array goes through as :func:`kernel_alias` gives
+    it (a read-only one, a frame's or a DataArray's, is not copied: the
+    kernel never writes it); anything else as a writeable C-contiguous
+    float64 copy.
+    """
+    arr = np.asarray(arr)
+    if arr.dtype == np.float64 and arr.flags.c_contiguous:
+        return kernel_alias(arr)
+    return np.array(arr, dtype=np.float64, order="C")
 
 
 def _freeze(arr: np.ndarray) -> None:

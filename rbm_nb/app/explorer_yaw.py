@@ -22,6 +22,7 @@ import numpy as np
 
 from .._engine import chain as _chain
 from .._infra.frozen import kernel_alias
+from .._infra.frozen import kernel_readable as _readable
 from .._kernels import gaze_rows as _gk
 from .._kernels._arrays import kernel_array
 from ..core import frames as registry
@@ -88,10 +89,3 @@ def yaw_columns(
         np.degrees(azimuth, out=azimuth)
         np.negative(azimuth, out=out[:, k])
     return out, first
-
-
-def _readable(arr: np.ndarray) -> np.ndarray:
-    """``arr`` for a kernel that only reads it, copied only if it must be."""
-    if arr.dtype == np.float64 and arr.flags.c_contiguous:
-        return kernel_alias(arr)
-    return kernel_array(arr)

@@ -36,7 +36,7 @@ from .._door import gaze as _door
 from .._engine import transform as _engine_transform
 from .._engine.time import sort_keys
 from .._engine.transform import Blocks
-from .._infra.frozen import kernel_alias
+from .._infra.frozen import kernel_readable as _readable
 from .._infra.time_index import dataarray_on
 from .._kernels import gaze_rows as _gk
 from .._kernels._arrays import kernel_array
@@ -269,16 +269,6 @@ def rates(angles: xr.DataArray, *, window: float = 0.02) -> xr.DataArray:
 
 
 # -- helpers ----------------------------------------------------------------
-
-
-def _readable(arr: np.ndarray) -> np.ndarray:
-    """``arr`` for a kernel that only reads it: no copy of a read-only
-    C-contiguous float64 array (a frame's, a DataArray's), else as
-    :func:`kernel_array` makes it."""
-    arr = np.asarray(arr)
-    if arr.dtype == np.float64 and arr.flags.c_contiguous:
-        return kernel_alias(arr)
-    return kernel_array(arr)
 
 
 def _represent(vectors, track, outof, into) -> np.ndarray:

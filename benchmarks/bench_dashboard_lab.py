@@ -15,11 +15,17 @@ checkout, e.g. main before a change):
 * ``kernel build``: seconds of the ``dashboard()`` call, as the kernel times it;
 * ``sent``: bytes the Jupyter server sent the page (counted on the wire by a
   loopback relay the page talks through) from the end of the loading cell to
-  the first frame (3D view and plots drawn);
+  the first frame (3D view and plots drawn), by the relay's clock;
 * ``cell -> drawn``: seconds from the start of the dashboard cell (after the
-  data is loaded; kernel clock) until the 3D view shows its content (the
-  frames' labels are in the page and screenshots of its canvas show a
-  picture, polled every 0.1 s) and every plot panel's uPlot canvas exists;
+  data is loaded; the kernel's clock) until the page painted a frame in which
+  the 3D view had drawn its content and every plot panel's uPlot canvas
+  existed. The page times this itself (``FIRST_FRAME``, on the same machine's
+  clock): the first animation frame after one in which a scene view had
+  rendered a frame holding content and the frames' labels, and every panel
+  its chart. Afterwards screenshots of the canvas must show a picture (else
+  the run fails). Polling from playwright instead (waiting for the cell's
+  printout, then screenshots every 0.1 s) lags the page by up to ~1 s at 3 h;
+  that figure is kept as ``drawn_polled_s`` in the JSON rows;
   ``sent in all``: the bytes received by 8 s later;
 * ``renderer``: resident memory (RSS) summed over chromium's renderer
   processes after drawing (as in earlier tables; it counts spare renderers
@@ -113,6 +119,34 @@ PLOTS_DRAWN = """() => {
     && r.querySelectorAll('canvas').length >= r.rbmCharts.length);
 }"""
 
+# The page's own clock for the first frame: an animation-frame loop, from the
+# page's start, notes (Date.now(), the machine's clock as the kernel's
+# time.time()) the frame after the first in which a scene view had rendered
+# content (meshcat commands in its store, at least one frame drawn, labels
+# placed) and every plot panel had its charts: that frame was on screen.
+FIRST_FRAME = """(() => {
+  const plots = () => {
+    const roots = [...document.querySelectorAll('.rbm-ts')];
+    return roots.length > 0 && roots.every((r) => r.rbmCharts && r.rbmCharts.length > 0
+      && r.querySelectorAll('canvas').length >= r.rbmCharts.length);
+  };
+  const scene = () => [...document.querySelectorAll('.rbm-scene')].some((r) => r.rbmView
+    && r.rbmView.frames > 0 && r.rbmView.store.commands.length > 0
+    && r.querySelectorAll('.rbm-label').length > 0);
+  const marks = (window.rbmBenchFrames = {});
+  const tick = () => {
+    const now = Date.now();
+    if (!marks.plotsSeen && plots()) marks.plotsSeen = now;
+    if (!marks.sceneSeen && scene()) marks.sceneSeen = now;
+    if (marks.plotsSeen && marks.sceneSeen) {
+      marks.drawn = now;  // the frame of both is on screen
+      return;
+    }
+    requestAnimationFrame(tick);
+  };
+  requestAnimationFrame(tick);
+})();"""
+
 ZOOM_JS = """async ([start, end]) => {
   const root = document.querySelector('.rbm-ts');
   const u = root.rbmCharts[0];
@@ -156,7 +190,9 @@ class CountingProxy:
         import threading
 
         self.target = port
-        self.down = 0
+        # (time.time(), bytes) of every read sent back: bytes between two
+        # instants of the kernel's clock, however late the page is watched
+        self.log: list[tuple[float, int]] = []
         self._lock = threading.Lock()
         self._server = socket.create_server(("127.0.0.1", 0))
         self.port = self._server.getsockname()[1]
@@ -187,7 +223,7 @@ class CountingProxy:
                 dst.sendall(data)
                 if count:
                     with self._lock:
-                        self.down += len(data)
+                        self.log.append((time.time(), len(data)))
         except OSError:
             pass
         finally:
@@ -196,6 +232,10 @@ class CountingProxy:
                     sock.shutdown(2)
                 except OSError:
                     pass
+
+    def sent_between(self, start: float, end: float) -> int:
+        with self._lock:
+            return sum(n for t, n in self.log if start <= t <= end)
 
     def close(self) -> None:
         self._open = False
@@ -273,6 +313,7 @@ def measure(hours: float, tree: Path) -> dict:
                 proxy = CountingProxy(server.port)
                 blocked = block_other_ports(context, proxy.port)
                 page = context.new_page()
+                page.add_init_script(FIRST_FRAME)
                 errors: list[str] = []
                 page.on("pageerror", lambda e: errors.append(str(e)))
                 page.goto(
@@ -295,7 +336,6 @@ def measure(hours: float, tree: Path) -> dict:
                 page.get_by_role("menuitem", name="Run", exact=True).click()
                 page.get_by_text("Run All Cells", exact=True).click()
                 loaded = _output(page, "LOADED", 900000)
-                proxy.down = 0  # what the dashboard cell costs
                 built = _output(page, "BUILT", 1800000)
                 page.wait_for_function(PLOTS_DRAWN, timeout=600000, polling=50)
                 plots_at = time.time()
@@ -304,14 +344,23 @@ def measure(hours: float, tree: Path) -> dict:
                     if time.time() > deadline:
                         raise RuntimeError("the 3D view did not draw in 10 minutes")
                     page.wait_for_timeout(100)
-                drawn_at = max(time.time(), plots_at)
-                row["sent_MB"] = proxy.down / 1e6
+                polled_at = max(time.time(), plots_at)
+                page.wait_for_function(
+                    "() => window.rbmBenchFrames.drawn", timeout=60000, polling=50
+                )
+                marks = page.evaluate("window.rbmBenchFrames")
+                drawn_at = marks["drawn"] / 1000
                 row["drawn_s"] = drawn_at - built["start"]
+                row["drawn_polled_s"] = polled_at - built["start"]
+                # what the dashboard cell costs: from its start to the first frame
+                row["sent_MB"] = proxy.sent_between(built["start"], drawn_at) / 1e6
                 row["build_s"] = built["build_s"]
                 # settle: what the views still fetch (plots at their own width,
                 # poses) and the page's work on it
                 page.wait_for_timeout(8000)
-                row["sent_all_MB"] = proxy.down / 1e6
+                row["sent_all_MB"] = (
+                    proxy.sent_between(built["start"], time.time()) / 1e6
+                )
                 row["renderer_MB"] = _renderer_rss() / 1e6
                 procs = chromium_processes()
                 tab = max(

@@ -59,7 +59,7 @@ _COMPILE = textwrap.dedent(
     from rbm_nb._kernels import _warmup as _warmup
     by_name = {_warmup.short_name(k): k for k in _warmup.declared_kernels()}
     for name in sys.argv[1:]:
-        _warmup._compile(by_name[name])
+        _warmup.compile_signature(by_name[name])
     """
 )
 

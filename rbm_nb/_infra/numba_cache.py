@@ -161,6 +161,8 @@ def kernels_fingerprint() -> str:
     numba keys a cached kernel on its own file only, but kernels inline
     helpers from other modules (``scalar``, ``quaternion``): after an edit of
     one of those, the cache of an unchanged module would serve stale code.
+    The warm-up's module (``_warmup.py``: lists and commands, no kernel)
+    does not count, so editing its lists keeps the compiled kernels.
     """
     digest = hashlib.sha256()
     # numba ignores entries another numba version wrote; the account of
@@ -172,6 +174,8 @@ def kernels_fingerprint() -> str:
     except Exception:  # noqa: BLE001 - no metadata: the sources still count
         pass
     for path in sorted(KERNELS.glob("*.py")):
+        if path.name.startswith("_warmup"):
+            continue
         digest.update(path.name.encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()

@@ -273,7 +273,7 @@ def account_stats(since: float = 0.0) -> KernelStats:
     return KernelStats(len(kernels), compiled, len(how) - compiled, dirs)
 
 
-def _compile(kernel: Declared, wait: bool = True) -> bool:
+def compile_signature(kernel: Declared, wait: bool = True) -> bool:
     """Compile the kernel's signature (or load it); False if another process has it.
 
     With ``wait=False`` a signature whose lock another process holds is left
@@ -299,14 +299,14 @@ def compile_all(
         if key(k) in ready([k]):
             continue
         start = time.perf_counter()
-        if not _compile(k, wait=False):
+        if not compile_signature(k, wait=False):
             put_off.append(k)
             continue
         if verbose:
             print(f"  {k.name}: {time.perf_counter() - start:.1f} s", flush=True)
     for k in put_off:
         if key(k) not in ready([k]):  # still compiling elsewhere: wait, load
-            _compile(k, wait=True)
+            compile_signature(k, wait=True)
 
 
 def _lower_priority() -> None:

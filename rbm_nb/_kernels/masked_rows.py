@@ -18,7 +18,7 @@ import math
 from .._infra.config import EXACT_VECTOR_KERNEL
 from ._jit import F2, S1, F, kernel
 from .quaternion import _rotate1
-from .rows import MAX_COORDINATE
+from .rows import MAX_COORDINATE, unflip_step
 
 # one bool per sample (True: the row is missing)
 _MASK = "boolean[::1]"
@@ -65,15 +65,10 @@ def masked_signs(t, q, mask, tol, codes):
         bad += abs(norm - 1.0) > tol
         d = 1.0 if (norm == 1.0) | (norm != norm) else norm
         w, x, y, z = w / d, x / d, y / d, z / d
-        dot = 0.0
-        if have:
-            dot = pw * w + px * x + py * y + pz * z
-        sign = -1.0 if dot < 0.0 else 1.0
-        codes[i] = -1 if dot < 0.0 else 1
-        w, x, y, z = sign * w, sign * x, sign * y, sign * z
-        if not math.isnan(w + x + y + z):
-            pw, px, py, pz = w, x, y, z
-            have = True
+        sign, _, _, _, _, pw, px, py, pz, have = unflip_step(
+            w, x, y, z, pw, px, py, pz, have
+        )
+        codes[i] = -1 if sign < 0.0 else 1
     return bad, missing
 
 

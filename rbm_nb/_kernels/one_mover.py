@@ -29,7 +29,7 @@ import numpy as np
 
 from .._infra.config import EXACT_VECTOR_KERNEL
 from ._jit import F2, B, helper, kernel
-from .quaternion import _qmul1, _rotate1
+from .quaternion import _qmul1, _rotate1, _rotate1_inline
 
 __all__ = ["mover_poses", "mover_summary", "mover_translations"]
 
@@ -162,26 +162,6 @@ def _static_steps(above_t, above_r, above_inverse):
 
 
 @helper(inline=True)
-def _rotated(w, x, y, z, vx, vy, vz):
-    """``quaternion._rotate1``, operation for operation (inlined here: the
-    summary's loop is ~5x faster than with a call per row)."""
-    n2 = w * w + x * x + y * y + z * z
-    d = x * vx + y * vy + z * vz
-    cx = y * vz - z * vy
-    cy = z * vx - x * vz
-    cz = x * vy - y * vx
-    s = w * w - (x * x + y * y + z * z)
-    k = 1.0 / n2
-    d2 = 2.0 * d
-    w2 = 2.0 * w
-    return (
-        (s * vx + d2 * x + w2 * cx) * k,
-        (s * vy + d2 * y + w2 * cy) * k,
-        (s * vz + d2 * z + w2 * cz) * k,
-    )
-
-
-@helper(inline=True)
 def _translation(t, rotation, i, below_t, raw, inverse, above_t, terms):
     """The composed translation of sample ``i``: :func:`_compose`'s, with the
     static steps' terms computed once (``terms``, :func:`_static_steps`)."""
@@ -191,9 +171,9 @@ def _translation(t, rotation, i, below_t, raw, inverse, above_t, terms):
         px, py, pz = below_t[0, 0], below_t[0, 1], below_t[0, 2]
         # resample.chain_step's translation
         if inverse:
-            x, y, z = _rotated(qw, -qx, -qy, -qz, px - x, py - y, pz - z)
+            x, y, z = _rotate1_inline(qw, -qx, -qy, -qz, px - x, py - y, pz - z)
         else:
-            rx, ry, rz = _rotated(qw, qx, qy, qz, px, py, pz)
+            rx, ry, rz = _rotate1_inline(qw, qx, qy, qz, px, py, pz)
             x = rx + x
             y = ry + y
             z = rz + z
@@ -206,7 +186,7 @@ def _translation(t, rotation, i, below_t, raw, inverse, above_t, terms):
             vz = z - above_t[j, 2]
         else:
             vx, vy, vz = x, y, z
-        # _rotated with the row-independent terms computed once
+        # _rotate1_inline with the row-independent terms computed once
         d = qx * vx + qy * vy + qz * vz
         cx = qy * vz - qz * vy
         cy = qz * vx - qx * vz

@@ -20,7 +20,7 @@ from numba import prange
 
 from .._infra.config import VECTOR_KERNEL
 from ._jit import F2, helper, kernel
-from .quaternion import _qinv1, _qlog1, _rotate1
+from .quaternion import _qinv1, _qlog1, _rotate1, _rotate1_inline
 
 # The prange twins of the branch-free loops (launched by rbm_nb._infra.parallel).
 _PARALLEL_VECTOR = dataclasses.replace(VECTOR_KERNEL, parallel=True)
@@ -80,26 +80,6 @@ def _flat(a):
 
 
 @helper(inline=True, options=VECTOR_KERNEL)
-def _rotate_inline(w, x, y, z, vx, vy, vz):
-    """:func:`~rbm_nb._kernels.quaternion._rotate1` inlined into vector loops
-    (the same operations; a zero q gives NaN instead of raising)."""
-    n2 = w * w + x * x + y * y + z * z
-    d = x * vx + y * vy + z * vz
-    cx = y * vz - z * vy
-    cy = z * vx - x * vz
-    cz = x * vy - y * vx
-    s = w * w - (x * x + y * y + z * z)
-    k = 1.0 / n2
-    d2 = 2.0 * d
-    w2 = 2.0 * w
-    return (
-        (s * vx + d2 * x + w2 * cx) * k,
-        (s * vy + d2 * y + w2 * cy) * k,
-        (s * vz + d2 * z + w2 * cz) * k,
-    )
-
-
-@helper(inline=True, options=VECTOR_KERNEL)
 def _rotate_rows(qf, nq, vf, nv, of, lo, hi):
     """Rotate rows lo..hi-1 into ``of``; count zero quaternions and infinities.
 
@@ -120,7 +100,7 @@ def _rotate_rows(qf, nq, vf, nv, of, lo, hi):
         for i in range(lo, hi):
             vx, vy, vz = vf[3 * i], vf[3 * i + 1], vf[3 * i + 2]
             infs += (abs(vx) == np.inf) + (abs(vy) == np.inf) + (abs(vz) == np.inf)
-            rx, ry, rz = _rotate_inline(w, x, y, z, vx, vy, vz)
+            rx, ry, rz = _rotate1_inline(w, x, y, z, vx, vy, vz)
             of[3 * i] = rx
             of[3 * i + 1] = ry
             of[3 * i + 2] = rz
@@ -135,7 +115,7 @@ def _rotate_rows(qf, nq, vf, nv, of, lo, hi):
             n2 = w * w + x * x + y * y + z * z
             zeros += n2 == 0.0
             infs += abs(n2) == np.inf
-            rx, ry, rz = _rotate_inline(w, x, y, z, vx, vy, vz)
+            rx, ry, rz = _rotate1_inline(w, x, y, z, vx, vy, vz)
             of[3 * i] = rx
             of[3 * i + 1] = ry
             of[3 * i + 2] = rz
@@ -147,7 +127,7 @@ def _rotate_rows(qf, nq, vf, nv, of, lo, hi):
         zeros += n2 == 0.0
         infs += (abs(n2) == np.inf) + (abs(vx) == np.inf) + (abs(vy) == np.inf)
         infs += abs(vz) == np.inf
-        rx, ry, rz = _rotate_inline(w, x, y, z, vx, vy, vz)
+        rx, ry, rz = _rotate1_inline(w, x, y, z, vx, vy, vz)
         of[3 * i] = rx
         of[3 * i + 1] = ry
         of[3 * i + 2] = rz

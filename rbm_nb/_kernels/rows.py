@@ -186,6 +186,27 @@ def _checked_block(tb, qb, m, tol, unit):
     return bad, missing
 
 
+@helper(inline=True, options=EXACT_VECTOR_KERNEL)
+def unflip_step(w, x, y, z, pw, px, py, pz, have):
+    """``quaternion.unflip``'s step for one unit row: the row negated if its
+    dot product with the last valid row (``pw``.. ``pz``, once ``have``) is
+    negative; ``sign * v`` is ``v`` or ``-v`` exactly, as there.
+
+    Returns the sign (-1.0 or 1.0), the row as corrected, and the last valid
+    row and ``have`` for the next row (this row, unless it holds a NaN).
+    Shared by :func:`moving_samples`, :func:`moving_signs` and
+    ``masked_rows.masked_signs`` (inlined into their serial loops).
+    """
+    d = 0.0
+    if have:
+        d = pw * w + px * x + py * y + pz * z
+    sign = -1.0 if d < 0.0 else 1.0
+    w, x, y, z = sign * w, sign * x, sign * y, sign * z
+    if math.isnan(w + x + y + z):
+        return sign, w, x, y, z, pw, px, py, pz, have
+    return sign, w, x, y, z, w, x, y, z, True
+
+
 @kernel(F2, F2, F, F2, F2, F2, options=EXACT_VECTOR_KERNEL)
 def moving_samples(t, q, tol, t_out, q_out, r_out):
     """A moving frame's private arrays and every registration check, in one pass.
@@ -231,21 +252,14 @@ def moving_samples(t, q, tol, t_out, q_out, r_out):
         missing += block_missing
         to[3 * start : 3 * (start + m)] = tb
         qo[4 * start : 4 * (start + m)] = qb
-        # unflip's signs (each row's depends on the row before): negated is a
-        # row whose dot product with the last valid row, as corrected, is
-        # negative; sign * v is v or -v exactly, as there
+        # unflip's signs (each row's depends on the row before)
         rb = ro[4 * start : 4 * (start + m)]
         for i in range(m):
             w, x, y, z = unit[4 * i], unit[4 * i + 1], unit[4 * i + 2], unit[4 * i + 3]
-            d = 0.0
-            if have:
-                d = pw * w + px * x + py * y + pz * z
-            sign = -1.0 if d < 0.0 else 1.0
-            w, x, y, z = sign * w, sign * x, sign * y, sign * z
+            _, w, x, y, z, pw, px, py, pz, have = unflip_step(
+                w, x, y, z, pw, px, py, pz, have
+            )
             rb[4 * i], rb[4 * i + 1], rb[4 * i + 2], rb[4 * i + 3] = w, x, y, z
-            if not math.isnan(w + x + y + z):
-                pw, px, py, pz = w, x, y, z
-                have = True
     return bad, missing
 
 
@@ -283,13 +297,8 @@ def moving_signs(t, q, tol, codes):
         cb = codes[start : start + m]
         for i in range(m):
             w, x, y, z = unit[4 * i], unit[4 * i + 1], unit[4 * i + 2], unit[4 * i + 3]
-            d = 0.0
-            if have:
-                d = pw * w + px * x + py * y + pz * z
-            sign = -1.0 if d < 0.0 else 1.0
-            cb[i] = -1 if d < 0.0 else 1
-            w, x, y, z = sign * w, sign * x, sign * y, sign * z
-            if not math.isnan(w + x + y + z):
-                pw, px, py, pz = w, x, y, z
-                have = True
+            sign, _, _, _, _, pw, px, py, pz, have = unflip_step(
+                w, x, y, z, pw, px, py, pz, have
+            )
+            cb[i] = -1 if sign < 0.0 else 1
     return bad, missing

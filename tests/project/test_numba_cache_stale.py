@@ -46,3 +46,18 @@ def test_the_fingerprint_covers_every_kernel_module():
     names = sorted(p.name for p in _numba_cache.KERNELS.glob("*.py"))
     assert {"scalar.py", "quaternion.py", "_jit.py"} <= set(names)
     assert len(_numba_cache.kernels_fingerprint()) == 64
+
+
+def test_the_warm_up_lists_are_not_kernel_sources(tmp_path, monkeypatch):
+    # editing the warm-up's lists must not drop every compiled kernel; editing
+    # any other module of the folder must
+    for path in _numba_cache.KERNELS.glob("*.py"):
+        (tmp_path / path.name).write_bytes(path.read_bytes())
+    monkeypatch.setattr(_numba_cache, "KERNELS", tmp_path)
+    before = _numba_cache.kernels_fingerprint()
+    warmup = tmp_path / "_warmup.py"
+    warmup.write_text(warmup.read_text() + "\n# another list\n")
+    assert _numba_cache.kernels_fingerprint() == before
+    jit = tmp_path / "_jit.py"
+    jit.write_text(jit.read_text() + "\n# a helper changed\n")
+    assert _numba_cache.kernels_fingerprint() != before

@@ -30,6 +30,7 @@ from ..core import frames as registry
 from ..core.lookups import lookup_transform
 from ..data.load import last_choice, load_example
 from ..io._files import load_netcdf
+from . import explorer_prepare
 
 # the frames and the series live in their own modules; their names are the
 # explorer's (rbm_nb.explorer.<name>), as before the split
@@ -137,9 +138,13 @@ def eye_centres(
             translation, _ = lookup_transform(frames.eye(eye), head or frames.head)
             out[eye] = np.nanmedian(np.atleast_2d(translation), axis=0)
         else:
-            # nanmedian's value: the median of the non-NaN values
+            # nanmedian's value: the median of the non-NaN values; the rows
+            # are the buffer's (scratch): partitioned in place, not copied
             out[eye] = np.array(
-                [np.median(row) if row.size else np.nan for row in kept]
+                [
+                    np.median(row, overwrite_input=True) if row.size else np.nan
+                    for row in kept
+                ]
             )
     return out
 
@@ -278,17 +283,33 @@ def explorer_plot(series: dict, player, *, max_points: int | None = PLOT_MAX_POI
     return TimeSeries(series, player=player, max_points=max_points, panel_height=140)
 
 
+#: eye rows per step of first_full_instant's search
+FIRST_INSTANT_BLOCK = 4096
+
+
 def first_full_instant(head, left_eye, right_eye, *, min_confidence=MIN_CONFIDENCE):
     """The first eye timestamp, from the head's first sample on, where both eyes
     have a trusted sample: where the explorer starts, with everything drawn."""
-    ok = left_eye.time.values >= head.time.values[0]
-    for eye in (left_eye, right_eye):
-        ok &= np.isfinite(eye.orientation.values).all(axis=1)
-        if "confidence" in eye:
-            ok &= eye.confidence.values >= min_confidence
-    # (at its own timestamps an eye frame gives its sample whatever its
-    # neighbours: docs/missing_data.md)
-    return left_eye.time.values[int(np.argmax(ok))]
+    times = left_eye.time.values
+    start = head.time.values[0]
+    eyes = [
+        (eye.orientation.values, eye.confidence.values if "confidence" in eye else None)
+        for eye in (left_eye, right_eye)
+    ]
+    # block by block from the start: the instant is usually in the first
+    # second, and a pass over hours of both eyes' rows costs ~0.1 s
+    for lo in range(0, len(times), FIRST_INSTANT_BLOCK):
+        rows = slice(lo, lo + FIRST_INSTANT_BLOCK)
+        ok = times[rows] >= start
+        for orientation, confidence in eyes:
+            ok &= np.isfinite(orientation[rows]).all(axis=1)
+            if confidence is not None:
+                ok &= confidence[rows] >= min_confidence
+        if ok.any():
+            # (at its own timestamps an eye frame gives its sample whatever
+            # its neighbours: docs/missing_data.md)
+            return times[lo + int(np.argmax(ok))]
+    return times[0]
 
 
 def seek_to(player, instant) -> None:
@@ -431,6 +452,8 @@ def dashboard(
         The dashboard; its ``scene``, ``player``, ``tree``, ``plot``,
         ``series`` and ``note`` attributes are the parts.
     """
+    # the code the build needs, loading since the import (usually done by now)
+    explorer_prepare.wait()
     import ipywidgets as widgets
 
     # lazy (optional dependency): ipywidgets, only for the dashboard
@@ -578,3 +601,7 @@ def write_explorer_html(
         for frame in previous.values():
             frame.register(update=True)
     return out
+
+
+# the dashboard's modules and kernels load while the notebook loads its data
+explorer_prepare.start()

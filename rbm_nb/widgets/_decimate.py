@@ -48,7 +48,8 @@ def pause_rows(x: np.ndarray, gap: float | None) -> tuple[np.ndarray, float | No
         positive = dt[dt > 0]
         if positive.size == 0:
             return np.empty(0, dtype=np.int64), None
-        gap = GAP_FACTOR * float(np.median(positive))
+        # (positive is a fresh array: partitioned in place, not copied again)
+        gap = GAP_FACTOR * float(np.median(positive, overwrite_input=True))
     return np.flatnonzero(dt > gap), gap
 
 

@@ -217,3 +217,36 @@ def test_the_series_are_built_beside_the_scene_and_their_errors_reach_the_caller
     monkeypatch.setattr(explorer, "explorer_series", fails)
     with pytest.raises(ValueError, match="could not be made"):
         explorer.dashboard()
+
+
+def _first_full_instant_whole(head, left_eye, right_eye, min_confidence):
+    # the definition in one pass over every row (what the search must find)
+    ok = left_eye.time.values >= head.time.values[0]
+    for eye in (left_eye, right_eye):
+        ok &= np.isfinite(eye.orientation.values).all(axis=1)
+        if "confidence" in eye:
+            ok &= eye.confidence.values >= min_confidence
+    return left_eye.time.values[int(np.argmax(ok))]
+
+
+@pytest.mark.parametrize("source", _sources())
+def test_the_first_full_instant_searched_block_by_block_is_the_definitions(
+    data_dir, source
+):
+    data_dir(source)
+    head, left, right, _ = explorer.load_head_eye("auto")
+    conf = explorer.MIN_CONFIDENCE
+    found = explorer.first_full_instant(head, left, right, min_confidence=conf)
+    assert found == _first_full_instant_whole(head, left, right, conf)
+    # an instant past the first blocks: the eyes missing for 3.5 blocks
+    late = left.copy(deep=True)
+    late.orientation.values[: int(3.5 * explorer.FIRST_INSTANT_BLOCK)] = np.nan
+    found = explorer.first_full_instant(head, late, right, min_confidence=conf)
+    assert found == _first_full_instant_whole(head, late, right, conf)
+    assert found >= late.time.values[int(3.5 * explorer.FIRST_INSTANT_BLOCK)]
+    # no such instant: the eyes' first timestamp, as the definition gives
+    never = left.copy(deep=True)
+    never.orientation.values[:] = np.nan
+    found = explorer.first_full_instant(head, never, right, min_confidence=conf)
+    assert found == never.time.values[0]
+    assert found == _first_full_instant_whole(head, never, right, conf)

@@ -58,6 +58,9 @@ def kernel_env(base: dict[str, str], data: str | None, folder: Path) -> dict[str
     """
     env = {k: v for k, v in base.items() if k != "RBM_NB_VIEWER_PROXY"}
     env["MPLCONFIGDIR"] = str(folder / "mpl")
+    # the explorer's background loading would give the process every cached
+    # explorer kernel, called or not: the listing (LIST_KERNELS) is of calls
+    env["RBM_NB_PREPARE"] = "0"
     if data == "real":
         if not REAL_DATA.is_dir():
             raise FileNotFoundError(

@@ -44,6 +44,13 @@ SHARED = Path(os.environ.get("RBM_NB_SHARED", REPO.parent / "shared"))
 SHARED_DATA = SHARED / "data"
 ORACLE = "rigid_body_motion"
 
+# No background loading of the explorer's code in the test processes (nor in
+# the kernels and subprocesses they start): tests importing the explorer
+# would otherwise share the process with a thread that allocates and loads
+# kernels at its own pace (tracemalloc counts every thread). Its own tests
+# (notebook/test_explorer_prepare.py) turn it on where they need it.
+os.environ.setdefault("RBM_NB_PREPARE", "0")
+
 # the session fixtures of the slow subprocess checks (see head_start.py)
 from compile_order import explorer_compiles  # noqa: E402, F401
 from head_start import HEAD_STARTS, checked_runs, packaging_runs  # noqa: E402, F401

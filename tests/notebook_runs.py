@@ -60,6 +60,7 @@ def kernel_env(base: dict[str, str], data: str | None, folder: Path) -> dict[str
     env["MPLCONFIGDIR"] = str(folder / "mpl")
     # the explorer's background loading would give the process every cached
     # explorer kernel, called or not: the listing (LIST_KERNELS) is of calls
+    # (conftest turns it off for the session; a base without it still counts)
     env["RBM_NB_PREPARE"] = "0"
     if data == "real":
         if not REAL_DATA.is_dir():

@@ -56,7 +56,7 @@ def _probe(before: str = "", **env: str) -> dict:
 
 
 def test_importing_the_explorer_loads_its_cached_kernels_and_modules():
-    seen = _probe()
+    seen = _probe(RBM_NB_PREPARE="1")  # (the test session turns it off)
     assert seen["thread"]
     assert seen["cached"], "the set-up's warm-up leaves the explorer's kernels cached"
     # every cached explorer kernel is loaded, none compiled

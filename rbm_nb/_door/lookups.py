@@ -13,6 +13,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
+from .._engine import at_time as _at_time
+from .._engine import time as _time
 from . import coverage as _coverage
 from . import xarray as _xarray
 from .series import velocity_options
@@ -20,6 +22,7 @@ from .series import velocity_options
 __all__ = [
     "Frames",
     "frames",
+    "requested_times",
     "pose_frames",
     "transform_frames",
     "VelocityFrames",
@@ -30,10 +33,12 @@ __all__ = [
 
 
 class Frames(NamedTuple):
-    """Two resolved frames: the transform maps points wrt ``outof`` to ``into``."""
+    """Two resolved frames: the transform maps points wrt ``outof`` to ``into``;
+    ``at``: the times asked for, checked (None: the frames' own times)."""
 
     outof: Any
     into: Any
+    at: _at_time.Requested | None = None
 
     def dataset(self, t: Any, r: Any, timestamps: Any, pose: bool = False) -> Any:
         """The transform (or pose) as a Dataset, wrt ``outof`` (a pose: ``into``)."""
@@ -79,7 +84,15 @@ def transform_frames(
     pair = Frames(resolve(outof, "outof"), to_frame)
     if time is None:
         _coverage.chain_samples(pair.outof, pair.into)
-    return pair
+        return pair
+    return pair._replace(at=requested_times(time))
+
+
+def requested_times(time: Any, name: str = "time") -> _at_time.Requested:
+    """Times a lookup is asked at (tf2 style), checked by the one time rule:
+    a scalar or one dimension, not empty, numeric or datetime64, no NaN or
+    NaT; any order, repeats allowed."""
+    return _at_time.Requested(*_time.requested_times(time, name))
 
 
 class VelocityFrames(NamedTuple):

@@ -15,13 +15,24 @@ and the offending time.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from ..errors import ExtrapolationError
 from . import chain as _chain
 from . import time as _time
 
-__all__ = ["transform_at_times", "latest_common_time"]
+__all__ = ["Requested", "transform_at_times", "latest_common_time"]
+
+
+class Requested(NamedTuple):
+    """Times a caller asks for, checked at the door (:func:`_time.requested_times`)."""
+
+    track: _time.Track  # the sorted unique times
+    inverse: np.ndarray  # the position of each requested time in track
+    scalar: bool  # a single time (0-d) was requested
+    values: np.ndarray  # the requested times as given
 
 
 def _moving(steps):
@@ -54,16 +65,17 @@ def _span(own) -> str:
     return f"has data from {own.values[0]} to {own.values[-1]} ({len(own)} samples)"
 
 
-def transform_at_times(outof, into, times):
-    """Transform from ``outof`` to ``into`` at the given times.
+def transform_at_times(outof, into, requested: Requested):
+    """Transform from ``outof`` to ``into`` at the requested times.
 
     Parameters
     ----------
     outof, into : ReferenceFrame
         Resolved frames of the same tree.
-    times : scalar or array_like, shape (n,)
-        Numeric or datetime64 times, like the moving frames' timestamps. Any
-        order, repeats allowed.
+    requested : Requested
+        Numeric or datetime64 times, like the moving frames' timestamps, in
+        any order, repeats allowed: the door's
+        ``Requested(*_time.requested_times(times))``.
 
     Returns
     -------
@@ -80,10 +92,10 @@ def transform_at_times(outof, into, times):
         If a requested time lies outside the range of a continuous moving
         frame on the chain.
     ValueError
-        If the frames are in different trees, the times are invalid, or
-        datetime64 and numeric times meet.
+        If the frames are in different trees, or datetime64 and numeric
+        times meet (what only the frames' data can tell).
     """
-    track, inverse, scalar, values = _time.requested_times(times)
+    track, inverse, scalar, values = requested
     steps = _chain.chain(outof, into)
     continuous, discrete = _moving(steps)
     _time.check_compatible([f.track for f in continuous + discrete] + [track])

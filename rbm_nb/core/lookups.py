@@ -139,10 +139,10 @@ def lookup_at(
         resolve_frame, outof, into, as_matrix, as_transform, as_dataset, time
     )
     outof, into = pair.outof, pair.into
-    if time is None:
+    if pair.at is None:  # (time None: the frames' own times)
         t, r, timestamps = _chain.lookup_transform(outof, into)
     else:
-        t, r, timestamps = _at_time.transform_at_times(outof, into, time)
+        t, r, timestamps = _at_time.transform_at_times(outof, into, pair.at)
     if as_dataset:
         return pair.dataset(t, r, timestamps)
     out: Any

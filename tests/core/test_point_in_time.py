@@ -264,6 +264,26 @@ def test_no_common_time_and_other_errors():
         lookup_at(a, world, [])
 
 
+@pytest.mark.parametrize(
+    "time, message",
+    [([0.5, np.nan], r"time\[1\] is nan"), ("noon", "numeric or datetime64"),
+     (np.zeros((2, 2)), "one-dimensional"), ([], "empty")],
+)  # fmt: skip
+def test_the_times_asked_for_are_checked_at_the_door(tree, monkeypatch, time, message):
+    # the engine is handed checked times only: a bad one never reaches it
+    entered = []
+    identity = (np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0]), None)
+    monkeypatch.setattr(
+        at_time, "transform_at_times", lambda *args: entered.append(args) or identity
+    )
+    with pytest.raises(ValueError, match=message):
+        rbm.lookup_transform("eye", "world", time=time)
+    assert entered == []
+    rbm.lookup_transform("eye", "world", time=1.0)  # a good one does
+    assert len(entered) == 1
+    assert isinstance(entered[0][2], at_time.Requested)
+
+
 # ---------------------------------------------------------------------------
 # output forms
 # ---------------------------------------------------------------------------

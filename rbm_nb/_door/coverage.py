@@ -29,6 +29,7 @@ from .series import enough_samples, velocity_options
 __all__ = [
     "samples",
     "chain_samples",
+    "connected",
     "velocity_samples",
     "velocity_transform",
     "velocity_terms",
@@ -71,6 +72,22 @@ def samples(frames: Sequence[Any], arrays: Sequence[Any] = ()) -> int:
     return hi - lo
 
 
+def connected(outof: Any, into: Any) -> None:
+    """Refuse two resolved frames of different trees: no transform connects them.
+
+    Checked before the engine builds the pair's chain; once built (cached),
+    the pair is known to be connected and this is one dictionary look-up.
+    """
+    if _chain.cached_chain(outof, into) is not None:
+        return
+    up, down = outof.data.path_to_root()[-1], into.data.path_to_root()[-1]
+    if up is not down:
+        raise ValueError(
+            f"frames {outof.name!r} and {into.name!r} are in different trees "
+            f"(roots {up.name!r} and {down.name!r}); no transform connects them"
+        )
+
+
 def chain_samples(outof: Any, into: Any, arrays: Sequence[Any] = ()) -> int:
     """:func:`samples` of the chain from ``outof`` to ``into`` (resolved frames)
     and ``arrays`` (Tracks or None).
@@ -80,6 +97,7 @@ def chain_samples(outof: Any, into: Any, arrays: Sequence[Any] = ()) -> int:
     that a lookup checks in a look-up and one array inside that span in a
     few comparisons; anything else takes :func:`samples`' whole rule.
     """
+    connected(outof, into)
     steps = _chain.chain(outof, into)
     covered = steps.covered
     if covered is None:

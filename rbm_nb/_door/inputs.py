@@ -38,7 +38,7 @@ from .._engine import transform as _engine_transform
 from .._engine import twist as _twist
 from .._engine.transform import SIZES, Blocks
 from .._kernels.rows import MAX_COORDINATE
-from .coverage import chain_samples, combined
+from .coverage import chain_samples, combined, connected
 from .unpack import Unpacked, float_array, kernel_array, moveaxis, resolve_axis, unpack
 from .validation import check_whole_rows, normalize_quaternions
 from .xarray import wrap
@@ -293,6 +293,7 @@ class ShortWay:
 
 
 def _short_way(source: Any, arr: Any, to_frame: Any, axis: Any) -> ShortWay | None:
+    connected(source, to_frame)
     static = _chain.static_transform(source, to_frame)
     if static is None:
         return None

@@ -85,6 +85,7 @@ def transform_frames(
     if time is None:
         _coverage.chain_samples(pair.outof, pair.into)
         return pair
+    _coverage.connected(pair.outof, pair.into)
     return pair._replace(at=requested_times(time))
 
 

@@ -120,6 +120,11 @@ def _cached(outof, into) -> Chain:
     return entry
 
 
+def cached_chain(outof, into) -> Chain | None:
+    """The pair's chain if it has been built (and is still cached), else None."""
+    return _CHAINS.get((outof.data, into.data))
+
+
 def chain(outof, into) -> Chain:
     """The steps from ``outof`` to ``into`` (frames or their values), cached.
 
@@ -146,6 +151,8 @@ def _steps(outof: FrameData, into: FrameData) -> list:
     up = outof.path_to_root()
     down = into.path_to_root()
     if up[-1] is not down[-1]:
+        # the door refuses such a pair first (_door.coverage.connected); this
+        # guards the package's own callers that build chains directly
         raise ValueError(
             f"frames {outof.name!r} and {into.name!r} are in different trees "
             f"(roots {up[-1].name!r} and {down[-1].name!r}); no transform connects them"

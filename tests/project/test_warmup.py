@@ -49,7 +49,7 @@ def test_a_busy_signature_is_put_off_then_waited_for(monkeypatch):
         calls.append((kernel.name, wait))
         return wait or kernel is not kernels[1]  # kernels[1]: another process's
 
-    monkeypatch.setattr(_warmup, "_compile", compile_)
+    monkeypatch.setattr(_warmup, "compile_signature", compile_)
     monkeypatch.setattr(_warmup, "ready", lambda ks=None: {})
     _warmup.compile_all(kernels)
     names = [k.name for k in kernels]
@@ -69,7 +69,9 @@ def test_a_signature_the_account_lists_is_skipped(monkeypatch):
     compiled = []
     monkeypatch.setattr(_warmup, "ready", lambda ks=None: done)
     monkeypatch.setattr(
-        _warmup, "_compile", lambda k, wait=True: compiled.append(k.name) or True
+        _warmup,
+        "compile_signature",
+        lambda k, wait=True: compiled.append(k.name) or True,
     )
     _warmup.compile_all(kernels)
     assert compiled == [k.name for k in kernels[1:]]
@@ -92,7 +94,7 @@ def _fake_interpreter(tmp_path, monkeypatch, body):
 
 def test_a_failed_worker_fails_the_warm_up_with_its_output(tmp_path, monkeypatch):
     _fake_interpreter(tmp_path, monkeypatch, "echo 'no numba here'; exit 3")
-    monkeypatch.setattr(_warmup, "_compile", lambda k, wait=True: True)
+    monkeypatch.setattr(_warmup, "compile_signature", lambda k, wait=True: True)
     with pytest.raises(RuntimeError, match=r"exit code 3:\nno numba here"):
         _warmup.warm_up(jobs=2)
 
@@ -107,7 +109,7 @@ def test_an_interrupted_warm_up_stops_its_workers(tmp_path, monkeypatch):
             time.sleep(0.01)
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(_warmup, "_compile", interrupted)
+    monkeypatch.setattr(_warmup, "compile_signature", interrupted)
     monkeypatch.setattr(_warmup, "ready", lambda ks=None: {})
     start = time.perf_counter()
     with pytest.raises(KeyboardInterrupt):

@@ -81,12 +81,12 @@ def transform_frames(
                                  ("as_dataset", as_dataset)) if v]  # fmt: skip
         raise ValueError(f"choose at most one of {', '.join(chosen)}")
     to_frame = resolve(into, "into")
-    pair = Frames(resolve(outof, "outof"), to_frame)
+    from_frame = resolve(outof, "outof")
     if time is None:
-        _coverage.chain_samples(pair.outof, pair.into)
-        return pair
-    _coverage.connected(pair.outof, pair.into)
-    return pair._replace(at=requested_times(time))
+        _coverage.chain_samples(from_frame, to_frame)
+        return Frames(from_frame, to_frame)
+    _coverage.connected(from_frame, to_frame)
+    return Frames(from_frame, to_frame, requested_times(time))
 
 
 def requested_times(time: Any, name: str = "time") -> _at_time.Requested:

@@ -14,9 +14,11 @@ and gets a frozen, checked value back: ``inputs.arguments`` (transforms),
 ``estimators`` (velocity series, vector pairs, ICP), ``coordinates``,
 ``quaternions`` (qinv, qmul, qmean, qinterp, rotate_vectors,
 from_euler_angles), ``poses`` (the se3 functions), ``shapes`` (the
-conversions), ``lookups`` (frames resolved, options checked, the times a
-lookup is asked at checked, a static chain refused for a velocity) and ``evaluation`` (``ape``/``rpe``'s
+conversions), ``lookups`` (frames resolved, options checked, a static chain refused
+for a velocity; the times a lookup is asked at checked against its chain by
+``at_times``) and ``evaluation`` (``ape``/``rpe``'s
 trajectories matched and options checked, ``umeyama_alignment``'s points); ``tests/core/test_one_door_call.py`` counts. Timestamps become the engine's tracks
 (:mod:`rbm_nb._engine.time`) here too. Below it, ``_engine`` and ``_kernels``
-check what only the data can tell (time ranges, sampling), nothing else.
+refuse only what shows once they have computed (a velocity's samples left
+after missing rows or outliers, intervals that underflow), nothing else.
 """

@@ -29,7 +29,7 @@ from .._engine.frame_data import FrameData, Samples
 from .._infra.frozen import is_frozen
 from .._kernels import quaternion as kq
 from . import coverage as _coverage
-from .lookups import requested_times
+from .at_times import requested_at
 from .unpack import float_array
 from .validation import check_missing_rows, moving_samples, normalize_quaternions
 from .xarray import transform_dataset
@@ -359,7 +359,9 @@ def _match(ref: Trajectory, est: Trajectory) -> tuple[Trajectory, Trajectory]:
     times = t[inside]
     moving, into = est._frames
     # inside the estimate's span by construction: the lookup cannot extrapolate
-    p, q, _ = _at_time.transform_at_times(moving, into, requested_times(times))
+    p, q, _ = _at_time.transform_at_times(
+        moving, into, requested_at(moving, into, times)
+    )
     matched_ref = Trajectory(
         times, ref.positions[inside], ref.orientations[inside], ref.name, ref._frames
     )

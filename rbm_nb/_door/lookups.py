@@ -14,15 +14,14 @@ from collections.abc import Callable
 from typing import Any, NamedTuple
 
 from .._engine import at_time as _at_time
-from .._engine import time as _time
 from . import coverage as _coverage
 from . import xarray as _xarray
+from .at_times import requested_at
 from .series import velocity_options
 
 __all__ = [
     "Frames",
     "frames",
-    "requested_times",
     "pose_frames",
     "transform_frames",
     "VelocityFrames",
@@ -85,15 +84,7 @@ def transform_frames(
     if time is None:
         _coverage.chain_samples(from_frame, to_frame)
         return Frames(from_frame, to_frame)
-    _coverage.connected(from_frame, to_frame)
-    return Frames(from_frame, to_frame, requested_times(time))
-
-
-def requested_times(time: Any, name: str = "time") -> _at_time.Requested:
-    """Times a lookup is asked at (tf2 style), checked by the one time rule:
-    a scalar or one dimension, not empty, numeric or datetime64, no NaN or
-    NaT; any order, repeats allowed."""
-    return _at_time.Requested(*_time.requested_times(time, name))
+    return Frames(from_frame, to_frame, requested_at(from_frame, to_frame, time))
 
 
 class VelocityFrames(NamedTuple):

@@ -45,7 +45,7 @@ from typing import TypeAlias
 import numpy as np
 import numpy.typing as npt
 
-from .._door.lookups import requested_times
+from .._door.at_times import latest_common_time, requested_at
 from .._door.unpack import float_array
 from .._door.validation import check_finite, normalize_quaternions
 from .._engine import at_time as _at_time
@@ -446,11 +446,13 @@ class Transformer:
             )
         when = _when(time)
         if when == 0.0:
-            latest = _at_time.latest_common_time(source, target)
+            latest = latest_common_time(source, target)
             if latest is None:  # all static: any time will do
                 latest = 0.0
             when = float(latest)
-        t, r, _ = _at_time.transform_at_times(source, target, requested_times(when))
+        t, r, _ = _at_time.transform_at_times(
+            source, target, requested_at(source, target, when)
+        )
         r = np.asarray(r, dtype=np.float64)
         if np.dot(r, self._tf2_rotation(source_name, target_name, when)) < 0:
             r = -r

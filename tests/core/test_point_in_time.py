@@ -10,6 +10,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import rbm_nb as rbm
+from rbm_nb._door import at_times
 from rbm_nb._engine import at_time
 from rbm_nb._engine import time as _time
 from rbm_nb.core.frames import ReferenceFrame, resolve_frame
@@ -22,8 +23,8 @@ with warnings.catch_warnings():
 
 
 def latest_common_time(outof, into):
-    """The engine's latest common time of two frames given by name or object."""
-    return at_time.latest_common_time(
+    """The door's latest common time of two frames given by name or object."""
+    return at_times.latest_common_time(
         resolve_frame(outof, "outof"), resolve_frame(into, "into")
     )
 

@@ -20,5 +20,5 @@ for a velocity; the times a lookup is asked at checked against its chain by
 trajectories matched and options checked, ``umeyama_alignment``'s points); ``tests/core/test_one_door_call.py`` counts. Timestamps become the engine's tracks
 (:mod:`rbm_nb._engine.time`) here too. Below it, ``_engine`` and ``_kernels``
 refuse only what shows once they have computed (a velocity's samples left
-after missing rows or outliers, intervals that underflow), nothing else.
+after missing rows or outliers), nothing else.
 """

@@ -24,12 +24,13 @@ import numpy as np
 
 from .._engine import chain as _chain
 from .._engine import time as _time
-from .series import enough_samples, velocity_options
+from .series import check_intervals, enough_samples, velocity_options
 
 __all__ = [
     "samples",
     "chain_samples",
     "connected",
+    "velocity_intervals",
     "velocity_samples",
     "velocity_transform",
     "velocity_terms",
@@ -155,6 +156,20 @@ def velocity_samples(n: int, outlier_thresh: Any = None, cutoff: Any = None) -> 
     enough_samples(n)
 
 
+def velocity_intervals(frame: Any, reference: Any) -> None:
+    """Refuse a looked-up velocity whose timestamps (the chain's matching)
+    are too close for its formulas; checked once per chain."""
+    steps = _chain.chain(frame, reference)
+    if steps.sampled:
+        return
+    track = _chain.match([f for f, _ in steps]).track
+    if track is not None:
+        check_intervals(
+            track.seconds(), f"timestamps of {frame.name!r} wrt {reference.name!r}"
+        )
+    steps.sampled = True
+
+
 def _velocity_track(
     moving: Any, reference: Any, outlier_thresh: Any, cutoff: Any
 ) -> Any:
@@ -162,6 +177,7 @@ def _velocity_track(
     track = _track(moving, reference)
     if track is not None:
         velocity_samples(len(track), outlier_thresh, cutoff)
+        velocity_intervals(moving, reference)
     return track
 
 

@@ -174,3 +174,4 @@ def _moving(frame: Any, reference: Any, outlier_thresh: Any, cutoff: Any,
             f"a velocity needs timestamps (pass allow_static=True for zeros)"
         )
     _coverage.velocity_samples(n, outlier_thresh, cutoff)
+    _coverage.velocity_intervals(frame, reference)

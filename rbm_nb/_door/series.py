@@ -24,7 +24,7 @@ from .._kernels._arrays import is_scalar
 from .unpack import dim_axis, is_dataarray, kernel_array, moveaxis, resolve_axis
 from .validation import check_no_inf
 
-__all__ = ["Series", "series", "enough_samples", "velocity_options"]
+__all__ = ["Series", "series", "check_intervals", "enough_samples", "velocity_options"]
 
 
 class Series:
@@ -110,10 +110,34 @@ def series(arr: Any, dim: Any, axis: Any, timestamps: Any, time_axis: Any) -> Se
     if axis == time_axis:
         raise ValueError(f"the spatial axis and the time axis are both axis {axis}")
     t = _time.seconds(timestamps, data.shape[time_axis])
+    check_intervals(t)
     data = kernel_array(data)
     # NaN rows are missing samples (gaps); infinities are mistakes
     check_no_inf(moveaxis(data, (time_axis, axis), (0, -1)), "arr")
     return Series(data, axis, time_axis, t)
+
+
+# Velocities divide by sampling intervals and by their products (numpy's
+# three-point weights use h0 h1 (h0 + h1), the spline's system h²): below
+# this interval those underflow and the results are silently wrong (at
+# 1e-300 s: NaN rows and slopes off by 1e3). No clock samples this finely.
+MIN_INTERVAL = 1e-90
+
+
+def check_intervals(t: np.ndarray, what: str = "timestamps") -> None:
+    """Refuse sampling intervals a velocity cannot be computed from."""
+    if len(t) < 2:
+        return
+    steps = np.subtract(t[1:], t[:-1])
+    if steps.min() >= MIN_INTERVAL:
+        return  # (one pass when it is fine; below: where it is not)
+    k = int(np.argmin(steps))
+    if steps[k] < MIN_INTERVAL:
+        raise ValueError(
+            f"{what}: samples {k} and {k + 1} are {steps[k]:.3g} s apart; a velocity "
+            f"needs sampling intervals of at least {MIN_INTERVAL:g} s (its formulas "
+            f"multiply intervals, which underflows below that)"
+        )
 
 
 def enough_samples(n: int) -> None:

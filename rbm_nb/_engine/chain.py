@@ -75,11 +75,13 @@ class Chain(list):
     t (3,) and r (4,), kept for lookup_transform's copies; ``plan`` is the
     fused plan (:func:`fused_plan`), made at the first call that needs it;
     ``covered`` what the door found of the chain's times
-    (:func:`rbm_nb._door.coverage.chain_samples`), kept with it.
+    (:func:`rbm_nb._door.coverage.chain_samples`), kept with it, and
+    ``sampled`` whether it found the chain's matched timestamps fit for a
+    velocity (:func:`rbm_nb._door.coverage.velocity_intervals`).
     (A list, so that the loops over a chain run at list speed.)
     """
 
-    __slots__ = ("static", "rows", "plan", "covered")
+    __slots__ = ("static", "rows", "plan", "covered", "sampled")
 
     def __init__(self, steps: list) -> None:
         super().__init__(steps)
@@ -87,6 +89,7 @@ class Chain(list):
         self.rows: Any = None
         self.plan: Any = _UNPLANNED
         self.covered: Any = None
+        self.sampled = False
         if all(f.track is None for f, _ in steps):
             self.static = compose(steps, Target(None))
             self.rows = self.static[0][0], self.static[1][0]

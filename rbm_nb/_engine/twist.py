@@ -98,11 +98,6 @@ def _result(values, track, as_track):
     return values, (track if as_track else (None if track is None else track.values))
 
 
-def _whose_times(frame, reference) -> str:
-    """How velocity errors name the timestamps of a lookup."""
-    return f"timestamps of {frame.name!r} wrt {reference.name!r}"
-
-
 def _linear_part(frame, reference, represent_in, looked_up, outlier_thresh, cutoff):
     """Linear velocity of ``frame`` wrt ``reference``, represented in ``represent_in``."""
     t, r, target, breaks = looked_up
@@ -112,7 +107,6 @@ def _linear_part(frame, reference, represent_in, looked_up, outlier_thresh, cuto
         outlier_thresh,
         cutoff,
         breaks,
-        _whose_times(frame, reference),
     )
     return _represent(
         linear, target.track, reference, represent_in, (frame, reference, r)
@@ -131,7 +125,6 @@ def _angular_part(
         outlier_thresh,
         cutoff,
         breaks,
-        _whose_times(frame, reference),
     )
     # the estimate is in the moving frame's axes (2 q^-1 dq/dt)
     return _represent(angular, target.track, frame, represent_in, (frame, reference, r))
@@ -199,7 +192,6 @@ def _chain_rates(frame, reference, in_reference):
     if planned is None:
         return None
     plan, own, target = planned
-    _velocity.check_intervals(target.track.base, _whose_times(frame, reference))
     breaks = _breaks(frame, reference, target)
     if breaks is not None and breaks.any():
         return None

@@ -63,29 +63,6 @@ def lowpass_reach(cutoff: float) -> int:
     return FILTER_PADLEN + int(math.ceil(math.log(1e-16) / math.log(radius)))
 
 
-# Velocities divide by sampling intervals and by their products (numpy's
-# three-point weights use h0 h1 (h0 + h1), the spline's system h²): below
-# this interval those underflow and the results are silently wrong (at
-# 1e-300 s: NaN rows and slopes off by 1e3). No clock samples this finely.
-MIN_INTERVAL = 1e-90
-
-
-def check_intervals(t: np.ndarray, what: str = "timestamps") -> None:
-    """Refuse sampling intervals a velocity cannot be computed from."""
-    if len(t) < 2:
-        return
-    steps = np.subtract(t[1:], t[:-1])
-    if steps.min() >= MIN_INTERVAL:
-        return  # (one pass when it is fine; below: where it is not)
-    k = int(np.argmin(steps))
-    if steps[k] < MIN_INTERVAL:
-        raise ValueError(
-            f"{what}: samples {k} and {k + 1} are {steps[k]:.3g} s apart; a velocity "
-            f"needs sampling intervals of at least {MIN_INTERVAL:g} s (its formulas "
-            f"multiply intervals, which underflows below that)"
-        )
-
-
 # ---------------------------------------------------------------------------
 # numerics on (n, b, k) arrays: time first, b independent series
 # ---------------------------------------------------------------------------
@@ -184,10 +161,10 @@ def linear_series(
     outlier_thresh,
     cutoff,
     breaks: np.ndarray | None = None,
-    what: str = "timestamps",
 ) -> np.ndarray:
-    n = x.shape[0]  # at least 2 (_door.series.enough_samples)
-    check_intervals(t, what)
+    # at least 2 samples (_door.series.enough_samples), intervals that do not
+    # underflow (_door.series.check_intervals)
+    n = x.shape[0]
     flat = kernel_array(x.reshape(n, -1))
     if (breaks is None or not breaks.any()) and not _dk.nan_rows(flat).any():
         v = _dk.gradient(flat, t).reshape(x.shape)
@@ -213,10 +190,9 @@ def angular_series(
     outlier_thresh,
     cutoff,
     breaks: np.ndarray | None = None,
-    what: str = "timestamps",
 ) -> np.ndarray:
-    n, nb, _ = q.shape  # at least 2 (_door.series.enough_samples)
-    check_intervals(t, what)
+    # at least 2 samples, intervals that do not underflow: as linear_series
+    n, nb, _ = q.shape
     # no zero row: the door refuses quaternions far from unit norm
     # (_door.validation.check_unit_norms) and frames' rotations are unit
     need_rv = mode == "rotation_vector" or outlier_thresh is not None
@@ -277,7 +253,7 @@ def angular_series(
 
 
 def linear_velocity(
-    arr, timestamps, outlier_thresh=None, cutoff=None, breaks=None, what="timestamps"
+    arr, timestamps, outlier_thresh=None, cutoff=None, breaks=None
 ) -> np.ndarray:
     """Linear velocity of positions sampled in time (array level).
 
@@ -289,9 +265,6 @@ def linear_velocity(
         Strictly increasing times in seconds (float64).
     outlier_thresh, cutoff : float, optional
         As in :func:`estimate_linear_velocity`.
-    what : str
-        How errors name the timestamps.
-
     Returns
     -------
     ndarray, shape (n, 3)
@@ -299,7 +272,7 @@ def linear_velocity(
     x = np.asarray(arr, dtype=np.float64)
     t = _time.seconds(timestamps, x.shape[0])
     return linear_series(
-        x.reshape(x.shape[0], 1, -1), t, outlier_thresh, cutoff, breaks, what
+        x.reshape(x.shape[0], 1, -1), t, outlier_thresh, cutoff, breaks
     ).reshape(x.shape)
 
 
@@ -310,7 +283,6 @@ def angular_velocity(
     outlier_thresh=None,
     cutoff=None,
     breaks=None,
-    what="timestamps",
 ) -> np.ndarray:
     """Angular velocity of orientations sampled in time (array level).
 
@@ -331,6 +303,6 @@ def angular_velocity(
     """
     qa = np.asarray(q, dtype=np.float64)  # (n, 4): the engine's own lookups
     t = _time.seconds(timestamps, qa.shape[0])
-    return angular_series(
-        qa[:, None, :], t, mode, outlier_thresh, cutoff, breaks, what
-    )[:, 0, :]
+    return angular_series(qa[:, None, :], t, mode, outlier_thresh, cutoff, breaks)[
+        :, 0, :
+    ]

@@ -94,7 +94,21 @@ def velocity_arguments(
         check_unit_norms(moved, "arr")
     enough_samples(moved.shape[0])
     rows = moved.reshape(moved.shape[0], -1, moved.shape[-1])
+    if angular:
+        _enough_present(rows)
     return VelocityArguments(rows, t, moved.shape, axis, time_axis, is_dataarray(arr))
+
+
+def _enough_present(rows: np.ndarray) -> None:
+    """Refuse quaternion series (n, b, 4) with fewer than two samples without
+    NaN: the spline of an angular velocity needs two (the samples on each
+    side of a missing one are differentiated on their own)."""
+    present = (~np.isnan(rows).any(axis=2)).sum(axis=0)
+    if present.size and present.min() < 2:
+        raise ValueError(
+            f"arr needs at least 2 samples without NaN to estimate a velocity, "
+            f"got {present.min()}"
+        )
 
 
 def _estimate_block(

@@ -124,12 +124,11 @@ PLOTS_DRAWN = """() => {
 # time.time()) the frame after the first in which a scene view had rendered
 # content (meshcat commands in its store, at least one frame drawn, labels
 # placed) and every plot panel had its charts: that frame was on screen.
-FIRST_FRAME = """(() => {
-  const plots = () => {
-    const roots = [...document.querySelectorAll('.rbm-ts')];
-    return roots.length > 0 && roots.every((r) => r.rbmCharts && r.rbmCharts.length > 0
-      && r.querySelectorAll('canvas').length >= r.rbmCharts.length);
-  };
+FIRST_FRAME = (
+    """(() => {
+  const plots = """
+    + PLOTS_DRAWN
+    + """;
   const scene = () => [...document.querySelectorAll('.rbm-scene')].some((r) => r.rbmView
     && r.rbmView.frames > 0 && r.rbmView.store.commands.length > 0
     && r.querySelectorAll('.rbm-label').length > 0);
@@ -146,6 +145,7 @@ FIRST_FRAME = """(() => {
   };
   requestAnimationFrame(tick);
 })();"""
+)
 
 ZOOM_JS = """async ([start, end]) => {
   const root = document.querySelector('.rbm-ts');

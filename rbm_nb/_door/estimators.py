@@ -90,20 +90,20 @@ def velocity_arguments(
         )
     velocity_options(outlier_thresh, cutoff, data.shape[time_axis], mode)
     moved = np.moveaxis(data, (time_axis, axis), (0, -1))
-    if angular:
-        check_unit_norms(moved, "arr")
+    norms = check_unit_norms(moved, "arr") if angular else None
     enough_samples(moved.shape[0])
+    if norms is not None:
+        _enough_present(norms.reshape(norms.shape[0], -1))
     rows = moved.reshape(moved.shape[0], -1, moved.shape[-1])
-    if angular:
-        _enough_present(rows)
     return VelocityArguments(rows, t, moved.shape, axis, time_axis, is_dataarray(arr))
 
 
-def _enough_present(rows: np.ndarray) -> None:
-    """Refuse quaternion series (n, b, 4) with fewer than two samples without
-    NaN: the spline of an angular velocity needs two (the samples on each
-    side of a missing one are differentiated on their own)."""
-    present = (~np.isnan(rows).any(axis=2)).sum(axis=0)
+def _enough_present(norms: np.ndarray) -> None:
+    """Refuse quaternion series with fewer than two samples without NaN (the
+    rows' norms (n, b), NaN where missing, as the unit-norm check made them):
+    the spline of an angular velocity needs two (the samples on each side of
+    a missing one are differentiated on their own)."""
+    present = norms.shape[0] - np.isnan(norms).sum(axis=0)
     if present.size and present.min() < 2:
         raise ValueError(
             f"arr needs at least 2 samples without NaN to estimate a velocity, "

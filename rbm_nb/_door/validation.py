@@ -120,12 +120,14 @@ def check_whole_rows(arr: np.ndarray, name: str) -> None:
         ) from None
 
 
-def check_unit_norms(q: np.ndarray, name: str) -> None:
+def check_unit_norms(q: np.ndarray, name: str) -> np.ndarray:
     """The one rule for quaternion arguments: unit norm within the tolerance.
 
     Rows of ``q`` (components last) farther than ``UNIT_QUATERNION_TOLERANCE``
     from unit norm, or zero, raise naming the first one; NaN rows (missing
     samples) pass. Nothing is changed: the math normalises where it needs to.
+    Returns the rows' norms (shape ``q.shape[:-1]``, NaN where a row is
+    missing), for a caller that also counts the missing rows.
     """
     with np.errstate(invalid="ignore"):
         norms = np.sqrt(np.einsum("...i,...i->...", q, q))
@@ -138,6 +140,7 @@ def check_unit_norms(q: np.ndarray, name: str) -> None:
             f"{name}{_index(bad)} is {kind}; rotations must be unit quaternions "
             f"(norm within {UNIT_QUATERNION_TOLERANCE} of 1)"
         )
+    return norms
 
 
 def check_missing_rows(arr: np.ndarray, name: str) -> bool:
